@@ -1,0 +1,65 @@
+#pragma once
+// The exact kernel's point type and the conversions between the two kernels.
+//
+// The fast kernel works on Vec3 (double coordinates, exact predicates, rounded
+// constructions). The exact kernel works on CGAL's Epeck points: lazily evaluated
+// exact rationals with interval filters, so predicates stay cheap and
+// constructions (the points where edges cross a plane) are exact. The slicer,
+// caps and solid separation are written once over both point types, using the
+// overloads below.
+//
+// Where a plane-based representation would plug in: a vertex as the meet of three
+// planes (the input's supporting planes and the cutting planes) keeps predicate
+// bit-length bounded at any recursion depth. It would be a third point type here
+// with the same overloads (side_of_plane, crossing_point, to_vec3, project_to_2d).
+
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+
+#include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/predicates.hpp"
+
+namespace shatter {
+
+using ExactKernel = CGAL::Epeck;
+using ExactPoint = ExactKernel::Point_3;
+using ExactMesh = BasicMesh<ExactPoint>;
+
+/// The same mesh with exact coordinates (every double is a rational exactly).
+ExactMesh to_exact(const Mesh& mesh);
+
+/// The mesh with every coordinate rounded to the nearest double. Deterministic:
+/// equal exact coordinates round to equal doubles, so pieces that share a vertex
+/// fit together bit for bit.
+Mesh to_fast(const ExactMesh& mesh);
+
+/// A coordinate's nearest double (round-to-nearest, ties to even).
+double round_to_double(const ExactKernel::FT& value);
+Vec3 to_vec3(const ExactPoint& p);
+inline Vec3 to_vec3(const Vec3& p) { return p; }
+
+/// sign(n·p + d) for an exact point, exactly.
+Sign side_of_plane(const Plane& plane, const ExactPoint& p);
+
+/// The point where segment (a, b) meets the plane, and its parameter t along a->b
+/// as a double (for interpolating attributes).
+/// Preconditions: side_of_plane(a) and side_of_plane(b) are opposite and non-zero.
+/// Fast kernel: rounded; symmetric in (a, b) up to the parameter (callers pass the
+/// endpoints in a fixed order so both triangles of an edge get the same point).
+/// Exact kernel: the exact intersection point.
+struct CrossingVec3 {
+  Vec3 point;
+  double t;
+};
+struct CrossingExact {
+  ExactPoint point;
+  double t;
+};
+CrossingVec3 crossing_point(const Plane& plane, const Vec3& a, const Vec3& b);
+CrossingExact crossing_point(const Plane& plane, const ExactPoint& a, const ExactPoint& b);
+
+/// The exact rational position a fast-kernel crossing would have had without
+/// rounding; the fast kernel uses it to build a cap exactly when rounding made
+/// the rounded cap invalid.
+ExactPoint exact_crossing_point(const Plane& plane, const Vec3& a, const Vec3& b);
+
+}  // namespace shatter

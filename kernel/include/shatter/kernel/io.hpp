@@ -1,0 +1,51 @@
+#pragma once
+// Mesh readers and writers: OFF, OBJ, PLY (ascii and binary), STL (ascii and binary).
+//
+// Readers never repair: they weld corners whose positions are equal (so -0.0 and
+// +0.0 weld, and nothing within a tolerance does), fan-triangulate polygons, keep
+// every face as written (a degenerate face stays, for validation to name), drop
+// vertices no face uses, and throw on anything malformed. Writers print coordinates
+// as shortest round-trip decimals (text) or as IEEE doubles (binary PLY), so a mesh
+// read back is the mesh written, except that STL cannot hold attributes.
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "shatter/kernel/mesh.hpp"
+
+namespace shatter {
+
+enum class MeshFormat { off, obj, ply, stl };
+
+/// The format named by a file's extension (case-insensitive), or nullopt.
+std::optional<MeshFormat> format_from_extension(const std::filesystem::path& path);
+/// The format named "off", "obj", "ply" or "stl", or nullopt.
+std::optional<MeshFormat> parse_mesh_format(std::string_view name);
+/// The lower-case name and file extension (without dot) of a format.
+std::string_view format_name(MeshFormat format);
+
+/// Reads a mesh from `path`, choosing the format by its extension.
+/// Throws IoError when the file cannot be opened or read, InvalidMeshError when
+/// its content is malformed (the message names the line or element at fault),
+/// including an unknown extension. Guarantees the BasicMesh invariants.
+Mesh read_mesh(const std::filesystem::path& path);
+
+/// Reads a mesh held in memory; the entry point of the fuzz targets.
+/// Throws InvalidMeshError on malformed content; never allocates more than a
+/// small multiple of `bytes.size()` whatever the header claims.
+Mesh read_mesh_from_bytes(std::string_view bytes, MeshFormat format);
+
+/// Serialises a mesh. Deterministic: the same mesh gives the same bytes.
+std::string write_mesh_to_bytes(const Mesh& mesh, MeshFormat format);
+
+/// Writes a mesh atomically: to a temporary file beside `path`, then renamed over
+/// it, so `path` is either untouched or complete. Throws IoError on failure, and
+/// then leaves no temporary file behind.
+void write_mesh(const Mesh& mesh, const std::filesystem::path& path, MeshFormat format);
+
+/// Writes `bytes` to `path` atomically, as write_mesh does. Throws IoError.
+void write_file_atomically(const std::filesystem::path& path, std::string_view bytes);
+
+}  // namespace shatter

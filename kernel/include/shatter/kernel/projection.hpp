@@ -1,0 +1,48 @@
+#pragma once
+// Projection of points in (or near) a plane to 2D, by dropping the coordinate of
+// the plane normal's largest component. Dropping a coordinate is exact, and the
+// two kept axes are ordered so that counter-clockwise seen from +n stays
+// counter-clockwise in 2D: orientation tests in the projection are exact
+// orientation tests in the plane.
+
+#include <cmath>
+
+#include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/predicates.hpp"
+
+namespace shatter {
+
+struct PlaneProjection {
+  int u_axis = 0;
+  int v_axis = 1;
+
+  /// The projection for a plane with a non-zero normal.
+  static PlaneProjection of(const Plane& plane) {
+    const double ax = std::fabs(plane.normal.x), ay = std::fabs(plane.normal.y),
+                 az = std::fabs(plane.normal.z);
+    // (u, v, dropped) is a right-handed cyclic permutation of the axes when the
+    // dropped component is positive; a negative one swaps u and v.
+    if (az >= ax && az >= ay) return plane.normal.z > 0 ? PlaneProjection{0, 1} : PlaneProjection{1, 0};
+    if (ax >= ay) return plane.normal.x > 0 ? PlaneProjection{1, 2} : PlaneProjection{2, 1};
+    return plane.normal.y > 0 ? PlaneProjection{2, 0} : PlaneProjection{0, 2};
+  }
+
+  Vec2 operator()(const Vec3& p) const { return {p[u_axis], p[v_axis]}; }
+  ExactKernel::Point_2 operator()(const ExactPoint& p) const {
+    return {p.cartesian(u_axis), p.cartesian(v_axis)};
+  }
+};
+
+/// Orientation of triangle (a, b, c) seen from the +n side of the projection's
+/// plane: positive when counter-clockwise. Exact.
+inline Sign orientation_in_projection(const PlaneProjection& proj, const Vec3& a, const Vec3& b,
+                                      const Vec3& c) {
+  return orient2d(proj(a), proj(b), proj(c));
+}
+inline Sign orientation_in_projection(const PlaneProjection& proj, const ExactPoint& a,
+                                      const ExactPoint& b, const ExactPoint& c) {
+  const CGAL::Orientation o = CGAL::orientation(proj(a), proj(b), proj(c));
+  return o == CGAL::LEFT_TURN ? Sign::positive : o == CGAL::RIGHT_TURN ? Sign::negative : Sign::zero;
+}
+
+}  // namespace shatter

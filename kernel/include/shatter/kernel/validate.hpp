@@ -1,0 +1,75 @@
+#pragma once
+// Validation of a mesh as a closed, oriented, 2-manifold solid. Every defect is
+// named with its count and the first element where it occurs.
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "shatter/kernel/mesh.hpp"
+
+namespace shatter {
+
+// "First" means: the lowest-numbered vertex or triangle; for edges, the first edge
+// met scanning triangles in order and each triangle's corners c -> c+1; for
+// triangle pairs, the lexicographically smallest (i, j) with i < j. Edges are
+// written "edge (i, j)" with i < j.
+enum class DefectKind {
+  nonfinite_coordinate,      ///< a NaN or infinite coordinate (first: vertex)
+  index_out_of_range,        ///< a triangle index >= vertex count (first: triangle); such triangles are left out of every later check
+  unused_vertex,             ///< a vertex no triangle uses (first: vertex)
+  zero_area_triangle,        ///< a repeated index, or three collinear corners decided exactly (first: triangle);
+                             ///< triangles with a repeated index are left out of the edge checks
+  boundary_edge,             ///< an edge with one triangle: the mesh is open (first: edge)
+  non_manifold_edge,         ///< an edge with three or more triangles (first: edge)
+  non_manifold_vertex,       ///< a vertex whose triangles form several edge-connected fans, not counting
+                             ///< vertices on a non-manifold edge (first: vertex)
+  inconsistent_orientation,  ///< an edge whose traversals cannot be paired with opposite ones: on a
+                             ///< two-triangle edge, both triangles traverse it the same way (first: edge)
+  inward_orientation,        ///< negative signed volume, decided exactly: faces point inward. Checked
+                             ///< only on a closed, consistently oriented mesh (count 1, first "whole mesh")
+  self_intersection,         ///< pairs of triangles that intersect beyond shared elements (first: pair),
+                             ///< see ValidationOptions::check_self_intersections
+};
+
+/// Human-readable name of a defect, as used in messages ("boundary edges", ...).
+std::string_view defect_name(DefectKind kind);
+
+struct Defect {
+  DefectKind kind;
+  std::size_t count = 0;  ///< how many elements (or triangle pairs) have it
+  std::string first;      ///< the first offending element, e.g. "edge (3, 7)" or "triangles 12 and 40"
+};
+
+struct ValidationOptions {
+  /// Look for self-intersections (CGAL PMP, O(n log n) on typical meshes). Only
+  /// run when the mesh is otherwise a closed, consistently oriented manifold with
+  /// finite coordinates and no zero-area triangle. Non-manifold vertices do not
+  /// prevent it: the test then sees one copy of such a vertex per fan, so the
+  /// triangles of different fans meeting there count as intersecting pairs (the
+  /// surface touches itself). Inward orientation and unused vertices do not matter.
+  bool check_self_intersections = true;
+};
+
+struct ValidationReport {
+  std::size_t vertex_count = 0;
+  std::size_t triangle_count = 0;
+  std::vector<Defect> defects;          ///< in DefectKind order; empty when valid
+  bool self_intersections_checked = false;
+
+  bool valid() const { return defects.empty(); }
+  /// The defect of this kind, or nullptr.
+  const Defect* find(DefectKind kind) const;
+  /// One line naming the first defect with its count and first element, e.g.
+  /// "open mesh: 4 boundary edges, first edge (0, 3)", followed by the names and
+  /// counts of any other defects ("; also self-intersecting triangle pairs (101)");
+  /// "valid" when there is none. Self-intersections always read "self-intersecting".
+  std::string summary() const;
+};
+
+/// Checks every defect in DefectKind order. Never throws on a malformed mesh:
+/// finding what is wrong is its job. Guarantees: the counts are exact.
+ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& options = {});
+
+}  // namespace shatter

@@ -1,0 +1,155 @@
+// Format dispatch, file reading, and atomic file writing.
+
+#include "shatter/kernel/io.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <initializer_list>
+#include <memory>
+#include <string>
+#include <system_error>
+
+#include "io_internal.hpp"
+#include "shatter/kernel/error.hpp"
+
+namespace shatter {
+
+namespace {
+
+std::string lower_case(std::string_view text) {
+  std::string lowered(text);
+  for (char& c : lowered) {
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  }
+  return lowered;
+}
+
+std::string describe_errno(const std::filesystem::path& path, const char* action, int error) {
+  return "cannot " + std::string(action) + " " + path.string() + ": " + std::strerror(error);
+}
+
+std::string read_file(const std::filesystem::path& path) {
+  const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!file) throw IoError(describe_errno(path, "open", errno));
+  std::string bytes;
+  char buffer[1 << 16];
+  while (true) {
+    const std::size_t read = std::fread(buffer, 1, sizeof buffer, file.get());
+    bytes.append(buffer, read);
+    if (read < sizeof buffer) break;
+  }
+  // A directory opens but fails to read (EISDIR).
+  if (std::ferror(file.get())) throw IoError(describe_errno(path, "read", errno));
+  return bytes;
+}
+
+/// Writes all of `bytes` to a new file; returns 0, or the errno of the failure
+/// after removing whatever it created. O_EXCL makes sure the name is ours, so
+/// the removal can never delete someone else's file.
+int write_new_file(const std::filesystem::path& path, std::string_view bytes) {
+  const int descriptor = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+  if (descriptor < 0) return errno;
+  int error = 0;
+  while (!bytes.empty()) {
+    const ssize_t written = ::write(descriptor, bytes.data(), bytes.size());
+    if (written < 0 && errno == EINTR) continue;
+    if (written < 0) {
+      error = errno;
+      break;
+    }
+    bytes.remove_prefix(static_cast<std::size_t>(written));
+  }
+  // close() can report a deferred write failure (NFS, full disk).
+  if (::close(descriptor) != 0 && error == 0) error = errno;
+  if (error != 0) ::unlink(path.c_str());
+  return error;
+}
+
+}  // namespace
+
+std::optional<MeshFormat> format_from_extension(const std::filesystem::path& path) {
+  const std::string extension = path.extension().string();
+  if (extension.empty()) return std::nullopt;
+  return parse_mesh_format(std::string_view(extension).substr(1));
+}
+
+std::optional<MeshFormat> parse_mesh_format(std::string_view name) {
+  const std::string lowered = lower_case(name);
+  for (const MeshFormat format : {MeshFormat::off, MeshFormat::obj, MeshFormat::ply, MeshFormat::stl}) {
+    if (lowered == format_name(format)) return format;
+  }
+  return std::nullopt;
+}
+
+std::string_view format_name(MeshFormat format) {
+  switch (format) {
+    case MeshFormat::off: return "off";
+    case MeshFormat::obj: return "obj";
+    case MeshFormat::ply: return "ply";
+    case MeshFormat::stl: return "stl";
+  }
+  return "unknown";
+}
+
+Mesh read_mesh(const std::filesystem::path& path) {
+  const std::optional<MeshFormat> format = format_from_extension(path);
+  if (!format) {
+    throw InvalidMeshError("unknown mesh format of " + path.string() + " (expected .off, .obj, .ply or .stl)");
+  }
+  const std::string bytes = read_file(path);
+  try {
+    return read_mesh_from_bytes(bytes, *format);
+  } catch (const InvalidMeshError& error) {
+    throw InvalidMeshError(path.string() + ": " + error.what());
+  }
+}
+
+Mesh read_mesh_from_bytes(std::string_view bytes, MeshFormat format) {
+  switch (format) {
+    case MeshFormat::off: return io_detail::read_off(bytes);
+    case MeshFormat::obj: return io_detail::read_obj(bytes);
+    case MeshFormat::ply: return io_detail::read_ply(bytes);
+    case MeshFormat::stl: return io_detail::read_stl(bytes);
+  }
+  throw InvalidMeshError("unknown mesh format");
+}
+
+std::string write_mesh_to_bytes(const Mesh& mesh, MeshFormat format) {
+  switch (format) {
+    case MeshFormat::off: return io_detail::write_off(mesh);
+    case MeshFormat::obj: return io_detail::write_obj(mesh);
+    case MeshFormat::ply: return io_detail::write_ply(mesh);
+    case MeshFormat::stl: return io_detail::write_stl(mesh);
+  }
+  throw InvalidMeshError("unknown mesh format");
+}
+
+void write_mesh(const Mesh& mesh, const std::filesystem::path& path, MeshFormat format) {
+  write_file_atomically(path, write_mesh_to_bytes(mesh, format));
+}
+
+void write_file_atomically(const std::filesystem::path& path, std::string_view bytes) {
+  // The temporary sits beside the target so the rename stays on one file system
+  // (and so is atomic); pid and counter keep concurrent writers apart.
+  static std::atomic<unsigned long> counter{0};
+  std::filesystem::path temporary = path;
+  temporary += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+
+  if (const int error = write_new_file(temporary, bytes); error != 0) {
+    throw IoError(describe_errno(path, "write", error));
+  }
+  std::error_code rename_error;
+  std::filesystem::rename(temporary, path, rename_error);
+  if (rename_error) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw IoError("cannot write " + path.string() + ": " + rename_error.message());
+  }
+}
+
+}  // namespace shatter

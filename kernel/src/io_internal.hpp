@@ -1,0 +1,185 @@
+#pragma once
+// Helpers shared by the mesh readers and writers; private to the kernel.
+
+#include <charconv>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <vector>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/mesh.hpp"
+
+namespace shatter::io_detail {
+
+/// What every reader produces before welding: triangles as three corner
+/// positions each, with per-corner attributes in the layout of the final mesh.
+/// Keeping positions per corner lets one welding rule serve all formats, whether
+/// the file was indexed (OFF, OBJ, PLY) or not (STL).
+struct TriangleSoup {
+  std::vector<Vec3> corner_positions;  ///< corner c of triangle t at 3*t + c
+  CornerAttributes corners;
+
+  std::size_t triangle_count() const { return corner_positions.size() / 3; }
+};
+
+/// Merges corners whose positions are equal as numbers (so -0.0 and +0.0 merge,
+/// and nothing merges within a tolerance), numbering vertices by first use.
+/// Every triangle gets original_surface. A soup without triangles is refused:
+/// no shatter operation has anything to do with it. Positions must be finite: the readers
+/// refuse non-finite coordinates where they can still name the vertex.
+Mesh weld(TriangleSoup soup);
+
+/// Calls emit(k) for the corners k of the fan triangulation of a polygon with
+/// `corner_count` corners: (0, 1, 2), (0, 2, 3), ... . The fan keeps the
+/// polygon's orientation and adds no vertex; it is exact for the convex
+/// polygons files hold, and a non-convex one yields overlapping triangles that
+/// validation reports rather than a silently moved surface.
+template <class EmitCorner>
+void fan_triangulate(std::size_t corner_count, EmitCorner&& emit) {
+  for (std::size_t k = 1; k + 1 < corner_count; ++k) {
+    emit(std::size_t{0});
+    emit(k);
+    emit(k + 1);
+  }
+}
+
+[[noreturn]] inline void refuse(const std::string& message) { throw InvalidMeshError(message); }
+
+/// Reads a whole token as a double: correctly rounded, so printing with
+/// append_shortest and reading back is exact. Accepts a leading '+', which
+/// std::from_chars does not; "nan" and "inf" parse, for the caller to refuse
+/// with the vertex named. Fails on anything else, including values beyond the
+/// range of double.
+inline bool parse_double(std::string_view token, double& value) {
+  if (token.size() > 1 && token.front() == '+' && token[1] != '-') token.remove_prefix(1);
+  const char* const end = token.data() + token.size();
+  const auto [stop, error] = std::from_chars(token.data(), end, value);
+  return error == std::errc{} && stop == end;
+}
+
+/// Reads a whole token as an integer of type Integer, failing on overflow.
+template <class Integer>
+bool parse_integer(std::string_view token, Integer& value) {
+  if (token.size() > 1 && token.front() == '+' && token[1] != '-') token.remove_prefix(1);
+  const char* const end = token.data() + token.size();
+  const auto [stop, error] = std::from_chars(token.data(), end, value);
+  return error == std::errc{} && stop == end;
+}
+
+/// Appends the shortest decimal that reads back as exactly `value`.
+inline void append_shortest(std::string& out, double value) {
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  out.append(buffer, result.ptr);
+}
+
+inline void append_vec3(std::string& out, Vec3 value) {
+  append_shortest(out, value.x);
+  out += ' ';
+  append_shortest(out, value.y);
+  out += ' ';
+  append_shortest(out, value.z);
+}
+
+inline bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+/// Splits a line into whitespace-separated tokens.
+inline void split_tokens(std::string_view line, std::vector<std::string_view>& tokens) {
+  tokens.clear();
+  std::size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && is_blank(line[i])) ++i;
+    const std::size_t start = i;
+    while (i < line.size() && !is_blank(line[i])) ++i;
+    if (i > start) tokens.push_back(line.substr(start, i - start));
+  }
+}
+
+/// Walks text line by line ('\n' ends a line; a trailing '\r' is whitespace),
+/// counting lines from 1 for error messages.
+class LineCursor {
+ public:
+  explicit LineCursor(std::string_view text) : text_(text) {}
+
+  bool next(std::string_view& line) {
+    if (position_ >= text_.size()) return false;
+    const std::size_t end = text_.find('\n', position_);
+    const std::size_t stop = end == std::string_view::npos ? text_.size() : end;
+    line = text_.substr(position_, stop - position_);
+    position_ = stop == text_.size() ? stop : stop + 1;
+    ++line_number_;
+    return true;
+  }
+  std::size_t line_number() const { return line_number_; }
+  /// Bytes not yet returned as lines.
+  std::string_view rest() const { return text_.substr(position_); }
+
+ private:
+  std::string_view text_;
+  std::size_t position_ = 0;
+  std::size_t line_number_ = 0;
+};
+
+/// Walks whitespace-separated tokens across lines, for formats (PLY ascii, STL
+/// ascii) where line breaks carry no meaning; remembers the line of the last
+/// token for error messages.
+class TokenCursor {
+ public:
+  explicit TokenCursor(std::string_view text, std::size_t first_line = 1)
+      : text_(text), line_number_(first_line) {}
+
+  /// The next token, or an empty view at the end of the text.
+  std::string_view next() {
+    skip_space();
+    const std::size_t start = position_;
+    while (position_ < text_.size() && !is_blank(text_[position_]) && text_[position_] != '\n') ++position_;
+    return text_.substr(start, position_ - start);
+  }
+  bool at_end() {
+    skip_space();
+    return position_ >= text_.size();
+  }
+  std::size_t line_number() const { return line_number_; }
+  /// The text from the current position to the end of its line, consumed.
+  std::string_view rest_of_line() {
+    const std::size_t end = text_.find('\n', position_);
+    const std::size_t stop = end == std::string_view::npos ? text_.size() : end;
+    const std::string_view rest = text_.substr(position_, stop - position_);
+    position_ = stop;
+    return rest;
+  }
+
+ private:
+  void skip_space() {
+    while (position_ < text_.size() && (is_blank(text_[position_]) || text_[position_] == '\n')) {
+      if (text_[position_] == '\n') ++line_number_;
+      ++position_;
+    }
+  }
+
+  std::string_view text_;
+  std::size_t position_ = 0;
+  std::size_t line_number_;
+};
+
+/// A reserve() bound that a hostile header count cannot inflate: no more
+/// elements than the bytes could hold at `minimum_bytes_each` bytes apiece.
+inline std::size_t reserve_bound(std::uint64_t claimed, std::size_t byte_count, std::size_t minimum_bytes_each) {
+  const std::uint64_t possible = byte_count / minimum_bytes_each + 1;
+  return static_cast<std::size_t>(claimed < possible ? claimed : possible);
+}
+
+Mesh read_off(std::string_view bytes);
+Mesh read_obj(std::string_view bytes);
+Mesh read_ply(std::string_view bytes);
+Mesh read_stl(std::string_view bytes);
+
+std::string write_off(const Mesh& mesh);
+std::string write_obj(const Mesh& mesh);
+std::string write_ply(const Mesh& mesh);
+std::string write_stl(const Mesh& mesh);
+
+}  // namespace shatter::io_detail

@@ -1,0 +1,148 @@
+// OFF: "OFF", the counts "vertices faces edges", one vertex per line, then one
+// face per line as "n i0 ... i(n-1)" with optional colour values after the indices.
+// Comments run from '#' to the end of the line. The COFF/NOFF/STOFF variants add
+// values to each vertex line, which are read past; 4OFF, nOFF and binary OFF
+// change the layout and are refused.
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "io_internal.hpp"
+
+namespace shatter::io_detail {
+
+namespace {
+
+std::string at_line(std::size_t line) { return " at line " + std::to_string(line); }
+
+/// Lines with comments removed; blank lines are skipped.
+class OffLines {
+ public:
+  explicit OffLines(std::string_view bytes) : cursor_(bytes) {}
+
+  bool next(std::vector<std::string_view>& tokens) {
+    std::string_view line;
+    while (cursor_.next(line)) {
+      if (const std::size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
+      split_tokens(line, tokens);
+      if (!tokens.empty()) return true;
+    }
+    return false;
+  }
+  std::size_t line_number() const { return cursor_.line_number(); }
+
+ private:
+  LineCursor cursor_;
+};
+
+/// Whether vertex lines carry values beyond x y z (colour, normal, texture).
+bool vertex_lines_have_extras(std::string_view keyword, std::size_t line) {
+  constexpr std::array<std::string_view, 8> readable = {"OFF",   "COFF",   "NOFF",   "CNOFF",
+                                                        "STOFF", "STCOFF", "STNOFF", "STCNOFF"};
+  for (const std::string_view variant : readable) {
+    if (keyword == variant) return variant != "OFF";
+  }
+  if (keyword.size() >= 3 && keyword.substr(keyword.size() - 3) == "OFF") {
+    refuse("unsupported OFF variant '" + std::string(keyword) + "'" + at_line(line) +
+           " (readable: OFF, COFF, NOFF, CNOFF and their ST forms)");
+  }
+  refuse("not an OFF file: first line must start with 'OFF'" + at_line(line));
+}
+
+std::uint64_t parse_count(std::string_view token, const char* what, std::size_t line) {
+  std::int64_t count = 0;
+  if (!parse_integer(token, count)) refuse(std::string(what) + " count '" + std::string(token) + "' is not an integer" + at_line(line));
+  if (count < 0) refuse("negative " + std::string(what) + " count " + std::to_string(count) + at_line(line));
+  return static_cast<std::uint64_t>(count);
+}
+
+}  // namespace
+
+Mesh read_off(std::string_view bytes) {
+  OffLines lines(bytes);
+  std::vector<std::string_view> tokens;
+  if (!lines.next(tokens)) refuse("empty OFF file");
+  const bool extras_allowed = vertex_lines_have_extras(tokens[0], lines.line_number());
+
+  // The counts may follow the keyword on its line, or have a line of their own.
+  std::vector<std::string_view> count_tokens(tokens.begin() + 1, tokens.end());
+  if (count_tokens.empty()) {
+    if (!lines.next(tokens)) refuse("OFF file ends before the vertex and face counts");
+    count_tokens = tokens;
+  }
+  if (count_tokens.size() != 3) {
+    if (count_tokens.size() == 1 && count_tokens[0] == "BINARY") refuse("binary OFF is not supported" + at_line(lines.line_number()));
+    refuse("expected 'vertices faces edges' counts" + at_line(lines.line_number()));
+  }
+  const std::uint64_t vertex_count = parse_count(count_tokens[0], "vertex", lines.line_number());
+  const std::uint64_t face_count = parse_count(count_tokens[1], "face", lines.line_number());
+  parse_count(count_tokens[2], "edge", lines.line_number());  // unused, but must be well-formed
+
+  // "0 0 0" is the shortest vertex line, "3 0 0 0" the shortest face line.
+  std::vector<Vec3> positions;
+  positions.reserve(reserve_bound(vertex_count, bytes.size(), 6));
+  for (std::uint64_t vertex = 0; vertex < vertex_count; ++vertex) {
+    if (!lines.next(tokens)) {
+      refuse("OFF file ends after " + std::to_string(vertex) + " of " + std::to_string(vertex_count) + " vertices");
+    }
+    const std::size_t line = lines.line_number();
+    if (tokens.size() < 3 || (tokens.size() > 3 && !extras_allowed)) {
+      refuse("vertex " + std::to_string(vertex) + at_line(line) + " has " + std::to_string(tokens.size()) +
+             " values, expected 3");
+    }
+    Vec3 position;
+    if (!parse_double(tokens[0], position.x) || !parse_double(tokens[1], position.y) ||
+        !parse_double(tokens[2], position.z)) {
+      refuse("vertex " + std::to_string(vertex) + at_line(line) + " has a coordinate that is not a number");
+    }
+    if (!is_finite(position)) refuse("non-finite coordinate at vertex " + std::to_string(vertex) + at_line(line));
+    positions.push_back(position);
+  }
+
+  TriangleSoup soup;
+  soup.corner_positions.reserve(3 * reserve_bound(face_count, bytes.size(), 8));
+  std::vector<std::size_t> polygon;
+  for (std::uint64_t face = 0; face < face_count; ++face) {
+    if (!lines.next(tokens)) {
+      refuse("OFF file ends after " + std::to_string(face) + " of " + std::to_string(face_count) + " faces");
+    }
+    const std::string where = "face " + std::to_string(face) + at_line(lines.line_number());
+    std::int64_t corner_count = 0;
+    if (!parse_integer(tokens[0], corner_count)) refuse(where + ": vertex count '" + std::string(tokens[0]) + "' is not an integer");
+    if (corner_count < 3) refuse(where + " has " + std::to_string(corner_count) + " vertices, at least 3 needed");
+    // Values past the indices are the optional face colour.
+    if (static_cast<std::uint64_t>(corner_count) > tokens.size() - 1) {
+      refuse(where + " lists " + std::to_string(tokens.size() - 1) + " of its " + std::to_string(corner_count) + " vertex indices");
+    }
+    polygon.clear();
+    for (std::size_t k = 1; k <= static_cast<std::size_t>(corner_count); ++k) {
+      std::int64_t index = 0;
+      if (!parse_integer(tokens[k], index)) refuse(where + ": vertex index '" + std::string(tokens[k]) + "' is not an integer");
+      if (index < 0 || static_cast<std::uint64_t>(index) >= vertex_count) {
+        refuse(where + ": vertex index " + std::to_string(index) + " out of range [0, " + std::to_string(vertex_count) + ")");
+      }
+      polygon.push_back(static_cast<std::size_t>(index));
+    }
+    fan_triangulate(polygon.size(), [&](std::size_t k) { soup.corner_positions.push_back(positions[polygon[k]]); });
+  }
+  if (lines.next(tokens)) refuse("unexpected content after the last face" + at_line(lines.line_number()));
+  return weld(std::move(soup));
+}
+
+std::string write_off(const Mesh& mesh) {
+  // OFF holds no per-corner attributes; they are dropped.
+  std::string out = "OFF\n" + std::to_string(mesh.vertex_count()) + ' ' + std::to_string(mesh.triangle_count()) + " 0\n";
+  for (const Vec3& position : mesh.positions) {
+    append_vec3(out, position);
+    out += '\n';
+  }
+  for (const Triangle& triangle : mesh.triangles) {
+    out += "3 " + std::to_string(triangle[0]) + ' ' + std::to_string(triangle[1]) + ' ' + std::to_string(triangle[2]) + '\n';
+  }
+  return out;
+}
+
+}  // namespace shatter::io_detail

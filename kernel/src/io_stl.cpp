@@ -1,0 +1,147 @@
+// STL, binary and ascii. A file is binary exactly when its size is 84 + 50 n for
+// the facet count n stored at byte 80: binary headers often begin with "solid"
+// too, so that prefix decides nothing. Facet normals in the file are ignored;
+// the geometry defines orientation. STL holds no attributes.
+//
+// The writer emits ascii, whose shortest round-trip decimals keep every double
+// (binary STL would round positions to float).
+
+#include <array>
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <initializer_list>
+#include <string>
+#include <vector>
+
+#include "io_internal.hpp"
+
+namespace shatter::io_detail {
+
+namespace {
+
+constexpr std::size_t binary_header_size = 84;
+constexpr std::size_t binary_facet_size = 50;
+
+bool is_binary_stl(std::string_view bytes) {
+  if (bytes.size() < binary_header_size) return false;
+  std::array<unsigned char, 4> raw;
+  std::memcpy(raw.data(), bytes.data() + 80, 4);
+  const std::uint64_t facet_count = std::uint64_t{raw[0]} | std::uint64_t{raw[1]} << 8 | std::uint64_t{raw[2]} << 16 |
+                                    std::uint64_t{raw[3]} << 24;
+  return bytes.size() == binary_header_size + binary_facet_size * facet_count;
+}
+
+float little_endian_float(const char* data) {
+  std::array<unsigned char, 4> raw;
+  std::memcpy(raw.data(), data, 4);
+  const std::uint32_t bits = std::uint32_t{raw[0]} | std::uint32_t{raw[1]} << 8 | std::uint32_t{raw[2]} << 16 |
+                             std::uint32_t{raw[3]} << 24;
+  return std::bit_cast<float>(bits);
+}
+
+Mesh read_binary(std::string_view bytes) {
+  const std::size_t facet_count = (bytes.size() - binary_header_size) / binary_facet_size;
+  TriangleSoup soup;
+  soup.corner_positions.reserve(3 * facet_count);
+  for (std::size_t facet = 0; facet < facet_count; ++facet) {
+    // Skip the stored normal (12 bytes); the 2-byte attribute follows the corners.
+    const char* corner = bytes.data() + binary_header_size + binary_facet_size * facet + 12;
+    for (int k = 0; k < 3; ++k, corner += 12) {
+      const Vec3 position{little_endian_float(corner), little_endian_float(corner + 4), little_endian_float(corner + 8)};
+      if (!is_finite(position)) refuse("non-finite coordinate at STL facet " + std::to_string(facet));
+      soup.corner_positions.push_back(position);
+    }
+  }
+  return weld(std::move(soup));
+}
+
+std::string describe(std::string_view token) {
+  return token.empty() ? std::string("end of file") : "'" + std::string(token.substr(0, 40)) + "'";
+}
+
+/// Token-level reader of ascii STL, naming the line of every defect.
+class AsciiStl {
+ public:
+  explicit AsciiStl(std::string_view bytes) : tokens_(bytes) {}
+
+  void expect(std::string_view keyword) {
+    const std::string_view token = tokens_.next();
+    if (token != keyword) {
+      refuse("STL: expected '" + std::string(keyword) + "', found " + describe(token) + at_line());
+    }
+  }
+  double number() {
+    const std::string_view token = tokens_.next();
+    double value = 0;
+    if (!parse_double(token, value)) refuse("STL: expected a number, found " + describe(token) + at_line());
+    return value;
+  }
+  std::string_view next() { return tokens_.next(); }
+  void skip_rest_of_line() { tokens_.rest_of_line(); }
+  bool at_end() { return tokens_.at_end(); }
+  std::string at_line() const { return " at line " + std::to_string(tokens_.line_number()); }
+
+ private:
+  TokenCursor tokens_;
+};
+
+Mesh read_ascii(std::string_view bytes) {
+  AsciiStl stl(bytes);
+  if (const std::string_view first = stl.next(); first != "solid") {
+    refuse("not an STL file: its size is not 84 + 50 n (binary) and it does not start with 'solid' (ascii), found " +
+           describe(first));
+  }
+  stl.skip_rest_of_line();  // the solid's name
+  TriangleSoup soup;
+  for (std::size_t facet = 0;; ++facet) {
+    const std::string_view keyword = stl.next();
+    if (keyword == "endsolid") break;
+    if (keyword != "facet") {
+      refuse("STL: expected 'facet' or 'endsolid', found " + describe(keyword) + stl.at_line());
+    }
+    stl.expect("normal");
+    for (int k = 0; k < 3; ++k) stl.number();
+    stl.expect("outer");
+    stl.expect("loop");
+    std::array<Vec3, 3> corners;
+    for (Vec3& corner : corners) {
+      stl.expect("vertex");
+      corner = {stl.number(), stl.number(), stl.number()};
+      if (!is_finite(corner)) refuse("non-finite coordinate at STL facet " + std::to_string(facet) + stl.at_line());
+    }
+    stl.expect("endloop");
+    stl.expect("endfacet");
+    soup.corner_positions.insert(soup.corner_positions.end(), corners.begin(), corners.end());
+  }
+  stl.skip_rest_of_line();  // the solid's name again
+  if (!stl.at_end()) refuse("STL: unexpected content after 'endsolid'" + stl.at_line());
+  return weld(std::move(soup));
+}
+
+}  // namespace
+
+Mesh read_stl(std::string_view bytes) {
+  if (is_binary_stl(bytes)) return read_binary(bytes);
+  return read_ascii(bytes);
+}
+
+std::string write_stl(const Mesh& mesh) {
+  std::string out = "solid shatter\n";
+  for (const Triangle& triangle : mesh.triangles) {
+    const Vec3 a = mesh.positions[triangle[0]], b = mesh.positions[triangle[1]], c = mesh.positions[triangle[2]];
+    out += "facet normal ";
+    append_vec3(out, normalized(cross(b - a, c - a)));
+    out += "\nouter loop\n";
+    for (const Vec3& corner : {a, b, c}) {
+      out += "vertex ";
+      append_vec3(out, corner);
+      out += '\n';
+    }
+    out += "endloop\nendfacet\n";
+  }
+  out += "endsolid shatter\n";
+  return out;
+}
+
+}  // namespace shatter::io_detail

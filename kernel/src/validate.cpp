@@ -1,0 +1,383 @@
+#include "shatter/kernel/validate.hpp"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <iterator>
+#include <limits>
+#include <numeric>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <utility>
+
+#include "shatter/kernel/mass.hpp"
+
+namespace shatter {
+namespace {
+
+using CgalPoint = CGAL::Epick::Point_3;
+using CgalMesh = CGAL::Surface_mesh<CgalPoint>;
+
+// Every undirected edge, in the order it is first met scanning triangles in order
+// and each triangle's corners c -> c+1. "First" for edge defects means first in
+// this order, so reports are deterministic and point at the earliest triangle.
+struct EdgeRecord {
+  VertexIndex low = 0, high = 0;     // endpoints, low < high
+  std::uint32_t forward = 0;         // triangles traversing low -> high
+  std::uint32_t backward = 0;        // triangles traversing high -> low
+  // The first two triangles on the edge (as corner ids 3*t + c, where the edge
+  // leaves corner c): enough to join the fans at both endpoints of a manifold edge.
+  std::array<std::uint32_t, 2> corners{};
+
+  std::uint32_t triangle_count() const { return forward + backward; }
+};
+
+std::uint64_t edge_key(VertexIndex a, VertexIndex b) {
+  const VertexIndex low = std::min(a, b), high = std::max(a, b);
+  return (std::uint64_t{low} << 32) | high;
+}
+
+std::string vertex_text(std::size_t v) { return "vertex " + std::to_string(v); }
+std::string triangle_text(std::size_t t) { return "triangle " + std::to_string(t); }
+std::string edge_text(const EdgeRecord& e) {
+  return "edge (" + std::to_string(e.low) + ", " + std::to_string(e.high) + ")";
+}
+
+// Union-find over triangle corners, to group the corners at each vertex into fans.
+class CornerFans {
+ public:
+  explicit CornerFans(std::size_t corner_count) : parent_(corner_count) {
+    std::iota(parent_.begin(), parent_.end(), std::uint32_t{0});
+  }
+  std::uint32_t root(std::uint32_t c) {
+    while (parent_[c] != c) {
+      parent_[c] = parent_[parent_[c]];  // path halving keeps chains short
+      c = parent_[c];
+    }
+    return c;
+  }
+  void join(std::uint32_t a, std::uint32_t b) {
+    a = root(a);
+    b = root(b);
+    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
+  }
+
+ private:
+  std::vector<std::uint32_t> parent_;
+};
+
+// Collects the defects of one kind: the count and the first element.
+struct Tally {
+  std::size_t count = 0;
+  std::string first;
+  // Takes a function making the element's text, so only the first one is built.
+  template <class MakeText>
+  void add(MakeText&& make_text) {
+    if (count++ == 0) first = make_text();
+  }
+};
+
+void append(ValidationReport& report, DefectKind kind, Tally&& tally) {
+  if (tally.count > 0) report.defects.push_back({kind, tally.count, std::move(tally.first)});
+}
+
+// Self-intersecting triangle pairs, sorted (smaller index first in each pair, pairs
+// in lexicographic order), or nullopt when CGAL cannot hold the mesh as a
+// Surface_mesh (should not happen for a closed, fan-split mesh, but never guess).
+std::optional<std::vector<std::pair<std::size_t, std::size_t>>> intersecting_pairs(
+    const std::vector<Vec3>& positions, const std::vector<Triangle>& triangles) {
+  CgalMesh surface;
+  surface.reserve(static_cast<CgalMesh::size_type>(positions.size()),
+                  static_cast<CgalMesh::size_type>(3 * triangles.size() / 2),
+                  static_cast<CgalMesh::size_type>(triangles.size()));
+  std::vector<CgalMesh::Vertex_index> vertices;
+  vertices.reserve(positions.size());
+  for (const Vec3& p : positions) vertices.push_back(surface.add_vertex(CgalPoint(p.x, p.y, p.z)));
+  for (const Triangle& t : triangles) {
+    const CgalMesh::Face_index f = surface.add_face(vertices[t[0]], vertices[t[1]], vertices[t[2]]);
+    if (f == CgalMesh::null_face()) return std::nullopt;
+  }
+  // Faces were added in triangle order into a fresh mesh, so face index == triangle index.
+  std::vector<std::pair<CgalMesh::Face_index, CgalMesh::Face_index>> face_pairs;
+  CGAL::Polygon_mesh_processing::self_intersections(surface, std::back_inserter(face_pairs));
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  pairs.reserve(face_pairs.size());
+  for (const auto& [f, g] : face_pairs) {
+    const std::size_t a = f.idx(), b = g.idx();
+    pairs.emplace_back(std::min(a, b), std::max(a, b));
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  return pairs;
+}
+
+std::string plural(std::size_t count, const char* singular, const char* plural_form) {
+  return std::to_string(count) + " " + (count == 1 ? singular : plural_form);
+}
+
+std::string defect_line(const Defect& d) {
+  const std::string first = d.first.empty() ? "" : ", first " + d.first;
+  switch (d.kind) {
+    case DefectKind::nonfinite_coordinate:
+      return "non-finite coordinates: " + plural(d.count, "vertex", "vertices") + " with NaN or infinity" + first;
+    case DefectKind::index_out_of_range:
+      return "indices out of range: " + plural(d.count, "triangle", "triangles") +
+             " with a vertex index past the vertex count" + first;
+    case DefectKind::unused_vertex:
+      return "unused vertices: " + plural(d.count, "vertex", "vertices") + " no triangle uses" + first;
+    case DefectKind::zero_area_triangle:
+      return "degenerate mesh: " + plural(d.count, "zero-area triangle", "zero-area triangles") + first;
+    case DefectKind::boundary_edge:
+      return "open mesh: " + plural(d.count, "boundary edge", "boundary edges") + first;
+    case DefectKind::non_manifold_edge:
+      return "non-manifold mesh: " + plural(d.count, "edge", "edges") + " shared by three or more triangles" +
+             first;
+    case DefectKind::non_manifold_vertex:
+      return "non-manifold mesh: " + plural(d.count, "vertex", "vertices") +
+             " where separate fans of triangles meet" + first;
+    case DefectKind::inconsistent_orientation:
+      return "inconsistent orientation: " + plural(d.count, "edge", "edges") +
+             " traversed the same way by two triangles" + first;
+    case DefectKind::inward_orientation:
+      return "inward-facing: negative volume (faces point inward)";
+    case DefectKind::self_intersection:
+      return "self-intersecting: " + plural(d.count, "pair", "pairs") + " of intersecting triangles" + first;
+  }
+  return std::string(defect_name(d.kind));
+}
+
+}  // namespace
+
+std::string_view defect_name(DefectKind kind) {
+  switch (kind) {
+    case DefectKind::nonfinite_coordinate: return "non-finite coordinates";
+    case DefectKind::index_out_of_range: return "indices out of range";
+    case DefectKind::unused_vertex: return "unused vertices";
+    case DefectKind::zero_area_triangle: return "zero-area triangles";
+    case DefectKind::boundary_edge: return "boundary edges";
+    case DefectKind::non_manifold_edge: return "non-manifold edges";
+    case DefectKind::non_manifold_vertex: return "non-manifold vertices";
+    case DefectKind::inconsistent_orientation: return "inconsistent orientation";
+    case DefectKind::inward_orientation: return "inward orientation";
+    case DefectKind::self_intersection: return "self-intersecting triangle pairs";
+  }
+  return "unknown defect";
+}
+
+const Defect* ValidationReport::find(DefectKind kind) const {
+  for (const Defect& d : defects) {
+    if (d.kind == kind) return &d;
+  }
+  return nullptr;
+}
+
+std::string ValidationReport::summary() const {
+  if (defects.empty()) return "valid";
+  std::string line = defect_line(defects.front());
+  if (defects.size() > 1) {
+    line += "; also";
+    for (std::size_t i = 1; i < defects.size(); ++i) {
+      const Defect& d = defects[i];
+      line += (i == 1 ? " " : ", ");
+      line += defect_name(d.kind);
+      if (d.kind != DefectKind::inward_orientation) line += " (" + std::to_string(d.count) + ")";
+    }
+  }
+  return line;
+}
+
+ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& options) {
+  ValidationReport report;
+  report.vertex_count = mesh.vertex_count();
+  report.triangle_count = mesh.triangle_count();
+  const std::size_t vertex_count = mesh.vertex_count();
+  const std::size_t triangle_count = mesh.triangle_count();
+
+  // --- Per-vertex and per-triangle checks -------------------------------------
+  Tally nonfinite;
+  std::vector<bool> finite(vertex_count);
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    finite[v] = is_finite(mesh.positions[v]);
+    if (!finite[v]) nonfinite.add([&] { return vertex_text(v); });
+  }
+
+  Tally out_of_range;
+  std::vector<bool> in_range(triangle_count);
+  std::vector<bool> used(vertex_count);
+  for (std::size_t t = 0; t < triangle_count; ++t) {
+    bool all_in_range = true;
+    for (VertexIndex v : mesh.triangles[t]) {
+      if (v < vertex_count) {
+        used[v] = true;  // referenced, even by a triangle that is otherwise broken
+      } else {
+        all_in_range = false;
+      }
+    }
+    in_range[t] = all_in_range;
+    if (!all_in_range) out_of_range.add([&] { return triangle_text(t); });
+  }
+
+  Tally unused;
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    if (!used[v]) unused.add([&] { return vertex_text(v); });
+  }
+
+  // A triangle with a repeated index has no area and no well-defined edges: it is
+  // reported here and left out of the edge topology below (its "edges" would be a
+  // loop and a doubled edge, which would only produce confusing follow-up defects).
+  Tally zero_area;
+  std::vector<bool> in_topology(triangle_count);
+  for (std::size_t t = 0; t < triangle_count; ++t) {
+    if (!in_range[t]) continue;
+    const Triangle& tri = mesh.triangles[t];
+    const bool repeated = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2];
+    in_topology[t] = !repeated;
+    bool degenerate = repeated;
+    if (!repeated && finite[tri[0]] && finite[tri[1]] && finite[tri[2]]) {
+      // Epick predicates are exact on double input (static and interval filters,
+      // then exact arithmetic), so this decides collinearity exactly.
+      const Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
+      degenerate = CGAL::collinear(CgalPoint(a.x, a.y, a.z), CgalPoint(b.x, b.y, b.z), CgalPoint(c.x, c.y, c.z));
+    }
+    if (degenerate) zero_area.add([&] { return triangle_text(t); });
+  }
+
+  // --- Edge topology (index-based, linear time) -------------------------------
+  std::vector<EdgeRecord> edges;
+  edges.reserve(3 * triangle_count / 2 + 1);
+  std::unordered_map<std::uint64_t, std::uint32_t> edge_ids;
+  edge_ids.reserve(3 * triangle_count / 2 + 1);
+  for (std::size_t t = 0; t < triangle_count; ++t) {
+    if (!in_topology[t]) continue;
+    const Triangle& tri = mesh.triangles[t];
+    for (std::uint32_t c = 0; c < 3; ++c) {
+      const VertexIndex from = tri[c], to = tri[(c + 1) % 3];
+      const auto [it, inserted] = edge_ids.try_emplace(edge_key(from, to), static_cast<std::uint32_t>(edges.size()));
+      if (inserted) edges.push_back({std::min(from, to), std::max(from, to), 0, 0, {}});
+      EdgeRecord& edge = edges[it->second];
+      const std::uint32_t seen = edge.triangle_count();
+      if (seen < 2) edge.corners[seen] = static_cast<std::uint32_t>(3 * t + c);
+      (from < to ? edge.forward : edge.backward) += 1;
+    }
+  }
+
+  Tally boundary, non_manifold_edges, inconsistent;
+  std::vector<bool> on_non_manifold_edge(vertex_count);
+  for (const EdgeRecord& edge : edges) {
+    const std::uint32_t n = edge.triangle_count();
+    if (n == 1) boundary.add([&] { return edge_text(edge); });
+    if (n > 2) {
+      non_manifold_edges.add([&] { return edge_text(edge); });
+      on_non_manifold_edge[edge.low] = on_non_manifold_edge[edge.high] = true;
+    }
+    // Consistent orientation pairs every traversal with one in the opposite
+    // direction. On a manifold edge this is exactly "no directed edge appears
+    // twice"; on a non-manifold edge a balanced split (2 + 2, two solids touching
+    // along an edge) is still orientable and is reported only as non-manifold.
+    const std::uint32_t imbalance = edge.forward > edge.backward ? edge.forward - edge.backward
+                                                                 : edge.backward - edge.forward;
+    if (imbalance >= 2) inconsistent.add([&] { return edge_text(edge); });
+  }
+
+  // Non-manifold vertices: the corners at a vertex are joined across each manifold
+  // edge (exactly two triangles); a vertex whose corners fall into more than one
+  // group sits where separate fans touch. Vertices on non-manifold edges are left
+  // to that defect: their fans are split by definition.
+  Tally non_manifold_vertices;
+  CornerFans fans(3 * triangle_count);
+  for (const EdgeRecord& edge : edges) {
+    if (edge.triangle_count() != 2) continue;
+    for (VertexIndex v : {edge.low, edge.high}) {
+      std::array<std::uint32_t, 2> corner_at_v{};
+      for (int side = 0; side < 2; ++side) {
+        const std::uint32_t corner = edge.corners[side];
+        const std::uint32_t t = corner / 3, c = corner % 3;
+        corner_at_v[side] = mesh.triangles[t][c] == v ? corner : 3 * t + (c + 1) % 3;
+      }
+      fans.join(corner_at_v[0], corner_at_v[1]);
+    }
+  }
+  constexpr std::uint32_t no_fan = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> fan_of_vertex(vertex_count, no_fan);  // the first fan met at each vertex
+  std::vector<bool> several_fans(vertex_count);
+  for (std::size_t t = 0; t < triangle_count; ++t) {
+    if (!in_topology[t]) continue;
+    for (std::uint32_t c = 0; c < 3; ++c) {
+      const VertexIndex v = mesh.triangles[t][c];
+      const std::uint32_t fan = fans.root(static_cast<std::uint32_t>(3 * t + c));
+      if (fan_of_vertex[v] == no_fan) {
+        fan_of_vertex[v] = fan;
+      } else if (fan_of_vertex[v] != fan) {
+        several_fans[v] = true;
+      }
+    }
+  }
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    if (several_fans[v] && !on_non_manifold_edge[v]) non_manifold_vertices.add([&] { return vertex_text(v); });
+  }
+
+  // Which later checks are meaningful is decided before the tallies move out.
+  const bool coordinates_and_indices_sound = nonfinite.count == 0 && out_of_range.count == 0;
+  const bool closed_and_oriented = coordinates_and_indices_sound && boundary.count == 0 &&
+                                   non_manifold_edges.count == 0 && inconsistent.count == 0;
+  // Unused vertices do not touch the surface, so they do not block the geometric
+  // checks; zero-area triangles do block the self-intersection test (CGAL reports
+  // a degenerate face as intersecting itself). A non-manifold vertex does not: the
+  // test runs on the mesh with one copy of the vertex per fan, and triangles of
+  // different fans that meet only there are then reported as intersecting, which
+  // they are: the surface touches itself at that point. (This is also exactly the
+  // unwelded input when welding created the pinch, as in the corpus cow.)
+  const bool closed_manifold_up_to_vertices = closed_and_oriented && zero_area.count == 0;
+  const bool has_non_manifold_vertices = non_manifold_vertices.count > 0;
+
+  append(report, DefectKind::nonfinite_coordinate, std::move(nonfinite));
+  append(report, DefectKind::index_out_of_range, std::move(out_of_range));
+  append(report, DefectKind::unused_vertex, std::move(unused));
+  append(report, DefectKind::zero_area_triangle, std::move(zero_area));
+  append(report, DefectKind::boundary_edge, std::move(boundary));
+  append(report, DefectKind::non_manifold_edge, std::move(non_manifold_edges));
+  append(report, DefectKind::non_manifold_vertex, std::move(non_manifold_vertices));
+  append(report, DefectKind::inconsistent_orientation, std::move(inconsistent));
+
+  // --- Orientation and self-intersection (geometry, exact) --------------------
+  // The signed volume is translation-invariant, and so meaningful, only when every
+  // edge is traversed once each way: a closed, consistently oriented mesh.
+  if (closed_and_oriented && signed_volume_sign(mesh) == Sign::negative) {
+    report.defects.push_back({DefectKind::inward_orientation, 1, "whole mesh"});
+  }
+
+  if (options.check_self_intersections && closed_manifold_up_to_vertices) {
+    std::vector<Vec3> positions = mesh.positions;
+    std::vector<Triangle> triangles = mesh.triangles;
+    if (has_non_manifold_vertices) {
+      // Every fan but the first at a pinched vertex gets its own copy of it.
+      std::unordered_map<std::uint32_t, VertexIndex> copy_of_fan;
+      for (std::size_t t = 0; t < triangle_count; ++t) {
+        for (std::uint32_t c = 0; c < 3; ++c) {
+          const VertexIndex v = mesh.triangles[t][c];
+          if (!several_fans[v]) continue;
+          const std::uint32_t fan = fans.root(static_cast<std::uint32_t>(3 * t + c));
+          if (fan == fan_of_vertex[v]) continue;
+          const auto [it, inserted] = copy_of_fan.try_emplace(fan, static_cast<VertexIndex>(positions.size()));
+          if (inserted) positions.push_back(mesh.positions[v]);
+          triangles[t][c] = it->second;
+        }
+      }
+    }
+    if (const auto pairs = intersecting_pairs(positions, triangles)) {
+      report.self_intersections_checked = true;
+      if (!pairs->empty()) {
+        const auto [a, b] = pairs->front();
+        report.defects.push_back({DefectKind::self_intersection, pairs->size(),
+                                  "triangles " + std::to_string(a) + " and " + std::to_string(b)});
+      }
+    }
+  }
+  return report;
+}
+
+}  // namespace shatter

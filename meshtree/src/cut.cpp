@@ -1,0 +1,112 @@
+#include "shatter/meshtree/cut.hpp"
+
+#include "shatter/meshtree/separate.hpp"
+#include "shatter/slicer/slice.hpp"
+
+namespace shatter {
+namespace {
+
+// An orthonormal basis (u, v) of the plane with u x v = n / |n|: cap UVs are
+// coordinates in it, and u is the cap's tangent.
+struct PlaneBasis {
+  Vec3 normal, u, v;
+
+  explicit PlaneBasis(const Plane& plane) : normal(normalized(plane.normal)) {
+    const Vec3 a{std::fabs(normal.x), std::fabs(normal.y), std::fabs(normal.z)};
+    const Vec3 least = a.x <= a.y && a.x <= a.z ? Vec3{1, 0, 0} : a.y <= a.z ? Vec3{0, 1, 0} : Vec3{0, 0, 1};
+    u = normalized(cross(least, normal));
+    v = cross(normal, u);
+  }
+};
+
+// Appends one side's copy of the cap: triangles reversed for the above side, whose
+// outward normal is -n, with attributes for the channels the mesh carries.
+template <class Point>
+void append_cap(BasicMesh<Point>& half, const Cap<Point>& cap, bool reversed, const PlaneBasis& basis,
+                const CutOptions& options, const std::vector<Point>& positions) {
+  const bool normals = half.corners.has_normals(), uvs = half.corners.has_uvs(),
+             tangents = half.corners.has_tangents();
+  const Vec3 normal = reversed ? -basis.normal : basis.normal;
+  for (Triangle t : cap.triangles) {
+    if (reversed) std::swap(t[1], t[2]);
+    half.triangles.push_back(t);
+    half.surfaces.push_back(options.cap_surface);
+    for (VertexIndex v : t) {
+      if (normals) half.corners.normals.push_back(normal);
+      if (uvs) {
+        const Vec3 p = to_vec3(positions[v]);
+        half.corners.uvs.push_back(
+            {dot(p, basis.u) * options.interior_uv_scale, dot(p, basis.v) * options.interior_uv_scale});
+      }
+      // The UV axes are (u, v) on both sides; seen from -n they are left-handed.
+      if (tangents) half.corners.tangents.push_back({basis.u.x, basis.u.y, basis.u.z, reversed ? -1.0 : 1.0});
+    }
+  }
+}
+
+template <class Point>
+BasicMesh<Point> half_with_cap(const OpenHalf& half, const std::vector<Point>& positions) {
+  BasicMesh<Point> mesh;
+  mesh.positions = positions;
+  mesh.triangles = half.triangles;
+  mesh.surfaces = half.surfaces;
+  mesh.corners = half.corners;
+  return mesh;
+}
+
+Cap<Vec3> cap_of(const SlicedMesh<Vec3>& sliced, const Plane& plane) {
+  // The exact position a rounded vertex stands for: an input vertex is exact as it
+  // is; a new one is the exact crossing of its input edge.
+  auto exact_position = [&](VertexIndex v) -> ExactPoint {
+    if (v < sliced.input_vertex_count) {
+      const Vec3& p = sliced.positions[v];
+      return {p.x, p.y, p.z};
+    }
+    const Edge& edge = sliced.crossing_edges[v - sliced.input_vertex_count];
+    return exact_crossing_point(plane, sliced.positions[edge[0]], sliced.positions[edge[1]]);
+  };
+  return triangulate_cap(sliced.positions, sliced.border_edges, plane, exact_position);
+}
+
+Cap<ExactPoint> cap_of(const SlicedMesh<ExactPoint>& sliced, const Plane& plane) {
+  return triangulate_cap(sliced.positions, sliced.border_edges, plane);
+}
+
+template <class Point>
+CutResult<Point> cut(const BasicMesh<Point>& mesh, const Plane& plane, const CutOptions& options) {
+  SlicedMesh<Point> sliced = slice_mesh(mesh, plane);
+  CutResult<Point> result;
+  if (sliced.plane_misses()) {
+    result.plane_missed = true;
+    auto& side = sliced.above.triangles.empty() ? result.below : result.above;
+    side = separate_solids(mesh);
+    return result;
+  }
+  const Cap<Point> cap = cap_of(sliced, plane);
+  result.cap_method = cap.method;
+  result.cap_loops = cap.loop_count;
+  result.cap_triangles = cap.triangles.size();
+  std::vector<Point>& positions = sliced.positions;
+  positions.insert(positions.end(), cap.added_points.begin(), cap.added_points.end());
+
+  const PlaneBasis basis(plane);
+  BasicMesh<Point> below = half_with_cap(sliced.below, positions);
+  append_cap(below, cap, false, basis, options, positions);
+  result.below = separate_solids(below);
+  below = {};
+  BasicMesh<Point> above = half_with_cap(sliced.above, positions);
+  append_cap(above, cap, true, basis, options, positions);
+  result.above = separate_solids(above);
+  return result;
+}
+
+}  // namespace
+
+CutResult<Vec3> cut_mesh(const Mesh& mesh, const Plane& plane, const CutOptions& options) {
+  return cut(mesh, plane, options);
+}
+CutResult<ExactPoint> cut_mesh(const ExactMesh& mesh, const Plane& plane, const CutOptions& options) {
+  return cut(mesh, plane, options);
+}
+
+}  // namespace shatter

@@ -1,0 +1,261 @@
+#include "shatter/meshtree/separate.hpp"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/index_map.hpp"
+#include "shatter/kernel/mass.hpp"
+
+namespace shatter {
+namespace {
+
+class UnionFind {
+ public:
+  explicit UnionFind(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0u); }
+  std::uint32_t find(std::uint32_t x) {
+    while (parent_[x] != x) {
+      parent_[x] = parent_[parent_[x]];
+      x = parent_[x];
+    }
+    return x;
+  }
+  void unite(std::uint32_t a, std::uint32_t b) {
+    a = find(a);
+    b = find(b);
+    // The smaller root wins, so roots do not depend on the order of unions.
+    if (a < b) parent_[b] = a;
+    else if (b < a) parent_[a] = b;
+  }
+
+ private:
+  std::vector<std::uint32_t> parent_;
+};
+
+// The CGAL kernel whose exact predicates decide containment for a point type.
+template <class Point>
+struct PredicateKernel;
+template <>
+struct PredicateKernel<Vec3> {
+  using K = CGAL::Epick;
+  static K::Point_3 point(const Vec3& p) { return {p.x, p.y, p.z}; }
+};
+template <>
+struct PredicateKernel<ExactPoint> {
+  using K = ExactKernel;
+  static const K::Point_3& point(const ExactPoint& p) { return p; }
+};
+
+Sign volume_sign(const Mesh& shell) { return signed_volume_sign(shell); }
+
+Sign volume_sign(const ExactMesh& shell) {
+  // Six times the volume: the sum of det(a, b, c), a polynomial in the exact
+  // coordinates; the lazy number decides its sign on intervals when it can.
+  ExactKernel::FT six_volume = 0;
+  for (const Triangle& t : shell.triangles) {
+    const ExactPoint& a = shell.positions[t[0]];
+    const ExactPoint& b = shell.positions[t[1]];
+    const ExactPoint& c = shell.positions[t[2]];
+    six_volume += CGAL::determinant(a.x(), a.y(), a.z(), b.x(), b.y(), b.z(), c.x(), c.y(), c.z());
+  }
+  const CGAL::Sign s = CGAL::sign(six_volume);
+  return s == CGAL::NEGATIVE ? Sign::negative : s == CGAL::POSITIVE ? Sign::positive : Sign::zero;
+}
+
+enum class Containment { inside, outside, undecided };
+
+// Whether point q lies inside the closed shell, by the parity of the crossings of a
+// segment from q to a point far outside the shell. Every test is an exact
+// orientation; a segment that touches an edge or a vertex, or a q on the shell,
+// is never resolved by a tolerance: the caller tries another direction or point.
+template <class Point>
+Containment locate(const Point& q_in, const BasicMesh<Point>& shell, int direction_index) {
+  using PK = PredicateKernel<Point>;
+  using K = typename PK::K;
+  const typename K::Point_3 q = PK::point(q_in);
+  CGAL::Bbox_3 box = q.bbox();
+  for (const Point& p : shell.positions) box += PK::point(p).bbox();
+  // Deterministic, irregular directions: degenerate ones for one shell are rare,
+  // and each degeneracy is detected exactly.
+  const double golden = 0.6180339887498949;
+  const double phi = 2 * 3.141592653589793 * std::fmod(golden * (direction_index + 1), 1.0);
+  const double z = 1 - 2 * std::fmod(0.7548776662466927 * (direction_index + 1), 1.0);
+  const double r = std::sqrt(std::max(0.0, 1 - z * z));
+  const double reach = 4 * (box.xmax() - box.xmin() + box.ymax() - box.ymin() + box.zmax() - box.zmin()) + 1;
+  const typename K::Point_3 far(box.xmin() + (box.xmax() - box.xmin()) / 2 + reach * r * std::cos(phi),
+                                box.ymin() + (box.ymax() - box.ymin()) / 2 + reach * r * std::sin(phi),
+                                box.zmin() + (box.zmax() - box.zmin()) / 2 + reach * z);
+  int crossings = 0;
+  for (const Triangle& t : shell.triangles) {
+    const auto& a = PK::point(shell.positions[t[0]]);
+    const auto& b = PK::point(shell.positions[t[1]]);
+    const auto& c = PK::point(shell.positions[t[2]]);
+    const CGAL::Orientation side_q = CGAL::orientation(a, b, c, q);
+    const CGAL::Orientation side_far = CGAL::orientation(a, b, c, far);
+    if (side_q == side_far && side_q != CGAL::COPLANAR) continue;  // both on one side: no crossing
+    const CGAL::Orientation ab = CGAL::orientation(q, far, a, b);
+    const CGAL::Orientation bc = CGAL::orientation(q, far, b, c);
+    const CGAL::Orientation ca = CGAL::orientation(q, far, c, a);
+    const bool misses = (ab == CGAL::POSITIVE || bc == CGAL::POSITIVE || ca == CGAL::POSITIVE) &&
+                        (ab == CGAL::NEGATIVE || bc == CGAL::NEGATIVE || ca == CGAL::NEGATIVE);
+    if (misses) continue;  // the segment's line passes beside the triangle
+    if (side_q == CGAL::COPLANAR || side_far == CGAL::COPLANAR || ab == CGAL::COPLANAR ||
+        bc == CGAL::COPLANAR || ca == CGAL::COPLANAR) {
+      return Containment::undecided;  // touches an edge or vertex, or q is on the plane of a face it may touch
+    }
+    ++crossings;
+  }
+  return crossings % 2 == 1 ? Containment::inside : Containment::outside;
+}
+
+// Whether shell `inner` lies inside closed shell `outer`; the shells do not cross,
+// so any vertex of `inner` not on `outer` decides.
+template <class Point>
+Containment shell_inside(const BasicMesh<Point>& inner, const BasicMesh<Point>& outer) {
+  constexpr int directions_per_point = 8;
+  constexpr std::size_t points_tried = 16;
+  for (std::size_t v = 0; v < std::min(points_tried, inner.positions.size()); ++v) {
+    for (int d = 0; d < directions_per_point; ++d) {
+      const Containment c = locate(inner.positions[v], outer, d);
+      if (c != Containment::undecided) return c;
+    }
+  }
+  return Containment::undecided;  // every probe touches `outer`: only a degenerate embedding does that
+}
+
+template <class Point>
+void append_shell(BasicMesh<Point>& solid, const BasicMesh<Point>& shell) {
+  const auto offset = static_cast<VertexIndex>(solid.positions.size());
+  solid.positions.insert(solid.positions.end(), shell.positions.begin(), shell.positions.end());
+  for (Triangle t : shell.triangles) solid.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  solid.surfaces.insert(solid.surfaces.end(), shell.surfaces.begin(), shell.surfaces.end());
+  auto append = [](auto& to, const auto& from) { to.insert(to.end(), from.begin(), from.end()); };
+  append(solid.corners.normals, shell.corners.normals);
+  append(solid.corners.uvs, shell.corners.uvs);
+  append(solid.corners.tangents, shell.corners.tangents);
+}
+
+template <class Point>
+std::vector<BasicMesh<Point>> split_into_shells(const BasicMesh<Point>& surface) {
+  const auto& tris = surface.triangles;
+  const std::size_t corner_count = 3 * tris.size();
+  // corner_of_edge: directed edge (u -> w) -> the corner at u of the triangle that
+  // traverses it. Each directed edge may appear once: twice is a non-manifold edge.
+  IndexMap corner_of_edge(corner_count);
+  for (std::uint32_t c = 0; c < corner_count; ++c) {
+    const Triangle& t = tris[c / 3];
+    const VertexIndex u = t[c % 3], w = t[(c + 1) % 3];
+    if (corner_of_edge.insert(directed_edge_key(u, w), c) != c) {
+      throw UnsupportedGeometryError("the cut makes a non-manifold edge (" + std::to_string(u) + ", " +
+                                     std::to_string(w) + "): a face of the mesh meets the plane along a cap chord");
+    }
+  }
+  // Corners around one vertex that are joined across an edge belong to one fan: a
+  // fan becomes one output vertex. Triangles joined across an edge share a shell.
+  UnionFind fans(corner_count);
+  UnionFind shells(tris.size());
+  for (std::uint32_t c = 0; c < corner_count; ++c) {
+    const Triangle& t = tris[c / 3];
+    const VertexIndex u = t[c % 3], w = t[(c + 1) % 3];
+    const std::uint32_t twin = corner_of_edge.find(directed_edge_key(w, u));
+    if (twin == IndexMap::absent) {
+      throw std::logic_error("separate_solids: open surface at edge (" + std::to_string(u) + ", " +
+                             std::to_string(w) + ")");
+    }
+    // The twin corner sits at w; the corner after it in its triangle sits at u.
+    const std::uint32_t twin_at_u = (twin / 3) * 3 + (twin % 3 + 1) % 3;
+    fans.unite(c, twin_at_u);
+    shells.unite(c / 3, twin / 3);
+  }
+  std::vector<BasicMesh<Point>> result;
+  std::vector<std::uint32_t> shell_of_root(tris.size(), IndexMap::absent);
+  std::vector<VertexIndex> vertex_of_fan(corner_count, IndexMap::absent);
+  const bool normals = surface.corners.has_normals(), uvs = surface.corners.has_uvs(),
+             tangents = surface.corners.has_tangents();
+  for (std::uint32_t t = 0; t < tris.size(); ++t) {
+    const std::uint32_t root = shells.find(t);
+    if (shell_of_root[root] == IndexMap::absent) {
+      shell_of_root[root] = static_cast<std::uint32_t>(result.size());
+      result.emplace_back();
+    }
+    BasicMesh<Point>& shell = result[shell_of_root[root]];
+    Triangle renumbered;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t corner = 3 * t + k;
+      const std::uint32_t fan = fans.find(corner);
+      if (vertex_of_fan[fan] == IndexMap::absent) {
+        vertex_of_fan[fan] = static_cast<VertexIndex>(shell.positions.size());
+        shell.positions.push_back(surface.positions[tris[t][k]]);
+      }
+      renumbered[k] = vertex_of_fan[fan];
+      if (normals) shell.corners.normals.push_back(surface.corners.normals[corner]);
+      if (uvs) shell.corners.uvs.push_back(surface.corners.uvs[corner]);
+      if (tangents) shell.corners.tangents.push_back(surface.corners.tangents[corner]);
+    }
+    shell.triangles.push_back(renumbered);
+    shell.surfaces.push_back(surface.surfaces[t]);
+  }
+  return result;
+}
+
+template <class Point>
+std::vector<BasicMesh<Point>> separate(const BasicMesh<Point>& surface) {
+  std::vector<BasicMesh<Point>> shells = split_into_shells(surface);
+  if (shells.size() <= 1) return shells;  // a lone closed shell of a valid cut faces outward
+  std::vector<Sign> orientation;
+  for (const auto& shell : shells) orientation.push_back(volume_sign(shell));
+
+  std::vector<std::size_t> solid_of_shell(shells.size(), SIZE_MAX);
+  std::vector<std::size_t> outer;
+  for (std::size_t i = 0; i < shells.size(); ++i) {
+    if (orientation[i] == Sign::positive) outer.push_back(i);
+  }
+  std::vector<BasicMesh<Point>> solids;
+  std::vector<std::size_t> solid_index_of_outer(shells.size(), SIZE_MAX);
+  for (std::size_t i : outer) {
+    solid_index_of_outer[i] = solids.size();
+    solids.push_back(std::move(shells[i]));
+  }
+  for (std::size_t i = 0; i < shells.size(); ++i) {
+    if (orientation[i] == Sign::positive) continue;
+    // A cavity goes with the innermost outward shell containing it: the one that
+    // lies inside every other container. A shell that is flat, or that no outward
+    // shell contains, can only come from a self-intersecting input or a rounded
+    // (fast kernel) embedding; it stays a solid of its own, so the output is
+    // still closed and oriented, and the caller's validation reports it.
+    std::vector<std::size_t> containers;
+    if (orientation[i] == Sign::negative) {
+      for (std::size_t o : outer) {
+        if (shell_inside(shells[i], solids[solid_index_of_outer[o]]) == Containment::inside) {
+          containers.push_back(o);
+        }
+      }
+    }
+    if (containers.empty()) {
+      solids.push_back(std::move(shells[i]));
+      continue;
+    }
+    std::size_t innermost = containers.front();
+    for (std::size_t candidate : containers) {
+      if (candidate != innermost && shell_inside(solids[solid_index_of_outer[candidate]],
+                                                 solids[solid_index_of_outer[innermost]]) == Containment::inside) {
+        innermost = candidate;
+      }
+    }
+    solid_of_shell[i] = solid_index_of_outer[innermost];
+  }
+  for (std::size_t i = 0; i < shells.size(); ++i) {
+    if (solid_of_shell[i] != SIZE_MAX) append_shell(solids[solid_of_shell[i]], shells[i]);
+  }
+  return solids;
+}
+
+}  // namespace
+
+std::vector<Mesh> separate_solids(const Mesh& surface) { return separate(surface); }
+std::vector<ExactMesh> separate_solids(const ExactMesh& surface) { return separate(surface); }
+
+}  // namespace shatter

@@ -1,0 +1,35 @@
+#pragma once
+// Invariant checks shared by the property tests (DESIGN.md, "Invariants").
+
+#include <gmpxx.h>
+
+#include <string>
+#include <vector>
+
+#include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/mesh.hpp"
+
+namespace shatter::test {
+
+/// Empty when `mesh` is a closed, oriented 2-manifold with positive volume, no
+/// zero-area triangle and no unused vertex, and its attribute channels have 3
+/// entries per triangle; otherwise the validator's one-line summary.
+std::string solid_problem(const Mesh& mesh);
+
+/// Empty when `mesh` is closed, consistently oriented and 2-manifold with every
+/// vertex used: the fast kernel's guarantee whatever rounding did to the
+/// embedding. Otherwise the first such defect.
+std::string topology_problem(const Mesh& mesh);
+
+/// solid_problem for an exact mesh, decided on the exact coordinates: topology as
+/// topology_problem, then no exactly collinear triangle, then positive volume.
+std::string exact_solid_problem(const ExactMesh& mesh);
+
+/// Six times the volume, exactly, as a rational.
+mpq_class exact_six_volume(const ExactMesh& mesh);
+mpq_class exact_six_volume(const Mesh& mesh);
+
+/// The mesh's bytes in a canonical binary form, to compare outputs for identity.
+std::string canonical_bytes(const Mesh& mesh);
+
+}  // namespace shatter::test

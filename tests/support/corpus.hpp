@@ -1,0 +1,19 @@
+#pragma once
+// The shared mesh corpus (../shared/meshes). Every accessor throws if the corpus
+// reads back empty, so a property test can never pass by testing nothing.
+
+#include <filesystem>
+#include <vector>
+
+namespace shatter::test {
+
+/// The folder holding the shared meshes.
+std::filesystem::path mesh_dir();
+/// The valid meshes at the top of the corpus (*.off), sorted by name; never empty.
+std::vector<std::filesystem::path> valid_meshes();
+/// The meshes under bad/, which must be refused; never empty.
+std::vector<std::filesystem::path> bad_meshes();
+/// The meshes under self-intersecting/; never empty.
+std::vector<std::filesystem::path> self_intersecting_meshes();
+
+}  // namespace shatter::test

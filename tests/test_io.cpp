@@ -1,0 +1,610 @@
+// Properties of the mesh readers and writers: every corpus mesh reads and
+// round-trips bit for bit through every format, the encodings of one format
+// agree, and malformed, truncated or hostile input is refused with
+// InvalidMeshError, never a crash or a huge allocation.
+
+#include <catch2/catch.hpp>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/io.hpp"
+#include "support/corpus.hpp"
+
+using namespace shatter;
+
+namespace {
+
+constexpr std::array<MeshFormat, 4> all_formats = {MeshFormat::off, MeshFormat::obj, MeshFormat::ply, MeshFormat::stl};
+
+std::string format_label(MeshFormat format) { return std::string(format_name(format)); }
+
+bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
+bool same_bits(Vec3 a, Vec3 b) { return same_bits(a.x, b.x) && same_bits(a.y, b.y) && same_bits(a.z, b.z); }
+
+/// The first BasicMesh invariant (as io.hpp promises them, plus "no vertex
+/// unused" and finiteness) that `mesh` breaks, or an empty string.
+std::string broken_invariant(const Mesh& mesh) {
+  if (mesh.surfaces.size() != mesh.triangle_count()) return "surface count differs from triangle count";
+  for (const SurfaceId surface : mesh.surfaces) {
+    if (surface != original_surface) return "a triangle read from a file is not on the original surface";
+  }
+  for (const std::size_t channel_size : {mesh.corners.normals.size(), mesh.corners.uvs.size(), mesh.corners.tangents.size()}) {
+    if (channel_size != 0 && channel_size != 3 * mesh.triangle_count()) return "an attribute channel has the wrong size";
+  }
+  std::vector<bool> used(mesh.vertex_count(), false);
+  for (const Triangle& triangle : mesh.triangles) {
+    for (const VertexIndex vertex : triangle) {
+      if (vertex >= mesh.vertex_count()) return "vertex index " + std::to_string(vertex) + " out of range";
+      used[vertex] = true;
+    }
+  }
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    if (!used[v]) return "vertex " + std::to_string(v) + " unused";
+    if (!is_finite(mesh.positions[v])) return "vertex " + std::to_string(v) + " not finite";
+  }
+  return {};
+}
+
+void check_invariants(const Mesh& mesh) { REQUIRE(broken_invariant(mesh) == ""); }
+
+void require_same_mesh(const Mesh& a, const Mesh& b) {
+  REQUIRE(a.vertex_count() == b.vertex_count());
+  std::size_t first_difference = 0;
+  while (first_difference < a.vertex_count() && same_bits(a.positions[first_difference], b.positions[first_difference])) {
+    ++first_difference;
+  }
+  INFO("first position that differs in its bits: " << first_difference);
+  REQUIRE(first_difference == a.vertex_count());
+  REQUIRE(a.triangles == b.triangles);
+  REQUIRE(a.surfaces == b.surfaces);
+  REQUIRE(a.corners.normals == b.corners.normals);
+  REQUIRE(a.corners.uvs == b.corners.uvs);
+}
+
+/// The positions of every triangle's corners, which do not depend on vertex numbering.
+std::vector<Vec3> corner_positions(const Mesh& mesh) {
+  std::vector<Vec3> corners;
+  for (const Triangle& triangle : mesh.triangles) {
+    for (const VertexIndex vertex : triangle) corners.push_back(mesh.positions[vertex]);
+  }
+  return corners;
+}
+
+Mesh read_text(std::string_view text, MeshFormat format) { return read_mesh_from_bytes(text, format); }
+
+std::string refusal_message(std::string_view bytes, MeshFormat format) {
+  try {
+    read_mesh_from_bytes(bytes, format);
+  } catch (const InvalidMeshError& error) {
+    return error.what();
+  }
+  FAIL("input was accepted: " << bytes.substr(0, 200));
+  return {};
+}
+
+std::string refusal_message_of_file(const std::filesystem::path& path) {
+  try {
+    read_mesh(path);
+  } catch (const InvalidMeshError& error) {
+    return error.what();
+  }
+  FAIL("file was accepted: " << path);
+  return {};
+}
+
+/// A directory of its own under the system temporary directory, removed at the end.
+struct ScratchDirectory {
+  std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("shatter-test-io-" + std::to_string(::getpid()));
+  ScratchDirectory() {
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  ~ScratchDirectory() { std::filesystem::remove_all(path); }
+  std::vector<std::filesystem::path> entries() const {
+    std::vector<std::filesystem::path> found;
+    for (const auto& entry : std::filesystem::directory_iterator(path)) found.push_back(entry.path());
+    return found;
+  }
+};
+
+template <class T>
+void append_binary(std::string& out, T value, bool big_endian) {
+  std::array<char, sizeof(T)> raw;
+  std::memcpy(raw.data(), &value, sizeof(T));
+  if (big_endian != (std::endian::native == std::endian::big)) std::reverse(raw.begin(), raw.end());
+  out.append(raw.data(), raw.size());
+}
+
+/// The start of the last non-blank line: cutting a counted text format before it
+/// always loses data the header promised.
+std::size_t last_line_start(std::string_view text) {
+  std::size_t end = text.find_last_not_of(" \t\r\n");
+  const std::size_t newline = text.rfind('\n', end);
+  return newline == std::string_view::npos ? 0 : newline + 1;
+}
+
+/// Cuts `bytes` at the given offsets: each cut is refused with InvalidMeshError
+/// (never another exception or a crash), or, where `must_refuse_before` allows,
+/// reads as a mesh that keeps every invariant.
+void check_truncations(const std::string& bytes, MeshFormat format, const std::vector<std::size_t>& offsets,
+                       std::size_t must_refuse_before) {
+  for (const std::size_t offset : offsets) {
+    INFO(format_label(format) << " cut at byte " << offset << " of " << bytes.size());
+    const std::string_view cut = std::string_view(bytes).substr(0, offset);
+    if (offset < must_refuse_before) {
+      REQUIRE_THROWS_AS(read_mesh_from_bytes(cut, format), InvalidMeshError);
+      continue;
+    }
+    try {
+      check_invariants(read_mesh_from_bytes(cut, format));
+    } catch (const InvalidMeshError&) {
+    }
+  }
+}
+
+std::vector<std::size_t> every_offset(std::size_t size) {
+  std::vector<std::size_t> offsets;
+  for (std::size_t offset = 0; offset < size; ++offset) offsets.push_back(offset);
+  return offsets;
+}
+
+std::vector<std::size_t> spread_offsets(std::size_t size, std::size_t count) {
+  std::vector<std::size_t> offsets;
+  for (std::size_t k = 0; k < count; ++k) offsets.push_back(size * k / count);
+  return offsets;
+}
+
+Mesh read_corpus(const char* name) { return read_mesh(test::mesh_dir() / name); }
+
+// A square pyramid with a quad base, per-vertex normals and texture coordinates,
+// written in all three PLY encodings with properties and an element to skip.
+struct PyramidVertex {
+  float x;
+  double y;
+  std::int16_t z;
+  std::uint8_t red;
+  float nx, ny, nz;
+  double s, t;
+};
+constexpr std::array<PyramidVertex, 5> pyramid = {{{0, 0, 0, 10, 0, 0, -1, 0, 0},
+                                                   {1, 0, 0, 20, 0, 0, -1, 1, 0},
+                                                   {1, 1, 0, 30, 0, 0, -1, 1, 1},
+                                                   {0, 1, 0, 40, 0, 0, -1, 0, 1},
+                                                   {0.5f, 0.5, 1, 50, 0, 0, 1, 0.5, 0.5}}};
+const std::vector<std::vector<int>> pyramid_faces = {{0, 3, 2, 1}, {0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}};
+
+std::string pyramid_ply(const std::string& encoding) {
+  std::string out = "ply\nformat " + encoding + " 1.0\ncomment skip me\n";
+  out += "element vertex 5\nproperty float x\nproperty double y\nproperty short z\nproperty uchar red\n";
+  out += "property float nx\nproperty float ny\nproperty float nz\nproperty double s\nproperty double t\n";
+  out += "element edge 2\nproperty int vertex1\nproperty list ushort float weights\n";
+  out += "element face 5\nproperty int flags\nproperty list uchar int vertex_indices\nend_header\n";
+  if (encoding == "ascii") {
+    for (const PyramidVertex& v : pyramid) {
+      out += std::to_string(v.x) + ' ' + std::to_string(v.y) + ' ' + std::to_string(v.z) + ' ' + std::to_string(v.red) + ' ' +
+             std::to_string(v.nx) + ' ' + std::to_string(v.ny) + ' ' + std::to_string(v.nz) + ' ' + std::to_string(v.s) +
+             ' ' + std::to_string(v.t) + '\n';
+    }
+    out += "0 2 0.5 1.5\n3 0\n";
+    for (const auto& face : pyramid_faces) {
+      out += "7 " + std::to_string(face.size());
+      for (const int index : face) out += ' ' + std::to_string(index);
+      out += '\n';
+    }
+    return out;
+  }
+  const bool big = encoding == "binary_big_endian";
+  for (const PyramidVertex& v : pyramid) {
+    append_binary(out, v.x, big);
+    append_binary(out, v.y, big);
+    append_binary(out, v.z, big);
+    append_binary(out, v.red, big);
+    append_binary(out, v.nx, big);
+    append_binary(out, v.ny, big);
+    append_binary(out, v.nz, big);
+    append_binary(out, v.s, big);
+    append_binary(out, v.t, big);
+  }
+  append_binary(out, std::int32_t{0}, big);
+  append_binary(out, std::uint16_t{2}, big);
+  append_binary(out, 0.5f, big);
+  append_binary(out, 1.5f, big);
+  append_binary(out, std::int32_t{3}, big);
+  append_binary(out, std::uint16_t{0}, big);
+  for (const auto& face : pyramid_faces) {
+    append_binary(out, std::int32_t{7}, big);
+    append_binary(out, static_cast<std::uint8_t>(face.size()), big);
+    for (const int index : face) append_binary(out, std::int32_t{index}, big);
+  }
+  return out;
+}
+
+std::string binary_stl(const Mesh& mesh, std::string_view header_start) {
+  std::string out(header_start);
+  out.resize(80, ' ');
+  append_binary(out, static_cast<std::uint32_t>(mesh.triangle_count()), false);
+  for (const Triangle& triangle : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) append_binary(out, 0.0f, false);  // the normal, which readers ignore
+    for (const VertexIndex vertex : triangle) {
+      const Vec3 p = mesh.positions[vertex];
+      append_binary(out, static_cast<float>(p.x), false);
+      append_binary(out, static_cast<float>(p.y), false);
+      append_binary(out, static_cast<float>(p.z), false);
+    }
+    append_binary(out, std::uint16_t{0}, false);
+  }
+  return out;
+}
+
+const char* const pyramid_obj = R"(# a pyramid: quad base, relative indices, per-corner uvs and normals
+mtllib missing.mtl
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 0.5 0.5 1
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+vt 0.5 0.5
+vn 0 0 -1
+vn 0 -1 1
+g base
+usemtl stone
+f 1/1/1 4/4/1 3/3/1 2/2/1
+g sides
+f -5/-5/-1 -4/-4/-1 -1/-1/-1
+f 2/2/2 3/3/2 5/5/2
+f 3/3/2 4/4/2 5/5/2
+f 4/4/2 1/1/2 5/5/2
+)";
+
+}  // namespace
+
+TEST_CASE("every valid corpus mesh reads with triangles and keeps the invariants", "[io]") {
+  for (const auto& path : test::valid_meshes()) {
+    INFO(path);
+    const Mesh mesh = read_mesh(path);
+    REQUIRE(mesh.triangle_count() > 0);
+    check_invariants(mesh);
+  }
+}
+
+TEST_CASE("every corpus mesh, bad ones included, reads or is refused without crashing", "[io]") {
+  std::vector<std::filesystem::path> paths = test::bad_meshes();
+  for (const auto& path : test::self_intersecting_meshes()) paths.push_back(path);
+  for (const auto& path : paths) {
+    INFO(path);
+    check_invariants(read_mesh(path));  // bad meshes are well-formed files: validation, not the reader, refuses them
+  }
+}
+
+TEST_CASE("quads are fan-triangulated", "[io]") {
+  const Mesh torus = read_corpus("torus_quad.off");
+  REQUIRE(torus.triangle_count() == 2 * 25);
+  const Mesh square = read_text("OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n", MeshFormat::off);
+  REQUIRE(square.triangles == std::vector<Triangle>{{0, 1, 2}, {0, 2, 3}});
+}
+
+TEST_CASE("round trip through every format keeps positions bit for bit and the triangles", "[io]") {
+  for (const auto& path : test::valid_meshes()) {
+    const Mesh original = read_mesh(path);
+    for (const MeshFormat format : all_formats) {
+      INFO(path << " via " << format_label(format));
+      const Mesh again = read_mesh_from_bytes(write_mesh_to_bytes(original, format), format);
+      require_same_mesh(original, again);
+    }
+  }
+}
+
+TEST_CASE("round trip keeps values that decimal printing could lose", "[io]") {
+  const double tiny = std::numeric_limits<double>::denorm_min();
+  const double third = 1.0 / 3.0;
+  const double big = std::numeric_limits<double>::max();
+  const double next_to_one = std::nextafter(1.0, 2.0);
+  Mesh mesh;
+  mesh.positions = {{tiny, third, -big}, {next_to_one, 1, 0.1}, {-0.0, 1e-300, 123456789.125}};
+  mesh.triangles = {{0, 1, 2}};
+  mesh.surfaces = {original_surface};
+  for (const MeshFormat format : all_formats) {
+    INFO(format_label(format));
+    require_same_mesh(mesh, read_mesh_from_bytes(write_mesh_to_bytes(mesh, format), format));
+  }
+}
+
+TEST_CASE("OBJ reads polygons, relative indices and per-corner attributes", "[io][obj]") {
+  const Mesh mesh = read_text(pyramid_obj, MeshFormat::obj);
+  check_invariants(mesh);
+  REQUIRE(mesh.triangle_count() == 2 + 4);
+  REQUIRE(mesh.vertex_count() == 5);
+  // File vertices 1 4 3 2 5 are first used in that order.
+  REQUIRE(mesh.triangles == std::vector<Triangle>{{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {3, 2, 4}, {2, 1, 4}, {1, 0, 4}});
+  REQUIRE(mesh.corners.uvs.size() == 18);
+  REQUIRE(mesh.corners.normals.size() == 18);
+  // Second triangle of the base fan: file corners 1, 3, 2.
+  REQUIRE(mesh.corners.uvs[3] == Vec2{0, 0});
+  REQUIRE(mesh.corners.uvs[4] == Vec2{1, 1});
+  REQUIRE(mesh.corners.uvs[5] == Vec2{1, 0});
+  // The face written with negative indices: vertices 1 2 5, normal 2.
+  REQUIRE(mesh.corners.uvs[8] == Vec2{0.5, 0.5});
+  REQUIRE(mesh.corners.normals[6] == Vec3{0, -1, 1});
+  REQUIRE(mesh.corners.normals[0] == Vec3{0, 0, -1});
+
+  SECTION("and writes them back exactly, each distinct value once") {
+    const std::string written = write_mesh_to_bytes(mesh, MeshFormat::obj);
+    require_same_mesh(mesh, read_text(written, MeshFormat::obj));
+    std::size_t uv_lines = 0, normal_lines = 0;
+    for (std::size_t at = written.find("\nvt "); at != std::string::npos; at = written.find("\nvt ", at + 1)) ++uv_lines;
+    for (std::size_t at = written.find("\nvn "); at != std::string::npos; at = written.find("\nvn ", at + 1)) ++normal_lines;
+    REQUIRE(uv_lines == 5);
+    REQUIRE(normal_lines == 2);
+  }
+}
+
+TEST_CASE("OBJ refuses what tinyobjloader would quietly accept", "[io][obj]") {
+  const std::string square = "v 0 0 0\nv 1 0 0\nv 1 1 0\n";
+  CHECK_THAT(refusal_message(square + "f 1 2\n", MeshFormat::obj), Catch::Contains("face 1 at line 4"));
+  CHECK_THAT(refusal_message(square + "f 1 2 4\n", MeshFormat::obj), Catch::Contains("does not exist"));
+  CHECK_THAT(refusal_message(square + "f 1 2 -4\n", MeshFormat::obj), Catch::Contains("does not exist"));
+  CHECK_THAT(refusal_message(square + "f 1 2 0\n", MeshFormat::obj), Catch::Contains("not a vertex reference"));
+  CHECK_THAT(refusal_message(square + "f 1 2 3x\n", MeshFormat::obj), Catch::Contains("not a vertex reference"));
+  CHECK_THAT(refusal_message(square + "f 1 2 99999999999\n", MeshFormat::obj), Catch::Contains("not a vertex reference"));
+  CHECK_THAT(refusal_message("v 0 0 zero\n", MeshFormat::obj), Catch::Contains("line 1"));
+  CHECK_THAT(refusal_message("v 0 0\n", MeshFormat::obj), Catch::Contains("vertex 1 at line 1"));
+  CHECK_THAT(refusal_message(square + "vt 0 0\nf 1/1 2/1 3/1\nf 1 2 3\n", MeshFormat::obj),
+             Catch::Contains("face 2 at line 6"));
+  CHECK_THAT(refusal_message(square + "vn 0 0 1\nf 1//1 2 3//1\n", MeshFormat::obj), Catch::Contains("without a normal"));
+}
+
+TEST_CASE("PLY ascii, binary little-endian and binary big-endian give the same mesh", "[io][ply]") {
+  const Mesh ascii = read_text(pyramid_ply("ascii"), MeshFormat::ply);
+  const Mesh little = read_text(pyramid_ply("binary_little_endian"), MeshFormat::ply);
+  const Mesh big = read_text(pyramid_ply("binary_big_endian"), MeshFormat::ply);
+  check_invariants(ascii);
+  REQUIRE(ascii.triangle_count() == 6);
+  REQUIRE(ascii.vertex_count() == 5);
+  require_same_mesh(ascii, little);
+  require_same_mesh(ascii, big);
+
+  std::vector<Vec3> expected_corners;
+  std::vector<Vec2> expected_uvs;
+  for (const auto& face : pyramid_faces) {
+    for (std::size_t k = 1; k + 1 < face.size(); ++k) {
+      for (const int index : {face[0], face[k], face[k + 1]}) {
+        const PyramidVertex& v = pyramid[static_cast<std::size_t>(index)];
+        expected_corners.push_back({v.x, v.y, static_cast<double>(v.z)});
+        expected_uvs.push_back({v.s, v.t});
+      }
+    }
+  }
+  REQUIRE(corner_positions(ascii) == expected_corners);
+  REQUIRE(ascii.corners.uvs == expected_uvs);
+  REQUIRE(ascii.corners.normals.size() == 18);
+  REQUIRE(ascii.corners.normals[17] == Vec3{0, 0, 1});  // the apex
+}
+
+TEST_CASE("PLY refuses malformed bodies, naming the element", "[io][ply]") {
+  const std::string header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+                             "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string vertices = "0 0 0\n1 0 0\n0 1 0\n";
+  check_invariants(read_text(header + vertices + "3 0 1 2\n", MeshFormat::ply));
+  CHECK_THAT(refusal_message(header + vertices + "2 0 1\n", MeshFormat::ply), Catch::Contains("face 0 at line 13"));
+  CHECK_THAT(refusal_message(header + vertices + "3 0 1 3\n", MeshFormat::ply), Catch::Contains("out of range"));
+  CHECK_THAT(refusal_message(header + vertices + "3 0 1 -1\n", MeshFormat::ply), Catch::Contains("out of range"));
+  CHECK_THAT(refusal_message(header + vertices + "3 0 1 2 7\n", MeshFormat::ply), Catch::Contains("after its last element"));
+  CHECK_THAT(refusal_message(header + "0 0 0\n1 0 x\n", MeshFormat::ply), Catch::Contains("vertex 1 at line 11"));
+  const std::string signed_counts = "ply\nformat binary_little_endian 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                                    "property float z\nelement face 1\nproperty list char int vertex_indices\nend_header\n\xff";
+  CHECK_THAT(refusal_message(signed_counts, MeshFormat::ply), Catch::Contains("negative list length"));
+}
+
+TEST_CASE("STL ascii and binary give the same cube, whatever the binary header says", "[io][stl]") {
+  const Mesh cube = read_corpus("cube.off");  // coordinates +-1, exact in float
+  const Mesh from_ascii = read_text(write_mesh_to_bytes(cube, MeshFormat::stl), MeshFormat::stl);
+  for (const std::string_view header : {"binary cube", "solid cube, but binary"}) {
+    INFO(header);
+    const Mesh from_binary = read_text(binary_stl(cube, header), MeshFormat::stl);
+    require_same_mesh(from_ascii, from_binary);
+  }
+  require_same_mesh(cube, from_ascii);
+}
+
+TEST_CASE("truncated files are refused or read as valid meshes, never a crash", "[io][fuzz]") {
+  const Mesh cube = read_corpus("cube.off");
+  const Mesh pyramid_with_attributes = read_text(pyramid_obj, MeshFormat::obj);
+  for (const MeshFormat format : all_formats) {
+    const std::string bytes = write_mesh_to_bytes(format == MeshFormat::obj ? pyramid_with_attributes : cube, format);
+    // Binary PLY and the counted text formats lose promised data at every cut
+    // before their last line; OBJ has no counts, so a cut at a line end is a valid file.
+    const std::size_t must_refuse_before =
+        format == MeshFormat::obj ? 0 : format == MeshFormat::ply ? bytes.size() : last_line_start(bytes);
+    check_truncations(bytes, format, every_offset(bytes.size()), must_refuse_before);
+  }
+  for (const std::string encoding : {"ascii", "binary_little_endian", "binary_big_endian"}) {
+    const std::string bytes = pyramid_ply(encoding);
+    check_truncations(bytes, MeshFormat::ply, every_offset(bytes.size()),
+                      encoding == "ascii" ? last_line_start(bytes) : bytes.size());
+  }
+  const std::string stl = binary_stl(cube, "solid");
+  check_truncations(stl, MeshFormat::stl, every_offset(stl.size()), stl.size());
+}
+
+TEST_CASE("truncated corpus meshes are refused in every format", "[io][fuzz]") {
+  for (const auto& path : test::valid_meshes()) {
+    const Mesh mesh = read_mesh(path);
+    for (const MeshFormat format : all_formats) {
+      const std::string bytes = write_mesh_to_bytes(mesh, format);
+      const std::size_t must_refuse_before =
+          format == MeshFormat::obj ? 0 : format == MeshFormat::ply ? bytes.size() : last_line_start(bytes);
+      INFO(path);
+      check_truncations(bytes, format, spread_offsets(bytes.size(), 12), must_refuse_before);
+    }
+  }
+}
+
+TEST_CASE("garbage is refused in every format", "[io][fuzz]") {
+  std::string noise;
+  std::uint64_t state = 0x243f6a8885a308d3ULL;
+  for (int k = 0; k < 4096; ++k) {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    noise += static_cast<char>(state >> 56);
+  }
+  for (const MeshFormat format : all_formats) {
+    INFO(format_label(format));
+    REQUIRE_THROWS_AS(read_mesh_from_bytes(noise, format), InvalidMeshError);
+    REQUIRE_THROWS_AS(read_mesh_from_bytes("", format), InvalidMeshError);
+  }
+}
+
+TEST_CASE("absurd header counts are refused without allocating for them", "[io][fuzz]") {
+  // Were any of these reserved up front, the allocation would throw bad_alloc
+  // (or exhaust memory) instead of InvalidMeshError.
+  CHECK_THROWS_AS(read_text("OFF\n999999999 999999999 0\n", MeshFormat::off), InvalidMeshError);
+  CHECK_THROWS_AS(read_text("OFF\n3 999999999999 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", MeshFormat::off), InvalidMeshError);
+  CHECK_THROWS_AS(read_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2000000000 0 1 2\n", MeshFormat::off), InvalidMeshError);
+  CHECK_THROWS_AS(read_text("OFF\n-3 1 0\n", MeshFormat::off), InvalidMeshError);
+  CHECK_THROWS_AS(read_text("OFF\n99999999999999999999999 1 0\n", MeshFormat::off), InvalidMeshError);
+  const std::string ply_start = "ply\nformat binary_little_endian 1.0\nelement vertex 18446744073709551615\n"
+                                "property double x\nproperty double y\nproperty double z\n";
+  CHECK_THROWS_AS(read_text(ply_start + "element face 4000000000\nproperty list uint uint vertex_indices\nend_header\n0123",
+                            MeshFormat::ply),
+                  InvalidMeshError);
+  // An element with no properties occupies no bytes: a huge count of them costs nothing.
+  const std::string empty_elements = "ply\nformat ascii 1.0\nelement nothing 18446744073709551615\n"
+                                     "element vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+                                     "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                                     "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  CHECK(read_text(empty_elements, MeshFormat::ply).triangle_count() == 1);
+  std::string stl_header(80, ' ');
+  stl_header += "\xff\xff\xff\xff";
+  CHECK_THROWS_AS(read_text(stl_header + std::string(50, '\0'), MeshFormat::stl), InvalidMeshError);
+}
+
+TEST_CASE("malformed OFF is refused with the line at fault", "[io][off]") {
+  const std::string head = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n";
+  check_invariants(read_text(head + "3 0 1 2 255 0 0\n", MeshFormat::off));  // a face colour is ignored
+  CHECK_THAT(refusal_message(head + "2 0 1\n", MeshFormat::off), Catch::Contains("face 0 at line 6"));
+  CHECK_THAT(refusal_message(head + "-3 0 1 2\n", MeshFormat::off), Catch::Contains("at least 3"));
+  CHECK_THAT(refusal_message(head + "3 0 1 3\n", MeshFormat::off), Catch::Contains("out of range"));
+  CHECK_THAT(refusal_message(head + "3 0 -1 2\n", MeshFormat::off), Catch::Contains("out of range"));
+  CHECK_THAT(refusal_message(head + "4 0 1 2\n", MeshFormat::off), Catch::Contains("lists 3 of its 4"));
+  CHECK_THAT(refusal_message(head + "3 0 1 2\n3 0 1 2\n", MeshFormat::off), Catch::Contains("line 7"));
+  CHECK_THAT(refusal_message("OFF\n3 1 0\n0 0 0\n1 0\n", MeshFormat::off), Catch::Contains("vertex 1 at line 4"));
+  CHECK_THAT(refusal_message("4OFF\n3 1 0\n", MeshFormat::off), Catch::Contains("unsupported OFF variant"));
+  CHECK_THAT(refusal_message("PLY\n3 1 0\n", MeshFormat::off), Catch::Contains("not an OFF file"));
+  const Mesh commented = read_text("# made by hand\nOFF # header\n\n3 1 0\n0 0 0 # origin\n1 0 0\n0 1 0\n3 0 1 2\n", MeshFormat::off);
+  CHECK(commented.triangle_count() == 1);
+  const Mesh coloured = read_text("COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n3 0 1 2\n", MeshFormat::off);
+  CHECK(coloured.vertex_count() == 3);
+}
+
+TEST_CASE("non-finite coordinates are refused, naming the vertex", "[io]") {
+  CHECK_THAT(refusal_message("OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n", MeshFormat::off),
+             Catch::Contains("non-finite coordinate at vertex 1 at line 4"));
+  CHECK_THAT(refusal_message("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 -inf\n3 0 1 2\n", MeshFormat::off),
+             Catch::Contains("non-finite coordinate at vertex 2"));
+  CHECK_THAT(refusal_message("v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n", MeshFormat::obj),
+             Catch::Contains("non-finite coordinate at vertex 3"));
+  Mesh triangle;
+  triangle.positions = {{0, 0, 0}, {1, 0, 0}, {0, std::numeric_limits<double>::quiet_NaN(), 0}};
+  triangle.triangles = {{0, 1, 2}};
+  triangle.surfaces = {original_surface};
+  CHECK_THAT(refusal_message(write_mesh_to_bytes(triangle, MeshFormat::ply), MeshFormat::ply),
+             Catch::Contains("non-finite coordinate at PLY vertex 2"));
+  CHECK_THAT(refusal_message(binary_stl(triangle, "nan"), MeshFormat::stl), Catch::Contains("non-finite coordinate at STL facet 0"));
+  CHECK_THAT(refusal_message(write_mesh_to_bytes(triangle, MeshFormat::stl), MeshFormat::stl),
+             Catch::Contains("non-finite coordinate at STL facet 0"));
+  CHECK_THAT(refusal_message("OFF\n3 1 0\n0 0 0\n1e999 0 0\n0 1 0\n3 0 1 2\n", MeshFormat::off),
+             Catch::Contains("vertex 1 at line 4"));
+}
+
+TEST_CASE("welding merges equal positions, -0.0 with +0.0, and nothing else", "[io]") {
+  // File vertices 0 and 3 weld; 4 (equal to 1) is unused; 6 is 1 + 2^-52, one ulp from vertex 1.
+  const Mesh mesh = read_text("OFF\n7 2 0\n0 0 0\n1 0 0\n0 1 0\n-0 0 -0.0\n1 0 0\n0 -1 0\n1.0000000000000002 0 0\n"
+                              "3 0 1 2\n3 3 5 6\n",
+                              MeshFormat::off);
+  REQUIRE(mesh.vertex_count() == 5);
+  REQUIRE(mesh.triangles == std::vector<Triangle>{{0, 1, 2}, {0, 3, 4}});
+  REQUIRE(same_bits(mesh.positions[0].x, 0.0));  // the first corner's bits are kept
+  REQUIRE(mesh.positions[4].x == std::nextafter(1.0, 2.0));
+}
+
+TEST_CASE("duplicate positions weld, unused vertices are dropped, degenerate faces are kept", "[io]") {
+  const Mesh mesh = read_text("OFF\n6 2 0\n9 9 9\n0 0 0\n1 0 0\n0 1 0\n1 0 0\n5 5 5\n3 3 1 2\n3 2 2 4\n", MeshFormat::off);
+  REQUIRE(mesh.vertex_count() == 3);  // first-use order: file vertices 3, 1, 2 (= 4)
+  REQUIRE(mesh.positions == std::vector<Vec3>{{0, 1, 0}, {0, 0, 0}, {1, 0, 0}});
+  REQUIRE(mesh.triangles == std::vector<Triangle>{{0, 1, 2}, {2, 2, 2}});
+}
+
+TEST_CASE("writing is deterministic", "[io]") {
+  const Mesh first = read_corpus("elephant.off");
+  const Mesh second = read_corpus("elephant.off");
+  const Mesh with_attributes = read_text(pyramid_obj, MeshFormat::obj);
+  for (const MeshFormat format : all_formats) {
+    INFO(format_label(format));
+    REQUIRE(write_mesh_to_bytes(first, format) == write_mesh_to_bytes(second, format));
+    REQUIRE(write_mesh_to_bytes(with_attributes, format) == write_mesh_to_bytes(with_attributes, format));
+  }
+}
+
+TEST_CASE("files are written atomically and failures leave nothing behind", "[io][files]") {
+  const ScratchDirectory scratch;
+  const Mesh cube = read_corpus("cube.off");
+
+  for (const MeshFormat format : all_formats) {
+    const auto path = scratch.path / ("cube." + format_label(format));
+    write_mesh(cube, path, format);
+    require_same_mesh(cube, read_mesh(path));
+    write_mesh(cube, path, format);  // over an existing file
+    require_same_mesh(cube, read_mesh(path));
+  }
+  REQUIRE(scratch.entries().size() == all_formats.size());
+
+  REQUIRE_THROWS_AS(write_mesh(cube, scratch.path / "missing" / "cube.off", MeshFormat::off), IoError);
+  REQUIRE(scratch.entries().size() == all_formats.size());
+
+  // A rename over a non-empty directory fails after the temporary was written.
+  const auto occupied = scratch.path / "occupied.off";
+  std::filesystem::create_directories(occupied / "inside");
+  REQUIRE_THROWS_AS(write_mesh(cube, occupied, MeshFormat::off), IoError);
+  REQUIRE(scratch.entries().size() == all_formats.size() + 1);
+  for (const auto& entry : scratch.entries()) REQUIRE(entry.filename().string().find(".tmp-") == std::string::npos);
+}
+
+TEST_CASE("reading names the file on failure", "[io][files]") {
+  const ScratchDirectory scratch;
+  CHECK_THROWS_AS(read_mesh(scratch.path / "absent.off"), IoError);
+  std::filesystem::create_directories(scratch.path / "folder.off");
+  CHECK_THROWS_AS(read_mesh(scratch.path / "folder.off"), IoError);
+  CHECK_THROWS_AS(read_mesh(scratch.path / "mesh.gltf"), InvalidMeshError);
+  std::ofstream(scratch.path / "broken.off") << "OFF\n1 1 0\n";
+  CHECK_THAT(refusal_message_of_file(scratch.path / "broken.off"), Catch::Contains("broken.off"));
+}
+
+TEST_CASE("formats are named by extension and by name, in any case", "[io]") {
+  CHECK(format_from_extension("a/b/mesh.OBJ") == MeshFormat::obj);
+  CHECK(format_from_extension("mesh.ply") == MeshFormat::ply);
+  CHECK(format_from_extension("mesh.tar.stl") == MeshFormat::stl);
+  CHECK(format_from_extension("mesh") == std::nullopt);
+  CHECK(format_from_extension("mesh.glb") == std::nullopt);
+  for (const MeshFormat format : all_formats) {
+    CHECK(parse_mesh_format(format_name(format)) == format);
+  }
+  CHECK(parse_mesh_format("Off") == MeshFormat::off);
+  CHECK(parse_mesh_format("gltf") == std::nullopt);
+}

@@ -1,0 +1,326 @@
+// Property tests of one cut (slice + caps + solid separation) over the shared
+// corpus and generated meshes, with random and degenerate planes, both kernels.
+
+#include <catch2/catch.hpp>
+
+#include <map>
+
+#include "shatter/kernel/io.hpp"
+#include "shatter/meshtree/cut.hpp"
+#include "shatter/slicer/slice.hpp"
+#include "shatter/triangulate/cap.hpp"
+#include "support/checks.hpp"
+#include "support/corpus.hpp"
+#include "support/generators.hpp"
+
+using namespace shatter;
+using namespace shatter::test;
+
+namespace {
+
+struct Box3 {
+  Vec3 lo, hi;
+};
+Box3 bounds(const Mesh& m) {
+  Box3 b{m.positions[0], m.positions[0]};
+  for (const Vec3& p : m.positions) {
+    b.lo = {std::min(b.lo.x, p.x), std::min(b.lo.y, p.y), std::min(b.lo.z, p.z)};
+    b.hi = {std::max(b.hi.x, p.x), std::max(b.hi.y, p.y), std::max(b.hi.z, p.z)};
+  }
+  return b;
+}
+
+Plane plane_through(Vec3 point, Vec3 normal) { return {normal, -dot(normal, point)}; }
+
+// A plane, and whether it may pass within rounding distance of a vertex without
+// containing it exactly: there the fast kernel's rounded crossings may collapse
+// onto the vertex, so only its topology is guaranteed.
+struct TestPlane {
+  Plane plane;
+  bool grazes_vertex = false;
+};
+
+// Planes of every kind for one mesh: random ones through the bounding box, axis
+// planes exactly through a vertex (often along edges and faces too), and one
+// through a vertex with a random normal (rounded, so it grazes the vertex).
+std::vector<TestPlane> planes_for(const Mesh& mesh, std::uint64_t seed, int random_count) {
+  Random random(seed);
+  const Box3 b = bounds(mesh);
+  std::vector<TestPlane> planes;
+  for (int i = 0; i < random_count; ++i) {
+    const Vec3 p{random.uniform(b.lo.x, b.hi.x), random.uniform(b.lo.y, b.hi.y), random.uniform(b.lo.z, b.hi.z)};
+    planes.push_back({plane_through(p, random.direction())});
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    const Vec3 v = mesh.positions[random.index(mesh.positions.size())];
+    Vec3 normal{};
+    (axis == 0 ? normal.x : axis == 1 ? normal.y : normal.z) = axis == 1 ? -1.0 : 1.0;
+    // Exactly through v; other vertices may lie within an ulp of it (coordinates
+    // computed by sin and cos), so it may graze them.
+    planes.push_back({{normal, -(v[axis] * (axis == 1 ? -1.0 : 1.0))}, true});
+  }
+  planes.push_back({plane_through(mesh.positions[random.index(mesh.positions.size())], random.direction()), true});
+  return planes;
+}
+
+template <class Point>
+std::size_t piece_count(const CutResult<Point>& r) {
+  return r.below.size() + r.above.size();
+}
+
+// Checks every invariant of one fast-kernel cut. Where the plane grazes a vertex
+// the embedding may degenerate after rounding: topology is still required, and
+// the pieces whose embedding is not valid are counted (returned), never hidden.
+std::size_t check_fast_cut(const Mesh& mesh, const TestPlane& test_plane, const std::string& what) {
+  const Plane& plane = test_plane.plane;
+  INFO(what << " plane n=(" << plane.normal.x << ", " << plane.normal.y << ", " << plane.normal.z
+            << ") d=" << plane.offset);
+  const CutResult<Vec3> result = cut_mesh(mesh, plane);
+  mpq_class volume = 0;
+  std::size_t invalid_embeddings = 0;
+  for (const auto* side : {&result.below, &result.above}) {
+    for (const Mesh& piece : *side) {
+      CHECK(topology_problem(piece) == "");
+      if (test_plane.grazes_vertex) {
+        invalid_embeddings += solid_problem(piece).empty() ? 0 : 1;
+      } else {
+        CHECK(solid_problem(piece) == "");
+      }
+      volume += exact_six_volume(piece);
+    }
+  }
+  const double input = exact_six_volume(mesh).get_d();
+  CHECK(std::fabs(volume.get_d() - input) <= 1e-9 * std::fabs(input));
+  CHECK(piece_count(result) >= 1);
+  return invalid_embeddings;
+}
+
+void check_exact_cut(const Mesh& mesh, const TestPlane& test_plane, const std::string& what) {
+  const Plane& plane = test_plane.plane;
+  INFO(what << " (exact) plane n=(" << plane.normal.x << ", " << plane.normal.y << ", " << plane.normal.z
+            << ") d=" << plane.offset);
+  const CutResult<ExactPoint> result = cut_mesh(to_exact(mesh), plane);
+  mpq_class volume = 0;
+  for (const auto* side : {&result.below, &result.above}) {
+    for (const ExactMesh& piece : *side) {
+      CHECK(exact_solid_problem(piece) == "");
+      volume += exact_six_volume(piece);
+    }
+  }
+  CHECK(volume == exact_six_volume(mesh));
+}
+
+std::vector<NamedMesh> corpus() {
+  std::vector<NamedMesh> meshes;
+  for (const auto& path : valid_meshes()) meshes.push_back({path.filename().string(), read_mesh(path)});
+  return meshes;
+}
+
+}  // namespace
+
+TEST_CASE("fast cuts of generated meshes are valid solids that partition the volume") {
+  const auto meshes = generated_meshes();
+  REQUIRE(meshes.size() >= 10);
+  for (const NamedMesh& m : meshes) {
+    REQUIRE(solid_problem(m.mesh) == "");
+    for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+      for (const TestPlane& plane : planes_for(m.mesh, seed, 4)) check_fast_cut(m.mesh, plane, m.name);
+    }
+  }
+}
+
+TEST_CASE("exact cuts of generated meshes partition the volume exactly") {
+  for (const NamedMesh& m : generated_meshes()) {
+    for (std::uint64_t seed = 1; seed <= 2; ++seed) {
+      for (const TestPlane& plane : planes_for(m.mesh, seed, 2)) check_exact_cut(m.mesh, plane, m.name);
+    }
+  }
+}
+
+TEST_CASE("cuts of every corpus mesh are valid in both kernels") {
+  const auto meshes = corpus();
+  REQUIRE(meshes.size() >= 10);
+  for (const NamedMesh& m : meshes) {
+    for (const TestPlane& plane : planes_for(m.mesh, 7, 3)) check_fast_cut(m.mesh, plane, m.name);
+    for (const TestPlane& plane : planes_for(m.mesh, 11, 1)) check_exact_cut(m.mesh, plane, m.name);
+  }
+}
+
+TEST_CASE("planes along grid lines hit vertices, edges and faces at once") {
+  // Coordinates are multiples of 1/2 (exact), so axis and diagonal planes through
+  // grid values contain many vertices, whole edges and whole faces.
+  const Mesh grid = grid_box({-1, -1, -1}, {1, 1, 1}, 4);
+  for (double c : {-1.0, -0.5, 0.0, 0.5, 1.0}) {
+    for (int axis = 0; axis < 3; ++axis) {
+      Vec3 n{};
+      (axis == 0 ? n.x : axis == 1 ? n.y : n.z) = 1;
+      check_fast_cut(grid, {{n, -c}}, "grid axis");
+      check_exact_cut(grid, {{n, -c}}, "grid axis");
+    }
+    check_fast_cut(grid, {{{1, 1, 0}, -c}}, "grid diagonal");
+    check_exact_cut(grid, {{{1, 1, 0}, -c}}, "grid diagonal");
+    check_fast_cut(grid, {{{1, -1, 1}, -c}}, "grid body diagonal");
+    check_exact_cut(grid, {{{1, -1, 1}, -c}}, "grid body diagonal");
+  }
+}
+
+TEST_CASE("a plane containing a face or missing the mesh returns it whole") {
+  const Mesh cube = box({0, 0, 0}, {1, 1, 1});
+  for (double d : {0.0, -1.0, 5.0, -5.0}) {
+    const auto result = cut_mesh(cube, {{0, 0, 1}, d});
+    CHECK(result.plane_missed);
+    REQUIRE(piece_count(result) == 1);
+    const Mesh& piece = result.below.empty() ? result.above[0] : result.below[0];
+    CHECK(piece.triangles.size() == cube.triangles.size());
+    CHECK(piece.positions.size() == cube.positions.size());
+    CHECK(exact_six_volume(piece) == exact_six_volume(cube));
+  }
+  // z = 0 holds the bottom face, which faces -z: the cube lies above.
+  CHECK(cut_mesh(cube, {{0, 0, 1}, 0.0}).above.size() == 1);
+  CHECK(cut_mesh(cube, {{0, 0, 1}, -1.0}).below.size() == 1);
+}
+
+TEST_CASE("each cap's boundary is exactly the border edges") {
+  std::vector<NamedMesh> meshes = generated_meshes();
+  for (const NamedMesh& m : corpus()) meshes.push_back(m);
+  std::size_t caps_checked = 0;
+  for (const NamedMesh& m : meshes) {
+    for (const TestPlane& test_plane : planes_for(m.mesh, 3, 3)) {
+      const Plane& plane = test_plane.plane;
+      const SlicedMesh<Vec3> sliced = slice_mesh(m.mesh, plane);
+      if (sliced.plane_misses()) continue;
+      auto exact_position = [&](VertexIndex v) -> ExactPoint {
+        if (v < sliced.input_vertex_count) return {sliced.positions[v].x, sliced.positions[v].y, sliced.positions[v].z};
+        const Edge& e = sliced.crossing_edges[v - sliced.input_vertex_count];
+        return exact_crossing_point(plane, sliced.positions[e[0]], sliced.positions[e[1]]);
+      };
+      const Cap<Vec3> cap = triangulate_cap(sliced.positions, sliced.border_edges, plane, exact_position);
+      // Count directed edges: the cap's boundary (edges without their reverse)
+      // must be the border, edge for edge and direction for direction.
+      std::map<std::pair<VertexIndex, VertexIndex>, int> edges;
+      for (const Triangle& t : cap.triangles) {
+        for (int k = 0; k < 3; ++k) ++edges[{t[k], t[(k + 1) % 3]}];
+      }
+      std::map<std::pair<VertexIndex, VertexIndex>, int> boundary;
+      for (const auto& [e, count] : edges) {
+        CHECK(count == 1);
+        if (!edges.count({e.second, e.first})) boundary[e] = count;
+      }
+      std::map<std::pair<VertexIndex, VertexIndex>, int> border;
+      for (const Edge& e : sliced.border_edges) ++border[{e[0], e[1]}];
+      INFO(m.name);
+      CHECK(boundary == border);
+      CHECK(cap.added_points.empty());
+      ++caps_checked;
+    }
+  }
+  CHECK(caps_checked > 30);
+}
+
+TEST_CASE("the same cut twice gives identical bytes") {
+  for (const NamedMesh& m : generated_meshes()) {
+    for (const TestPlane& plane : planes_for(m.mesh, 5, 2)) {
+      const auto first = cut_mesh(m.mesh, plane.plane);
+      const auto second = cut_mesh(m.mesh, plane.plane);
+      REQUIRE(first.below.size() == second.below.size());
+      REQUIRE(first.above.size() == second.above.size());
+      for (std::size_t i = 0; i < first.below.size(); ++i) {
+        CHECK(canonical_bytes(first.below[i]) == canonical_bytes(second.below[i]));
+      }
+      for (std::size_t i = 0; i < first.above.size(); ++i) {
+        CHECK(canonical_bytes(first.above[i]) == canonical_bytes(second.above[i]));
+      }
+    }
+  }
+}
+
+TEST_CASE("both kernels agree on topology when no vertex lies on the plane") {
+  std::size_t compared = 0;
+  for (const NamedMesh& m : generated_meshes()) {
+    Random random(99);
+    const Box3 b = bounds(m.mesh);
+    for (int i = 0; i < 4; ++i) {
+      const Vec3 p{random.uniform(b.lo.x, b.hi.x), random.uniform(b.lo.y, b.hi.y), random.uniform(b.lo.z, b.hi.z)};
+      const Plane plane = plane_through(p, random.direction());
+      bool touches_vertex = false;
+      for (const Vec3& v : m.mesh.positions) touches_vertex |= side_of_plane(plane, v) == Sign::zero;
+      if (touches_vertex) continue;
+      const auto fast = cut_mesh(m.mesh, plane);
+      const auto exact = cut_mesh(to_exact(m.mesh), plane);
+      INFO(m.name);
+      REQUIRE(fast.below.size() == exact.below.size());
+      REQUIRE(fast.above.size() == exact.above.size());
+      auto same = [](const Mesh& a, const ExactMesh& b) {
+        return a.positions.size() == b.positions.size() && a.triangles.size() == b.triangles.size();
+      };
+      for (std::size_t k = 0; k < fast.below.size(); ++k) CHECK(same(fast.below[k], exact.below[k]));
+      for (std::size_t k = 0; k < fast.above.size(); ++k) CHECK(same(fast.above[k], exact.above[k]));
+      ++compared;
+    }
+  }
+  CHECK(compared > 20);
+}
+
+TEST_CASE("a hollow egg cut above its cavity keeps the cavity with the outer shell") {
+  const Mesh egg = hollow_egg();
+  // The cavity reaches z = 1.1; the outer shell z = 1.35.
+  const auto top_off = cut_mesh(egg, {{0, 0, 1}, -1.2});
+  REQUIRE(top_off.above.size() == 1);
+  REQUIRE(top_off.below.size() == 1);
+  CHECK(top_off.below[0].triangles.size() > top_off.above[0].triangles.size());
+  CHECK(solid_problem(top_off.below[0]) == "");
+  // Through the middle: two bowls, each capped by an annulus (two loops).
+  const auto halves = cut_mesh(egg, {{0, 0, 1}, 0.013});
+  CHECK(halves.below.size() == 1);
+  CHECK(halves.above.size() == 1);
+  CHECK(halves.cap_loops == 2);
+  CHECK(halves.cap_method == CapMethod::cdt);
+}
+
+TEST_CASE("nested shells: the island separates from the shell around its cavity") {
+  const Mesh nested = nested_shells_with_island();
+  const auto result = cut_mesh(nested, {{1, 0.01, 0.02}, -2.0});
+  // Each side: the outer shell's half (open cavity now part of its surface) and
+  // the island's half.
+  CHECK(result.below.size() == 2);
+  CHECK(result.above.size() == 2);
+  CHECK(result.cap_loops == 3);  // outer boundary, cavity hole, island
+  // A cut that misses the cavity: the whole inner structure stays in one solid
+  // on one side, with the island as a separate solid inside the cavity.
+  const auto side = cut_mesh(nested, {{1, 0, 0}, -0.5});
+  CHECK(side.below.size() == 1);
+  CHECK(side.above.size() == 2);
+}
+
+TEST_CASE("cap corners carry the plane normal, UVs and tangents") {
+  Mesh cube = box({0, 0, 0}, {1, 1, 1});
+  const std::size_t corners = 3 * cube.triangles.size();
+  cube.corners.normals.assign(corners, {0, 0, 1});
+  cube.corners.uvs.assign(corners, {0.5, 0.5});
+  cube.corners.tangents.assign(corners, {1, 0, 0, 1});
+  CutOptions options;
+  options.cap_surface = 7;
+  options.interior_uv_scale = 2.0;
+  const Plane plane{{0, 0, 2}, -1};  // z = 0.5, normal not unit length
+  const auto result = cut_mesh(cube, plane, options);
+  REQUIRE(result.below.size() == 1);
+  REQUIRE(result.above.size() == 1);
+  for (const auto* side : {&result.below, &result.above}) {
+    const Mesh& piece = side->front();
+    CHECK(solid_problem(piece) == "");
+    const double expected_z = side == &result.below ? 1.0 : -1.0;
+    std::size_t cap_corners = 0;
+    for (std::size_t t = 0; t < piece.triangles.size(); ++t) {
+      if (piece.surfaces[t] != 7) continue;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 n = piece.corners.normals[3 * t + k];
+        CHECK(n.z == expected_z);
+        const Vec3 p = piece.positions[piece.triangles[t][k]];
+        const Vec2 uv = piece.corners.uvs[3 * t + k];
+        CHECK(std::fabs(uv.x * uv.x + uv.y * uv.y - 4 * (p.x * p.x + p.y * p.y)) < 1e-12);
+        ++cap_corners;
+      }
+    }
+    CHECK(cap_corners >= 6);
+  }
+}

@@ -1,0 +1,63 @@
+#pragma once
+// Caps: the triangles that close a cut. Border edges are linked into loops by
+// vertex index; the region they bound (polygons, holes, islands in holes, to any
+// depth) is triangulated without ever adding a vertex on its boundary, so the cap's
+// boundary is exactly the border edges and the cut is watertight by construction.
+//
+// Method, cheapest first, each result checked before it is accepted:
+// 1. fan: one loop that is star-shaped from one of its vertices within a half-turn
+//    (every fan triangle strictly counter-clockwise, tested exactly). Convex caps
+//    at the leaves of a fracture take this path: no allocation beyond the output.
+// 2. cdt: CGAL's constrained Delaunay triangulation of all border edges, with each
+//    vertex's mesh index as info; nesting comes from the parity of constraints
+//    crossed on the way from the infinite face (exact predicates throughout).
+// 3. exact_cdt (fast kernel only): the same on the exact positions the rounded
+//    crossings stand for, when rounding made loops touch or cross in 2D.
+// 4. steiner_fan: a last resort for inputs whose loops cross even exactly (a
+//    self-intersecting mesh, allowed on request): one interior vertex per loop and a
+//    fan to it. Closed and oriented, but the embedding may overlap itself.
+// The checks: every border edge is used once, in its direction, and every other
+// cap edge twice in opposite directions; no zero-area triangle in projection.
+
+#include <functional>
+#include <span>
+#include <vector>
+
+#include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/mesh.hpp"
+
+namespace shatter {
+
+enum class CapMethod { none, fan, cdt, exact_cdt, steiner_fan };
+
+template <class Point>
+struct Cap {
+  /// Counter-clockwise seen from +n: the cap of the below half as given, of the
+  /// above half reversed. Indices refer to the caller's positions, then to
+  /// added_points (index positions.size() + i).
+  std::vector<Triangle> triangles;
+  /// Interior vertices added by steiner_fan; empty otherwise.
+  std::vector<Point> added_points;
+  std::size_t loop_count = 0;
+  CapMethod method = CapMethod::none;
+};
+
+/// Gives the exact position of a vertex of the cut (fast kernel fallback).
+using ExactPositionFn = std::function<ExactPoint(VertexIndex)>;
+
+/// Triangulates the region bounded by `border` in `plane`.
+/// Preconditions: border is a set of directed edges with the region on their left
+/// seen from +n (SlicedMesh::border_edges), every in-degree equal to the out-degree,
+/// and every vertex on the plane (exactly, or after rounding in the fast kernel).
+/// Guarantees: the cap's boundary is exactly `border`; no vertex added on it.
+/// Throws UnsupportedGeometryError only if even steiner_fan cannot close it.
+Cap<Vec3> triangulate_cap(std::span<const Vec3> positions, std::span<const Edge> border,
+                          const Plane& plane, const ExactPositionFn& exact_position);
+Cap<ExactPoint> triangulate_cap(std::span<const ExactPoint> positions, std::span<const Edge> border,
+                                const Plane& plane);
+
+/// The border edges linked into closed loops of vertex indices, in linear time.
+/// Where several loops meet at a vertex, each visit takes the next unused edge.
+std::vector<std::vector<VertexIndex>> link_loops(std::span<const Edge> border);
+
+}  // namespace shatter

@@ -1,0 +1,313 @@
+#include "shatter/triangulate/cap.hpp"
+
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_face_base_with_info_2.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+
+#include <algorithm>
+#include <deque>
+#include <optional>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/index_map.hpp"
+#include "shatter/kernel/projection.hpp"
+
+namespace shatter {
+
+std::vector<std::vector<VertexIndex>> link_loops(std::span<const Edge> border) {
+  // first_out: vertex -> an edge leaving it; next_out chains the others, so a
+  // vertex where loops meet (a pinch) hands out each of its edges once.
+  IndexMap first_out(border.size());
+  std::vector<std::uint32_t> next_out(border.size(), IndexMap::absent);
+  for (std::uint32_t e = 0; e < border.size(); ++e) {
+    const std::uint32_t head = first_out.insert(border[e][0], e);
+    if (head != e) {
+      next_out[e] = next_out[head];
+      next_out[head] = e;
+    }
+  }
+  std::vector<bool> used(border.size(), false);
+  std::vector<std::vector<VertexIndex>> loops;
+  for (std::uint32_t start = 0; start < border.size(); ++start) {
+    if (used[start]) continue;
+    std::vector<VertexIndex> loop;
+    std::uint32_t e = start;
+    while (e != IndexMap::absent && !used[e]) {
+      used[e] = true;
+      loop.push_back(border[e][0]);
+      const VertexIndex to = border[e][1];
+      if (to == border[start][0]) break;
+      std::uint32_t candidate = first_out.find(to);
+      while (candidate != IndexMap::absent && used[candidate]) candidate = next_out[candidate];
+      e = candidate;
+    }
+    loops.push_back(std::move(loop));
+  }
+  return loops;
+}
+
+namespace {
+
+Sign orientation_2d(const Vec2& a, const Vec2& b, const Vec2& c) { return orient2d(a, b, c); }
+template <class Point2>
+Sign orientation_2d(const Point2& a, const Point2& b, const Point2& c) {
+  const CGAL::Orientation o = CGAL::orientation(a, b, c);
+  return o == CGAL::LEFT_TURN ? Sign::positive : o == CGAL::RIGHT_TURN ? Sign::negative : Sign::zero;
+}
+
+// The fan from loop[apex] is a triangulation of the loop exactly when every fan
+// triangle is strictly counter-clockwise and every fan vertex lies strictly within
+// the half-turn from the first fan edge: the triangles then occupy disjoint angular
+// sectors around the apex whose union is bounded by the loop.
+template <class Point2>
+bool fan_is_valid(const std::vector<Point2>& loop, std::size_t apex) {
+  const std::size_t n = loop.size();
+  const Point2& o = loop[apex];
+  const Point2& first = loop[(apex + 1) % n];
+  for (std::size_t k = 1; k + 1 < n; ++k) {
+    const Point2& p = loop[(apex + k) % n];
+    const Point2& q = loop[(apex + k + 1) % n];
+    if (orientation_2d(o, p, q) != Sign::positive) return false;
+    if (orientation_2d(o, first, q) != Sign::positive) return false;
+  }
+  return true;
+}
+
+// Tries a fan from a few apexes (all of them for small loops, where collinear runs
+// from exact constructions make some apexes fail).
+template <class Point2>
+std::optional<std::vector<Triangle>> try_fan(const std::vector<VertexIndex>& loop,
+                                             const std::vector<Point2>& points) {
+  constexpr std::size_t apexes_tried = 8;
+  const std::size_t n = loop.size();
+  if (n < 3) return std::nullopt;
+  for (std::size_t apex = 0; apex < std::min(n, apexes_tried); ++apex) {
+    if (!fan_is_valid(points, apex)) continue;
+    std::vector<Triangle> triangles;
+    triangles.reserve(n - 2);
+    for (std::size_t k = 1; k + 1 < n; ++k) {
+      triangles.push_back({loop[apex], loop[(apex + k) % n], loop[(apex + k + 1) % n]});
+    }
+    return triangles;
+  }
+  return std::nullopt;
+}
+
+// True when the triangles' boundary is exactly `border`, each border edge in its
+// direction, every other edge paired with its reverse, and no edge twice.
+bool boundary_is_border(const std::vector<Triangle>& triangles, std::span<const Edge> border) {
+  IndexMap cap_edges(3 * triangles.size());
+  for (const Triangle& t : triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const std::uint64_t key = directed_edge_key(t[k], t[(k + 1) % 3]);
+      if (cap_edges.insert(key, 1) != 1 || t[k] == t[(k + 1) % 3]) return false;
+      cap_edges.insert(key, 0);
+    }
+  }
+  IndexMap border_edges(border.size());
+  for (const Edge& e : border) {
+    if (cap_edges.find(directed_edge_key(e[0], e[1])) == IndexMap::absent) return false;
+    if (cap_edges.find(directed_edge_key(e[1], e[0])) != IndexMap::absent) return false;
+    border_edges.insert(directed_edge_key(e[0], e[1]), 1);
+  }
+  for (const Triangle& t : triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const VertexIndex u = t[k], v = t[(k + 1) % 3];
+      if (border_edges.find(directed_edge_key(u, v)) != IndexMap::absent) continue;
+      if (cap_edges.find(directed_edge_key(v, u)) == IndexMap::absent) return false;
+    }
+  }
+  return true;
+}
+
+template <class K>
+struct CdtTypes {
+  using VertexBase = CGAL::Triangulation_vertex_base_with_info_2<VertexIndex, K>;
+  using FaceBase = CGAL::Triangulation_face_base_with_info_2<int, K, CGAL::Constrained_triangulation_face_base_2<K>>;
+  using Tds = CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>;
+  // Crossing constraints are an error, not a reason to add Steiner points: a cap
+  // never adds a vertex on its boundary.
+  using Cdt = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::No_constraint_intersection_tag>;
+};
+
+// Constrained Delaunay triangulation of the border edges; the faces at odd
+// constraint-crossing depth from the infinite face form the region. Returns
+// nullopt when two border vertices coincide in 2D or constraints cross or touch.
+template <class K, class Point2>
+std::optional<std::vector<Triangle>> triangulate_with_cdt(std::span<const Edge> border,
+                                                          const std::vector<VertexIndex>& vertices,
+                                                          const std::vector<Point2>& points) {
+  using Cdt = typename CdtTypes<K>::Cdt;
+  using VertexHandle = typename Cdt::Vertex_handle;
+  using FaceHandle = typename Cdt::Face_handle;
+  Cdt cdt;
+  IndexMap handle_of_vertex(vertices.size());
+  std::vector<VertexHandle> handles;
+  handles.reserve(vertices.size());
+  try {
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+      VertexHandle h = cdt.insert(points[i]);
+      if (cdt.number_of_vertices() != i + 1) return std::nullopt;  // two mesh vertices at one 2D point
+      h->info() = vertices[i];
+      handles.push_back(h);
+      handle_of_vertex.insert(vertices[i], static_cast<std::uint32_t>(i));
+    }
+    for (const Edge& e : border) {
+      cdt.insert_constraint(handles[handle_of_vertex.find(e[0])], handles[handle_of_vertex.find(e[1])]);
+    }
+  } catch (const CGAL::Failure_exception&) {
+    return std::nullopt;
+  } catch (const typename Cdt::Intersection_of_constraints_exception&) {
+    return std::nullopt;
+  }
+
+  for (FaceHandle f : cdt.all_face_handles()) f->info() = -1;
+  // Breadth-first over faces; crossing a constrained edge goes one level deeper.
+  std::deque<FaceHandle> frontier{cdt.infinite_face()};
+  cdt.infinite_face()->info() = 0;
+  std::deque<FaceHandle> next_level;
+  for (int depth = 0; !frontier.empty(); ++depth) {
+    while (!frontier.empty()) {
+      FaceHandle f = frontier.front();
+      frontier.pop_front();
+      for (int k = 0; k < 3; ++k) {
+        FaceHandle neighbor = f->neighbor(k);
+        if (neighbor->info() != -1) continue;
+        if (cdt.is_constrained({f, k})) {
+          next_level.push_back(neighbor);
+        } else {
+          neighbor->info() = depth;
+          frontier.push_back(neighbor);
+        }
+      }
+    }
+    for (FaceHandle f : next_level) {
+      if (f->info() == -1) {
+        f->info() = depth + 1;
+        frontier.push_back(f);
+      }
+    }
+    next_level.clear();
+  }
+  std::vector<Triangle> triangles;
+  for (FaceHandle f : cdt.finite_face_handles()) {
+    if (f->info() % 2 == 1) {
+      triangles.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
+    }
+  }
+  return triangles;
+}
+
+template <class Point>
+Vec3 approximate(const Point& p) {
+  return to_vec3(p);
+}
+
+// One new vertex inside each loop, joined to every loop edge. Only topology is
+// guaranteed: closed, oriented, boundary = border.
+template <class Point>
+Cap<Point> steiner_fan(std::span<const Point> positions, const std::vector<std::vector<VertexIndex>>& loops) {
+  Cap<Point> cap;
+  cap.method = CapMethod::steiner_fan;
+  cap.loop_count = loops.size();
+  for (const auto& loop : loops) {
+    Vec3 sum;
+    for (VertexIndex v : loop) sum = sum + approximate(positions[v]);
+    const Vec3 centre = sum * (1.0 / static_cast<double>(loop.size()));
+    const auto apex = static_cast<VertexIndex>(positions.size() + cap.added_points.size());
+    if constexpr (std::is_same_v<Point, Vec3>) {
+      cap.added_points.push_back(centre);
+    } else {
+      cap.added_points.emplace_back(centre.x, centre.y, centre.z);
+    }
+    for (std::size_t k = 0; k < loop.size(); ++k) {
+      cap.triangles.push_back({apex, loop[k], loop[(k + 1) % loop.size()]});
+    }
+  }
+  return cap;
+}
+
+std::vector<VertexIndex> distinct_vertices(std::span<const Edge> border) {
+  std::vector<VertexIndex> vertices;
+  vertices.reserve(border.size());
+  IndexMap seen(border.size());
+  for (const Edge& e : border) {
+    if (seen.insert(e[0], 1) == 1 && seen.size() > vertices.size()) vertices.push_back(e[0]);
+  }
+  return vertices;
+}
+
+template <class Point2, class Project>
+std::vector<Point2> project_all(const std::vector<VertexIndex>& vertices, Project&& project) {
+  std::vector<Point2> points;
+  points.reserve(vertices.size());
+  for (VertexIndex v : vertices) points.push_back(project(v));
+  return points;
+}
+
+// Methods 1 and 2 for either kernel; K is the CGAL kernel for the 2D points.
+template <class K, class Point, class Point2, class Project>
+std::optional<Cap<Point>> fan_or_cdt(std::span<const Edge> border,
+                                     const std::vector<std::vector<VertexIndex>>& loops,
+                                     Project&& project) {
+  Cap<Point> cap;
+  cap.loop_count = loops.size();
+  if (loops.size() == 1) {
+    std::vector<Point2> loop_points = project_all<Point2>(loops[0], project);
+    if (auto fan = try_fan(loops[0], loop_points)) {
+      cap.triangles = std::move(*fan);
+      cap.method = CapMethod::fan;
+      return cap;
+    }
+  }
+  const std::vector<VertexIndex> vertices = distinct_vertices(border);
+  auto triangles = triangulate_with_cdt<K>(border, vertices, project_all<Point2>(vertices, project));
+  if (!triangles || !boundary_is_border(*triangles, border)) return std::nullopt;
+  cap.triangles = std::move(*triangles);
+  cap.method = CapMethod::cdt;
+  return cap;
+}
+
+}  // namespace
+
+Cap<Vec3> triangulate_cap(std::span<const Vec3> positions, std::span<const Edge> border, const Plane& plane,
+                          const ExactPositionFn& exact_position) {
+  if (border.empty()) return {};
+  const PlaneProjection projection = PlaneProjection::of(plane);
+  const auto loops = link_loops(border);
+  using Point2 = CGAL::Epick::Point_2;
+  auto rounded = fan_or_cdt<CGAL::Epick, Vec3, Point2>(border, loops, [&](VertexIndex v) {
+    const Vec2 p = projection(positions[v]);
+    return Point2(p.x, p.y);
+  });
+  if (rounded) return std::move(*rounded);
+  if (exact_position) {
+    const std::vector<VertexIndex> vertices = distinct_vertices(border);
+    auto triangles = triangulate_with_cdt<ExactKernel>(
+        border, vertices, project_all<ExactKernel::Point_2>(vertices, [&](VertexIndex v) {
+          return projection(exact_position(v));
+        }));
+    if (triangles && boundary_is_border(*triangles, border)) {
+      Cap<Vec3> cap;
+      cap.triangles = std::move(*triangles);
+      cap.loop_count = loops.size();
+      cap.method = CapMethod::exact_cdt;
+      return cap;
+    }
+  }
+  return steiner_fan<Vec3>(positions, loops);
+}
+
+Cap<ExactPoint> triangulate_cap(std::span<const ExactPoint> positions, std::span<const Edge> border,
+                                const Plane& plane) {
+  if (border.empty()) return {};
+  const PlaneProjection projection = PlaneProjection::of(plane);
+  const auto loops = link_loops(border);
+  auto exact = fan_or_cdt<ExactKernel, ExactPoint, ExactKernel::Point_2>(
+      border, loops, [&](VertexIndex v) { return projection(positions[v]); });
+  if (exact) return std::move(*exact);
+  return steiner_fan<ExactPoint>(positions, loops);
+}
+
+}  // namespace shatter
