@@ -250,8 +250,9 @@ TEST_CASE("both kernels agree on topology when no vertex lies on the plane") {
       INFO(m.name);
       REQUIRE(fast.below.size() == exact.below.size());
       REQUIRE(fast.above.size() == exact.above.size());
-      auto same = [](const Mesh& a, const ExactMesh& b) {
-        return a.positions.size() == b.positions.size() && a.triangles.size() == b.triangles.size();
+      auto same = [](const Mesh& fast_piece, const ExactMesh& exact_piece) {
+        return fast_piece.positions.size() == exact_piece.positions.size() &&
+               fast_piece.triangles.size() == exact_piece.triangles.size();
       };
       for (std::size_t k = 0; k < fast.below.size(); ++k) CHECK(same(fast.below[k], exact.below[k]));
       for (std::size_t k = 0; k < fast.above.size(); ++k) CHECK(same(fast.above[k], exact.above[k]));

@@ -4,9 +4,24 @@
 // Readers never repair: they weld corners whose positions are equal (so -0.0 and
 // +0.0 weld, and nothing within a tolerance does), fan-triangulate polygons, keep
 // every face as written (a degenerate face stays, for validation to name), drop
-// vertices no face uses, and throw on anything malformed. Writers print coordinates
-// as shortest round-trip decimals (text) or as IEEE doubles (binary PLY), so a mesh
-// read back is the mesh written, except that STL cannot hold attributes.
+// vertices no face uses, and throw on anything malformed, including a file with no
+// faces. Vertices are numbered in order of first use by the triangles. Writers print
+// coordinates as shortest round-trip decimals (text) or as IEEE doubles (binary PLY),
+// so a mesh read back is the mesh written (positions bit for bit) whenever its
+// vertices are numbered as a reader numbers them, as every mesh read is.
+//
+// Per format:
+// - OFF: plain OFF, and COFF/NOFF/CNOFF/ST* (extra vertex values ignored); face
+//   colours ignored; 4OFF, nOFF and binary OFF refused. Writes no attributes.
+// - OBJ: v/vt/vn/f with negative indices; a channel (uv or normal) present on
+//   some corners must be on all of them, else the file is refused. Writes uvs and
+//   normals (each distinct value once); tangents are not written.
+// - PLY: ascii and both binary byte orders; per-vertex nx/ny/nz and u,v (or s,t,
+//   texture_u,texture_v) become per-corner attributes. Writes binary little-endian
+//   positions and triangles only: per-corner attributes do not fit PLY's
+//   per-vertex layout without splitting the welded vertices.
+// - STL: ascii and binary (binary exactly when the size is 84 + 50 n). Written as
+//   ascii, which keeps doubles; holds no attributes.
 
 #include <filesystem>
 #include <optional>
