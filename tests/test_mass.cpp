@@ -14,6 +14,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "support/corpus.hpp"
+#include "support/generators.hpp"
 
 using namespace shatter;
 
@@ -22,21 +23,6 @@ namespace {
 constexpr double pi = 3.14159265358979323846;
 
 using Matrix3 = std::array<double, 9>;  // row-major
-
-Mesh make_mesh(std::vector<Vec3> positions, std::vector<Triangle> triangles) {
-  Mesh mesh;
-  mesh.positions = std::move(positions);
-  mesh.triangles = std::move(triangles);
-  mesh.surfaces.assign(mesh.triangles.size(), original_surface);
-  return mesh;
-}
-
-// Unit cube [0,1]^3, outward.
-Mesh unit_cube() {
-  return make_mesh({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}},
-                   {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
-                    {3, 7, 6}, {3, 6, 2}, {0, 4, 7}, {0, 7, 3}, {1, 2, 6}, {1, 6, 5}});
-}
 
 Vec3 apply(const Matrix3& m, Vec3 v) {
   return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[3] * v.x + m[4] * v.y + m[5] * v.z,
@@ -106,7 +92,7 @@ Mesh icosphere(int levels) {
     }
     triangles = std::move(finer);
   }
-  return make_mesh(std::move(positions), std::move(triangles));
+  return test::mesh_from(std::move(positions), std::move(triangles));
 }
 
 void check_close(Vec3 actual, Vec3 expected, double margin) {
@@ -149,7 +135,7 @@ double naive_determinant_sum(const Mesh& mesh) {
 // diagonal 0-2, the bottom (outward -z) on diagonal 1-3, so the triangles' terms
 // do not cancel bit for bit. Its volume is exactly zero.
 Mesh flat_pillow(Vec3 shift) {
-  return make_mesh({Vec3{0.1, 0.1, 0.7} + shift, Vec3{1.3, 0.2, 0.7} + shift, Vec3{1.1, 1.7, 0.7} + shift,
+  return test::mesh_from({Vec3{0.1, 0.1, 0.7} + shift, Vec3{1.3, 0.2, 0.7} + shift, Vec3{1.1, 1.7, 0.7} + shift,
                     Vec3{0.3, 0.9, 0.7} + shift},
                    {{0, 1, 2}, {0, 2, 3}, {0, 3, 1}, {1, 3, 2}});
 }
@@ -157,13 +143,13 @@ Mesh flat_pillow(Vec3 shift) {
 }  // namespace
 
 TEST_CASE("unit cube: volume, centroid and inertia", "[mass]") {
-  const MassProperties props = mass_properties(unit_cube());
+  const MassProperties props = mass_properties(test::unit_cube());
   CHECK(props.volume == Approx(1.0).epsilon(1e-15));
   check_close(props.centroid, {0.5, 0.5, 0.5}, 1e-15);
   const double d = 1.0 / 6;  // (1^2 + 1^2) / 12
   check_close(props.inertia, {d, 0, 0, 0, d, 0, 0, 0, d}, 1e-15);
-  CHECK(signed_volume(unit_cube()) == Approx(1.0).epsilon(1e-15));
-  CHECK(signed_volume_sign(unit_cube()) == Sign::positive);
+  CHECK(signed_volume(test::unit_cube()) == Approx(1.0).epsilon(1e-15));
+  CHECK(signed_volume_sign(test::unit_cube()) == Sign::positive);
 }
 
 TEST_CASE("a scaled, rotated and translated box matches the analytic values", "[mass]") {
@@ -173,7 +159,7 @@ TEST_CASE("a scaled, rotated and translated box matches the analytic values", "[
   const Vec3 shift{10, -20, 30};
   // The cube's corner (0,0,0) maps to shift; its centre (0.5,0.5,0.5) to:
   const Vec3 centre = apply(turn, Vec3{a / 2, b / 2, c / 2}) + shift;
-  const Mesh box = transformed(unit_cube(), multiply(turn, scale), shift);
+  const Mesh box = transformed(test::unit_cube(), multiply(turn, scale), shift);
 
   const MassProperties props = mass_properties(box);
   const double volume = a * b * c;
@@ -234,7 +220,7 @@ TEST_CASE("far from the origin the properties keep their precision", "[mass]") {
 }
 
 TEST_CASE("reversing every triangle negates the volume", "[mass]") {
-  for (const Mesh& mesh : {unit_cube(), icosphere(2), translated(icosphere(2), {1e6, 2e6, -3e6})}) {
+  for (const Mesh& mesh : {test::unit_cube(), icosphere(2), translated(icosphere(2), {1e6, 2e6, -3e6})}) {
     const Mesh inward = reversed(mesh);
     const MassProperties out = mass_properties(mesh), in = mass_properties(inward);
     CHECK(out.volume > 0);
@@ -300,7 +286,7 @@ TEST_CASE("signed_volume_sign takes the exact path for coordinates outside the f
   for (const double scale : {0x1p-520, 0x1p-230, 0x1p230, 0x1p330}) {
     INFO("scale " << scale);
     const Matrix3 scaling{scale, 0, 0, 0, scale, 0, 0, 0, scale};
-    const Mesh cube = transformed(unit_cube(), scaling, {0, 0, 0});
+    const Mesh cube = transformed(test::unit_cube(), scaling, {0, 0, 0});
     CHECK(signed_volume_sign(cube) == Sign::positive);
     CHECK(signed_volume_sign(reversed(cube)) == Sign::negative);
     Mesh tent = transformed(flat_pillow({0, 0, 0}), scaling, {0, 0, 0});

@@ -14,33 +14,15 @@
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "support/corpus.hpp"
+#include "support/generators.hpp"
 
 using namespace shatter;
 
 namespace {
 
-Mesh make_mesh(std::vector<Vec3> positions, std::vector<Triangle> triangles) {
-  Mesh mesh;
-  mesh.positions = std::move(positions);
-  mesh.triangles = std::move(triangles);
-  mesh.surfaces.assign(mesh.triangles.size(), original_surface);
-  return mesh;
-}
-
-// Unit cube [0,1]^3, outward.
-Mesh unit_cube() {
-  return make_mesh({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}},
-                   {{0, 2, 1}, {0, 3, 2},    // z = 0
-                    {4, 5, 6}, {4, 6, 7},    // z = 1
-                    {0, 1, 5}, {0, 5, 4},    // y = 0
-                    {3, 7, 6}, {3, 6, 2},    // y = 1
-                    {0, 4, 7}, {0, 7, 3},    // x = 0
-                    {1, 2, 6}, {1, 6, 5}});  // x = 1
-}
-
 // The corner tetrahedron (0,0,0), (s,0,0), (0,s,0), (0,0,s), outward.
 Mesh corner_tetrahedron(double s = 1) {
-  return make_mesh({{0, 0, 0}, {s, 0, 0}, {0, s, 0}, {0, 0, s}}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+  return test::mesh_from({{0, 0, 0}, {s, 0, 0}, {0, s, 0}, {0, 0, s}}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
 }
 
 std::vector<DefectKind> kinds(const ValidationReport& report) {
@@ -56,7 +38,7 @@ void reverse_all(Mesh& mesh) {
 }  // namespace
 
 TEST_CASE("hand-built closed meshes validate clean", "[validate]") {
-  for (const Mesh& mesh : {unit_cube(), corner_tetrahedron()}) {
+  for (const Mesh& mesh : {test::unit_cube(), corner_tetrahedron()}) {
     const ValidationReport report = validate_mesh(mesh);
     CHECK(report.valid());
     CHECK(report.defects.empty());
@@ -68,7 +50,7 @@ TEST_CASE("hand-built closed meshes validate clean", "[validate]") {
 }
 
 TEST_CASE("non-finite coordinates are counted and block geometric checks", "[validate]") {
-  Mesh mesh = unit_cube();
+  Mesh mesh = test::unit_cube();
   mesh.positions[5].x = std::numeric_limits<double>::quiet_NaN();
   mesh.positions[7].z = -std::numeric_limits<double>::infinity();
   const ValidationReport report = validate_mesh(mesh);
@@ -80,7 +62,7 @@ TEST_CASE("non-finite coordinates are counted and block geometric checks", "[val
 }
 
 TEST_CASE("indices out of range are counted and never read", "[validate]") {
-  Mesh mesh = unit_cube();
+  Mesh mesh = test::unit_cube();
   mesh.triangles.push_back({0, 1, 42});
   mesh.triangles.push_back({42, 43, 44});
   mesh.surfaces.resize(mesh.triangles.size());
@@ -92,7 +74,7 @@ TEST_CASE("indices out of range are counted and never read", "[validate]") {
 }
 
 TEST_CASE("unused vertices are reported but do not block the geometric checks", "[validate]") {
-  Mesh mesh = unit_cube();
+  Mesh mesh = test::unit_cube();
   mesh.positions.push_back({5, 5, 5});
   mesh.positions.push_back({6, 6, 6});
   const ValidationReport report = validate_mesh(mesh);
@@ -107,7 +89,7 @@ namespace {
 // edge (1,2), closed by the flat triangle (1,2,4): a T-junction filled with a
 // zero-area triangle, as exporters produce. Closed and consistently oriented.
 Mesh tetrahedron_with_flat_triangle(Vec3 split_point) {
-  return make_mesh({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0, 0, 2}, split_point},
+  return test::mesh_from({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0, 0, 2}, split_point},
                    {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 4, 3}, {4, 2, 3}, {1, 2, 4}});
 }
 }  // namespace
@@ -130,7 +112,7 @@ TEST_CASE("zero-area triangles are decided exactly", "[validate]") {
     // 3 * 0.1 rounds, but (0.1, 0.2, 0.3) * 2^k scalings are exact: these three
     // points are exactly collinear in doubles.
     const Vec3 a{0.1, 0.2, 0.3}, b{0.4, 0.8, 1.2}, c{0.2, 0.4, 0.6};
-    Mesh mesh = make_mesh({a, b, c}, {{0, 1, 2}});
+    Mesh mesh = test::mesh_from({a, b, c}, {{0, 1, 2}});
     const ValidationReport report = validate_mesh(mesh);
     const Defect* zero_area = report.find(DefectKind::zero_area_triangle);
     REQUIRE(zero_area != nullptr);
@@ -138,7 +120,7 @@ TEST_CASE("zero-area triangles are decided exactly", "[validate]") {
     CHECK(zero_area->first == "triangle 0");
   }
   SECTION("a repeated index") {
-    Mesh mesh = unit_cube();
+    Mesh mesh = test::unit_cube();
     mesh.triangles.push_back({0, 0, 1});
     mesh.surfaces.resize(mesh.triangles.size());
     const ValidationReport report = validate_mesh(mesh);
@@ -150,7 +132,7 @@ TEST_CASE("zero-area triangles are decided exactly", "[validate]") {
 }
 
 TEST_CASE("boundary edges of an open mesh", "[validate]") {
-  Mesh mesh = unit_cube();
+  Mesh mesh = test::unit_cube();
   mesh.triangles.erase(mesh.triangles.begin());  // drop (0, 2, 1)
   mesh.surfaces.pop_back();
   const ValidationReport report = validate_mesh(mesh);
@@ -164,7 +146,7 @@ TEST_CASE("boundary edges of an open mesh", "[validate]") {
 
 TEST_CASE("non-manifold edge: two tetrahedra sharing an edge", "[validate]") {
   // The second tetrahedron is the first turned half a turn about the x axis.
-  const Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, -1, 0}, {0, 0, -1}},
+  const Mesh mesh = test::mesh_from({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, -1, 0}, {0, 0, -1}},
                               {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3},    //
                                {0, 4, 1}, {0, 1, 5}, {0, 5, 4}, {1, 4, 5}});
   const ValidationReport report = validate_mesh(mesh);
@@ -178,7 +160,7 @@ TEST_CASE("non-manifold edge: two tetrahedra sharing an edge", "[validate]") {
 
 TEST_CASE("non-manifold edge: three triangles on one edge", "[validate]") {
   SECTION("two one way, one the other: paired as far as possible") {
-    const Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, -1, 0}},
+    const Mesh mesh = test::mesh_from({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, -1, 0}},
                                 {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}});
     const ValidationReport report = validate_mesh(mesh);
     // The odd third triangle is the non-manifold defect, not an orientation one.
@@ -189,7 +171,7 @@ TEST_CASE("non-manifold edge: three triangles on one edge", "[validate]") {
     CHECK(report.find(DefectKind::non_manifold_edge)->first == "edge (0, 1)");
   }
   SECTION("all three the same way: also inconsistently oriented") {
-    const Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, -1, 0}},
+    const Mesh mesh = test::mesh_from({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, -1, 0}},
                                 {{0, 1, 2}, {0, 1, 3}, {0, 1, 4}});
     const ValidationReport report = validate_mesh(mesh);
     REQUIRE(kinds(report) == std::vector{DefectKind::boundary_edge, DefectKind::non_manifold_edge,
@@ -202,7 +184,7 @@ TEST_CASE("non-manifold edge: three triangles on one edge", "[validate]") {
 TEST_CASE("non-manifold vertex: two tetrahedra touching at a vertex", "[validate]") {
   // The second tetrahedron is the first reflected through the origin, with its
   // triangles reversed to stay outward.
-  const Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}},
+  const Mesh mesh = test::mesh_from({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}},
                               {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3},    //
                                {0, 4, 5}, {0, 6, 4}, {0, 5, 6}, {4, 6, 5}});
   const ValidationReport report = validate_mesh(mesh);
@@ -230,7 +212,7 @@ TEST_CASE("inconsistent orientation: one face of a tetrahedron flipped", "[valid
 }
 
 TEST_CASE("inward orientation: every face reversed", "[validate]") {
-  for (Mesh mesh : {unit_cube(), corner_tetrahedron()}) {
+  for (Mesh mesh : {test::unit_cube(), corner_tetrahedron()}) {
     reverse_all(mesh);
     const ValidationReport report = validate_mesh(mesh);
     REQUIRE(kinds(report) == std::vector{DefectKind::inward_orientation});
@@ -244,7 +226,7 @@ namespace {
 // A big tetrahedron pierced through its slanted face (triangle 3) by the apex of a
 // small one (triangles 4-7, apex faces 5, 6, 7): exactly three crossing pairs.
 Mesh pierced_tetrahedron() {
-  return make_mesh({{0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {0, 0, 10}, {2, 2, 2}, {4, 2, 2}, {2, 4, 2}, {3, 3, 5}},
+  return test::mesh_from({{0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {0, 0, 10}, {2, 2, 2}, {4, 2, 2}, {2, 4, 2}, {3, 3, 5}},
                    {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3},    //
                     {4, 6, 5}, {4, 5, 7}, {5, 6, 7}, {6, 4, 7}});
 }
@@ -266,7 +248,7 @@ TEST_CASE("self-intersections: count and first pair", "[validate]") {
 }
 
 TEST_CASE("defects are listed in enum order and the summary names the first", "[validate]") {
-  Mesh mesh = unit_cube();
+  Mesh mesh = test::unit_cube();
   mesh.triangles.erase(mesh.triangles.begin());
   mesh.surfaces.pop_back();
   mesh.positions.push_back({9, 9, 9});

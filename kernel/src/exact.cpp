@@ -1,6 +1,7 @@
 #include "shatter/kernel/exact.hpp"
 
 #include <gmpxx.h>
+#include <algorithm>
 #include <mpfr.h>
 
 
@@ -89,11 +90,15 @@ CrossingVec3 crossing_point(const Plane& plane, const Vec3& a, const Vec3& b) {
 
 CrossingExact crossing_point(const Plane& plane, const ExactPoint& a, const ExactPoint& b) {
   ExactPoint point = exact_plane_segment_crossing(plane, a, b);
-  const Vec3 approx_a = to_vec3(a), approx_b = to_vec3(b), approx_p = to_vec3(point);
-  const Vec3 ab = approx_b - approx_a;
+  // t only interpolates attributes, so the interval approximations serve; rounding
+  // exactly here would force every lazy crossing to be evaluated in rationals.
+  auto approx = [](const ExactPoint& p) {
+    return Vec3{CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())};
+  };
+  const Vec3 approx_a = approx(a), ab = approx(b) - approx_a;
   const double length_squared = dot(ab, ab);
-  const double t = length_squared > 0 ? dot(approx_p - approx_a, ab) / length_squared : 0.5;
-  return {std::move(point), t};
+  const double t = length_squared > 0 ? dot(approx(point) - approx_a, ab) / length_squared : 0.5;
+  return {std::move(point), std::clamp(t, 0.0, 1.0)};
 }
 
 ExactPoint exact_crossing_point(const Plane& plane, const Vec3& a, const Vec3& b) {

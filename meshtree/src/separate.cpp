@@ -52,16 +52,32 @@ struct PredicateKernel<ExactPoint> {
 Sign volume_sign(const Mesh& shell) { return signed_volume_sign(shell); }
 
 Sign volume_sign(const ExactMesh& shell) {
-  // Six times the volume: the sum of det(a, b, c), a polynomial in the exact
-  // coordinates; the lazy number decides its sign on intervals when it can.
-  ExactKernel::FT six_volume = 0;
+  // Six times the volume is the sum of det(a, b, c). Summed first in interval
+  // arithmetic on the points' approximations (no lazy nodes are built); only when
+  // the interval contains zero is it summed again in exact rationals.
+  using Interval = CGAL::Interval_nt<false>;
+  Interval six_volume = 0;
+  {
+  CGAL::Protect_FPU_rounding<true> rounding_upward;  // Interval_nt<false> needs it; restored at scope end
   for (const Triangle& t : shell.triangles) {
     const ExactPoint& a = shell.positions[t[0]];
     const ExactPoint& b = shell.positions[t[1]];
     const ExactPoint& c = shell.positions[t[2]];
-    six_volume += CGAL::determinant(a.x(), a.y(), a.z(), b.x(), b.y(), b.z(), c.x(), c.y(), c.z());
+    six_volume += CGAL::determinant(a.approx().x(), a.approx().y(), a.approx().z(), b.approx().x(),
+                                    b.approx().y(), b.approx().z(), c.approx().x(), c.approx().y(),
+                                    c.approx().z());
   }
-  const CGAL::Sign s = CGAL::sign(six_volume);
+  }
+  if (six_volume.inf() > 0) return Sign::positive;
+  if (six_volume.sup() < 0) return Sign::negative;
+  ExactKernel::FT::ET exact_six_volume = 0;
+  for (const Triangle& t : shell.triangles) {
+    const auto& a = CGAL::exact(shell.positions[t[0]]);
+    const auto& b = CGAL::exact(shell.positions[t[1]]);
+    const auto& c = CGAL::exact(shell.positions[t[2]]);
+    exact_six_volume += CGAL::determinant(a.x(), a.y(), a.z(), b.x(), b.y(), b.z(), c.x(), c.y(), c.z());
+  }
+  const CGAL::Sign s = CGAL::sign(exact_six_volume);
   return s == CGAL::NEGATIVE ? Sign::negative : s == CGAL::POSITIVE ? Sign::positive : Sign::zero;
 }
 

@@ -41,7 +41,7 @@ template <class Point>
 class Slicer {
  public:
   Slicer(const BasicMesh<Point>& mesh, const Plane& plane)
-      : mesh_(mesh), plane_(plane), has_attributes_(mesh.corners.has_normals() || mesh.corners.has_uvs() ||
+      : mesh_(mesh), plane_(plane), projection_(PlaneProjection::of(plane)), has_attributes_(mesh.corners.has_normals() || mesh.corners.has_uvs() ||
                                                     mesh.corners.has_tangents()) {}
 
   SlicedMesh<Point> run() {
@@ -99,8 +99,7 @@ class Slicer {
       Sign side = has_above ? Sign::positive : has_below ? Sign::negative : Sign::zero;
       if (side == Sign::zero) {
         // In the plane: the lid of the solid on the side it faces away from.
-        const PlaneProjection projection = PlaneProjection::of(plane_);
-        const Sign facing = orientation_in_projection(projection, mesh_.positions[tri[0]],
+        const Sign facing = orientation_in_projection(projection_, mesh_.positions[tri[0]],
                                                       mesh_.positions[tri[1]], mesh_.positions[tri[2]]);
         side = facing == Sign::positive ? Sign::negative : Sign::positive;
       }
@@ -192,6 +191,7 @@ class Slicer {
 
   const BasicMesh<Point>& mesh_;
   const Plane plane_;
+  const PlaneProjection projection_;
   const bool has_attributes_;
   std::vector<Sign> sides_;
   bool any_below_ = false, any_above_ = false, any_on_plane_ = false;

@@ -23,6 +23,24 @@ Vec3 Random::direction() {
   return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
+Mesh mesh_from(std::vector<Vec3> positions, std::vector<Triangle> triangles) {
+  Mesh mesh;
+  mesh.positions = std::move(positions);
+  mesh.triangles = std::move(triangles);
+  finish(mesh);
+  return mesh;
+}
+
+Mesh unit_cube() {
+  return mesh_from({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}},
+                   {{0, 2, 1}, {0, 3, 2},    // z = 0
+                    {4, 5, 6}, {4, 6, 7},    // z = 1
+                    {0, 1, 5}, {0, 5, 4},    // y = 0
+                    {3, 7, 6}, {3, 6, 2},    // y = 1
+                    {0, 4, 7}, {0, 7, 3},    // x = 0
+                    {1, 2, 6}, {1, 6, 5}});  // x = 1
+}
+
 Mesh box(Vec3 lo, Vec3 hi) { return grid_box(lo, hi, 1); }
 
 Mesh grid_box(Vec3 lo, Vec3 hi, int n) {

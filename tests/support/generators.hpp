@@ -11,6 +11,11 @@
 
 namespace shatter::test {
 
+/// A mesh from positions and triangles, every triangle on the original surface.
+Mesh mesh_from(std::vector<Vec3> positions, std::vector<Triangle> triangles);
+/// The unit cube [0,1]^3, outward, with a fixed numbering the validator tests
+/// refer to: vertices 0-3 the z = 0 square counter-clockwise from the origin, 4-7 above them.
+Mesh unit_cube();
 /// Axis-aligned box [lo, hi], 12 triangles. Volume (hi-lo).x*(hi-lo).y*(hi-lo).z.
 Mesh box(Vec3 lo, Vec3 hi);
 /// The box with each face split into n x n squares (2 n^2 triangles a face), so

@@ -49,7 +49,6 @@ std::vector<std::vector<VertexIndex>> link_loops(std::span<const Edge> border) {
 
 namespace {
 
-Sign orientation_2d(const Vec2& a, const Vec2& b, const Vec2& c) { return orient2d(a, b, c); }
 template <class Point2>
 Sign orientation_2d(const Point2& a, const Point2& b, const Point2& c) {
   const CGAL::Orientation o = CGAL::orientation(a, b, c);

@@ -1,0 +1,447 @@
+// shatter-bench-cut: one plane cut through the volume centroid, timed per input
+// triangle for shatter's fast and exact kernels, against CGAL PMP clip with
+// clip_volume(true) run on both sides of the same plane.
+//
+// Inputs: knot1.off and fandisk.off from the mesh folder, and a subdivided
+// icosahedron projected to the unit sphere (20 * 4^K triangles, K = 8 by default:
+// 1,310,720 triangles). Every method sees the same plane n·x + d = 0 with n the
+// normalised (0.3, 0.5, 0.8) and d = -n·c, c the volume centroid.
+//
+// Timing: std::chrono::steady_clock around the cut call only. Everything a method
+// needs beforehand is prepared outside the clock on every run: the exact kernel's
+// to_exact conversion (timed separately and reported), CGAL's two Surface_mesh
+// copies. The outputs are destroyed after the clock stops. Each measurement is
+// repeated until it has taken >= 0.3 s in total and at least 3 runs (a run that
+// takes more than 60 s is not repeated); the median is reported. Validity checks
+// run outside the clock, on the output of the first run.
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/clip.h>
+#include <CGAL/Polygon_mesh_processing/connected_components.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/boost/graph/helpers.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <unordered_map>
+#include <vector>
+
+#include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/io.hpp"
+#include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "shatter/meshtree/cut.hpp"
+
+namespace {
+
+namespace PMP = CGAL::Polygon_mesh_processing;
+using Epick = CGAL::Epick;
+using CgalMesh = CGAL::Surface_mesh<Epick::Point_3>;
+using Clock = std::chrono::steady_clock;
+
+constexpr const char* usage_text =
+    "usage: shatter-bench-cut [--mesh-dir DIR] [--csv FILE] [--sphere-subdivisions K] [--quick]\n"
+    "                         [--no-validate]\n"
+    "\n"
+    "One cut through the volume centroid (normal = normalised (0.3, 0.5, 0.8)) of\n"
+    "knot1.off, fandisk.off and a subdivided icosahedron sphere (20 * 4^K triangles).\n"
+    "Times shatter::cut_mesh with the fast and the exact kernel and CGAL PMP\n"
+    "clip(..., clip_volume(true)) on both sides of the same plane; prints a Markdown\n"
+    "table (median of >= 3 runs and >= 0.3 s) and per-method pieces and validity.\n"
+    "\n"
+    "options:\n"
+    "  --mesh-dir DIR            folder holding knot1.off and fandisk.off\n"
+    "                            (default: " SHATTER_MESH_DIR ")\n"
+    "  --csv FILE                also write the results as CSV to FILE\n"
+    "  --sphere-subdivisions K   subdivisions of the icosahedron, 0..10 (default 8:\n"
+    "                            1,310,720 triangles; --quick default 6)\n"
+    "  --quick                   smoke run: 1 run per measurement, sphere 4^6\n"
+    "  --no-validate             skip the validity checks of the outputs\n"
+    "  -h, --help                show this help\n";
+
+struct Options {
+  std::filesystem::path mesh_dir = SHATTER_MESH_DIR;
+  std::optional<std::filesystem::path> csv;
+  std::optional<int> sphere_subdivisions;
+  bool quick = false;
+  bool validate = true;
+};
+
+struct RepeatPolicy {
+  int min_runs = 3;
+  double min_total_seconds = 0.3;
+  int max_runs = 1000;
+  double no_repeat_seconds = 60.0;  ///< a run longer than this is not repeated
+};
+
+// ---------------------------------------------------------------------------
+// The generated sphere: a subdivided icosahedron, welded, closed, outward.
+
+shatter::Mesh make_icosphere(int subdivisions) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  shatter::Mesh mesh;
+  const shatter::Vec3 base[12] = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                                  {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  for (const auto& p : base) mesh.positions.push_back(shatter::normalized(p));
+  mesh.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                    {11, 10, 2}, {10, 7, 6}, {7, 1, 8},   {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                    {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (int level = 0; level < subdivisions; ++level) {
+    std::unordered_map<std::uint64_t, shatter::VertexIndex> midpoints;
+    midpoints.reserve(mesh.triangles.size() * 2);
+    auto midpoint = [&](shatter::VertexIndex a, shatter::VertexIndex b) {
+      const std::uint64_t key = (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b);
+      auto [it, inserted] = midpoints.try_emplace(key, 0);
+      if (inserted) {
+        it->second = static_cast<shatter::VertexIndex>(mesh.positions.size());
+        mesh.positions.push_back(shatter::normalized((mesh.positions[a] + mesh.positions[b]) * 0.5));
+      }
+      return it->second;
+    };
+    std::vector<shatter::Triangle> next;
+    next.reserve(mesh.triangles.size() * 4);
+    for (const auto& [a, b, c] : mesh.triangles) {
+      const auto ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+      next.push_back({a, ab, ca});
+      next.push_back({b, bc, ab});
+      next.push_back({c, ca, bc});
+      next.push_back({ab, bc, ca});
+    }
+    mesh.triangles = std::move(next);
+  }
+  mesh.surfaces.assign(mesh.triangles.size(), shatter::original_surface);
+  return mesh;
+}
+
+// ---------------------------------------------------------------------------
+// Conversions and checks for CGAL.
+
+CgalMesh to_cgal(const shatter::Mesh& mesh) {
+  CgalMesh out;
+  out.reserve(static_cast<CgalMesh::size_type>(mesh.positions.size()),
+              static_cast<CgalMesh::size_type>(mesh.positions.size() + mesh.triangles.size()),
+              static_cast<CgalMesh::size_type>(mesh.triangles.size()));
+  std::vector<CgalMesh::Vertex_index> vertices;
+  vertices.reserve(mesh.positions.size());
+  for (const auto& p : mesh.positions) vertices.push_back(out.add_vertex(Epick::Point_3(p.x, p.y, p.z)));
+  for (const auto& [a, b, c] : mesh.triangles) {
+    if (out.add_face(vertices[a], vertices[b], vertices[c]) == CgalMesh::null_face())
+      throw std::runtime_error("the mesh is not a valid CGAL Surface_mesh (non-manifold face)");
+  }
+  return out;
+}
+
+std::size_t component_count(CgalMesh& mesh) {
+  if (mesh.number_of_faces() == 0) return 0;
+  auto [ids, created] = mesh.add_property_map<CgalMesh::Face_index, std::size_t>("f:bench_component", 0);
+  const std::size_t count = PMP::connected_components(mesh, ids);
+  mesh.remove_property_map(ids);
+  (void)created;
+  return count;
+}
+
+// ---------------------------------------------------------------------------
+// Timing.
+
+struct Timing {
+  double median_ms = 0;
+  int runs = 0;
+  double setup_ms = 0;  ///< median time of the per-run preparation outside the clock
+};
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  if (n == 0) return 0;
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+double ms_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+/// Runs `setup` (untimed), then `run` on its result (timed), repeatedly; calls
+/// `inspect` (untimed) on the first run's output.
+template <class Setup, class Run, class Inspect>
+Timing measure(const RepeatPolicy& policy, Setup setup, Run run, Inspect inspect) {
+  std::vector<double> times, setups;
+  double total = 0;
+  for (int i = 0; i < policy.max_runs; ++i) {
+    const auto s0 = Clock::now();
+    auto input = setup();
+    const auto t0 = Clock::now();
+    auto output = run(input);
+    const auto t1 = Clock::now();
+    const double ms = ms_between(t0, t1);
+    times.push_back(ms);
+    setups.push_back(ms_between(s0, t0));
+    total += ms / 1000.0;
+    if (i == 0) inspect(output);
+    if (ms / 1000.0 > policy.no_repeat_seconds) break;
+    if (static_cast<int>(times.size()) >= policy.min_runs && total >= policy.min_total_seconds) break;
+  }
+  return {median(times), static_cast<int>(times.size()), median(setups)};
+}
+
+// ---------------------------------------------------------------------------
+// One input.
+
+struct Row {
+  std::string name;
+  std::size_t triangles = 0;
+  Timing fast, exact, cgal;
+  std::size_t fast_pieces = 0, exact_pieces = 0, cgal_pieces = 0;
+  std::size_t fast_cap_triangles = 0;
+  // Validity (outside timing): -1 = not checked.
+  long fast_valid = -1;        ///< fast pieces passing validate_mesh (with self-intersections)
+  long fast_closed = -1;       ///< fast pieces with no boundary / non-manifold / orientation defect
+  long cgal_closed = -1;       ///< CGAL sides (of 2) that are closed
+  long cgal_self_free = -1;    ///< CGAL sides (of 2) without self-intersections
+  std::size_t cgal_triangles = 0;  ///< triangles of both CGAL outputs
+  bool cgal_ok = true;         ///< every clip call returned true
+  std::string note;
+};
+
+bool topologically_closed(const shatter::ValidationReport& report) {
+  using shatter::DefectKind;
+  for (const auto kind : {DefectKind::boundary_edge, DefectKind::non_manifold_edge,
+                          DefectKind::inconsistent_orientation, DefectKind::index_out_of_range})
+    if (report.find(kind)) return false;
+  return true;
+}
+
+Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatPolicy& policy, bool validate) {
+  Row row;
+  row.name = name;
+  row.triangles = mesh.triangle_count();
+
+  {
+    shatter::ValidationOptions vo;
+    vo.check_self_intersections = false;
+    const auto report = shatter::validate_mesh(mesh, vo);
+    if (!report.valid()) throw std::runtime_error(name + ": input is not a valid solid: " + report.summary());
+  }
+
+  const shatter::Vec3 centroid = shatter::mass_properties(mesh).centroid;
+  const shatter::Vec3 n = shatter::normalized({0.3, 0.5, 0.8});
+  const shatter::Plane plane{n, -shatter::dot(n, centroid)};
+  std::cerr << name << ": " << mesh.triangle_count() << " triangles, plane (" << n.x << ", " << n.y << ", " << n.z
+            << ", " << plane.offset << ")\n";
+
+  // shatter, fast kernel.
+  std::cerr << "  fast ..." << std::flush;
+  row.fast = measure(
+      policy, [] { return 0; }, [&](int) { return shatter::cut_mesh(mesh, plane); },
+      [&](const shatter::CutResult<shatter::Vec3>& r) {
+        row.fast_pieces = r.below.size() + r.above.size();
+        row.fast_cap_triangles = r.cap_triangles;
+        if (r.plane_missed) row.note += "plane missed; ";
+        if (!validate) return;
+        row.fast_valid = row.fast_closed = 0;
+        for (const auto* side : {&r.below, &r.above})
+          for (const auto& piece : *side) {
+            const auto report = shatter::validate_mesh(piece);
+            row.fast_valid += report.valid();
+            row.fast_closed += topologically_closed(report);
+          }
+      });
+  std::cerr << " " << row.fast.median_ms << " ms (" << row.fast.runs << " runs)\n";
+
+  // shatter, exact kernel: to_exact per run, outside the clock.
+  std::cerr << "  exact ..." << std::flush;
+  row.exact = measure(
+      policy, [&] { return shatter::to_exact(mesh); },
+      [&](const shatter::ExactMesh& exact) { return shatter::cut_mesh(exact, plane); },
+      [&](const shatter::CutResult<shatter::ExactPoint>& r) { row.exact_pieces = r.below.size() + r.above.size(); });
+  std::cerr << " " << row.exact.median_ms << " ms (" << row.exact.runs << " runs, to_exact " << row.exact.setup_ms
+            << " ms)\n";
+
+  // CGAL PMP clip, both sides: two copies made outside the clock.
+  std::cerr << "  cgal clip ..." << std::flush;
+  const CgalMesh cgal_input = to_cgal(mesh);
+  const Epick::Plane_3 below_plane(n.x, n.y, n.z, plane.offset);
+  const Epick::Plane_3 above_plane = below_plane.opposite();
+  struct Clipped {
+    CgalMesh below, above;
+    bool ok_below = false, ok_above = false;
+  };
+  row.cgal = measure(
+      policy, [&] { return Clipped{cgal_input, cgal_input}; },
+      [&](Clipped& c) {
+        // clip keeps the part on the negative side of the plane.
+        c.ok_below = PMP::clip(c.below, below_plane, CGAL::parameters::clip_volume(true));
+        c.ok_above = PMP::clip(c.above, above_plane, CGAL::parameters::clip_volume(true));
+        return std::move(c);
+      },
+      [&](Clipped& c) {
+        row.cgal_ok = c.ok_below && c.ok_above;
+        if (!row.cgal_ok) row.note += "CGAL clip returned false; ";
+        row.cgal_pieces = 0;
+        row.cgal_triangles = 0;
+        if (validate) row.cgal_closed = row.cgal_self_free = 0;
+        for (auto* side : {&c.below, &c.above}) {
+          side->collect_garbage();
+          row.cgal_pieces += component_count(*side);
+          row.cgal_triangles += side->number_of_faces();
+          if (!validate) continue;
+          row.cgal_closed += CGAL::is_closed(*side);
+          row.cgal_self_free += !PMP::does_self_intersect(*side);
+        }
+      });
+  std::cerr << " " << row.cgal.median_ms << " ms (" << row.cgal.runs << " runs)\n";
+  return row;
+}
+
+// ---------------------------------------------------------------------------
+// Output.
+
+std::string fixed(double value, int digits) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
+  return buffer;
+}
+
+std::string ms_text(double ms) { return fixed(ms, ms < 10 ? 3 : ms < 1000 ? 1 : 0); }
+
+double ns_per_triangle(double ms, std::size_t triangles) { return ms * 1e6 / static_cast<double>(triangles); }
+
+std::string with_thousands(std::size_t value) {
+  std::string digits = std::to_string(value), out;
+  for (std::size_t i = 0; i < digits.size(); ++i) {
+    if (i && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
+  }
+  return out;
+}
+
+std::string check_text(long ok, std::size_t of) {
+  return ok < 0 ? "n/c" : std::to_string(ok) + "/" + std::to_string(of);
+}
+
+void print_markdown(std::ostream& out, const std::vector<Row>& rows) {
+  out << "| mesh | triangles | fast ms | fast ns/triangle | exact ms | exact ns/triangle | CGAL clip ms | "
+         "CGAL/fast ratio | CGAL/exact ratio |\n"
+      << "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const auto& r : rows) {
+    out << "| " << r.name << " | " << with_thousands(r.triangles) << " | " << ms_text(r.fast.median_ms) << " | "
+        << fixed(ns_per_triangle(r.fast.median_ms, r.triangles), 1) << " | " << ms_text(r.exact.median_ms) << " | "
+        << fixed(ns_per_triangle(r.exact.median_ms, r.triangles), 1) << " | " << ms_text(r.cgal.median_ms) << " | "
+        << fixed(r.cgal.median_ms / r.fast.median_ms, 2) << " | " << fixed(r.cgal.median_ms / r.exact.median_ms, 2)
+        << " |\n";
+  }
+  out << "\n| mesh | runs fast/exact/CGAL | to_exact ms (untimed) | pieces fast | pieces exact | pieces CGAL | "
+         "fast pieces valid | fast pieces closed | CGAL sides closed | CGAL sides w/o self-intersection | note |\n"
+      << "|---|---|---:|---:|---:|---:|---|---|---|---|---|\n";
+  for (const auto& r : rows) {
+    out << "| " << r.name << " | " << r.fast.runs << "/" << r.exact.runs << "/" << r.cgal.runs << " | "
+        << ms_text(r.exact.setup_ms) << " | " << r.fast_pieces << " | " << r.exact_pieces << " | " << r.cgal_pieces
+        << " | " << check_text(r.fast_valid, r.fast_pieces) << " | " << check_text(r.fast_closed, r.fast_pieces)
+        << " | " << check_text(r.cgal_closed, 2) << " | " << check_text(r.cgal_self_free, 2) << " | " << r.note
+        << " |\n";
+  }
+}
+
+void write_csv(const std::filesystem::path& path, const std::vector<Row>& rows) {
+  std::ostringstream out;
+  out << "mesh,triangles,fast_ms,fast_ns_per_triangle,exact_ms,exact_ns_per_triangle,cgal_clip_ms,"
+         "cgal_over_fast,cgal_over_exact,runs_fast,runs_exact,runs_cgal,to_exact_ms,pieces_fast,pieces_exact,"
+         "pieces_cgal,fast_pieces_valid,cgal_sides_closed,cgal_sides_without_self_intersection,cgal_clip_ok\n";
+  out.precision(9);
+  for (const auto& r : rows) {
+    out << r.name << ',' << r.triangles << ',' << r.fast.median_ms << ','
+        << ns_per_triangle(r.fast.median_ms, r.triangles) << ',' << r.exact.median_ms << ','
+        << ns_per_triangle(r.exact.median_ms, r.triangles) << ',' << r.cgal.median_ms << ','
+        << r.cgal.median_ms / r.fast.median_ms << ',' << r.cgal.median_ms / r.exact.median_ms << ',' << r.fast.runs
+        << ',' << r.exact.runs << ',' << r.cgal.runs << ',' << r.exact.setup_ms << ',' << r.fast_pieces << ','
+        << r.exact_pieces << ',' << r.cgal_pieces << ',' << r.fast_valid << ',' << r.cgal_closed << ','
+        << r.cgal_self_free << ',' << (r.cgal_ok ? 1 : 0) << '\n';
+  }
+  std::ofstream file(path, std::ios::binary);
+  if (!file) throw std::runtime_error("cannot open " + path.string() + " for writing");
+  file << out.str();
+  if (!file.flush()) throw std::runtime_error("cannot write " + path.string());
+}
+
+Options parse(int argc, char** argv) {
+  Options options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::runtime_error(arg + " needs a value");
+      return argv[++i];
+    };
+    if (arg == "-h" || arg == "--help") {
+      std::cout << usage_text;
+      std::exit(0);
+    } else if (arg == "--mesh-dir") {
+      options.mesh_dir = value();
+    } else if (arg == "--csv") {
+      options.csv = value();
+    } else if (arg == "--sphere-subdivisions") {
+      const std::string text = value();
+      std::size_t used = 0;
+      int k = -1;
+      try {
+        k = std::stoi(text, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used != text.size() || k < 0 || k > 10)
+        throw std::runtime_error("--sphere-subdivisions wants an integer 0..10, got '" + text + "'");
+      options.sphere_subdivisions = k;
+    } else if (arg == "--quick") {
+      options.quick = true;
+    } else if (arg == "--no-validate") {
+      options.validate = false;
+    } else {
+      throw std::runtime_error("unknown argument '" + arg + "' (see --help)");
+    }
+  }
+  return options;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    const Options options = parse(argc, argv);
+    RepeatPolicy policy;
+    if (options.quick) {
+      policy.min_runs = 1;
+      policy.min_total_seconds = 0.0;
+    }
+    const int k = options.sphere_subdivisions.value_or(options.quick ? 6 : 8);
+
+    std::vector<Row> rows;
+    for (const char* file : {"knot1.off", "fandisk.off"}) {
+      const auto path = options.mesh_dir / file;
+      if (!std::filesystem::exists(path)) throw std::runtime_error("mesh not found: " + path.string());
+      rows.push_back(bench_mesh(file, shatter::read_mesh(path), policy, options.validate));
+    }
+    rows.push_back(bench_mesh("sphere 20*4^" + std::to_string(k), make_icosphere(k), policy, options.validate));
+
+    std::cout << "One cut through the volume centroid, normal normalised (0.3, 0.5, 0.8); median of "
+              << (options.quick ? "1 run (--quick)" : ">= 3 runs and >= 0.3 s (1 run if > 60 s)")
+              << "; CGAL = PMP::clip(clip_volume(true)) on both sides, Surface_mesh<Epick>; "
+              << std::thread::hardware_concurrency() << " hardware threads.\n\n";
+    print_markdown(std::cout, rows);
+    if (options.csv) write_csv(*options.csv, rows);
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << '\n';
+    return 1;
+  }
+}
