@@ -325,3 +325,36 @@ TEST_CASE("cap corners carry the plane normal, UVs and tangents") {
     CHECK(cap_corners >= 6);
   }
 }
+
+TEST_CASE("exact pieces on both sides of a cut round their shared cap vertices to identical doubles") {
+  std::size_t shared_checked = 0;
+  for (const NamedMesh& m : generated_meshes()) {
+    for (const TestPlane& plane : planes_for(m.mesh, 13, 2)) {
+      const auto result = cut_mesh(to_exact(m.mesh), plane.plane);
+      if (result.plane_missed) continue;
+      // The rounded positions of every cap vertex, per side: each side's cap is
+      // the same vertices, so the two sets must agree bit for bit.
+      auto cap_vertices = [](const std::vector<ExactMesh>& side) {
+        std::vector<std::array<double, 3>> points;
+        for (const ExactMesh& piece : side) {
+          const Mesh rounded = to_fast(piece);
+          for (std::size_t t = 0; t < rounded.triangles.size(); ++t) {
+            if (rounded.surfaces[t] == original_surface) continue;
+            for (VertexIndex v : rounded.triangles[t]) {
+              const Vec3 p = rounded.positions[v];
+              points.push_back({p.x, p.y, p.z});
+            }
+          }
+        }
+        std::sort(points.begin(), points.end());
+        points.erase(std::unique(points.begin(), points.end()), points.end());
+        return points;
+      };
+      const auto below = cap_vertices(result.below);
+      INFO(m.name);
+      CHECK(below == cap_vertices(result.above));
+      shared_checked += below.size();
+    }
+  }
+  CHECK(shared_checked > 100);
+}
