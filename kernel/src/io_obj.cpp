@@ -76,7 +76,7 @@ CornerForm parse_corner_form(std::string_view token) {
 template <std::size_t N>
 void parse_numbers(const std::vector<std::string_view>& tokens, std::array<double, N>& values, std::size_t count,
                    const std::string& what) {
-  for (std::size_t k = 0; k < count; ++k) {
+  for (std::size_t k = 0; k < count && k < N; ++k) {
     if (!parse_double(tokens[k + 1], values[k])) refuse(what + ": '" + std::string(tokens[k + 1]) + "' is not a number");
   }
 }
