@@ -358,3 +358,17 @@ TEST_CASE("exact pieces on both sides of a cut round their shared cap vertices t
   }
   CHECK(shared_checked > 100);
 }
+
+TEST_CASE("the cap check refuses caps whose boundary is not exactly the border") {
+  // A square 0-1-2-3, counter-clockwise: the region lies left of every border edge.
+  const std::vector<Edge> border = {{0, 1}, {1, 2}, {2, 3}, {3, 0}};
+  using Triangles = std::vector<Triangle>;
+  CHECK(cap_boundary_is_border(Triangles{{0, 1, 2}, {0, 2, 3}}, border));
+  CHECK(cap_boundary_is_border(Triangles{{1, 2, 3}, {1, 3, 0}}, border));
+  // Regression: a triangle given twice used to pass, its edges counted once.
+  CHECK_FALSE(cap_boundary_is_border(Triangles{{0, 1, 2}, {0, 1, 2}, {0, 2, 3}}, border));
+  CHECK_FALSE(cap_boundary_is_border(Triangles{{0, 2, 1}, {0, 3, 2}}, border));  // reversed
+  CHECK_FALSE(cap_boundary_is_border(Triangles{{0, 1, 2}}, border));             // half missing
+  CHECK_FALSE(cap_boundary_is_border(Triangles{{0, 1, 2}, {0, 2, 3}, {0, 0, 1}}, border));  // degenerate
+  CHECK_FALSE(cap_boundary_is_border(Triangles{{0, 1, 2}, {0, 2, 3}, {3, 2, 4}}, border));  // sticks out
+}

@@ -93,15 +93,16 @@ std::optional<std::vector<Triangle>> try_fan(const std::vector<VertexIndex>& loo
   return std::nullopt;
 }
 
-// True when the triangles' boundary is exactly `border`, each border edge in its
-// direction, every other edge paired with its reverse, and no edge twice.
-bool boundary_is_border(const std::vector<Triangle>& triangles, std::span<const Edge> border) {
+}  // namespace
+
+bool cap_boundary_is_border(std::span<const Triangle> triangles, std::span<const Edge> border) {
   IndexMap cap_edges(3 * triangles.size());
   for (const Triangle& t : triangles) {
     for (int k = 0; k < 3; ++k) {
-      const std::uint64_t key = directed_edge_key(t[k], t[(k + 1) % 3]);
-      if (cap_edges.insert(key, 1) != 1 || t[k] == t[(k + 1) % 3]) return false;
-      cap_edges.insert(key, 0);
+      const VertexIndex u = t[k], v = t[(k + 1) % 3];
+      const std::uint64_t key = directed_edge_key(u, v);
+      if (u == v || cap_edges.find(key) != IndexMap::absent) return false;  // degenerate, or an edge used twice
+      cap_edges.insert(key, 1);
     }
   }
   IndexMap border_edges(border.size());
@@ -119,6 +120,8 @@ bool boundary_is_border(const std::vector<Triangle>& triangles, std::span<const 
   }
   return true;
 }
+
+namespace {
 
 template <class K>
 struct CdtTypes {
@@ -262,7 +265,7 @@ std::optional<Cap<Point>> fan_or_cdt(std::span<const Edge> border,
   }
   const std::vector<VertexIndex> vertices = distinct_vertices(border);
   auto triangles = triangulate_with_cdt<K>(border, vertices, project_all<Point2>(vertices, project));
-  if (!triangles || !boundary_is_border(*triangles, border)) return std::nullopt;
+  if (!triangles || !cap_boundary_is_border(*triangles, border)) return std::nullopt;
   cap.triangles = std::move(*triangles);
   cap.method = CapMethod::cdt;
   return cap;
@@ -287,7 +290,7 @@ Cap<Vec3> triangulate_cap(std::span<const Vec3> positions, std::span<const Edge>
         border, vertices, project_all<ExactKernel::Point_2>(vertices, [&](VertexIndex v) {
           return projection(exact_position(v));
         }));
-    if (triangles && boundary_is_border(*triangles, border)) {
+    if (triangles && cap_boundary_is_border(*triangles, border)) {
       Cap<Vec3> cap;
       cap.triangles = std::move(*triangles);
       cap.loop_count = loops.size();

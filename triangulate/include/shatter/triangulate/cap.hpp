@@ -56,6 +56,12 @@ Cap<Vec3> triangulate_cap(std::span<const Vec3> positions, std::span<const Edge>
 Cap<ExactPoint> triangulate_cap(std::span<const ExactPoint> positions, std::span<const Edge> border,
                                 const Plane& plane);
 
+/// The check every cap passes before it is accepted: true when no edge of
+/// `triangles` is degenerate or used twice in one direction, every border edge is
+/// used in its own direction and not reversed, and every other edge is matched by
+/// its reverse, so the triangles' boundary is exactly `border`. Linear time.
+bool cap_boundary_is_border(std::span<const Triangle> triangles, std::span<const Edge> border);
+
 /// The border edges linked into closed loops of vertex indices, in linear time.
 /// Where several loops meet at a vertex, each visit takes the next unused edge.
 std::vector<std::vector<VertexIndex>> link_loops(std::span<const Edge> border);
