@@ -189,12 +189,8 @@ TEST_CASE("each cap's boundary is exactly the border edges") {
       const Plane& plane = test_plane.plane;
       const SlicedMesh<Vec3> sliced = slice_mesh(m.mesh, plane);
       if (sliced.plane_misses()) continue;
-      auto exact_position = [&](VertexIndex v) -> ExactPoint {
-        if (v < sliced.input_vertex_count) return {sliced.positions[v].x, sliced.positions[v].y, sliced.positions[v].z};
-        const Edge& e = sliced.crossing_edges[v - sliced.input_vertex_count];
-        return exact_crossing_point(plane, sliced.positions[e[0]], sliced.positions[e[1]]);
-      };
-      const Cap<Vec3> cap = triangulate_cap(sliced.positions, sliced.border_edges, plane, exact_position);
+      const Cap<Vec3> cap = triangulate_cap(sliced.positions, sliced.border_edges, plane,
+                                            [&](VertexIndex v) { return exact_position(sliced, plane, v); });
       // Count directed edges: the cap's boundary (edges without their reverse)
       // must be the border, edge for edge and direction for direction.
       std::map<std::pair<VertexIndex, VertexIndex>, int> edges;

@@ -23,7 +23,7 @@ struct PlaneBasis {
 // outward normal is -n, with attributes for the channels the mesh carries.
 template <class Point>
 void append_cap(BasicMesh<Point>& half, const Cap<Point>& cap, bool reversed, const PlaneBasis& basis,
-                const CutOptions& options, const std::vector<Point>& positions) {
+                const CutOptions& options) {
   const bool normals = half.corners.has_normals(), uvs = half.corners.has_uvs(),
              tangents = half.corners.has_tangents();
   const Vec3 normal = reversed ? -basis.normal : basis.normal;
@@ -34,7 +34,7 @@ void append_cap(BasicMesh<Point>& half, const Cap<Point>& cap, bool reversed, co
     for (VertexIndex v : t) {
       if (normals) half.corners.normals.push_back(normal);
       if (uvs) {
-        const Vec3 p = to_vec3(positions[v]);
+        const Vec3 p = to_vec3(half.positions[v]);
         half.corners.uvs.push_back(
             {dot(p, basis.u) * options.interior_uv_scale, dot(p, basis.v) * options.interior_uv_scale});
       }
@@ -45,9 +45,9 @@ void append_cap(BasicMesh<Point>& half, const Cap<Point>& cap, bool reversed, co
 }
 
 template <class Point>
-BasicMesh<Point> half_with_cap(const OpenHalf& half, const std::vector<Point>& positions) {
+BasicMesh<Point> half_with_cap(const OpenHalf& half, std::vector<Point> positions) {
   BasicMesh<Point> mesh;
-  mesh.positions = positions;
+  mesh.positions = std::move(positions);
   mesh.triangles = half.triangles;
   mesh.surfaces = half.surfaces;
   mesh.corners = half.corners;
@@ -55,17 +55,8 @@ BasicMesh<Point> half_with_cap(const OpenHalf& half, const std::vector<Point>& p
 }
 
 Cap<Vec3> cap_of(const SlicedMesh<Vec3>& sliced, const Plane& plane) {
-  // The exact position a rounded vertex stands for: an input vertex is exact as it
-  // is; a new one is the exact crossing of its input edge.
-  auto exact_position = [&](VertexIndex v) -> ExactPoint {
-    if (v < sliced.input_vertex_count) {
-      const Vec3& p = sliced.positions[v];
-      return {p.x, p.y, p.z};
-    }
-    const Edge& edge = sliced.crossing_edges[v - sliced.input_vertex_count];
-    return exact_crossing_point(plane, sliced.positions[edge[0]], sliced.positions[edge[1]]);
-  };
-  return triangulate_cap(sliced.positions, sliced.border_edges, plane, exact_position);
+  return triangulate_cap(sliced.positions, sliced.border_edges, plane,
+                         [&](VertexIndex v) { return exact_position(sliced, plane, v); });
 }
 
 Cap<ExactPoint> cap_of(const SlicedMesh<ExactPoint>& sliced, const Plane& plane) {
@@ -91,11 +82,11 @@ CutResult<Point> cut(const BasicMesh<Point>& mesh, const Plane& plane, const Cut
 
   const PlaneBasis basis(plane);
   BasicMesh<Point> below = half_with_cap(sliced.below, positions);
-  append_cap(below, cap, false, basis, options, positions);
+  append_cap(below, cap, false, basis, options);
   result.below = separate_solids(below);
   below = {};
-  BasicMesh<Point> above = half_with_cap(sliced.above, positions);
-  append_cap(above, cap, true, basis, options, positions);
+  BasicMesh<Point> above = half_with_cap(sliced.above, std::move(positions));  // its last use
+  append_cap(above, cap, true, basis, options);
   result.above = separate_solids(above);
   return result;
 }

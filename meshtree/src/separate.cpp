@@ -51,23 +51,23 @@ struct PredicateKernel<ExactPoint> {
 
 Sign volume_sign(const Mesh& shell) { return signed_volume_sign(shell); }
 
-Sign volume_sign(const ExactMesh& shell) {
-  // Six times the volume is the sum of det(a, b, c). Summed first in interval
-  // arithmetic on the points' approximations (no lazy nodes are built); only when
-  // the interval contains zero is it summed again in exact rationals.
-  using Interval = CGAL::Interval_nt<false>;
-  Interval six_volume = 0;
-  {
-  CGAL::Protect_FPU_rounding<true> rounding_upward;  // Interval_nt<false> needs it; restored at scope end
+// Six times the volume, sum of det(a, b, c), in interval arithmetic on the points'
+// approximations: no lazy nodes are built.
+CGAL::Interval_nt<false> approximate_six_volume(const ExactMesh& shell) {
+  CGAL::Protect_FPU_rounding<true> rounding_upward;  // Interval_nt<false> needs it; restored on return
+  CGAL::Interval_nt<false> six_volume = 0;
   for (const Triangle& t : shell.triangles) {
-    const ExactPoint& a = shell.positions[t[0]];
-    const ExactPoint& b = shell.positions[t[1]];
-    const ExactPoint& c = shell.positions[t[2]];
-    six_volume += CGAL::determinant(a.approx().x(), a.approx().y(), a.approx().z(), b.approx().x(),
-                                    b.approx().y(), b.approx().z(), c.approx().x(), c.approx().y(),
-                                    c.approx().z());
+    const auto& a = shell.positions[t[0]].approx();
+    const auto& b = shell.positions[t[1]].approx();
+    const auto& c = shell.positions[t[2]].approx();
+    six_volume += CGAL::determinant(a.x(), a.y(), a.z(), b.x(), b.y(), b.z(), c.x(), c.y(), c.z());
   }
-  }
+  return six_volume;
+}
+
+Sign volume_sign(const ExactMesh& shell) {
+  // Only when the interval holds zero is the sum taken again in exact rationals.
+  const CGAL::Interval_nt<false> six_volume = approximate_six_volume(shell);
   if (six_volume.inf() > 0) return Sign::positive;
   if (six_volume.sup() < 0) return Sign::negative;
   ExactKernel::FT::ET exact_six_volume = 0;
@@ -88,12 +88,12 @@ enum class Containment { inside, outside, undecided };
 // orientation; a segment that touches an edge or a vertex, or a q on the shell,
 // is never resolved by a tolerance: the caller tries another direction or point.
 template <class Point>
-Containment locate(const Point& q_in, const BasicMesh<Point>& shell, int direction_index) {
+Containment locate(const Point& q_in, const BasicMesh<Point>& shell, const CGAL::Bbox_3& shell_box,
+                   int direction_index) {
   using PK = PredicateKernel<Point>;
   using K = typename PK::K;
   const typename K::Point_3 q = PK::point(q_in);
-  CGAL::Bbox_3 box = q.bbox();
-  for (const Point& p : shell.positions) box += PK::point(p).bbox();
+  const CGAL::Bbox_3 box = shell_box + q.bbox();
   // Deterministic, irregular directions: degenerate ones for one shell are rare,
   // and each degeneracy is detected exactly.
   const double golden = 0.6180339887498949;
@@ -133,9 +133,11 @@ template <class Point>
 Containment shell_inside(const BasicMesh<Point>& inner, const BasicMesh<Point>& outer) {
   constexpr int directions_per_point = 8;
   constexpr std::size_t points_tried = 16;
+  CGAL::Bbox_3 outer_box;
+  for (const Point& p : outer.positions) outer_box += PredicateKernel<Point>::point(p).bbox();
   for (std::size_t v = 0; v < std::min(points_tried, inner.positions.size()); ++v) {
     for (int d = 0; d < directions_per_point; ++d) {
-      const Containment c = locate(inner.positions[v], outer, d);
+      const Containment c = locate(inner.positions[v], outer, outer_box, d);
       if (c != Containment::undecided) return c;
     }
   }

@@ -203,6 +203,15 @@ class Slicer {
 
 }  // namespace
 
+ExactPoint exact_position(const SlicedMesh<Vec3>& sliced, const Plane& plane, VertexIndex v) {
+  if (v < sliced.input_vertex_count) {
+    const Vec3& p = sliced.positions[v];
+    return {p.x, p.y, p.z};
+  }
+  const Edge& edge = sliced.crossing_edges[v - sliced.input_vertex_count];
+  return exact_crossing_point(plane, sliced.positions[edge[0]], sliced.positions[edge[1]]);
+}
+
 SlicedMesh<Vec3> slice_mesh(const Mesh& mesh, const Plane& plane) { return Slicer<Vec3>(mesh, plane).run(); }
 
 SlicedMesh<ExactPoint> slice_mesh(const ExactMesh& mesh, const Plane& plane) {

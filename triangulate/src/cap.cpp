@@ -201,11 +201,6 @@ std::optional<std::vector<Triangle>> triangulate_with_cdt(std::span<const Edge> 
   return triangles;
 }
 
-template <class Point>
-Vec3 approximate(const Point& p) {
-  return to_vec3(p);
-}
-
 // One new vertex inside each loop, joined to every loop edge. Only topology is
 // guaranteed: closed, oriented, boundary = border.
 template <class Point>
@@ -215,7 +210,7 @@ Cap<Point> steiner_fan(std::span<const Point> positions, const std::vector<std::
   cap.loop_count = loops.size();
   for (const auto& loop : loops) {
     Vec3 sum;
-    for (VertexIndex v : loop) sum = sum + approximate(positions[v]);
+    for (VertexIndex v : loop) sum = sum + to_vec3(positions[v]);
     const Vec3 centre = sum * (1.0 / static_cast<double>(loop.size()));
     const auto apex = static_cast<VertexIndex>(positions.size() + cap.added_points.size());
     if constexpr (std::is_same_v<Point, Vec3>) {

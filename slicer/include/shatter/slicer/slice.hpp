@@ -53,6 +53,11 @@ struct SlicedMesh {
   bool plane_misses() const { return below.triangles.empty() || above.triangles.empty(); }
 };
 
+/// The exact position vertex v of a fast-kernel slice stands for: an input vertex
+/// as it is, a new vertex as the exact crossing of its input edge (which the
+/// rounded position only approximates). Precondition: v < sliced.positions.size().
+ExactPoint exact_position(const SlicedMesh<Vec3>& sliced, const Plane& plane, VertexIndex v);
+
 /// Splits a closed mesh by `plane` (n·x + d = 0).
 /// Preconditions: mesh is closed, 2-manifold and consistently oriented (as
 /// validate_mesh checks), plane.normal is not zero, every coordinate finite.
