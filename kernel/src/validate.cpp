@@ -1,5 +1,7 @@
 #include "shatter/kernel/validate.hpp"
 
+#include "shatter/kernel/error.hpp"
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
@@ -378,6 +380,24 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
     }
   }
   return report;
+}
+
+void require_valid_solid(const Mesh& mesh, std::string_view name, bool allow_self_intersections) {
+  const ValidationReport report = validate_mesh(mesh);
+  const Defect* self_intersection = nullptr;
+  for (const Defect& d : report.defects) {
+    if (d.kind == DefectKind::self_intersection) {
+      self_intersection = &d;
+      continue;
+    }
+    if (d.kind == DefectKind::non_manifold_vertex && allow_self_intersections) continue;
+    throw InvalidMeshError("invalid mesh " + std::string(name) + ": " + report.summary());
+  }
+  if (self_intersection && !allow_self_intersections) {
+    throw InvalidMeshError("invalid mesh " + std::string(name) + ": self-intersecting: " +
+                           std::to_string(self_intersection->count) + " pairs of intersecting triangles, first " +
+                           self_intersection->first + " (--allow-self-intersections cuts it anyway)");
+  }
 }
 
 }  // namespace shatter

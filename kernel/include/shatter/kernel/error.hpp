@@ -17,6 +17,12 @@ struct IoError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A file is damaged, truncated or not of the expected format, e.g. a .shatter
+/// file that fails its checksums or structure checks (CLI exit code 3).
+struct CorruptFileError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 /// A configuration shatter decides exactly but cannot yet process; refused
 /// rather than approximated (CLI exit code 3, as the input is the cause).
 struct UnsupportedGeometryError : std::runtime_error {

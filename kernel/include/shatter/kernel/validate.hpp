@@ -72,4 +72,11 @@ struct ValidationReport {
 /// finding what is wrong is its job. Guarantees: the counts are exact.
 ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& options = {});
 
+/// Refuses a mesh that is not a valid solid, with InvalidMeshError "invalid mesh
+/// <name>: <summary>". Self-intersections, and the pinched vertices where a surface
+/// touches itself, pass when `allow_self_intersections`: a cut then still gives
+/// closed, oriented pieces, but their embedding may overlap. Never returns on a
+/// mesh the slicer's preconditions exclude.
+void require_valid_solid(const Mesh& mesh, std::string_view name, bool allow_self_intersections);
+
 }  // namespace shatter
