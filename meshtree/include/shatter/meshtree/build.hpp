@@ -1,0 +1,55 @@
+#pragma once
+// The recursive builder: cuts a solid into at least N fragments and keeps every
+// level as a MeshTree (seed thesis ch. 4, listing 4.1), then finds the bonds.
+
+#include <cstddef>
+#include <functional>
+#include <vector>
+
+#include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/mesh.hpp"
+#include "shatter/meshtree/tree.hpp"
+
+namespace shatter {
+
+/// Called once per finished leaf with the number finished so far. May be called
+/// from any worker thread, concurrently: it must be thread-safe and cheap.
+using LeafProgressFn = std::function<void(std::size_t leaves_done)>;
+
+/// Builds the mesh tree of `mesh` with `options` (see BuildOptions, Strategy).
+/// Preconditions: options.fragments >= 1 and every triangle of `mesh` on surface 0
+/// (std::invalid_argument otherwise). The mesh is validated first: a mesh that
+/// is not a closed, oriented 2-manifold with positive volume, or that intersects
+/// itself (unless options.allow_self_intersections), is refused with
+/// InvalidMeshError naming its first defect.
+/// Guarantees: at least options.fragments leaves, and no leaf cut that was not
+/// needed to reach that count; every node's stored mesh a valid solid (closed,
+/// oriented, 2-manifold, positive volume, no zero-area triangle, no
+/// self-intersection; with allow_self_intersections only the topology), because a
+/// plane whose rounded pieces are not is redrawn; children partition their parent
+/// (exact kernel: exactly, in the exact solids; fast: up to rounding of the cut
+/// points); leaf ranges contiguous; cap triangles carry cap_surface_of(cut node);
+/// mass properties and hulls filled; bonds = find_bonds(tree). The result depends
+/// only on the mesh and the options other than `threads`: byte-identical on any
+/// machine and thread count.
+/// Throws UnsupportedGeometryError when none of max_plane_tries planes gives a node
+/// valid pieces (all missed it, or its pieces are thinner than rounding).
+MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const LeafProgressFn& progress = {});
+
+/// The same build, also returning every node's exact solid (node order) when
+/// options.kernel is exact (empty otherwise): the tree's meshes are those solids
+/// rounded to the nearest doubles, so only these show that volumes add up exactly.
+struct ExactBuild {
+  MeshTree tree;
+  std::vector<ExactMesh> exact_meshes;
+};
+ExactBuild build_mesh_tree_keeping_exact(const Mesh& mesh, const BuildOptions& options);
+
+/// The convex hull of a closed mesh's vertices as an outward triangle mesh (surface
+/// ids 0, no attributes), computed with CGAL convex_hull_3 (exact predicates). A
+/// mesh that is convex already (every edge convex or flat, decided exactly) is its
+/// own hull, without a hull computation.
+/// Precondition: the mesh is closed and oriented with positive volume.
+Mesh convex_hull_of(const Mesh& mesh);
+
+}  // namespace shatter

@@ -1,0 +1,111 @@
+#pragma once
+// The mesh tree (seed thesis ch. 3, Fig 3.1-3.3): the input solid at the root,
+// every solid a cut produced as a child of the solid it was cut from, the
+// fragments at the leaves. Nodes are stored in depth-first preorder and leaves are
+// numbered in that order, so every node's leaves form one contiguous range.
+
+#include <cstdint>
+#include <limits>
+#include <string_view>
+#include <vector>
+
+#include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/vec.hpp"
+
+namespace shatter {
+
+/// Index of a node in MeshTree::nodes.
+using NodeIndex = std::uint32_t;
+/// Index of a leaf (fragment) in depth-first order: MeshTree::leaf_nodes[i].
+using LeafIndex = std::uint32_t;
+inline constexpr NodeIndex no_node = std::numeric_limits<NodeIndex>::max();
+
+/// How the builder picks the next plane and the next node to cut.
+enum class Strategy : std::uint8_t {
+  /// A random plane through the node's volume centroid; a node's fragment budget is
+  /// shared evenly among its children, whatever their size (the seed's method).
+  thesis = 0,
+  /// A random plane through the centroid, always cutting the largest-volume leaf
+  /// next, which evens out fragment sizes.
+  balanced = 1,
+  /// Planes across the node's longest bounding-box axis (X, Y or Z) near the
+  /// centroid, with offset and angle jitter (as PhysX APEX slices); the budget is
+  /// shared among the children in proportion to their volume.
+  axis = 2,
+};
+
+/// Which kernel constructs the cut points (DESIGN.md, "Exact arithmetic").
+enum class KernelKind : std::uint8_t { fast = 0, exact = 1 };
+
+std::string_view strategy_name(Strategy strategy);
+std::string_view kernel_name(KernelKind kernel);
+
+/// Everything that decides a tree's contents. Two builds with equal options on
+/// equal input give byte-identical trees, whatever `threads` is.
+struct BuildOptions {
+  std::uint32_t fragments = 2;  ///< stop at the first leaf count >= this (>= 1)
+  std::uint64_t seed = 1;
+  Strategy strategy = Strategy::thesis;
+  KernelKind kernel = KernelKind::fast;
+  double interior_uv_scale = 1.0;
+  /// Planes drawn for one node before the build fails. A plane is redrawn when it
+  /// misses the node or when a piece's stored (rounded) mesh would not be a valid
+  /// solid (a plane within rounding of a vertex can fold or flatten a triangle).
+  std::uint32_t max_plane_tries = 64;
+  /// Accept a self-intersecting input (only topology is promised then).
+  bool allow_self_intersections = false;
+  /// Worker threads; 0 means one per hardware thread. Never changes the output.
+  unsigned threads = 0;
+};
+
+/// A bond joins two leaves that truly touch: they lie on opposite sides of one
+/// cut and their caps on that plane overlap in positive area.
+struct Bond {
+  LeafIndex first = 0;   ///< first < second
+  LeafIndex second = 0;
+  NodeIndex cut_node = no_node;  ///< the node whose plane both caps lie on
+  /// Area of the caps' overlap: > 0 exactly; as a rounded double it is 0 only
+  /// when the exact overlap is below the double range's resolution.
+  double area = 0;
+  Vec3 centroid;                 ///< area-weighted centroid of the overlap
+  Vec3 normal;                   ///< unit normal of the plane, from `first` into `second`
+};
+
+struct MeshTreeNode {
+  /// The closed solid, a valid one (validate_mesh finds no defect; with
+  /// allow_self_intersections only topology is promised). Cap triangles of the cut
+  /// at node k carry cap_surface_of(k) = k + 1; the input's triangles keep surface 0.
+  Mesh mesh;
+  MassProperties mass;  ///< of `mesh`, unit density
+  /// The convex hull of `mesh` (outward triangles over its own positions; every
+  /// surface id 0, no attributes), for colliders.
+  Mesh hull;
+  NodeIndex parent = no_node;
+  std::vector<NodeIndex> children;  ///< empty for a leaf; otherwise two or more
+  Plane plane;                      ///< the plane that cut this node (internal nodes only)
+  /// Which side of its parent's plane the node lies on (false: n·x + d < 0).
+  bool above_parent_plane = false;
+  std::uint32_t depth = 0;          ///< root 0
+  LeafIndex first_leaf = 0;         ///< this node's leaves are [first_leaf, first_leaf + leaf_count)
+  std::uint32_t leaf_count = 0;
+  std::uint64_t seed = 0;           ///< the node's own seed, derived from the root seed
+
+  bool is_leaf() const { return children.empty(); }
+};
+
+/// What `build_mesh_tree` produces and the .shatter file stores.
+struct MeshTree {
+  BuildOptions options;
+  std::vector<MeshTreeNode> nodes;   ///< depth-first preorder; nodes[0] is the root
+  std::vector<NodeIndex> leaf_nodes; ///< leaf i is nodes[leaf_nodes[i]]
+  std::vector<Bond> bonds;           ///< sorted by (first, second, cut_node)
+
+  std::size_t leaf_count() const { return leaf_nodes.size(); }
+  const MeshTreeNode& leaf(LeafIndex i) const { return nodes[leaf_nodes[i]]; }
+};
+
+/// The surface id cap triangles of the cut at `node` carry.
+inline SurfaceId cap_surface_of(NodeIndex node) { return node + 1; }
+
+}  // namespace shatter

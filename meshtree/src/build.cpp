@@ -1,0 +1,491 @@
+#include "shatter/meshtree/build.hpp"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "shatter/meshtree/bonds.hpp"
+#include "shatter/meshtree/cut.hpp"
+
+namespace shatter {
+
+std::string_view strategy_name(Strategy strategy) {
+  switch (strategy) {
+    case Strategy::thesis: return "thesis";
+    case Strategy::balanced: return "balanced";
+    case Strategy::axis: return "axis";
+  }
+  return "unknown";
+}
+
+std::string_view kernel_name(KernelKind kernel) {
+  switch (kernel) {
+    case KernelKind::fast: return "fast";
+    case KernelKind::exact: return "exact";
+  }
+  return "unknown";
+}
+
+namespace {
+
+// --- reproducible randomness ------------------------------------------------
+// splitmix64: a node's planes come from its own stream, seeded from its parent's
+// seed and its place among its siblings, so a subtree never depends on what other
+// threads drew. Only +, *, / and sqrt touch the draws (all correctly rounded in
+// IEEE arithmetic), never a library transcendental, so every machine agrees.
+
+std::uint64_t splitmix(std::uint64_t& state) {
+  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+class NodeRandom {
+ public:
+  explicit NodeRandom(std::uint64_t seed) : state_(seed) {}
+  /// Uniform in [-1, 1).
+  double symmetric() { return static_cast<double>(splitmix(state_) >> 11) * 0x1p-52 - 1.0; }
+  /// A unit direction uniform on the sphere (rejection from the cube).
+  Vec3 direction() {
+    for (;;) {
+      const Vec3 v{symmetric(), symmetric(), symmetric()};
+      const double length_squared = dot(v, v);
+      if (length_squared > 1e-4 && length_squared <= 1.0) return v * (1.0 / std::sqrt(length_squared));
+    }
+  }
+
+ private:
+  std::uint64_t state_;
+};
+
+std::uint64_t root_seed(std::uint64_t seed) {
+  std::uint64_t state = seed;
+  return splitmix(state);
+}
+
+std::uint64_t child_seed(std::uint64_t parent_seed, std::size_t child) {
+  std::uint64_t state = parent_seed ^ (0xD1B54A32D192ED03ull * (child + 1));
+  return splitmix(state);
+}
+
+// --- planes -------------------------------------------------------------------
+
+// Axis strategy jitter: the normal leans up to atan(0.27) ≈ 15° off the axis, and
+// the plane moves up to 20% of the half-extent off the centroid.
+constexpr double axis_lean = 0.27;
+constexpr double axis_offset_fraction = 0.2;
+
+Plane plane_through(const Vec3& normal, const Vec3& point) { return {normal, -dot(normal, point)}; }
+
+Plane axis_plane(const Mesh& mesh, const Vec3& centroid, NodeRandom& random) {
+  Vec3 lo = mesh.positions.front(), hi = lo;
+  for (const Vec3& p : mesh.positions) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  const Vec3 extent = hi - lo;
+  const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
+  const double a = random.symmetric() * axis_lean, b = random.symmetric() * axis_lean;
+  const double shift = random.symmetric() * axis_offset_fraction * 0.5;
+  Vec3 normal, point = centroid;
+  if (axis == 0) {
+    normal = {1, a, b};
+    point.x += shift * extent.x;
+  } else if (axis == 1) {
+    normal = {b, 1, a};
+    point.y += shift * extent.y;
+  } else {
+    normal = {a, b, 1};
+    point.z += shift * extent.z;
+  }
+  return plane_through(normalized(normal), point);
+}
+
+Plane draw_plane(Strategy strategy, const Mesh& mesh, const Vec3& centroid, NodeRandom& random) {
+  if (strategy == Strategy::axis) return axis_plane(mesh, centroid, random);
+  return plane_through(random.direction(), centroid);
+}
+
+// --- the tree under construction ----------------------------------------------
+
+struct BuildNode {
+  Mesh mesh;
+  ExactMesh exact;  // exact kernel: the solid the rounded mesh stands for
+  MassProperties mass;
+  Plane plane;
+  bool above_parent_plane = false;
+  std::uint32_t depth = 0;
+  std::uint64_t seed = 0;
+  std::vector<std::unique_ptr<BuildNode>> children;
+};
+
+// A fresh point holding only its exact value. Cut points share lazy-evaluation
+// nodes with the solid they were cut from and with the sibling across the cap;
+// CGAL's lazy numbers are not safe to evaluate from two threads at once, and an
+// evaluation refines the cached approximations (which attribute interpolation
+// reads). Detaching every child's points before its subtree starts makes each
+// subtree touch only its own numbers: safe, and independent of scheduling.
+ExactPoint detached(const ExactPoint& p) {
+  using FT = ExactKernel::FT;
+  return {FT(CGAL::exact(p.x())), FT(CGAL::exact(p.y())), FT(CGAL::exact(p.z()))};
+}
+
+// Everything a node's children need, computed from the node alone.
+std::unique_ptr<BuildNode> make_node(Mesh mesh, ExactMesh exact, const BuildNode& parent, std::size_t index,
+                                     bool above) {
+  auto node = std::make_unique<BuildNode>();
+  node->mesh = std::move(mesh);
+  node->exact = std::move(exact);
+  node->mass = mass_properties(node->mesh);
+  node->above_parent_plane = above;
+  node->depth = parent.depth + 1;
+  node->seed = child_seed(parent.seed, index);
+  return node;
+}
+
+class Builder {
+ public:
+  Builder(const BuildOptions& options, bool keep_exact, const LeafProgressFn& progress)
+      : options_(options), keep_exact_(keep_exact), progress_(progress) {}
+
+  std::unique_ptr<BuildNode> root(const Mesh& mesh) const {
+    auto node = std::make_unique<BuildNode>();
+    node->mesh = mesh;
+    if (options_.kernel == KernelKind::exact) node->exact = to_exact(mesh);
+    node->mass = mass_properties(node->mesh);
+    node->seed = root_seed(options_.seed);
+    return node;
+  }
+
+  /// Cuts `node` and attaches its children. A pure function of the node (its mesh,
+  /// seed and depth) and the options: which thread runs it, and when, never shows.
+  void cut(BuildNode& node) const {
+    NodeRandom random(node.seed);
+    CutOptions cut_options;
+    cut_options.cap_surface = node.depth + 1;  // made global once the tree is numbered
+    cut_options.interior_uv_scale = options_.interior_uv_scale;
+    std::uint32_t missed = 0;
+    for (std::uint32_t attempt = 0; attempt < options_.max_plane_tries; ++attempt) {
+      const Plane plane = draw_plane(options_.strategy, node.mesh, node.mass.centroid, random);
+      bool accepted = false;
+      if (options_.kernel == KernelKind::fast) {
+        CutResult<Vec3> result = cut_mesh(node.mesh, plane, cut_options);
+        missed += result.plane_missed ? 1 : 0;
+        accepted = !result.plane_missed && all_valid(result.below) && all_valid(result.above);
+        if (accepted) {
+          adopt(node, result.below, false);
+          adopt(node, result.above, true);
+        }
+      } else {
+        CutResult<ExactPoint> result = cut_mesh(node.exact, plane, cut_options);
+        missed += result.plane_missed ? 1 : 0;
+        if (!result.plane_missed) accepted = adopt_if_valid(node, result);
+        if (accepted && !keep_exact_) node.exact = {};
+      }
+      if (accepted) {
+        node.plane = plane;
+        return;
+      }
+    }
+    throw UnsupportedGeometryError(
+        "cannot cut a fragment at depth " + std::to_string(node.depth) + " (" +
+        std::to_string(node.mesh.triangles.size()) + " triangles): of " + std::to_string(options_.max_plane_tries) +
+        " planes, " + std::to_string(missed) + " missed it and " +
+        std::to_string(options_.max_plane_tries - missed) +
+        " gave a piece whose rounded mesh is not a valid solid (is it flat, or thinner than rounding?)");
+  }
+
+  void leaf_finished() {
+    const std::size_t done = ++leaves_done_;
+    if (progress_) progress_(done);
+  }
+
+  const BuildOptions& options() const { return options_; }
+
+ private:
+  // The promise of the tree is that every stored mesh is a valid solid. The fast
+  // kernel rounds each crossing point, and the exact kernel rounds each node once
+  // for storage; where a plane passes within rounding of a vertex that can fold a
+  // triangle or collapse one to zero area. Such a plane is redrawn, exactly as one
+  // that misses: the check is exact (validate_mesh), nothing is nudged.
+  bool valid(const Mesh& mesh) const {
+    ValidationOptions validation;
+    validation.check_self_intersections = !options_.allow_self_intersections;
+    const ValidationReport report = validate_mesh(mesh, validation);
+    for (const Defect& defect : report.defects) {
+      // A self-intersecting input (allowed) can pinch its pieces at a vertex.
+      if (options_.allow_self_intersections && defect.kind == DefectKind::non_manifold_vertex) continue;
+      return false;
+    }
+    return true;
+  }
+  bool all_valid(const std::vector<Mesh>& solids) const {
+    return std::all_of(solids.begin(), solids.end(), [&](const Mesh& solid) { return valid(solid); });
+  }
+
+  void adopt(BuildNode& node, std::vector<Mesh>& solids, bool above) const {
+    for (Mesh& solid : solids) {
+      node.children.push_back(make_node(std::move(solid), {}, node, node.children.size(), above));
+    }
+  }
+
+  // Rounds every exact child; keeps them all only if every rounding is valid.
+  bool adopt_if_valid(BuildNode& node, CutResult<ExactPoint>& result) const {
+    std::vector<Mesh> rounded;
+    for (auto* solids : {&result.below, &result.above}) {
+      for (ExactMesh& solid : *solids) {
+        for (ExactPoint& p : solid.positions) p = detached(p);
+        rounded.push_back(to_fast(solid));
+        if (!valid(rounded.back())) return false;
+      }
+    }
+    std::size_t next = 0;
+    for (auto* solids : {&result.below, &result.above}) {
+      for (ExactMesh& solid : *solids) {
+        node.children.push_back(make_node(std::move(rounded[next++]), std::move(solid), node,
+                                          node.children.size(), solids == &result.above));
+      }
+    }
+    return true;
+  }
+
+  const BuildOptions& options_;
+  bool keep_exact_;
+  const LeafProgressFn& progress_;
+  std::atomic<std::size_t> leaves_done_{0};
+};
+
+// --- budgets: thesis and axis ---------------------------------------------------
+// A node asked for n fragments is cut, and n is shared among its children; a child
+// with a share of 1 or less is a leaf. The shares depend only on the node, so
+// subtrees grow independently, in parallel.
+
+std::vector<std::uint32_t> share_evenly(std::uint32_t budget, std::size_t children) {
+  std::vector<std::uint32_t> shares(children);
+  const auto k = static_cast<std::uint32_t>(children);
+  for (std::uint32_t i = 0; i < k; ++i) shares[i] = budget / k + (i < budget % k ? 1 : 0);
+  return shares;
+}
+
+// Each child gets one, and the rest goes by volume (largest remainder, ties to
+// the earlier child), so big pieces are cut more and fragments come out even.
+std::vector<std::uint32_t> share_by_volume(std::uint32_t budget, const BuildNode& node) {
+  const std::size_t k = node.children.size();
+  std::vector<std::uint32_t> shares(k, 1);
+  if (budget <= k) return shares;
+  const std::uint32_t rest = budget - static_cast<std::uint32_t>(k);
+  double total = 0;
+  for (const auto& child : node.children) total += std::max(child->mass.volume, 0.0);
+  std::vector<double> remainder(k);
+  std::uint32_t given = 0;
+  for (std::size_t i = 0; i < k; ++i) {
+    const double exact_share =
+        total > 0 ? rest * (std::max(node.children[i]->mass.volume, 0.0) / total) : double(rest) / double(k);
+    const auto whole = std::min(rest - given, static_cast<std::uint32_t>(std::floor(exact_share)));
+    shares[i] += whole;
+    given += whole;
+    remainder[i] = exact_share - whole;
+  }
+  std::vector<std::size_t> order(k);
+  for (std::size_t i = 0; i < k; ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return remainder[a] > remainder[b]; });
+  for (std::size_t i = 0; given < rest; i = (i + 1) % k, ++given) ++shares[order[i]];
+  return shares;
+}
+
+// Below this budget a subtree is grown on the current thread: the work is too
+// small to pay for a task.
+constexpr std::uint32_t parallel_budget = 32;
+
+void grow(Builder& builder, BuildNode& node, std::uint32_t budget) {
+  if (budget <= 1) {
+    builder.leaf_finished();
+    return;
+  }
+  builder.cut(node);
+  const std::vector<std::uint32_t> shares = builder.options().strategy == Strategy::axis
+                                                ? share_by_volume(budget, node)
+                                                : share_evenly(budget, node.children.size());
+  if (budget < parallel_budget) {
+    for (std::size_t i = 0; i < node.children.size(); ++i) grow(builder, *node.children[i], shares[i]);
+  } else {
+    tbb::parallel_for(std::size_t{0}, node.children.size(),
+                      [&](std::size_t i) { grow(builder, *node.children[i], shares[i]); });
+  }
+}
+
+// --- balanced: the largest leaf next -------------------------------------------
+// The order is global, so the decisions are taken one at a time; the cuts, being
+// pure functions of their node, are computed ahead for the next few largest
+// leaves in parallel. A cut computed ahead that is never needed is dropped, so the
+// tree is the one the one-at-a-time loop makes, on any number of threads.
+
+struct LargestFirst {
+  bool operator()(const std::pair<BuildNode*, std::uint64_t>& a,
+                  const std::pair<BuildNode*, std::uint64_t>& b) const {
+    if (a.first->mass.volume != b.first->mass.volume) return a.first->mass.volume > b.first->mass.volume;
+    return a.second < b.second;  // equal volumes: the older leaf first
+  }
+};
+
+void grow_balanced(Builder& builder, BuildNode& root, std::uint32_t target, unsigned threads) {
+  std::set<std::pair<BuildNode*, std::uint64_t>, LargestFirst> leaves;
+  std::uint64_t created = 0;
+  leaves.insert({&root, created++});
+  std::vector<BuildNode*> ahead;
+  while (leaves.size() < target) {
+    ahead.clear();
+    for (auto it = leaves.begin(); it != leaves.end() && ahead.size() < threads; ++it) {
+      if (it->first->children.empty()) ahead.push_back(it->first);
+    }
+    if (ahead.size() > 1) {
+      tbb::parallel_for(std::size_t{0}, ahead.size(), [&](std::size_t i) { builder.cut(*ahead[i]); });
+    } else {
+      builder.cut(*ahead.front());
+    }
+    // Apply the decisions in order; stop at the first leaf whose cut was not made
+    // ahead (its turn comes in the next round).
+    while (leaves.size() < target) {
+      auto largest = leaves.begin();
+      BuildNode* node = largest->first;
+      if (node->children.empty()) break;
+      leaves.erase(largest);
+      for (auto& child : node->children) leaves.insert({child.get(), created++});
+    }
+  }
+  // Cuts made ahead but never reached are undone: those nodes stay leaves.
+  for (const auto& [node, order] : leaves) {
+    node->children.clear();
+    node->plane = {};
+    builder.leaf_finished();
+  }
+}
+
+// --- numbering ------------------------------------------------------------------
+
+void number_tree(BuildNode& root, MeshTree& tree, std::vector<ExactMesh>* exact_meshes) {
+  struct Pending {
+    BuildNode* node;
+    NodeIndex parent;
+  };
+  std::vector<Pending> stack{{&root, no_node}};
+  std::vector<NodeIndex> path;  // path[d]: the node at depth d above the current one
+  while (!stack.empty()) {
+    const Pending pending = stack.back();
+    stack.pop_back();
+    BuildNode& built = *pending.node;
+    const auto index = static_cast<NodeIndex>(tree.nodes.size());
+    path.resize(built.depth + 1);
+    path[built.depth] = index;
+
+    MeshTreeNode node;
+    node.mesh = std::move(built.mesh);
+    // Caps were labelled by the depth of their cut; now that every node has its
+    // index, each label becomes that ancestor's.
+    for (SurfaceId& surface : node.mesh.surfaces) {
+      if (surface != original_surface) surface = cap_surface_of(path[surface - 1]);
+    }
+    node.mass = built.mass;
+    node.parent = pending.parent;
+    node.plane = built.plane;
+    node.above_parent_plane = built.above_parent_plane;
+    node.depth = built.depth;
+    node.seed = built.seed;
+    if (built.children.empty()) {
+      node.first_leaf = static_cast<LeafIndex>(tree.leaf_nodes.size());
+      node.leaf_count = 1;
+      tree.leaf_nodes.push_back(index);
+    }
+    if (pending.parent != no_node) tree.nodes[pending.parent].children.push_back(index);
+    if (exact_meshes) exact_meshes->push_back(std::move(built.exact));
+    tree.nodes.push_back(std::move(node));
+    for (auto child = built.children.rbegin(); child != built.children.rend(); ++child) {
+      stack.push_back({child->get(), index});
+    }
+  }
+  // Children follow their parent in preorder: fill ranges from the back.
+  for (std::size_t i = tree.nodes.size(); i-- > 0;) {
+    MeshTreeNode& node = tree.nodes[i];
+    if (node.children.empty()) continue;
+    node.first_leaf = tree.nodes[node.children.front()].first_leaf;
+    node.leaf_count = 0;
+    for (NodeIndex child : node.children) node.leaf_count += tree.nodes[child].leaf_count;
+  }
+}
+
+// Frees a built tree without deep recursion (a chain of cuts can be long).
+void dismantle(std::unique_ptr<BuildNode> root) {
+  std::vector<std::unique_ptr<BuildNode>> stack;
+  stack.push_back(std::move(root));
+  while (!stack.empty()) {
+    std::unique_ptr<BuildNode> node = std::move(stack.back());
+    stack.pop_back();
+    for (auto& child : node->children) stack.push_back(std::move(child));
+  }
+}
+
+ExactBuild build(const Mesh& mesh, const BuildOptions& options, bool keep_exact, const LeafProgressFn& progress) {
+  if (options.fragments < 1) throw std::invalid_argument("fragments must be at least 1");
+  if (options.max_plane_tries < 1) throw std::invalid_argument("max_plane_tries must be at least 1");
+  for (SurfaceId surface : mesh.surfaces) {
+    if (surface != original_surface) {
+      throw std::invalid_argument("build_mesh_tree needs every input triangle on surface 0 (caps are numbered by cut)");
+    }
+  }
+  require_valid_solid(mesh, "input", options.allow_self_intersections);
+
+  const unsigned threads = options.threads == 0 ? static_cast<unsigned>(tbb::info::default_concurrency())
+                                                : options.threads;
+  Builder builder(options, keep_exact && options.kernel == KernelKind::exact, progress);
+  std::unique_ptr<BuildNode> root = builder.root(mesh);
+  tbb::task_arena arena(static_cast<int>(threads));
+  arena.execute([&] {
+    if (options.strategy == Strategy::balanced) {
+      grow_balanced(builder, *root, options.fragments, threads);
+    } else {
+      grow(builder, *root, options.fragments);
+    }
+  });
+
+  ExactBuild result;
+  result.tree.options = options;
+  result.tree.options.threads = 0;  // never changes the output, so not part of it
+  number_tree(*root, result.tree, keep_exact && options.kernel == KernelKind::exact ? &result.exact_meshes : nullptr);
+  dismantle(std::move(root));
+  // Hulls are pure functions of their meshes, so computing them after the build,
+  // in parallel, changes nothing but the time.
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t{0}, result.tree.nodes.size(), [&](std::size_t i) {
+      MeshTreeNode& node = result.tree.nodes[i];
+      node.hull = convex_hull_of(node.mesh);
+    });
+  });
+  result.tree.bonds = find_bonds(result.tree);
+  return result;
+}
+
+}  // namespace
+
+MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const LeafProgressFn& progress) {
+  return build(mesh, options, false, progress).tree;
+}
+
+ExactBuild build_mesh_tree_keeping_exact(const Mesh& mesh, const BuildOptions& options) {
+  return build(mesh, options, true, {});
+}
+
+}  // namespace shatter

@@ -1,0 +1,77 @@
+// Tree statistics: counts, fragment volume spread, bonds.
+
+#include "shatter/meshtree/stats.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace shatter {
+
+double median_of(std::vector<double>& values) {
+  if (values.empty()) return 0;
+  const std::size_t middle = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(middle), values.end());
+  const double upper = values[middle];
+  if (values.size() % 2 == 1) return upper;
+  // nth_element leaves every smaller value before `middle`: the lower middle is their maximum.
+  const double lower = *std::max_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(middle));
+  return std::midpoint(lower, upper);
+}
+
+namespace {
+
+VolumeSpread spread_of(std::vector<double> volumes) {
+  VolumeSpread spread;
+  if (volumes.empty()) return spread;
+  const auto [min, max] = std::minmax_element(volumes.begin(), volumes.end());
+  spread.min = *min;
+  spread.max = *max;
+  const double count = static_cast<double>(volumes.size());
+  double sum = 0;
+  for (double v : volumes) sum += v;
+  spread.mean = sum / count;
+  // Two passes: the deviations are taken from the mean, which keeps the variance
+  // accurate when the fragments are nearly equal (the one-pass formula cancels).
+  double squared_deviations = 0;
+  for (double v : volumes) squared_deviations += (v - spread.mean) * (v - spread.mean);
+  const double deviation = std::sqrt(squared_deviations / count);
+  spread.coefficient_of_variation = spread.mean != 0 ? deviation / spread.mean : 0;
+  spread.median = median_of(volumes);
+  return spread;
+}
+
+}  // namespace
+
+TreeStats tree_stats(const MeshTree& tree) {
+  TreeStats stats;
+  stats.node_count = tree.nodes.size();
+  stats.leaf_count = tree.leaf_count();
+  stats.internal_count = stats.node_count - std::min(stats.leaf_count, stats.node_count);
+  if (tree.nodes.empty()) return stats;
+
+  for (const MeshTreeNode& node : tree.nodes) stats.max_depth = std::max(stats.max_depth, node.depth);
+  stats.root_volume = tree.nodes.front().mass.volume;
+
+  std::vector<double> volumes;
+  volumes.reserve(tree.leaf_count());
+  stats.min_leaf_depth = tree.leaf_nodes.empty() ? 0 : stats.max_depth;
+  for (NodeIndex index : tree.leaf_nodes) {
+    const MeshTreeNode& leaf = tree.nodes.at(index);
+    volumes.push_back(leaf.mass.volume);
+    stats.total_leaf_volume += leaf.mass.volume;
+    stats.min_leaf_depth = std::min(stats.min_leaf_depth, leaf.depth);
+    stats.leaf_triangles += leaf.mesh.triangle_count();
+    stats.leaf_vertices += leaf.mesh.vertex_count();
+    stats.leaf_cap_triangles += static_cast<std::size_t>(
+        std::count_if(leaf.mesh.surfaces.begin(), leaf.mesh.surfaces.end(),
+                      [](SurfaceId surface) { return surface != original_surface; }));
+  }
+  stats.fragment_volume = spread_of(std::move(volumes));
+
+  stats.bond_count = tree.bonds.size();
+  for (const Bond& bond : tree.bonds) stats.total_bond_area += bond.area;
+  return stats;
+}
+
+}  // namespace shatter

@@ -1,0 +1,654 @@
+// Bonds between fragments: hand-cut trees whose bonds geometry dictates, trees from
+// the builder (every strategy, both kernels) checked against an independent
+// brute force in exact rational arithmetic, and the seed's bounding-box rule.
+
+#include <catch2/catch.hpp>
+
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+#include <CGAL/intersections.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <tuple>
+
+#include "shatter/kernel/io.hpp"
+#include "shatter/kernel/projection.hpp"
+#include "shatter/meshtree/bonds.hpp"
+#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/cut.hpp"
+#include "shatter/meshtree/file.hpp"
+#include "support/corpus.hpp"
+#include "support/generators.hpp"
+
+using namespace shatter;
+using namespace shatter::test;
+
+namespace {
+
+struct Box3 {
+  Vec3 lo, hi;
+};
+Box3 bounds(const Mesh& m) {
+  Box3 b{m.positions.at(0), m.positions.at(0)};
+  for (const Vec3& p : m.positions) {
+    b.lo = {std::min(b.lo.x, p.x), std::min(b.lo.y, p.y), std::min(b.lo.z, p.z)};
+    b.hi = {std::max(b.hi.x, p.x), std::max(b.hi.y, p.y), std::max(b.hi.z, p.z)};
+  }
+  return b;
+}
+
+double triangle_area(const Mesh& mesh, const Triangle& t) {
+  return 0.5 * norm(cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]));
+}
+
+double area_with_surface(const Mesh& mesh, SurfaceId surface) {
+  double area = 0;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (mesh.surfaces[t] == surface) area += triangle_area(mesh, mesh.triangles[t]);
+  }
+  return area;
+}
+
+// The cap area of internal node k's cut, from its children (not its leaves): the
+// below side's caps and the above side's.
+struct CutCapArea {
+  double below = 0, above = 0;
+};
+CutCapArea cap_area_of_cut(const MeshTree& tree, NodeIndex k) {
+  CutCapArea area;
+  for (const NodeIndex child : tree.nodes[k].children) {
+    const double a = area_with_surface(tree.nodes[child].mesh, cap_surface_of(k));
+    (tree.nodes[child].above_parent_plane ? area.above : area.below) += a;
+  }
+  return area;
+}
+
+// The size of the input: tolerances of rounded numbers are relative to it.
+double length_scale(const MeshTree& tree) {
+  const Box3 b = bounds(tree.nodes[0].mesh);
+  return norm(b.hi - b.lo);
+}
+
+// Which side of ancestor k's plane a leaf is on, by walking parent links (not
+// by leaf ranges, which find_bonds uses). Nullopt when k is not an ancestor.
+std::optional<bool> leaf_above(const MeshTree& tree, LeafIndex leaf, NodeIndex k) {
+  for (NodeIndex n = tree.leaf_nodes[leaf]; tree.nodes[n].parent != no_node; n = tree.nodes[n].parent) {
+    if (tree.nodes[n].parent == k) return tree.nodes[n].above_parent_plane;
+  }
+  return std::nullopt;
+}
+
+// --- the brute force: every cross-side pair of cap triangles of every cut,
+// intersected in exact rational arithmetic (CGAL Epeck), no bounding boxes.
+using K = CGAL::Epeck;
+
+K::FT polygon_area(const std::vector<K::Point_2>& points) {
+  K::FT twice = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const K::Point_2& a = points[i];
+    const K::Point_2& b = points[(i + 1) % points.size()];
+    twice += a.x() * b.y() - a.y() * b.x();
+  }
+  return CGAL::abs(twice) / 2;
+}
+
+// Exact projected overlap area of two triangles (0 when they only touch):
+// Sutherland-Hodgman clipping of one by the other's three edge lines, in exact
+// rationals. (CGAL's Triangle_2 intersection is not used: with Epeck it returned
+// absurd polygons for a mesh far from the origin.)
+K::FT signed_twice_area(const K::Point_2& a, const K::Point_2& b, const K::Point_2& c) {
+  return (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+}
+
+K::FT overlap_area(const K::Triangle_2& a, const K::Triangle_2& b) {
+  std::array<K::Point_2, 3> clipper{b[0], b[1], b[2]};
+  if (signed_twice_area(clipper[0], clipper[1], clipper[2]) < 0) std::swap(clipper[1], clipper[2]);
+  std::vector<K::Point_2> polygon{a[0], a[1], a[2]};
+  for (int e = 0; e < 3 && !polygon.empty(); ++e) {
+    const K::Point_2& from = clipper[e];
+    const K::Point_2& to = clipper[(e + 1) % 3];
+    std::vector<K::Point_2> kept;
+    for (std::size_t i = 0; i < polygon.size(); ++i) {
+      const K::Point_2& p = polygon[i];
+      const K::Point_2& q = polygon[(i + 1) % polygon.size()];
+      const K::FT sp = signed_twice_area(from, to, p), sq = signed_twice_area(from, to, q);
+      if (sp >= 0) kept.push_back(p);
+      if ((sp > 0 && sq < 0) || (sp < 0 && sq > 0)) {
+        const K::FT t = sp / (sp - sq);
+        kept.emplace_back(p.x() + t * (q.x() - p.x()), p.y() + t * (q.y() - p.y()));
+      }
+    }
+    polygon = std::move(kept);
+  }
+  return polygon.size() < 3 ? K::FT(0) : polygon_area(polygon);
+}
+
+using BondKey = std::tuple<LeafIndex, LeafIndex, NodeIndex>;
+
+// (first, second, cut) -> overlap area in the plane, for every pair sharing area.
+std::map<BondKey, double> brute_force_bonds(const MeshTree& tree) {
+  struct Cap {
+    LeafIndex leaf;
+    K::Triangle_2 triangle;
+    CGAL::Bbox_2 box;  // closed: a pair whose boxes miss cannot share area
+  };
+  std::map<BondKey, double> bonds;
+  for (NodeIndex k = 0; k < tree.nodes.size(); ++k) {
+    const MeshTreeNode& node = tree.nodes[k];
+    if (node.is_leaf()) continue;
+    const PlaneProjection projection = PlaneProjection::of(node.plane);
+    const int dropped = 3 - projection.u_axis - projection.v_axis;
+    const double scale = norm(node.plane.normal) / std::fabs(node.plane.normal[dropped]);
+    std::vector<Cap> below, above;
+    for (LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) {
+      const std::optional<bool> side = leaf_above(tree, leaf, k);
+      if (!side) continue;
+      const Mesh& mesh = tree.leaf(leaf).mesh;
+      for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        if (mesh.surfaces[t] != cap_surface_of(k)) continue;
+        std::array<K::Point_2, 3> p;
+        CGAL::Bbox_2 box;
+        for (int c = 0; c < 3; ++c) {
+          const Vec2 q = projection(mesh.positions[mesh.triangles[t][c]]);
+          p[c] = K::Point_2(q.x, q.y);
+          box += CGAL::Bbox_2(q.x, q.y, q.x, q.y);
+        }
+        if (CGAL::collinear(p[0], p[1], p[2])) continue;
+        (*side ? above : below).push_back({leaf, K::Triangle_2(p[0], p[1], p[2]), box});
+      }
+    }
+    std::map<std::pair<LeafIndex, LeafIndex>, K::FT> areas;
+    for (const Cap& b : below) {
+      for (const Cap& a : above) {
+        if (!CGAL::do_overlap(b.box, a.box)) continue;
+        const K::FT area = overlap_area(b.triangle, a.triangle);
+        if (area > 0) areas[{std::min(a.leaf, b.leaf), std::max(a.leaf, b.leaf)}] += area;
+      }
+    }
+    for (const auto& [pair, area] : areas) bonds[{pair.first, pair.second, k}] = CGAL::to_double(area) * scale;
+  }
+  return bonds;
+}
+
+// Every promised property of find_bonds' output; with `brute_force`, also the
+// exact bond set and areas.
+void check_bonds(const MeshTree& tree, const std::vector<Bond>& bonds, bool brute_force) {
+  const double scale = length_scale(tree);
+  const double length_tolerance = 1e-9 * scale;
+  std::map<NodeIndex, double> area_by_cut;
+  for (std::size_t i = 0; i < bonds.size(); ++i) {
+    const Bond& bond = bonds[i];
+    INFO("bond " << i << ": " << bond.first << "-" << bond.second << " on cut " << bond.cut_node);
+    REQUIRE(bond.first < bond.second);
+    REQUIRE(bond.second < tree.leaf_count());
+    if (i > 0) {
+      const Bond& previous = bonds[i - 1];
+      REQUIRE(std::tie(previous.first, previous.second, previous.cut_node) <
+              std::tie(bond.first, bond.second, bond.cut_node));
+    }
+    REQUIRE(bond.cut_node < tree.nodes.size());
+    const MeshTreeNode& cut = tree.nodes[bond.cut_node];
+    REQUIRE_FALSE(cut.is_leaf());
+    const std::optional<bool> first_above = leaf_above(tree, bond.first, bond.cut_node);
+    const std::optional<bool> second_above = leaf_above(tree, bond.second, bond.cut_node);
+    REQUIRE(first_above.has_value());
+    REQUIRE(second_above.has_value());
+    REQUIRE(*first_above != *second_above);
+
+    CHECK(bond.area > 0);
+    area_by_cut[bond.cut_node] += bond.area;
+    CHECK(std::fabs(norm(bond.normal) - 1) < 1e-12);
+    // The normal points from first into second: along +n when first is below.
+    const Vec3 unit = normalized(cut.plane.normal);
+    CHECK(dot(bond.normal, *first_above ? -unit : unit) > 1 - 1e-12);
+
+    // The centroid is on the plane and inside both leaves' boxes (checks of a
+    // rounded construction, hence tolerances).
+    const double distance = (dot(cut.plane.normal, bond.centroid) + cut.plane.offset) / norm(cut.plane.normal);
+    CHECK(std::fabs(distance) <= length_tolerance);
+    for (const LeafIndex leaf : {bond.first, bond.second}) {
+      const Box3 box = bounds(tree.leaf(leaf).mesh);
+      for (int axis = 0; axis < 3; ++axis) {
+        CHECK(bond.centroid[axis] >= box.lo[axis] - length_tolerance);
+        CHECK(bond.centroid[axis] <= box.hi[axis] + length_tolerance);
+      }
+    }
+  }
+
+  // The caps of one cut are the same region seen from both sides, so the
+  // overlaps add up to the cap (and never exceed it).
+  for (NodeIndex k = 0; k < tree.nodes.size(); ++k) {
+    if (tree.nodes[k].is_leaf()) continue;
+    const CutCapArea cap = cap_area_of_cut(tree, k);
+    INFO("cut " << k << " cap area below " << cap.below << " above " << cap.above);
+    const double bonded = area_by_cut.count(k) ? area_by_cut[k] : 0.0;
+    CHECK(bonded <= cap.below * (1 + 1e-9) + 1e-12 * scale * scale);
+    CHECK(bonded == Approx(cap.below).epsilon(1e-9).margin(1e-12 * scale * scale));
+  }
+
+  if (brute_force) {
+    const std::map<BondKey, double> expected = brute_force_bonds(tree);
+    std::set<BondKey> found;
+    for (const Bond& bond : bonds) found.insert({bond.first, bond.second, bond.cut_node});
+    std::set<BondKey> expected_keys;
+    for (const auto& entry : expected) expected_keys.insert(entry.first);
+    REQUIRE(found == expected_keys);
+    for (const Bond& bond : bonds) {
+      INFO("bond " << bond.first << "-" << bond.second << " on cut " << bond.cut_node);
+      CHECK(bond.area == Approx(expected.at({bond.first, bond.second, bond.cut_node}))
+                             .epsilon(1e-9)
+                             .margin(1e-12 * scale * scale));
+    }
+  }
+}
+
+void check_box_rule(const MeshTree& tree, const std::vector<Bond>& bonds) {
+  const auto box_pairs = find_bounding_box_bonds(tree);
+  // Reference: all pairs, closed boxes.
+  std::vector<Box3> leaf_boxes;
+  for (LeafIndex a = 0; a < tree.leaf_count(); ++a) leaf_boxes.push_back(bounds(tree.leaf(a).mesh));
+  std::vector<std::pair<LeafIndex, LeafIndex>> expected;
+  for (LeafIndex a = 0; a < tree.leaf_count(); ++a) {
+    const Box3& ba = leaf_boxes[a];
+    for (LeafIndex b = a + 1; b < tree.leaf_count(); ++b) {
+      const Box3& bb = leaf_boxes[b];
+      bool overlap = true;
+      for (int axis = 0; axis < 3; ++axis) {
+        overlap = overlap && ba.lo[axis] <= bb.hi[axis] && bb.lo[axis] <= ba.hi[axis];
+      }
+      if (overlap) expected.emplace_back(a, b);
+    }
+  }
+  REQUIRE(box_pairs == expected);
+
+  const BondRuleComparison comparison = compare_bond_rules(tree);
+  std::set<std::pair<LeafIndex, LeafIndex>> true_pairs;
+  for (const Bond& bond : bonds) true_pairs.insert({bond.first, bond.second});
+  CHECK(comparison.true_bonds == true_pairs.size());
+  CHECK(comparison.box_bonds == box_pairs.size());
+  CHECK(comparison.missed_true_bonds == 0);
+  CHECK(comparison.box_bonds - comparison.false_box_bonds ==
+        comparison.true_bonds - comparison.missed_true_bonds);
+}
+
+MeshTree build(const Mesh& mesh, Strategy strategy, KernelKind kernel, std::uint32_t fragments,
+               std::uint64_t seed = 11) {
+  BuildOptions options;
+  options.fragments = fragments;
+  options.strategy = strategy;
+  options.kernel = kernel;
+  options.seed = seed;
+  return build_mesh_tree(mesh, options);
+}
+
+constexpr Strategy all_strategies[] = {Strategy::thesis, Strategy::balanced, Strategy::axis};
+constexpr KernelKind all_kernels[] = {KernelKind::fast, KernelKind::exact};
+
+// --- a tree cut by hand with cut_mesh, independent of the builder ------------
+
+// Builds a tree in preorder: `plane_for(depth, node mesh)` gives the plane a node
+// is cut by, or nullopt for a leaf.
+MeshTree cut_by_hand(const Mesh& mesh, const std::function<std::optional<Plane>(std::uint32_t, const Mesh&)>& plane_for) {
+  MeshTree tree;
+  const std::function<NodeIndex(Mesh, NodeIndex, bool, std::uint32_t)> grow =
+      [&](Mesh node_mesh, NodeIndex parent, bool above, std::uint32_t depth) -> NodeIndex {
+    const auto index = static_cast<NodeIndex>(tree.nodes.size());
+    tree.nodes.emplace_back();
+    tree.nodes[index].parent = parent;
+    tree.nodes[index].above_parent_plane = above;
+    tree.nodes[index].depth = depth;
+    tree.nodes[index].first_leaf = static_cast<LeafIndex>(tree.leaf_nodes.size());
+    const std::optional<Plane> plane = plane_for(depth, node_mesh);
+    if (!plane) {
+      tree.nodes[index].leaf_count = 1;
+      tree.leaf_nodes.push_back(index);
+      tree.nodes[index].mesh = std::move(node_mesh);
+      return index;
+    }
+    CutOptions options;
+    options.cap_surface = cap_surface_of(index);
+    CutResult<Vec3> cut = cut_mesh(node_mesh, *plane, options);
+    REQUIRE_FALSE(cut.plane_missed);
+    tree.nodes[index].plane = *plane;
+    tree.nodes[index].mesh = std::move(node_mesh);
+    for (int side = 0; side < 2; ++side) {
+      for (Mesh& solid : side == 0 ? cut.below : cut.above) {
+        const NodeIndex child = grow(std::move(solid), index, side == 1, depth + 1);
+        tree.nodes[index].children.push_back(child);
+      }
+    }
+    tree.nodes[index].leaf_count = static_cast<std::uint32_t>(tree.leaf_nodes.size()) - tree.nodes[index].first_leaf;
+    return index;
+  };
+  grow(mesh, no_node, false, 0);
+  return tree;
+}
+
+}  // namespace
+
+TEST_CASE("bonds of a cube cut into four by hand: touching along an edge is no bond", "[bonds]") {
+  // Root cut x = 1/2; the left half cut y = 1/2 with +y, the right half with -y
+  // (so its below side is y > 1/2). Preorder: 0 root, 1 left, 2-3 its halves,
+  // 4 right, 5-6 its halves.
+  const MeshTree tree = cut_by_hand(unit_cube(), [](std::uint32_t depth, const Mesh& mesh) -> std::optional<Plane> {
+    if (depth == 0) return Plane{{1, 0, 0}, -0.5};
+    if (depth == 1) {
+      const bool left = bounds(mesh).hi.x <= 0.5;
+      return left ? Plane{{0, 1, 0}, -0.5} : Plane{{0, -1, 0}, 0.5};
+    }
+    return std::nullopt;
+  });
+  REQUIRE(tree.nodes.size() == 7);
+  REQUIRE(tree.leaf_count() == 4);
+  // Leaves: 0 left-low, 1 left-high, 2 right-high (below -y), 3 right-low.
+  const std::vector<Bond> bonds = find_bonds(tree);
+  REQUIRE(bonds.size() == 4);
+  const std::vector<BondKey> expected{{0, 1, 1}, {0, 3, 0}, {1, 2, 0}, {2, 3, 4}};
+  for (std::size_t i = 0; i < bonds.size(); ++i) {
+    CHECK(BondKey{bonds[i].first, bonds[i].second, bonds[i].cut_node} == expected[i]);
+    CHECK(bonds[i].area == Approx(0.5).epsilon(1e-15));
+  }
+  // Left-low (below x = 1/2) into right-low: +x.
+  CHECK(bonds[1].normal == Vec3{1, 0, 0});
+  CHECK(bonds[1].centroid.x == Approx(0.5));
+  CHECK(bonds[1].centroid.y == Approx(0.25));
+  CHECK(bonds[1].centroid.z == Approx(0.5));
+  // Right-high (leaf 2) is below the plane -y + 1/2 = 0, so from it into right-low
+  // is along that plane's +n = (0, -1, 0).
+  CHECK(bonds[3].normal == Vec3{0, -1, 0});
+  CHECK(bonds[3].centroid.x == Approx(0.75));
+  check_bonds(tree, bonds, true);
+
+  // Every pair of boxes touches at the line x = y = 1/2: two false box bonds.
+  const BondRuleComparison comparison = compare_bond_rules(tree);
+  CHECK(comparison.true_bonds == 4);
+  CHECK(comparison.box_bonds == 6);
+  CHECK(comparison.false_box_bonds == 2);
+  CHECK(comparison.missed_true_bonds == 0);
+  check_box_rule(tree, bonds);
+}
+
+TEST_CASE("bonds of a tilted hand cut far from the origin", "[bonds]") {
+  // A tilted plane whose largest normal component is negative exercises the
+  // swapped projection; the shift keeps every coordinate large.
+  const Vec3 shift{1e5, -3e5, 2e5};
+  const Mesh mesh = transformed(ellipsoid({0, 0, 0}, {1, 0.7, 0.5}, 24, 12), 1.0, shift);
+  const Vec3 normal{0.3, -0.2, -1.0};
+  const MeshTree tree = cut_by_hand(mesh, [&](std::uint32_t depth, const Mesh&) -> std::optional<Plane> {
+    if (depth == 0) return Plane{normal, -dot(normal, shift + Vec3{0.1, 0.05, 0.0})};
+    return std::nullopt;
+  });
+  REQUIRE(tree.leaf_count() == 2);
+  const std::vector<Bond> bonds = find_bonds(tree);
+  REQUIRE(bonds.size() == 1);
+  CHECK(bonds[0].area == Approx(area_with_surface(tree.leaf(0).mesh, cap_surface_of(0))).epsilon(1e-9));
+  check_bonds(tree, bonds, true);
+  check_box_rule(tree, bonds);
+}
+
+TEST_CASE("a tree without cuts, or without leaves, has no bonds", "[bonds]") {
+  MeshTree single;
+  single.nodes.emplace_back();
+  single.nodes[0].mesh = unit_cube();
+  single.nodes[0].leaf_count = 1;
+  single.leaf_nodes = {0};
+  CHECK(find_bonds(single).empty());
+  CHECK(find_bounding_box_bonds(single).empty());
+  const BondRuleComparison comparison = compare_bond_rules(single);
+  CHECK(comparison.true_bonds == 0);
+  CHECK(comparison.box_bonds == 0);
+
+  const MeshTree empty;
+  CHECK(find_bonds(empty).empty());
+  CHECK(find_bounding_box_bonds(empty).empty());
+}
+
+TEST_CASE("two fragments of a convex solid: one bond covering the whole cap", "[bonds][build]") {
+  const std::vector<NamedMesh> meshes{{"unit-cube", unit_cube()},
+                                      {"box", box({-1, 0, 2}, {3, 0.5, 2.25})},
+                                      {"ellipsoid", ellipsoid({0.5, -1, 2}, {1.0, 0.6, 0.8}, 24, 12)}};
+  for (const NamedMesh& named : meshes) {
+    for (const Strategy strategy : all_strategies) {
+      for (const KernelKind kernel : all_kernels) {
+        INFO(named.name << " " << strategy_name(strategy) << " " << kernel_name(kernel));
+        const MeshTree tree = build(named.mesh, strategy, kernel, 2);
+        REQUIRE(tree.leaf_count() == 2);
+        const std::vector<Bond> bonds = find_bonds(tree);
+        REQUIRE(bonds.size() == 1);
+        CHECK(bonds[0].first == 0);
+        CHECK(bonds[0].second == 1);
+        CHECK(bonds[0].cut_node == 0);
+        CHECK(bonds[0].area == Approx(area_with_surface(tree.leaf(0).mesh, cap_surface_of(0))).epsilon(1e-9));
+        check_bonds(tree, bonds, true);
+        check_box_rule(tree, bonds);
+      }
+    }
+  }
+}
+
+TEST_CASE("axis slices of a long box: a chain of bonds, each the slanted cross-section", "[bonds][build]") {
+  // Along x the box is 16 long and 1 x 1 across; axis planes lean at most 15°
+  // and stay near the middle, so no two planes meet inside it and every cap is a
+  // parallelogram of area 1 / |n_x| (n unit).
+  const Mesh long_box = box({0, 0, 0}, {16, 1, 1});
+  for (const KernelKind kernel : all_kernels) {
+    for (const std::uint32_t fragments : {2u, 3u, 4u}) {
+      INFO(kernel_name(kernel) << " N = " << fragments);
+      const MeshTree tree = build(long_box, Strategy::axis, kernel, fragments, 5);
+      REQUIRE(tree.leaf_count() == fragments);
+      const std::vector<Bond> bonds = find_bonds(tree);
+      REQUIRE(bonds.size() == fragments - 1);
+      std::vector<int> degree(fragments, 0);
+      for (const Bond& bond : bonds) {
+        ++degree[bond.first];
+        ++degree[bond.second];
+        const Vec3 n = tree.nodes[bond.cut_node].plane.normal;
+        CHECK(bond.area == Approx(norm(n) / std::fabs(n.x)).epsilon(1e-9));
+        CHECK(std::fabs(bond.normal.x) > 0.9);
+      }
+      // A path: two ends of degree 1, the rest 2.
+      CHECK(std::count(degree.begin(), degree.end(), 1) == 2);
+      CHECK(std::count(degree.begin(), degree.end(), 2) == static_cast<long>(fragments) - 2);
+      check_bonds(tree, bonds, true);
+      check_box_rule(tree, bonds);
+    }
+  }
+}
+
+TEST_CASE("a non-convex cap around another's notch: touching is no bond", "[bonds]") {
+  // One cut (z = 0). Below it leaf A, whose cap is an L (the unit square without
+  // its upper-right quarter); above it leaves B, the missing quarter, and C, the
+  // same L as A triangulated differently. A's hull covers B but A only touches
+  // it, which only the triangles can tell. Nodes: 0 root, 1 A, 2 the above
+  // side (cut by an irrelevant plane), 3 B, 4 C.
+  const auto square = [](double x0, double y0, double x1, double y1) {
+    return std::vector<Vec3>{{x0, y0, 0}, {x1, y0, 0}, {x1, y1, 0}, {x0, y1, 0}};
+  };
+  const auto cap_mesh = [](std::vector<Vec3> positions, std::vector<Triangle> triangles) {
+    Mesh mesh = mesh_from(std::move(positions), std::move(triangles));
+    mesh.surfaces.assign(mesh.triangles.size(), cap_surface_of(0));
+    return mesh;
+  };
+  // A (below, facing +z: counter-clockwise from above): three quarter squares.
+  std::vector<Vec3> a_positions;
+  std::vector<Triangle> a_triangles;
+  for (const auto& quad : {square(0, 0, 0.5, 0.5), square(0.5, 0, 1, 0.5), square(0, 0.5, 0.5, 1)}) {
+    const auto base = static_cast<VertexIndex>(a_positions.size());
+    a_positions.insert(a_positions.end(), quad.begin(), quad.end());
+    a_triangles.push_back({base, base + 1, base + 2});
+    a_triangles.push_back({base, base + 2, base + 3});
+  }
+  // B and C (above, facing -z: clockwise from above).
+  const Mesh b_mesh = cap_mesh(square(0.5, 0.5, 1, 1), {{0, 2, 1}, {0, 3, 2}});
+  std::vector<Vec3> c_positions = square(0, 0, 1, 0.5);
+  const std::vector<Vec3> c_top = square(0, 0.5, 0.5, 1);
+  c_positions.insert(c_positions.end(), c_top.begin(), c_top.end());
+  const Mesh c_mesh = cap_mesh(c_positions, {{0, 2, 1}, {0, 3, 2}, {4, 6, 5}, {4, 7, 6}});
+
+  MeshTree tree;
+  tree.nodes.resize(5);
+  tree.nodes[0].children = {1, 2};
+  tree.nodes[0].plane = Plane{{0, 0, 1}, 0};
+  tree.nodes[0].first_leaf = 0;
+  tree.nodes[0].leaf_count = 3;
+  tree.nodes[1].parent = 0;
+  tree.nodes[1].mesh = cap_mesh(a_positions, a_triangles);
+  tree.nodes[1].first_leaf = 0;
+  tree.nodes[1].leaf_count = 1;
+  tree.nodes[2].parent = 0;
+  tree.nodes[2].above_parent_plane = true;
+  tree.nodes[2].children = {3, 4};
+  tree.nodes[2].plane = Plane{{1, 0, 0}, -0.75};
+  tree.nodes[2].mesh = merge({b_mesh, c_mesh});
+  tree.nodes[2].first_leaf = 1;
+  tree.nodes[2].leaf_count = 2;
+  for (const NodeIndex n : {3u, 4u}) {
+    tree.nodes[n].parent = 2;
+    tree.nodes[n].first_leaf = n - 2;
+    tree.nodes[n].leaf_count = 1;
+  }
+  tree.nodes[3].mesh = b_mesh;
+  tree.nodes[4].mesh = c_mesh;
+  tree.nodes[4].above_parent_plane = true;
+  tree.leaf_nodes = {1, 3, 4};
+
+  const std::vector<Bond> bonds = find_bonds(tree);
+  REQUIRE(bonds.size() == 1);
+  CHECK(BondKey{bonds[0].first, bonds[0].second, bonds[0].cut_node} == BondKey{0, 2, 0});
+  CHECK(bonds[0].area == Approx(0.75).epsilon(1e-15));
+  CHECK(bonds[0].normal == Vec3{0, 0, 1});
+  // The L's centroid: (5/12, 5/12).
+  CHECK(bonds[0].centroid.x == Approx(5.0 / 12));
+  CHECK(bonds[0].centroid.y == Approx(5.0 / 12));
+  CHECK(bonds[0].centroid.z == 0);
+  CHECK(brute_force_bonds(tree).size() == 1);
+}
+
+TEST_CASE("bonds equal the brute-force contact set", "[bonds][build][property]") {
+  const std::vector<NamedMesh> meshes{{"unit-cube", unit_cube()},
+                                      {"ellipsoid", ellipsoid({0, 0, 0}, {1.0, 0.8, 0.6}, 12, 6)},
+                                      {"torus", torus(1.0, 0.35, 16, 10)},
+                                      {"hollow-egg", hollow_egg()}};
+  std::size_t trees = 0, brute_forced = 0;
+  const auto check_tree = [&](const NamedMesh& named, Strategy strategy, KernelKind kernel, std::uint32_t fragments,
+                              bool brute_force) {
+    INFO(named.name << " " << strategy_name(strategy) << " " << kernel_name(kernel) << " N = " << fragments);
+    const MeshTree tree = build(named.mesh, strategy, kernel, fragments);
+    REQUIRE(tree.leaf_count() >= fragments);
+    const std::vector<Bond> bonds = find_bonds(tree);
+    CHECK(bonds.size() >= tree.leaf_count() - 1);  // every solid here is connected
+    check_bonds(tree, bonds, brute_force);
+    check_box_rule(tree, bonds);
+    ++trees;
+    brute_forced += brute_force ? 1 : 0;
+  };
+  for (const NamedMesh& named : meshes) {
+    for (const Strategy strategy : all_strategies) {
+      for (const KernelKind kernel : all_kernels) check_tree(named, strategy, kernel, 3, true);
+    }
+  }
+  // At 64 fragments the builds and the O(n^2) reference (slow on sliver-rich
+  // caps) cost most: every strategy on the cube and the torus, one on the others,
+  // and the reference on one tree.
+  for (const Strategy strategy : all_strategies) {
+    check_tree(meshes[0], strategy, KernelKind::fast, 64, strategy == Strategy::balanced);
+    check_tree(meshes[2], strategy, KernelKind::fast, 64, false);
+  }
+  check_tree(meshes[1], Strategy::axis, KernelKind::fast, 64, false);
+  check_tree(meshes[3], Strategy::thesis, KernelKind::fast, 64, false);
+  check_tree(meshes[0], Strategy::balanced, KernelKind::exact, 64, false);
+  CHECK(trees == 4 * 3 * 2 + 3 * 2 + 3);
+  CHECK(brute_forced == 4 * 3 * 2 + 1);
+}
+
+TEST_CASE("bonds of 256 fragments and of the generated catalogue", "[bonds][build][property]") {
+  SECTION("256 fragments") {
+    // The fast kernel only: the exact one is covered at 64 fragments, and its
+    // builds are slow.
+    for (const Strategy strategy : all_strategies) {
+      INFO(strategy_name(strategy));
+      const MeshTree tree = build(unit_cube(), strategy, KernelKind::fast, 256);
+      REQUIRE(tree.leaf_count() >= 256);
+      const std::vector<Bond> bonds = find_bonds(tree);
+      check_bonds(tree, bonds, false);
+      check_box_rule(tree, bonds);
+    }
+  }
+  SECTION("generated meshes, tiny, huge and far from the origin") {
+    std::size_t built = 0;
+    for (const NamedMesh& named : generated_meshes()) {
+      INFO(named.name);
+      MeshTree tree;
+      try {
+        tree = build(named.mesh, Strategy::thesis, KernelKind::exact, 8);
+      } catch (const std::exception& error) {
+        WARN(named.name << " not built: " << error.what());
+        continue;
+      }
+      ++built;
+      const std::vector<Bond> bonds = find_bonds(tree);
+      check_bonds(tree, bonds, true);
+      check_box_rule(tree, bonds);
+    }
+    CHECK(built > 0);
+  }
+}
+
+TEST_CASE("bonds of corpus meshes", "[bonds][build][corpus]") {
+  std::size_t built = 0;
+  for (const std::filesystem::path& path : valid_meshes()) {
+    const Mesh mesh = read_mesh(path);
+    if (mesh.triangle_count() > 1000) continue;  // keep the suite fast: small ones only
+    INFO(path.filename().string());
+    const MeshTree tree = build(mesh, Strategy::balanced, KernelKind::fast, 8);
+    const std::vector<Bond> bonds = find_bonds(tree);
+    check_bonds(tree, bonds, true);
+    check_box_rule(tree, bonds);
+    ++built;
+  }
+  CHECK(built > 0);
+}
+
+// Not run by default: the build alone takes minutes. SHATTER_BONDS_BENCH_TREE may
+// name a .shatter file to read instead (written there when it does not exist).
+TEST_CASE("find_bonds on 65,536 fragments of a cube", "[.][bench]") {
+  const char* cache = std::getenv("SHATTER_BONDS_BENCH_TREE");
+  MeshTree tree;
+  if (cache != nullptr && std::filesystem::exists(cache)) {
+    tree = read_shatter_file(cache);
+  } else {
+    BuildOptions options;
+    options.fragments = 65536;
+    options.strategy = Strategy::balanced;
+    options.seed = 3;
+    const auto build_start = std::chrono::steady_clock::now();
+    tree = build_mesh_tree(unit_cube(), options);
+    WARN("build " << std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count() << " s");
+    if (cache != nullptr) write_shatter_file(cache, tree);
+  }
+  std::size_t cap_triangles = 0;
+  for (LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) {
+    for (const SurfaceId surface : tree.leaf(leaf).mesh.surfaces) cap_triangles += surface != original_surface;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<Bond> bonds = find_bonds(tree);
+  const auto middle = std::chrono::steady_clock::now();
+  const auto box_pairs = find_bounding_box_bonds(tree);
+  const auto end = std::chrono::steady_clock::now();
+  const auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
+  WARN(tree.leaf_count() << " leaves, " << cap_triangles << " cap triangles: " << bonds.size() << " bonds in "
+                         << ms(middle - start) << " ms; " << box_pairs.size() << " box pairs in " << ms(end - middle)
+                         << " ms");
+  const BondRuleComparison comparison = compare_bond_rules(tree);
+  WARN("true pairs " << comparison.true_bonds << ", box pairs " << comparison.box_bonds << ", false box pairs "
+                     << comparison.false_box_bonds << ", missed true pairs " << comparison.missed_true_bonds);
+  CHECK(bonds.size() >= tree.leaf_count() - 1);
+}

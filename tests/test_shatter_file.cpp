@@ -1,0 +1,817 @@
+// Properties of the .shatter file: the bytes are exactly the layout file.hpp
+// documents; trees round-trip field by field and bit for bit (hand-built ones with
+// every kind of special double, and built ones); and every truncation, every
+// single-byte change and a catalogue of hostile files are refused with
+// CorruptFileError naming the defect, never a crash or an allocation beyond a
+// small multiple of the input (checked by counting every operator new).
+
+#include <catch2/catch.hpp>
+
+#include <unistd.h>
+
+#include <array>
+#include <atomic>
+#include <bit>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <new>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/mass.hpp"
+#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/file.hpp"
+#include "support/generators.hpp"
+
+using namespace shatter;
+
+// ---------------------------------------------------------------------------
+// Allocation budget: while a budget is active, every allocation counts against
+// it, and exceeding it throws bad_alloc, which fails the test (decode_shatter
+// may only throw CorruptFileError) instead of exhausting the machine.
+
+namespace {
+std::atomic<bool> budget_active{false};
+std::atomic<std::size_t> budget_left{0};
+
+void* counted_allocation(std::size_t size) noexcept {
+  if (budget_active.load(std::memory_order_relaxed)) {
+    const std::size_t left = budget_left.load(std::memory_order_relaxed);
+    if (size > left) return nullptr;
+    budget_left.store(left - size, std::memory_order_relaxed);
+  }
+  return std::malloc(size == 0 ? 1 : size);
+}
+void* counted_allocation_or_throw(std::size_t size) {
+  if (void* memory = counted_allocation(size)) return memory;
+  throw std::bad_alloc();
+}
+}  // namespace
+
+// Every non-aligned form is replaced, so that all of them pair malloc with free
+// (a sanitizer's own operator new[] would not match a free()). Deletes are not
+// inlined: GCC would otherwise pair the free() with the `new` expressions it
+// sees and warn of a mismatch (-Wmismatched-new-delete) that is not one.
+void* operator new(std::size_t size) { return counted_allocation_or_throw(size); }
+void* operator new[](std::size_t size) { return counted_allocation_or_throw(size); }
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept { return counted_allocation(size); }
+void* operator new[](std::size_t size, const std::nothrow_t&) noexcept { return counted_allocation(size); }
+[[gnu::noinline]] void operator delete(void* memory) noexcept { std::free(memory); }
+[[gnu::noinline]] void operator delete[](void* memory) noexcept { std::free(memory); }
+[[gnu::noinline]] void operator delete(void* memory, std::size_t) noexcept { std::free(memory); }
+[[gnu::noinline]] void operator delete[](void* memory, std::size_t) noexcept { std::free(memory); }
+[[gnu::noinline]] void operator delete(void* memory, const std::nothrow_t&) noexcept { std::free(memory); }
+[[gnu::noinline]] void operator delete[](void* memory, const std::nothrow_t&) noexcept { std::free(memory); }
+
+namespace {
+
+class AllocationBudget {
+ public:
+  explicit AllocationBudget(std::size_t bytes) {
+    budget_left = bytes;
+    budget_active = true;
+  }
+  ~AllocationBudget() { budget_active = false; }
+  AllocationBudget(const AllocationBudget&) = delete;
+  AllocationBudget& operator=(const AllocationBudget&) = delete;
+};
+
+/// What decode_shatter may allocate in total for an input of `size` bytes.
+std::size_t allowed_allocation(std::size_t size) { return 16 * size + (std::size_t{1} << 16); }
+
+/// The message decode_shatter refuses `bytes` with, or nullopt if it accepts them.
+std::optional<std::string> refusal(std::string_view bytes) {
+  const AllocationBudget budget(allowed_allocation(bytes.size()));
+  try {
+    decode_shatter(bytes);
+  } catch (const CorruptFileError& error) {
+    return std::string(error.what());
+  }
+  return std::nullopt;
+}
+
+/// decode_shatter under the allocation budget.
+MeshTree decode_within_budget(std::string_view bytes) {
+  const AllocationBudget budget(allowed_allocation(bytes.size()));
+  return decode_shatter(bytes);
+}
+
+// ---------------------------------------------------------------------------
+// Field-by-field comparison, doubles by their bits
+
+std::uint64_t bits(double value) { return std::bit_cast<std::uint64_t>(value); }
+bool same(double a, double b) { return bits(a) == bits(b); }
+bool same(Vec2 a, Vec2 b) { return same(a.x, b.x) && same(a.y, b.y); }
+bool same(Vec3 a, Vec3 b) { return same(a.x, b.x) && same(a.y, b.y) && same(a.z, b.z); }
+bool same(Vec4 a, Vec4 b) { return same(a.x, b.x) && same(a.y, b.y) && same(a.z, b.z) && same(a.w, b.w); }
+
+template <class T>
+bool same_all(const std::vector<T>& a, const std::vector<T>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!same(a[i], b[i])) return false;
+  }
+  return true;
+}
+
+std::string mesh_difference(const Mesh& a, const Mesh& b) {
+  if (!same_all(a.positions, b.positions)) return "positions";
+  if (a.triangles != b.triangles) return "triangles";
+  if (a.surfaces != b.surfaces) return "surfaces";
+  if (!same_all(a.corners.normals, b.corners.normals)) return "normals";
+  if (!same_all(a.corners.uvs, b.corners.uvs)) return "uvs";
+  if (!same_all(a.corners.tangents, b.corners.tangents)) return "tangents";
+  return {};
+}
+
+/// The first field in which the trees differ (options.threads excepted: it is
+/// not stored), or an empty string.
+std::string tree_difference(const MeshTree& a, const MeshTree& b) {
+  const BuildOptions &oa = a.options, &ob = b.options;
+  if (oa.fragments != ob.fragments || oa.seed != ob.seed || oa.strategy != ob.strategy || oa.kernel != ob.kernel ||
+      !same(oa.interior_uv_scale, ob.interior_uv_scale) || oa.max_plane_tries != ob.max_plane_tries ||
+      oa.allow_self_intersections != ob.allow_self_intersections) {
+    return "options";
+  }
+  if (a.nodes.size() != b.nodes.size()) return "node count";
+  for (std::size_t k = 0; k < a.nodes.size(); ++k) {
+    const MeshTreeNode &na = a.nodes[k], &nb = b.nodes[k];
+    const std::string node = "node " + std::to_string(k) + " ";
+    if (const std::string d = mesh_difference(na.mesh, nb.mesh); !d.empty()) return node + "mesh " + d;
+    if (const std::string d = mesh_difference(na.hull, nb.hull); !d.empty()) return node + "hull " + d;
+    if (!same(na.mass.volume, nb.mass.volume) || !same(na.mass.centroid, nb.mass.centroid)) return node + "mass";
+    for (std::size_t e = 0; e < 9; ++e) {
+      if (!same(na.mass.inertia[e], nb.mass.inertia[e])) return node + "inertia";
+    }
+    if (na.parent != nb.parent || na.children != nb.children) return node + "links";
+    if (!same(na.plane.normal, nb.plane.normal) || !same(na.plane.offset, nb.plane.offset)) return node + "plane";
+    if (na.above_parent_plane != nb.above_parent_plane || na.depth != nb.depth || na.first_leaf != nb.first_leaf ||
+        na.leaf_count != nb.leaf_count || na.seed != nb.seed) {
+      return node + "scalars";
+    }
+  }
+  if (a.leaf_nodes != b.leaf_nodes) return "leaf_nodes";
+  if (a.bonds.size() != b.bonds.size()) return "bond count";
+  for (std::size_t i = 0; i < a.bonds.size(); ++i) {
+    const Bond &ba = a.bonds[i], &bb = b.bonds[i];
+    if (ba.first != bb.first || ba.second != bb.second || ba.cut_node != bb.cut_node || !same(ba.area, bb.area) ||
+        !same(ba.centroid, bb.centroid) || !same(ba.normal, bb.normal)) {
+      return "bond " + std::to_string(i);
+    }
+  }
+  return {};
+}
+
+/// decode(encode(tree)) equals tree and encodes to the same bytes.
+void check_round_trip(const MeshTree& tree) {
+  const std::string bytes = encode_shatter(tree);
+  const MeshTree decoded = decode_within_budget(bytes);
+  CHECK(tree_difference(tree, decoded).empty());
+  CHECK(decoded.options.threads == 0);
+  CHECK(encode_shatter(decoded) == bytes);
+}
+
+// ---------------------------------------------------------------------------
+// Hand-built trees
+
+/// Doubles whose bits a careless reader or writer would change.
+const std::array<double, 8> special_doubles = {
+    std::bit_cast<double>(std::uint64_t{0x7FF0000000000001}),  // signalling NaN
+    std::bit_cast<double>(std::uint64_t{0xFFF80000DEADBEEF}),  // negative quiet NaN with a payload
+    -0.0,
+    0x1p-1074,  // smallest subnormal
+    std::numeric_limits<double>::infinity(),
+    -std::numeric_limits<double>::infinity(),
+    std::numeric_limits<double>::max(),
+    0.1,
+};
+
+MeshTreeNode node_of(Mesh mesh) {
+  MeshTreeNode node;
+  node.mass = mass_properties(mesh);
+  node.hull = mesh;  // the format stores any mesh as a hull; these boxes are convex anyway
+  node.mesh = std::move(mesh);
+  return node;
+}
+
+/// A box [0,2]x[0,1]x[0,1] cut at x = 1 into two leaf boxes, with one bond.
+MeshTree two_leaf_tree() {
+  MeshTree tree;
+  tree.options.fragments = 2;
+  tree.options.seed = 0xFEEDFACECAFEBEEFull;
+  tree.options.strategy = Strategy::balanced;
+  tree.options.kernel = KernelKind::exact;
+  tree.options.interior_uv_scale = 0.5;
+  tree.options.max_plane_tries = 7;
+  tree.options.allow_self_intersections = true;
+  tree.options.threads = 3;  // not stored
+
+  MeshTreeNode root = node_of(test::box({0, 0, 0}, {2, 1, 1}));
+  root.plane = {{1, 0, 0}, -1};
+  root.children = {1, 2};
+  root.leaf_count = 2;
+  root.seed = 11;
+  MeshTreeNode left = node_of(test::box({0, 0, 0}, {1, 1, 1}));
+  MeshTreeNode right = node_of(test::box({1, 0, 0}, {2, 1, 1}));
+  left.parent = right.parent = 0;
+  left.depth = right.depth = 1;
+  left.leaf_count = right.leaf_count = 1;
+  right.first_leaf = 1;
+  right.above_parent_plane = true;
+  left.seed = 12;
+  right.seed = 13;
+  // The faces on x = 1 are the cap of the root's cut.
+  for (MeshTreeNode* leaf : {&left, &right}) {
+    for (std::size_t t = 0; t < leaf->mesh.triangle_count(); ++t) {
+      bool on_cap = true;
+      for (const VertexIndex v : leaf->mesh.triangles[t]) on_cap = on_cap && leaf->mesh.positions[v].x == 1;
+      if (on_cap) leaf->mesh.surfaces[t] = cap_surface_of(0);
+    }
+  }
+  tree.nodes = {root, left, right};
+  tree.leaf_nodes = {1, 2};
+  tree.bonds = {Bond{0, 1, 0, 1.0, {1, 0.5, 0.5}, {1, 0, 0}}};
+  return tree;
+}
+
+/// Fills the attribute channels `which` (bit 0 normals, 1 uvs, 2 tangents) of a
+/// mesh with values cycling through the special doubles.
+void add_attributes(Mesh& mesh, unsigned which, std::size_t& cursor) {
+  const auto next = [&] { return special_doubles[cursor++ % special_doubles.size()]; };
+  const std::size_t corners = 3 * mesh.triangle_count();
+  for (std::size_t c = 0; c < corners; ++c) {
+    if (which & 1) mesh.corners.normals.push_back({next(), next(), next()});
+    if (which & 2) mesh.corners.uvs.push_back({next(), next()});
+    if (which & 4) mesh.corners.tangents.push_back({next(), next(), next(), next()});
+  }
+}
+
+/// Four leaves two levels deep (root with three children, the first cut again),
+/// meshes from the generators, attribute channels in every combination, and
+/// special doubles in positions, planes, masses and bonds.
+MeshTree deep_tree() {
+  MeshTree tree;
+  tree.options.fragments = 4;
+  tree.options.seed = 99;
+  tree.options.strategy = Strategy::axis;
+  tree.options.kernel = KernelKind::fast;
+  tree.options.interior_uv_scale = special_doubles[1];
+  tree.options.max_plane_tries = 0xFFFFFFFFu;
+
+  tree.nodes = {node_of(test::torus(2, 0.5, 12, 8)), node_of(test::ellipsoid({0, 0, 0}, {1, 2, 3}, 8, 6)),
+                node_of(test::box({0, 0, 0}, {1, 1, 1})), node_of(test::box({-1, -1, -1}, {0, 0, 0})),
+                node_of(test::ellipsoid({0, 0, 1}, {1, 1, 1}, 6, 4)), node_of(test::box({5, 5, 5}, {6, 7, 8}))};
+  tree.nodes[0].children = {1, 4, 5};
+  tree.nodes[1].children = {2, 3};
+  const std::array<NodeIndex, 6> parents = {no_node, 0, 1, 1, 0, 0};
+  const std::array<std::uint32_t, 6> depths = {0, 1, 2, 2, 1, 1};
+  const std::array<LeafIndex, 6> first_leaves = {0, 0, 0, 1, 2, 3};
+  const std::array<std::uint32_t, 6> leaf_counts = {4, 2, 1, 1, 1, 1};
+  std::size_t cursor = 0;
+  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+    MeshTreeNode& node = tree.nodes[k];
+    node.parent = parents[k];
+    node.depth = depths[k];
+    node.first_leaf = first_leaves[k];
+    node.leaf_count = leaf_counts[k];
+    node.seed = 0x8000000000000000ull + k;
+    node.above_parent_plane = k % 2 == 1;
+    if (!node.is_leaf()) node.plane = {{special_doubles[k], 1, -0.0}, special_doubles[k + 1]};
+    node.mass.inertia[k] = special_doubles[k];
+    add_attributes(node.mesh, static_cast<unsigned>(k + 2) % 8, cursor);
+    add_attributes(node.hull, static_cast<unsigned>(k) % 8, cursor);
+  }
+  tree.nodes[2].mesh.positions[0] = {special_doubles[0], special_doubles[2], special_doubles[3]};
+  tree.nodes[3].mesh.surfaces[0] = 0xFFFFFFFFu;
+  tree.nodes[5].mesh = Mesh{};  // an empty mesh is stored as it is
+  tree.leaf_nodes = {2, 3, 4, 5};
+  tree.bonds = {Bond{0, 1, 1, special_doubles[0], {1, 2, 3}, {0, 0, 1}}, Bond{0, 2, 0, 0.25, {}, {}},
+                Bond{0, 2, 0, 0.5, {}, {}}, Bond{1, 2, 0, special_doubles[3], {special_doubles[4], 0, 0}, {}},
+                Bond{2, 3, 0, 1e300, {}, {-0.0, 0, 0}}};
+  return tree;
+}
+
+// ---------------------------------------------------------------------------
+// The layout as file.hpp documents it, written independently of the library:
+// the test of the documentation, and the way to craft files with correct
+// checksums around invalid content.
+
+std::uint32_t reference_crc32(std::string_view bytes) {
+  std::uint32_t crc = 0xFFFFFFFFu;
+  for (const char c : bytes) {
+    crc ^= static_cast<unsigned char>(c);
+    for (int bit = 0; bit < 8; ++bit) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+  }
+  return ~crc;
+}
+
+struct Bytes {
+  std::string data;
+  Bytes& u8(std::uint8_t v) {
+    data.push_back(static_cast<char>(v));
+    return *this;
+  }
+  Bytes& u32(std::uint32_t v) {
+    for (int k = 0; k < 4; ++k) u8(static_cast<std::uint8_t>(v >> (8 * k)));
+    return *this;
+  }
+  Bytes& u64(std::uint64_t v) {
+    for (int k = 0; k < 8; ++k) u8(static_cast<std::uint8_t>(v >> (8 * k)));
+    return *this;
+  }
+  Bytes& f64(double v) { return u64(bits(v)); }
+  Bytes& vec3(Vec3 v) { return f64(v.x).f64(v.y).f64(v.z); }
+  Bytes& text(std::string_view s) {
+    data += s;
+    return *this;
+  }
+};
+
+const std::string magic_bytes("\x89SHT\r\n\x1a\n", 8);
+
+std::string file_header(std::uint32_t version = 1) { return Bytes{}.text(magic_bytes).u32(version).data; }
+
+std::string section(std::string_view tag, std::string_view payload) {
+  return Bytes{}.text(tag).u64(payload.size()).u32(reference_crc32(payload)).text(payload).data;
+}
+
+std::string options_payload(const BuildOptions& o) {
+  return Bytes{}
+      .u32(o.fragments)
+      .u64(o.seed)
+      .u8(static_cast<std::uint8_t>(o.strategy))
+      .u8(static_cast<std::uint8_t>(o.kernel))
+      .f64(o.interior_uv_scale)
+      .u32(o.max_plane_tries)
+      .u8(o.allow_self_intersections ? 1 : 0)
+      .data;
+}
+
+std::string nodes_payload(const std::vector<MeshTreeNode>& nodes) {
+  Bytes out;
+  out.u32(static_cast<std::uint32_t>(nodes.size()));
+  for (const MeshTreeNode& n : nodes) {
+    out.u32(n.parent).u32(n.depth).u32(n.first_leaf).u32(n.leaf_count).u64(n.seed).u8(n.above_parent_plane ? 1 : 0);
+    out.vec3(n.plane.normal).f64(n.plane.offset).f64(n.mass.volume).vec3(n.mass.centroid);
+    for (const double e : n.mass.inertia) out.f64(e);
+    out.u32(static_cast<std::uint32_t>(n.children.size()));
+    for (const NodeIndex c : n.children) out.u32(c);
+  }
+  return out.data;
+}
+
+std::string mesh_record(const Mesh& m) {
+  Bytes out;
+  out.u32(static_cast<std::uint32_t>(m.positions.size())).u32(static_cast<std::uint32_t>(m.triangles.size()));
+  out.u8(static_cast<std::uint8_t>((m.corners.has_normals() ? 1 : 0) | (m.corners.has_uvs() ? 2 : 0) | (m.corners.has_tangents() ? 4 : 0)));
+  for (const Vec3& p : m.positions) out.vec3(p);
+  for (const Triangle& t : m.triangles) out.u32(t[0]).u32(t[1]).u32(t[2]);
+  for (const SurfaceId s : m.surfaces) out.u32(s);
+  for (const Vec3& n : m.corners.normals) out.vec3(n);
+  for (const Vec2& uv : m.corners.uvs) out.f64(uv.x).f64(uv.y);
+  for (const Vec4& t : m.corners.tangents) out.f64(t.x).f64(t.y).f64(t.z).f64(t.w);
+  return out.data;
+}
+
+std::string meshes_payload(const std::vector<MeshTreeNode>& nodes, bool hulls) {
+  std::string out = Bytes{}.u32(static_cast<std::uint32_t>(nodes.size())).data;
+  for (const MeshTreeNode& n : nodes) out += mesh_record(hulls ? n.hull : n.mesh);
+  return out;
+}
+
+std::string bonds_payload(const std::vector<Bond>& bonds) {
+  Bytes out;
+  out.u64(bonds.size());
+  for (const Bond& b : bonds) out.u32(b.first).u32(b.second).u32(b.cut_node).f64(b.area).vec3(b.centroid).vec3(b.normal);
+  return out.data;
+}
+
+/// The documented file of `tree`, whatever its content: no validation.
+std::string reference_file(const MeshTree& tree) {
+  return file_header() + section("OPTS", options_payload(tree.options)) + section("NODE", nodes_payload(tree.nodes)) +
+         section("MESH", meshes_payload(tree.nodes, false)) + section("HULL", meshes_payload(tree.nodes, true)) +
+         section("BOND", bonds_payload(tree.bonds)) + section("END ", "");
+}
+
+/// A file with the given NODE payload and otherwise the sections of `tree`.
+std::string file_with_nodes_payload(const MeshTree& tree, const std::string& nodes) {
+  return file_header() + section("OPTS", options_payload(tree.options)) + section("NODE", nodes) +
+         section("MESH", meshes_payload(tree.nodes, false)) + section("HULL", meshes_payload(tree.nodes, true)) +
+         section("BOND", bonds_payload(tree.bonds)) + section("END ", "");
+}
+
+/// Refused, with a message holding `expected`.
+void check_refused(const std::string& bytes, const std::string& expected) {
+  const std::optional<std::string> message = refusal(bytes);
+  INFO("expected a refusal mentioning: " << expected);
+  REQUIRE(message.has_value());
+  INFO("message: " << *message);
+  CHECK(message->find(expected) != std::string::npos);
+  CHECK(message->find('\n') == std::string::npos);
+}
+
+Mesh with_attributes(Mesh mesh) {
+  // Unit-ish normals, planar uvs and tangents per corner, as a real input would carry.
+  for (const Triangle& t : mesh.triangles) {
+    for (const VertexIndex v : t) {
+      const Vec3 p = mesh.positions[v];
+      mesh.corners.normals.push_back(normalized(p));
+      mesh.corners.uvs.push_back({p.x, p.y});
+      mesh.corners.tangents.push_back({1, 0, 0, -1});
+    }
+  }
+  return mesh;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+
+TEST_CASE("encode_shatter writes exactly the layout file.hpp documents", "[shatter_file]") {
+  for (const MeshTree& tree : {two_leaf_tree(), deep_tree()}) {
+    const std::string bytes = encode_shatter(tree);
+    CHECK(bytes == reference_file(tree));
+    CHECK(bytes.substr(0, 12) == file_header());
+    CHECK(bytes.substr(bytes.size() - 16) == std::string("END \0\0\0\0\0\0\0\0\0\0\0\0", 16));
+  }
+}
+
+TEST_CASE("hand-built trees round-trip field by field and bit for bit", "[shatter_file]") {
+  SECTION("two leaves") { check_round_trip(two_leaf_tree()); }
+  SECTION("two levels, every attribute combination, special doubles") {
+    const MeshTree tree = deep_tree();
+    check_round_trip(tree);
+    const MeshTree decoded = decode_shatter(encode_shatter(tree));
+    // Spot checks that the comparison itself sees the special bit patterns.
+    CHECK(bits(decoded.nodes[2].mesh.positions[0].x) == 0x7FF0000000000001u);
+    CHECK(bits(decoded.options.interior_uv_scale) == 0xFFF80000DEADBEEFu);
+    CHECK(bits(decoded.nodes[2].mesh.positions[0].y) == bits(-0.0));
+    CHECK(decoded.leaf_nodes == std::vector<NodeIndex>{2, 3, 4, 5});
+  }
+  SECTION("threads is not stored, so it never changes the bytes") {
+    MeshTree a = two_leaf_tree(), b = two_leaf_tree();
+    a.options.threads = 0;
+    b.options.threads = 64;
+    CHECK(encode_shatter(a) == encode_shatter(b));
+  }
+}
+
+TEST_CASE("built trees round-trip exactly", "[shatter_file][build]") {
+  const std::vector<test::NamedMesh> meshes = {{"box", test::box({0, 0, 0}, {2, 1, 1})},
+                                               {"torus", test::torus(2, 0.6, 16, 10)},
+                                               {"hollow egg", test::hollow_egg()},
+                                               {"ellipsoid with attributes", with_attributes(test::ellipsoid({0, 0, 0}, {1, 1.5, 2}, 12, 8))}};
+  for (const test::NamedMesh& input : meshes) {
+    for (const Strategy strategy : {Strategy::thesis, Strategy::balanced, Strategy::axis}) {
+      for (const KernelKind kernel : {KernelKind::fast, KernelKind::exact}) {
+        for (const std::uint32_t fragments : {2u, 3u, 64u}) {
+          // Keep the suite fast (building dominates): N = 64 on the box with every
+          // strategy and kernel, on the other meshes with one combination.
+          const bool one_large_build = strategy == Strategy::axis && kernel == KernelKind::fast;
+          if (fragments == 64 && input.name != "box" && !one_large_build) continue;
+          BuildOptions options;
+          options.fragments = fragments;
+          options.seed = 7 + fragments;
+          options.strategy = strategy;
+          options.kernel = kernel;
+          INFO(input.name << ", " << strategy_name(strategy) << ", " << kernel_name(kernel) << ", N = " << fragments);
+          const MeshTree tree = build_mesh_tree(input.mesh, options);
+          REQUIRE(tree.leaf_count() >= fragments);
+          check_round_trip(tree);
+          if (input.name == "ellipsoid with attributes") {
+            CHECK(tree.nodes.back().mesh.corners.has_normals());
+            CHECK(tree.nodes.back().mesh.corners.has_uvs());
+            CHECK(tree.nodes.back().mesh.corners.has_tangents());
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("every truncation of a file is refused as truncated", "[shatter_file][damage]") {
+  const std::string bytes = encode_shatter(two_leaf_tree());
+  for (std::size_t length = 0; length < bytes.size(); ++length) {
+    const std::optional<std::string> message = refusal(std::string_view(bytes).substr(0, length));
+    INFO("prefix of " << length << " of " << bytes.size() << " bytes");
+    REQUIRE(message.has_value());
+    CHECK(message->find("truncated") != std::string::npos);
+  }
+}
+
+TEST_CASE("every single-byte change is refused", "[shatter_file][damage]") {
+  SECTION("every byte of a small file, three ways") {
+    const std::string bytes = encode_shatter(two_leaf_tree());
+    std::vector<std::string> accepted;  // collected rather than asserted one by one, to stay fast
+    for (std::size_t position = 0; position < bytes.size(); ++position) {
+      for (const int change : {0x01, 0x20, 0xFF}) {
+        std::string damaged = bytes;
+        damaged[position] = static_cast<char>(static_cast<unsigned char>(damaged[position]) ^ change);
+        if (!refusal(damaged)) accepted.push_back("byte " + std::to_string(position) + " xor " + std::to_string(change));
+      }
+    }
+    INFO(accepted.size() << " changes accepted, the first: " << (accepted.empty() ? std::string("none") : accepted.front()));
+    CHECK(accepted.empty());
+  }
+  SECTION("2000 random positions in built trees' files") {
+    std::vector<std::string> files = {encode_shatter(deep_tree())};
+    for (const auto& [mesh, strategy] : {std::pair{test::torus(2, 0.6, 16, 10), Strategy::thesis},
+                                         std::pair{test::hollow_egg(), Strategy::axis},
+                                         std::pair{test::box({0, 0, 0}, {1, 2, 3}), Strategy::balanced}}) {
+      BuildOptions options;
+      options.fragments = 8;
+      options.strategy = strategy;
+      files.push_back(encode_shatter(build_mesh_tree(mesh, options)));
+    }
+    test::Random random(2024);
+    for (int sample = 0; sample < 2000; ++sample) {
+      std::string damaged = files[random.index(files.size())];
+      const std::size_t position = random.index(damaged.size());
+      const auto change = static_cast<unsigned char>(1 + random.index(255));
+      damaged[position] = static_cast<char>(static_cast<unsigned char>(damaged[position]) ^ change);
+      if (refusal(damaged)) continue;
+      FAIL("byte " << position << " of " << damaged.size() << " xor " << int{change} << " accepted");
+    }
+  }
+}
+
+TEST_CASE("random damage behind correct checksums is refused or decodes to a valid tree", "[shatter_file][hostile]") {
+  // Checksums stop accidental damage; this is the deliberate kind. Bytes of one
+  // payload are changed and its CRC recomputed, so only the structure checks
+  // stand between the reader and the damage. Whatever decodes must be a tree the
+  // encoder accepts (the two agree on validity) and must re-encode to the input.
+  struct Part {
+    std::string tag, payload;
+  };
+  test::Random random(77);
+  for (const MeshTree& tree : {two_leaf_tree(), deep_tree()}) {
+    const std::vector<Part> parts = {{"OPTS", options_payload(tree.options)},      {"NODE", nodes_payload(tree.nodes)},
+                                     {"MESH", meshes_payload(tree.nodes, false)}, {"HULL", meshes_payload(tree.nodes, true)},
+                                     {"BOND", bonds_payload(tree.bonds)}};
+    int refused = 0, accepted = 0;
+    for (int sample = 0; sample < 1500; ++sample) {
+      std::vector<Part> damaged = parts;
+      Part& victim = damaged[random.index(damaged.size())];
+      const std::size_t changes = 1 + random.index(4);
+      for (std::size_t c = 0; c < changes; ++c) {
+        // Small values are the interesting ones in counts and indices.
+        const std::size_t at = random.index(victim.payload.size());
+        victim.payload[at] = static_cast<char>(random.index(2) == 0 ? random.index(4) : random.index(256));
+      }
+      std::string bytes = file_header();
+      for (const Part& part : damaged) bytes += section(part.tag, part.payload);
+      bytes += section("END ", "");
+      std::optional<MeshTree> decoded;
+      {
+        const AllocationBudget budget(allowed_allocation(bytes.size()));
+        try {
+          decoded = decode_shatter(bytes);
+        } catch (const CorruptFileError&) {
+        }
+      }
+      if (!decoded) {
+        ++refused;
+        continue;
+      }
+      ++accepted;
+      std::string again;
+      REQUIRE_NOTHROW(again = encode_shatter(*decoded));
+      REQUIRE(again == bytes);
+    }
+    CHECK(refused > 0);
+    CHECK(accepted > 0);  // changes to doubles and seeds are not damage a reader can see
+  }
+}
+
+TEST_CASE("the header is checked: magic, version, with distinct messages", "[shatter_file][hostile]") {
+  const std::string bytes = encode_shatter(two_leaf_tree());
+  std::string wrong_magic = bytes;
+  wrong_magic[1] = 'X';
+  check_refused(wrong_magic, "not a .shatter file");
+  check_refused("ply\nformat ascii 1.0\n", "not a .shatter file");
+  // Text-mode transfer turns the CR LF guard into LF: refused as not this format.
+  std::string newline_translated = bytes;
+  newline_translated.erase(4, 1);
+  check_refused(newline_translated, "not a .shatter file");
+
+  std::string future = bytes;
+  future.replace(8, 4, Bytes{}.u32(999).data);
+  check_refused(future, "unsupported .shatter format version 999");
+  check_refused(future, "newer shatter");
+  std::string version_zero = bytes;
+  version_zero.replace(8, 4, Bytes{}.u32(0).data);
+  check_refused(version_zero, "unsupported .shatter format version 0");
+  CHECK(*refusal(wrong_magic) != *refusal(future));
+}
+
+TEST_CASE("hostile section tables are refused", "[shatter_file][hostile]") {
+  const MeshTree tree = two_leaf_tree();
+  const std::string opts = section("OPTS", options_payload(tree.options)), nodes = section("NODE", nodes_payload(tree.nodes)),
+                    meshes = section("MESH", meshes_payload(tree.nodes, false)), hulls = section("HULL", meshes_payload(tree.nodes, true)),
+                    bonds = section("BOND", bonds_payload(tree.bonds)), end = section("END ", "");
+
+  SECTION("a section length of 2^63") {
+    const std::string huge = Bytes{}.text("NODE").u64(std::uint64_t{1} << 63).u32(0).data;
+    check_refused(file_header() + opts + huge + "tiny", "declares 9223372036854775808 payload bytes");
+  }
+  SECTION("a section length of 2^64 - 1") {
+    const std::string huge = Bytes{}.text("MESH").u64(~std::uint64_t{0}).u32(0).data;
+    check_refused(file_header() + huge, "truncated");
+  }
+  SECTION("a damaged checksum") {
+    std::string bad = nodes;
+    bad[12] = static_cast<char>(bad[12] ^ 1);
+    check_refused(file_header() + opts + bad + meshes + hulls + bonds + end, "NODE section at byte 55 fails its checksum");
+  }
+  SECTION("missing, repeated, unknown and trailing sections") {
+    check_refused(file_header() + opts + nodes + meshes + bonds + end, "no HULL section");
+    check_refused(file_header() + opts + nodes + nodes + meshes + hulls + bonds + end, "repeats the one at byte");
+    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + section("FUTR", "x") + end, "unknown section 'FUTR'");
+    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + section("\x01\xFFzz", "") + end, "unknown section '\\x01\\xFFzz'");
+    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + end + "x", "1 bytes follow the END section");
+    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + section("END ", "x"), "must be empty");
+    check_refused(file_header() + opts + nodes + meshes + hulls + bonds, "without the END section");
+  }
+  SECTION("optional sections are skipped and the order of sections is free") {
+    const std::string reordered = file_header() + section("xtra", "later data") + bonds + hulls + section("note", "") + meshes + nodes + opts + end;
+    const MeshTree decoded = decode_within_budget(reordered);
+    CHECK(tree_difference(tree, decoded).empty());
+    CHECK(encode_shatter(decoded) == encode_shatter(tree));
+  }
+}
+
+TEST_CASE("hostile counts are refused before anything is allocated", "[shatter_file][hostile]") {
+  const MeshTree tree = two_leaf_tree();
+  const auto with_section = [&](std::string_view tag, const std::string& payload) {
+    const std::string opts = std::string_view(tag) == "OPTS" ? payload : options_payload(tree.options);
+    const std::string nodes = std::string_view(tag) == "NODE" ? payload : nodes_payload(tree.nodes);
+    const std::string meshes = std::string_view(tag) == "MESH" ? payload : meshes_payload(tree.nodes, false);
+    const std::string hulls = std::string_view(tag) == "HULL" ? payload : meshes_payload(tree.nodes, true);
+    const std::string bonds = std::string_view(tag) == "BOND" ? payload : bonds_payload(tree.bonds);
+    return file_header() + section("OPTS", opts) + section("NODE", nodes) + section("MESH", meshes) + section("HULL", hulls) +
+           section("BOND", bonds) + section("END ", "");
+  };
+  check_refused(with_section("NODE", Bytes{}.u32(0xFFFFFFFFu).u64(0).data), "4294967295 nodes need at least 165 bytes each");
+  check_refused(with_section("NODE", Bytes{}.u32(0).data), "node count 0");
+  // A node whose child count claims 2^32 - 1 children.
+  std::string nodes = nodes_payload(tree.nodes);
+  nodes.replace(4 + 161, 4, Bytes{}.u32(0xFFFFFFFFu).data);
+  check_refused(with_section("NODE", nodes), "4294967295 children need at least 4 bytes each");
+  // Two empty meshes after the hostile one, so the mesh count itself fits.
+  const std::string two_empty_meshes = Bytes{}.u32(0).u32(0).u8(0).u32(0).u32(0).u8(0).data;
+  check_refused(with_section("MESH", Bytes{}.u32(3).u32(0xFFFFFFFFu).u32(0).u8(0).data + two_empty_meshes),
+                "4294967295 vertices need at least 24 bytes each");
+  check_refused(with_section("HULL", Bytes{}.u32(3).u32(0).u32(0xFFFFFFFFu).u8(0).data + two_empty_meshes),
+                "4294967295 triangles need at least 16 bytes each");
+  check_refused(with_section("MESH", Bytes{}.u32(0xFFFFFFFFu).data), "4294967295 meshes for 3 nodes");
+  check_refused(with_section("BOND", Bytes{}.u64(~std::uint64_t{0}).data), "18446744073709551615 bonds need at least 68 bytes each");
+  check_refused(with_section("BOND", Bytes{}.u64(1).u32(0).data), "1 bonds need at least 68 bytes each, but only 4 bytes remain");
+  check_refused(with_section("NODE", nodes_payload(tree.nodes).substr(0, nodes_payload(tree.nodes).size() - 1)),
+                "node 2: the payload ends inside child count");
+  check_refused(with_section("BOND", bonds_payload(tree.bonds) + "!"), "1 unexpected bytes after the last record");
+  check_refused(with_section("OPTS", options_payload(tree.options).substr(0, 24)), "the payload ends inside max_plane_tries");
+
+  // Attribute channels claiming 3T values with none present.
+  Mesh mesh = test::box({0, 0, 0}, {1, 1, 1});
+  std::string record = mesh_record(mesh);
+  record[8] = 7;
+  const std::string one_mesh_three_times = Bytes{}.u32(3).data + record + mesh_record(mesh) + mesh_record(mesh);
+  check_refused(with_section("MESH", one_mesh_three_times), "36 corner normals need at least 24 bytes each");
+  record[8] = 8;
+  check_refused(with_section("MESH", Bytes{}.u32(3).data + record + mesh_record(mesh) + mesh_record(mesh)), "unknown attribute channel bits 0x08");
+}
+
+TEST_CASE("enum and bool bytes out of range are refused", "[shatter_file][hostile]") {
+  const MeshTree tree = two_leaf_tree();
+  const std::string good = encode_shatter(tree);
+  const std::size_t opts_payload = 12 + 16;
+  const auto with_byte = [&](std::size_t at, std::uint8_t value) {
+    std::string payload = options_payload(tree.options);
+    payload[at] = static_cast<char>(value);
+    return good.substr(0, 12) + section("OPTS", payload) + good.substr(opts_payload + 27);
+  };
+  check_refused(with_byte(12, 3), "OPTS section, byte 40: strategy 3 is unknown");
+  check_refused(with_byte(13, 2), "kernel 2 is unknown");
+  check_refused(with_byte(26, 2), "allow_self_intersections is 2 (must be 0 or 1)");
+  std::string nodes = nodes_payload(tree.nodes);
+  nodes[4 + 24] = 5;  // above_parent_plane of the root
+  check_refused(file_with_nodes_payload(tree, nodes), "node 0: above_parent_plane is 5");
+  MeshTree zero_fragments = tree;
+  zero_fragments.options.fragments = 0;
+  check_refused(reference_file(zero_fragments), "options.fragments is 0");
+}
+
+TEST_CASE("invalid trees with correct checksums are refused", "[shatter_file][hostile]") {
+  // Each case breaks one invariant of a valid tree, writes it with the reference
+  // writer (correct checksums), and expects the reader to name the defect; the
+  // library's own encoder refuses the same tree.
+  struct Case {
+    const char* name;
+    MeshTree tree;
+    const char* expected;
+  };
+  std::vector<Case> cases;
+  const auto add = [&](const char* name, const MeshTree& base, auto&& change, const char* expected) {
+    MeshTree tree = base;
+    change(tree);
+    cases.push_back({name, std::move(tree), expected});
+  };
+  const MeshTree small = two_leaf_tree(), deep = deep_tree();
+
+  add("triangle index out of range", small, [](MeshTree& t) { t.nodes[1].mesh.triangles[3][2] = 8; },
+      "MESH section, byte 991: the mesh of node 1 triangle 3 corner 2 has vertex index 8, but there are only 8 vertices");
+  add("hull triangle index out of range", deep, [](MeshTree& t) { t.nodes[4].hull.triangles.back()[0] = 0xFFFFFFFFu; },
+      "the hull of node 4 triangle");
+  add("root with a parent", small, [](MeshTree& t) { t.nodes[0].parent = 2; }, "node 0 (the root) has parent 2");
+  add("root with depth", small, [](MeshTree& t) { t.nodes[0].depth = 1; }, "node 0 (the root) has depth 1");
+  add("cycle in parent links", small,
+      [](MeshTree& t) {
+        t.nodes[1].parent = 2;
+        t.nodes[2].parent = 1;
+      },
+      "node 1 has parent 2, but node 0 lists it as a child");
+  add("cycle in children", deep, [](MeshTree& t) { t.nodes[1].children = {0, 2}; }, "node 1 lists child 0, which already has its place");
+  add("self as child", deep, [](MeshTree& t) { t.nodes[1].children = {1, 2}; }, "node 1 lists child 1, which already has its place");
+  add("child listed by two parents (overlapping children)", deep, [](MeshTree& t) { t.nodes[0].children = {1, 3, 5}; },
+      "node 0 lists child 3, which already has its place");
+  add("children out of preorder", deep, [](MeshTree& t) { t.nodes[0].children = {1, 5, 4}; },
+      "node 0 lists child 5, but depth-first preorder puts node 4 there");
+  add("child beyond the nodes", small, [](MeshTree& t) { t.nodes[0].children = {1, 2, 7}; }, "node 0 lists child 7, but there are only 3 nodes");
+  add("child index no_node", small, [](MeshTree& t) { t.nodes[0].children = {1, no_node}; }, "node 0 lists child 4294967295");
+  add("single child", small, [](MeshTree& t) { t.nodes[0].children = {1}; }, "node 0 has one child");
+  add("unreachable node", small,
+      [](MeshTree& t) {
+        t.nodes[0].children = {1, 2};
+        t.nodes.push_back(t.nodes[2]);
+      },
+      "node 3 is not reachable from the root");
+  add("wrong depth", deep, [](MeshTree& t) { t.nodes[3].depth = 1; }, "node 3 has depth 1, but its parent's depth is 1");
+  add("overlapping leaf ranges", deep, [](MeshTree& t) { t.nodes[4].first_leaf = 1; }, "node 4 claims leaves [1, +1), but its subtree holds [2, +1)");
+  add("leaf count not the sum of the children's", deep, [](MeshTree& t) { t.nodes[1].leaf_count = 3; }, "node 1 claims leaves [0, +3)");
+  add("bond with first == second", small, [](MeshTree& t) { t.bonds[0].second = 0; }, "BOND section, byte");
+  add("bond with first > second", small, [](MeshTree& t) { std::swap(t.bonds[0].first, t.bonds[0].second); }, "does not have first < second");
+  add("bond beyond the leaves", small, [](MeshTree& t) { t.bonds[0].second = 2; }, "names a leaf beyond the 2 leaves");
+  add("bond cut at a leaf", small, [](MeshTree& t) { t.bonds[0].cut_node = 1; }, "does not name an internal node");
+  add("bond cut beyond the nodes", small, [](MeshTree& t) { t.bonds[0].cut_node = no_node; }, "cut node none) does not name an internal node");
+  add("bond across a cut that does not separate it", deep, [](MeshTree& t) { t.bonds[0].cut_node = 0; }, "the cut of its cut node does not separate");
+  add("bonds out of order", deep, [](MeshTree& t) { std::swap(t.bonds[1], t.bonds[3]); }, "is out of order");
+
+  for (const Case& c : cases) {
+    INFO(c.name);
+    check_refused(reference_file(c.tree), c.expected);
+    CHECK_THROWS_AS(encode_shatter(c.tree), std::invalid_argument);
+  }
+}
+
+TEST_CASE("encode_shatter refuses trees a reader could not trust", "[shatter_file]") {
+  MeshTree tree = two_leaf_tree();
+  tree.leaf_nodes = {2, 1};
+  CHECK_THROWS_WITH(encode_shatter(tree), Catch::Contains("leaf_nodes[0] is node 2, but leaf 0 is node 1"));
+  tree = two_leaf_tree();
+  tree.nodes[2].mesh.surfaces.pop_back();
+  CHECK_THROWS_WITH(encode_shatter(tree), Catch::Contains("the mesh of node 2 has 11 surface ids for 12 triangles"));
+  tree = two_leaf_tree();
+  tree.nodes[1].hull.corners.uvs.resize(5);
+  CHECK_THROWS_WITH(encode_shatter(tree), Catch::Contains("has 5 uvs for 12 triangles"));
+  CHECK_THROWS_AS(encode_shatter(MeshTree{}), std::invalid_argument);
+  tree = two_leaf_tree();
+  tree.options.strategy = static_cast<Strategy>(9);
+  CHECK_THROWS_WITH(encode_shatter(tree), Catch::Contains("options.strategy 9"));
+}
+
+TEST_CASE("write_shatter_file and read_shatter_file", "[shatter_file][io]") {
+  const std::filesystem::path directory = std::filesystem::temp_directory_path() / ("shatter-file-test-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(directory);
+  std::filesystem::create_directories(directory);
+  const MeshTree tree = deep_tree();
+  const std::filesystem::path path = directory / "tree.shatter";
+
+  write_shatter_file(path, tree);
+  CHECK(tree_difference(tree, read_shatter_file(path)).empty());
+  // Overwriting replaces the file whole, leaving no temporary beside it.
+  write_shatter_file(path, two_leaf_tree());
+  CHECK(tree_difference(two_leaf_tree(), read_shatter_file(path)).empty());
+  CHECK(std::distance(std::filesystem::directory_iterator(directory), std::filesystem::directory_iterator{}) == 1);
+
+  CHECK_THROWS_AS(write_shatter_file(directory / "no such directory" / "tree.shatter", tree), IoError);
+  CHECK_THROWS_AS(write_shatter_file(directory, tree), IoError);  // a directory
+  CHECK_THROWS_AS(read_shatter_file(directory / "missing.shatter"), IoError);
+  CHECK_THROWS_AS(read_shatter_file(directory), IoError);
+
+  {
+    std::string damaged = encode_shatter(tree);
+    damaged[damaged.size() / 2] = static_cast<char>(damaged[damaged.size() / 2] ^ 0x10);
+    std::ofstream(directory / "damaged.shatter", std::ios::binary) << damaged;
+  }
+  CHECK_THROWS_AS(read_shatter_file(directory / "damaged.shatter"), CorruptFileError);
+  CHECK_THROWS_WITH(read_shatter_file(directory / "damaged.shatter"), Catch::StartsWith((directory / "damaged.shatter").string() + ": damaged"));
+  std::filesystem::remove_all(directory);
+}
