@@ -1,0 +1,1149 @@
+// shatter-bench-tree: the seed thesis's chapter 6.2 ("Testing Fragment Generation")
+// measured again, side by side with a peer.
+//
+// Part 1, time against fragment count (seed 6.2.1 and 6.2.3, where the seed's
+// builder failed at 2,048 fragments): a 1 x 1 x 1 box (12 triangles) cut into
+// N = 2, 4, ..., 65,536 fragments with the thesis strategy, fast kernel on 1 and on
+// 2 threads, exact kernel on 1 thread up to --exact-max and no further once one
+// exact build took longer than --exact-stop-seconds (and, for the whole section,
+// no further once a fast build took longer than --fast-stop-seconds).
+//
+// Part 2, the seed's meshes at 256 fragments (6.2.2): the box, an 800-triangle
+// torus, the 1,520-triangle hollow egg shell and elephant.off (standing in for the
+// Stanford bunny: organic, with protrusions), each with the thesis, balanced and
+// axis strategies, fast and exact kernel, 1 thread. The coefficient of variation of
+// the fragment volumes (standard deviation / mean) measures the seed's "clusters of
+// very small fragments".
+//
+// The peer: CGAL 5.5 PMP::clip(clip_volume(true)) on Surface_mesh<Epick>, replaying
+// the very planes of shatter's fast-kernel, 1-thread, thesis tree. For each internal
+// node in preorder, the peer's piece for that node is clipped on both sides of the
+// node's plane (two copies, clipped by the plane and by its opposite, as
+// shatter-bench-cut does), each side is split into connected components, and those
+// are matched to the node's children on that side by nearest area-weighted surface
+// centroid. A side whose clip returns false or throws, or whose component count
+// differs from shatter's child count, ends the replay of those children's subtrees:
+// counted, and their leaves reported missing. Each replay runs in a forked child
+// process under a wall-clock limit (--peer-timeout) and an address-space limit,
+// because after a few levels rounded points make CGAL's pieces degenerate and clip
+// may then hang, explode or crash; a timeout or crash is reported as such, with the
+// progress made before it.
+//
+// Timing: std::chrono::steady_clock. Shatter: around build_mesh_tree only, which
+// includes validating the input, the exact conversion (exact kernel), mass
+// properties, convex hulls and bonds, so shatter does more work than the peer; the
+// tree is destroyed after the clock stops. Repeated until >= 3 runs and >= 0.3 s (a
+// run longer than 2 s is not repeated); the median is reported. The peer: the sum
+// of its clip and split_connected_components calls only (copies, matching and
+// checks are outside), a single run. The machine is shared and noisy: read the
+// ratios peer/shatter measured in the same run, not the absolute times.
+//
+// Checks, outside every clock: every shatter leaf through validate_mesh (closed,
+// oriented, manifold, positive volume, no self-intersection, no zero-area
+// triangle); the 2-thread tree's fingerprint against the 1-thread tree's (they must
+// be byte-identical); every peer leaf piece through is_closed, does_self_intersect
+// and volume > 0.
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/clip.h>
+#include <CGAL/Polygon_mesh_processing/connected_components.h>
+#include <CGAL/Polygon_mesh_processing/measure.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/boost/graph/helpers.h>
+
+#include <poll.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <limits>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "shatter/kernel/io.hpp"
+#include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/stats.hpp"
+#include "shatter/meshtree/tree.hpp"
+#include "support/generators.hpp"
+
+namespace {
+
+namespace PMP = CGAL::Polygon_mesh_processing;
+using Epick = CGAL::Epick;
+using CgalMesh = CGAL::Surface_mesh<Epick::Point_3>;
+using Clock = std::chrono::steady_clock;
+using shatter::KernelKind;
+using shatter::MeshTree;
+using shatter::NodeIndex;
+using shatter::Strategy;
+
+constexpr double not_measured = std::numeric_limits<double>::quiet_NaN();
+
+constexpr const char* usage_text =
+    "usage: shatter-bench-tree [--quick] [--csv FILE] [--mesh-dir DIR] [--seed S]\n"
+    "                          [--section all|scaling|meshes] [--max-fragments N]\n"
+    "                          [--exact-max N] [--exact-stop-seconds T] [--fast-stop-seconds T]\n"
+    "                          [--mesh-fragments N] [--dump-invalid DIR]\n"
+    "                          [--peer-max N] [--peer-timeout T] [--peer-memory-mb M]\n"
+    "                          [--no-peer] [--no-validate]\n"
+    "\n"
+    "The seed thesis's chapter 6.2 again: shatter::build_mesh_tree timed against the\n"
+    "fragment count and on the thesis's meshes, with CGAL PMP clip replaying the same\n"
+    "planes as the peer.\n"
+    "\n"
+    "scaling  a 1 x 1 x 1 box (12 triangles) cut into N = 2, 4, ..., --max-fragments\n"
+    "         fragments, strategy thesis: fast kernel on 1 and 2 threads, exact kernel on\n"
+    "         1 thread. Per N: leaves, nodes, seconds (median of >= 3 runs and >= 0.3 s;\n"
+    "         one run if > 2 s), microseconds per cut (per internal node), invalid\n"
+    "         leaves, and whether the 2-thread tree equals the 1-thread tree.\n"
+    "meshes   the box, an 800-triangle torus, the 1,520-triangle hollow egg and\n"
+    "         elephant.off cut into --mesh-fragments fragments with the thesis, balanced\n"
+    "         and axis strategies, fast and exact kernel, 1 thread: seconds, leaves,\n"
+    "         coefficient of variation of the leaf volumes (std dev / mean), smallest\n"
+    "         leaf volume / mean, invalid leaves.\n"
+    "peer     CGAL PMP::clip(clip_volume(true)), Surface_mesh<Epick>, replays the planes\n"
+    "         of the fast 1-thread thesis tree node by node (both sides of each plane,\n"
+    "         connected components matched to shatter's children by nearest centroid),\n"
+    "         in a forked process with a time limit. Its time is the sum of the clip and\n"
+    "         split calls. Reported: seconds, peer/shatter ratio, leaf pieces that are\n"
+    "         not closed, self-intersect or have volume <= 0 (invalid), leaves never\n"
+    "         produced (missing), clips that returned false (failed) or threw, nodes whose\n"
+    "         component count differs from shatter's (mismatch), timeout or crash. The\n"
+    "         exact row shows the same peer run, its ratio taken against the exact time.\n"
+    "\n"
+    "Leaves are validated outside the clock (validate_mesh, with self-intersections).\n"
+    "Exit status: 0 when every build succeeded and every shatter leaf is valid and the\n"
+    "thread counts agree, 2 when not (the peer's failures never count), 1 on errors.\n"
+    "\n"
+    "options:\n"
+    "  --quick                 smoke run (CI): N up to 32, meshes at 8 fragments, peer\n"
+    "                          up to 16, one run per measurement; a few seconds\n"
+    "  --csv FILE              also write one CSV row per measurement to FILE\n"
+    "  --mesh-dir DIR          folder holding elephant.off (default:\n"
+    "                          " SHATTER_MESH_DIR ")\n"
+    "  --seed S                root seed of every build (default 1)\n"
+    "  --section S             all (default), scaling or meshes\n"
+    "  --max-fragments N       largest N of the scaling section (default 65536)\n"
+    "  --exact-max N           largest N built with the exact kernel (default 65536)\n"
+    "  --exact-stop-seconds T  build no larger N with the exact kernel once one exact\n"
+    "                          build took longer than T seconds (default 30)\n"
+    "  --fast-stop-seconds T   end the scaling section once a fast 1-thread build took\n"
+    "                          longer than T seconds (default 300)\n"
+    "  --mesh-fragments N      fragments of the meshes section (default 256)\n"
+    "  --peer-max N            largest N of the scaling section replayed by the peer\n"
+    "                          (default 4096); after a peer timeout or crash no larger\n"
+    "                          N is tried\n"
+    "  --peer-timeout T        wall-clock limit of one peer replay in seconds (default 60)\n"
+    "  --peer-memory-mb M      address space a peer replay may add (default 8192)\n"
+    "  --no-peer               skip the peer\n"
+    "  --no-validate           skip the validity checks (leaves and peer pieces)\n"
+    "  --dump-invalid DIR      write the first invalid leaf of each build, and the\n"
+    "                          node it was cut from, to DIR as OFF files\n"
+    "  -h, --help              show this help\n";
+
+// ---------------------------------------------------------------------------
+// Options.
+
+struct Options {
+  std::filesystem::path mesh_dir = SHATTER_MESH_DIR;
+  std::optional<std::filesystem::path> csv;
+  std::uint64_t seed = 1;
+  bool quick = false;
+  bool validate = true;
+  bool peer = true;
+  bool scaling = true;
+  bool meshes = true;
+  std::optional<std::uint32_t> max_fragments, exact_max, mesh_fragments, peer_max;
+  std::optional<std::filesystem::path> dump_invalid;
+  double exact_stop_seconds = 30;
+  double fast_stop_seconds = 300;
+  std::optional<double> peer_timeout;
+  std::uint64_t peer_memory_mb = 8192;
+};
+
+/// The options with --quick's smaller defaults applied.
+struct Plan {
+  Options options;
+  std::uint32_t max_fragments = 65536;
+  std::uint32_t exact_max = 65536;
+  std::uint32_t mesh_fragments = 256;
+  std::uint32_t peer_max = 4096;
+  double peer_timeout = 60;
+  int min_runs = 3;
+  double min_total_seconds = 0.3;
+  int max_runs = 1000;
+  double no_repeat_seconds = 2.0;  ///< a run longer than this is not repeated
+};
+
+Plan make_plan(const Options& options) {
+  Plan plan;
+  plan.options = options;
+  const bool q = options.quick;
+  plan.max_fragments = options.max_fragments.value_or(q ? 32 : 65536);
+  plan.exact_max = options.exact_max.value_or(q ? 32 : 65536);
+  plan.mesh_fragments = options.mesh_fragments.value_or(q ? 8 : 256);
+  plan.peer_max = options.peer_max.value_or(q ? 16 : 4096);
+  plan.peer_timeout = options.peer_timeout.value_or(q ? 30 : 60);
+  if (q) {
+    plan.min_runs = 1;
+    plan.min_total_seconds = 0;
+  }
+  return plan;
+}
+
+// ---------------------------------------------------------------------------
+// Small helpers.
+
+double seconds_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  if (n == 0) return not_measured;
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+std::string fixed(double value, int digits) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
+  return buffer;
+}
+
+/// Seconds with about four significant digits, never in exponent form.
+std::string seconds_text(double s) {
+  if (std::isnan(s)) return "–";
+  return fixed(s, s < 0.001 ? 6 : s < 0.01 ? 5 : s < 0.1 ? 4 : s < 1 ? 3 : s < 100 ? 2 : 1);
+}
+
+/// `digits` significant digits, exponent form only for tiny values (a sliver fragment).
+std::string significant(double value, int digits) {
+  if (std::isnan(value)) return "–";
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.*g", digits, value);
+  return buffer;
+}
+
+std::string ratio_text(double r) { return std::isnan(r) || std::isinf(r) ? "–" : fixed(r, r < 10 ? 2 : 1); }
+
+std::string with_thousands(std::uint64_t value) {
+  std::string digits = std::to_string(value), out;
+  for (std::size_t i = 0; i < digits.size(); ++i) {
+    if (i && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
+  }
+  return out;
+}
+
+/// 64-bit FNV-1a over raw bytes: a fingerprint to compare two trees, not a hash
+/// for tables.
+class Fingerprint {
+ public:
+  void add_bytes(const void* data, std::size_t size) {
+    const auto* bytes = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < size; ++i) {
+      state_ ^= bytes[i];
+      state_ *= 0x100000001B3ull;
+    }
+  }
+  template <class T>
+  void add(const T& value) {
+    add_bytes(&value, sizeof value);
+  }
+  template <class T>
+  void add_vector(const std::vector<T>& values) {
+    add(values.size());
+    add_bytes(values.data(), values.size() * sizeof(T));
+  }
+  std::uint64_t value() const { return state_; }
+
+ private:
+  std::uint64_t state_ = 0xCBF29CE484222325ull;
+};
+
+// ---------------------------------------------------------------------------
+// Shatter's side: the leaves of one tree.
+
+struct LeafSummary {
+  long invalid = -1;          ///< leaves failing validate_mesh; -1 = not checked
+  std::string first_invalid;  ///< which leaf and why, for the note
+  NodeIndex first_invalid_node = shatter::no_node;
+  double volume_cv = not_measured;
+  double smallest_over_mean = not_measured;
+  std::uint32_t max_depth = 0;
+  std::uint64_t fingerprint = 0;
+};
+
+std::uint64_t tree_fingerprint(const MeshTree& tree) {
+  Fingerprint f;
+  f.add(tree.nodes.size());
+  for (const auto& node : tree.nodes) {
+    f.add_vector(node.mesh.positions);
+    f.add_vector(node.mesh.triangles);
+    f.add_vector(node.mesh.surfaces);
+    f.add(node.parent);
+    f.add(node.plane);
+  }
+  f.add_vector(tree.leaf_nodes);
+  f.add(tree.bonds.size());
+  return f.value();
+}
+
+LeafSummary summarize_leaves(const MeshTree& tree, bool validate) {
+  LeafSummary summary;
+  summary.fingerprint = tree_fingerprint(tree);
+  const shatter::TreeStats stats = shatter::tree_stats(tree);
+  summary.max_depth = stats.max_depth;
+  if (stats.leaf_count > 0 && stats.fragment_volume.mean > 0) {
+    summary.volume_cv = stats.fragment_volume.coefficient_of_variation;
+    summary.smallest_over_mean = stats.fragment_volume.min / stats.fragment_volume.mean;
+  }
+  const std::size_t count = tree.leaf_count();
+  if (!validate) return summary;
+  summary.invalid = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    const NodeIndex node = tree.leaf_nodes[i];
+    const auto report = shatter::validate_mesh(tree.nodes[node].mesh);
+    if (report.valid()) continue;
+    if (summary.invalid++ > 0) continue;
+    summary.first_invalid_node = node;
+    summary.first_invalid = "leaf " + std::to_string(i) + " (node " + std::to_string(node) + ", depth " +
+                            std::to_string(tree.nodes[node].depth) + "): " + report.summary();
+  }
+  return summary;
+}
+
+// ---------------------------------------------------------------------------
+// The peer: CGAL clip replaying a tree's planes.
+
+CgalMesh to_cgal(const shatter::Mesh& mesh) {
+  CgalMesh out;
+  out.reserve(static_cast<CgalMesh::size_type>(mesh.positions.size()),
+              static_cast<CgalMesh::size_type>(mesh.positions.size() + mesh.triangles.size()),
+              static_cast<CgalMesh::size_type>(mesh.triangles.size()));
+  std::vector<CgalMesh::Vertex_index> vertices;
+  vertices.reserve(mesh.positions.size());
+  for (const auto& p : mesh.positions) vertices.push_back(out.add_vertex(Epick::Point_3(p.x, p.y, p.z)));
+  for (const auto& [a, b, c] : mesh.triangles) {
+    if (out.add_face(vertices[a], vertices[b], vertices[c]) == CgalMesh::null_face())
+      throw std::runtime_error("the mesh is not a valid CGAL Surface_mesh (non-manifold face)");
+  }
+  return out;
+}
+
+/// Area-weighted centroid of the surface, computed the same way for both sides of
+/// the matching; it needs no closed surface, unlike a volume centroid. Falls back
+/// to the vertex average for a surface of zero area.
+template <class TriangleVisitor>
+shatter::Vec3 surface_centroid(TriangleVisitor for_each_triangle) {
+  shatter::Vec3 weighted{}, vertex_sum{};
+  double area = 0;
+  std::size_t corners = 0;
+  for_each_triangle([&](shatter::Vec3 a, shatter::Vec3 b, shatter::Vec3 c) {
+    const double w = shatter::norm(shatter::cross(b - a, c - a));
+    weighted = weighted + (a + b + c) * (w / 3.0);
+    area += w;
+    vertex_sum = vertex_sum + a + b + c;
+    corners += 3;
+  });
+  if (area > 0) return weighted * (1.0 / area);
+  return corners ? vertex_sum * (1.0 / static_cast<double>(corners)) : shatter::Vec3{};
+}
+
+shatter::Vec3 surface_centroid(const shatter::Mesh& mesh) {
+  return surface_centroid([&](auto&& visit) {
+    for (const auto& [a, b, c] : mesh.triangles) visit(mesh.positions[a], mesh.positions[b], mesh.positions[c]);
+  });
+}
+
+shatter::Vec3 surface_centroid(const CgalMesh& mesh) {
+  return surface_centroid([&](auto&& visit) {
+    for (const auto face : mesh.faces()) {
+      std::array<shatter::Vec3, 3> corner{};
+      std::size_t k = 0;
+      for (const auto v : CGAL::vertices_around_face(mesh.halfedge(face), mesh)) {
+        const auto& p = mesh.point(v);
+        if (k < 3) corner[k] = {p.x(), p.y(), p.z()};
+        ++k;
+      }
+      if (k == 3) visit(corner[0], corner[1], corner[2]);
+    }
+  });
+}
+
+/// Pairs every component with one child, closest centroids first. Returns for each
+/// component the index into `children`.
+std::vector<std::size_t> match_by_centroid(const std::vector<CgalMesh>& components, const MeshTree& tree,
+                                           const std::vector<NodeIndex>& children) {
+  struct Pair {
+    double distance;
+    std::size_t component, child;
+  };
+  std::vector<shatter::Vec3> child_centroids;
+  for (const NodeIndex child : children) child_centroids.push_back(surface_centroid(tree.nodes[child].mesh));
+  std::vector<Pair> pairs;
+  for (std::size_t i = 0; i < components.size(); ++i) {
+    const shatter::Vec3 c = surface_centroid(components[i]);
+    for (std::size_t j = 0; j < children.size(); ++j) pairs.push_back({shatter::norm(c - child_centroids[j]), i, j});
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
+    return a.distance != b.distance ? a.distance < b.distance
+                                    : std::pair(a.component, a.child) < std::pair(b.component, b.child);
+  });
+  constexpr std::size_t unassigned = std::numeric_limits<std::size_t>::max();
+  std::vector<std::size_t> child_of(components.size(), unassigned);
+  std::vector<bool> taken(children.size(), false);
+  for (const Pair& p : pairs) {
+    if (child_of[p.component] != unassigned || taken[p.child]) continue;
+    child_of[p.component] = p.child;
+    taken[p.child] = true;
+  }
+  return child_of;
+}
+
+bool peer_piece_valid(const CgalMesh& piece) {
+  if (piece.number_of_faces() == 0 || !CGAL::is_triangle_mesh(piece) || !CGAL::is_closed(piece)) return false;
+  if (PMP::does_self_intersect(piece)) return false;
+  return PMP::volume(piece) > 0;
+}
+
+/// Runs in the forked child: replays the tree with CGAL and reports through `send`
+/// (one line at a time, see PeerResult parsing in the parent).
+void replay_with_cgal(const MeshTree& tree, const shatter::Mesh& input, bool check_pieces,
+                      const std::function<void(const std::string&)>& send) {
+  const std::size_t internal_nodes = tree.nodes.size() - tree.leaf_count();
+  std::size_t nodes_done = 0, failed_clips = 0, threw = 0, mismatches = 0, missing = 0;
+  double clip_seconds = 0;
+  auto report_progress = [&] {
+    send("progress " + std::to_string(nodes_done) + " " + std::to_string(internal_nodes) + " " +
+         fixed(clip_seconds, 6));
+  };
+
+  std::vector<std::optional<CgalMesh>> piece(tree.nodes.size());
+  piece[0] = to_cgal(input);
+  auto last_report = Clock::now();
+  for (std::size_t index = 0; index < tree.nodes.size(); ++index) {
+    const auto& node = tree.nodes[index];
+    if (node.is_leaf() || !piece[index]) continue;
+    // Two copies, made outside the clock: clip keeps the plane's negative side.
+    std::array<CgalMesh, 2> side{*piece[index], std::move(*piece[index])};
+    piece[index].reset();
+    const Epick::Plane_3 below_plane(node.plane.normal.x, node.plane.normal.y, node.plane.normal.z,
+                                     node.plane.offset);
+    const std::array<Epick::Plane_3, 2> plane{below_plane, below_plane.opposite()};
+    std::array<bool, 2> clipped{false, false}, thrown{false, false};
+    std::array<std::vector<CgalMesh>, 2> components;
+    for (std::size_t s = 0; s < 2; ++s) {
+      try {
+        const auto t0 = Clock::now();
+        clipped[s] = PMP::clip(side[s], plane[s], CGAL::parameters::clip_volume(true));
+        if (clipped[s]) {
+          side[s].collect_garbage();  // the default index maps need dense indices
+          PMP::split_connected_components(side[s], components[s]);
+        }
+        clip_seconds += seconds_between(t0, Clock::now());
+      } catch (...) {
+        thrown[s] = true;
+      }
+    }
+    ++nodes_done;
+    for (std::size_t s = 0; s < 2; ++s) {
+      std::vector<NodeIndex> children;
+      for (const NodeIndex child : node.children)
+        if (tree.nodes[child].above_parent_plane == (s == 1)) children.push_back(child);
+      const bool usable = !thrown[s] && clipped[s] && components[s].size() == children.size();
+      if (thrown[s]) {
+        ++threw;
+      } else if (!clipped[s]) {
+        ++failed_clips;
+      } else if (!usable) {
+        ++mismatches;
+      }
+      if (!usable) {
+        for (const NodeIndex child : children) missing += tree.nodes[child].leaf_count;
+        continue;
+      }
+      const auto child_of = match_by_centroid(components[s], tree, children);
+      for (std::size_t k = 0; k < child_of.size(); ++k) piece[children[child_of[k]]] = std::move(components[s][k]);
+    }
+    if (seconds_between(last_report, Clock::now()) > 0.25) {
+      report_progress();
+      last_report = Clock::now();
+    }
+  }
+  send("clipped " + fixed(clip_seconds, 6) + " " + std::to_string(nodes_done) + " " + std::to_string(internal_nodes) +
+       " " + std::to_string(failed_clips) + " " + std::to_string(threw) + " " + std::to_string(mismatches) + " " +
+       std::to_string(missing));
+  if (!check_pieces) return;
+  std::size_t pieces = 0, invalid = 0;
+  for (const NodeIndex leaf : tree.leaf_nodes) {
+    if (!piece[leaf]) continue;
+    ++pieces;
+    bool valid = false;
+    try {
+      valid = peer_piece_valid(*piece[leaf]);
+    } catch (...) {
+    }
+    invalid += !valid;
+  }
+  send("checked " + std::to_string(pieces) + " " + std::to_string(invalid));
+}
+
+struct PeerResult {
+  enum class Status { ok, timeout, crashed, error } status = Status::ok;
+  double clip_seconds = not_measured;  ///< a lower bound unless status is ok
+  std::size_t internal_nodes = 0, nodes_done = 0;
+  std::size_t failed_clips = 0, threw = 0, mismatches = 0, missing = 0;
+  long pieces = -1, invalid = -1;  ///< leaf pieces produced and how many are invalid; -1 = not checked
+  bool clipping_finished = false;
+  std::string detail;  ///< why it is not ok
+
+  std::string status_name() const {
+    switch (status) {
+      case Status::ok: return "ok";
+      case Status::timeout: return "timeout";
+      case Status::crashed: return "crashed";
+      case Status::error: return "error";
+    }
+    return "?";
+  }
+  /// Seconds to compare with, when the replay ran to its end.
+  double comparable_seconds() const { return status == Status::ok ? clip_seconds : not_measured; }
+};
+
+void apply_peer_line(const std::string& line, PeerResult& result) {
+  std::istringstream in(line);
+  std::string tag;
+  in >> tag;
+  if (tag == "progress") {
+    in >> result.nodes_done >> result.internal_nodes >> result.clip_seconds;
+  } else if (tag == "clipped") {
+    in >> result.clip_seconds >> result.nodes_done >> result.internal_nodes >> result.failed_clips >> result.threw >>
+        result.mismatches >> result.missing;
+    result.clipping_finished = true;
+  } else if (tag == "checked") {
+    in >> result.pieces >> result.invalid;
+  } else if (tag == "error") {
+    result.status = PeerResult::Status::error;
+    std::getline(in >> std::ws, result.detail);
+  }
+}
+
+/// Writes all of `text` to a pipe; the parent may already be gone, then it stops.
+void write_all(int fd, const std::string& text) {
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return;
+    done += static_cast<std::size_t>(n);
+  }
+}
+
+/// The address space the process uses now, so the child's limit can be "this much more".
+std::uint64_t current_address_space_bytes() {
+  std::ifstream statm("/proc/self/statm");
+  std::uint64_t pages = 0;
+  statm >> pages;
+  return pages * static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE));
+}
+
+PeerResult run_peer_isolated(const MeshTree& tree, const shatter::Mesh& input, const Plan& plan) {
+  int fds[2];
+  if (::pipe(fds) != 0) throw std::runtime_error(std::string("pipe failed: ") + std::strerror(errno));
+  // Flush first, or the child's copy of buffered output would be written twice.
+  std::cout.flush();
+  std::cerr.flush();
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) throw std::runtime_error(std::string("fork failed: ") + std::strerror(errno));
+  if (pid == 0) {
+    ::close(fds[0]);
+    // Should this process be orphaned while CGAL hangs, it still ends.
+    ::alarm(static_cast<unsigned>(std::ceil(plan.peer_timeout)) + 30);
+    const rlim_t limit =
+        static_cast<rlim_t>(current_address_space_bytes() + plan.options.peer_memory_mb * 1024 * 1024);
+    const rlimit address_space{limit, limit};
+    ::setrlimit(RLIMIT_AS, &address_space);
+    const int out = fds[1];
+    try {
+      replay_with_cgal(tree, input, plan.options.validate, [out](const std::string& line) { write_all(out, line + "\n"); });
+    } catch (const std::exception& e) {
+      write_all(out, std::string("error ") + e.what() + "\n");
+    } catch (...) {
+      write_all(out, "error unknown exception\n");
+    }
+    ::close(out);
+    ::_exit(0);  // no destructors or atexit handlers of the parent's state
+  }
+
+  ::close(fds[1]);
+  PeerResult result;
+  std::string pending;
+  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(plan.peer_timeout));
+  bool timed_out = false;
+  for (;;) {
+    const double remaining = seconds_between(Clock::now(), deadline);
+    if (remaining <= 0) {
+      timed_out = true;
+      break;
+    }
+    pollfd watch{fds[0], POLLIN, 0};
+    const int ready = ::poll(&watch, 1, static_cast<int>(std::min(remaining * 1000.0, 1000.0)) + 1);
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready <= 0) continue;
+    char buffer[4096];
+    const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;  // end of file: the child is done (or died)
+    pending.append(buffer, static_cast<std::size_t>(n));
+    for (std::size_t eol; (eol = pending.find('\n')) != std::string::npos;) {
+      apply_peer_line(pending.substr(0, eol), result);
+      pending.erase(0, eol + 1);
+    }
+  }
+  if (timed_out) ::kill(pid, SIGKILL);
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+
+  const std::string progress = std::to_string(result.nodes_done) + "/" + std::to_string(result.internal_nodes) +
+                               " nodes clipped in " + seconds_text(result.clip_seconds) + " s";
+  if (timed_out) {
+    result.status = PeerResult::Status::timeout;
+    result.detail = "no result within " + fixed(plan.peer_timeout, 0) + " s (" +
+                    (result.clipping_finished ? "clipping finished, checking pieces" : progress) + ")";
+  } else if (WIFSIGNALED(status)) {
+    result.status = PeerResult::Status::crashed;
+    result.detail = std::string("signal ") + std::to_string(WTERMSIG(status)) + " (" +
+                    ::strsignal(WTERMSIG(status)) + ") after " + progress;
+  } else if (result.status == PeerResult::Status::ok && !result.clipping_finished) {
+    result.status = PeerResult::Status::error;
+    result.detail = "the replay ended without a result after " + progress;
+  }
+  return result;
+}
+
+// ---------------------------------------------------------------------------
+// One measurement: a CSV row.
+
+struct NamedInput {
+  std::string name;
+  shatter::Mesh mesh;
+};
+
+struct Row {
+  std::string section;
+  std::string mesh;
+  std::size_t triangles = 0;
+  Strategy strategy = Strategy::thesis;
+  KernelKind kernel = KernelKind::fast;
+  unsigned threads = 1;
+  std::uint32_t fragments = 0;
+  bool built = false;
+  std::size_t leaves = 0, nodes = 0;
+  int runs = 0;
+  double seconds = not_measured;
+  LeafSummary leaf_summary;
+  /// The peer's replay of the fast 1-thread tree with the same input, strategy and N.
+  std::optional<PeerResult> peer;
+  bool failed = false;  ///< the build threw, a leaf is invalid, or thread counts disagree
+  std::string note;
+
+  double us_per_cut() const {
+    return nodes > leaves ? seconds * 1e6 / static_cast<double>(nodes - leaves) : not_measured;
+  }
+  double peer_ratio() const { return peer ? peer->comparable_seconds() / seconds : not_measured; }
+  void add_note(const std::string& text) { note += (note.empty() ? "" : "; ") + text; }
+};
+
+/// Writes the first invalid leaf and its parent, named so the build can be repeated.
+void dump_first_invalid(const std::filesystem::path& dir, const Row& row, const MeshTree& tree, std::uint64_t seed) {
+  const NodeIndex leaf = row.leaf_summary.first_invalid_node;
+  if (leaf == shatter::no_node) return;
+  std::filesystem::create_directories(dir);
+  const std::string stem = row.mesh + "-" + std::string(shatter::strategy_name(row.strategy)) + "-" +
+                           std::string(shatter::kernel_name(row.kernel)) + "-N" + std::to_string(row.fragments) +
+                           "-seed" + std::to_string(seed) + "-node" + std::to_string(leaf);
+  shatter::write_mesh(tree.nodes[leaf].mesh, dir / (stem + ".off"), shatter::MeshFormat::off);
+  const NodeIndex parent = tree.nodes[leaf].parent;
+  if (parent != shatter::no_node)
+    shatter::write_mesh(tree.nodes[parent].mesh, dir / (stem + "-parent" + std::to_string(parent) + ".off"),
+                        shatter::MeshFormat::off);
+}
+
+/// Builds repeatedly and times it; checks the first run's tree and, if asked,
+/// replays it with the peer. `one_thread` is the same build on 1 thread, whose tree
+/// this one must equal.
+Row bench_build(const std::string& section, const NamedInput& input, Strategy strategy, KernelKind kernel,
+                unsigned threads, std::uint32_t fragments, const Plan& plan, bool with_peer,
+                const Row* one_thread = nullptr) {
+  Row row;
+  row.section = section;
+  row.mesh = input.name;
+  row.triangles = input.mesh.triangle_count();
+  row.strategy = strategy;
+  row.kernel = kernel;
+  row.threads = threads;
+  row.fragments = fragments;
+
+  shatter::BuildOptions options;
+  options.fragments = fragments;
+  options.seed = plan.options.seed;
+  options.strategy = strategy;
+  options.kernel = kernel;
+  options.threads = threads;
+
+  std::cerr << section << ": " << input.name << " " << shatter::strategy_name(strategy) << " "
+            << shatter::kernel_name(kernel) << " " << threads << " thread(s) N=" << fragments << " ..." << std::flush;
+  std::vector<double> times;
+  try {
+    double total = 0;
+    for (int run = 0; run < plan.max_runs; ++run) {
+      const auto t0 = Clock::now();
+      const MeshTree tree = shatter::build_mesh_tree(input.mesh, options);
+      const double seconds = seconds_between(t0, Clock::now());
+      times.push_back(seconds);
+      total += seconds;
+      if (run == 0) {
+        row.built = true;
+        row.leaves = tree.leaf_count();
+        row.nodes = tree.nodes.size();
+        if (row.leaves < fragments) {
+          row.failed = true;
+          row.add_note("only " + std::to_string(row.leaves) + " leaves");
+        }
+        const bool reuse = one_thread && one_thread->built && one_thread->leaf_summary.invalid >= 0;
+        row.leaf_summary = summarize_leaves(tree, plan.options.validate && !reuse);
+        if (one_thread && one_thread->built) {
+          if (row.leaf_summary.fingerprint == one_thread->leaf_summary.fingerprint) {
+            if (reuse) {
+              row.leaf_summary.invalid = one_thread->leaf_summary.invalid;
+              row.leaf_summary.first_invalid = one_thread->leaf_summary.first_invalid;
+              row.leaf_summary.first_invalid_node = one_thread->leaf_summary.first_invalid_node;
+            }
+          } else {
+            row.failed = true;
+            row.add_note("tree differs from the 1-thread tree");
+            if (reuse) row.leaf_summary = summarize_leaves(tree, plan.options.validate);
+          }
+        }
+        if (row.leaf_summary.invalid > 0) {
+          if (plan.options.dump_invalid) dump_first_invalid(*plan.options.dump_invalid, row, tree, plan.options.seed);
+          row.failed = true;
+          row.add_note(std::to_string(row.leaf_summary.invalid) + " invalid leaves, first " +
+                       row.leaf_summary.first_invalid);
+        }
+        if (with_peer) {
+          std::cerr << " [peer" << std::flush;
+          try {
+            row.peer = run_peer_isolated(tree, input.mesh, plan);
+          } catch (const std::exception& e) {  // pipe or fork failed: the peer's problem, not shatter's
+            row.peer = PeerResult{};
+            row.peer->status = PeerResult::Status::error;
+            row.peer->detail = e.what();
+          }
+          std::cerr << " " << row.peer->status_name() << " " << seconds_text(row.peer->clip_seconds) << " s]"
+                    << std::flush;
+        }
+      }
+      if (seconds > plan.no_repeat_seconds) break;
+      if (static_cast<int>(times.size()) >= plan.min_runs && total >= plan.min_total_seconds) break;
+    }
+  } catch (const std::exception& e) {
+    row.failed = true;
+    row.add_note(std::string("build threw: ") + e.what());
+  }
+  row.runs = static_cast<int>(times.size());
+  if (row.built) row.seconds = median(times);
+  std::cerr << " " << seconds_text(row.seconds) << " s (" << row.runs << " runs)"
+            << (row.failed ? " FAILED: " + row.note : "") << "\n";
+  return row;
+}
+
+// ---------------------------------------------------------------------------
+// The two sections.
+
+shatter::Mesh seed_cube() { return shatter::test::box({-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5}); }
+
+struct ScalingLine {
+  std::uint32_t fragments = 0;
+  Row fast, fast_two_threads;
+  std::optional<Row> exact;
+  std::string exact_skipped, peer_skipped;  ///< why not run, if not
+  std::string stopped_here;                 ///< why no larger N was built, if so
+};
+
+std::vector<ScalingLine> run_scaling(const Plan& plan) {
+  const NamedInput cube{"cube", seed_cube()};
+  std::vector<ScalingLine> lines;
+  std::string exact_stop, peer_stop;
+  for (std::uint64_t n = 2; n <= plan.max_fragments; n *= 2) {
+    ScalingLine line;
+    line.fragments = static_cast<std::uint32_t>(n);
+    const bool peer_wanted = plan.options.peer && n <= plan.peer_max;
+    line.peer_skipped = !plan.options.peer ? "--no-peer" : !peer_wanted ? "above --peer-max" : peer_stop;
+    line.fast = bench_build("scaling", cube, Strategy::thesis, KernelKind::fast, 1, line.fragments, plan,
+                            peer_wanted && peer_stop.empty());
+    if (line.fast.peer && line.fast.peer->status != PeerResult::Status::ok && peer_stop.empty())
+      peer_stop = "peer " + line.fast.peer->status_name() + " at N=" + std::to_string(n);
+    line.fast_two_threads = bench_build("scaling", cube, Strategy::thesis, KernelKind::fast, 2, line.fragments, plan,
+                                        false, &line.fast);
+    if (n > plan.exact_max) {
+      line.exact_skipped = "above --exact-max";
+    } else if (!exact_stop.empty()) {
+      line.exact_skipped = exact_stop;
+    } else {
+      line.exact = bench_build("scaling", cube, Strategy::thesis, KernelKind::exact, 1, line.fragments, plan, false);
+      line.exact->peer = line.fast.peer;
+      if (line.exact->seconds > plan.options.exact_stop_seconds)
+        exact_stop = "exact took " + seconds_text(line.exact->seconds) + " s at N=" + std::to_string(n);
+    }
+    const bool stop = line.fast.seconds > plan.options.fast_stop_seconds && n * 2 <= plan.max_fragments;
+    if (stop)
+      line.stopped_here = "no larger N: the fast build took " + seconds_text(line.fast.seconds) +
+                          " s, over --fast-stop-seconds";
+    lines.push_back(std::move(line));
+    if (stop) {
+      std::cerr << "scaling: " << lines.back().stopped_here << "\n";
+      break;
+    }
+  }
+  return lines;
+}
+
+struct MeshLine {
+  std::string mesh;
+  std::size_t triangles = 0;
+  Strategy strategy = Strategy::thesis;
+  Row fast, exact;
+};
+
+std::vector<NamedInput> seed_meshes(const Plan& plan) {
+  std::vector<NamedInput> inputs;
+  inputs.push_back({"cube", seed_cube()});
+  inputs.push_back({"torus-800", shatter::test::torus(1.0, 0.35, 20, 20)});
+  inputs.push_back({"hollow-egg", shatter::test::hollow_egg()});
+  const auto elephant = plan.options.mesh_dir / "elephant.off";
+  if (!std::filesystem::exists(elephant)) throw std::runtime_error("mesh not found: " + elephant.string());
+  inputs.push_back({"elephant.off", shatter::read_mesh(elephant)});
+  return inputs;
+}
+
+std::vector<MeshLine> run_meshes(const Plan& plan) {
+  std::vector<MeshLine> lines;
+  for (const NamedInput& input : seed_meshes(plan)) {
+    for (const Strategy strategy : {Strategy::thesis, Strategy::balanced, Strategy::axis}) {
+      MeshLine line;
+      line.mesh = input.name;
+      line.triangles = input.mesh.triangle_count();
+      line.strategy = strategy;
+      // One peer run per mesh: it replays planes, and the thesis strategy is the seed's.
+      line.fast = bench_build("meshes", input, strategy, KernelKind::fast, 1, plan.mesh_fragments, plan,
+                              plan.options.peer && strategy == Strategy::thesis);
+      line.exact = bench_build("meshes", input, strategy, KernelKind::exact, 1, plan.mesh_fragments, plan, false);
+      line.exact.peer = line.fast.peer;
+      lines.push_back(std::move(line));
+    }
+  }
+  return lines;
+}
+
+// ---------------------------------------------------------------------------
+// Output.
+
+std::string invalid_text(const Row& row) {
+  if (!row.built) return "–";
+  return row.leaf_summary.invalid < 0 ? "n/c" : std::to_string(row.leaf_summary.invalid);
+}
+
+std::string peer_cell_seconds(const PeerResult& p) {
+  if (p.status == PeerResult::Status::ok) return seconds_text(p.clip_seconds);
+  return p.status_name();
+}
+
+std::string peer_counts(const PeerResult& p) {
+  const auto checked = [](long v) { return v < 0 ? std::string("n/c") : std::to_string(v); };
+  return checked(p.pieces) + " | " + checked(p.invalid) + " | " + std::to_string(p.missing) + " | " +
+         std::to_string(p.failed_clips) + "/" + std::to_string(p.threw) + " | " + std::to_string(p.mismatches);
+}
+
+void print_scaling(std::ostream& out, const std::vector<ScalingLine>& lines) {
+  out << "### Time against fragment count: cube (12 triangles), strategy thesis\n\n"
+      << "| N | leaves | nodes | depth | fast 1 thread s | µs/cut | fast 2 threads s | speedup | exact s | exact µs/cut | "
+         "exact/fast | invalid leaves fast/exact | note |\n"
+      << "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n";
+  for (const auto& l : lines) {
+    const Row& f = l.fast;
+    const Row& f2 = l.fast_two_threads;
+    std::string note = f.note;
+    // The 2-thread tree is the 1-thread tree (else its note says so): its note would repeat.
+    if (!f2.note.empty() && f2.note != f.note) note += (note.empty() ? "" : "; ") + ("2 threads: " + f2.note);
+    if (l.exact && !l.exact->note.empty()) note += (note.empty() ? "" : "; ") + ("exact: " + l.exact->note);
+    out << "| " << with_thousands(l.fragments) << " | " << with_thousands(f.leaves) << " | " << with_thousands(f.nodes)
+        << " | " << f.leaf_summary.max_depth << " | " << seconds_text(f.seconds) << " | " << ratio_text(f.us_per_cut()) << " | "
+        << seconds_text(f2.seconds) << " | " << ratio_text(f.seconds / f2.seconds) << " | "
+        << (l.exact ? seconds_text(l.exact->seconds) : "skipped") << " | "
+        << (l.exact ? ratio_text(l.exact->us_per_cut()) : "–") << " | "
+        << (l.exact ? ratio_text(l.exact->seconds / f.seconds) : "–") << " | " << invalid_text(f) << "/"
+        << (l.exact ? invalid_text(*l.exact) : "–") << " | " << note << " |\n";
+  }
+  if (!lines.empty() && !lines.back().stopped_here.empty()) out << "\n" << lines.back().stopped_here << ".\n";
+  out << "\n### Peer: CGAL PMP clip replaying the same planes (fast 1-thread tree)\n\n"
+      << "| N | CGAL s | CGAL/fast | CGAL/exact | pieces | invalid | missing | clips failed/threw | "
+         "component mismatches | status |\n"
+      << "|---:|---:|---:|---:|---:|---:|---:|---|---:|---|\n";
+  for (const auto& l : lines) {
+    if (!l.fast.peer) {
+      if (!l.peer_skipped.empty() && l.peer_skipped != "above --peer-max" && l.peer_skipped != "--no-peer")
+        out << "| " << with_thousands(l.fragments) << " | skipped | | | | | | | | " << l.peer_skipped << " |\n";
+      continue;
+    }
+    const PeerResult& p = *l.fast.peer;
+    out << "| " << with_thousands(l.fragments) << " | " << peer_cell_seconds(p) << " | "
+        << ratio_text(l.fast.peer_ratio()) << " | " << (l.exact ? ratio_text(l.exact->peer_ratio()) : "–") << " | "
+        << peer_counts(p) << " | " << p.status_name() << (p.detail.empty() ? "" : ": " + p.detail) << " |\n";
+  }
+}
+
+void print_meshes(std::ostream& out, const std::vector<MeshLine>& lines, std::uint32_t fragments) {
+  out << "\n### The seed's meshes at " << with_thousands(fragments) << " fragments, 1 thread\n\n"
+      << "| mesh | triangles | strategy | leaves | fast s | exact s | exact/fast | volume CV | smallest/mean | "
+         "invalid leaves fast/exact | note |\n"
+      << "|---|---:|---|---:|---:|---:|---:|---:|---:|---|---|\n";
+  for (const auto& l : lines) {
+    std::string note = l.fast.note;
+    if (!l.exact.note.empty()) note += (note.empty() ? "" : "; ") + ("exact: " + l.exact.note);
+    out << "| " << l.mesh << " | " << with_thousands(l.triangles) << " | " << shatter::strategy_name(l.strategy)
+        << " | " << with_thousands(l.fast.leaves) << " | " << seconds_text(l.fast.seconds) << " | "
+        << seconds_text(l.exact.seconds) << " | " << ratio_text(l.exact.seconds / l.fast.seconds) << " | "
+        << (std::isnan(l.fast.leaf_summary.volume_cv) ? "–" : fixed(l.fast.leaf_summary.volume_cv, 3)) << " | "
+        << significant(l.fast.leaf_summary.smallest_over_mean, 3)
+        << " | " << invalid_text(l.fast) << "/" << invalid_text(l.exact) << " | " << note << " |\n";
+  }
+  bool any_peer = false;
+  for (const auto& l : lines) any_peer = any_peer || l.fast.peer.has_value();
+  if (!any_peer) return;
+  out << "\n### Peer on the seed's meshes: CGAL PMP clip replaying the thesis tree's planes\n\n"
+      << "| mesh | CGAL s | CGAL/fast | CGAL/exact | pieces | invalid | missing | clips failed/threw | "
+         "component mismatches | status |\n"
+      << "|---|---:|---:|---:|---:|---:|---:|---|---:|---|\n";
+  for (const auto& l : lines) {
+    if (!l.fast.peer) continue;
+    const PeerResult& p = *l.fast.peer;
+    out << "| " << l.mesh << " | " << peer_cell_seconds(p) << " | " << ratio_text(l.fast.peer_ratio()) << " | "
+        << ratio_text(l.exact.peer_ratio()) << " | " << peer_counts(p) << " | " << p.status_name()
+        << (p.detail.empty() ? "" : ": " + p.detail) << " |\n";
+  }
+}
+
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (const char c : text) {
+    if (c == '"') quoted += '"';
+    quoted += c;
+  }
+  return quoted + "\"";
+}
+
+std::string csv_number(double value) {
+  if (std::isnan(value) || std::isinf(value)) return "";
+  std::ostringstream out;
+  out.precision(9);
+  out << value;
+  return out.str();
+}
+
+void write_csv(const std::filesystem::path& path, const std::vector<const Row*>& rows) {
+  std::ostringstream out;
+  out << "section,mesh,triangles,strategy,kernel,threads,fragments_requested,leaves,nodes,runs,seconds,us_per_cut,"
+         "max_depth,invalid_leaves,volume_cv,smallest_volume_over_mean,tree_fingerprint,peer_status,peer_seconds,peer_ratio,"
+         "peer_nodes_done,peer_internal_nodes,peer_pieces,peer_invalid,peer_missing,peer_failed,peer_threw,"
+         "peer_mismatches,failed,note\n";
+  for (const Row* r : rows) {
+    char fingerprint[17];
+    std::snprintf(fingerprint, sizeof fingerprint, "%016llx",
+                  static_cast<unsigned long long>(r->leaf_summary.fingerprint));
+    out << r->section << ',' << csv_field(r->mesh) << ',' << r->triangles << ','
+        << shatter::strategy_name(r->strategy) << ',' << shatter::kernel_name(r->kernel) << ',' << r->threads << ','
+        << r->fragments << ',' << r->leaves << ',' << r->nodes << ',' << r->runs << ',' << csv_number(r->seconds)
+        << ',' << csv_number(r->us_per_cut()) << ',' << r->leaf_summary.max_depth << ','
+        << (r->leaf_summary.invalid < 0 ? "" : std::to_string(r->leaf_summary.invalid))
+        << ',' << csv_number(r->leaf_summary.volume_cv) << ',' << csv_number(r->leaf_summary.smallest_over_mean)
+        << ',' << (r->built ? fingerprint : "") << ',';
+    if (r->peer) {
+      const PeerResult& p = *r->peer;
+      out << p.status_name() << ',' << csv_number(p.clip_seconds) << ',' << csv_number(r->peer_ratio()) << ','
+          << p.nodes_done << ',' << p.internal_nodes << ',' << (p.pieces < 0 ? "" : std::to_string(p.pieces)) << ','
+          << (p.invalid < 0 ? "" : std::to_string(p.invalid)) << ',' << p.missing << ',' << p.failed_clips << ','
+          << p.threw << ',' << p.mismatches << ',';
+    } else {
+      out << "not run,,,,,,,,,,,";
+    }
+    std::string note = r->note;
+    if (r->peer && !r->peer->detail.empty()) note += (note.empty() ? "" : "; ") + ("peer: " + r->peer->detail);
+    out << (r->failed ? 1 : 0) << ',' << csv_field(note) << '\n';
+  }
+  std::ofstream file(path, std::ios::binary);
+  if (!file) throw std::runtime_error("cannot open " + path.string() + " for writing");
+  file << out.str();
+  if (!file.flush()) throw std::runtime_error("cannot write " + path.string());
+}
+
+// ---------------------------------------------------------------------------
+// Command line.
+
+std::uint64_t parse_unsigned(const std::string& flag, const std::string& text, std::uint64_t lo, std::uint64_t hi) {
+  std::size_t used = 0;
+  unsigned long long value = 0;
+  try {
+    value = std::stoull(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (text.empty() || text[0] == '-' || used != text.size() || value < lo || value > hi)
+    throw std::runtime_error(flag + " wants an integer " + std::to_string(lo) + ".." + std::to_string(hi) + ", got '" +
+                             text + "'");
+  return value;
+}
+
+double parse_seconds(const std::string& flag, const std::string& text) {
+  std::size_t used = 0;
+  double value = -1;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !(value > 0) || !std::isfinite(value))
+    throw std::runtime_error(flag + " wants a positive number of seconds, got '" + text + "'");
+  return value;
+}
+
+Options parse(int argc, char** argv) {
+  Options options;
+  constexpr std::uint64_t max_fragments = 1u << 22;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::runtime_error(arg + " needs a value");
+      return argv[++i];
+    };
+    auto fragments = [&] { return static_cast<std::uint32_t>(parse_unsigned(arg, value(), 1, max_fragments)); };
+    if (arg == "-h" || arg == "--help") {
+      std::cout << usage_text;
+      std::exit(0);
+    } else if (arg == "--quick") {
+      options.quick = true;
+    } else if (arg == "--csv") {
+      options.csv = value();
+    } else if (arg == "--mesh-dir") {
+      options.mesh_dir = value();
+    } else if (arg == "--seed") {
+      options.seed = parse_unsigned(arg, value(), 0, std::numeric_limits<std::uint64_t>::max());
+    } else if (arg == "--section") {
+      const std::string which = value();
+      if (which != "all" && which != "scaling" && which != "meshes")
+        throw std::runtime_error("--section wants all, scaling or meshes, got '" + which + "'");
+      options.scaling = which != "meshes";
+      options.meshes = which != "scaling";
+    } else if (arg == "--max-fragments") {
+      options.max_fragments = fragments();
+    } else if (arg == "--exact-max") {
+      options.exact_max = fragments();
+    } else if (arg == "--exact-stop-seconds") {
+      options.exact_stop_seconds = parse_seconds(arg, value());
+    } else if (arg == "--fast-stop-seconds") {
+      options.fast_stop_seconds = parse_seconds(arg, value());
+    } else if (arg == "--mesh-fragments") {
+      options.mesh_fragments = fragments();
+    } else if (arg == "--peer-max") {
+      options.peer_max = fragments();
+    } else if (arg == "--peer-timeout") {
+      options.peer_timeout = parse_seconds(arg, value());
+    } else if (arg == "--peer-memory-mb") {
+      options.peer_memory_mb = parse_unsigned(arg, value(), 64, 1u << 20);
+    } else if (arg == "--no-peer") {
+      options.peer = false;
+    } else if (arg == "--dump-invalid") {
+      options.dump_invalid = value();
+    } else if (arg == "--no-validate") {
+      options.validate = false;
+    } else {
+      throw std::runtime_error("unknown argument '" + arg + "' (see --help)");
+    }
+  }
+  return options;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    const Plan plan = make_plan(parse(argc, argv));
+    std::vector<ScalingLine> scaling;
+    std::vector<MeshLine> meshes;
+    if (plan.options.scaling) scaling = run_scaling(plan);
+    if (plan.options.meshes) meshes = run_meshes(plan);
+
+    std::cout << "shatter-bench-tree: seed " << plan.options.seed << "; shatter time = build_mesh_tree (median of "
+              << (plan.options.quick ? "1 run, --quick" : ">= 3 runs and >= 0.3 s, 1 run if > 2 s")
+              << "); CGAL = PMP::clip(clip_volume(true)) + split_connected_components on Surface_mesh<Epick>, "
+                 "1 run in a child process, limit "
+              << fixed(plan.peer_timeout, 0) << " s; " << std::thread::hardware_concurrency()
+              << " hardware threads.\n\n";
+    if (!scaling.empty()) print_scaling(std::cout, scaling);
+    if (!meshes.empty()) print_meshes(std::cout, meshes, plan.mesh_fragments);
+
+    std::vector<const Row*> rows;
+    for (const auto& l : scaling) {
+      rows.push_back(&l.fast);
+      rows.push_back(&l.fast_two_threads);
+      if (l.exact) rows.push_back(&*l.exact);
+    }
+    for (const auto& l : meshes) {
+      rows.push_back(&l.fast);
+      rows.push_back(&l.exact);
+    }
+    if (plan.options.csv) write_csv(*plan.options.csv, rows);
+
+    std::size_t failures = 0;
+    for (const Row* r : rows) {
+      if (!r->failed) continue;
+      ++failures;
+      std::cerr << "FAILED: " << r->mesh << " " << shatter::strategy_name(r->strategy) << " "
+                << shatter::kernel_name(r->kernel) << " " << r->threads << " thread(s) N=" << r->fragments
+                << " seed " << plan.options.seed << ": " << r->note << '\n';
+    }
+    return failures ? 2 : 0;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << '\n';
+    return 1;
+  }
+}
