@@ -2,9 +2,12 @@
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/convex_hull_3.h>
 
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "shatter/kernel/index_map.hpp"
+#include "shatter/kernel/predicates.hpp"
 #include "shatter/meshtree/build.hpp"
 
 namespace shatter {
@@ -44,21 +47,113 @@ bool every_edge_convex(const Mesh& mesh) {
   return true;
 }
 
-// Vertices whose triangles are used, renumbered in order of first use.
-Mesh compact(const std::vector<Vec3>& positions, const std::vector<Triangle>& triangles) {
-  Mesh hull;
-  std::vector<VertexIndex> index_of(positions.size(), IndexMap::absent);
-  hull.triangles.reserve(triangles.size());
-  for (Triangle t : triangles) {
-    for (VertexIndex& v : t) {
-      if (index_of[v] == IndexMap::absent) {
-        index_of[v] = static_cast<VertexIndex>(hull.positions.size());
-        hull.positions.push_back(positions[v]);
-      }
-      v = index_of[v];
-    }
-    hull.triangles.push_back(t);
+// --- a canonical hull ---------------------------------------------------------
+// CGAL's hull is right, but the order of its output, and how it triangulates a
+// face with four or more coplanar vertices, follow memory addresses, which differ
+// between runs and threads. So the hull is rebuilt from what is unique: its facets
+// (maximal groups of exactly coplanar adjacent triangles) and their strictly
+// convex corners, each facet fanned from its least vertex.
+
+std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t x) {
+  while (parent[x] != x) x = parent[x] = parent[parent[x]];
+  return x;
+}
+
+bool lexicographically_less(const Vec3& a, const Vec3& b) {
+  if (a.x != b.x) return a.x < b.x;
+  if (a.y != b.y) return a.y < b.y;
+  return a.z < b.z;
+}
+
+// The strictly convex corners of coplanar points, counter-clockwise seen from the
+// side `outward` (a triangle of the facet, outward) faces. Exact: the points are
+// projected by dropping the coordinate where the facet's normal is largest, and
+// only orientations of projected doubles decide.
+std::vector<VertexIndex> facet_polygon(const std::vector<Vec3>& positions, std::vector<VertexIndex> corners,
+                                       const Triangle& outward) {
+  const Vec3 a = positions[outward[0]], b = positions[outward[1]], c = positions[outward[2]];
+  const Vec3 n = cross(b - a, c - a);  // rounded: only picks an axis the facet is not parallel to
+  const double ax = std::fabs(n.x), ay = std::fabs(n.y), az = std::fabs(n.z);
+  const int dropped = az >= ax && az >= ay ? 2 : ax >= ay ? 0 : 1;
+  const int u = (dropped + 1) % 3, w = (dropped + 2) % 3;
+  const auto project = [&](VertexIndex v) { return Vec2{positions[v][u], positions[v][w]}; };
+  const bool counter_clockwise = orient2d(project(outward[0]), project(outward[1]), project(outward[2])) == Sign::positive;
+
+  std::sort(corners.begin(), corners.end(), [&](VertexIndex p, VertexIndex q) {
+    const Vec2 pp = project(p), qq = project(q);
+    return pp.x != qq.x ? pp.x < qq.x : pp.y < qq.y;
+  });
+  corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+  // Andrew's monotone chain; collinear points are dropped (orientation <= 0 pops).
+  std::vector<VertexIndex> hull(2 * corners.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    while (k >= 2 && orient2d(project(hull[k - 2]), project(hull[k - 1]), project(corners[i])) != Sign::positive) --k;
+    hull[k++] = corners[i];
   }
+  for (std::size_t i = corners.size() - 1, lower = k + 1; i-- > 0;) {
+    while (k >= lower && orient2d(project(hull[k - 2]), project(hull[k - 1]), project(corners[i])) != Sign::positive) --k;
+    hull[k++] = corners[i];
+  }
+  hull.resize(k - 1);  // the last point repeats the first
+  if (!counter_clockwise) std::reverse(hull.begin(), hull.end());
+  return hull;
+}
+
+// The canonical form of a convex, closed, outward triangle surface over `positions`.
+Mesh canonical_hull(const std::vector<Vec3>& positions, const std::vector<Triangle>& triangles) {
+  IndexMap triangle_of_edge(3 * triangles.size());
+  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) triangle_of_edge.insert(directed_edge_key(triangles[t][k], triangles[t][(k + 1) % 3]), t);
+  }
+  std::vector<std::uint32_t> facet(triangles.size());
+  for (std::uint32_t t = 0; t < triangles.size(); ++t) facet[t] = t;
+  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+    const Triangle& tri = triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t n = triangle_of_edge.find(directed_edge_key(tri[(k + 1) % 3], tri[k]));
+      if (n == IndexMap::absent || n < t) continue;
+      VertexIndex opposite = triangles[n][0];
+      for (VertexIndex v : triangles[n]) {
+        if (v != tri[k] && v != tri[(k + 1) % 3]) opposite = v;
+      }
+      if (CGAL::orientation(to_epick(positions[tri[0]]), to_epick(positions[tri[1]]), to_epick(positions[tri[2]]),
+                            to_epick(positions[opposite])) == CGAL::COPLANAR) {
+        facet[find_root(facet, t)] = find_root(facet, n);
+      }
+    }
+  }
+  std::vector<std::vector<VertexIndex>> corners_of(triangles.size());
+  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+    auto& corners = corners_of[find_root(facet, t)];
+    corners.insert(corners.end(), triangles[t].begin(), triangles[t].end());
+  }
+  std::vector<std::vector<VertexIndex>> polygons;
+  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+    if (!corners_of[t].empty()) polygons.push_back(facet_polygon(positions, std::move(corners_of[t]), triangles[t]));
+  }
+
+  // Vertices in lexicographic order of their coordinates, facets fanned from their
+  // least vertex, triangles sorted.
+  std::vector<VertexIndex> used;
+  for (const auto& polygon : polygons) used.insert(used.end(), polygon.begin(), polygon.end());
+  std::sort(used.begin(), used.end());
+  used.erase(std::unique(used.begin(), used.end()), used.end());
+  std::sort(used.begin(), used.end(), [&](VertexIndex p, VertexIndex q) {
+    return lexicographically_less(positions[p], positions[q]);
+  });
+  std::vector<VertexIndex> index_of(positions.size(), IndexMap::absent);
+  Mesh hull;
+  for (VertexIndex v : used) {
+    index_of[v] = static_cast<VertexIndex>(hull.positions.size());
+    hull.positions.push_back(positions[v]);
+  }
+  for (auto& polygon : polygons) {
+    for (VertexIndex& v : polygon) v = index_of[v];
+    std::rotate(polygon.begin(), std::min_element(polygon.begin(), polygon.end()), polygon.end());
+    for (std::size_t i = 1; i + 1 < polygon.size(); ++i) hull.triangles.push_back({polygon[0], polygon[i], polygon[i + 1]});
+  }
+  std::sort(hull.triangles.begin(), hull.triangles.end());
   hull.surfaces.assign(hull.triangles.size(), original_surface);
   return hull;
 }
@@ -66,7 +161,7 @@ Mesh compact(const std::vector<Vec3>& positions, const std::vector<Triangle>& tr
 }  // namespace
 
 Mesh convex_hull_of(const Mesh& mesh) {
-  if (every_edge_convex(mesh)) return compact(mesh.positions, mesh.triangles);
+  if (every_edge_convex(mesh)) return canonical_hull(mesh.positions, mesh.triangles);
 
   std::vector<EpickPoint> points;
   points.reserve(mesh.positions.size());
@@ -76,21 +171,19 @@ Mesh convex_hull_of(const Mesh& mesh) {
 
   // convex_hull_3 gives triangles; a polygon face, should one come, is fanned
   // (hull faces are convex).
-  Mesh hull;
-  std::vector<VertexIndex> index_of(hull_mesh.number_of_vertices(), IndexMap::absent);
+  std::vector<Vec3> positions(hull_mesh.num_vertices());  // indexed by Surface_mesh vertex index
   for (auto v : hull_mesh.vertices()) {
     const EpickPoint& p = hull_mesh.point(v);
-    index_of[v.idx()] = static_cast<VertexIndex>(hull.positions.size());
-    hull.positions.push_back({p.x(), p.y(), p.z()});
+    positions[v.idx()] = {p.x(), p.y(), p.z()};
   }
+  std::vector<Triangle> triangles;
   std::vector<VertexIndex> face;
   for (auto f : hull_mesh.faces()) {
     face.clear();
-    for (auto v : CGAL::vertices_around_face(hull_mesh.halfedge(f), hull_mesh)) face.push_back(index_of[v.idx()]);
-    for (std::size_t i = 1; i + 1 < face.size(); ++i) hull.triangles.push_back({face[0], face[i], face[i + 1]});
+    for (auto v : CGAL::vertices_around_face(hull_mesh.halfedge(f), hull_mesh)) face.push_back(static_cast<VertexIndex>(v.idx()));
+    for (std::size_t i = 1; i + 1 < face.size(); ++i) triangles.push_back({face[0], face[i], face[i + 1]});
   }
-  hull.surfaces.assign(hull.triangles.size(), original_surface);
-  return hull;
+  return canonical_hull(positions, triangles);
 }
 
 }  // namespace shatter
