@@ -1,5 +1,6 @@
 // The shatter command: parses flags, calls the libraries, prints one `error:` line
-// on failure. Exit codes: 0 ok, 1 internal error, 2 usage, 3 invalid input mesh,
+// on failure. Exit codes: 0 ok, 1 internal error, 2 usage, 3 invalid input (a mesh
+// that is not a valid solid, geometry the cut refuses, a damaged .shatter file),
 // 4 I/O error.
 
 #include <CLI/CLI.hpp>
@@ -19,6 +20,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/cut.hpp"
+#include "tree_commands.hpp"
 
 namespace {
 
@@ -121,27 +123,6 @@ Plane parse_plane(const std::string& text) {
   return plane;
 }
 
-// Refuses a mesh that is not a valid solid. Self-intersections, and the pinched
-// vertices where a surface touches itself, are allowed on request: the cut then
-// still gives closed, oriented pieces, but their embedding may overlap.
-void require_solid(const Mesh& mesh, const std::string& name, bool allow_self_intersections) {
-  const ValidationReport report = validate_mesh(mesh);
-  std::optional<Defect> self_intersection;
-  for (const Defect& d : report.defects) {
-    if (d.kind == DefectKind::self_intersection) {
-      self_intersection = d;
-      continue;
-    }
-    if (d.kind == DefectKind::non_manifold_vertex && allow_self_intersections) continue;
-    throw RefusedInput("invalid mesh " + name + ": " + report.summary());
-  }
-  if (self_intersection && !allow_self_intersections) {
-    throw RefusedInput("invalid mesh " + name + ": self-intersecting: " + std::to_string(self_intersection->count) +
-                       " pairs of intersecting triangles, first " + self_intersection->first +
-                       " (--allow-self-intersections cuts it anyway)");
-  }
-}
-
 std::string_view cap_method_name(CapMethod method) {
   switch (method) {
     case CapMethod::none: return "none";
@@ -200,7 +181,7 @@ int run_slice(const SliceArgs& args) {
   const auto format = parse_mesh_format(args.format);
   if (!format) throw UsageError("--format must be off, obj, ply or stl");
   const Mesh mesh = read_mesh(args.mesh);
-  require_solid(mesh, args.mesh, args.allow_self_intersections);
+  require_valid_solid(mesh, args.mesh, args.allow_self_intersections);
 
   CutOptions options;
   options.interior_uv_scale = args.interior_uv_scale;
@@ -274,7 +255,15 @@ int run_slice(const SliceArgs& args) {
   return ok;
 }
 
-int report_error(const std::string& message, int code) {
+// Prints the one `error:` line. A message that spans lines (a library's or
+// CLI11's) is joined with "; ", so scripts can rely on exactly one line.
+int report_error(std::string message, int code) {
+  while (!message.empty() && (message.back() == '\n' || message.back() == '\r')) message.pop_back();
+  for (std::size_t at = message.find_first_of("\r\n"); at != std::string::npos;
+       at = message.find_first_of("\r\n", at)) {
+    const std::size_t end = message.find_first_not_of("\r\n", at);
+    message.replace(at, end == std::string::npos ? std::string::npos : end - at, "; ");
+  }
   std::cerr << "error: " << message << '\n';
   return code;
 }
@@ -284,7 +273,8 @@ int report_error(const std::string& message, int code) {
 int main(int argc, char** argv) {
   CLI::App app{
       "shatter: exact plane slicing of closed triangle meshes into breakable objects.\n"
-      "Exit codes: 0 ok, 1 internal error, 2 usage error, 3 invalid input mesh, 4 I/O error."};
+      "Exit codes: 0 ok, 1 internal error, 2 usage error, 3 invalid input (mesh, geometry or .shatter file), "
+      "4 I/O error."};
   app.require_subcommand(1);
   app.set_version_flag("--version", "shatter 0.1.0");
 
@@ -320,6 +310,13 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   slice->add_flag("--json", slice_args.json, "Print pieces, triangles and volumes as JSON");
 
+  FractureArgs fracture_args;
+  CLI::App* fracture = add_fracture_command(app, fracture_args);
+  InfoArgs info_args;
+  CLI::App* info = add_info_command(app, info_args);
+  ExportArgs export_args;
+  CLI::App* export_command = add_export_command(app, export_args);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -335,14 +332,21 @@ int main(int argc, char** argv) {
   try {
     if (validate->parsed()) return run_validate(validate_args);
     if (slice->parsed()) return run_slice(slice_args);
+    if (fracture->parsed()) return run_fracture(fracture_args);
+    if (info->parsed()) return run_info(info_args);
+    if (export_command->parsed()) return run_export(export_args);
     return report_error("no command given (see --help)", usage_error);
   } catch (const UsageError& e) {
+    return report_error(e.what(), usage_error);
+  } catch (const CommandUsageError& e) {
     return report_error(e.what(), usage_error);
   } catch (const RefusedInput& e) {
     return report_error(e.what(), invalid_input);
   } catch (const InvalidMeshError& e) {
     return report_error(e.what(), invalid_input);
   } catch (const UnsupportedGeometryError& e) {
+    return report_error(e.what(), invalid_input);
+  } catch (const CorruptFileError& e) {
     return report_error(e.what(), invalid_input);
   } catch (const IoError& e) {
     return report_error(e.what(), io_error);

@@ -2,14 +2,18 @@
 // written (and nothing left behind on failure), determinism of the bytes.
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <map>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/validate.hpp"
@@ -62,13 +66,93 @@ std::size_t files_in(const fs::path& dir) {
   return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
 }
 
-}  // namespace
+// Whether two files hold the same bytes (a CHECK on the strings would print
+// megabytes of binary on failure).
+bool same_bytes(const fs::path& a, const fs::path& b) { return slurp(a) == slurp(b); }
 
-TEST_CASE("every bad mesh is refused with exit 3 and a line naming its defect") {
-  const std::map<std::string, std::string> defect_of = {
+// The tags of the sections (file.hpp's layout: 12-byte header, then tag, u64
+// length, u32 CRC, payload) whose payloads differ between two .shatter files, or
+// "" when none does: says which part of the tree a failed byte comparison is in.
+std::string differing_sections(const fs::path& a, const fs::path& b) {
+  const auto sections_of = [](const std::string& bytes) {
+    std::map<std::string, std::string> sections;
+    std::size_t at = 12;
+    while (at + 16 <= bytes.size()) {
+      std::uint64_t length = 0;
+      for (int i = 7; i >= 0; --i) length = length << 8 | static_cast<unsigned char>(bytes[at + 4 + i]);
+      if (length > bytes.size() - at - 16) break;
+      sections[bytes.substr(at, 4)] = bytes.substr(at + 16, length);
+      at += 16 + length;
+    }
+    return sections;
+  };
+  const auto first = sections_of(slurp(a)), second = sections_of(slurp(b));
+  std::string differing;
+  for (const auto& [tag, payload] : first) {
+    const auto other = second.find(tag);
+    if (other == second.end() || other->second != payload) differing += (differing.empty() ? "" : " ") + tag;
+  }
+  return differing;
+}
+
+// The names in `dir`, sorted.
+std::vector<std::string> names_in(const fs::path& dir) {
+  std::vector<std::string> names;
+  if (!fs::exists(dir)) return names;
+  for (const auto& entry : fs::directory_iterator(dir)) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// `leaf-0000.off`, ...: the names fracture --export and export --nodes leaves
+// give a tree of fewer than 10,000 leaves.
+std::vector<std::string> leaf_file_names(std::size_t leaves, const std::string& extension) {
+  std::vector<std::string> names;
+  for (std::size_t i = 0; i < leaves; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "leaf-%04zu.%s", i, extension.c_str());
+    names.push_back(name);
+  }
+  return names;
+}
+
+// A few meshes of the corpus: the demo mesh, a knotted tube (cuts give several
+// pieces), a convex solid with flat faces, a CAD part with sharp edges.
+std::vector<fs::path> fracture_meshes() {
+  return {mesh_dir() / "knot1.off", mesh_dir() / "cube.off",
+          mesh_dir() / "fandisk.off"};
+}
+
+// What `shatter info --json` says about a .shatter file.
+nlohmann::json info_of(const fs::path& tree) {
+  const Run run = run_shatter("info " + quoted(tree) + " --json");
+  INFO(run.err);
+  REQUIRE(run.exit_code == 0);
+  return nlohmann::json::parse(run.out);
+}
+
+// The first problem of a fracture run that had to succeed and write `tree`, or ""
+// (exit 0, nothing on stderr as it is not a terminal, the tree file there).
+std::string fracture_problem(const Run& run, const fs::path& tree) {
+  if (run.exit_code != 0) return "exit " + std::to_string(run.exit_code) + ": " + run.err;
+  if (!run.err.empty()) return "stderr not empty: " + run.err;
+  if (!fs::is_regular_file(tree)) return "no tree file written";
+  return "";
+}
+
+// The words the refusal of each mesh under bad/ must contain.
+const std::map<std::string, std::string>& defect_of_bad_mesh() {
+  static const std::map<std::string, std::string> defect_of = {
       {"cube-ouvert.off", "boundary edges"},         {"tet-shuffled.off", "inconsistent"},
       {"tetrahedron.off", "inward"},                 {"degtri_sliding.off", "zero-area"},
       {"elephant-with-holes.off", "boundary edges"}, {"tetra_intersected_by_triangle.off", "boundary edges"}};
+  return defect_of;
+}
+
+}  // namespace
+
+TEST_CASE("every bad mesh is refused with exit 3 and a line naming its defect") {
+  const std::map<std::string, std::string>& defect_of = defect_of_bad_mesh();
   const auto bad = bad_meshes();
   REQUIRE(bad.size() == defect_of.size());
   for (const auto& path : bad) {
@@ -171,4 +255,349 @@ TEST_CASE("usage and I/O errors have their own exit codes and one error line") {
   CHECK(is_one_error_line(blocked.err));
   CHECK(run_shatter("--help").exit_code == 0);
   CHECK(run_shatter("slice --help").exit_code == 0);
+}
+
+// --- fracture, info, export -------------------------------------------------------
+
+TEST_CASE("fracture writes a tree info reads back: at least N leaves, as asked, the same bytes on any thread count") {
+  const std::vector<std::string> strategies = {"thesis", "balanced", "axis"};
+  std::size_t round = 0;  // walks the strategies, so each mesh meets each one
+  for (const fs::path& mesh : fracture_meshes()) {
+    for (const std::uint64_t seed : {1u, 7u, 12345u}) {
+      const std::string strategy = strategies[round++ % strategies.size()];
+      const auto fragments = static_cast<unsigned>(5 + seed % 7);
+      INFO(mesh.filename() << " seed " << seed << " strategy " << strategy << " N " << fragments);
+      const fs::path dir = scratch("fracture");
+      const std::string flags = " --fragments " + std::to_string(fragments) + " --seed " + std::to_string(seed) +
+                                " --strategy " + strategy + " --json";
+      const std::string fracture = "fracture " + quoted(mesh) + flags;
+      const Run one = run_shatter(fracture + " --threads 1 --out " + quoted(dir / "1.shatter"));
+      REQUIRE(fracture_problem(one, dir / "1.shatter") == "");
+      const Run two = run_shatter(fracture + " --threads 2 --out " + quoted(dir / "2.shatter"));
+      REQUIRE(fracture_problem(two, dir / "2.shatter") == "");
+      CHECK(same_bytes(dir / "1.shatter", dir / "2.shatter"));
+      CHECK(differing_sections(dir / "1.shatter", dir / "2.shatter") == "");
+
+      const nlohmann::json info = info_of(dir / "1.shatter");
+      const std::size_t leaves = info["leaves"];
+      CHECK(leaves >= fragments);
+      CHECK(info["nodes"].get<std::size_t>() > leaves);  // the root was cut
+      CHECK(info["options"]["fragments"] == fragments);
+      CHECK(info["options"]["seed"] == seed);
+      CHECK(info["options"]["strategy"] == strategy);
+      CHECK(info["options"]["kernel"] == "fast");
+      CHECK(std::abs(info["volume"]["leaves_relative_error"].get<double>()) < 1e-9);
+      CHECK(info["bonds"]["count"].get<std::size_t>() >= leaves - 1);  // a solid's fragments hold together
+
+      // The summary fracture printed is the tree's, as info reads it.
+      const nlohmann::json summary = nlohmann::json::parse(one.out);
+      CHECK(summary["fragments_requested"] == fragments);
+      CHECK(summary["options"]["threads"] == 1);
+      CHECK(summary["seconds"].get<double>() >= 0);
+      CHECK(summary["export"].is_null());
+      for (const char* key : {"leaves", "nodes", "max_depth", "bonds", "fragment_volume", "volume"}) {
+        INFO(key);
+        CHECK(summary[key] == info[key]);
+      }
+    }
+  }
+}
+
+TEST_CASE("fracture --fragments 1 keeps the solid whole, and --kernel exact gives a valid tree too") {
+  const fs::path dir = scratch("whole");
+  for (const fs::path& mesh : fracture_meshes()) {
+    INFO(mesh.filename());
+    const Run whole = run_shatter("fracture " + quoted(mesh) + " --fragments 1 --out " + quoted(dir / "t.shatter"));
+    REQUIRE(fracture_problem(whole, dir / "t.shatter") == "");
+    const nlohmann::json info = info_of(dir / "t.shatter");
+    CHECK(info["leaves"] == 1);
+    CHECK(info["nodes"] == 1);
+    CHECK(info["bonds"]["count"] == 0);
+
+    const Run exact = run_shatter("fracture " + quoted(mesh) +
+                                  " --fragments 6 --kernel exact --strategy balanced --out " +
+                                  quoted(dir / "exact.shatter"));
+    REQUIRE(fracture_problem(exact, dir / "exact.shatter") == "");
+    const nlohmann::json exact_info = info_of(dir / "exact.shatter");
+    CHECK(exact_info["leaves"].get<std::size_t>() >= 6);
+    CHECK(exact_info["options"]["kernel"] == "exact");
+  }
+}
+
+TEST_CASE("fracture --export writes one closed mesh file per leaf, the same files export writes") {
+  const std::vector<std::string> formats = {"off", "obj", "ply", "stl"};
+  std::size_t round = 0;
+  for (const fs::path& mesh : fracture_meshes()) {
+    for (const std::string& format : {formats[round % 4], formats[(round + 1) % 4]}) {
+      INFO(mesh.filename() << " " << format);
+      const fs::path dir = scratch("export-leaves");
+      const std::string seed = std::to_string(3 + round);
+      const Run run = run_shatter("fracture " + quoted(mesh) + " --fragments 8 --seed " + seed + " --out " +
+                                  quoted(dir / "tree.shatter") + " --export " + quoted(dir / "leaves") +
+                                  " --format " + format);
+      REQUIRE(fracture_problem(run, dir / "tree.shatter") == "");
+      CHECK(run.out.find("leaf-0000." + format) != std::string::npos);
+      const std::size_t leaves = info_of(dir / "tree.shatter")["leaves"];
+      const std::vector<std::string> names = names_in(dir / "leaves");
+      CHECK(names == leaf_file_names(leaves, format));
+      for (const std::string& name : names) {
+        INFO(name);
+        // The fast kernel promises topology whatever rounding does.
+        CHECK(topology_problem(read_mesh(dir / "leaves" / name)) == "");
+      }
+      // export --nodes leaves of the written tree writes the very same files.
+      const Run again = run_shatter("export " + quoted(dir / "tree.shatter") + " --out " + quoted(dir / "again") +
+                                    " --format " + format);
+      REQUIRE(again.exit_code == 0);
+      REQUIRE(names_in(dir / "again") == names);
+      for (const std::string& name : names) CHECK(same_bytes(dir / "leaves" / name, dir / "again" / name));
+    }
+    ++round;
+  }
+  // Without --format the leaves are OFF files.
+  const fs::path dir = scratch("export-default");
+  const Run run = run_shatter("fracture " + quoted(mesh_dir() / "cube.off") + " --fragments 3 --out " +
+                              quoted(dir / "t.shatter") + " --export " + quoted(dir / "leaves"));
+  REQUIRE(fracture_problem(run, dir / "t.shatter") == "");
+  CHECK(names_in(dir / "leaves") == leaf_file_names(info_of(dir / "t.shatter")["leaves"], "off"));
+}
+
+TEST_CASE("fracture refuses a bad mesh with exit 3 and one line, and leaves nothing behind") {
+  for (const fs::path& mesh : bad_meshes()) {
+    INFO(mesh.filename());
+    const fs::path dir = scratch("fracture-bad");
+    const Run run = run_shatter("fracture " + quoted(mesh) + " --fragments 8 --out " +
+                                quoted(dir / "sub" / "t.shatter") + " --export " + quoted(dir / "leaves"));
+    CHECK(run.exit_code == 3);
+    CHECK(is_one_error_line(run.err));
+    CHECK(run.err.find(defect_of_bad_mesh().at(mesh.filename().string())) != std::string::npos);
+    CHECK(run.err.find(mesh.filename().string()) != std::string::npos);  // names the file
+    CHECK(run.out.empty());
+    CHECK_FALSE(fs::exists(dir));
+  }
+  for (const fs::path& mesh : self_intersecting_meshes()) {
+    INFO(mesh.filename());
+    const fs::path dir = scratch("fracture-self");
+    const Run refused = run_shatter("fracture " + quoted(mesh) + " --fragments 4 --out " + quoted(dir / "t.shatter"));
+    CHECK(refused.exit_code == 3);
+    CHECK(is_one_error_line(refused.err));
+    CHECK_FALSE(fs::exists(dir));
+    const Run allowed = run_shatter("fracture " + quoted(mesh) + " --fragments 4 --allow-self-intersections --out " +
+                                    quoted(dir / "t.shatter"));
+    CHECK(fracture_problem(allowed, dir / "t.shatter") == "");
+    CHECK(info_of(dir / "t.shatter")["options"]["allow_self_intersections"] == true);
+  }
+}
+
+TEST_CASE("fracture usage errors exit 2 with one line, before anything is written") {
+  const std::string cube = quoted(mesh_dir() / "cube.off");
+  const fs::path dir = scratch("fracture-usage");
+  const std::string out = " --out " + quoted(dir / "t.shatter");
+  const std::vector<std::string> mistakes = {
+      cube + out,                                                   // no --fragments
+      cube + " --fragments 0" + out,                                // N >= 1
+      cube + " --fragments -3" + out,
+      cube + " --fragments x" + out,
+      cube + " --fragments 4294967296" + out,                       // beyond 32 bits
+      cube + " --fragments 4",                                      // no --out
+      cube + " --fragments 4 --format obj" + out,                   // --format without --export
+      cube + " --fragments 4 --export " + quoted(dir / "e") + " --format glb" + out,
+      cube + " --fragments 4 --strategy random" + out,
+      cube + " --fragments 4 --kernel slow" + out,
+      cube + " --fragments 4 --threads -1" + out,
+      cube + " --fragments 4 --interior-uv-scale 0" + out,
+      cube + " --fragments 4 --seed -1" + out,
+      cube + " --fragments 4 --frobnicate" + out,
+      "--fragments 4" + out,                                        // no mesh
+  };
+  for (const std::string& arguments : mistakes) {
+    INFO(arguments);
+    const Run run = run_shatter("fracture " + arguments);
+    CHECK(run.exit_code == 2);
+    CHECK(is_one_error_line(run.err));
+    CHECK_FALSE(fs::exists(dir));
+  }
+  // --out naming a folder is caught before the (possibly long) build.
+  fs::create_directories(dir);
+  const Run folder = run_shatter("fracture " + cube + " --fragments 4 --out " + quoted(dir));
+  CHECK(folder.exit_code == 2);
+  CHECK(is_one_error_line(folder.err));
+  CHECK(files_in(dir) == 0);
+}
+
+TEST_CASE("fracture I/O errors exit 4 and remove what the run wrote") {
+  const fs::path dir = scratch("fracture-io");
+  fs::create_directories(dir);
+  const Run missing = run_shatter("fracture " + quoted(dir / "no-such-mesh.off") + " --fragments 4 --out " +
+                                  quoted(dir / "t.shatter"));
+  CHECK(missing.exit_code == 4);
+  CHECK(is_one_error_line(missing.err));
+  CHECK(files_in(dir) == 0);
+  // The leaves are written first; the tree's folder cannot be made under a regular
+  // file, so the leaves (and the folders made for them) go again.
+  const fs::path file = dir / "a-file";
+  std::ofstream(file) << "x";
+  const Run blocked = run_shatter("fracture " + quoted(mesh_dir() / "cube.off") + " --fragments 4 --out " +
+                                  quoted(file / "sub" / "t.shatter") + " --export " + quoted(dir / "new" / "leaves"));
+  CHECK(blocked.exit_code == 4);
+  CHECK(is_one_error_line(blocked.err));
+  CHECK(names_in(dir) == std::vector<std::string>{"a-file"});
+}
+
+TEST_CASE("export writes mesh folders by node selection, and GLB files") {
+  const fs::path dir = scratch("export");
+  for (const fs::path& mesh : fracture_meshes()) {
+    INFO(mesh.filename());
+    const fs::path tree = dir / (mesh.stem().string() + ".shatter");
+    const Run fracture = run_shatter("fracture " + quoted(mesh) + " --fragments 9 --out " + quoted(tree));
+    REQUIRE(fracture_problem(fracture, tree) == "");
+    const nlohmann::json info = info_of(tree);
+    const std::size_t leaves = info["leaves"], nodes = info["nodes"];
+    const std::uint32_t max_depth = info["max_depth"];
+
+    const fs::path objs = dir / (mesh.stem().string() + "-obj");
+    REQUIRE(run_shatter("export " + quoted(tree) + " --out " + quoted(objs) + " --format obj").exit_code == 0);
+    CHECK(names_in(objs) == leaf_file_names(leaves, "obj"));
+
+    // depth:0 is the root alone; depth:1 the root's pieces; deeper than the
+    // deepest leaf, the leaves, named by node index.
+    for (const auto& [selection, expected] : std::vector<std::pair<std::string, std::size_t>>{
+             {"depth:0", 1}, {"depth:" + std::to_string(max_depth + 1), leaves}, {"all", nodes}}) {
+      INFO(selection);
+      std::string folder_name = mesh.stem().string() + "-" + selection;
+      std::replace(folder_name.begin(), folder_name.end(), ':', '-');
+      const fs::path folder = dir / folder_name;
+      const Run run = run_shatter("export " + quoted(tree) + " --out " + quoted(folder) + " --nodes " + selection);
+      REQUIRE(run.exit_code == 0);
+      CHECK(files_in(folder) == expected);
+    }
+    const fs::path depth1 = dir / (mesh.stem().string() + "-depth1");
+    REQUIRE(run_shatter("export " + quoted(tree) + " --out " + quoted(depth1) + " --nodes depth:1").exit_code == 0);
+    const std::vector<std::string> level1 = names_in(depth1);
+    CHECK(level1.size() >= 2);
+    CHECK(level1.size() <= leaves);
+    for (const std::string& name : level1) CHECK(name.rfind("node-", 0) == 0);
+    CHECK(std::find(level1.begin(), level1.end(), "node-00000.off") == level1.end());  // not the root
+
+    const fs::path glb = dir / (mesh.stem().string() + ".glb");
+    const Run glb_run = run_shatter("export " + quoted(tree) + " --out " + quoted(glb) + " --nodes all");
+    REQUIRE(glb_run.exit_code == 0);
+    const std::string bytes = slurp(glb);
+    CHECK(bytes.substr(0, 4) == "glTF");
+    CHECK(bytes.size() % 4 == 0);  // GLB chunks are 4-byte aligned
+  }
+  const fs::path tree = dir / "cube.shatter";
+  for (const std::string& arguments : {"--out " + quoted(dir / "x.glb") + " --format ply",
+                                       "--out " + quoted(dir / "y") + " --nodes depth:x",
+                                       "--out " + quoted(dir / "y") + " --nodes some", std::string("--format off")}) {
+    INFO(arguments);
+    const Run run = run_shatter("export " + quoted(tree) + " " + arguments);
+    CHECK(run.exit_code == 2);
+    CHECK(is_one_error_line(run.err));
+    CHECK_FALSE(fs::exists(dir / "x.glb"));
+    CHECK_FALSE(fs::exists(dir / "y"));
+  }
+}
+
+TEST_CASE("info and export refuse a damaged .shatter file with exit 3 and one line") {
+  const fs::path dir = scratch("damaged");
+  const fs::path tree = dir / "good.shatter";
+  fs::create_directories(dir);
+  const Run fracture =
+      run_shatter("fracture " + quoted(mesh_dir() / "knot1.off") + " --fragments 4 --out " + quoted(tree));
+  REQUIRE(fracture_problem(fracture, tree) == "");
+  const std::string good = slurp(tree);
+  REQUIRE(good.size() > 1000);
+
+  std::vector<std::pair<std::string, std::string>> damaged;
+  for (const std::size_t length : {std::size_t{0}, std::size_t{5}, std::size_t{12}, std::size_t{40}, good.size() / 3,
+                                   good.size() / 2, good.size() - 17, good.size() - 1}) {
+    damaged.emplace_back("truncated to " + std::to_string(length), good.substr(0, length));
+  }
+  for (const std::size_t at : {std::size_t{0}, std::size_t{9}, std::size_t{60}, good.size() / 2, good.size() - 20}) {
+    std::string flipped = good;
+    flipped[at] = static_cast<char>(flipped[at] ^ 0x10);
+    damaged.emplace_back("byte " + std::to_string(at) + " flipped", flipped);
+  }
+  damaged.emplace_back("a byte appended", good + '\0');
+  damaged.emplace_back("a mesh file", slurp(mesh_dir() / "cube.off"));
+
+  for (const auto& [what, bytes] : damaged) {
+    INFO(what);
+    const fs::path file = dir / "damaged.shatter";
+    std::ofstream(file, std::ios::binary) << bytes;
+    const Run info = run_shatter("info " + quoted(file));
+    CHECK(info.exit_code == 3);
+    CHECK(is_one_error_line(info.err));
+    CHECK(info.out.empty());
+    const Run json = run_shatter("info --json " + quoted(file));
+    CHECK(json.exit_code == 3);
+    CHECK(json.out.empty());
+    const Run exported = run_shatter("export " + quoted(file) + " --out " + quoted(dir / "out"));
+    CHECK(exported.exit_code == 3);
+    CHECK(is_one_error_line(exported.err));
+    CHECK_FALSE(fs::exists(dir / "out"));
+  }
+  const Run missing = run_shatter("info " + quoted(dir / "no-such.shatter"));
+  CHECK(missing.exit_code == 4);
+  CHECK(is_one_error_line(missing.err));
+  // The good file still reads.
+  CHECK(info_of(tree)["leaves"].get<std::size_t>() >= 4);
+}
+
+TEST_CASE("every subcommand's --help names every option") {
+  const std::map<std::string, std::vector<std::string>> options_of = {
+      {"validate", {"mesh", "--json"}},
+      {"slice", {"mesh", "--plane", "--kernel", "--allow-self-intersections", "--out", "--format",
+                 "--interior-uv-scale", "--json"}},
+      {"fracture", {"mesh", "--fragments", "--seed", "--strategy", "thesis", "balanced", "axis", "--kernel", "fast",
+                    "exact", "--threads", "--interior-uv-scale", "--allow-self-intersections", "--out", "--export",
+                    "--format", "--json"}},
+      {"info", {"tree", "--json"}},
+      {"export", {"tree", "--out", "--format", "glb", "--nodes", "leaves", "all", "depth:K"}},
+  };
+  const Run top = run_shatter("--help");
+  CHECK(top.exit_code == 0);
+  for (const auto& [command, options] : options_of) {
+    INFO(command);
+    CHECK(top.out.find(command) != std::string::npos);
+    const Run help = run_shatter(command + " --help");
+    CHECK(help.exit_code == 0);
+    CHECK(help.err.empty());
+    for (const std::string& option : options) {
+      INFO(option);
+      CHECK(help.out.find(option) != std::string::npos);
+    }
+  }
+}
+
+TEST_CASE("fracture draws a progress bar on a terminal and erases it") {
+  // `script` gives the command a terminal; without it, there is nothing to test.
+  if (std::system("command -v script >/dev/null 2>&1") != 0) {
+    WARN("script(1) not found: progress bar not tested");
+    return;
+  }
+  const fs::path dir = scratch("progress");
+  fs::create_directories(dir);
+  // Long enough to pass the bar's quiet first half second on any machine.
+  const std::string command = std::string("'") + SHATTER_EXE + "' fracture " + quoted(mesh_dir() / "elephant.off") +
+                              " --fragments 512 --threads 2 --out " + quoted(dir / "t.shatter") + " >" +
+                              quoted(dir / "stdout.txt");
+  const std::string transcript = (dir / "terminal.txt").string();
+  const int status = std::system(("script -qec \"" + command + "\" /dev/null >'" + transcript + "' 2>&1").c_str());
+  REQUIRE(WIFEXITED(status));
+  REQUIRE(WEXITSTATUS(status) == 0);
+  const std::string terminal = slurp(transcript);
+  INFO(terminal);
+  const std::size_t last_bar = terminal.rfind("fracturing [");
+  REQUIRE(last_bar != std::string::npos);
+  CHECK(terminal.find("leaves") != std::string::npos);
+  // Erased: after the last bar, a carriage return, blanks, a carriage return, and
+  // nothing else but what the terminal adds.
+  const std::size_t erase = terminal.find('\r', last_bar);
+  REQUIRE(erase != std::string::npos);
+  const std::string tail = terminal.substr(erase);
+  CHECK(tail.find_first_not_of(" \r\n") == std::string::npos);
+  // The summary went to stdout as usual.
+  CHECK(slurp(dir / "stdout.txt").find("fragments") != std::string::npos);
 }

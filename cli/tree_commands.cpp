@@ -1,0 +1,569 @@
+// The `fracture`, `export` and `info` subcommands: thin layers over meshtree's
+// builder, file, export and stats functions.
+
+#include "tree_commands.hpp"
+
+#include <nlohmann/json.hpp>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <initializer_list>
+#include <iostream>
+#include <limits>
+#include <mutex>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/io.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/export.hpp"
+#include "shatter/meshtree/file.hpp"
+#include "shatter/meshtree/stats.hpp"
+
+namespace shatter {
+
+namespace {
+
+using json = nlohmann::ordered_json;
+
+constexpr std::string_view glb_format = "glb";
+
+bool names_glb_file(const std::filesystem::path& path) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension == ".glb";
+}
+
+// The output format: --format if given, else glb for a .glb --out, else off.
+// nullopt stands for glb, which is not a MeshFormat.
+std::optional<MeshFormat> export_format(const ExportArgs& args) {
+  const bool out_is_glb = names_glb_file(args.out);
+  if (args.format.empty()) {
+    if (out_is_glb) return std::nullopt;
+    return MeshFormat::off;
+  }
+  if (args.format == glb_format) {
+    if (std::filesystem::is_directory(args.out)) {
+      throw CommandUsageError("--format glb writes one file, but --out " + args.out + " is a folder");
+    }
+    return std::nullopt;
+  }
+  const std::optional<MeshFormat> format = parse_mesh_format(args.format);
+  if (!format) throw CommandUsageError("--format must be off, obj, ply, stl or glb, got '" + args.format + "'");
+  if (out_is_glb) {
+    throw CommandUsageError("--out " + args.out + " names a .glb file but --format is " + args.format +
+                            ", which writes a folder of mesh files");
+  }
+  return format;
+}
+
+NodeSelection selection_of(const std::string& text) {
+  try {
+    return parse_node_selection(text);
+  } catch (const std::invalid_argument& e) {
+    throw CommandUsageError(std::string("--nodes: ") + e.what());
+  }
+}
+
+std::size_t triangles_of(const MeshTree& tree, const std::vector<NodeIndex>& nodes) {
+  std::size_t triangles = 0;
+  for (NodeIndex node : nodes) triangles += tree.nodes[node].mesh.triangle_count();
+  return triangles;
+}
+
+// Relative difference between the leaves' summed volume and the root's: how far
+// rounding (fast kernel) moved the partition from exact.
+double leaf_volume_relative_error(const TreeStats& stats) {
+  if (stats.root_volume == 0) return 0;
+  return (stats.total_leaf_volume - stats.root_volume) / std::abs(stats.root_volume);
+}
+
+json options_json(const BuildOptions& options) {
+  return json{{"fragments", options.fragments},
+              {"seed", options.seed},
+              {"strategy", strategy_name(options.strategy)},
+              {"kernel", kernel_name(options.kernel)},
+              {"interior_uv_scale", options.interior_uv_scale},
+              {"max_plane_tries", options.max_plane_tries},
+              {"allow_self_intersections", options.allow_self_intersections}};
+}
+
+// The statistics `info` and `fracture` both print, under the same keys, appended
+// to `out` after `options` (so the JSON reads: shape, how built, then how well).
+void append_stats_json(json& out, const json& options, const TreeStats& stats) {
+  const VolumeSpread& volume = stats.fragment_volume;
+  out["nodes"] = stats.node_count;
+  out["leaves"] = stats.leaf_count;
+  out["internal_nodes"] = stats.internal_count;
+  out["max_depth"] = stats.max_depth;
+  out["min_leaf_depth"] = stats.min_leaf_depth;
+  out["options"] = options;
+  out["volume"] = {{"root", stats.root_volume},
+                   {"leaves_total", stats.total_leaf_volume},
+                   {"leaves_relative_error", leaf_volume_relative_error(stats)}};
+  out["fragment_volume"] = {{"min", volume.min},
+                            {"median", volume.median},
+                            {"max", volume.max},
+                            {"mean", volume.mean},
+                            {"coefficient_of_variation", volume.coefficient_of_variation}};
+  out["bonds"] = {{"count", stats.bond_count}, {"total_area", stats.total_bond_area}};
+  out["leaf_triangles"] = {{"total", stats.leaf_triangles}, {"cap", stats.leaf_cap_triangles}};
+  out["leaf_vertices"] = stats.leaf_vertices;
+}
+
+json info_json(const InfoArgs& args, const MeshTree& tree, const TreeStats& stats) {
+  json out{{"file", args.input}};
+  append_stats_json(out, options_json(tree.options), stats);
+  return out;
+}
+
+void print_info_text(const InfoArgs& args, const MeshTree& tree, const TreeStats& stats) {
+  const BuildOptions& options = tree.options;
+  const VolumeSpread& volume = stats.fragment_volume;
+  std::cout << args.input << ": mesh tree of " << stats.node_count << " nodes, " << stats.leaf_count
+            << " leaves (fragments), " << stats.internal_count << " internal; leaves at depth " << stats.min_leaf_depth
+            << " to " << stats.max_depth << '\n'
+            << "  built with: fragments " << options.fragments << ", seed " << options.seed << ", strategy "
+            << strategy_name(options.strategy) << ", kernel " << kernel_name(options.kernel)
+            << ", interior UV scale " << options.interior_uv_scale << ", max plane tries "
+            << options.max_plane_tries
+            << (options.allow_self_intersections ? ", self-intersections allowed" : "") << '\n'
+            << "  volume: root " << stats.root_volume << ", leaves together " << stats.total_leaf_volume
+            << " (relative difference " << leaf_volume_relative_error(stats) << ")\n"
+            << "  fragment volume: min " << volume.min << ", median " << volume.median << ", max " << volume.max
+            << ", mean " << volume.mean << ", coefficient of variation " << volume.coefficient_of_variation
+            << '\n'
+            << "  bonds: " << stats.bond_count << ", total area " << stats.total_bond_area << '\n'
+            << "  leaves hold " << stats.leaf_triangles << " triangles (" << stats.leaf_cap_triangles
+            << " on caps) over " << stats.leaf_vertices << " vertices\n";
+}
+
+}  // namespace
+
+// --- fracture -------------------------------------------------------------------
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+// The value of an enum whose name (by the library's own naming function) is
+// `name`, so the command accepts exactly the names the library prints.
+template <class Enum>
+std::optional<Enum> enum_named(std::string_view name, std::initializer_list<Enum> values,
+                               std::string_view (*name_of)(Enum)) {
+  for (Enum value : values) {
+    if (name_of(value) == name) return value;
+  }
+  return std::nullopt;
+}
+
+// CLI11 reads "-1" into an unsigned option as its two's complement (a seed of
+// 2^64 - 1), so signs and anything but decimal digits are refused before it does.
+CLI::Validator whole_number() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        if (!text.empty() && std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); })) {
+          return {};
+        }
+        return "'" + text + "' is not a whole number (decimal digits only)";
+      },
+      "", "whole number");
+}
+
+BuildOptions build_options_of(const FractureArgs& args) {
+  BuildOptions options;
+  options.fragments = args.fragments;
+  options.seed = args.seed;
+  const auto strategy =
+      enum_named(args.strategy, {Strategy::thesis, Strategy::balanced, Strategy::axis}, &strategy_name);
+  if (!strategy) throw CommandUsageError("--strategy must be thesis, balanced or axis, got '" + args.strategy + "'");
+  options.strategy = *strategy;
+  const auto kernel = enum_named(args.kernel, {KernelKind::fast, KernelKind::exact}, &kernel_name);
+  if (!kernel) throw CommandUsageError("--kernel must be fast or exact, got '" + args.kernel + "'");
+  options.kernel = *kernel;
+  options.interior_uv_scale = args.interior_uv_scale;
+  options.allow_self_intersections = args.allow_self_intersections;
+  options.threads = args.threads;
+  return options;
+}
+
+// The format of the leaf export, nullopt for no export. Checked before the mesh is
+// read, so a usage mistake costs nothing.
+std::optional<MeshFormat> leaf_export_format(const FractureArgs& args) {
+  if (args.export_folder.empty()) {
+    if (!args.format.empty()) throw CommandUsageError("--format " + args.format + " needs --export <folder>");
+    return std::nullopt;
+  }
+  if (args.format.empty()) return MeshFormat::off;
+  const std::optional<MeshFormat> format = parse_mesh_format(args.format);
+  if (!format) throw CommandUsageError("--format must be off, obj, ply or stl, got '" + args.format + "'");
+  return format;
+}
+
+// Draws "fracturing [#####.....] 37/64 leaves, 2.1 s" on stderr while a build runs,
+// when stderr is a terminal and the build has run for a while (a short build, or
+// output captured to a file, gets nothing). The builder reports finished leaves
+// from its worker threads; a report that finds another thread drawing, or comes
+// within the redraw interval, only records the count, so reports stay cheap and
+// never wait. The destructor erases the bar, so the summary or an `error:` line
+// starts on a clean line.
+class LeafProgressBar {
+ public:
+  explicit LeafProgressBar(std::uint32_t target_leaves)
+      : enabled_(::isatty(STDERR_FILENO) == 1), target_(std::max<std::uint32_t>(target_leaves, 1)) {}
+
+  LeafProgressBar(const LeafProgressBar&) = delete;
+  LeafProgressBar& operator=(const LeafProgressBar&) = delete;
+
+  ~LeafProgressBar() {
+    const std::lock_guard lock(mutex_);
+    if (drawn_width_ > 0) std::fprintf(stderr, "\r%*s\r", static_cast<int>(drawn_width_), "");
+    std::fflush(stderr);
+  }
+
+  /// The callback to hand to the builder: empty when no bar will be drawn, so the
+  /// builder does not even call it.
+  LeafProgressFn callback() {
+    if (!enabled_) return {};
+    return [this](std::size_t leaves_done) { report(leaves_done); };
+  }
+
+ private:
+  // Before this long, no bar: most builds finish sooner, and a flash is noise.
+  static constexpr std::chrono::milliseconds quiet_start{500};
+  static constexpr std::chrono::milliseconds redraw_interval{100};
+  static constexpr int bar_width = 30;
+
+  void report(std::size_t leaves_done) {
+    // Reports can arrive out of order from several threads: keep the largest.
+    std::size_t seen = most_done_.load(std::memory_order_relaxed);
+    while (seen < leaves_done && !most_done_.compare_exchange_weak(seen, leaves_done, std::memory_order_relaxed)) {
+    }
+    const std::unique_lock lock(mutex_, std::try_to_lock);
+    if (!lock.owns_lock()) return;
+    const Clock::time_point now = Clock::now();
+    if (now < next_draw_) return;
+    next_draw_ = now + redraw_interval;
+    draw(most_done_.load(std::memory_order_relaxed), now);
+  }
+
+  void draw(std::size_t leaves_done, Clock::time_point now) {
+    // A cut can split a node into more than two solids, so the count may pass
+    // the target; the bar stops at full.
+    const double fraction = std::min(1.0, static_cast<double>(leaves_done) / target_);
+    const int filled = static_cast<int>(fraction * bar_width);
+    char bar[bar_width + 1];
+    for (int i = 0; i < bar_width; ++i) bar[i] = i < filled ? '#' : '.';
+    bar[bar_width] = '\0';
+    const double seconds = std::chrono::duration<double>(now - start_).count();
+    const int width = std::fprintf(stderr, "\rfracturing [%s] %zu/%u leaves, %.1f s", bar, leaves_done,
+                                   static_cast<unsigned>(target_), seconds);
+    // Pad over the rest of a longer earlier line (fprintf counts the '\r' too).
+    const std::size_t written = width > 1 ? static_cast<std::size_t>(width - 1) : 0;
+    if (written < drawn_width_) std::fprintf(stderr, "%*s", static_cast<int>(drawn_width_ - written), "");
+    drawn_width_ = std::max(drawn_width_, written);
+    std::fflush(stderr);
+  }
+
+  const bool enabled_;
+  const std::uint32_t target_;
+  const Clock::time_point start_ = Clock::now();
+  std::atomic<std::size_t> most_done_{0};
+  std::mutex mutex_;
+  Clock::time_point next_draw_ = start_ + quiet_start;  // guarded by mutex_
+  std::size_t drawn_width_ = 0;                          // guarded by mutex_
+};
+
+// The files and folders one run creates, removed again unless the run commits,
+// so a run that fails part-way leaves nothing of itself behind.
+class CreatedOutputs {
+ public:
+  CreatedOutputs() = default;
+  CreatedOutputs(const CreatedOutputs&) = delete;
+  CreatedOutputs& operator=(const CreatedOutputs&) = delete;
+
+  ~CreatedOutputs() {
+    if (committed_) return;
+    std::error_code ignored;
+    for (const fs::path& file : files_) fs::remove(file, ignored);
+    // Deepest first; a folder that holds anything else stays (remove refuses).
+    for (const fs::path& folder : folders_) fs::remove(folder, ignored);
+  }
+
+  /// Creates `folder` and any missing parents, remembering which it created.
+  void create_folder(const fs::path& folder) {
+    std::vector<fs::path> missing;
+    std::error_code unknown;  // a folder whose existence cannot be told is not ours to remove
+    for (fs::path p = folder; !p.empty() && !fs::exists(p, unknown) && !unknown; p = p.parent_path()) {
+      missing.push_back(p);
+      if (p == p.parent_path()) break;
+    }
+    std::error_code error;
+    fs::create_directories(folder, error);
+    if (error) throw IoError("cannot create folder " + folder.string() + ": " + error.message());
+    folders_.insert(folders_.end(), missing.begin(), missing.end());
+  }
+
+  void add_files(const std::vector<fs::path>& files) { files_.insert(files_.end(), files.begin(), files.end()); }
+
+  /// Keeps everything: the run succeeded.
+  void commit() { committed_ = true; }
+
+ private:
+  std::vector<fs::path> files_;
+  std::vector<fs::path> folders_;  ///< deepest first within each create_folder call
+  bool committed_ = false;
+};
+
+struct FractureOutcome {
+  double build_seconds = 0;
+  std::optional<MeshFormat> export_format;
+  std::vector<fs::path> exported;
+};
+
+json fracture_json(const FractureArgs& args, const BuildOptions& options, const TreeStats& stats,
+                   const FractureOutcome& outcome) {
+  json out{{"input", args.mesh}, {"output", args.out}, {"fragments_requested", options.fragments}};
+  json options_out = options_json(options);
+  options_out["threads"] = options.threads;  // as asked (0: all cores); never changes the tree
+  append_stats_json(out, options_out, stats);
+  out["seconds"] = outcome.build_seconds;
+  if (outcome.export_format) {
+    json files = json::array();
+    for (const fs::path& path : outcome.exported) files.push_back(path.filename().string());
+    out["export"] = {{"folder", args.export_folder}, {"format", format_name(*outcome.export_format)}, {"files", files}};
+  } else {
+    out["export"] = nullptr;
+  }
+  return out;
+}
+
+// Seconds to the hundredth: finer is noise for a human reader.
+std::string seconds_text(double seconds) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2f", seconds);
+  return text;
+}
+
+void print_fracture_text(const FractureArgs& args, const BuildOptions& options, const TreeStats& stats,
+                         const FractureOutcome& outcome) {
+  const VolumeSpread& volume = stats.fragment_volume;
+  std::cout << args.mesh << ": " << stats.leaf_count << " fragments (" << options.fragments << " asked) in a tree of "
+            << stats.node_count << " nodes, depth " << stats.max_depth << ", " << stats.bond_count
+            << " bonds (total area " << stats.total_bond_area << "); built in "
+            << seconds_text(outcome.build_seconds) << " s\n"
+            << "  strategy " << strategy_name(options.strategy) << ", kernel " << kernel_name(options.kernel)
+            << ", seed " << options.seed << '\n'
+            << "  fragment volume: min " << volume.min << ", median " << volume.median << ", max " << volume.max
+            << ", coefficient of variation " << volume.coefficient_of_variation << '\n'
+            << "  wrote " << args.out << '\n';
+  if (outcome.export_format) {
+    std::cout << "  wrote " << outcome.exported.size() << " " << format_name(*outcome.export_format)
+              << " file(s) to " << args.export_folder;
+    if (!outcome.exported.empty()) {
+      std::cout << ": " << outcome.exported.front().filename().string();
+      if (outcome.exported.size() > 1) std::cout << " ... " << outcome.exported.back().filename().string();
+    }
+    std::cout << '\n';
+  }
+}
+
+}  // namespace
+
+CLI::App* add_fracture_command(CLI::App& app, FractureArgs& args) {
+  CLI::App* command = app.add_subcommand(
+      "fracture",
+      "Cut a closed mesh recursively into at least N fragments, keeping every level as a mesh tree with the bonds "
+      "between touching fragments; write it as a .shatter file (read it with `info`, `export`), optionally also "
+      "one mesh file per fragment. The same mesh and options give the same bytes, whatever --threads is.");
+  command->add_option("mesh", args.mesh, "Mesh file (.off, .obj, .ply, .stl): a closed, oriented 2-manifold solid")
+      ->required();
+  command->add_option("--fragments", args.fragments,
+                      "N >= 1: cut until there are at least N fragments (leaves); a cut of a concave solid can "
+                      "give more than two pieces, so the count may pass N")
+      ->required()
+      ->check(whole_number())
+      ->check(CLI::Range(std::uint32_t{1}, std::numeric_limits<std::uint32_t>::max()));
+  command->add_option("--seed", args.seed, "Seed of the random planes (an unsigned 64-bit integer)")
+      ->check(whole_number())
+      ->capture_default_str();
+  command->add_option("--strategy", args.strategy,
+                      "thesis: random planes through each piece's volume centroid, its fragment budget shared "
+                      "evenly among its pieces. balanced: random centroid planes, always cutting the largest "
+                      "fragment next (evens out sizes). axis: planes across each piece's longest bounding-box axis "
+                      "near the centroid, with jitter, budget shared by volume")
+      ->check(CLI::IsMember({"thesis", "balanced", "axis"}))
+      ->capture_default_str();
+  command->add_option("--kernel", args.kernel,
+                      "fast: double coordinates, exact predicates, rounded intersection points (topology always "
+                      "valid). exact: exact intersection points, volumes add up exactly; stored rounded once to "
+                      "doubles. Slower")
+      ->check(CLI::IsMember({"fast", "exact"}))
+      ->capture_default_str();
+  command->add_option("--threads", args.threads,
+                      "Worker threads; 0 uses every hardware thread. Changes the speed only, never the output")
+      ->check(whole_number())
+      ->check(CLI::Range(0u, std::numeric_limits<unsigned>::max()))
+      ->capture_default_str();
+  command->add_option("--interior-uv-scale", args.interior_uv_scale,
+                      "Cap UVs are the cap's plane coordinates times this (used when the mesh has UVs)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  command->add_flag("--allow-self-intersections", args.allow_self_intersections,
+                    "Fracture a self-intersecting (or self-touching) mesh instead of refusing it; fragments are "
+                    "closed and oriented, their embedding may overlap");
+  command->add_option("--out", args.out,
+                      "The .shatter file to write (its folder is created if missing); replaced atomically")
+      ->required();
+  command->add_option("--export", args.export_folder,
+                      "Also write one mesh file per fragment into this folder (created if missing): leaf-0000.off, "
+                      "leaf-0001.off, ... in leaf order, as `export --nodes leaves` would");
+  command->add_option("--format", args.format,
+                      "Format of the --export files: off, obj, ply (binary, doubles) or stl (ascii); default off. "
+                      "Only with --export")
+      ->check(CLI::IsMember({"off", "obj", "ply", "stl"}));
+  command->add_flag("--json", args.json,
+                    "Print the summary as JSON: fragments asked, leaves, nodes, depth, options, volumes, fragment "
+                    "volume spread, bonds and their total area, build seconds, exported files");
+  return command;
+}
+
+int run_fracture(const FractureArgs& args) {
+  // Every usage check comes before reading the mesh and building.
+  FractureOutcome outcome;
+  outcome.export_format = leaf_export_format(args);
+  const BuildOptions options = build_options_of(args);
+  if (options.fragments < 1) throw CommandUsageError("--fragments must be at least 1");
+  if (std::error_code unknown; fs::is_directory(args.out, unknown)) {
+    throw CommandUsageError("--out " + args.out + " is a folder; it names the .shatter file to write");
+  }
+
+  const Mesh mesh = read_mesh(args.mesh);
+  // The builder validates too, but this names the file in the refusal.
+  require_valid_solid(mesh, args.mesh, args.allow_self_intersections);
+
+  MeshTree tree;
+  const Clock::time_point start = Clock::now();
+  {
+    LeafProgressBar progress_bar(options.fragments);
+    try {
+      tree = build_mesh_tree(mesh, options, progress_bar.callback());
+    } catch (const UnsupportedGeometryError& e) {
+      throw UnsupportedGeometryError("cannot fracture " + args.mesh + ": " + e.what());
+    }
+  }
+  outcome.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+
+  // The .shatter file goes last: its rename is the run's commit point, and any
+  // failure before it removes the leaf files and folders this run made.
+  CreatedOutputs created;
+  if (outcome.export_format) {
+    created.create_folder(args.export_folder);
+    const NodeSelection leaves{NodeSelectionKind::leaves};
+    outcome.exported = write_mesh_files(tree, select_nodes(tree, leaves), args.export_folder,
+                                        *outcome.export_format, file_naming_for(leaves));
+    created.add_files(outcome.exported);
+  }
+  if (const fs::path folder = fs::path(args.out).parent_path(); !folder.empty()) created.create_folder(folder);
+  write_shatter_file(args.out, tree);
+  created.commit();
+
+  const TreeStats stats = tree_stats(tree);
+  if (args.json) {
+    std::cout << fracture_json(args, options, stats, outcome).dump(2) << '\n';
+  } else {
+    print_fracture_text(args, options, stats, outcome);
+  }
+  return 0;
+}
+
+// --- export and info ---------------------------------------------------------------
+
+CLI::App* add_export_command(CLI::App& app, ExportArgs& args) {
+  CLI::App* command = app.add_subcommand(
+      "export",
+      "Write the nodes of a .shatter mesh tree as mesh files (one per node, into a folder) or as one glTF binary "
+      "(.glb) holding the whole tree as a node hierarchy.");
+  command->add_option("tree", args.input, "Mesh tree file (.shatter)")->required();
+  command->add_option("--out", args.out,
+                      "Output folder for mesh files (created if missing; leaf-0000.off, ... for --nodes leaves, "
+                      "node-00012.off, ... by node index otherwise), or a .glb file")
+      ->required();
+  command->add_option("--format", args.format,
+                      "off, obj, ply, stl (as `slice` writes them, coordinates kept exactly) or glb (float32 "
+                      "vertices: for viewing). Default: glb when --out ends in .glb, else off")
+      ->check(CLI::IsMember({"off", "obj", "ply", "stl", "glb"}));
+  command->add_option("--nodes", args.nodes,
+                      "Which nodes: leaves (the fragments), all (every level, overlapping), or depth:K (the nodes "
+                      "at depth K and the leaves above it: the solid cut at that level; the root is depth 0)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            try {
+              parse_node_selection(text);
+              return {};
+            } catch (const std::invalid_argument& e) {
+              return e.what();
+            }
+          },
+          "leaves|all|depth:K", "node selection"))
+      ->capture_default_str();
+  return command;
+}
+
+int run_export(const ExportArgs& args) {
+  const std::optional<MeshFormat> format = export_format(args);
+  const NodeSelection selection = selection_of(args.nodes);
+  const MeshTree tree = read_shatter_file(args.input);
+  const std::vector<NodeIndex> nodes = select_nodes(tree, selection);
+
+  if (!format) {
+    write_glb(args.out, tree, nodes);
+    std::cout << "wrote " << args.out << ": " << tree.nodes.size() << " tree nodes, meshes on " << nodes.size()
+              << " (" << node_selection_name(selection) << "), " << triangles_of(tree, nodes) << " triangles\n";
+    return 0;
+  }
+  const std::vector<std::filesystem::path> paths =
+      write_mesh_files(tree, nodes, args.out, *format, file_naming_for(selection));
+  std::cout << "wrote " << paths.size() << " " << format_name(*format) << " file(s) ("
+            << node_selection_name(selection) << ") to " << args.out;
+  if (!paths.empty()) {
+    std::cout << ": " << paths.front().filename().string();
+    if (paths.size() > 1) std::cout << " ... " << paths.back().filename().string();
+  }
+  std::cout << ", " << triangles_of(tree, nodes) << " triangles\n";
+  return 0;
+}
+
+CLI::App* add_info_command(CLI::App& app, InfoArgs& args) {
+  CLI::App* command = app.add_subcommand(
+      "info",
+      "Describe a .shatter mesh tree: node, leaf and depth counts, the build options, fragment volume statistics "
+      "(min, median, max, coefficient of variation), bonds and their total area.");
+  command->add_option("tree", args.input, "Mesh tree file (.shatter)")->required();
+  command->add_flag("--json", args.json, "Print the description as JSON");
+  return command;
+}
+
+int run_info(const InfoArgs& args) {
+  const MeshTree tree = read_shatter_file(args.input);
+  const TreeStats stats = tree_stats(tree);
+  if (args.json) {
+    std::cout << info_json(args, tree, stats).dump(2) << '\n';
+  } else {
+    print_info_text(args, tree, stats);
+  }
+  return 0;
+}
+
+}  // namespace shatter
