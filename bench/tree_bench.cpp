@@ -669,6 +669,8 @@ struct Row {
   std::size_t leaves = 0, nodes = 0;
   int runs = 0;
   double seconds = not_measured;
+  /// Where the first run's time went (cutting, hulls, bonds) and its redrawn planes.
+  shatter::BuildReport report;
   LeafSummary leaf_summary;
   /// The peer's replay of the fast 1-thread tree with the same input, strategy and N.
   std::optional<PeerResult> peer;
@@ -679,6 +681,20 @@ struct Row {
     return nodes > leaves ? seconds * 1e6 / static_cast<double>(nodes - leaves) : not_measured;
   }
   double peer_ratio() const { return peer ? peer->comparable_seconds() / seconds : not_measured; }
+  /// The peer only cuts: its time against shatter's cutting phase alone.
+  double peer_ratio_to_cutting() const {
+    return peer && report.cutting_seconds > 0 ? peer->comparable_seconds() / report.cutting_seconds : not_measured;
+  }
+  /// "cut / hulls / bonds" seconds of the first run.
+  std::string phases() const {
+    if (!built) return "–";
+    return seconds_text(report.cutting_seconds) + " / " + seconds_text(report.hull_seconds) + " / " +
+           seconds_text(report.bond_seconds);
+  }
+  std::string redrawn() const {
+    if (!built) return "–";
+    return std::to_string(report.planes_missed) + "/" + std::to_string(report.planes_rejected);
+  }
   void add_note(const std::string& text) { note += (note.empty() ? "" : "; ") + text; }
 };
 
@@ -726,8 +742,10 @@ Row bench_build(const std::string& section, const NamedInput& input, Strategy st
     double total = 0;
     for (int run = 0; run < plan.max_runs; ++run) {
       const auto t0 = Clock::now();
-      const MeshTree tree = shatter::build_mesh_tree(input.mesh, options);
+      shatter::BuildReport report;
+      const MeshTree tree = shatter::build_mesh_tree(input.mesh, options, {}, &report);
       const double seconds = seconds_between(t0, Clock::now());
+      if (run == 0) row.report = report;
       times.push_back(seconds);
       total += seconds;
       if (run == 0) {
@@ -895,9 +913,9 @@ std::string peer_counts(const PeerResult& p) {
 
 void print_scaling(std::ostream& out, const std::vector<ScalingLine>& lines) {
   out << "### Time against fragment count: cube (12 triangles), strategy thesis\n\n"
-      << "| N | leaves | nodes | depth | fast 1 thread s | µs/cut | fast 2 threads s | speedup | exact s | exact µs/cut | "
-         "exact/fast | invalid leaves fast/exact | note |\n"
-      << "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n";
+      << "| N | leaves | nodes | depth | fast 1 thread s | µs/cut | fast: cut / hulls / bonds s | planes missed/rejected | "
+         "fast 2 threads s | speedup | exact s | exact µs/cut | exact/fast | invalid leaves fast/exact | note |\n"
+      << "|---:|---:|---:|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---|---|\n";
   for (const auto& l : lines) {
     const Row& f = l.fast;
     const Row& f2 = l.fast_two_threads;
@@ -907,7 +925,7 @@ void print_scaling(std::ostream& out, const std::vector<ScalingLine>& lines) {
     if (l.exact && !l.exact->note.empty()) note += (note.empty() ? "" : "; ") + ("exact: " + l.exact->note);
     out << "| " << with_thousands(l.fragments) << " | " << with_thousands(f.leaves) << " | " << with_thousands(f.nodes)
         << " | " << f.leaf_summary.max_depth << " | " << seconds_text(f.seconds) << " | " << ratio_text(f.us_per_cut()) << " | "
-        << seconds_text(f2.seconds) << " | " << ratio_text(f.seconds / f2.seconds) << " | "
+        << f.phases() << " | " << f.redrawn() << " | " << seconds_text(f2.seconds) << " | " << ratio_text(f.seconds / f2.seconds) << " | "
         << (l.exact ? seconds_text(l.exact->seconds) : "skipped") << " | "
         << (l.exact ? ratio_text(l.exact->us_per_cut()) : "–") << " | "
         << (l.exact ? ratio_text(l.exact->seconds / f.seconds) : "–") << " | " << invalid_text(f) << "/"
@@ -915,33 +933,33 @@ void print_scaling(std::ostream& out, const std::vector<ScalingLine>& lines) {
   }
   if (!lines.empty() && !lines.back().stopped_here.empty()) out << "\n" << lines.back().stopped_here << ".\n";
   out << "\n### Peer: CGAL PMP clip replaying the same planes (fast 1-thread tree)\n\n"
-      << "| N | CGAL s | CGAL/fast | CGAL/exact | pieces | invalid | missing | clips failed/threw | "
+      << "| N | CGAL s | CGAL/fast | CGAL/fast cutting | CGAL/exact | pieces | invalid | missing | clips failed/threw | "
          "component mismatches | status |\n"
-      << "|---:|---:|---:|---:|---:|---:|---:|---|---:|---|\n";
+      << "|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---|\n";
   for (const auto& l : lines) {
     if (!l.fast.peer) {
       if (!l.peer_skipped.empty() && l.peer_skipped != "above --peer-max" && l.peer_skipped != "--no-peer")
-        out << "| " << with_thousands(l.fragments) << " | skipped | | | | | | | | " << l.peer_skipped << " |\n";
+        out << "| " << with_thousands(l.fragments) << " | skipped | | | | | | | | | " << l.peer_skipped << " |\n";
       continue;
     }
     const PeerResult& p = *l.fast.peer;
     out << "| " << with_thousands(l.fragments) << " | " << peer_cell_seconds(p) << " | "
-        << ratio_text(l.fast.peer_ratio()) << " | " << (l.exact ? ratio_text(l.exact->peer_ratio()) : "–") << " | "
+        << ratio_text(l.fast.peer_ratio()) << " | " << ratio_text(l.fast.peer_ratio_to_cutting()) << " | " << (l.exact ? ratio_text(l.exact->peer_ratio()) : "–") << " | "
         << peer_counts(p) << " | " << p.status_name() << (p.detail.empty() ? "" : ": " + p.detail) << " |\n";
   }
 }
 
 void print_meshes(std::ostream& out, const std::vector<MeshLine>& lines, std::uint32_t fragments) {
   out << "\n### The seed's meshes at " << with_thousands(fragments) << " fragments, 1 thread\n\n"
-      << "| mesh | triangles | strategy | leaves | fast s | exact s | exact/fast | volume CV | smallest/mean | "
-         "invalid leaves fast/exact | note |\n"
-      << "|---|---:|---|---:|---:|---:|---:|---:|---:|---|---|\n";
+      << "| mesh | triangles | strategy | leaves | fast s | fast: cut / hulls / bonds s | planes missed/rejected | "
+         "exact s | exact/fast | volume CV | smallest/mean | invalid leaves fast/exact | note |\n"
+      << "|---|---:|---|---:|---:|---|---|---:|---:|---:|---:|---|---|\n";
   for (const auto& l : lines) {
     std::string note = l.fast.note;
     if (!l.exact.note.empty()) note += (note.empty() ? "" : "; ") + ("exact: " + l.exact.note);
     out << "| " << l.mesh << " | " << with_thousands(l.triangles) << " | " << shatter::strategy_name(l.strategy)
         << " | " << with_thousands(l.fast.leaves) << " | " << seconds_text(l.fast.seconds) << " | "
-        << seconds_text(l.exact.seconds) << " | " << ratio_text(l.exact.seconds / l.fast.seconds) << " | "
+        << l.fast.phases() << " | " << l.fast.redrawn() << " | " << seconds_text(l.exact.seconds) << " | " << ratio_text(l.exact.seconds / l.fast.seconds) << " | "
         << (std::isnan(l.fast.leaf_summary.volume_cv) ? "–" : fixed(l.fast.leaf_summary.volume_cv, 3)) << " | "
         << significant(l.fast.leaf_summary.smallest_over_mean, 3)
         << " | " << invalid_text(l.fast) << "/" << invalid_text(l.exact) << " | " << note << " |\n";
@@ -950,14 +968,14 @@ void print_meshes(std::ostream& out, const std::vector<MeshLine>& lines, std::ui
   for (const auto& l : lines) any_peer = any_peer || l.fast.peer.has_value();
   if (!any_peer) return;
   out << "\n### Peer on the seed's meshes: CGAL PMP clip replaying the thesis tree's planes\n\n"
-      << "| mesh | CGAL s | CGAL/fast | CGAL/exact | pieces | invalid | missing | clips failed/threw | "
+      << "| mesh | CGAL s | CGAL/fast | CGAL/fast cutting | CGAL/exact | pieces | invalid | missing | clips failed/threw | "
          "component mismatches | status |\n"
-      << "|---|---:|---:|---:|---:|---:|---:|---|---:|---|\n";
+      << "|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---|\n";
   for (const auto& l : lines) {
     if (!l.fast.peer) continue;
     const PeerResult& p = *l.fast.peer;
     out << "| " << l.mesh << " | " << peer_cell_seconds(p) << " | " << ratio_text(l.fast.peer_ratio()) << " | "
-        << ratio_text(l.exact.peer_ratio()) << " | " << peer_counts(p) << " | " << p.status_name()
+        << ratio_text(l.fast.peer_ratio_to_cutting()) << " | " << ratio_text(l.exact.peer_ratio()) << " | " << peer_counts(p) << " | " << p.status_name()
         << (p.detail.empty() ? "" : ": " + p.detail) << " |\n";
   }
 }
@@ -983,6 +1001,7 @@ std::string csv_number(double value) {
 void write_csv(const std::filesystem::path& path, const std::vector<const Row*>& rows) {
   std::ostringstream out;
   out << "section,mesh,triangles,strategy,kernel,threads,fragments_requested,leaves,nodes,runs,seconds,us_per_cut,"
+         "cutting_seconds,hull_seconds,bond_seconds,planes_missed,planes_rejected,"
          "max_depth,invalid_leaves,volume_cv,smallest_volume_over_mean,tree_fingerprint,peer_status,peer_seconds,peer_ratio,"
          "peer_nodes_done,peer_internal_nodes,peer_pieces,peer_invalid,peer_missing,peer_failed,peer_threw,"
          "peer_mismatches,failed,note\n";
@@ -993,7 +1012,11 @@ void write_csv(const std::filesystem::path& path, const std::vector<const Row*>&
     out << r->section << ',' << csv_field(r->mesh) << ',' << r->triangles << ','
         << shatter::strategy_name(r->strategy) << ',' << shatter::kernel_name(r->kernel) << ',' << r->threads << ','
         << r->fragments << ',' << r->leaves << ',' << r->nodes << ',' << r->runs << ',' << csv_number(r->seconds)
-        << ',' << csv_number(r->us_per_cut()) << ',' << r->leaf_summary.max_depth << ','
+        << ',' << csv_number(r->us_per_cut()) << ',' << csv_number(r->built ? r->report.cutting_seconds : not_measured)
+        << ',' << csv_number(r->built ? r->report.hull_seconds : not_measured) << ','
+        << csv_number(r->built ? r->report.bond_seconds : not_measured) << ','
+        << (r->built ? std::to_string(r->report.planes_missed) : "") << ','
+        << (r->built ? std::to_string(r->report.planes_rejected) : "") << ',' << r->leaf_summary.max_depth << ','
         << (r->leaf_summary.invalid < 0 ? "" : std::to_string(r->leaf_summary.invalid))
         << ',' << csv_number(r->leaf_summary.volume_cv) << ',' << csv_number(r->leaf_summary.smallest_over_mean)
         << ',' << (r->built ? fingerprint : "") << ',';

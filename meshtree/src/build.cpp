@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -198,6 +199,8 @@ class Builder {
       }
       if (accepted) {
         node.plane = plane;
+        planes_missed_ += missed;
+        planes_rejected_ += attempt - missed;
         return;
       }
     }
@@ -215,6 +218,8 @@ class Builder {
   }
 
   const BuildOptions& options() const { return options_; }
+  std::uint64_t planes_missed() const { return planes_missed_; }
+  std::uint64_t planes_rejected() const { return planes_rejected_; }
 
  private:
   // The promise of the tree is that every stored mesh is a valid solid. The fast
@@ -267,6 +272,9 @@ class Builder {
   bool keep_exact_;
   const LeafProgressFn& progress_;
   std::atomic<std::size_t> leaves_done_{0};
+  // Counted from every worker; cut() is const because it is a pure function of
+  // its node, and these tallies never feed back into a decision.
+  mutable std::atomic<std::uint64_t> planes_missed_{0}, planes_rejected_{0};
 };
 
 // --- budgets: thesis and axis ---------------------------------------------------
@@ -438,7 +446,12 @@ void dismantle(std::unique_ptr<BuildNode> root) {
   }
 }
 
-ExactBuild build(const Mesh& mesh, const BuildOptions& options, bool keep_exact, const LeafProgressFn& progress) {
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+ExactBuild build(const Mesh& mesh, const BuildOptions& options, bool keep_exact, const LeafProgressFn& progress,
+                 BuildReport* report) {
   if (options.fragments < 1) throw std::invalid_argument("fragments must be at least 1");
   if (options.max_plane_tries < 1) throw std::invalid_argument("max_plane_tries must be at least 1");
   for (SurfaceId surface : mesh.surfaces) {
@@ -450,6 +463,7 @@ ExactBuild build(const Mesh& mesh, const BuildOptions& options, bool keep_exact,
 
   const unsigned threads = options.threads == 0 ? static_cast<unsigned>(tbb::info::default_concurrency())
                                                 : options.threads;
+  auto phase_start = std::chrono::steady_clock::now();
   Builder builder(options, keep_exact && options.kernel == KernelKind::exact, progress);
   std::unique_ptr<BuildNode> root = builder.root(mesh);
   tbb::task_arena arena(static_cast<int>(threads));
@@ -466,6 +480,11 @@ ExactBuild build(const Mesh& mesh, const BuildOptions& options, bool keep_exact,
   result.tree.options.threads = 0;  // never changes the output, so not part of it
   number_tree(*root, result.tree, keep_exact && options.kernel == KernelKind::exact ? &result.exact_meshes : nullptr);
   dismantle(std::move(root));
+  BuildReport timing;
+  timing.cutting_seconds = seconds_since(phase_start);
+  timing.planes_missed = builder.planes_missed();
+  timing.planes_rejected = builder.planes_rejected();
+  phase_start = std::chrono::steady_clock::now();
   // Hulls are pure functions of their meshes, so computing them after the build,
   // in parallel, changes nothing but the time.
   arena.execute([&] {
@@ -474,18 +493,23 @@ ExactBuild build(const Mesh& mesh, const BuildOptions& options, bool keep_exact,
       node.hull = convex_hull_of(node.mesh);
     });
   });
+  timing.hull_seconds = seconds_since(phase_start);
+  phase_start = std::chrono::steady_clock::now();
   result.tree.bonds = find_bonds(result.tree);
+  timing.bond_seconds = seconds_since(phase_start);
+  if (report) *report = timing;
   return result;
 }
 
 }  // namespace
 
-MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const LeafProgressFn& progress) {
-  return build(mesh, options, false, progress).tree;
+MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const LeafProgressFn& progress,
+                         BuildReport* report) {
+  return build(mesh, options, false, progress, report).tree;
 }
 
 ExactBuild build_mesh_tree_keeping_exact(const Mesh& mesh, const BuildOptions& options) {
-  return build(mesh, options, true, {});
+  return build(mesh, options, true, {}, nullptr);
 }
 
 }  // namespace shatter

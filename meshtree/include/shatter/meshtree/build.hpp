@@ -3,6 +3,7 @@
 // level as a MeshTree (seed thesis ch. 4, listing 4.1), then finds the bonds.
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <vector>
 
@@ -15,6 +16,16 @@ namespace shatter {
 /// Called once per finished leaf with the number finished so far. May be called
 /// from any worker thread, concurrently: it must be thread-safe and cheap.
 using LeafProgressFn = std::function<void(std::size_t leaves_done)>;
+
+/// Where a build's time went, and how often a drawn plane was not used. The
+/// counts are part of the deterministic build; the seconds are wall-clock.
+struct BuildReport {
+  double cutting_seconds = 0;  ///< cutting, validating the pieces, mass properties
+  double hull_seconds = 0;     ///< convex hulls of every node (in parallel)
+  double bond_seconds = 0;     ///< find_bonds
+  std::uint64_t planes_missed = 0;    ///< drawn planes that missed their node
+  std::uint64_t planes_rejected = 0;  ///< drawn planes whose rounded pieces were not valid solids
+};
 
 /// Builds the mesh tree of `mesh` with `options` (see BuildOptions, Strategy).
 /// Preconditions: options.fragments >= 1 and every triangle of `mesh` on surface 0
@@ -34,7 +45,9 @@ using LeafProgressFn = std::function<void(std::size_t leaves_done)>;
 /// machine and thread count.
 /// Throws UnsupportedGeometryError when none of max_plane_tries planes gives a node
 /// valid pieces (all missed it, or its pieces are thinner than rounding).
-MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const LeafProgressFn& progress = {});
+/// When `report` is given, it is filled in.
+MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const LeafProgressFn& progress = {},
+                         BuildReport* report = nullptr);
 
 /// The same build, also returning every node's exact solid (node order) when
 /// options.kernel is exact (empty otherwise): the tree's meshes are those solids
