@@ -102,8 +102,7 @@ K::FT polygon_area(const std::vector<K::Point_2>& points) {
 
 // Exact projected overlap area of two triangles (0 when they only touch):
 // Sutherland-Hodgman clipping of one by the other's three edge lines, in exact
-// rationals. (CGAL's Triangle_2 intersection is not used: with Epeck it returned
-// absurd polygons for a mesh far from the origin.)
+// rationals.
 K::FT signed_twice_area(const K::Point_2& a, const K::Point_2& b, const K::Point_2& c) {
   return (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
 }
@@ -173,7 +172,9 @@ std::map<BondKey, double> brute_force_bonds(const MeshTree& tree) {
         if (area > 0) areas[{std::min(a.leaf, b.leaf), std::max(a.leaf, b.leaf)}] += area;
       }
     }
-    for (const auto& [pair, area] : areas) bonds[{pair.first, pair.second, k}] = CGAL::to_double(area) * scale;
+    // to_double of a lazy number may return the midpoint of a wide interval (the
+    // sums cancel terms of size 1e10 far from the origin): round the exact value.
+    for (const auto& [pair, area] : areas) bonds[{pair.first, pair.second, k}] = CGAL::to_double(CGAL::exact(area)) * scale;
   }
   return bonds;
 }
