@@ -15,7 +15,6 @@
 // takes more than 60 s is not repeated); the median is reported. Validity checks
 // run outside the clock, on the output of the first run.
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/clip.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
@@ -38,6 +37,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "bench_support.hpp"
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mass.hpp"
@@ -48,8 +48,11 @@
 namespace {
 
 namespace PMP = CGAL::Polygon_mesh_processing;
-using Epick = CGAL::Epick;
-using CgalMesh = CGAL::Surface_mesh<Epick::Point_3>;
+using shatter::bench::CgalMesh;
+using shatter::bench::Epick;
+using shatter::bench::fixed;
+using shatter::bench::to_cgal;
+using shatter::bench::with_thousands;
 using Clock = std::chrono::steady_clock;
 
 constexpr const char* usage_text =
@@ -129,21 +132,6 @@ shatter::Mesh make_icosphere(int subdivisions) {
 // ---------------------------------------------------------------------------
 // Conversions and checks for CGAL.
 
-CgalMesh to_cgal(const shatter::Mesh& mesh) {
-  CgalMesh out;
-  out.reserve(static_cast<CgalMesh::size_type>(mesh.positions.size()),
-              static_cast<CgalMesh::size_type>(mesh.positions.size() + mesh.triangles.size()),
-              static_cast<CgalMesh::size_type>(mesh.triangles.size()));
-  std::vector<CgalMesh::Vertex_index> vertices;
-  vertices.reserve(mesh.positions.size());
-  for (const auto& p : mesh.positions) vertices.push_back(out.add_vertex(Epick::Point_3(p.x, p.y, p.z)));
-  for (const auto& [a, b, c] : mesh.triangles) {
-    if (out.add_face(vertices[a], vertices[b], vertices[c]) == CgalMesh::null_face())
-      throw std::runtime_error("the mesh is not a valid CGAL Surface_mesh (non-manifold face)");
-  }
-  return out;
-}
-
 std::size_t component_count(CgalMesh& mesh) {
   if (mesh.number_of_faces() == 0) return 0;
   auto [ids, created] = mesh.add_property_map<CgalMesh::Face_index, std::size_t>("f:bench_component", 0);
@@ -161,13 +149,6 @@ struct Timing {
   int runs = 0;
   double setup_ms = 0;  ///< median time of the per-run preparation outside the clock
 };
-
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  if (n == 0) return 0;
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
 
 double ms_between(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
@@ -193,7 +174,7 @@ Timing measure(const RepeatPolicy& policy, Setup setup, Run run, Inspect inspect
     if (ms / 1000.0 > policy.no_repeat_seconds) break;
     if (static_cast<int>(times.size()) >= policy.min_runs && total >= policy.min_total_seconds) break;
   }
-  return {median(times), static_cast<int>(times.size()), median(setups)};
+  return {shatter::bench::median(times, 0), static_cast<int>(times.size()), shatter::bench::median(setups, 0)};
 }
 
 // ---------------------------------------------------------------------------
@@ -308,24 +289,9 @@ Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatP
 // ---------------------------------------------------------------------------
 // Output.
 
-std::string fixed(double value, int digits) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
-  return buffer;
-}
-
 std::string ms_text(double ms) { return fixed(ms, ms < 10 ? 3 : ms < 1000 ? 1 : 0); }
 
 double ns_per_triangle(double ms, std::size_t triangles) { return ms * 1e6 / static_cast<double>(triangles); }
-
-std::string with_thousands(std::size_t value) {
-  std::string digits = std::to_string(value), out;
-  for (std::size_t i = 0; i < digits.size(); ++i) {
-    if (i && (digits.size() - i) % 3 == 0) out += ',';
-    out += digits[i];
-  }
-  return out;
-}
 
 std::string check_text(long ok, std::size_t of) {
   return ok < 0 ? "n/c" : std::to_string(ok) + "/" + std::to_string(of);

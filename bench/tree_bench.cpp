@@ -44,7 +44,6 @@
 // be byte-identical); every peer leaf piece through is_closed, does_self_intersect
 // and volume > 0.
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/clip.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
 #include <CGAL/Polygon_mesh_processing/measure.h>
@@ -80,6 +79,7 @@
 #include <utility>
 #include <vector>
 
+#include "bench_support.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/validate.hpp"
@@ -91,8 +91,11 @@
 namespace {
 
 namespace PMP = CGAL::Polygon_mesh_processing;
-using Epick = CGAL::Epick;
-using CgalMesh = CGAL::Surface_mesh<Epick::Point_3>;
+using shatter::bench::CgalMesh;
+using shatter::bench::Epick;
+using shatter::bench::fixed;
+using shatter::bench::to_cgal;
+using shatter::bench::with_thousands;
 using Clock = std::chrono::steady_clock;
 using shatter::KernelKind;
 using shatter::MeshTree;
@@ -220,19 +223,6 @@ double seconds_between(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  if (n == 0) return not_measured;
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
-std::string fixed(double value, int digits) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
-  return buffer;
-}
-
 /// Seconds with about four significant digits, never in exponent form.
 std::string seconds_text(double s) {
   if (std::isnan(s)) return "–";
@@ -248,15 +238,6 @@ std::string significant(double value, int digits) {
 }
 
 std::string ratio_text(double r) { return std::isnan(r) || std::isinf(r) ? "–" : fixed(r, r < 10 ? 2 : 1); }
-
-std::string with_thousands(std::uint64_t value) {
-  std::string digits = std::to_string(value), out;
-  for (std::size_t i = 0; i < digits.size(); ++i) {
-    if (i && (digits.size() - i) % 3 == 0) out += ',';
-    out += digits[i];
-  }
-  return out;
-}
 
 /// 64-bit FNV-1a over raw bytes: a fingerprint to compare two trees, not a hash
 /// for tables.
@@ -338,21 +319,6 @@ LeafSummary summarize_leaves(const MeshTree& tree, bool validate) {
 
 // ---------------------------------------------------------------------------
 // The peer: CGAL clip replaying a tree's planes.
-
-CgalMesh to_cgal(const shatter::Mesh& mesh) {
-  CgalMesh out;
-  out.reserve(static_cast<CgalMesh::size_type>(mesh.positions.size()),
-              static_cast<CgalMesh::size_type>(mesh.positions.size() + mesh.triangles.size()),
-              static_cast<CgalMesh::size_type>(mesh.triangles.size()));
-  std::vector<CgalMesh::Vertex_index> vertices;
-  vertices.reserve(mesh.positions.size());
-  for (const auto& p : mesh.positions) vertices.push_back(out.add_vertex(Epick::Point_3(p.x, p.y, p.z)));
-  for (const auto& [a, b, c] : mesh.triangles) {
-    if (out.add_face(vertices[a], vertices[b], vertices[c]) == CgalMesh::null_face())
-      throw std::runtime_error("the mesh is not a valid CGAL Surface_mesh (non-manifold face)");
-  }
-  return out;
-}
 
 /// Area-weighted centroid of the surface, computed the same way for both sides of
 /// the matching; it needs no closed surface, unlike a volume centroid. Falls back
@@ -798,7 +764,7 @@ Row bench_build(const std::string& section, const NamedInput& input, Strategy st
     row.add_note(std::string("build threw: ") + e.what());
   }
   row.runs = static_cast<int>(times.size());
-  if (row.built) row.seconds = median(times);
+  if (row.built) row.seconds = shatter::bench::median(times, not_measured);
   std::cerr << " " << seconds_text(row.seconds) << " s (" << row.runs << " runs)"
             << (row.failed ? " FAILED: " + row.note : "") << "\n";
   return row;
