@@ -383,6 +383,8 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
 }
 
 void require_valid_solid(const Mesh& mesh, std::string_view name, bool allow_self_intersections) {
+  // No triangle has no defect either, but it is no solid.
+  if (mesh.triangles.empty()) throw InvalidMeshError("invalid mesh " + std::string(name) + ": empty (no triangles)");
   const ValidationReport report = validate_mesh(mesh);
   const Defect* self_intersection = nullptr;
   for (const Defect& d : report.defects) {

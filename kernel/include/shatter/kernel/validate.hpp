@@ -73,7 +73,7 @@ struct ValidationReport {
 ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& options = {});
 
 /// Refuses a mesh that is not a valid solid, with InvalidMeshError "invalid mesh
-/// <name>: <summary>". Self-intersections, and the pinched vertices where a surface
+/// <name>: <summary>" (an empty mesh: "invalid mesh <name>: empty (no triangles)"). Self-intersections, and the pinched vertices where a surface
 /// touches itself, pass when `allow_self_intersections`: a cut then still gives
 /// closed, oriented pieces, but their embedding may overlap. Never returns on a
 /// mesh the slicer's preconditions exclude.
