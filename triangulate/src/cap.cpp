@@ -266,6 +266,30 @@ std::optional<Cap<Point>> fan_or_cdt(std::span<const Edge> border,
   return cap;
 }
 
+// Cut points that lie on one line exactly (where the plane crosses a flat face
+// split into several triangles) come out of rounding a little off it. A
+// triangulation of the rounded points may then join three of them in a sliver
+// that fills a dent of a few ulps: a needle, whose two long edges any later plane
+// crosses at points that round together. Such a cap is rebuilt from the exact
+// points, where those three can never form a triangle.
+bool joins_exactly_collinear_points(const std::vector<Triangle>& triangles, const PlaneProjection& projection,
+                                    const ExactPositionFn& exact_position) {
+  IndexMap slot_of_vertex(3 * triangles.size());
+  std::vector<ExactKernel::Point_2> projected;
+  const auto exact_projected = [&](VertexIndex v) -> const ExactKernel::Point_2& {
+    const auto slot = static_cast<std::uint32_t>(projected.size());
+    const std::uint32_t found = slot_of_vertex.insert(v, slot);
+    if (found == slot) projected.push_back(projection(exact_position(v)));
+    return projected[found];
+  };
+  projected.reserve(3 * triangles.size());
+  for (const Triangle& t : triangles) {
+    const ExactKernel::Point_2 a = exact_projected(t[0]), b = exact_projected(t[1]), c = exact_projected(t[2]);
+    if (CGAL::collinear(a, b, c)) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 Cap<Vec3> triangulate_cap(std::span<const Vec3> positions, std::span<const Edge> border, const Plane& plane,
@@ -278,7 +302,9 @@ Cap<Vec3> triangulate_cap(std::span<const Vec3> positions, std::span<const Edge>
     const Vec2 p = projection(positions[v]);
     return Point2(p.x, p.y);
   });
-  if (rounded) return std::move(*rounded);
+  if (rounded && (!exact_position || !joins_exactly_collinear_points(rounded->triangles, projection, exact_position))) {
+    return std::move(*rounded);
+  }
   if (exact_position) {
     const std::vector<VertexIndex> vertices = distinct_vertices(border);
     auto triangles = triangulate_with_cdt<ExactKernel>(
