@@ -121,6 +121,27 @@ Plane draw_plane(Strategy strategy, const Mesh& mesh, const Vec3& centroid, Node
   return plane_through(random.direction(), centroid);
 }
 
+// A plane passing within rounding of a vertex makes crossing points a few ulps
+// from it: valid, but needles whose two long edges any later plane crosses at
+// points that round together, so the piece can no longer be cut validly. Such a
+// plane is redrawn. This only chooses among random planes; whether a piece is
+// valid is still decided exactly (validate_mesh), never by this bound.
+constexpr double grazing_distance = 1e-8;  // relative to the node's bounding-box diagonal
+
+bool grazes_a_vertex(const Mesh& mesh, const Plane& plane) {
+  Vec3 lo = mesh.positions.front(), hi = lo;
+  for (const Vec3& p : mesh.positions) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  const double limit = grazing_distance * norm(hi - lo) * norm(plane.normal);
+  for (const Vec3& p : mesh.positions) {
+    const double distance = dot(plane.normal, p) + plane.offset;
+    if (std::fabs(distance) < limit) return true;
+  }
+  return false;
+}
+
 // --- the tree under construction ----------------------------------------------
 
 struct BuildNode {
@@ -183,6 +204,7 @@ class Builder {
     for (std::uint32_t attempt = 0; attempt < options_.max_plane_tries; ++attempt) {
       const Plane plane = draw_plane(options_.strategy, node.mesh, node.mass.centroid, random);
       bool accepted = false;
+      if (grazes_a_vertex(node.mesh, plane)) continue;
       if (options_.kernel == KernelKind::fast) {
         CutResult<Vec3> result = cut_mesh(node.mesh, plane, cut_options);
         missed += result.plane_missed ? 1 : 0;
@@ -209,7 +231,8 @@ class Builder {
         std::to_string(node.mesh.triangles.size()) + " triangles): of " + std::to_string(options_.max_plane_tries) +
         " planes, " + std::to_string(missed) + " missed it and " +
         std::to_string(options_.max_plane_tries - missed) +
-        " gave a piece whose rounded mesh is not a valid solid (is it flat, or thinner than rounding?)");
+        " grazed a vertex or gave a piece whose rounded mesh is not a valid solid (is it flat, or thinner than "
+        "rounding?)");
   }
 
   void leaf_finished() {
@@ -333,6 +356,37 @@ void grow(Builder& builder, BuildNode& node, std::uint32_t budget) {
   } else {
     tbb::parallel_for(std::size_t{0}, node.children.size(),
                       [&](std::size_t i) { grow(builder, *node.children[i], shares[i]); });
+  }
+}
+
+// A cut whose node falls into three or more solids spends more leaves than its
+// budget, and subtrees spend their budgets without seeing each other, so the
+// count can pass N by more than one cut's worth. Undoing last cuts (nodes whose
+// children are all leaves), the last in depth-first order first, while the count
+// stays >= N makes the tree the one that stops at the first count >= N.
+void undo_surplus_cuts(BuildNode& root, std::uint32_t target) {
+  std::vector<BuildNode*> preorder;
+  std::vector<BuildNode*> stack{&root};
+  while (!stack.empty()) {
+    BuildNode* node = stack.back();
+    stack.pop_back();
+    preorder.push_back(node);
+    for (auto child = node->children.rbegin(); child != node->children.rend(); ++child) stack.push_back(child->get());
+  }
+  std::size_t leaves = 0;
+  for (const BuildNode* node : preorder) leaves += node->children.empty() ? 1 : 0;
+  // Children come after their parent in preorder, so one backward pass also sees
+  // a parent whose last child cut was just undone.
+  for (auto it = preorder.rbegin(); it != preorder.rend() && leaves > target; ++it) {
+    BuildNode& node = **it;
+    if (node.children.empty()) continue;
+    const bool last_cut = std::all_of(node.children.begin(), node.children.end(),
+                                      [](const auto& child) { return child->children.empty(); });
+    const std::size_t spent = node.children.size() - 1;
+    if (!last_cut || leaves - spent < target) continue;
+    node.children.clear();
+    node.plane = {};
+    leaves -= spent;
   }
 }
 
@@ -472,6 +526,7 @@ ExactBuild build(const Mesh& mesh, const BuildOptions& options, bool keep_exact,
       grow_balanced(builder, *root, options.fragments, threads);
     } else {
       grow(builder, *root, options.fragments);
+      undo_surplus_cuts(*root, options.fragments);
     }
   });
 

@@ -3,6 +3,7 @@
 #include <CGAL/convex_hull_3.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -65,19 +66,28 @@ bool lexicographically_less(const Vec3& a, const Vec3& b) {
   return a.z < b.z;
 }
 
-// The strictly convex corners of coplanar points, counter-clockwise seen from the
-// side `outward` (a triangle of the facet, outward) faces. Exact: the points are
-// projected by dropping the coordinate where the facet's normal is largest, and
-// only orientations of projected doubles decide.
+// The strictly convex corners of a facet, counter-clockwise seen from outside
+// (the side `outward`, one of its triangles, faces). The facet is projected by
+// dropping a coordinate, tried in the order the rounded normal suggests; the
+// first projection in which `outward` keeps positive area, decided exactly, is
+// used (hulls of fragments have needle facets whose rounded normal is noise).
+// Any such projection gives the same corners in the same cyclic order.
 std::vector<VertexIndex> facet_polygon(const std::vector<Vec3>& positions, std::vector<VertexIndex> corners,
                                        const Triangle& outward) {
   const Vec3 a = positions[outward[0]], b = positions[outward[1]], c = positions[outward[2]];
-  const Vec3 n = cross(b - a, c - a);  // rounded: only picks an axis the facet is not parallel to
-  const double ax = std::fabs(n.x), ay = std::fabs(n.y), az = std::fabs(n.z);
-  const int dropped = az >= ax && az >= ay ? 2 : ax >= ay ? 0 : 1;
-  const int u = (dropped + 1) % 3, w = (dropped + 2) % 3;
+  const Vec3 n = cross(b - a, c - a);
+  std::array<int, 3> axes{0, 1, 2};
+  std::sort(axes.begin(), axes.end(), [&](int p, int q) { return std::fabs(n[p]) > std::fabs(n[q]); });
+  int u = 0, w = 1;
+  Sign facing = Sign::zero;
+  for (const int dropped : axes) {
+    u = (dropped + 1) % 3;  // (u, w, dropped) is right-handed
+    w = (dropped + 2) % 3;
+    facing = orient2d({a[u], a[w]}, {b[u], b[w]}, {c[u], c[w]});
+    if (facing != Sign::zero) break;
+  }
   const auto project = [&](VertexIndex v) { return Vec2{positions[v][u], positions[v][w]}; };
-  const bool counter_clockwise = orient2d(project(outward[0]), project(outward[1]), project(outward[2])) == Sign::positive;
+  const bool counter_clockwise = facing == Sign::positive;
 
   std::sort(corners.begin(), corners.end(), [&](VertexIndex p, VertexIndex q) {
     const Vec2 pp = project(p), qq = project(q);

@@ -24,7 +24,9 @@ struct BuildReport {
   double hull_seconds = 0;     ///< convex hulls of every node (in parallel)
   double bond_seconds = 0;     ///< find_bonds
   std::uint64_t planes_missed = 0;    ///< drawn planes that missed their node
-  std::uint64_t planes_rejected = 0;  ///< drawn planes whose rounded pieces were not valid solids
+  /// Drawn planes that passed within 1e-8 of the node's size of a vertex, or whose
+  /// rounded pieces were not valid solids.
+  std::uint64_t planes_rejected = 0;
 };
 
 /// Builds the mesh tree of `mesh` with `options` (see BuildOptions, Strategy).

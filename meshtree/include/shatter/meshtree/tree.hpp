@@ -50,8 +50,9 @@ struct BuildOptions {
   KernelKind kernel = KernelKind::fast;
   double interior_uv_scale = 1.0;
   /// Planes drawn for one node before the build fails. A plane is redrawn when it
-  /// misses the node or when a piece's stored (rounded) mesh would not be a valid
-  /// solid (a plane within rounding of a vertex can fold or flatten a triangle).
+  /// misses the node, when it passes within 1e-8 of the node's bounding-box
+  /// diagonal of a vertex (it would leave needles later planes cannot cut), or when
+  /// a piece's stored (rounded) mesh would not be a valid solid.
   std::uint32_t max_plane_tries = 64;
   /// Accept a self-intersecting input (only topology is promised then).
   bool allow_self_intersections = false;
