@@ -1,0 +1,1304 @@
+// Property tests of the mesh tree builder (DESIGN.md, "Invariants" and "Mesh tree
+// builder"): shared and generated meshes, N in {1, 2, 3, 64, 256, 2048}, every
+// strategy, both kernels (exact at the smaller N), and every invariant of the
+// tree on every node: valid solids, volumes that add up, leaf ranges, surface
+// ids, hulls, mass properties, cover, bonds, the file round trip and thread-count
+// independence. Failures name the case (mesh, N, strategy, kernel, seed) and the
+// first offending nodes, so a builder defect can be reproduced directly.
+
+#include <catch2/catch.hpp>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Mpzf.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/convex_hull_3.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <span>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <tuple>
+#include <vector>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/io.hpp"
+#include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "shatter/meshtree/bonds.hpp"
+#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/cover.hpp"
+#include "shatter/meshtree/file.hpp"
+#include "support/checks.hpp"
+#include "support/corpus.hpp"
+#include "support/generators.hpp"
+
+using namespace shatter;
+using namespace shatter::test;
+
+namespace {
+
+constexpr Strategy all_strategies[] = {Strategy::thesis, Strategy::balanced, Strategy::axis};
+constexpr KernelKind all_kernels[] = {KernelKind::fast, KernelKind::exact};
+
+// A double in full (17 significant digits), for messages.
+std::string num(double x) {
+  std::ostringstream out;
+  out.precision(17);
+  out << x;
+  return out.str();
+}
+
+// --- the meshes -------------------------------------------------------------------
+
+struct TestMesh {
+  std::string name;
+  Mesh mesh;
+  bool convex = false;  // every cut gives exactly two children, so leaves == N
+};
+
+Mesh corpus_mesh(const std::string& file) {
+  const std::filesystem::path path = mesh_dir() / file;
+  REQUIRE(std::filesystem::exists(path));
+  return read_mesh(path);
+}
+
+bool is_convex_name(const std::string& name) {
+  return name == "box" || name == "grid-box-4" || name == "cube.off" || name == "sphere.off";
+}
+
+// The generated catalogue (box, torus, hollow egg, nested shells with an island,
+// two boxes, slivers, tiny/huge/far variants) plus small and medium corpus meshes.
+std::vector<TestMesh> all_test_meshes() {
+  std::vector<TestMesh> meshes;
+  for (NamedMesh& named : generated_meshes()) {
+    const bool convex = is_convex_name(named.name);
+    meshes.push_back({named.name, std::move(named.mesh), convex});
+  }
+  for (const char* file : {"cube.off", "sphere.off", "torus_quad.off", "double-torus-example.off", "helmet.off",
+                           "pinion.off", "spool.off"}) {
+    meshes.push_back({file, corpus_mesh(file), is_convex_name(file)});
+  }
+  REQUIRE(meshes.size() >= 15);
+  return meshes;
+}
+
+const std::vector<TestMesh>& test_meshes() {
+  static const std::vector<TestMesh> meshes = all_test_meshes();
+  return meshes;
+}
+
+const TestMesh& test_mesh(const std::string& name) {
+  for (const TestMesh& m : test_meshes()) {
+    if (m.name == name) return m;
+  }
+  FAIL("no test mesh named " << name);
+  throw std::logic_error("unreachable");
+}
+
+// --- one build and its description ---------------------------------------------
+
+// How much is checked: `full` adds the self-intersection test of every node mesh
+// and the hull's convexity and containment test on every node; `cheap` (the
+// 2048-fragment trees) keeps topology, zero-area triangles, orientation, volumes
+// (exact sums), everything structural, and the hull test on the leaves only.
+enum class Level { full, cheap };
+
+struct Case {
+  const TestMesh* mesh = nullptr;
+  BuildOptions options;
+  Level level = Level::full;
+  bool check_threads = false;  // also build with the other thread counts of 1, 2 and 4 and compare bytes
+};
+
+std::string describe(const Case& c) {
+  std::ostringstream out;
+  out << "mesh=" << c.mesh->name << " N=" << c.options.fragments << " strategy=" << strategy_name(c.options.strategy)
+      << " kernel=" << kernel_name(c.options.kernel) << " seed=" << c.options.seed
+      << " threads=" << c.options.threads;
+  return out.str();
+}
+
+BuildOptions options_for(std::uint32_t fragments, Strategy strategy, KernelKind kernel, std::uint64_t seed,
+                         unsigned threads = 2) {
+  BuildOptions options;
+  options.fragments = fragments;
+  options.strategy = strategy;
+  options.kernel = kernel;
+  options.seed = seed;
+  options.threads = threads;
+  return options;
+}
+
+// The tree, and for the exact kernel every node's exact solid.
+struct Built {
+  MeshTree tree;
+  std::vector<ExactMesh> exact;
+};
+
+// Known limitation (README, "The mesh tree"): with the axis strategy, whose
+// near-parallel planes keep crossing the flat faces of earlier cuts, the fast
+// kernel's rounded cut points leave needle triangles on boxes that, a few levels
+// down, every plane crosses at points that round together; the exact kernel cuts
+// the same boxes (tested below). On the 1e-6 torus both kernels run out of valid
+// planes with this strategy, not yet understood. In these cases the builder may
+// refuse with UnsupportedGeometryError; anything else it does is checked in full.
+bool may_run_out_of_planes(const Case& c) {
+  if (c.options.strategy != Strategy::axis) return false;
+  const std::string& name = c.mesh->name;
+  if (name == "torus-tiny-1e-6") return true;
+  if (c.options.kernel != KernelKind::fast) return false;
+  return name == "box" || name == "two-boxes" || (name == "hollow-egg" && c.options.fragments >= 2048);
+}
+
+// Builds a case; a thrown error fails the case (with its description) and
+// returns nothing, so the other cases still run.
+std::optional<Built> try_build(const Case& c) {
+  try {
+    Built built;
+    if (c.options.kernel == KernelKind::exact) {
+      ExactBuild result = build_mesh_tree_keeping_exact(c.mesh->mesh, c.options);
+      built.tree = std::move(result.tree);
+      built.exact = std::move(result.exact_meshes);
+    } else {
+      built.tree = build_mesh_tree(c.mesh->mesh, c.options);
+    }
+    return built;
+  } catch (const UnsupportedGeometryError& error) {
+    if (may_run_out_of_planes(c)) {
+      WARN(describe(c) << ": refused, a known limitation: " << error.what());
+    } else {
+      FAIL_CHECK(describe(c) << ": the build threw: " << error.what());
+    }
+    return std::nullopt;
+  } catch (const std::exception& error) {
+    FAIL_CHECK(describe(c) << ": the build threw: " << error.what());
+    return std::nullopt;
+  }
+}
+
+// SHATTER_TREE_TIMING=1 prints each case's build time and the time of each
+// group of checks to stderr, to keep the suite's runtime in view.
+bool timing_wanted() {
+  static const bool wanted = std::getenv("SHATTER_TREE_TIMING") != nullptr;
+  return wanted;
+}
+
+class PhaseTimer {
+ public:
+  void lap(const char* phase) {
+    const auto now = std::chrono::steady_clock::now();
+    if (timing_wanted()) {
+      char seconds[32];
+      std::snprintf(seconds, sizeof seconds, " %s %.3f", phase, std::chrono::duration<double>(now - last_).count());
+      line_ += seconds;
+    }
+    last_ = now;
+  }
+  void print(const std::string& what) const {
+    if (timing_wanted()) std::fprintf(stderr, "  %s:%s\n", what.c_str(), line_.c_str());
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+  std::string line_;
+};
+
+// --- collecting defects ----------------------------------------------------------
+
+// The defects of one kind over a tree: counted, the first few kept with their
+// node, reported by one assertion so a systematic defect does not flood the log.
+class Problems {
+ public:
+  Problems(const MeshTree& tree, std::string what) : tree_(tree), what_(std::move(what)) {}
+
+  void add(NodeIndex node, const std::string& text) {
+    ++count_;
+    if (first_.size() >= 8) return;
+    std::ostringstream out;
+    out << "node " << node;
+    if (node < tree_.nodes.size()) {
+      const MeshTreeNode& n = tree_.nodes[node];
+      out << " (depth " << n.depth << ", " << (n.is_leaf() ? "leaf " + std::to_string(n.first_leaf) : "internal")
+          << ", " << n.mesh.triangle_count() << " triangles, parent "
+          << (n.parent == no_node ? std::string("none") : std::to_string(n.parent)) << ")";
+    }
+    out << ": " << text;
+    first_.push_back(out.str());
+  }
+  void add_global(const std::string& text) {
+    ++count_;
+    if (first_.size() < 8) first_.push_back(text);
+  }
+
+  std::size_t count() const { return count_; }
+  std::string report() const {
+    std::ostringstream out;
+    out << what_ << ": " << count_ << " problem(s)";
+    for (const std::string& line : first_) out << "\n    " << line;
+    if (count_ > first_.size()) out << "\n    ...";
+    return out.str();
+  }
+
+ private:
+  const MeshTree& tree_;
+  std::string what_;
+  std::size_t count_ = 0;
+  std::vector<std::string> first_;
+};
+
+void expect_none(const Problems& problems) {
+  INFO(problems.report());
+  CHECK(problems.count() == 0);
+}
+
+// --- geometry helpers --------------------------------------------------------------
+
+struct Box3 {
+  Vec3 lo, hi;
+};
+Box3 bounds(const Mesh& m) {
+  Box3 b{m.positions.at(0), m.positions.at(0)};
+  for (const Vec3& p : m.positions) {
+    b.lo = {std::min(b.lo.x, p.x), std::min(b.lo.y, p.y), std::min(b.lo.z, p.z)};
+    b.hi = {std::max(b.hi.x, p.x), std::max(b.hi.y, p.y), std::max(b.hi.z, p.z)};
+  }
+  return b;
+}
+
+// A distance tolerance for rounded constructions: relative to the input's size,
+// plus a few ulps of its largest coordinate (meshes far from the origin).
+double distance_tolerance(const Mesh& input) {
+  const Box3 b = bounds(input);
+  double largest = 0;
+  for (int axis = 0; axis < 3; ++axis) largest = std::max({largest, std::fabs(b.lo[axis]), std::fabs(b.hi[axis])});
+  return 1e-9 * norm(b.hi - b.lo) + 64 * std::numeric_limits<double>::epsilon() * largest;
+}
+
+// (n·p + d) / |n|, the signed distance (rounded).
+double signed_distance(const Plane& plane, const Vec3& p) {
+  return (dot(plane.normal, p) + plane.offset) / norm(plane.normal);
+}
+
+std::string vec_text(const Vec3& v) {
+  std::ostringstream out;
+  out.precision(17);
+  out << "(" << v.x << ", " << v.y << ", " << v.z << ")";
+  return out.str();
+}
+
+using EpickPoint = CGAL::Exact_predicates_inexact_constructions_kernel::Point_3;
+EpickPoint epick(const Vec3& p) { return {p.x, p.y, p.z}; }
+
+// The validator's verdict with the self-intersection test (only reached when the
+// mesh is otherwise a valid solid).
+std::string self_intersection_problem(const Mesh& mesh) {
+  const ValidationReport report = validate_mesh(mesh);  // check_self_intersections = true
+  return report.valid() ? std::string() : report.summary();
+}
+
+// Six times the signed volume of a mesh, exactly: CGAL's Mpzf (a binary
+// floating-point integer, so products and sums of doubles are exact with no gcd).
+CGAL::Mpzf six_volume(const std::vector<Vec3>& positions, const std::vector<Triangle>& triangles) {
+  CGAL::Mpzf sum(0);
+  for (const Triangle& t : triangles) {
+    const Vec3& a = positions[t[0]];
+    const Vec3& b = positions[t[1]];
+    const Vec3& c = positions[t[2]];
+    const CGAL::Mpzf ax(a.x), ay(a.y), az(a.z), bx(b.x), by(b.y), bz(b.z), cx(c.x), cy(c.y), cz(c.z);
+    sum += ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
+  }
+  return sum;
+}
+CGAL::Mpzf six_volume(const Mesh& mesh) { return six_volume(mesh.positions, mesh.triangles); }
+
+bool lexicographic_less(const Vec3& a, const Vec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); }
+
+// Empty when `hull` is the convex hull of `mesh`'s vertices as the tree promises
+// it: a valid solid (closed, oriented, positive volume, no zero-area triangle),
+// surface ids 0, no attributes, its vertices among the mesh's; with `complete`,
+// also convex at every edge (exact orientation) and enclosing exactly the volume
+// of CGAL's hull of the mesh's vertices (so no mesh vertex lies outside it).
+std::string hull_problem(const Mesh& mesh, const Mesh& hull, bool complete) {
+  if (const std::string problem = solid_problem(hull); !problem.empty()) return "not a valid solid: " + problem;
+  if (std::any_of(hull.surfaces.begin(), hull.surfaces.end(), [](SurfaceId s) { return s != 0; })) {
+    return "a surface id other than 0";
+  }
+  if (hull.corners.has_normals() || hull.corners.has_uvs() || hull.corners.has_tangents()) return "carries attributes";
+  std::vector<Vec3> vertices = mesh.positions;
+  std::sort(vertices.begin(), vertices.end(), lexicographic_less);
+  for (const Vec3& p : hull.positions) {
+    if (!std::binary_search(vertices.begin(), vertices.end(), p, lexicographic_less)) {
+      return "hull vertex " + vec_text(p) + " is not a mesh vertex";
+    }
+  }
+  if (!complete) return {};
+  // Convex at every edge: the far corner of the triangle across each edge is not
+  // above the triangle's plane.
+  std::map<std::pair<VertexIndex, VertexIndex>, VertexIndex> far_corner;
+  for (const Triangle& t : hull.triangles) {
+    for (int c = 0; c < 3; ++c) far_corner[{t[c], t[(c + 1) % 3]}] = t[(c + 2) % 3];
+  }
+  for (std::size_t i = 0; i < hull.triangles.size(); ++i) {
+    const Triangle& t = hull.triangles[i];
+    const EpickPoint a = epick(hull.positions[t[0]]), b = epick(hull.positions[t[1]]), c = epick(hull.positions[t[2]]);
+    for (int k = 0; k < 3; ++k) {
+      const auto across = far_corner.find({t[(k + 1) % 3], t[k]});
+      if (across == far_corner.end()) return "open at triangle " + std::to_string(i);
+      if (CGAL::orientation(a, b, c, epick(hull.positions[across->second])) == CGAL::POSITIVE) {
+        return "not convex at an edge of triangle " + std::to_string(i);
+      }
+    }
+  }
+  // The same body as CGAL's hull of the mesh's vertices: equal exact volumes
+  // (any triangulation of one polytope's boundary has the same exact volume).
+  std::vector<EpickPoint> points;
+  points.reserve(mesh.positions.size());
+  for (const Vec3& p : mesh.positions) points.push_back(epick(p));
+  CGAL::Surface_mesh<EpickPoint> reference;
+  CGAL::convex_hull_3(points.begin(), points.end(), reference);
+  std::vector<Vec3> reference_positions(reference.number_of_vertices());
+  for (const auto v : reference.vertices()) {
+    const EpickPoint& p = reference.point(v);
+    reference_positions[v.idx()] = {p.x(), p.y(), p.z()};
+  }
+  std::vector<Triangle> reference_triangles;
+  for (const auto f : reference.faces()) {
+    std::vector<VertexIndex> face;
+    for (const auto v : CGAL::vertices_around_face(reference.halfedge(f), reference)) {
+      face.push_back(static_cast<VertexIndex>(v.idx()));
+    }
+    for (std::size_t i = 1; i + 1 < face.size(); ++i) reference_triangles.push_back({face[0], face[i], face[i + 1]});
+  }
+  const CGAL::Mpzf expected = six_volume(reference_positions, reference_triangles);
+  const CGAL::Mpzf actual = six_volume(hull);
+  if (actual != expected) {
+    return "encloses volume " + num(actual.to_double() / 6) + ", the vertices' convex hull " +
+           num(expected.to_double() / 6) + " (a mesh vertex lies outside it)";
+  }
+  return {};
+}
+
+// --- the checks ---------------------------------------------------------------------
+
+// Parent, children, depth, preorder and leaf ranges; returns false when the
+// structure is too broken for the other checks to index safely.
+bool check_structure(const MeshTree& tree) {
+  Problems problems(tree, "structure (parent/children/depth/preorder/leaf ranges)");
+  const std::size_t n = tree.nodes.size();
+  REQUIRE(n >= 1);
+  const MeshTreeNode& root = tree.nodes[0];
+  if (root.parent != no_node) problems.add(0, "the root has a parent");
+  if (root.depth != 0) problems.add(0, "the root's depth is not 0");
+  if (root.first_leaf != 0 || root.leaf_count != tree.leaf_count()) {
+    problems.add(0, "the root's leaf range is [" + std::to_string(root.first_leaf) + ", +" +
+                        std::to_string(root.leaf_count) + "), not all " + std::to_string(tree.leaf_count()) +
+                        " leaves");
+  }
+
+  // Children indices must be in range and after their parent before anything
+  // else may follow them.
+  for (NodeIndex v = 0; v < n; ++v) {
+    for (const NodeIndex c : tree.nodes[v].children) {
+      if (c <= v || c >= n) {
+        problems.add(v, "child index " + std::to_string(c) + " out of preorder range");
+        expect_none(problems);
+        return false;
+      }
+    }
+  }
+  // Subtree sizes (children follow their parent in preorder).
+  std::vector<std::size_t> size(n, 1);
+  for (std::size_t v = n; v-- > 0;) {
+    for (const NodeIndex c : tree.nodes[v].children) size[v] += size[c];
+  }
+  if (size[0] != n) problems.add_global("the root's subtree has " + std::to_string(size[0]) + " of " +
+                                        std::to_string(n) + " nodes");
+
+  std::size_t leaves = 0;
+  for (NodeIndex v = 0; v < n; ++v) {
+    const MeshTreeNode& node = tree.nodes[v];
+    if (node.is_leaf()) {
+      ++leaves;
+      if (node.leaf_count != 1) problems.add(v, "a leaf with leaf_count " + std::to_string(node.leaf_count));
+      if (node.first_leaf >= tree.leaf_count() || tree.leaf_nodes[node.first_leaf] != v) {
+        problems.add(v, "leaf_nodes[first_leaf = " + std::to_string(node.first_leaf) + "] is not this leaf");
+      }
+      continue;
+    }
+    if (node.children.size() < 2) problems.add(v, "an internal node with one child");
+    if (!is_finite(node.plane.normal) || !std::isfinite(node.plane.offset) || norm(node.plane.normal) == 0) {
+      problems.add(v, "an internal node without a finite plane");
+    }
+    if (node.children.front() != v + 1) problems.add(v, "first child is not the next node in preorder");
+    LeafIndex next_leaf = node.first_leaf;
+    NodeIndex next_node = v + 1;
+    bool below = false, above = false;
+    for (const NodeIndex c : node.children) {
+      const MeshTreeNode& child = tree.nodes[c];
+      if (c != next_node) problems.add(v, "child " + std::to_string(c) + " is not where preorder puts it");
+      next_node = static_cast<NodeIndex>(c + size[c]);
+      if (child.parent != v) problems.add(c, "parent link " + std::to_string(child.parent) + " != " + std::to_string(v));
+      if (child.depth != node.depth + 1) problems.add(c, "depth is not the parent's + 1");
+      if (child.first_leaf != next_leaf) {
+        problems.add(c, "leaf range starts at " + std::to_string(child.first_leaf) + ", not right after its elder "
+                        "sibling's (" + std::to_string(next_leaf) + ")");
+      }
+      next_leaf = child.first_leaf + child.leaf_count;
+      (child.above_parent_plane ? above : below) = true;
+    }
+    if (next_leaf != node.first_leaf + node.leaf_count) {
+      problems.add(v, "leaf range [" + std::to_string(node.first_leaf) + ", +" + std::to_string(node.leaf_count) +
+                          ") is not the union of its children's");
+    }
+    if (!below || !above) problems.add(v, "a cut whose children are all on one side of its plane");
+  }
+  if (leaves != tree.leaf_count()) {
+    problems.add_global(std::to_string(leaves) + " leaf nodes but " + std::to_string(tree.leaf_count()) +
+                        " entries in leaf_nodes");
+  }
+  for (std::size_t i = 1; i < tree.leaf_nodes.size(); ++i) {
+    if (tree.leaf_nodes[i] <= tree.leaf_nodes[i - 1]) problems.add_global("leaf_nodes not in node (preorder) order");
+  }
+  for (std::size_t i = 0; i < tree.leaf_nodes.size(); ++i) {
+    if (tree.leaf_nodes[i] >= n || !tree.nodes[tree.leaf_nodes[i]].is_leaf()) {
+      problems.add_global("leaf_nodes[" + std::to_string(i) + "] is not a leaf node");
+    }
+  }
+  expect_none(problems);
+  return problems.count() == 0;
+}
+
+// Leaves >= N, and the build stopped at the first leaf count >= N: some order of
+// the cuts (parents first) reaches N only with its last cut, i.e. some node whose
+// children are all leaves, k of them, leaves the count below N when undone. For a
+// convex input every cut makes exactly two children, so then leaves == N.
+void check_leaf_count(const MeshTree& tree, std::uint32_t fragments, bool convex) {
+  const std::size_t leaves = tree.leaf_count();
+  INFO(leaves << " leaves for N = " << fragments);
+  CHECK(leaves >= fragments);
+  if (fragments == 1) {
+    CHECK(tree.nodes.size() == 1);
+    return;
+  }
+  std::size_t most_children_of_a_last_cut = 0;
+  for (const MeshTreeNode& node : tree.nodes) {
+    if (node.is_leaf()) continue;
+    const bool last_level =
+        std::all_of(node.children.begin(), node.children.end(), [&](NodeIndex c) { return tree.nodes[c].is_leaf(); });
+    if (last_level) most_children_of_a_last_cut = std::max(most_children_of_a_last_cut, node.children.size());
+  }
+  INFO("the largest cut whose children are all leaves made " << most_children_of_a_last_cut << " children");
+  CHECK(most_children_of_a_last_cut >= 2);
+  CHECK(leaves - (most_children_of_a_last_cut - 1) < fragments);  // every cut was needed
+  if (convex) CHECK(leaves == fragments);
+}
+
+// How each strategy picks its planes and the next node to cut.
+void check_strategy(const MeshTree& tree, Strategy strategy) {
+  Problems problems(tree, std::string("strategy ") + std::string(strategy_name(strategy)));
+  if (strategy == Strategy::thesis || strategy == Strategy::balanced) {
+    // The plane passes through the node's volume centroid.
+    for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+      const MeshTreeNode& node = tree.nodes[v];
+      if (node.is_leaf()) continue;
+      const Box3 b = bounds(node.mesh);
+      const double tolerance = 1e-9 * norm(b.hi - b.lo) + 1e-12 * norm(node.mass.centroid);
+      const double distance = signed_distance(node.plane, node.mass.centroid);
+      if (std::fabs(distance) > tolerance) {
+        problems.add(v, "plane misses the centroid " + vec_text(node.mass.centroid) + " by " + num(distance));
+      }
+    }
+  }
+  if (strategy == Strategy::balanced) {
+    // Always the largest leaf next: cut volumes never grow, so no leaf is larger
+    // than any node that was cut.
+    double smallest_cut = std::numeric_limits<double>::infinity(), largest_leaf = 0;
+    NodeIndex smallest_cut_node = 0, largest_leaf_node = 0;
+    for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+      const double volume = tree.nodes[v].mass.volume;
+      if (tree.nodes[v].is_leaf()) {
+        if (volume > largest_leaf) largest_leaf = volume, largest_leaf_node = v;
+      } else if (volume < smallest_cut) {
+        smallest_cut = volume, smallest_cut_node = v;
+      }
+    }
+    if (largest_leaf > smallest_cut * (1 + 1e-9)) {
+      problems.add(largest_leaf_node, "leaf of volume " + num(largest_leaf) + " left uncut while node " +
+                                          std::to_string(smallest_cut_node) + " of volume " + num(smallest_cut) +
+                                          " was cut");
+    }
+  }
+  if (strategy == Strategy::axis) {
+    // The plane runs across the node's longest bounding-box axis: the normal's
+    // largest component is along it (or along an axis as long).
+    for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+      const MeshTreeNode& node = tree.nodes[v];
+      if (node.is_leaf()) continue;
+      const Box3 b = bounds(node.mesh);
+      const Vec3 extent = b.hi - b.lo;
+      const Vec3 n = node.plane.normal;
+      const double components[] = {std::fabs(n.x), std::fabs(n.y), std::fabs(n.z)};
+      const int dominant = static_cast<int>(std::max_element(components, components + 3) - components);
+      const double longest = std::max({extent.x, extent.y, extent.z});
+      if (extent[dominant] < longest) {
+        problems.add(v, "plane normal " + vec_text(n) + " is not across the longest axis of extent " + vec_text(extent));
+      }
+    }
+  }
+  expect_none(problems);
+}
+
+// Runs check(v) for every node v on all hardware threads; each call writes
+// only its own node's findings, so the result does not depend on scheduling.
+template <class Check>
+void for_each_node_in_parallel(std::size_t count, const Check& check) {
+  const unsigned workers = std::max(1u, std::min(4u, std::thread::hardware_concurrency()));
+  std::atomic<std::size_t> next{0};
+  const auto work = [&] {
+    for (std::size_t v = next++; v < count; v = next++) check(static_cast<NodeIndex>(v));
+  };
+  std::vector<std::thread> threads;
+  for (unsigned i = 1; i < workers; ++i) threads.emplace_back(work);
+  work();
+  for (std::thread& thread : threads) thread.join();
+}
+
+// Every node mesh a valid solid, its mass properties and hull, its surface ids,
+// and its place relative to its parent's plane.
+void check_nodes(const MeshTree& tree, const Mesh& input, Level level) {
+  enum Kind { solid, intersecting, mass, hull, surfaces, caps, sides, kinds };
+  std::array<Problems, kinds> problems{Problems(tree, "node mesh not a valid solid (solid_problem)"),
+                                       Problems(tree, "node mesh self-intersects"),
+                                       Problems(tree, "mass properties"),
+                                       Problems(tree, "hull"),
+                                       Problems(tree, "surface ids (0 or cap_surface_of(an ancestor))"),
+                                       Problems(tree, "caps of the parent's cut"),
+                                       Problems(tree, "vertices on the wrong side of the parent's plane")};
+  const double tolerance = distance_tolerance(input);
+  struct Findings {
+    std::vector<std::pair<Kind, std::string>> found;
+    double hull_seconds = 0, self_seconds = 0;
+    void add(Kind kind, std::string text) { found.emplace_back(kind, std::move(text)); }
+  };
+  std::vector<Findings> findings(tree.nodes.size());
+
+  for_each_node_in_parallel(tree.nodes.size(), [&](NodeIndex v) {
+    const MeshTreeNode& node = tree.nodes[v];
+    const Mesh& mesh = node.mesh;
+    Findings& out = findings[v];
+
+    const std::string problem = solid_problem(mesh);
+    if (!problem.empty()) {
+      out.add(solid, problem);
+    } else if (level == Level::full) {
+      const auto self_start = std::chrono::steady_clock::now();
+      if (const std::string self = self_intersection_problem(mesh); !self.empty()) out.add(intersecting, self);
+      out.self_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - self_start).count();
+    }
+    if (mesh.positions.empty() || mesh.triangles.empty()) {
+      out.add(solid, "empty mesh");
+      return;
+    }
+
+    // Mass properties: positive volume, and those of the node's own mesh.
+    if (!(node.mass.volume > 0)) out.add(mass, "volume " + num(node.mass.volume) + " not positive");
+    const MassProperties recomputed = mass_properties(mesh);
+    const Box3 box = bounds(mesh);
+    const double size = norm(box.hi - box.lo);
+    if (std::fabs(recomputed.volume - node.mass.volume) > 1e-12 * std::fabs(recomputed.volume)) {
+      out.add(mass, "stored volume " + num(node.mass.volume) + " != the mesh's " + num(recomputed.volume));
+    }
+    if (norm(recomputed.centroid - node.mass.centroid) > 1e-9 * size + tolerance) {
+      out.add(mass, "stored centroid " + vec_text(node.mass.centroid) + " != the mesh's " + vec_text(recomputed.centroid));
+    }
+    for (int i = 0; i < 9; ++i) {
+      if (!std::isfinite(node.mass.inertia[i])) out.add(mass, "inertia not finite");
+    }
+    if (!(node.mass.inertia[0] > 0 && node.mass.inertia[4] > 0 && node.mass.inertia[8] > 0)) {
+      out.add(mass, "a principal moment of inertia is not positive");
+    }
+
+    const auto hull_start = std::chrono::steady_clock::now();
+    if (const std::string h = hull_problem(mesh, node.hull, level == Level::full || node.is_leaf()); !h.empty()) {
+      out.add(hull, h);
+    }
+    out.hull_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - hull_start).count();
+
+    // Surface ids: 0, or the cap of a proper ancestor's cut.
+    std::set<SurfaceId> allowed{original_surface};
+    for (NodeIndex a = node.parent; a != no_node && a < tree.nodes.size(); a = tree.nodes[a].parent) {
+      allowed.insert(cap_surface_of(a));
+    }
+    for (std::size_t t = 0; t < mesh.surfaces.size(); ++t) {
+      if (!allowed.count(mesh.surfaces[t])) {
+        out.add(surfaces, "triangle " + std::to_string(t) + " has surface id " + std::to_string(mesh.surfaces[t]) +
+                              ", not 0 nor the cap of an ancestor");
+        break;
+      }
+    }
+
+    if (node.parent == no_node) return;
+    // Relative to the parent's plane: every vertex on the node's side, and the
+    // cap triangles of the parent's cut on the plane (within rounding).
+    const Plane& plane = tree.nodes[node.parent].plane;
+    const double sign = node.above_parent_plane ? 1.0 : -1.0;
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+      const double d = signed_distance(plane, mesh.positions[i]);
+      if (sign * d < -tolerance) {
+        out.add(sides, "vertex " + std::to_string(i) + " " + vec_text(mesh.positions[i]) + " is " + num(d) +
+                           " from the plane, on the other side");
+        break;
+      }
+    }
+    const SurfaceId cap = cap_surface_of(node.parent);
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      if (mesh.surfaces[t] != cap) continue;
+      for (const VertexIndex corner : mesh.triangles[t]) {
+        const double d = signed_distance(plane, mesh.positions[corner]);
+        if (std::fabs(d) > tolerance) {
+          out.add(caps, "cap triangle " + std::to_string(t) + " has a corner " + num(d) + " off its plane");
+          t = mesh.triangles.size() - 1;
+          break;
+        }
+      }
+    }
+  });
+
+  double hull_seconds = 0, self_seconds = 0;
+  for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+    for (const auto& [kind, text] : findings[v].found) problems[kind].add(v, text);
+    hull_seconds += findings[v].hull_seconds;
+    self_seconds += findings[v].self_seconds;
+  }
+
+  // A cut closes both sides with a cap.
+  for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+    const MeshTreeNode& node = tree.nodes[v];
+    if (node.is_leaf()) continue;
+    bool below = false, above = false;
+    for (const NodeIndex c : node.children) {
+      const Mesh& mesh = tree.nodes[c].mesh;
+      if (std::find(mesh.surfaces.begin(), mesh.surfaces.end(), cap_surface_of(v)) != mesh.surfaces.end()) {
+        (tree.nodes[c].above_parent_plane ? above : below) = true;
+      }
+    }
+    // (A plane passing between separate solids of the node makes no cap at all.)
+    if (below != above) {
+      problems[caps].add(v, std::string("no cap triangle of this cut on the ") + (below ? "above" : "below") +
+                                " side, but some on the other");
+    }
+  }
+
+  for (const Problems& p : problems) expect_none(p);
+  if (timing_wanted()) {
+    std::fprintf(stderr, "  (node checks, summed over threads: hulls %.3f s, self-intersections %.3f s)\n",
+                 hull_seconds, self_seconds);
+  }
+}
+
+// Children's volumes add up to their parent's within 1e-9 relative (the fast
+// kernel's promise; the exact kernel's rounded meshes keep it too), compared as
+// exact sums of the rounded meshes' volumes. Rounding moves a cut point by at
+// most half an ulp of its coordinates; far from the origin that can exceed 1e-9 of
+// a small fragment's volume, so the bound also allows surface area x 2 ulps.
+double surface_area(const Mesh& mesh) {
+  double area = 0;
+  for (const Triangle& t : mesh.triangles) {
+    area += 0.5 * norm(cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]));
+  }
+  return area;
+}
+
+double largest_coordinate(const Mesh& mesh) {
+  double largest = 0;
+  for (const Vec3& p : mesh.positions) largest = std::max({largest, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
+  return largest;
+}
+
+void check_fast_volumes(const MeshTree& tree) {
+  Problems problems(tree, "children's volumes do not sum to the parent's (1e-9 relative, plus area x 2 ulps)");
+  std::vector<CGAL::Mpzf> six;
+  six.reserve(tree.nodes.size());
+  for (const MeshTreeNode& node : tree.nodes) six.push_back(six_volume(node.mesh));
+  for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+    const MeshTreeNode& node = tree.nodes[v];
+    if (node.is_leaf()) continue;
+    CGAL::Mpzf total(0);
+    for (const NodeIndex c : node.children) total += six[c];
+    const double parent = six[v].to_double();
+    const double difference = std::fabs((total - six[v]).to_double());
+    const double rounding = 2 * std::numeric_limits<double>::epsilon() * largest_coordinate(node.mesh) *
+                            surface_area(node.mesh);
+    if (!(difference <= 1e-9 * std::fabs(parent) + 6 * rounding)) {  // six: volumes here are 6x
+      problems.add(v, "children " + num(total.to_double() / 6) + " vs parent " + num(parent / 6) + " (relative " +
+                          num(difference / std::fabs(parent)) + ")");
+    }
+  }
+  expect_none(problems);
+}
+
+// The exact kernel: every node's exact solid is valid, rounds to the node's mesh,
+// lies exactly on its side of its parent's plane with its caps exactly on the
+// planes they came from, and children's exact volumes sum exactly to the parent's.
+void check_exact(const MeshTree& tree, const std::vector<ExactMesh>& exact, const Mesh& input) {
+  REQUIRE(exact.size() == tree.nodes.size());
+  Problems solid(tree, "exact solid invalid (as exact_solid_problem)");
+  Problems rounding(tree, "node mesh is not the exact solid rounded");
+  Problems volumes(tree, "children's exact volumes do not sum exactly to the parent's");
+  Problems planes(tree, "exact vertices vs the cutting planes");
+  std::vector<mpq_class> six;
+  six.reserve(exact.size());
+  for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+    const MeshTreeNode& node = tree.nodes[v];
+    const ExactMesh& solid_v = exact[v];
+    // exact_solid_problem, sharing its parts with the checks below.
+    six.push_back(exact_six_volume(solid_v));
+    const Mesh rounded = to_fast(solid_v);
+    if (const std::string problem = topology_problem(rounded); !problem.empty()) {
+      solid.add(v, problem);
+    } else if (six.back() <= 0) {
+      solid.add(v, "volume not positive");
+    } else {
+      for (std::size_t t = 0; t < solid_v.triangles.size(); ++t) {
+        const Triangle& tri = solid_v.triangles[t];
+        if (CGAL::collinear(solid_v.positions[tri[0]], solid_v.positions[tri[1]], solid_v.positions[tri[2]])) {
+          solid.add(v, "zero-area triangle " + std::to_string(t));
+          break;
+        }
+      }
+    }
+    if (rounded.positions != node.mesh.positions || rounded.triangles != node.mesh.triangles) {
+      rounding.add(v, "positions or triangles differ");
+      continue;
+    }
+    // Every vertex on the node's side of every ancestor's plane (exactly), and
+    // each cap triangle's corners exactly on the plane of its cut.
+    for (NodeIndex child = v, a = node.parent; a != no_node; child = a, a = tree.nodes[a].parent) {
+      const Plane& plane = tree.nodes[a].plane;
+      const Sign wrong = tree.nodes[child].above_parent_plane ? Sign::negative : Sign::positive;
+      for (std::size_t i = 0; i < solid_v.positions.size(); ++i) {
+        if (side_of_plane(plane, solid_v.positions[i]) == wrong) {
+          planes.add(v, "vertex " + std::to_string(i) + " on the wrong side of ancestor " + std::to_string(a) +
+                            "'s plane");
+          break;
+        }
+      }
+    }
+    for (std::size_t t = 0; t < node.mesh.triangles.size(); ++t) {
+      const SurfaceId surface = node.mesh.surfaces[t];
+      if (surface == original_surface || surface - 1 >= tree.nodes.size()) continue;
+      const Plane& plane = tree.nodes[surface - 1].plane;
+      for (const VertexIndex corner : solid_v.triangles[t]) {
+        if (side_of_plane(plane, solid_v.positions[corner]) != Sign::zero) {
+          planes.add(v, "cap triangle " + std::to_string(t) + " (surface " + std::to_string(surface) +
+                            ") has a corner off its cut's plane");
+          t = node.mesh.triangles.size() - 1;
+          break;
+        }
+      }
+    }
+  }
+  if (six[0] != exact_six_volume(input)) volumes.add(0, "the root's exact volume is not the input's");
+  mpq_class leaves = 0;
+  for (const NodeIndex leaf : tree.leaf_nodes) leaves += six[leaf];
+  if (leaves != six[0]) volumes.add_global("the leaves' exact volumes do not sum to the root's");
+  for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+    const MeshTreeNode& node = tree.nodes[v];
+    if (node.is_leaf()) continue;
+    mpq_class total = 0;
+    for (const NodeIndex c : node.children) total += six[c];
+    if (total != six[v]) {
+      volumes.add(v, "children " + num(total.get_d() / 6) + " vs parent " + num(six[v].get_d() / 6) + ", off by " +
+                         num(mpq_class(total - six[v]).get_d() / 6));
+    }
+  }
+  for (const Problems* p : {&solid, &rounding, &volumes, &planes}) expect_none(*p);
+}
+
+// Minimal cover: the cover of all leaves is the root, and of each node's leaf
+// range that node alone.
+void check_cover(const MeshTree& tree) {
+  std::vector<LeafIndex> all(tree.leaf_count());
+  for (LeafIndex i = 0; i < all.size(); ++i) all[i] = i;
+  CHECK(minimal_cover(tree, all) == std::vector<NodeIndex>{0});
+  Problems problems(tree, "minimal cover of a node's leaf range is not that node");
+  for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+    const MeshTreeNode& node = tree.nodes[v];
+    const std::span<const LeafIndex> range(all.data() + node.first_leaf, node.leaf_count);
+    const std::vector<NodeIndex> cover = minimal_cover(tree, range);
+    if (cover != std::vector<NodeIndex>{v}) problems.add(v, "cover has " + std::to_string(cover.size()) + " nodes");
+  }
+  expect_none(problems);
+}
+
+void check_bonds_match(const MeshTree& tree) {
+  const std::vector<Bond> expected = find_bonds(tree);
+  REQUIRE(tree.bonds.size() == expected.size());
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    const Bond& a = tree.bonds[i];
+    const Bond& b = expected[i];
+    if (std::tie(a.first, a.second, a.cut_node) != std::tie(b.first, b.second, b.cut_node) || a.area != b.area ||
+        !(a.centroid == b.centroid) || !(a.normal == b.normal)) {
+      ++differing;
+    }
+  }
+  CHECK(differing == 0);
+}
+
+// Where two encodings differ: "equal", or the sizes and the first differing
+// offset (never the raw bytes, which would flood the log).
+std::string byte_difference(const std::string& a, const std::string& b) {
+  if (a == b) return "equal";
+  std::size_t i = 0;
+  while (i < a.size() && i < b.size() && a[i] == b[i]) ++i;
+  // Name the section the offset falls in (12-byte header, then tag + u64 + u32 + payload).
+  std::string section = "header";
+  for (std::size_t at = 12; at + 16 <= a.size();) {
+    std::uint64_t length = 0;
+    for (int k = 0; k < 8; ++k) length |= std::uint64_t(static_cast<unsigned char>(a[at + 4 + k])) << (8 * k);
+    if (i < at + 16 + length) {
+      section = a.substr(at, 4) + ", payload offset " + std::to_string(i - std::min(i, at + 16));
+      break;
+    }
+    at += 16 + length;
+  }
+  return "sizes " + std::to_string(a.size()) + " and " + std::to_string(b.size()) + ", first difference at byte " +
+         std::to_string(i) + " (section " + section + ")";
+}
+
+// decode(encode(tree)) encodes to the same bytes; returns the bytes.
+std::string check_round_trip(const MeshTree& tree) {
+  std::string bytes;
+  REQUIRE_NOTHROW(bytes = encode_shatter(tree));
+  MeshTree decoded;
+  REQUIRE_NOTHROW(decoded = decode_shatter(bytes));
+  CHECK(decoded.options.threads == 0);
+  CHECK(decoded.nodes.size() == tree.nodes.size());
+  CHECK(decoded.leaf_nodes == tree.leaf_nodes);
+  CHECK(byte_difference(encode_shatter(decoded), bytes) == "equal");
+  return bytes;
+}
+
+// Every check on one built tree.
+void check_tree(const Case& c, const Built& built) {
+  const MeshTree& tree = built.tree;
+  const Mesh& input = c.mesh->mesh;
+  INFO(describe(c) << ": " << tree.nodes.size() << " nodes, " << tree.leaf_count() << " leaves");
+
+  CHECK(tree.options.fragments == c.options.fragments);
+  CHECK(tree.options.seed == c.options.seed);
+  CHECK(tree.options.strategy == c.options.strategy);
+  CHECK(tree.options.kernel == c.options.kernel);
+  CHECK(tree.options.threads == 0);
+  PhaseTimer timer;
+  if (!check_structure(tree)) return;
+  check_leaf_count(tree, c.options.fragments, c.mesh->convex);
+  CHECK(canonical_bytes(tree.nodes[0].mesh) == canonical_bytes(input));
+  check_strategy(tree, c.options.strategy);
+  timer.lap("structure");
+  check_nodes(tree, input, c.level);
+  timer.lap("nodes");
+  check_fast_volumes(tree);
+  timer.lap("volumes");
+  if (c.options.kernel == KernelKind::exact) check_exact(tree, built.exact, input);
+  timer.lap("exact");
+  check_cover(tree);
+  check_bonds_match(tree);
+  timer.lap("cover+bonds");
+  const std::string bytes = check_round_trip(tree);
+  timer.lap("file");
+
+  if (c.check_threads) {
+    // The tree itself was built with c.options.threads (2 unless a case says
+    // otherwise); the other counts of 1, 2 and 4 are rebuilt.
+    for (const unsigned threads : {1u, 2u, 4u}) {
+      if (threads == c.options.threads) continue;
+      Case other = c;
+      other.options.threads = threads;
+      INFO("rebuilt with threads = " << threads);
+      MeshTree again;
+      try {
+        again = build_mesh_tree(input, other.options);
+      } catch (const std::exception& error) {
+        FAIL_CHECK("the rebuild threw: " << error.what());
+        continue;
+      }
+      CHECK(byte_difference(encode_shatter(again), bytes) == "equal");
+    }
+  }
+  timer.lap("threads");
+  timer.print(describe(c));
+}
+
+void run(const Case& c) {
+  INFO(describe(c));
+  const auto start = std::chrono::steady_clock::now();
+  const std::optional<Built> built = try_build(c);
+  const auto built_at = std::chrono::steady_clock::now();
+  if (built) check_tree(c, *built);
+  if (timing_wanted()) {
+    const auto seconds = [](auto d) { return std::chrono::duration<double>(d).count(); };
+    std::fprintf(stderr, "%-70s build %7.3f s, checks %7.3f s\n", describe(c).c_str(), seconds(built_at - start),
+                 seconds(std::chrono::steady_clock::now() - built_at));
+  }
+}
+
+}  // namespace
+
+// --- the matrix --------------------------------------------------------------------
+
+TEST_CASE("one fragment: the root alone, a leaf holding the input", "[tree][build]") {
+  for (const TestMesh& m : test_meshes()) {
+    for (const Strategy strategy : all_strategies) {
+      for (const KernelKind kernel : all_kernels) {
+        const Case c{&m, options_for(1, strategy, kernel, 3), Level::full, false};
+        INFO(describe(c));
+        const std::optional<Built> built = try_build(c);
+        if (!built) continue;
+        const MeshTree& tree = built->tree;
+        REQUIRE(tree.nodes.size() == 1);
+        CHECK(tree.leaf_nodes == std::vector<NodeIndex>{0});
+        CHECK(tree.nodes[0].is_leaf());
+        CHECK(tree.nodes[0].first_leaf == 0);
+        CHECK(tree.nodes[0].leaf_count == 1);
+        CHECK(tree.bonds.empty());
+        if (kernel == KernelKind::exact) {
+          REQUIRE(built->exact.size() == 1);
+          CHECK(exact_six_volume(built->exact[0]) == exact_six_volume(m.mesh));
+        }
+        check_tree(c, *built);
+      }
+    }
+  }
+}
+
+TEST_CASE("2 and 3 fragments: every mesh, strategy and kernel, full validation", "[tree][build][property]") {
+  for (const TestMesh& m : test_meshes()) {
+    for (const std::uint32_t fragments : {2u, 3u}) {
+      for (const Strategy strategy : all_strategies) {
+        for (const KernelKind kernel : all_kernels) {
+          for (const std::uint64_t seed : {1u, 2u}) {
+            if (kernel == KernelKind::exact && seed != 1) continue;
+            run({&m, options_for(fragments, strategy, kernel, seed), Level::full, seed == 1 && fragments == 3});
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("64 fragments, fast kernel: every strategy, full validation", "[tree][build][property]") {
+  // (sphere.off is left to 2 and 3 fragments: here it costs as much as three
+  // other meshes, and the box and the egg cover convex and smooth.)
+  const char* meshes[] = {"box", "grid-box-4", "torus-800", "hollow-egg", "nested-shells-island", "two-boxes",
+                          "sliver", "torus-tiny-1e-6", "torus-huge-1e6", "egg-far-from-origin", "torus_quad.off",
+                          "double-torus-example.off", "helmet.off"};
+  for (const Strategy strategy : all_strategies) {
+    for (const char* name : meshes) {
+      const std::string mesh = name;
+      run({&test_mesh(mesh), options_for(64, strategy, KernelKind::fast, 7), Level::full,
+           mesh == "torus-800" || mesh == "nested-shells-island"});
+    }
+  }
+}
+
+TEST_CASE("64 fragments, exact kernel: every strategy, exact volumes", "[tree][build][property][exact]") {
+  const char* meshes[] = {"box", "nested-shells-island", "two-boxes", "torus_quad.off"};
+  for (const Strategy strategy : all_strategies) {
+    for (const char* name : meshes) {
+      const std::string mesh = name;
+      run({&test_mesh(mesh), options_for(64, strategy, KernelKind::exact, 7), Level::full, mesh == "torus_quad.off"});
+    }
+  }
+}
+
+// The remedy for the known limitation above: exact cut points leave no needles.
+TEST_CASE("the exact kernel cuts the boxes where the fast kernel's axis planes run out", "[tree][build][exact]") {
+  for (const char* name : {"box", "two-boxes"}) {
+    run({&test_mesh(name), options_for(256, Strategy::axis, KernelKind::exact, 13), Level::full, false});
+  }
+}
+
+TEST_CASE("256 fragments: every strategy, fast kernel, full validation", "[tree][build][property]") {
+  const char* meshes[] = {"box", "torus-800", "hollow-egg", "nested-shells-island", "egg-far-from-origin"};
+  for (const Strategy strategy : all_strategies) {
+    for (const char* name : meshes) {
+      const std::string mesh = name;
+      run({&test_mesh(mesh), options_for(256, strategy, KernelKind::fast, 13), Level::full,
+           mesh == "nested-shells-island"});
+    }
+  }
+}
+
+// 2048 fragments: topology, zero-area triangles, orientation, volumes and every
+// structural invariant, but no self-intersection test, and the hull's convexity
+// and containment on the leaves only. The thread-count comparison runs on one
+// strategy (the others are compared at 64 and 256 fragments).
+TEST_CASE("2048 fragments of the box: every strategy, fast kernel", "[tree][build][property][slow]") {
+  for (const Strategy strategy : all_strategies) {
+    run({&test_mesh("box"), options_for(2048, strategy, KernelKind::fast, 17), Level::cheap,
+         strategy == Strategy::thesis});
+  }
+}
+
+TEST_CASE("2048 fragments of the hollow egg: every strategy, fast kernel", "[tree][build][property][slow]") {
+  for (const Strategy strategy : all_strategies) {
+    run({&test_mesh("hollow-egg"), options_for(2048, strategy, KernelKind::fast, 17), Level::cheap, false});
+  }
+}
+
+// --- determinism ---------------------------------------------------------------------
+
+TEST_CASE("the same options give the same bytes, another seed another tree", "[tree][build]") {
+  const TestMesh& m = test_mesh("torus-800");
+  for (const Strategy strategy : all_strategies) {
+    for (const KernelKind kernel : all_kernels) {
+      const BuildOptions options = options_for(kernel == KernelKind::exact ? 8 : 32, strategy, kernel, 5, 2);
+      INFO(describe({&m, options, Level::full, false}));
+      const std::string first = encode_shatter(build_mesh_tree(m.mesh, options));
+      CHECK(byte_difference(encode_shatter(build_mesh_tree(m.mesh, options)), first) == "equal");
+      if (kernel == KernelKind::exact) {
+        // Keeping the exact solids changes nothing in the tree.
+        CHECK(byte_difference(encode_shatter(build_mesh_tree_keeping_exact(m.mesh, options).tree), first) == "equal");
+      }
+      BuildOptions other = options;
+      other.seed = 6;
+      CHECK(encode_shatter(build_mesh_tree(m.mesh, other)) != first);
+      // threads = 0 (one per hardware thread) gives the same tree too.
+      other = options;
+      other.threads = 0;
+      CHECK(byte_difference(encode_shatter(build_mesh_tree(m.mesh, other)), first) == "equal");
+    }
+  }
+}
+
+TEST_CASE("the progress callback reports every leaf once", "[tree][build]") {
+  for (const Strategy strategy : all_strategies) {
+    INFO(strategy_name(strategy));
+    std::mutex mutex;
+    std::vector<std::size_t> reported;
+    const MeshTree tree = build_mesh_tree(test_mesh("torus-800").mesh, options_for(100, strategy, KernelKind::fast, 9, 4),
+                                          [&](std::size_t done) {
+                                            const std::lock_guard<std::mutex> lock(mutex);
+                                            reported.push_back(done);
+                                          });
+    std::sort(reported.begin(), reported.end());
+    std::vector<std::size_t> expected(tree.leaf_count());
+    for (std::size_t i = 0; i < expected.size(); ++i) expected[i] = i + 1;
+    CHECK(reported == expected);
+  }
+}
+
+// --- refused inputs ---------------------------------------------------------------------
+
+TEST_CASE("an input triangle with a surface id other than 0 is refused", "[tree][build][errors]") {
+  for (const SurfaceId surface : {1u, 2u, 7u, 0xFFFFFFFFu}) {
+    Mesh mesh = box({0, 0, 0}, {1, 1, 1});
+    mesh.surfaces[5] = surface;
+    for (const std::uint32_t fragments : {1u, 2u}) {
+      INFO("surface " << surface << " N = " << fragments);
+      CHECK_THROWS_AS(build_mesh_tree(mesh, options_for(fragments, Strategy::thesis, KernelKind::fast, 1)),
+                      std::invalid_argument);
+      CHECK_THROWS_AS(build_mesh_tree_keeping_exact(mesh, options_for(fragments, Strategy::axis, KernelKind::exact, 1)),
+                      std::invalid_argument);
+    }
+  }
+}
+
+TEST_CASE("invalid options are refused", "[tree][build][errors]") {
+  const Mesh mesh = unit_cube();
+  BuildOptions options = options_for(0, Strategy::thesis, KernelKind::fast, 1);
+  CHECK_THROWS_AS(build_mesh_tree(mesh, options), std::invalid_argument);
+  options = options_for(4, Strategy::balanced, KernelKind::fast, 1);
+  options.max_plane_tries = 0;
+  CHECK_THROWS_AS(build_mesh_tree(mesh, options), std::invalid_argument);
+}
+
+TEST_CASE("an invalid input mesh is refused with InvalidMeshError", "[tree][build][errors]") {
+  std::vector<NamedMesh> bad;
+  for (const std::filesystem::path& path : bad_meshes()) {
+    Mesh mesh;
+    try {
+      mesh = read_mesh(path);
+    } catch (const std::exception&) {
+      continue;  // refused by the reader already (test_io's concern)
+    }
+    bad.push_back({path.filename().string(), std::move(mesh)});
+  }
+  REQUIRE(bad.size() >= 3);
+  bad.push_back({"flipped box", flipped(box({0, 0, 0}, {1, 1, 1}))});
+  Mesh open = box({0, 0, 0}, {1, 1, 1});
+  open.triangles.pop_back();
+  open.surfaces.pop_back();
+  bad.push_back({"open box", open});
+  Mesh degenerate = unit_cube();
+  degenerate.positions.push_back({0.5, 0, 0});  // on the edge (0, 1): a zero-area triangle
+  degenerate.triangles.push_back({0, 1, static_cast<VertexIndex>(degenerate.positions.size() - 1)});
+  degenerate.surfaces.push_back(original_surface);
+  bad.push_back({"zero-area triangle", degenerate});
+  Mesh not_finite = unit_cube();
+  not_finite.positions[3].y = std::numeric_limits<double>::quiet_NaN();
+  bad.push_back({"NaN coordinate", not_finite});
+  Mesh unused = unit_cube();
+  unused.positions.push_back({5, 5, 5});
+  bad.push_back({"unused vertex", unused});
+  bad.push_back({"flat (zero volume) pair of triangles", mesh_from({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, 2, 1}})});
+  bad.push_back({"empty mesh", Mesh{}});
+
+  for (const NamedMesh& named : bad) {
+    for (const KernelKind kernel : all_kernels) {
+      for (const std::uint32_t fragments : {1u, 4u}) {
+        INFO(named.name << " " << kernel_name(kernel) << " N = " << fragments);
+        CHECK_THROWS_AS(build_mesh_tree(named.mesh, options_for(fragments, Strategy::thesis, kernel, 1)),
+                        InvalidMeshError);
+      }
+    }
+  }
+}
+
+TEST_CASE("self-intersecting input: refused by default, closed and oriented pieces on request",
+          "[tree][build][errors]") {
+  for (const std::filesystem::path& path : self_intersecting_meshes()) {
+    const Mesh mesh = read_mesh(path);
+    INFO(path.filename().string());
+    CHECK_THROWS_AS(build_mesh_tree(mesh, options_for(4, Strategy::thesis, KernelKind::fast, 1)), InvalidMeshError);
+  }
+  const Mesh elk = read_mesh(mesh_dir() / "self-intersecting" / "elk.off");
+  for (const Strategy strategy : all_strategies) {
+    BuildOptions options = options_for(8, strategy, KernelKind::fast, 1);
+    options.allow_self_intersections = true;
+    INFO("elk.off " << strategy_name(strategy));
+    MeshTree tree;
+    REQUIRE_NOTHROW(tree = build_mesh_tree(elk, options));
+    CHECK(tree.leaf_count() >= 8);
+    REQUIRE(check_structure(tree));
+    Problems problems(tree, "topology (closed, oriented, manifold)");
+    for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+      if (const std::string problem = topology_problem(tree.nodes[v].mesh); !problem.empty()) problems.add(v, problem);
+    }
+    expect_none(problems);
+    check_round_trip(tree);
+  }
+}
+
+TEST_CASE("planes that keep failing end in UnsupportedGeometryError", "[tree][build][errors]") {
+  // A plane through the centroid always has volume on both sides, so it cannot
+  // miss a solid; what keeps failing is a solid thinner than rounding. This
+  // tetrahedron is one ulp on a side (2^-32 at 2^20): every crossing point rounds
+  // onto a corner of its ulp grid, so every piece is degenerate, in both kernels
+  // (the exact one rounds its pieces for storage).
+  const double base = 1048576.0, ulp = 0x1p-32;
+  const Mesh tiny = mesh_from({{base, base, base}, {base + ulp, base, base}, {base, base + ulp, base}, {base, base, base + ulp}},
+                              {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}});
+  REQUIRE(solid_problem(tiny) == "");
+  for (const Strategy strategy : all_strategies) {
+    for (const KernelKind kernel : all_kernels) {
+      for (const std::uint32_t tries : {1u, 3u, 64u}) {
+        BuildOptions options = options_for(2, strategy, kernel, 1);
+        options.max_plane_tries = tries;
+        INFO(strategy_name(strategy) << " " << kernel_name(kernel) << " max_plane_tries " << tries);
+        try {
+          const MeshTree tree = build_mesh_tree(tiny, options);
+          FAIL_CHECK("no error: a tree of " << tree.nodes.size() << " nodes");
+        } catch (const UnsupportedGeometryError& error) {
+          // A clear message: it names the number of planes tried.
+          CHECK(std::string(error.what()).find(std::to_string(tries)) != std::string::npos);
+        } catch (const std::exception& error) {
+          FAIL_CHECK("the wrong error: " << error.what());
+        }
+      }
+    }
+  }
+  // One fragment needs no cut, so nothing can fail.
+  const MeshTree single = build_mesh_tree(tiny, options_for(1, Strategy::axis, KernelKind::fast, 1));
+  CHECK(single.nodes.size() == 1);
+}
+
+TEST_CASE("a plane between separate solids parts them without a cap", "[tree][build]") {
+  // Two 1e-3 cubes 2000 apart: a plane through the centroid meets one only if its
+  // normal is within ~1e-6 of perpendicular to their axis, and an axis plane
+  // (across x, within 20% of the extent of the centroid) never does; such a plane
+  // misses no solid of the node, it parts them.
+  const TestMesh far_apart{"two cubes far apart",
+                           merge({box({-1000, 0, 0}, {-999.999, 0.001, 0.001}), box({999.999, 0, 0}, {1000, 0.001, 0.001})}),
+                           false};
+  for (const Strategy strategy : all_strategies) {
+    for (const KernelKind kernel : all_kernels) {
+      const Case c{&far_apart, options_for(2, strategy, kernel, 1), Level::full, true};
+      INFO(describe(c));
+      const std::optional<Built> built = try_build(c);
+      if (!built) continue;
+      check_tree(c, *built);
+      REQUIRE(built->tree.leaf_count() == 2);
+      for (const LeafIndex leaf : {0u, 1u}) {
+        const Mesh& mesh = built->tree.leaf(leaf).mesh;
+        CHECK(std::all_of(mesh.surfaces.begin(), mesh.surfaces.end(), [](SurfaceId s) { return s == 0; }));  // no cap
+        CHECK(mesh.triangle_count() == 12);
+      }
+      CHECK(built->tree.bonds.empty());
+    }
+  }
+}
+
+// --- attributes ---------------------------------------------------------------------------
+
+TEST_CASE("corner attributes survive the tree, and caps get the plane normal", "[tree][build]") {
+  Mesh mesh = torus(1.0, 0.35, 16, 10);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    const Vec3 n = normalized(cross(mesh.positions[tri[1]] - mesh.positions[tri[0]],
+                                    mesh.positions[tri[2]] - mesh.positions[tri[0]]));
+    for (int c = 0; c < 3; ++c) {
+      mesh.corners.normals.push_back(n);
+      mesh.corners.uvs.push_back({static_cast<double>(t % 7) / 7, static_cast<double>(c) / 3});
+    }
+  }
+  const TestMesh m{"torus-with-normals-uvs", mesh, false};
+  for (const Strategy strategy : all_strategies) {
+    for (const KernelKind kernel : all_kernels) {
+      const Case c{&m, options_for(kernel == KernelKind::exact ? 8 : 64, strategy, kernel, 21), Level::full, false};
+      INFO(describe(c));
+      const std::optional<Built> built = try_build(c);
+      if (!built) continue;
+      check_tree(c, *built);
+      const MeshTree& tree = built->tree;
+      Problems problems(tree, "cap corner normals are not the plane normal, outward");
+      for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+        const MeshTreeNode& node = tree.nodes[v];
+        REQUIRE(node.mesh.corners.normals.size() == 3 * node.mesh.triangle_count());
+        REQUIRE(node.mesh.corners.uvs.size() == 3 * node.mesh.triangle_count());
+        if (node.parent == no_node) continue;
+        const Vec3 outward = normalized(tree.nodes[node.parent].plane.normal) * (node.above_parent_plane ? -1.0 : 1.0);
+        for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
+          if (node.mesh.surfaces[t] != cap_surface_of(node.parent)) continue;
+          for (int corner = 0; corner < 3; ++corner) {
+            const Vec3 normal = node.mesh.corners.normals[3 * t + corner];
+            if (dot(normal, outward) < 1 - 1e-12) {
+              problems.add(v, "cap triangle " + std::to_string(t) + " normal " + vec_text(normal));
+              t = node.mesh.triangle_count() - 1;
+              break;
+            }
+          }
+        }
+      }
+      expect_none(problems);
+    }
+  }
+}
