@@ -1,0 +1,104 @@
+// shatter-bench-node: where one node of a deep mesh tree spends its time. A cube is
+// fractured (thesis strategy, fast kernel, seed 1) to N fragments; then, on every
+// leaf, each step the builder takes per node is timed on its own: the cut (slice,
+// cap, separate), the validation of a piece with and without the self-intersection
+// test (the builder runs it with), the convex hull, and the mass properties.
+// Reported: microseconds per leaf, and the leaves' mean triangle count.
+//
+// Timing: std::chrono::steady_clock around a loop over all leaves, each step
+// repeated until the loop has taken >= 0.3 s in total; the mean per leaf.
+
+#include <chrono>
+#include <cstdint>
+#include <cstdlib>
+#include <functional>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "bench_support.hpp"
+#include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/cut.hpp"
+#include "support/generators.hpp"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Mean microseconds per leaf of `step` over all leaves.
+double microseconds_per_leaf(const std::vector<const shatter::Mesh*>& leaves,
+                             const std::function<void(const shatter::Mesh&)>& step) {
+  const auto start = Clock::now();
+  std::size_t calls = 0;
+  do {
+    for (const shatter::Mesh* leaf : leaves) step(*leaf);
+    calls += leaves.size();
+  } while (std::chrono::duration<double>(Clock::now() - start).count() < 0.3);
+  return std::chrono::duration<double, std::micro>(Clock::now() - start).count() / static_cast<double>(calls);
+}
+
+// A plane through the leaf's vertex mean with a fixed oblique normal: a cut of the
+// kind the builder makes, the same on every run.
+shatter::Plane plane_through_middle(const shatter::Mesh& mesh) {
+  shatter::Vec3 sum;
+  for (const shatter::Vec3& p : mesh.positions) sum = sum + p;
+  const shatter::Vec3 middle = sum * (1.0 / static_cast<double>(mesh.positions.size()));
+  const shatter::Vec3 normal = shatter::normalized(shatter::Vec3{0.3, 0.5, 0.8});
+  return {normal, -shatter::dot(normal, middle)};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::uint32_t> counts;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "-h" || arg == "--help") {
+      std::cout << "usage: shatter-bench-node [N ...]   (default: 256 4096)\n\n"
+                   "Fractures a unit cube into N fragments (thesis, fast kernel, seed 1) and times,\n"
+                   "per leaf, each step the builder takes per node: cut, validation with and\n"
+                   "without the self-intersection test, convex hull, mass properties.\n";
+      return 0;
+    }
+    char* end = nullptr;
+    const unsigned long value = std::strtoul(arg.c_str(), &end, 10);
+    if (arg.empty() || *end != '\0' || value < 2 || value > (1u << 20)) {
+      std::cerr << "error: N must be an integer from 2 to 1048576, not '" << arg << "'\n";
+      return 2;
+    }
+    counts.push_back(static_cast<std::uint32_t>(value));
+  }
+  if (counts.empty()) counts = {256, 4096};
+
+  std::cout << "| N | mean leaf triangles | cut µs | validate µs | validate without self-intersections µs | "
+               "hull µs | mass µs |\n|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const std::uint32_t count : counts) {
+    shatter::BuildOptions options;
+    options.fragments = count;
+    options.threads = 1;
+    const shatter::MeshTree tree = shatter::build_mesh_tree(shatter::test::unit_cube(), options);
+    std::vector<const shatter::Mesh*> leaves;
+    std::size_t triangles = 0;
+    for (const shatter::NodeIndex node : tree.leaf_nodes) {
+      leaves.push_back(&tree.nodes[node].mesh);
+      triangles += tree.nodes[node].mesh.triangles.size();
+    }
+    shatter::ValidationOptions without_self_intersections;
+    without_self_intersections.check_self_intersections = false;
+    const double cut = microseconds_per_leaf(
+        leaves, [](const shatter::Mesh& m) { (void)shatter::cut_mesh(m, plane_through_middle(m)); });
+    const double validate = microseconds_per_leaf(leaves, [](const shatter::Mesh& m) { (void)shatter::validate_mesh(m); });
+    const double validate_topology = microseconds_per_leaf(
+        leaves, [&](const shatter::Mesh& m) { (void)shatter::validate_mesh(m, without_self_intersections); });
+    const double hull = microseconds_per_leaf(leaves, [](const shatter::Mesh& m) { (void)shatter::convex_hull_of(m); });
+    const double mass = microseconds_per_leaf(leaves, [](const shatter::Mesh& m) { (void)shatter::mass_properties(m); });
+    std::cout << "| " << shatter::bench::with_thousands(count) << " | "
+              << shatter::bench::fixed(static_cast<double>(triangles) / static_cast<double>(leaves.size()), 1) << " | "
+              << shatter::bench::fixed(cut, 1) << " | " << shatter::bench::fixed(validate, 1) << " | "
+              << shatter::bench::fixed(validate_topology, 1) << " | " << shatter::bench::fixed(hull, 1) << " | "
+              << shatter::bench::fixed(mass, 2) << " |\n";
+  }
+  return 0;
+}
