@@ -24,6 +24,7 @@
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/validate.hpp"
+#include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/export.hpp"
 #include "shatter/meshtree/file.hpp"
@@ -121,9 +122,16 @@ void append_stats_json(json& out, const json& options, const TreeStats& stats) {
   out["leaf_vertices"] = stats.leaf_vertices;
 }
 
-json info_json(const InfoArgs& args, const MeshTree& tree, const TreeStats& stats) {
+json info_json(const InfoArgs& args, const MeshTree& tree, const TreeStats& stats,
+               const std::optional<BondRuleComparison>& rules) {
   json out{{"file", args.input}};
   append_stats_json(out, options_json(tree.options), stats);
+  if (rules) {
+    out["bounding_box_rule"] = {{"true_bonds", rules->true_bonds},
+                                {"box_bonds", rules->box_bonds},
+                                {"false_box_bonds", rules->false_box_bonds},
+                                {"missed_true_bonds", rules->missed_true_bonds}};
+  }
   return out;
 }
 
@@ -146,6 +154,12 @@ void print_info_text(const InfoArgs& args, const MeshTree& tree, const TreeStats
             << "  bonds: " << stats.bond_count << ", total area " << stats.total_bond_area << '\n'
             << "  leaves hold " << stats.leaf_triangles << " triangles (" << stats.leaf_cap_triangles
             << " on caps) over " << stats.leaf_vertices << " vertices\n";
+}
+
+void print_bond_rules_text(const BondRuleComparison& rules) {
+  std::cout << "  the seed's bounding-box rule: " << rules.box_bonds << " bonded pairs, " << rules.false_box_bonds
+            << " of them false (no cap contact); " << rules.missed_true_bonds << " of the " << rules.true_bonds
+            << " truly touching pairs missed\n";
 }
 
 }  // namespace
@@ -552,16 +566,23 @@ CLI::App* add_info_command(CLI::App& app, InfoArgs& args) {
       "(min, median, max, coefficient of variation), bonds and their total area.");
   command->add_option("tree", args.input, "Mesh tree file (.shatter)")->required();
   command->add_flag("--json", args.json, "Print the description as JSON");
+  command->add_flag("--compare-bond-rules", args.compare_bond_rules,
+                    "Also apply the seed's bond rule (leaves whose bounding boxes overlap) and count its false "
+                    "bonds (pairs with no cap contact) and the true bonds it misses, against the stored true-contact "
+                    "bonds recomputed from the meshes");
   return command;
 }
 
 int run_info(const InfoArgs& args) {
   const MeshTree tree = read_shatter_file(args.input);
   const TreeStats stats = tree_stats(tree);
+  std::optional<BondRuleComparison> rules;
+  if (args.compare_bond_rules) rules = compare_bond_rules(tree);
   if (args.json) {
-    std::cout << info_json(args, tree, stats).dump(2) << '\n';
+    std::cout << info_json(args, tree, stats, rules).dump(2) << '\n';
   } else {
     print_info_text(args, tree, stats);
+    if (rules) print_bond_rules_text(*rules);
   }
   return 0;
 }

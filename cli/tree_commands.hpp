@@ -84,6 +84,7 @@ int run_export(const ExportArgs& args);
 struct InfoArgs {
   std::string input;
   bool json = false;
+  bool compare_bond_rules = false;  ///< also count the seed's bounding-box bonds against the true ones
 };
 
 /// Declares the `info` subcommand on `app`, its arguments bound to `args`;

@@ -303,6 +303,36 @@ TEST_CASE("fracture writes a tree info reads back: at least N leaves, as asked, 
   }
 }
 
+TEST_CASE("info --compare-bond-rules counts the seed's false box bonds against the true ones") {
+  for (const fs::path& mesh : fracture_meshes()) {
+    for (const char* seed : {"3", "11"}) {
+      INFO(mesh.filename() << " seed " << seed);
+      const fs::path dir = scratch("bond-rules");
+      REQUIRE(run_shatter("fracture " + quoted(mesh) + " --fragments 12 --seed " + seed + " --out " +
+                          quoted(dir / "t.shatter"))
+                  .exit_code == 0);
+      const Run run = run_shatter("info " + quoted(dir / "t.shatter") + " --json --compare-bond-rules");
+      REQUIRE(run.exit_code == 0);
+      const nlohmann::json info = nlohmann::json::parse(run.out);
+      const nlohmann::json& rules = info["bounding_box_rule"];
+      const auto true_bonds = rules["true_bonds"].get<std::size_t>();
+      const auto box_bonds = rules["box_bonds"].get<std::size_t>();
+      const auto false_box = rules["false_box_bonds"].get<std::size_t>();
+      const auto missed = rules["missed_true_bonds"].get<std::size_t>();
+      CHECK(true_bonds > 0);
+      CHECK(true_bonds <= info["bonds"]["count"].get<std::size_t>());  // pairs, against bonds per cut
+      CHECK(false_box <= box_bonds);
+      CHECK(missed <= true_bonds);
+      CHECK(true_bonds - missed == box_bonds - false_box);  // the pairs both rules find
+      // Without the flag, no comparison is made or printed.
+      CHECK(info_of(dir / "t.shatter").count("bounding_box_rule") == 0);
+      const Run text = run_shatter("info " + quoted(dir / "t.shatter") + " --compare-bond-rules");
+      CHECK(text.out.find("bounding-box rule: " + std::to_string(box_bonds) + " bonded pairs, " +
+                          std::to_string(false_box) + " of them false") != std::string::npos);
+    }
+  }
+}
+
 TEST_CASE("fracture --fragments 1 keeps the solid whole, and --kernel exact gives a valid tree too") {
   const fs::path dir = scratch("whole");
   for (const fs::path& mesh : fracture_meshes()) {
