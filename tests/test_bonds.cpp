@@ -25,6 +25,7 @@
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cut.hpp"
 #include "shatter/meshtree/file.hpp"
+#include "support/checks.hpp"
 #include "support/corpus.hpp"
 #include "support/generators.hpp"
 
@@ -32,18 +33,6 @@ using namespace shatter;
 using namespace shatter::test;
 
 namespace {
-
-struct Box3 {
-  Vec3 lo, hi;
-};
-Box3 bounds(const Mesh& m) {
-  Box3 b{m.positions.at(0), m.positions.at(0)};
-  for (const Vec3& p : m.positions) {
-    b.lo = {std::min(b.lo.x, p.x), std::min(b.lo.y, p.y), std::min(b.lo.z, p.z)};
-    b.hi = {std::max(b.hi.x, p.x), std::max(b.hi.y, p.y), std::max(b.hi.z, p.z)};
-  }
-  return b;
-}
 
 double triangle_area(const Mesh& mesh, const Triangle& t) {
   return 0.5 * norm(cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]));

@@ -18,18 +18,6 @@ using namespace shatter::test;
 
 namespace {
 
-struct Box3 {
-  Vec3 lo, hi;
-};
-Box3 bounds(const Mesh& m) {
-  Box3 b{m.positions[0], m.positions[0]};
-  for (const Vec3& p : m.positions) {
-    b.lo = {std::min(b.lo.x, p.x), std::min(b.lo.y, p.y), std::min(b.lo.z, p.z)};
-    b.hi = {std::max(b.hi.x, p.x), std::max(b.hi.y, p.y), std::max(b.hi.z, p.z)};
-  }
-  return b;
-}
-
 Plane plane_through(Vec3 point, Vec3 normal) { return {normal, -dot(normal, point)}; }
 
 // A plane, and whether it may pass within rounding distance of a vertex without

@@ -269,18 +269,6 @@ void expect_none(const Problems& problems) {
 
 // --- geometry helpers --------------------------------------------------------------
 
-struct Box3 {
-  Vec3 lo, hi;
-};
-Box3 bounds(const Mesh& m) {
-  Box3 b{m.positions.at(0), m.positions.at(0)};
-  for (const Vec3& p : m.positions) {
-    b.lo = {std::min(b.lo.x, p.x), std::min(b.lo.y, p.y), std::min(b.lo.z, p.z)};
-    b.hi = {std::max(b.hi.x, p.x), std::max(b.hi.y, p.y), std::max(b.hi.z, p.z)};
-  }
-  return b;
-}
-
 // A distance tolerance for rounded constructions: relative to the input's size,
 // plus a few ulps of its largest coordinate (meshes far from the origin).
 double distance_tolerance(const Mesh& input) {

@@ -1,5 +1,6 @@
 #include "support/checks.hpp"
 
+#include <algorithm>
 #include <cstring>
 
 #include "shatter/kernel/validate.hpp"
@@ -88,6 +89,15 @@ std::string canonical_bytes(const Mesh& mesh) {
   put(mesh.corners.uvs.data(), mesh.corners.uvs.size() * sizeof(Vec2));
   put(mesh.corners.tangents.data(), mesh.corners.tangents.size() * sizeof(Vec4));
   return bytes;
+}
+
+Box3 bounds(const Mesh& mesh) {
+  Box3 box{mesh.positions.at(0), mesh.positions.at(0)};
+  for (const Vec3& p : mesh.positions) {
+    box.lo = {std::min(box.lo.x, p.x), std::min(box.lo.y, p.y), std::min(box.lo.z, p.z)};
+    box.hi = {std::max(box.hi.x, p.x), std::max(box.hi.y, p.y), std::max(box.hi.z, p.z)};
+  }
+  return box;
 }
 
 }  // namespace shatter::test

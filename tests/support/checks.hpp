@@ -32,4 +32,11 @@ mpq_class exact_six_volume(const Mesh& mesh);
 /// The mesh's bytes in a canonical binary form, to compare outputs for identity.
 std::string canonical_bytes(const Mesh& mesh);
 
+/// An axis-aligned box.
+struct Box3 {
+  Vec3 lo, hi;
+};
+/// The bounding box of a mesh's positions. Precondition: at least one position.
+Box3 bounds(const Mesh& mesh);
+
 }  // namespace shatter::test
