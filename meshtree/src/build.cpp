@@ -92,13 +92,21 @@ constexpr double axis_offset_fraction = 0.2;
 
 Plane plane_through(const Vec3& normal, const Vec3& point) { return {normal, -dot(normal, point)}; }
 
-Plane axis_plane(const Mesh& mesh, const Vec3& centroid, NodeRandom& random) {
-  Vec3 lo = mesh.positions.front(), hi = lo;
+struct BoundingBox {
+  Vec3 lo, hi;
+};
+
+BoundingBox bounding_box(const Mesh& mesh) {
+  BoundingBox box{mesh.positions.front(), mesh.positions.front()};
   for (const Vec3& p : mesh.positions) {
-    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    box.lo = {std::min(box.lo.x, p.x), std::min(box.lo.y, p.y), std::min(box.lo.z, p.z)};
+    box.hi = {std::max(box.hi.x, p.x), std::max(box.hi.y, p.y), std::max(box.hi.z, p.z)};
   }
-  const Vec3 extent = hi - lo;
+  return box;
+}
+
+Plane axis_plane(const BoundingBox& box, const Vec3& centroid, NodeRandom& random) {
+  const Vec3 extent = box.hi - box.lo;
   const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
   const double a = random.symmetric() * axis_lean, b = random.symmetric() * axis_lean;
   const double shift = random.symmetric() * axis_offset_fraction * 0.5;
@@ -116,8 +124,8 @@ Plane axis_plane(const Mesh& mesh, const Vec3& centroid, NodeRandom& random) {
   return plane_through(normalized(normal), point);
 }
 
-Plane draw_plane(Strategy strategy, const Mesh& mesh, const Vec3& centroid, NodeRandom& random) {
-  if (strategy == Strategy::axis) return axis_plane(mesh, centroid, random);
+Plane draw_plane(Strategy strategy, const BoundingBox& box, const Vec3& centroid, NodeRandom& random) {
+  if (strategy == Strategy::axis) return axis_plane(box, centroid, random);
   return plane_through(random.direction(), centroid);
 }
 
@@ -128,16 +136,10 @@ Plane draw_plane(Strategy strategy, const Mesh& mesh, const Vec3& centroid, Node
 // valid is still decided exactly (validate_mesh), never by this bound.
 constexpr double grazing_distance = 1e-8;  // relative to the node's bounding-box diagonal
 
-bool grazes_a_vertex(const Mesh& mesh, const Plane& plane) {
-  Vec3 lo = mesh.positions.front(), hi = lo;
+bool grazes_a_vertex(const Mesh& mesh, const Plane& plane, double diagonal) {
+  const double limit = grazing_distance * diagonal * norm(plane.normal);
   for (const Vec3& p : mesh.positions) {
-    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-  }
-  const double limit = grazing_distance * norm(hi - lo) * norm(plane.normal);
-  for (const Vec3& p : mesh.positions) {
-    const double distance = dot(plane.normal, p) + plane.offset;
-    if (std::fabs(distance) < limit) return true;
+    if (std::fabs(dot(plane.normal, p) + plane.offset) < limit) return true;
   }
   return false;
 }
@@ -201,10 +203,12 @@ class Builder {
     cut_options.cap_surface = node.depth + 1;  // made global once the tree is numbered
     cut_options.interior_uv_scale = options_.interior_uv_scale;
     std::uint32_t missed = 0;
+    const BoundingBox box = bounding_box(node.mesh);
+    const double diagonal = norm(box.hi - box.lo);
     for (std::uint32_t attempt = 0; attempt < options_.max_plane_tries; ++attempt) {
-      const Plane plane = draw_plane(options_.strategy, node.mesh, node.mass.centroid, random);
+      const Plane plane = draw_plane(options_.strategy, box, node.mass.centroid, random);
       bool accepted = false;
-      if (grazes_a_vertex(node.mesh, plane)) continue;
+      if (grazes_a_vertex(node.mesh, plane, diagonal)) continue;
       if (options_.kernel == KernelKind::fast) {
         CutResult<Vec3> result = cut_mesh(node.mesh, plane, cut_options);
         missed += result.plane_missed ? 1 : 0;
