@@ -19,33 +19,51 @@ using EpickPoint = Epick::Point_3;
 
 EpickPoint to_epick(const Vec3& p) { return {p.x, p.y, p.z}; }
 
+std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t x) {
+  while (parent[x] != x) x = parent[x] = parent[parent[x]];
+  return x;
+}
+
 // A closed, connected, outward surface that is convex or flat at every edge bounds
-// a convex body, so checking each edge's two triangles is enough. Deep in a
-// fracture almost every fragment is convex and this saves the hull computation.
-// Orientation is exact (Epick's filtered predicate on the stored doubles).
+// a convex body, so checking each edge's two triangles, and that the triangles are
+// one edge-connected piece (a node can hold two separate boxes), is enough. Many
+// fragments of convex inputs pass, and skip the hull computation. Orientation is
+// exact (Epick's filtered predicate on the stored doubles).
 thread_local IndexMap edge_to_triangle;
 
-bool every_edge_convex(const Mesh& mesh) {
-  IndexMap& opposite_of_edge = edge_to_triangle;
-  opposite_of_edge.reset(mesh.triangles.size() * 3);
+bool convex_surface(const Mesh& mesh) {
+  IndexMap& triangle_of_edge = edge_to_triangle;
+  triangle_of_edge.reset(mesh.triangles.size() * 3);
   for (TriangleIndex t = 0; t < mesh.triangles.size(); ++t) {
     const Triangle& tri = mesh.triangles[t];
-    for (int c = 0; c < 3; ++c) {
-      opposite_of_edge.insert(directed_edge_key(tri[c], tri[(c + 1) % 3]), tri[(c + 2) % 3]);
-    }
+    for (int c = 0; c < 3; ++c) triangle_of_edge.insert(directed_edge_key(tri[c], tri[(c + 1) % 3]), t);
   }
-  for (const Triangle& tri : mesh.triangles) {
+  std::vector<std::uint32_t> piece(mesh.triangles.size());
+  for (std::uint32_t t = 0; t < piece.size(); ++t) piece[t] = t;
+  std::size_t pieces = mesh.triangles.size();
+  for (TriangleIndex t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
     const EpickPoint a = to_epick(mesh.positions[tri[0]]), b = to_epick(mesh.positions[tri[1]]),
                      c = to_epick(mesh.positions[tri[2]]);
     for (int k = 0; k < 3; ++k) {
       // The neighbour across edge (u, v) traverses it as (v, u).
-      const std::uint32_t d = opposite_of_edge.find(directed_edge_key(tri[(k + 1) % 3], tri[k]));
-      if (d == IndexMap::absent) return false;  // not closed: let the general path decide
+      const VertexIndex u = tri[k], v = tri[(k + 1) % 3];
+      const std::uint32_t n = triangle_of_edge.find(directed_edge_key(v, u));
+      if (n == IndexMap::absent) return false;  // not closed: let the general path decide
+      VertexIndex d = mesh.triangles[n][0];
+      for (const VertexIndex corner : mesh.triangles[n]) {
+        if (corner != u && corner != v) d = corner;
+      }
       // Positive: d lies on the side the triangle's outward normal points to.
-      if (CGAL::orientation(a, b, c, to_epick(mesh.positions[d])) == CGAL::NEGATIVE) return false;
+      if (CGAL::orientation(a, b, c, to_epick(mesh.positions[d])) == CGAL::POSITIVE) return false;
+      const std::uint32_t p = find_root(piece, t), q = find_root(piece, n);
+      if (p != q) {
+        piece[p] = q;
+        --pieces;
+      }
     }
   }
-  return true;
+  return pieces == 1;
 }
 
 // --- a canonical hull ---------------------------------------------------------
@@ -55,10 +73,6 @@ bool every_edge_convex(const Mesh& mesh) {
 // (maximal groups of exactly coplanar adjacent triangles) and their strictly
 // convex corners, each facet fanned from its least vertex.
 
-std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t x) {
-  while (parent[x] != x) x = parent[x] = parent[parent[x]];
-  return x;
-}
 
 bool lexicographically_less(const Vec3& a, const Vec3& b) {
   if (a.x != b.x) return a.x < b.x;
@@ -171,7 +185,7 @@ Mesh canonical_hull(const std::vector<Vec3>& positions, const std::vector<Triang
 }  // namespace
 
 Mesh convex_hull_of(const Mesh& mesh) {
-  if (every_edge_convex(mesh)) return canonical_hull(mesh.positions, mesh.triangles);
+  if (convex_surface(mesh)) return canonical_hull(mesh.positions, mesh.triangles);
 
   std::vector<EpickPoint> points;
   points.reserve(mesh.positions.size());

@@ -63,7 +63,7 @@ ExactBuild build_mesh_tree_keeping_exact(const Mesh& mesh, const BuildOptions& o
 /// The convex hull of a closed mesh's vertices as an outward triangle mesh (surface
 /// ids 0, no attributes), computed with CGAL convex_hull_3 (exact predicates). A
 /// mesh that is convex already (every edge convex or flat, decided exactly) is its
-/// own hull, without a hull computation.
+/// own hull, without a hull computation, when it is one edge-connected piece.
 /// Precondition: the mesh is closed and oriented with positive volume.
 Mesh convex_hull_of(const Mesh& mesh);
 
