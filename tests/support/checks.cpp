@@ -1,6 +1,9 @@
 #include "support/checks.hpp"
 
+#include <CGAL/Mpzf.h>
+
 #include <algorithm>
+#include <array>
 #include <cstring>
 
 #include "shatter/kernel/validate.hpp"
@@ -15,14 +18,16 @@ auto to_mpq(const Rational& q) -> decltype(q.backend().data(), mpq_class()) {
   return mpq_class(q.backend().data());
 }
 
-template <class GetCoordinate>
-mpq_class six_volume(const std::vector<Triangle>& triangles, GetCoordinate&& coordinate) {
-  mpq_class sum = 0;
+// Six times the signed volume as the sum of a·(b×c) over the triangles, in the
+// number type of the coordinates given (one entry per vertex, three per entry).
+template <class Number>
+Number six_volume(const std::vector<Triangle>& triangles, const std::vector<std::array<Number, 3>>& p) {
+  Number sum(0);
   for (const Triangle& t : triangles) {
-    const mpq_class ax = coordinate(t[0], 0), ay = coordinate(t[0], 1), az = coordinate(t[0], 2);
-    const mpq_class bx = coordinate(t[1], 0), by = coordinate(t[1], 1), bz = coordinate(t[1], 2);
-    const mpq_class cx = coordinate(t[2], 0), cy = coordinate(t[2], 1), cz = coordinate(t[2], 2);
-    sum += ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
+    const auto& a = p[t[0]];
+    const auto& b = p[t[1]];
+    const auto& c = p[t[2]];
+    sum += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
   }
   return sum;
 }
@@ -67,13 +72,22 @@ std::string exact_solid_problem(const ExactMesh& mesh) {
 }
 
 mpq_class exact_six_volume(const ExactMesh& mesh) {
-  return six_volume(mesh.triangles, [&](VertexIndex v, int axis) {
-    return to_mpq(CGAL::exact(mesh.positions[v].cartesian(axis)));
-  });
+  // Each coordinate converted once, not once per corner.
+  std::vector<std::array<mpq_class, 3>> p(mesh.positions.size());
+  for (std::size_t v = 0; v < p.size(); ++v) {
+    for (int axis = 0; axis < 3; ++axis) p[v][axis] = to_mpq(CGAL::exact(mesh.positions[v].cartesian(axis)));
+  }
+  return six_volume(mesh.triangles, p);
 }
 
 mpq_class exact_six_volume(const Mesh& mesh) {
-  return six_volume(mesh.triangles, [&](VertexIndex v, int axis) { return mpq_class(mesh.positions[v][axis]); });
+  // CGAL's Mpzf is a binary floating-point integer: products and sums of doubles
+  // stay exact without the rationals' gcd on every operation.
+  std::vector<std::array<CGAL::Mpzf, 3>> p(mesh.positions.size());
+  for (std::size_t v = 0; v < p.size(); ++v) {
+    for (int axis = 0; axis < 3; ++axis) p[v][axis] = CGAL::Mpzf(mesh.positions[v][axis]);
+  }
+  return mpq_class(six_volume(mesh.triangles, p));
 }
 
 std::string canonical_bytes(const Mesh& mesh) {

@@ -1,0 +1,130 @@
+// The robustness runner's own tests: reproducers keep their case, cases are
+// reproducible and cover every class, the checks can fail, and the degenerate
+// generators are what they claim.
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+
+#include "robustness/robustness.hpp"
+#include "shatter/kernel/io.hpp"
+#include "support/checks.hpp"
+#include "support/degenerate.hpp"
+#include "support/generators.hpp"
+
+using namespace shatter;
+using namespace shatter::robust;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("shatter-test-robustness-" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+}  // namespace
+
+TEST_CASE("a reproducer keeps the case: planes bit for bit, mesh, options") {
+  const MeshPool pool = MeshPool::load();
+  const fs::path dir = scratch("round-trip");
+  for (std::uint64_t index = 0; index < 4 * case_class_count; ++index) {
+    const Case c = make_case(pool, 99, index);
+    INFO(class_name(c.kind) << " " << c.mesh_name);
+    const Case back = read_reproducer(write_reproducer(dir, c, "a failure\nwith a second line"));
+    CHECK(back.kind == c.kind);
+    CHECK(back.op == c.op);
+    CHECK(back.kernel == c.kernel);
+    CHECK(back.seed == c.seed);
+    CHECK(back.mesh_name == c.mesh_name);
+    REQUIRE(back.planes.size() == c.planes.size());
+    for (std::size_t i = 0; i < c.planes.size(); ++i) {
+      CHECK(same_bits(back.planes[i].normal.x, c.planes[i].normal.x));
+      CHECK(same_bits(back.planes[i].normal.y, c.planes[i].normal.y));
+      CHECK(same_bits(back.planes[i].normal.z, c.planes[i].normal.z));
+      CHECK(same_bits(back.planes[i].offset, c.planes[i].offset));
+    }
+    if (c.op == Operation::fracture) {
+      CHECK(back.build.fragments == c.build.fragments);
+      CHECK(back.build.seed == c.build.seed);
+      CHECK(back.build.strategy == c.build.strategy);
+      CHECK(back.build.kernel == c.kernel);
+    }
+    // Same solid: same triangle count and the same exact volume (the reader may
+    // renumber vertices in order of first use), and a second trip is the identity.
+    CHECK(back.mesh.triangles.size() == c.mesh.triangles.size());
+    CHECK(test::exact_six_volume(back.mesh) == test::exact_six_volume(c.mesh));
+    CHECK(back.mesh.corners.has_normals() == c.mesh.corners.has_normals());
+    const Case twice = read_reproducer(write_reproducer(dir, back, "again"));
+    CHECK(test::canonical_bytes(twice.mesh) == test::canonical_bytes(back.mesh));
+  }
+}
+
+TEST_CASE("cases are a pure function of (seed, index), and every class is drawn") {
+  const MeshPool pool = MeshPool::load();
+  std::vector<int> per_class(case_class_count, 0);
+  for (std::uint64_t index = 0; index < 2 * case_class_count; ++index) {
+    const Case a = make_case(pool, 7, index), b = make_case(pool, 7, index);
+    CHECK(test::canonical_bytes(a.mesh) == test::canonical_bytes(b.mesh));
+    REQUIRE(a.planes.size() == b.planes.size());
+    for (std::size_t i = 0; i < a.planes.size(); ++i) CHECK(same_bits(a.planes[i].offset, b.planes[i].offset));
+    ++per_class[static_cast<std::size_t>(a.kind)];
+    CHECK(test::solid_problem(a.mesh) == "");
+  }
+  for (int count : per_class) CHECK(count == 2);
+}
+
+TEST_CASE("the runner's checks catch broken promises") {
+  // An inward cube breaks the cut's precondition (positive volume), so its
+  // pieces come out inward. The exact kernel promises positive volume: a failure.
+  // The fast kernel promises topology only, so it counts the pieces as degenerate
+  // embeddings, every one of them.
+  Case c;
+  c.mesh = test::flipped(test::unit_cube());
+  c.planes = {test::plane_through({0.5, 0.5, 0.5}, {0.3, 0.4, 1})};
+  const CaseOutcome fast = run_case(c);
+  CHECK(fast.fast_pieces == 2);
+  CHECK(fast.fast_degenerate == 2);
+  c.kernel = KernelKind::exact;
+  CHECK(!run_case(c).failures.empty());
+  // A plane that holds a face of the staircase passes: the checks are not
+  // failing everything either.
+  c.kernel = KernelKind::fast;
+  c.mesh = test::staircase(3);
+  c.planes = {test::axis_plane_through({1, 0, 1}, 2)};
+  const CaseOutcome outcome = run_case(c);
+  CHECK(outcome.failures == std::vector<std::string>{});
+  CHECK(outcome.fast_pieces >= 2);
+}
+
+TEST_CASE("degenerate generators give valid solids with exact degeneracies") {
+  for (int steps = 1; steps <= 6; ++steps) CHECK(test::solid_problem(test::staircase(steps)) == "");
+  for (int floors = 1; floors <= 5; ++floors) CHECK(test::solid_problem(test::stacked_boxes(floors)) == "");
+  for (int k = 10; k <= 40; k += 10) {
+    CHECK(test::solid_problem(test::needle_bridge(std::ldexp(1.0, -k))) == "");
+    CHECK(test::solid_problem(test::flat_tetrahedron(std::ldexp(1.0, -k))) == "");
+  }
+  CHECK(test::solid_problem(test::nested_islands()) == "");
+  CHECK(test::solid_problem(test::with_seams(test::torus(1, 0.3, 8, 6))) == "");
+  // The saddle: z = 0 holds the saddle vertex and the four top corners exactly.
+  const Mesh saddle = test::pinch_saddle();
+  REQUIRE(test::solid_problem(saddle) == "");
+  const test::PlaneContact contact = test::plane_contact(saddle, test::axis_plane_through({1, 1, 0}, 2));
+  CHECK(contact.on == 5);
+  CHECK(contact.above == 2);
+  CHECK(contact.below == 6);
+  // Moved one ulp, the plane holds none of them.
+  CHECK(test::plane_contact(saddle, test::offset_by_ulps({{0, 0, 1}, -1.0}, 1)).on == 0);
+  // A staircase tread plane holds whole faces: many vertices on it.
+  CHECK(test::plane_contact(test::staircase(4), test::axis_plane_through({0, 0, 2}, 2)).on >= 8);
+  // Near-parallel planes through one edge all hold its first end up to rounding.
+  for (const Plane& p : test::near_parallel_fan({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 4, 1e-3, 1e-2)) {
+    CHECK(p.offset == 0);
+  }
+}
