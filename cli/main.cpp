@@ -20,6 +20,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/cut.hpp"
+#include "repair_option.hpp"
 #include "tree_commands.hpp"
 
 namespace {
@@ -51,10 +52,20 @@ json defects_json(const ValidationReport& report) {
 struct ValidateArgs {
   std::string mesh;
   bool json = false;
+  bool repair = false;
+  std::string out;  ///< with --repair: where to write the repaired mesh
 };
 
 int run_validate(const ValidateArgs& args) {
-  const Mesh mesh = read_mesh(args.mesh);
+  std::optional<MeshFormat> out_format;
+  if (!args.out.empty()) {
+    if (!args.repair) throw UsageError("--out writes the repaired mesh: it needs --repair");
+    out_format = format_from_extension(args.out);
+    if (!out_format) throw UsageError("--out " + args.out + ": the extension must be .off, .obj, .ply or .stl");
+  }
+  Mesh mesh = read_mesh(args.mesh);
+  std::optional<RepairReport> repair;
+  if (args.repair) repair = cli::repair_and_print(mesh, args.mesh);
   const ValidationReport report = validate_mesh(mesh);
   if (args.json) {
     json out{{"file", args.mesh},
@@ -63,6 +74,10 @@ int run_validate(const ValidateArgs& args) {
              {"valid", report.valid()},
              {"self_intersections_checked", report.self_intersections_checked},
              {"defects", defects_json(report)}};
+    if (repair) {
+      out["repair"] = cli::repair_changes_json(*repair);
+      out["repair_not_done"] = cli::repair_notes_json(*repair);
+    }
     if (report.valid()) {
       const MassProperties mass = mass_properties(mesh);
       out["volume"] = mass.volume;
@@ -79,7 +94,13 @@ int run_validate(const ValidateArgs& args) {
       std::cout << "  " << defect_name(d.kind) << ": " << d.count << ", first " << d.first << '\n';
     }
   }
-  if (!report.valid()) throw RefusedInput("invalid mesh " + args.mesh + ": " + report.summary());
+  if (!report.valid()) {
+    throw RefusedInput("invalid mesh " + args.mesh + (repair ? " after --repair: " : ": ") + report.summary());
+  }
+  if (out_format) {
+    write_mesh(mesh, args.out, *out_format);
+    if (!args.json) std::cout << "wrote " << args.out << '\n';
+  }
   return ok;
 }
 
@@ -94,6 +115,7 @@ struct SliceArgs {
   std::string format = "off";
   double interior_uv_scale = 1.0;
   bool json = false;
+  bool repair = false;
 };
 
 Plane parse_plane(const std::string& text) {
@@ -180,8 +202,18 @@ int run_slice(const SliceArgs& args) {
   const Plane plane = parse_plane(args.plane);
   const auto format = parse_mesh_format(args.format);
   if (!format) throw UsageError("--format must be off, obj, ply or stl");
-  const Mesh mesh = read_mesh(args.mesh);
-  require_valid_solid(mesh, args.mesh, args.allow_self_intersections);
+  Mesh mesh = read_mesh(args.mesh);
+  std::optional<RepairReport> repair;
+  if (args.repair) {
+    repair = cli::repair_and_print(mesh, args.mesh);
+    try {
+      require_valid_solid(mesh, args.mesh, args.allow_self_intersections);
+    } catch (const InvalidMeshError& e) {
+      throw InvalidMeshError(std::string(e.what()) + " (after --repair)");
+    }
+  } else {
+    require_valid_solid(mesh, args.mesh, args.allow_self_intersections);
+  }
 
   CutOptions options;
   options.interior_uv_scale = args.interior_uv_scale;
@@ -238,6 +270,10 @@ int run_slice(const SliceArgs& args) {
              {"total_volume", total_volume},
              {"invalid_embeddings", invalid_embeddings},
              {"pieces", pieces_json}};
+    if (repair) {
+      out["repair"] = cli::repair_changes_json(*repair);
+      out["repair_not_done"] = cli::repair_notes_json(*repair);
+    }
     std::cout << out.dump(2) << '\n';
   } else {
     if (plane_missed) std::cout << "the plane misses or only touches the mesh: it is returned whole\n";
@@ -284,6 +320,12 @@ int main(int argc, char** argv) {
                   "first element. Exit 3 if it is not.");
   validate->add_option("mesh", validate_args.mesh, "Mesh file (.off, .obj, .ply, .stl)")->required();
   validate->add_flag("--json", validate_args.json, "Print the report as JSON");
+  validate->add_flag("--repair", validate_args.repair,
+                     cli::repair_flag_help("The report is then of the repaired mesh (JSON: \"repair\" lists the "
+                                           "changes, \"repair_not_done\" what could not be done)."));
+  validate->add_option("--out", validate_args.out,
+                       "With --repair: write the repaired mesh to this file (format from its extension: .off, "
+                       ".obj, .ply, .stl), atomically, only if it is valid");
 
   SliceArgs slice_args;
   CLI::App* slice = app.add_subcommand(
@@ -309,6 +351,8 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   slice->add_flag("--json", slice_args.json, "Print pieces, triangles and volumes as JSON");
+  slice->add_flag("--repair", slice_args.repair,
+                  cli::repair_flag_help("The repaired mesh is cut (JSON: \"repair\" lists the changes)."));
 
   FractureArgs fracture_args;
   CLI::App* fracture = add_fracture_command(app, fracture_args);

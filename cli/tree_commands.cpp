@@ -29,6 +29,7 @@
 #include "shatter/meshtree/export.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/meshtree/stats.hpp"
+#include "repair_option.hpp"
 
 namespace shatter {
 
@@ -344,6 +345,7 @@ struct FractureOutcome {
   double build_seconds = 0;
   std::optional<MeshFormat> export_format;
   std::vector<fs::path> exported;
+  std::optional<RepairReport> repair;  ///< set with --repair
 };
 
 json fracture_json(const FractureArgs& args, const BuildOptions& options, const TreeStats& stats,
@@ -359,6 +361,10 @@ json fracture_json(const FractureArgs& args, const BuildOptions& options, const 
     out["export"] = {{"folder", args.export_folder}, {"format", format_name(*outcome.export_format)}, {"files", files}};
   } else {
     out["export"] = nullptr;
+  }
+  if (outcome.repair) {
+    out["repair"] = cli::repair_changes_json(*outcome.repair);
+    out["repair_not_done"] = cli::repair_notes_json(*outcome.repair);
   }
   return out;
 }
@@ -450,6 +456,9 @@ CLI::App* add_fracture_command(CLI::App& app, FractureArgs& args) {
   command->add_flag("--json", args.json,
                     "Print the summary as JSON: fragments asked, leaves, nodes, depth, options, volumes, fragment "
                     "volume spread, bonds and their total area, build seconds, exported files");
+  command->add_flag("--repair", args.repair,
+                    cli::repair_flag_help("The repaired mesh is fractured and stored as the tree's root (JSON: "
+                                          "\"repair\" lists the changes)."));
   return command;
 }
 
@@ -463,9 +472,18 @@ int run_fracture(const FractureArgs& args) {
     throw CommandUsageError("--out " + args.out + " is a folder; it names the .shatter file to write");
   }
 
-  const Mesh mesh = read_mesh(args.mesh);
+  Mesh mesh = read_mesh(args.mesh);
   // The builder validates too, but this names the file in the refusal.
-  require_valid_solid(mesh, args.mesh, args.allow_self_intersections);
+  if (args.repair) {
+    outcome.repair = cli::repair_and_print(mesh, args.mesh);
+    try {
+      require_valid_solid(mesh, args.mesh, args.allow_self_intersections);
+    } catch (const InvalidMeshError& e) {
+      throw InvalidMeshError(std::string(e.what()) + " (after --repair)");
+    }
+  } else {
+    require_valid_solid(mesh, args.mesh, args.allow_self_intersections);
+  }
 
   MeshTree tree;
   const Clock::time_point start = Clock::now();

@@ -39,6 +39,8 @@ struct FractureArgs {
   /// off, obj, ply or stl; empty: off. Only meaningful with export_folder.
   std::string format;
   bool json = false;
+  /// Repair the mesh first (repair_mesh), printing each change (cli/repair_option.hpp).
+  bool repair = false;
 };
 
 /// Declares the `fracture` subcommand on `app`, its arguments bound to `args`;

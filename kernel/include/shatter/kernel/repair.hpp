@@ -1,0 +1,119 @@
+#pragma once
+// Opt-in repair of a mesh that is not a valid solid (`--repair` on the CLI).
+// Nothing else in shatter ever changes a mesh silently: readers weld and keep
+// everything as written, validation only names defects. Repair is the one place
+// that edits an input, and it reports every change it makes.
+//
+// Exactness as everywhere: "duplicate" means exactly equal positions (-0.0 and
+// +0.0 are equal, as the readers weld them), "zero-area" means exactly collinear,
+// orientation and self-intersection are decided by exact predicates (CGAL Epick's
+// filtered predicates on the double coordinates). No tolerance decides anything.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "shatter/kernel/mesh.hpp"
+
+namespace shatter {
+
+/// What one repair step changed. In the order the steps run.
+enum class RepairKind {
+  merged_duplicate_vertices,     ///< vertices at exactly the same position joined into one
+  removed_repeated_index_triangles,  ///< triangles using one vertex twice (after merging): no area, no edges
+  removed_duplicate_triangles,   ///< extra copies of a triangle over the same three vertices, same orientation
+  removed_opposite_triangle_pairs,   ///< a triangle and its reverse over the same vertices: they enclose nothing
+  reversed_triangles,            ///< triangles reversed: consistently oriented (orient_polygon_soup), then every
+                                 ///< shell bounding its volume, the outer ones outward (orient_to_bound_a_volume);
+                                 ///< counted once, against the input's orientation
+  stitched_border_edges,         ///< pairs of boundary edges with exactly equal endpoints joined (stitch_borders)
+  fixed_zero_area_triangles,     ///< exactly collinear triangles removed by edge flips/collapses (remove_degenerate_faces)
+  filled_holes,                  ///< boundary cycles closed by new triangles over their own vertices (triangulate_hole)
+  resolved_self_intersections,   ///< intersecting triangles refined along their intersection and the inner
+                                 ///< patches removed (autorefine_and_remove_self_intersections)
+  removed_unused_vertices,       ///< vertices no triangle uses any more
+};
+
+struct RepairChange {
+  RepairKind kind;
+  std::size_t count = 0;  ///< the main count of the step (vertices, triangles, edges or holes)
+  std::string text;       ///< one line, e.g. "filled 1 hole (4 border edges) with 2 triangles"
+};
+
+/// A step that could not be done, e.g. a hole larger than the limit. The mesh is
+/// still changed by the other steps; validation afterwards names what is left.
+struct RepairNote {
+  std::string text;
+};
+
+struct RepairOptions {
+  /// Fill a boundary cycle (hole) only when it has at most this many edges.
+  /// Larger openings are more likely a deliberately open surface than a defect,
+  /// and a filled large hole is an invented surface; they are left and noted.
+  std::size_t max_hole_edges = 64;
+  /// Try CGAL's autorefinement on a closed mesh that still self-intersects. This
+  /// constructs the intersection points (exactly, inside CGAL) and rounds them to
+  /// the nearest double; the rounded result is checked like any other (see
+  /// repair_mesh's guarantees), and the mesh is left as before this step when the
+  /// result is not a valid self-intersection-free solid.
+  bool resolve_self_intersections = true;
+};
+
+struct RepairReport {
+  std::vector<RepairChange> changes;  ///< in step order; empty when nothing was changed
+  std::vector<RepairNote> notes;      ///< what was attempted but not done
+  std::size_t vertices_before = 0, triangles_before = 0;
+  std::size_t vertices_after = 0, triangles_after = 0;
+
+  bool changed() const { return !changes.empty(); }
+  /// The change of this kind, or nullptr.
+  const RepairChange* find(RepairKind kind) const;
+  /// One line: "no change" or the changes' texts joined with "; ".
+  std::string summary() const;
+};
+
+/// Repairs `mesh` in place, step by step, each step doing something only when its
+/// defect is present:
+///  1. merge vertices at exactly equal positions (a caller may pass an unwelded mesh);
+///  2. remove triangles that use one vertex twice, extra copies of a triangle, and
+///     pairs of a triangle with its reverse;
+///  3. orient each connected piece consistently (CGAL orient_polygon_soup; a vertex
+///     or edge that cannot be made manifold is split for CGAL only and joined again
+///     on output, since shatter's meshes are welded by position);
+///  4. stitch boundary edges whose endpoints are exactly equal (stitch_borders);
+///  5. remove exactly collinear triangles by flipping or collapsing edges
+///     (remove_degenerate_faces; no point is moved or created);
+///  6. fill each hole of at most `max_hole_edges` edges with triangles over its own
+///     vertices (triangulate_hole; no new vertex);
+///  7. when the mesh is closed, orient every shell to bound a volume, the outermost
+///     outward (orient_to_bound_a_volume);
+///  8. when closed and still self-intersecting and `resolve_self_intersections`,
+///     autorefine and drop the inner patches (experimental in CGAL 5.5), kept only
+///     if the rounded result validates with no defect at all and keeps at least
+///     half the signed volume (resolving overlaps removes only doubly covered
+///     volume; CGAL sometimes keeps the wrong side, as on the corpus cow and elk);
+///  9. drop vertices no triangle uses.
+///
+/// Attributes: a surviving triangle keeps its corners' attributes (they follow the
+/// vertex when it is reversed or rotated; normals are not negated on reversal, as
+/// the winding, not the normal, is taken to be the mistake). A triangle made by a
+/// flip or by hole filling takes, at each corner, the attribute of an existing
+/// corner at the same vertex (the first one, in triangle order, of the same
+/// surface where there is one); its surface id is that of an adjacent triangle.
+/// A triangle cut by autorefinement gets its attributes interpolated from the
+/// triangle it came from. Unchanged triangles keep their order and corner order,
+/// and unchanged vertices their relative order; new ones come after.
+///
+/// Preconditions: none; any mesh may be passed. A mesh with a non-finite
+/// coordinate or an index out of range is left unchanged with a note (there is no
+/// exact meaning to repair it by). A mesh with no triangle is left unchanged.
+/// Guarantees: every change is in the report; a mesh that validate_mesh finds
+/// valid (with self-intersections checked) is left bit-for-bit unchanged with an
+/// empty report; the BasicMesh invariants hold on return. The result is not
+/// promised to be valid: run validate_mesh on it (the CLI does) to learn what is
+/// left. The work is done on a copy and moved into `mesh` at the end, so on an
+/// exception (std::bad_alloc) `mesh` is unchanged; a CGAL failure inside the
+/// self-intersection step is caught, that step undone and noted.
+RepairReport repair_mesh(Mesh& mesh, const RepairOptions& options = {});
+
+}  // namespace shatter

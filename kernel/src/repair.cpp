@@ -1,0 +1,759 @@
+#include "shatter/kernel/repair.hpp"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/border.h>
+#include <CGAL/Polygon_mesh_processing/corefinement.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/orientation.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Polygon_mesh_processing/stitch_borders.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/boost/graph/Euler_operations.h>
+#include <CGAL/boost/graph/helpers.h>
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <iterator>
+#include <limits>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/validate.hpp"
+
+namespace shatter {
+namespace {
+
+namespace PMP = CGAL::Polygon_mesh_processing;
+using CgalPoint = CGAL::Epick::Point_3;
+using SurfaceMesh = CGAL::Surface_mesh<CgalPoint>;
+using FaceIndex = SurfaceMesh::Face_index;
+using HalfedgeIndex = SurfaceMesh::Halfedge_index;
+using SmVertex = SurfaceMesh::Vertex_index;
+
+constexpr std::int64_t no_origin = -1;
+
+std::string plural(std::size_t count, const char* singular, const char* plural_form) {
+  return std::to_string(count) + " " + (count == 1 ? singular : plural_form);
+}
+
+// --- Exact position keys (as the readers weld: -0.0 equals +0.0) ------------------
+
+struct PositionKey {
+  std::uint64_t x, y, z;
+  friend bool operator==(const PositionKey&, const PositionKey&) = default;
+};
+std::uint64_t value_bits(double c) { return std::bit_cast<std::uint64_t>(c == 0.0 ? 0.0 : c); }
+PositionKey key_of(Vec3 p) { return {value_bits(p.x), value_bits(p.y), value_bits(p.z)}; }
+PositionKey key_of(const CgalPoint& p) { return key_of(Vec3{p.x(), p.y(), p.z()}); }
+struct PositionKeyHash {
+  std::size_t operator()(const PositionKey& k) const {
+    auto mix = [](std::uint64_t v) {
+      v ^= v >> 30;
+      v *= 0xbf58476d1ce4e5b9ULL;
+      v ^= v >> 27;
+      v *= 0x94d049bb133111ebULL;
+      return v ^ (v >> 31);
+    };
+    return static_cast<std::size_t>(mix(k.x) ^ mix(k.y + 0x9e3779b97f4a7c15ULL) ^ mix(k.z + 0x3c6ef372fe94f82aULL));
+  }
+};
+
+CgalPoint to_cgal(Vec3 p) { return CgalPoint(p.x, p.y, p.z); }
+
+bool exactly_collinear(const SurfaceMesh& sm, FaceIndex f) {
+  const HalfedgeIndex h = sm.halfedge(f);
+  return CGAL::collinear(sm.point(sm.source(h)), sm.point(sm.target(h)), sm.point(sm.target(sm.next(h))));
+}
+
+std::size_t count_collinear_faces(const SurfaceMesh& sm) {
+  std::size_t count = 0;
+  for (FaceIndex f : sm.faces()) count += exactly_collinear(sm, f) ? 1 : 0;
+  return count;
+}
+
+// The three vertex ids of a triangle in the rotation that starts at its smallest.
+Triangle canonical_rotation(const Triangle& t) {
+  const int first = t[0] < t[1] ? (t[0] < t[2] ? 0 : 2) : (t[1] < t[2] ? 1 : 2);
+  return {t[first], t[(first + 1) % 3], t[(first + 2) % 3]};
+}
+
+bool same_cyclic_order(const Triangle& a, const Triangle& b) { return canonical_rotation(a) == canonical_rotation(b); }
+
+// Autorefinement splits faces; this records which input triangle every piece came
+// from, so attributes can be interpolated and surfaces kept. A face the refinement
+// keeps keeps its property; only new subfaces need it set.
+struct OriginTrackingVisitor : PMP::Corefinement::Default_visitor<SurfaceMesh> {
+  SurfaceMesh::Property_map<FaceIndex, std::int64_t>* origin = nullptr;
+  SurfaceMesh::Property_map<FaceIndex, bool>* split = nullptr;
+  std::int64_t current = no_origin;
+  void before_subface_creations(FaceIndex f_old, SurfaceMesh&) {
+    current = (*origin)[f_old];
+    (*split)[f_old] = true;
+  }
+  void after_subface_created(FaceIndex f_new, SurfaceMesh&) {
+    (*origin)[f_new] = current;
+    (*split)[f_new] = true;
+  }
+};
+
+// The whole repair works on this copy of the input plus CGAL's surface mesh.
+class Repairer {
+ public:
+  Repairer(const Mesh& input, const RepairOptions& options, RepairReport& report)
+      : input_(input), options_(options), report_(report) {}
+
+  Mesh run() {
+    merge_duplicate_vertices();
+    clean_triangles();
+    if (working_.empty()) {
+      report_.notes.push_back({"no triangle left after removing degenerate and duplicate ones; nothing to repair"});
+      return output_from_working_only();
+    }
+    build_surface_mesh();
+    stitch();
+    fill_holes();
+    remove_zero_area_triangles();
+    orient_to_bound_volume();
+    if (options_.resolve_self_intersections) resolve_self_intersections();
+    return to_mesh(sm_, /*record=*/true);
+  }
+
+ private:
+  void change(RepairKind kind, std::size_t count, std::string text) {
+    report_.changes.push_back({kind, count, std::move(text)});
+  }
+
+  // Step 1: one representative (the first) per exact position.
+  void merge_duplicate_vertices() {
+    representative_.resize(input_.vertex_count());
+    std::unordered_map<PositionKey, VertexIndex, PositionKeyHash> first_at;
+    first_at.reserve(input_.vertex_count());
+    std::size_t merged = 0;
+    for (std::size_t v = 0; v < input_.vertex_count(); ++v) {
+      const auto [it, inserted] = first_at.try_emplace(key_of(input_.positions[v]), static_cast<VertexIndex>(v));
+      representative_[v] = it->second;
+      merged += inserted ? 0 : 1;
+    }
+    if (merged > 0) {
+      change(RepairKind::merged_duplicate_vertices, merged,
+             "merged " + plural(merged, "duplicate vertex", "duplicate vertices") + " (exactly equal positions)");
+    }
+  }
+
+  Triangle mapped(std::size_t t) const {
+    const Triangle& tri = input_.triangles[t];
+    return {representative_[tri[0]], representative_[tri[1]], representative_[tri[2]]};
+  }
+
+  // Step 2: triangles with a repeated vertex, duplicate copies, opposite pairs.
+  void clean_triangles() {
+    std::vector<std::size_t> kept;
+    std::size_t repeated = 0;
+    for (std::size_t t = 0; t < input_.triangle_count(); ++t) {
+      const Triangle tri = mapped(t);
+      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) {
+        ++repeated;
+      } else {
+        kept.push_back(t);
+      }
+    }
+    // Group by vertex set; within a group, a canonical rotation tells the two
+    // orientations apart.
+    std::map<Triangle, std::vector<std::size_t>> by_vertex_set;
+    for (std::size_t t : kept) {
+      Triangle sorted = mapped(t);
+      std::sort(sorted.begin(), sorted.end());
+      by_vertex_set[sorted].push_back(t);
+    }
+    std::vector<bool> drop(input_.triangle_count());
+    std::size_t duplicates = 0, in_opposite_pairs = 0;
+    for (const auto& [vertex_set, group] : by_vertex_set) {
+      if (group.size() < 2) continue;
+      const Triangle first = mapped(group.front());
+      const bool both_orientations = std::any_of(group.begin(), group.end(), [&](std::size_t t) {
+        return !same_cyclic_order(mapped(t), first);
+      });
+      if (both_orientations) {
+        // A triangle and its reverse enclose nothing; which of them the surface
+        // needs cannot be told, so both go and hole filling closes what is left.
+        for (std::size_t t : group) drop[t] = true;
+        in_opposite_pairs += group.size();
+      } else {
+        for (std::size_t i = 1; i < group.size(); ++i) drop[group[i]] = true;
+        duplicates += group.size() - 1;
+      }
+    }
+    for (std::size_t t : kept) {
+      if (!drop[t]) working_.push_back(t);
+    }
+    if (repeated > 0) {
+      change(RepairKind::removed_repeated_index_triangles, repeated,
+             "removed " + plural(repeated, "zero-area triangle", "zero-area triangles") + " that use one vertex twice");
+    }
+    if (duplicates > 0) {
+      change(RepairKind::removed_duplicate_triangles, duplicates,
+             "removed " + plural(duplicates, "duplicate triangle", "duplicate triangles"));
+    }
+    if (in_opposite_pairs > 0) {
+      change(RepairKind::removed_opposite_triangle_pairs, in_opposite_pairs,
+             "removed " + plural(in_opposite_pairs, "triangle", "triangles") +
+                 " lying back to back with a reversed copy of themselves");
+    }
+  }
+
+  // Step 3: the soup, oriented by CGAL, as a halfedge mesh. Each face remembers
+  // the input triangle it holds.
+  void build_surface_mesh() {
+    std::vector<CgalPoint> points;
+    std::unordered_map<VertexIndex, std::size_t> point_of;
+    std::vector<std::vector<std::size_t>> polygons;
+    polygons.reserve(working_.size());
+    for (std::size_t t : working_) {
+      std::vector<std::size_t> polygon;
+      for (VertexIndex v : mapped(t)) {
+        const auto [it, inserted] = point_of.try_emplace(v, points.size());
+        if (inserted) points.push_back(to_cgal(input_.positions[v]));
+        polygon.push_back(it->second);
+      }
+      polygons.push_back(std::move(polygon));
+    }
+    const std::size_t points_before = points.size();
+    // Returns false when it had to split vertices to make the soup an oriented
+    // manifold. The copies sit at the same positions, so the output (welded by
+    // position) joins them again and validation names them; nothing is hidden.
+    if (!PMP::orient_polygon_soup(points, polygons)) {
+      report_.notes.push_back({"the surface is not an orientable manifold at " +
+                               plural(points.size() - points_before, "vertex", "vertices") +
+                               " (worked on split copies, joined again on output)"});
+    }
+    PMP::polygon_soup_to_polygon_mesh(points, polygons, sm_);
+    auto [origin, created] = sm_.add_property_map<FaceIndex, std::int64_t>("f:origin", no_origin);
+    origin_ = origin;
+    split_ = sm_.add_property_map<FaceIndex, bool>("f:split", false).first;
+    // A fresh Surface_mesh gets its faces in polygon order; checked, since the
+    // attribute bookkeeping depends on it.
+    if (sm_.number_of_faces() != polygons.size()) {
+      throw std::logic_error("repair: CGAL built " + std::to_string(sm_.number_of_faces()) + " faces from " +
+                             std::to_string(polygons.size()) + " triangles");
+    }
+    for (FaceIndex f : sm_.faces()) origin_[f] = static_cast<std::int64_t>(working_[f.idx()]);
+  }
+
+  // Step 4.
+  void stitch() {
+    const std::size_t stitched = PMP::stitch_borders(sm_);
+    if (stitched > 0) {
+      change(RepairKind::stitched_border_edges, stitched,
+             "stitched " + plural(stitched, "pair", "pairs") + " of boundary edges with equal endpoints");
+    }
+  }
+
+  // Vertices of the surface mesh as the output will number them: by exact
+  // position, so copies made by orient_polygon_soup count as one.
+  std::uint32_t welded_id(SmVertex v) {
+    return welded_ids_.try_emplace(key_of(sm_.point(v)), static_cast<std::uint32_t>(welded_ids_.size())).first->second;
+  }
+  std::uint64_t welded_edge_key(SmVertex a, SmVertex b) {
+    const std::uint32_t i = welded_id(a), j = welded_id(b);
+    return (std::uint64_t{std::min(i, j)} << 32) | std::max(i, j);
+  }
+
+  // A patch is kept only if, once copies are joined again on output, it adds no
+  // edge the mesh already has (that would make the edge non-manifold: holes that
+  // touch at a pinched vertex) and no triangle over the vertices of an existing
+  // one (the lid of a lone open triangle is its reverse). Both decided by index.
+  bool patch_is_manifold_when_welded(const std::vector<FaceIndex>& patch, std::unordered_map<std::uint64_t, int>& edges,
+                                     std::map<std::array<std::uint32_t, 3>, int>& faces) {
+    std::vector<FaceIndex> sorted_patch = patch;
+    std::sort(sorted_patch.begin(), sorted_patch.end());
+    auto in_patch = [&](FaceIndex f) { return std::binary_search(sorted_patch.begin(), sorted_patch.end(), f); };
+    std::vector<std::uint64_t> new_edges;
+    std::vector<std::array<std::uint32_t, 3>> new_faces;
+    for (FaceIndex f : patch) {
+      std::array<std::uint32_t, 3> corners{};
+      int k = 0;
+      for (HalfedgeIndex h : CGAL::halfedges_around_face(sm_.halfedge(f), sm_)) {
+        corners[k++] = welded_id(sm_.target(h));
+        const FaceIndex other = sm_.face(sm_.opposite(h));
+        // A diagonal inside the patch is met from both sides: count it once.
+        if (other != SurfaceMesh::null_face() && in_patch(other) && other < f) continue;
+        if (other == SurfaceMesh::null_face() || in_patch(other)) {
+          new_edges.push_back(welded_edge_key(sm_.source(h), sm_.target(h)));
+        }
+      }
+      std::sort(corners.begin(), corners.end());
+      new_faces.push_back(corners);
+    }
+    for (std::uint64_t e : new_edges) {
+      if (edges.count(e)) return false;
+    }
+    for (const auto& f : new_faces) {
+      if (faces.count(f)) return false;
+    }
+    for (std::uint64_t e : new_edges) edges[e] = 1;
+    for (const auto& f : new_faces) faces[f] = 1;
+    return true;
+  }
+
+  // Step 6 (before the zero-area step, so that flips can work on a closed surface).
+  void fill_holes() {
+    std::vector<HalfedgeIndex> cycles;
+    PMP::extract_boundary_cycles(sm_, std::back_inserter(cycles));
+    if (cycles.empty()) return;
+    std::unordered_map<std::uint64_t, int> welded_edges;
+    std::map<std::array<std::uint32_t, 3>, int> welded_faces;
+    for (HalfedgeIndex h : sm_.halfedges()) {
+      if (!sm_.is_border(h)) welded_edges[welded_edge_key(sm_.source(h), sm_.target(h))] = 1;
+    }
+    for (FaceIndex f : sm_.faces()) {
+      const HalfedgeIndex h = sm_.halfedge(f);
+      std::array<std::uint32_t, 3> corners{welded_id(sm_.source(h)), welded_id(sm_.target(h)),
+                                           welded_id(sm_.target(sm_.next(h)))};
+      std::sort(corners.begin(), corners.end());
+      welded_faces[corners] = 1;
+    }
+    std::size_t filled = 0, filled_edges = 0, new_triangles = 0;
+    std::vector<std::size_t> too_large, unfillable, non_manifold;
+    for (HalfedgeIndex h : cycles) {
+      std::size_t edges = 0;
+      HalfedgeIndex walk = h;
+      do {
+        ++edges;
+        walk = sm_.next(walk);
+      } while (walk != h);
+      if (edges > options_.max_hole_edges) {
+        too_large.push_back(edges);
+        continue;
+      }
+      std::vector<FaceIndex> patch;
+      PMP::triangulate_hole(sm_, h, std::back_inserter(patch));
+      if (patch.empty()) {
+        unfillable.push_back(edges);
+        continue;
+      }
+      if (!patch_is_manifold_when_welded(patch, welded_edges, welded_faces)) {
+        for (FaceIndex f : patch) CGAL::Euler::remove_face(sm_.halfedge(f), sm_);
+        non_manifold.push_back(edges);
+        continue;
+      }
+      ++filled;
+      filled_edges += edges;
+      new_triangles += patch.size();
+    }
+    if (filled > 0) {
+      change(RepairKind::filled_holes, filled,
+             "filled " + plural(filled, "hole", "holes") + " (" + plural(filled_edges, "border edge", "border edges") +
+                 ") with " + plural(new_triangles, "new triangle", "new triangles"));
+    }
+    auto sizes = [](const std::vector<std::size_t>& v) {
+      std::string text;
+      for (std::size_t i = 0; i < v.size() && i < 8; ++i) text += (i ? ", " : "") + std::to_string(v[i]);
+      if (v.size() > 8) text += ", ...";
+      return text;
+    };
+    if (!too_large.empty()) {
+      report_.notes.push_back({"left " + plural(too_large.size(), "hole", "holes") + " larger than " +
+                               std::to_string(options_.max_hole_edges) + " edges unfilled (" + sizes(too_large) +
+                               " edges)"});
+    }
+    if (!unfillable.empty()) {
+      report_.notes.push_back({"could not fill " + plural(unfillable.size(), "hole", "holes") + " (" +
+                               sizes(unfillable) + " edges): no valid triangulation over its vertices"});
+    }
+    if (!non_manifold.empty()) {
+      report_.notes.push_back({"did not fill " + plural(non_manifold.size(), "hole", "holes") + " (" +
+                               sizes(non_manifold) +
+                               " edges): the lid would repeat an existing edge or triangle (holes touching at a "
+                               "vertex, or a lone open piece)"});
+    }
+  }
+
+  // Step 5: CGAL flips the longest edge of a triangle whose third corner lies on
+  // it, and collapses edges of length zero; both only rewire existing vertices.
+  void remove_zero_area_triangles() {
+    const std::size_t before = count_collinear_faces(sm_);
+    if (before == 0) return;
+    PMP::remove_degenerate_faces(sm_);
+    const std::size_t after = count_collinear_faces(sm_);
+    if (after < before) {
+      change(RepairKind::fixed_zero_area_triangles, before - after,
+             "removed " + plural(before - after, "zero-area triangle", "zero-area triangles") +
+                 " by flipping or collapsing their edges");
+    }
+    if (after > 0) {
+      report_.notes.push_back({"could not remove " + plural(after, "zero-area triangle", "zero-area triangles")});
+    }
+  }
+
+  // Step 7: reversal is counted at the end, against the input.
+  void orient_to_bound_volume() {
+    if (!CGAL::is_closed(sm_) || sm_.number_of_faces() == 0) return;
+    PMP::orient_to_bound_a_volume(sm_);
+  }
+
+  // Step 8.
+  void resolve_self_intersections() {
+    if (!CGAL::is_closed(sm_) || count_collinear_faces(sm_) > 0) return;
+    if (!PMP::does_self_intersect(sm_)) return;
+    const std::size_t pairs_before = count_intersecting_pairs(sm_);
+    SurfaceMesh refined = sm_;
+    auto origin = refined.property_map<FaceIndex, std::int64_t>("f:origin").first;
+    auto split = refined.property_map<FaceIndex, bool>("f:split").first;
+    OriginTrackingVisitor visitor;
+    visitor.origin = &origin;
+    visitor.split = &split;
+    bool fixed = false;
+    std::string failure;
+    try {
+      fixed = PMP::experimental::autorefine_and_remove_self_intersections(refined, CGAL::parameters::visitor(visitor));
+    } catch (const std::exception& e) {
+      failure = e.what();
+    }
+    if (!failure.empty() || !fixed) {
+      report_.notes.push_back({"could not resolve " + plural(pairs_before, "self-intersecting pair", "self-intersecting pairs") +
+                               (failure.empty() ? std::string(" (CGAL autorefinement gave up)")
+                                                : " (CGAL failed: " + first_line(failure) + ")")});
+      return;
+    }
+    // The kept patches come out as CGAL builds them; orient them as step 7 did.
+    if (CGAL::is_closed(refined) && refined.number_of_faces() > 0) PMP::orient_to_bound_a_volume(refined);
+    refined.collect_garbage();
+    const Mesh candidate = to_mesh(refined, /*record=*/false);
+    const ValidationReport check = validate_mesh(candidate);
+    if (!check.valid() || candidate.triangles.empty()) {
+      report_.notes.push_back({"autorefinement of " + plural(pairs_before, "self-intersecting pair", "self-intersecting pairs") +
+                               " was undone: its result, rounded to doubles, is not valid (" + check.summary() + ")"});
+      return;
+    }
+    // CGAL keeps the patches it takes to be outside; on the corpus cow and elk it
+    // keeps a sliver instead. Resolving overlaps can only remove doubly covered
+    // volume, so a result with less than half the volume has cut away the wrong
+    // side. (A sanity bound on what to accept, not a geometric decision.)
+    const double volume_before = signed_volume(to_mesh(sm_, /*record=*/false));
+    const double volume_after = signed_volume(candidate);
+    if (!(volume_after >= 0.5 * volume_before)) {
+      report_.notes.push_back({"autorefinement of " + plural(pairs_before, "self-intersecting pair", "self-intersecting pairs") +
+                               " was undone: it kept volume " + number_text(volume_after) + " of " +
+                               number_text(volume_before) + " (less than half: the wrong side)"});
+      return;
+    }
+    sm_ = std::move(refined);
+    origin_ = sm_.property_map<FaceIndex, std::int64_t>("f:origin").first;
+    split_ = sm_.property_map<FaceIndex, bool>("f:split").first;
+    resolved_pairs_ = pairs_before;
+  }
+
+  static std::string number_text(double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", value);
+    return text;
+  }
+
+  static std::string first_line(const std::string& text) {
+    const std::size_t end = text.find_first_of("\r\n");
+    return end == std::string::npos ? text : text.substr(0, end);
+  }
+
+  static std::size_t count_intersecting_pairs(const SurfaceMesh& sm) {
+    std::vector<std::pair<FaceIndex, FaceIndex>> pairs;
+    PMP::self_intersections(sm, std::back_inserter(pairs));
+    return pairs.size();
+  }
+
+  Mesh output_from_working_only() {
+    // Only reached when every triangle was removed: nothing is left to output.
+    Mesh out;
+    finish_report(out, 0, 0);
+    return out;
+  }
+
+  // The first corner (3*t + c) at each vertex, overall and per surface: the
+  // attributes a corner of a new triangle borrows.
+  std::optional<std::size_t> borrowed_corner(VertexIndex v, SurfaceId surface) {
+    if (corner_at_.empty()) {
+      for (std::size_t t : working_) {
+        const Triangle tri = mapped(t);
+        for (std::size_t c = 0; c < 3; ++c) {
+          corner_at_.try_emplace(tri[c], 3 * t + c);
+          corner_at_surface_.try_emplace((std::uint64_t{tri[c]} << 32) | input_.surfaces[t], 3 * t + c);
+        }
+      }
+    }
+    if (auto it = corner_at_surface_.find((std::uint64_t{v} << 32) | surface); it != corner_at_surface_.end()) {
+      return it->second;
+    }
+    if (auto it = corner_at_.find(v); it != corner_at_.end()) return it->second;
+    return std::nullopt;
+  }
+
+  // Converts a repaired surface back to shatter's mesh. `record` adds the
+  // reversal, self-intersection and unused-vertex changes to the report.
+  Mesh to_mesh(const SurfaceMesh& sm, bool record) {
+    const auto origin = sm.property_map<FaceIndex, std::int64_t>("f:origin").first;
+    const auto split = sm.property_map<FaceIndex, bool>("f:split").first;
+
+    // Vertices: existing positions keep their input (representative) index; new
+    // positions (autorefinement) get new ones. Welded by position, as always.
+    std::unordered_map<PositionKey, VertexIndex, PositionKeyHash> input_vertex_at;
+    for (std::size_t v = 0; v < input_.vertex_count(); ++v) {
+      if (representative_[v] == v) input_vertex_at.emplace(key_of(input_.positions[v]), static_cast<VertexIndex>(v));
+    }
+    constexpr VertexIndex new_base = std::numeric_limits<VertexIndex>::max() / 2;  // marks new vertices until renumbering
+    std::vector<Vec3> new_positions;
+    std::unordered_map<PositionKey, VertexIndex, PositionKeyHash> new_vertex_at;
+    auto vertex_id = [&](SmVertex v) -> VertexIndex {
+      const PositionKey key = key_of(sm.point(v));
+      if (auto it = input_vertex_at.find(key); it != input_vertex_at.end()) return it->second;
+      const auto [it, inserted] = new_vertex_at.try_emplace(key, static_cast<VertexIndex>(new_base + new_positions.size()));
+      if (inserted) new_positions.push_back({sm.point(v).x(), sm.point(v).y(), sm.point(v).z()});
+      return it->second;
+    };
+
+    struct Face {
+      Triangle vertices;
+      std::int64_t origin;
+      bool split;
+      std::optional<SurfaceId> surface;
+      FaceIndex handle;
+    };
+    std::vector<Face> faces;
+    faces.reserve(sm.number_of_faces());
+    std::size_t reversed = 0;
+    for (FaceIndex f : sm.faces()) {
+      const HalfedgeIndex h = sm.halfedge(f);
+      Triangle tri{vertex_id(sm.source(h)), vertex_id(sm.target(h)), vertex_id(sm.target(sm.next(h)))};
+      Face face{tri, origin[f], split[f], std::nullopt, f};
+      if (face.origin != no_origin) {
+        const std::size_t t = static_cast<std::size_t>(face.origin);
+        const Triangle in = mapped(t);
+        Triangle sorted_in = in, sorted_out = tri;
+        std::sort(sorted_in.begin(), sorted_in.end());
+        std::sort(sorted_out.begin(), sorted_out.end());
+        if (sorted_in == sorted_out) {
+          // The input triangle itself: written as it was read, or reversed
+          // keeping its first corner, so an untouched triangle stays bit-identical.
+          if (same_cyclic_order(tri, in)) {
+            face.vertices = in;
+          } else {
+            face.vertices = {in[0], in[2], in[1]};
+            ++reversed;
+          }
+        }
+        face.surface = input_.surfaces[t];
+      }
+      faces.push_back(face);
+    }
+
+    // New triangles (hole filling) take the surface of a neighbour that has one,
+    // spreading inward across the patch.
+    std::unordered_map<std::uint32_t, std::size_t> face_slot;
+    for (std::size_t i = 0; i < faces.size(); ++i) face_slot[faces[i].handle.idx()] = i;
+    for (bool progress = true; progress;) {
+      progress = false;
+      for (Face& face : faces) {
+        if (face.surface) continue;
+        for (HalfedgeIndex h : CGAL::halfedges_around_face(sm.halfedge(face.handle), sm)) {
+          const FaceIndex neighbour = sm.face(sm.opposite(h));
+          if (neighbour == SurfaceMesh::null_face()) continue;
+          const Face& other = faces[face_slot.at(neighbour.idx())];
+          if (other.surface) {
+            face.surface = other.surface;
+            progress = true;
+            break;
+          }
+        }
+      }
+    }
+
+    // Renumber: surviving input vertices in input order, then new ones.
+    std::vector<bool> input_used(input_.vertex_count());
+    std::vector<bool> new_used(new_positions.size());
+    for (const Face& face : faces) {
+      for (VertexIndex v : face.vertices) {
+        if (v >= new_base) new_used[v - new_base] = true; else input_used[v] = true;
+      }
+    }
+    Mesh out;
+    std::vector<VertexIndex> input_number(input_.vertex_count()), new_number(new_positions.size());
+    for (std::size_t v = 0; v < input_.vertex_count(); ++v) {
+      if (!input_used[v]) continue;
+      input_number[v] = static_cast<VertexIndex>(out.positions.size());
+      out.positions.push_back(input_.positions[v]);
+    }
+    std::size_t created_vertices = 0;
+    for (std::size_t v = 0; v < new_positions.size(); ++v) {
+      if (!new_used[v]) continue;
+      new_number[v] = static_cast<VertexIndex>(out.positions.size());
+      out.positions.push_back(new_positions[v]);
+      ++created_vertices;
+    }
+
+    const CornerAttributes& in_corners = input_.corners;
+    const bool normals = in_corners.has_normals(), uvs = in_corners.has_uvs(), tangents = in_corners.has_tangents();
+    for (const Face& face : faces) {
+      Triangle tri;
+      for (int c = 0; c < 3; ++c) {
+        const VertexIndex v = face.vertices[c];
+        tri[c] = v >= new_base ? new_number[v - new_base] : input_number[v];
+      }
+      out.triangles.push_back(tri);
+      const SurfaceId surface = face.surface.value_or(original_surface);
+      out.surfaces.push_back(surface);
+      if (!normals && !uvs && !tangents) continue;
+      for (int c = 0; c < 3; ++c) {
+        const VertexIndex v = face.vertices[c];
+        std::optional<std::size_t> corner;
+        if (face.origin != no_origin) {
+          const std::size_t t = static_cast<std::size_t>(face.origin);
+          const Triangle in = mapped(t);
+          for (std::size_t k = 0; k < 3; ++k) {
+            if (in[k] == v) corner = 3 * t + k;
+          }
+          if (!corner && face.split) {
+            interpolate_corner(out, static_cast<std::size_t>(face.origin), out.positions[tri[c]]);
+            continue;
+          }
+        }
+        if (!corner && v < new_base) corner = borrowed_corner(v, surface);
+        if (corner) {
+          if (normals) out.corners.normals.push_back(in_corners.normals[*corner]);
+          if (uvs) out.corners.uvs.push_back(in_corners.uvs[*corner]);
+          if (tangents) out.corners.tangents.push_back(in_corners.tangents[*corner]);
+        } else {
+          // Unreachable for vertices that came from the input (each has a
+          // corner); kept total so the channels always stay 3 per triangle.
+          interpolate_corner(out, face.origin == no_origin ? working_.front() : static_cast<std::size_t>(face.origin),
+                             out.positions[tri[c]]);
+        }
+      }
+    }
+
+    if (record) {
+      if (reversed > 0) {
+        change(RepairKind::reversed_triangles, reversed,
+               "reversed " + plural(reversed, "triangle", "triangles") +
+                   " to orient the surface consistently and outward");
+      }
+      if (resolved_pairs_ > 0) {
+        change(RepairKind::resolved_self_intersections, resolved_pairs_,
+               "resolved " + plural(resolved_pairs_, "self-intersecting triangle pair", "self-intersecting triangle pairs") +
+                   " (autorefinement: " + plural(created_vertices, "new vertex", "new vertices") +
+                   " rounded to doubles, inner parts removed)");
+      }
+      std::size_t kept_input_vertices = out.positions.size() - created_vertices;
+      finish_report(out, kept_input_vertices, created_vertices);
+    }
+    return out;
+  }
+
+  // Attributes of a point inside input triangle t, barycentric in t's corners
+  // (computed in doubles: attributes are data, no decision depends on them).
+  void interpolate_corner(Mesh& out, std::size_t t, Vec3 p) const {
+    const Triangle& tri = input_.triangles[t];
+    const Vec3 a = input_.positions[tri[0]], b = input_.positions[tri[1]], c = input_.positions[tri[2]];
+    auto cross = [](Vec3 u, Vec3 v) { return Vec3{u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x}; };
+    auto dot = [](Vec3 u, Vec3 v) { return u.x * v.x + u.y * v.y + u.z * v.z; };
+    const Vec3 n = cross(b - a, c - a);
+    const double area2 = dot(n, n);
+    double wa = 1.0 / 3, wb = 1.0 / 3, wc = 1.0 / 3;
+    if (area2 > 0) {
+      wa = dot(cross(b - p, c - p), n) / area2;
+      wb = dot(cross(c - p, a - p), n) / area2;
+      wc = 1.0 - wa - wb;
+    }
+    const CornerAttributes& in = input_.corners;
+    const std::size_t k = 3 * t;
+    if (in.has_normals()) {
+      Vec3 v = in.normals[k] * wa + in.normals[k + 1] * wb + in.normals[k + 2] * wc;
+      const double length = std::sqrt(dot(v, v));
+      if (length > 0) v = v * (1.0 / length);
+      out.corners.normals.push_back(v);
+    }
+    if (in.has_uvs()) {
+      const Vec2 &ua = in.uvs[k], &ub = in.uvs[k + 1], &uc = in.uvs[k + 2];
+      out.corners.uvs.push_back(Vec2{ua.x * wa + ub.x * wb + uc.x * wc, ua.y * wa + ub.y * wb + uc.y * wc});
+    }
+    if (in.has_tangents()) {
+      const Vec4 &ta = in.tangents[k], &tb = in.tangents[k + 1], &tc = in.tangents[k + 2];
+      Vec3 v{ta.x * wa + tb.x * wb + tc.x * wc, ta.y * wa + tb.y * wb + tc.y * wc, ta.z * wa + tb.z * wb + tc.z * wc};
+      const double length = std::sqrt(dot(v, v));
+      if (length > 0) v = v * (1.0 / length);
+      out.corners.tangents.push_back(Vec4{v.x, v.y, v.z, ta.w});
+    }
+  }
+
+  void finish_report(const Mesh& out, std::size_t kept_input_vertices, std::size_t /*created_vertices*/) {
+    std::size_t distinct_input = 0;
+    for (std::size_t v = 0; v < input_.vertex_count(); ++v) distinct_input += representative_[v] == v ? 1 : 0;
+    const std::size_t unused = distinct_input - kept_input_vertices;
+    if (unused > 0) {
+      change(RepairKind::removed_unused_vertices, unused,
+             "removed " + plural(unused, "vertex", "vertices") + " no triangle uses");
+    }
+    report_.vertices_after = out.vertex_count();
+    report_.triangles_after = out.triangle_count();
+  }
+
+  const Mesh& input_;
+  const RepairOptions& options_;
+  RepairReport& report_;
+  std::vector<VertexIndex> representative_;
+  std::vector<std::size_t> working_;  // input triangles kept after step 2, in input order
+  SurfaceMesh sm_;
+  SurfaceMesh::Property_map<FaceIndex, std::int64_t> origin_;
+  SurfaceMesh::Property_map<FaceIndex, bool> split_;
+  std::size_t resolved_pairs_ = 0;
+  std::unordered_map<PositionKey, std::uint32_t, PositionKeyHash> welded_ids_;
+  std::unordered_map<VertexIndex, std::size_t> corner_at_;
+  std::unordered_map<std::uint64_t, std::size_t> corner_at_surface_;
+};
+
+}  // namespace
+
+const RepairChange* RepairReport::find(RepairKind kind) const {
+  for (const RepairChange& c : changes) {
+    if (c.kind == kind) return &c;
+  }
+  return nullptr;
+}
+
+std::string RepairReport::summary() const {
+  if (changes.empty()) return "no change";
+  std::string line;
+  for (const RepairChange& c : changes) line += (line.empty() ? "" : "; ") + c.text;
+  return line;
+}
+
+RepairReport repair_mesh(Mesh& mesh, const RepairOptions& options) {
+  RepairReport report;
+  report.vertices_before = report.vertices_after = mesh.vertex_count();
+  report.triangles_before = report.triangles_after = mesh.triangle_count();
+  if (mesh.triangles.empty()) {
+    report.notes.push_back({"the mesh has no triangle; nothing to repair"});
+    return report;
+  }
+  const ValidationReport validation = validate_mesh(mesh);
+  if (validation.valid()) return report;
+  if (validation.find(DefectKind::nonfinite_coordinate) || validation.find(DefectKind::index_out_of_range)) {
+    report.notes.push_back({"not repaired: " + validation.summary()});
+    return report;
+  }
+  Mesh repaired = Repairer(mesh, options, report).run();
+  mesh = std::move(repaired);
+  return report;
+}
+
+}  // namespace shatter

@@ -1,0 +1,507 @@
+// repair_mesh: valid meshes damaged in known ways, over many seeds, must come back
+// valid with every change named, and with their exact volume where the repair can
+// restore it exactly; valid meshes are left alone; the corpus's bad meshes are
+// repaired or refused as recorded here; and `shatter ... --repair` end to end.
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/io.hpp"
+#include "shatter/kernel/repair.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "support/checks.hpp"
+#include "support/corpus.hpp"
+#include "support/generators.hpp"
+
+using namespace shatter;
+using namespace shatter::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+// Small and quick meshes for the many-seed loops: the generated catalogue plus
+// the smaller corpus meshes.
+std::vector<NamedMesh> test_meshes() {
+  std::vector<NamedMesh> meshes = generated_meshes();
+  for (const fs::path& path : valid_meshes()) {
+    Mesh mesh = read_mesh(path);
+    if (mesh.triangle_count() <= 3000) meshes.push_back({path.filename().string(), std::move(mesh)});
+  }
+  return meshes;
+}
+
+bool names(const RepairReport& report, RepairKind kind) { return report.find(kind) != nullptr; }
+std::size_t count_of(const RepairReport& report, RepairKind kind) {
+  const RepairChange* change = report.find(kind);
+  return change ? change->count : 0;
+}
+
+void reverse(Triangle& t) { std::swap(t[1], t[2]); }
+
+void reverse_corner_attributes(Mesh& mesh, std::size_t t) {
+  if (mesh.corners.has_normals()) std::swap(mesh.corners.normals[3 * t + 1], mesh.corners.normals[3 * t + 2]);
+  if (mesh.corners.has_uvs()) std::swap(mesh.corners.uvs[3 * t + 1], mesh.corners.uvs[3 * t + 2]);
+  if (mesh.corners.has_tangents()) std::swap(mesh.corners.tangents[3 * t + 1], mesh.corners.tangents[3 * t + 2]);
+}
+
+// Per-corner UVs that name their triangle and vertex, so a test can tell whether
+// each corner kept its own attribute.
+void add_tracer_uvs(Mesh& mesh) {
+  mesh.corners.uvs.clear();
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    for (int c = 0; c < 3; ++c) mesh.corners.uvs.push_back({double(t), double(mesh.triangles[t][c])});
+  }
+}
+
+void remove_triangles(Mesh& mesh, std::vector<std::size_t> doomed) {
+  std::sort(doomed.begin(), doomed.end(), std::greater<>());
+  for (std::size_t t : doomed) {
+    mesh.triangles.erase(mesh.triangles.begin() + static_cast<std::ptrdiff_t>(t));
+    mesh.surfaces.erase(mesh.surfaces.begin() + static_cast<std::ptrdiff_t>(t));
+    for (auto* channel : {&mesh.corners.uvs}) {
+      if (!channel->empty()) channel->erase(channel->begin() + static_cast<std::ptrdiff_t>(3 * t),
+                                            channel->begin() + static_cast<std::ptrdiff_t>(3 * t + 3));
+    }
+  }
+}
+
+std::string problem_after_repair(const Mesh& mesh) { return solid_problem(mesh); }
+
+}  // namespace
+
+TEST_CASE("repairing a valid mesh changes nothing and reports nothing", "[repair]") {
+  for (NamedMesh& named : test_meshes()) {
+    INFO(named.name);
+    const std::string before = canonical_bytes(named.mesh);
+    const RepairReport report = repair_mesh(named.mesh);
+    CHECK_FALSE(report.changed());
+    CHECK(report.notes.empty());
+    CHECK(report.summary() == "no change");
+    CHECK(canonical_bytes(named.mesh) == before);
+  }
+}
+
+TEST_CASE("reversed triangles are oriented back, outward, with the exact volume", "[repair]") {
+  std::size_t cases = 0;
+  for (const NamedMesh& named : test_meshes()) {
+    const mpq_class volume = exact_six_volume(named.mesh);
+    for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+      INFO(named.name << " seed " << seed);
+      Mesh mesh = named.mesh;
+      Random random(seed * 7919 + named.mesh.triangle_count());
+      add_tracer_uvs(mesh);
+      const Mesh traced = mesh;
+      // Seed 1 reverses every triangle (inward); the others a random subset.
+      std::size_t reversed = 0;
+      for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+        if (seed == 1 || random.uniform() < 0.3) {
+          reverse(mesh.triangles[t]);
+          reverse_corner_attributes(mesh, t);
+          ++reversed;
+        }
+      }
+      if (reversed == 0) continue;
+      const RepairReport report = repair_mesh(mesh);
+      CHECK(problem_after_repair(mesh).empty());
+      CHECK(count_of(report, RepairKind::reversed_triangles) == reversed);
+      CHECK(report.changes.size() == 1);
+      CHECK(exact_six_volume(mesh) == volume);
+      // Each corner keeps its own attribute, and the result is the input again.
+      CHECK(canonical_bytes(mesh) == canonical_bytes(traced));
+      ++cases;
+    }
+  }
+  CHECK(cases > 50);
+}
+
+TEST_CASE("duplicate vertices and triangles are merged and removed, giving the input back", "[repair]") {
+  for (const NamedMesh& named : test_meshes()) {
+    for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+      INFO(named.name << " seed " << seed);
+      Mesh mesh = named.mesh;
+      Random random(seed);
+      // Unweld: some corners get a fresh copy of their vertex, appended at the
+      // end, so the first copy keeps its number and the input comes back exactly.
+      std::size_t copies = 0;
+      for (int i = 0; i < 5; ++i) {
+        const std::size_t t = random.index(mesh.triangle_count());
+        const int c = static_cast<int>(random.index(3));
+        mesh.positions.push_back(mesh.positions[mesh.triangles[t][c]]);
+        mesh.triangles[t][c] = static_cast<VertexIndex>(mesh.positions.size() - 1);
+        ++copies;
+      }
+      // Duplicate triangles, some rotated: the same triangle all the same.
+      std::size_t duplicates = 1 + random.index(3);
+      for (std::size_t i = 0; i < duplicates; ++i) {
+        Triangle copy = named.mesh.triangles[random.index(named.mesh.triangle_count())];
+        std::rotate(copy.begin(), copy.begin() + static_cast<std::ptrdiff_t>(random.index(3)), copy.end());
+        mesh.triangles.push_back(copy);
+        mesh.surfaces.push_back(original_surface);
+      }
+      const RepairReport report = repair_mesh(mesh);
+      CHECK(count_of(report, RepairKind::merged_duplicate_vertices) == copies);
+      CHECK(count_of(report, RepairKind::removed_duplicate_triangles) == duplicates);
+      CHECK(problem_after_repair(mesh).empty());
+      CHECK(canonical_bytes(mesh) == canonical_bytes(named.mesh));
+    }
+  }
+}
+
+TEST_CASE("a triangle and its reverse lying back to back are both removed", "[repair]") {
+  Mesh mesh = unit_cube();
+  const Mesh cube = mesh;
+  Triangle reversed = mesh.triangles[3];
+  reverse(reversed);
+  mesh.triangles.push_back(reversed);
+  mesh.surfaces.push_back(original_surface);
+  const RepairReport report = repair_mesh(mesh);
+  CHECK(count_of(report, RepairKind::removed_opposite_triangle_pairs) == 2);
+  // The hole this leaves is the triangle's own outline: filled again.
+  CHECK(count_of(report, RepairKind::filled_holes) == 1);
+  CHECK(problem_after_repair(mesh).empty());
+  CHECK(exact_six_volume(mesh) == exact_six_volume(cube));
+}
+
+TEST_CASE("zero-area triangles from an exact edge split are removed, the volume kept exactly", "[repair]") {
+  using K = CGAL::Epick;
+  std::size_t cases = 0;
+  for (const NamedMesh& named : test_meshes()) {
+    const mpq_class volume = exact_six_volume(named.mesh);
+    Random random(named.mesh.triangle_count());
+    for (int attempt = 0, done = 0; attempt < 40 && done < 3; ++attempt) {
+      Mesh mesh = named.mesh;
+      const std::size_t t = random.index(mesh.triangle_count());
+      const int c = static_cast<int>(random.index(3));
+      const VertexIndex a = mesh.triangles[t][c], b = mesh.triangles[t][(c + 1) % 3], x = mesh.triangles[t][(c + 2) % 3];
+      const Vec3 pa = mesh.positions[a], pb = mesh.positions[b];
+      const Vec3 m = (pa + pb) * 0.5;
+      // Only where the rounded midpoint lies exactly inside the edge.
+      const K::Point_3 ka(pa.x, pa.y, pa.z), km(m.x, m.y, m.z), kb(pb.x, pb.y, pb.z);
+      if (!CGAL::collinear(ka, km, kb) || !CGAL::collinear_are_strictly_ordered_along_line(ka, km, kb)) {
+        continue;
+      }
+      INFO(named.name << " triangle " << t);
+      const VertexIndex mi = static_cast<VertexIndex>(mesh.positions.size());
+      mesh.positions.push_back(m);
+      // (a, b, x) becomes (a, m, x) + (m, b, x); the zero-area (a, b, m) closes the
+      // edge the other triangle still traverses b -> a.
+      mesh.triangles[t] = {a, mi, x};
+      mesh.triangles.push_back({mi, b, x});
+      mesh.triangles.push_back({a, b, mi});
+      mesh.surfaces.push_back(original_surface);
+      mesh.surfaces.push_back(original_surface);
+      REQUIRE(validate_mesh(mesh).find(DefectKind::zero_area_triangle) != nullptr);
+      const RepairReport report = repair_mesh(mesh);
+      CHECK(count_of(report, RepairKind::fixed_zero_area_triangles) == 1);
+      CHECK(problem_after_repair(mesh).empty());
+      CHECK(exact_six_volume(mesh) == volume);
+      ++done;
+      ++cases;
+    }
+  }
+  CHECK(cases > 20);
+}
+
+TEST_CASE("small holes are filled: one to three adjacent triangles deleted", "[repair]") {
+  std::size_t cases = 0, single = 0;
+  for (const NamedMesh& named : test_meshes()) {
+    const mpq_class volume = exact_six_volume(named.mesh);
+    for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+      Mesh mesh = named.mesh;
+      add_tracer_uvs(mesh);
+      Random random(seed * 31 + named.mesh.triangle_count());
+      const std::size_t holes = 1 + seed % 3;  // triangles deleted
+      std::vector<std::size_t> doomed{random.index(mesh.triangle_count())};
+      // Grow by triangles sharing an edge with the first one.
+      for (std::size_t t = 0; t < mesh.triangle_count() && doomed.size() < holes; ++t) {
+        const Triangle& a = mesh.triangles[doomed[0]];
+        const Triangle& b = mesh.triangles[t];
+        int shared = 0;
+        for (VertexIndex v : a) shared += std::count(b.begin(), b.end(), v) ? 1 : 0;
+        if (shared == 2) doomed.push_back(t);
+      }
+      // Skip damage that would orphan a vertex: that is not a hole any more.
+      std::map<VertexIndex, int> uses;
+      for (const Triangle& t : mesh.triangles) for (VertexIndex v : t) ++uses[v];
+      for (std::size_t t : doomed) for (VertexIndex v : mesh.triangles[t]) --uses[v];
+      if (std::any_of(uses.begin(), uses.end(), [](const auto& u) { return u.second == 0; })) continue;
+      INFO(named.name << " seed " << seed << " deleted " << doomed.size());
+      remove_triangles(mesh, doomed);
+      const RepairReport report = repair_mesh(mesh);
+      CHECK(count_of(report, RepairKind::filled_holes) == 1);
+      CHECK(problem_after_repair(mesh).empty());
+      CHECK(mesh.corners.uvs.size() == 3 * mesh.triangle_count());
+      // New corners borrow an existing corner's value at the same vertex.
+      for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+        for (int c = 0; c < 3; ++c) CHECK(mesh.corners.uvs[3 * t + c].y == double(mesh.triangles[t][c]));
+      }
+      if (doomed.size() == 1) {
+        // A 3-edge hole has one lid: the deleted triangle itself.
+        CHECK(exact_six_volume(mesh) == volume);
+        ++single;
+      }
+      ++cases;
+    }
+  }
+  CHECK(cases > 30);
+  CHECK(single > 10);
+}
+
+TEST_CASE("several kinds of damage at once are each named", "[repair]") {
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    INFO("seed " << seed);
+    const Mesh original = grid_box({0, 0, 0}, {1, 2, 3}, 3);
+    Mesh mesh = original;
+    Random random(seed);
+    for (Triangle& t : mesh.triangles) {
+      if (random.uniform() < 0.2) reverse(t);
+    }
+    mesh.positions.push_back(mesh.positions[mesh.triangles[5][0]]);
+    mesh.triangles[5][0] = static_cast<VertexIndex>(mesh.positions.size() - 1);
+    mesh.triangles.push_back(mesh.triangles[9]);
+    mesh.surfaces.push_back(original_surface);
+    const RepairReport report = repair_mesh(mesh);
+    CHECK(names(report, RepairKind::merged_duplicate_vertices));
+    CHECK(names(report, RepairKind::removed_duplicate_triangles));
+    CHECK(problem_after_repair(mesh).empty());
+    CHECK(exact_six_volume(mesh) == exact_six_volume(original));
+    // Repairing again finds nothing left to do.
+    const std::string once = canonical_bytes(mesh);
+    CHECK_FALSE(repair_mesh(mesh).changed());
+    CHECK(canonical_bytes(mesh) == once);
+  }
+}
+
+TEST_CASE("meshes repair cannot give a meaning to are left unchanged with a note", "[repair]") {
+  Mesh mesh = unit_cube();
+  mesh.positions[2].y = std::numeric_limits<double>::infinity();
+  std::reverse(mesh.triangles[0].begin(), mesh.triangles[0].end());
+  const std::string before = canonical_bytes(mesh);
+  const RepairReport report = repair_mesh(mesh);
+  CHECK_FALSE(report.changed());
+  REQUIRE(report.notes.size() == 1);
+  CHECK(report.notes[0].text.find("non-finite") != std::string::npos);
+  CHECK(canonical_bytes(mesh) == before);
+
+  Mesh empty;
+  CHECK_FALSE(repair_mesh(empty).changed());
+}
+
+TEST_CASE("holes larger than the limit are left, and noted", "[repair]") {
+  Mesh mesh = grid_box({0, 0, 0}, {1, 1, 1}, 4);
+  // Delete the whole z = 0 face: a 16-edge hole.
+  std::vector<std::size_t> bottom;
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    if (mesh.positions[tri[0]].z == 0 && mesh.positions[tri[1]].z == 0 && mesh.positions[tri[2]].z == 0) bottom.push_back(t);
+  }
+  REQUIRE(bottom.size() == 32);
+  remove_triangles(mesh, bottom);
+  RepairOptions small;
+  small.max_hole_edges = 15;
+  Mesh refused = mesh;
+  const RepairReport report = repair_mesh(refused, small);
+  CHECK_FALSE(names(report, RepairKind::filled_holes));
+  REQUIRE(report.notes.size() == 1);
+  CHECK(report.notes[0].text.find("16 edges") != std::string::npos);
+  CHECK(validate_mesh(refused).find(DefectKind::boundary_edge) != nullptr);
+  // The interior grid vertices of the face are gone with it.
+  CHECK(names(report, RepairKind::removed_unused_vertices));
+
+  RepairOptions enough;
+  enough.max_hole_edges = 16;
+  const RepairReport filled = repair_mesh(mesh, enough);
+  CHECK(count_of(filled, RepairKind::filled_holes) == 1);
+  CHECK(problem_after_repair(mesh).empty());
+  CHECK(exact_six_volume(mesh) == 6);
+}
+
+// What repair does with each mesh in the corpus's bad/ folder, recorded.
+TEST_CASE("every bad corpus mesh is repaired or refused as recorded", "[repair][corpus]") {
+  struct Expected {
+    bool valid;
+    std::vector<RepairKind> changes;    // named in the report
+    DefectKind remaining{};             // when refused: the first defect left
+    mpq_class six_volume = 0;           // when repaired
+  };
+  const std::map<std::string, Expected> expected{
+      {"cube-ouvert.off", {true, {RepairKind::filled_holes}, {}, 48}},
+      {"tet-shuffled.off", {true, {RepairKind::reversed_triangles}, {}, 1}},
+      {"tetrahedron.off", {true, {RepairKind::reversed_triangles}, {}, 1}},
+      // Flat: every triangle lies in z = 0; no solid to recover.
+      {"degtri_sliding.off", {false, {}, DefectKind::zero_area_triangle}},
+      // 106 holes, holes touching at 65 pinched vertices, one of 78 edges.
+      {"elephant-with-holes.off", {false, {RepairKind::filled_holes}, DefectKind::boundary_edge}},
+      // The stray triangle is an open piece: its lid would be its own reverse.
+      {"tetra_intersected_by_triangle.off", {false, {}, DefectKind::boundary_edge}},
+  };
+  std::size_t seen = 0;
+  for (const fs::path& path : bad_meshes()) {
+    const std::string name = path.filename().string();
+    INFO(name);
+    const auto it = expected.find(name);
+    REQUIRE(it != expected.end());  // a new bad mesh needs its outcome recorded here
+    ++seen;
+    Mesh mesh = read_mesh(path);
+    const RepairReport report = repair_mesh(mesh);
+    CHECK((report.changed() || !report.notes.empty()));
+    for (RepairKind kind : it->second.changes) CHECK(names(report, kind));
+    const ValidationReport after = validate_mesh(mesh);
+    CHECK(after.valid() == it->second.valid);
+    if (it->second.valid) {
+      CHECK(exact_six_volume(mesh) == it->second.six_volume);
+    } else {
+      REQUIRE_FALSE(after.defects.empty());
+      CHECK(after.defects.front().kind == it->second.remaining);
+      CHECK_THROWS_AS(require_valid_solid(mesh, name, false), InvalidMeshError);
+    }
+  }
+  CHECK(seen == expected.size());
+}
+
+TEST_CASE("self-intersections: resolved on the camel, refused on cow and elk", "[repair][corpus]") {
+  for (const fs::path& path : self_intersecting_meshes()) {
+    const std::string name = path.filename().string();
+    INFO(name);
+    Mesh mesh = read_mesh(path);
+    const RepairReport report = repair_mesh(mesh);
+    const ValidationReport after = validate_mesh(mesh);
+    if (name == "camel.off") {
+      CHECK(names(report, RepairKind::resolved_self_intersections));
+      CHECK(after.valid());
+    } else {
+      CHECK_FALSE(names(report, RepairKind::resolved_self_intersections));
+      CHECK_FALSE(report.notes.empty());
+      CHECK(after.find(DefectKind::self_intersection) != nullptr);
+    }
+  }
+}
+
+// --- the command ------------------------------------------------------------------
+
+namespace {
+
+struct Run {
+  int exit_code;
+  std::string out;
+  std::string err;
+};
+
+std::string slurp(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return buffer.str();
+}
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("shatter-repair-test-" + std::to_string(::getpid())) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir.parent_path());
+  return dir;
+}
+
+Run run_shatter(const std::string& arguments) {
+  const fs::path out = scratch("stdout.txt"), err = scratch("stderr.txt");
+  const std::string command = std::string("'") + SHATTER_EXE + "' " + arguments + " >'" + out.string() + "' 2>'" +
+                              err.string() + "' </dev/null";
+  const int status = std::system(command.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+fs::path bad(const std::string& name) { return mesh_dir() / "bad" / name; }
+std::string last_line(const std::string& text) {
+  const std::size_t end = text.find_last_not_of('\n');
+  const std::size_t start = text.rfind('\n', end);
+  return text.substr(start == std::string::npos ? 0 : start + 1, end - (start == std::string::npos ? 0 : start + 1) + 1);
+}
+
+}  // namespace
+
+TEST_CASE("validate --repair prints the changes and exits 0 on a repaired mesh", "[repair][cli]") {
+  const fs::path out = scratch("cube-closed.off");
+  const Run run = run_shatter("validate " + quoted(bad("cube-ouvert.off")) + " --repair --out " + quoted(out));
+  CHECK(run.exit_code == 0);
+  CHECK(run.err == "repair: filled 1 hole (4 border edges) with 2 new triangles\n");
+  CHECK(run.out.find("valid closed oriented 2-manifold") != std::string::npos);
+  const Mesh written = read_mesh(out);
+  CHECK(solid_problem(written).empty());
+  CHECK(exact_six_volume(written) == 48);
+
+  // Without --repair the same file is refused, and nothing is ever written.
+  const Run plain = run_shatter("validate " + quoted(bad("cube-ouvert.off")));
+  CHECK(plain.exit_code == 3);
+  CHECK(plain.err.find("repair") == std::string::npos);
+}
+
+TEST_CASE("validate --repair refuses what repair cannot fix, after saying what it did", "[repair][cli]") {
+  const fs::path out = scratch("never.off");
+  const Run run = run_shatter("validate " + quoted(bad("degtri_sliding.off")) + " --repair --out " + quoted(out));
+  CHECK(run.exit_code == 3);
+  CHECK(run.err.rfind("repair: ", 0) == 0);
+  CHECK(last_line(run.err).rfind("error: invalid mesh ", 0) == 0);
+  CHECK(last_line(run.err).find("after --repair: degenerate mesh") != std::string::npos);
+  CHECK_FALSE(fs::exists(out));
+}
+
+TEST_CASE("validate --repair on a valid mesh says no change, and --json lists changes", "[repair][cli]") {
+  const Run valid = run_shatter("validate " + quoted(mesh_dir() / "cube.off") + " --repair");
+  CHECK(valid.exit_code == 0);
+  CHECK(valid.err.find("no change") != std::string::npos);
+
+  const Run json_run = run_shatter("validate " + quoted(bad("tetrahedron.off")) + " --repair --json");
+  CHECK(json_run.exit_code == 0);
+  const auto out = nlohmann::json::parse(json_run.out);
+  CHECK(out["valid"] == true);
+  REQUIRE(out["repair"].size() == 1);
+  CHECK(out["repair"][0]["change"] == "reversed_triangles");
+  CHECK(out["repair"][0]["count"] == 4);
+
+  // --out is for the repaired mesh only.
+  const Run usage = run_shatter("validate " + quoted(mesh_dir() / "cube.off") + " --out " + quoted(scratch("x.off")));
+  CHECK(usage.exit_code == 2);
+}
+
+TEST_CASE("slice and fracture --repair proceed with the repaired mesh", "[repair][cli]") {
+  const fs::path pieces = scratch("pieces");
+  const Run refused = run_shatter("slice " + quoted(bad("tet-shuffled.off")) + " --plane 0,0,1,-0.25 --out " +
+                                  quoted(pieces));
+  CHECK(refused.exit_code == 3);
+  const Run slice = run_shatter("slice " + quoted(bad("tet-shuffled.off")) + " --plane 0,0,1,-0.25 --out " +
+                                quoted(pieces) + " --repair");
+  CHECK(slice.exit_code == 0);
+  CHECK(slice.err.find("repair: reversed") != std::string::npos);
+  CHECK(fs::exists(pieces / "below-0.off"));
+  CHECK(fs::exists(pieces / "above-0.off"));
+
+  const fs::path tree = scratch("tree.shatter");
+  const Run fracture = run_shatter("fracture " + quoted(bad("cube-ouvert.off")) + " --fragments 4 --out " +
+                                   quoted(tree) + " --repair --json");
+  CHECK(fracture.exit_code == 0);
+  CHECK(fracture.err.find("repair: filled 1 hole") != std::string::npos);
+  const auto out = nlohmann::json::parse(fracture.out);
+  CHECK(out["repair"][0]["change"] == "filled_holes");
+  CHECK(out["leaves"].get<int>() >= 4);
+
+  const Run open = run_shatter("fracture " + quoted(bad("tetra_intersected_by_triangle.off")) +
+                               " --fragments 2 --out " + quoted(scratch("no.shatter")) + " --repair");
+  CHECK(open.exit_code == 3);
+  CHECK(last_line(open.err).find("(after --repair)") != std::string::npos);
+}
