@@ -278,10 +278,14 @@ int run_slice(const SliceArgs& args) {
   } else {
     if (plane_missed) std::cout << "the plane misses or only touches the mesh: it is returned whole\n";
     std::cout << pieces.size() << " piece(s) written to " << args.out << '\n';
-    for (const auto& piece : pieces_json) {
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+      // Printed from the double, not the JSON value: a volume beyond the double
+      // range (coordinates near 1e300) is JSON null; here it is named.
+      const json& piece = pieces_json[i];
+      const double volume = piece["volume"].get<double>();
       std::cout << "  " << piece["file"].get<std::string>() << ": " << piece["triangles"] << " triangles, volume "
-                << piece["volume"] << (piece["valid"].get<bool>() ? "" : " (embedding not valid after rounding)")
-                << '\n';
+                << volume << (std::isfinite(volume) ? "" : " (beyond the double range)")
+                << (piece["valid"].get<bool>() ? "" : " (embedding not valid after rounding)") << '\n';
     }
   }
   if (invalid_embeddings > 0) {

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <map>
@@ -232,6 +233,21 @@ TEST_CASE("a plane that misses returns the mesh whole and says so") {
   CHECK(run.exit_code == 0);
   CHECK(run.out.find("returned whole") != std::string::npos);
   CHECK(files_in(out) == 1);
+}
+
+TEST_CASE("slice says a volume is beyond the double range, not JSON null") {
+  // Found by probing extreme scales: a cube 2^600 on a side has a volume of
+  // 2^1800, which no double holds (its sum comes out NaN); text output printed "null".
+  const fs::path dir = scratch("huge");
+  fs::create_directories(dir);
+  const double side = std::ldexp(1.0, 600);
+  Mesh cube = read_mesh(mesh_dir() / "cube.off");
+  for (Vec3& p : cube.positions) p = p * side;
+  write_mesh(cube, dir / "huge.off", MeshFormat::off);
+  const Run run = run_shatter("slice " + quoted(dir / "huge.off") + " --plane 1,0,0,0 --out " + quoted(dir / "out"));
+  REQUIRE(run.exit_code == 0);
+  CHECK(run.out.find("null") == std::string::npos);
+  CHECK(run.out.find("(beyond the double range)") != std::string::npos);
 }
 
 TEST_CASE("usage and I/O errors have their own exit codes and one error line") {
