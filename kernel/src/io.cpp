@@ -29,6 +29,24 @@ std::string lower_case(std::string_view text) {
   return lowered;
 }
 
+/// `text` with every byte outside printable ASCII written as \xNN.
+std::string printable(std::string_view text) {
+  std::string escaped;
+  escaped.reserve(text.size());
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte >= 0x20 && byte < 0x7f) {
+      escaped += c;
+      continue;
+    }
+    constexpr char hex[] = "0123456789abcdef";
+    escaped += "\\x";
+    escaped += hex[byte >> 4];
+    escaped += hex[byte & 0xf];
+  }
+  return escaped;
+}
+
 std::string describe_errno(const std::filesystem::path& path, const char* action, int error) {
   return "cannot " + std::string(action) + " " + path.string() + ": " + std::strerror(error);
 }
@@ -110,11 +128,23 @@ Mesh read_mesh(const std::filesystem::path& path) {
 }
 
 Mesh read_mesh_from_bytes(std::string_view bytes, MeshFormat format) {
-  switch (format) {
-    case MeshFormat::off: return io_detail::read_off(bytes);
-    case MeshFormat::obj: return io_detail::read_obj(bytes);
-    case MeshFormat::ply: return io_detail::read_ply(bytes);
-    case MeshFormat::stl: return io_detail::read_stl(bytes);
+  // Said once here, an empty file is refused as empty: each reader alone would
+  // complain about its missing first keyword, a different message per format.
+  if (bytes.empty()) throw InvalidMeshError("empty file (0 bytes)");
+  if (bytes.find_first_not_of(" \t\r\n\v\f") == std::string_view::npos) {
+    throw InvalidMeshError("blank file: " + std::to_string(bytes.size()) + " bytes of whitespace and nothing else");
+  }
+  try {
+    switch (format) {
+      case MeshFormat::off: return io_detail::read_off(bytes);
+      case MeshFormat::obj: return io_detail::read_obj(bytes);
+      case MeshFormat::ply: return io_detail::read_ply(bytes);
+      case MeshFormat::stl: return io_detail::read_stl(bytes);
+    }
+  } catch (const InvalidMeshError& error) {
+    // Messages quote tokens from the file, which may be binary garbage; the
+    // one-line error the CLI prints must stay printable text.
+    throw InvalidMeshError(printable(error.what()));
   }
   throw InvalidMeshError("unknown mesh format");
 }

@@ -77,7 +77,7 @@ template <std::size_t N>
 void parse_numbers(const std::vector<std::string_view>& tokens, std::array<double, N>& values, std::size_t count,
                    const std::string& what) {
   for (std::size_t k = 0; k < count && k < N; ++k) {
-    if (!parse_double(tokens[k + 1], values[k])) refuse(what + ": '" + std::string(tokens[k + 1]) + "' is not a number");
+    if (!parse_double(tokens[k + 1], values[k])) refuse(what + ": '" + std::string(tokens[k + 1].substr(0, 40)) + "' is not a finite double");
   }
 }
 
@@ -123,7 +123,7 @@ ObjContent scan_lines(std::string_view bytes) {
       if (value_count < 3) refuse(what + " has " + std::to_string(value_count) + " vertices, at least 3 needed");
       for (std::size_t k = 1; k < tokens.size(); ++k) {
         const CornerForm form = parse_corner_form(tokens[k]);
-        if (!form.valid) refuse(what + ": '" + std::string(tokens[k]) + "' is not a vertex reference");
+        if (!form.valid) refuse(what + ": '" + std::string(tokens[k].substr(0, 40)) + "' is not a vertex reference");
         content.corner_has_uv.push_back(form.has_uv);
         content.corner_has_normal.push_back(form.has_normal);
       }
@@ -141,8 +141,8 @@ std::string face_name(const ObjContent& content, std::size_t face_number) {
 /// the first element resolves below zero).
 void check_range(int index, std::size_t count, const char* what, const ObjContent& content, std::size_t face_number) {
   if (index < 0 || static_cast<std::size_t>(index) >= count) {
-    refuse(face_name(content, face_number) + " refers to a " + what + " that does not exist (the file has " +
-           std::to_string(count) + ")");
+    refuse(face_name(content, face_number) + ": " + what + " index out of range: refers to a " + what +
+           " that does not exist (the file has " + std::to_string(count) + ")");
   }
 }
 

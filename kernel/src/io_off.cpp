@@ -4,6 +4,7 @@
 // values to each vertex line, which are read past; 4OFF, nOFF and binary OFF
 // change the layout and are refused.
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -46,7 +47,7 @@ bool vertex_lines_have_extras(std::string_view keyword, std::size_t line) {
     if (keyword == variant) return variant != "OFF";
   }
   if (keyword.size() >= 3 && keyword.substr(keyword.size() - 3) == "OFF") {
-    refuse("unsupported OFF variant '" + std::string(keyword) + "'" + at_line(line) +
+    refuse("unsupported OFF variant '" + std::string(keyword.substr(0, 40)) + "'" + at_line(line) +
            " (readable: OFF, COFF, NOFF, CNOFF and their ST forms)");
   }
   refuse("not an OFF file: first line must start with 'OFF'" + at_line(line));
@@ -54,7 +55,7 @@ bool vertex_lines_have_extras(std::string_view keyword, std::size_t line) {
 
 std::uint64_t parse_count(std::string_view token, const char* what, std::size_t line) {
   std::int64_t count = 0;
-  if (!parse_integer(token, count)) refuse(std::string(what) + " count '" + std::string(token) + "' is not an integer" + at_line(line));
+  if (!parse_integer(token, count)) refuse(std::string(what) + " count '" + std::string(token.substr(0, 40)) + "' is not an integer" + at_line(line));
   if (count < 0) refuse("negative " + std::string(what) + " count " + std::to_string(count) + at_line(line));
   return static_cast<std::uint64_t>(count);
 }
@@ -62,6 +63,11 @@ std::uint64_t parse_count(std::string_view token, const char* what, std::size_t 
 }  // namespace
 
 Mesh read_off(std::string_view bytes) {
+  // OFF is text: a NUL byte means a binary file, and would cut a quoted token short.
+  if (const std::size_t nul = bytes.find('\0'); nul != std::string_view::npos) {
+    const std::size_t line = 1 + static_cast<std::size_t>(std::count(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(nul), '\n'));
+    refuse("OFF file contains a NUL byte" + at_line(line));
+  }
   OffLines lines(bytes);
   std::vector<std::string_view> tokens;
   if (!lines.next(tokens)) refuse("empty OFF file");
@@ -94,9 +100,13 @@ Mesh read_off(std::string_view bytes) {
              " values, expected 3");
     }
     Vec3 position;
-    if (!parse_double(tokens[0], position.x) || !parse_double(tokens[1], position.y) ||
-        !parse_double(tokens[2], position.z)) {
-      refuse("vertex " + std::to_string(vertex) + at_line(line) + " has a coordinate that is not a number");
+    double* const coordinates[3] = {&position.x, &position.y, &position.z};
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      if (!parse_double(tokens[axis], *coordinates[axis])) {
+        // Quoted: "1e999" (beyond double) and "1,5" are refused for different reasons.
+        refuse("vertex " + std::to_string(vertex) + at_line(line) + ": coordinate '" +
+               std::string(tokens[axis].substr(0, 40)) + "' is not a finite double");
+      }
     }
     if (!is_finite(position)) refuse("non-finite coordinate at vertex " + std::to_string(vertex) + at_line(line));
     positions.push_back(position);
@@ -111,7 +121,7 @@ Mesh read_off(std::string_view bytes) {
     }
     const std::string where = "face " + std::to_string(face) + at_line(lines.line_number());
     std::int64_t corner_count = 0;
-    if (!parse_integer(tokens[0], corner_count)) refuse(where + ": vertex count '" + std::string(tokens[0]) + "' is not an integer");
+    if (!parse_integer(tokens[0], corner_count)) refuse(where + ": vertex count '" + std::string(tokens[0].substr(0, 40)) + "' is not an integer");
     if (corner_count < 3) refuse(where + " has " + std::to_string(corner_count) + " vertices, at least 3 needed");
     // Values past the indices are the optional face colour.
     if (static_cast<std::uint64_t>(corner_count) > tokens.size() - 1) {
@@ -120,7 +130,7 @@ Mesh read_off(std::string_view bytes) {
     polygon.clear();
     for (std::size_t k = 1; k <= static_cast<std::size_t>(corner_count); ++k) {
       std::int64_t index = 0;
-      if (!parse_integer(tokens[k], index)) refuse(where + ": vertex index '" + std::string(tokens[k]) + "' is not an integer");
+      if (!parse_integer(tokens[k], index)) refuse(where + ": vertex index '" + std::string(tokens[k].substr(0, 40)) + "' is not an integer");
       if (index < 0 || static_cast<std::uint64_t>(index) >= vertex_count) {
         refuse(where + ": vertex index " + std::to_string(index) + " out of range [0, " + std::to_string(vertex_count) + ")");
       }

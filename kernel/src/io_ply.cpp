@@ -95,6 +95,8 @@ Header parse_header(std::string_view bytes) {
   while (true) {
     if (!lines.next(line)) refuse("PLY header has no 'end_header'");
     const std::size_t line_number = lines.line_number();
+    // A NUL would cut a quoted token short in a message; the header is text.
+    if (line.find('\0') != std::string_view::npos) refuse("PLY header contains a NUL byte" + at_line(line_number));
     split_tokens(line, tokens);
     if (tokens.empty()) continue;
     const std::string_view keyword = tokens[0];
@@ -109,7 +111,7 @@ Header parse_header(std::string_view bytes) {
       } else if (tokens[1] == "binary_big_endian") {
         header.encoding = Encoding::big_endian;
       } else {
-        refuse("unknown PLY encoding '" + std::string(tokens[1]) + "'" + at_line(line_number));
+        refuse("unknown PLY encoding '" + std::string(tokens[1].substr(0, 40)) + "'" + at_line(line_number));
       }
       has_format = true;
     } else if (keyword == "element") {
@@ -117,7 +119,7 @@ Header parse_header(std::string_view bytes) {
       Element element;
       element.name = tokens[1];
       if (!parse_integer(tokens[2], element.count)) {
-        refuse("PLY element count '" + std::string(tokens[2]) + "' is not a non-negative integer" + at_line(line_number));
+        refuse("PLY element count '" + std::string(tokens[2].substr(0, 40)) + "' is not a non-negative integer" + at_line(line_number));
       }
       header.elements.push_back(std::move(element));
     } else if (keyword == "property") {
@@ -127,18 +129,18 @@ Header parse_header(std::string_view bytes) {
       if (!is_list && tokens.size() != 3) refuse("malformed PLY property line" + at_line(line_number));
       const std::string_view type_name = tokens[is_list ? 3 : 1];
       const std::optional<ScalarType> type = scalar_type_named(type_name);
-      if (!type) refuse("unknown PLY type '" + std::string(type_name) + "'" + at_line(line_number));
+      if (!type) refuse("unknown PLY type '" + std::string(type_name.substr(0, 40)) + "'" + at_line(line_number));
       property.type = *type;
       if (is_list) {
         property.list_count = scalar_type_named(tokens[2]);
         if (!property.list_count || !is_integral(*property.list_count)) {
-          refuse("PLY list count type '" + std::string(tokens[2]) + "' is not an integer type" + at_line(line_number));
+          refuse("PLY list count type '" + std::string(tokens[2].substr(0, 40)) + "' is not an integer type" + at_line(line_number));
         }
       }
       property.name = tokens[is_list ? 4 : 2];
       header.elements.back().properties.push_back(std::move(property));
     } else {
-      refuse("unknown PLY header keyword '" + std::string(keyword) + "'" + at_line(line_number));
+      refuse("unknown PLY header keyword '" + std::string(keyword.substr(0, 40)) + "'" + at_line(line_number));
     }
   }
   if (!has_format) refuse("PLY header has no format line");
@@ -172,9 +174,16 @@ class ValueReader {
     return position_ == body_.size();
   }
 
+  /// Why the last next() gave nullopt: the value is missing, or (ascii) its text.
+  std::string failure() const {
+    if (encoding_ != Encoding::ascii || last_token_.empty()) return "is missing (the file ends)";
+    return "has malformed value '" + std::string(last_token_.substr(0, 40)) + "'";
+  }
+
  private:
   std::optional<double> next_text(ScalarType type) {
     const std::string_view token = tokens_.next();
+    last_token_ = token;
     if (is_integral(type)) {
       std::int64_t value = 0;
       if (!parse_integer(token, value) || !fits(value, type)) return std::nullopt;
@@ -225,6 +234,7 @@ class ValueReader {
   std::string_view body_;
   Encoding encoding_;
   TokenCursor tokens_;
+  std::string_view last_token_;
   std::size_t position_ = 0;
 };
 
@@ -299,6 +309,10 @@ Mesh read_ply(std::string_view bytes) {
   if (!index_list) refuse("PLY face element has no list property 'vertex_indices'");
 
   const std::string_view body = bytes.substr(header.body_offset);
+  if (const std::size_t nul = body.find('\0'); header.encoding == Encoding::ascii && nul != std::string_view::npos) {
+    const auto line = header.line_count + 1 + static_cast<std::size_t>(std::count(body.begin(), body.begin() + static_cast<std::ptrdiff_t>(nul), '\n'));
+    refuse("PLY ascii body contains a NUL byte" + at_line(line));
+  }
   ValueReader reader(body, header.encoding, header.line_count);
   std::vector<Vec3> positions, normals;
   std::vector<Vec2> uvs;
@@ -323,7 +337,7 @@ Mesh read_ply(std::string_view bytes) {
         const Property& property = element.properties[p];
         const auto value_or_refuse = [&](ScalarType type) {
           const std::optional<double> value = reader.next(type);
-          if (!value) refuse("PLY " + reader.location(element, index) + ": property '" + property.name + "' is missing or malformed");
+          if (!value) refuse("PLY " + reader.location(element, index) + ": property '" + property.name.substr(0, 40) + "' " + reader.failure());
           return *value;
         };
         if (!property.list_count) {

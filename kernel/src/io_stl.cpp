@@ -57,7 +57,11 @@ Mesh read_binary(std::string_view bytes) {
 }
 
 std::string describe(std::string_view token) {
-  return token.empty() ? std::string("end of file") : "'" + std::string(token.substr(0, 40)) + "'";
+  if (token.empty()) return "end of file";
+  std::string quoted = "'";
+  quoted.append(token.substr(0, 40));
+  quoted += '\'';
+  return quoted;
 }
 
 /// Token-level reader of ascii STL, naming the line of every defect.
@@ -71,10 +75,11 @@ class AsciiStl {
       refuse("STL: expected '" + std::string(keyword) + "', found " + describe(token) + at_line());
     }
   }
-  double number() {
+  /// The next token as a double; `element` (" facet 3") says whose it is.
+  double number(const std::string& element = "") {
     const std::string_view token = tokens_.next();
     double value = 0;
-    if (!parse_double(token, value)) refuse("STL: expected a number, found " + describe(token) + at_line());
+    if (!parse_double(token, value)) refuse("STL" + element + ": expected a finite double, found " + describe(token) + at_line());
     return value;
   }
   std::string_view next() { return tokens_.next(); }
@@ -87,6 +92,11 @@ class AsciiStl {
 };
 
 Mesh read_ascii(std::string_view bytes) {
+  // Ascii STL is text: a NUL byte means a binary file of the wrong size (or
+  // garbage), and would cut a token quoted in a message short.
+  if (bytes.find('\0') != std::string_view::npos) {
+    refuse("not an STL file: its size is not 84 + 50 n (binary) and it holds a NUL byte (so is not ascii)");
+  }
   AsciiStl stl(bytes);
   if (const std::string_view first = stl.next(); first != "solid") {
     refuse("not an STL file: its size is not 84 + 50 n (binary) and it does not start with 'solid' (ascii), found " +
@@ -107,7 +117,10 @@ Mesh read_ascii(std::string_view bytes) {
     std::array<Vec3, 3> corners;
     for (Vec3& corner : corners) {
       stl.expect("vertex");
-      corner = {stl.number(), stl.number(), stl.number()};
+      const std::string element = " facet " + std::to_string(facet);
+      corner.x = stl.number(element);
+      corner.y = stl.number(element);
+      corner.z = stl.number(element);
       if (!is_finite(corner)) refuse("non-finite coordinate at STL facet " + std::to_string(facet) + stl.at_line());
     }
     stl.expect("endloop");
