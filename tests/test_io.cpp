@@ -533,6 +533,33 @@ TEST_CASE("non-finite coordinates are refused, naming the vertex", "[io]") {
              Catch::Contains("vertex 1 at line 4"));
 }
 
+TEST_CASE("decimals beyond the double range round like any decimal: to infinity, or to zero", "[io]") {
+  // 1e999 once read as "not a number" in one format and as a malformed value in
+  // another; it is a decimal whose nearest double is infinity, refused as such.
+  for (const char* big : {"1e999", "-1e999", "2e308"}) {
+    INFO(big);
+    const std::string b(big);
+    CHECK_THAT(refusal_message("OFF\n3 1 0\n0 0 0\n" + b + " 0 0\n0 1 0\n3 0 1 2\n", MeshFormat::off),
+               Catch::Contains("non-finite coordinate at vertex 1"));
+    CHECK_THAT(refusal_message("v 0 0 0\nv 1 0 0\nv 0 " + b + " 0\nf 1 2 3\n", MeshFormat::obj),
+               Catch::Contains("non-finite coordinate at vertex 3"));
+    CHECK_THAT(refusal_message("ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+                               "property double z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                               "end_header\n0 0 0\n1 0 0\n0 " + b + " 0\n3 0 1 2\n",
+                               MeshFormat::ply),
+               Catch::Contains("non-finite coordinate at PLY vertex 2"));
+    CHECK_THAT(refusal_message("solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 " + b +
+                                   " 0\nendloop\nendfacet\nendsolid t\n",
+                               MeshFormat::stl),
+               Catch::Contains("non-finite coordinate at STL facet 0"));
+  }
+  // Below the smallest subnormal, the nearest double is zero; 1e-310 is a subnormal.
+  const Mesh tiny = read_mesh_from_bytes("OFF\n3 1 0\n0 0 1e-400\n1 0 0\n0 1e-310 0\n3 0 1 2\n", MeshFormat::off);
+  REQUIRE(tiny.positions.size() == 3);
+  CHECK(tiny.positions[0].z == 0.0);
+  CHECK(tiny.positions[2].y == 1e-310);
+}
+
 TEST_CASE("welding merges equal positions, -0.0 with +0.0, and nothing else", "[io]") {
   // File vertices 0 and 3 weld; 4 (equal to 1) is unused; 6 is 1 + 2^-52, one ulp from vertex 1.
   const Mesh mesh = read_text("OFF\n7 2 0\n0 0 0\n1 0 0\n0 1 0\n-0 0 -0.0\n1 0 0\n0 -1 0\n1.0000000000000002 0 0\n"

@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -51,13 +52,24 @@ void fan_triangulate(std::size_t corner_count, EmitCorner&& emit) {
 /// Reads a whole token as a double: correctly rounded, so printing with
 /// append_shortest and reading back is exact. Accepts a leading '+', which
 /// std::from_chars does not; "nan" and "inf" parse, for the caller to refuse
-/// with the vertex named. Fails on anything else, including values beyond the
-/// range of double.
+/// with the vertex named. A decimal beyond the double range rounds as any
+/// decimal does: past the largest double to infinity (so "1e999" is refused as
+/// a non-finite coordinate, like "inf"), below the smallest to a subnormal or
+/// zero. Fails on anything that is not a decimal number.
 inline bool parse_double(std::string_view token, double& value) {
   if (token.size() > 1 && token.front() == '+' && token[1] != '-') token.remove_prefix(1);
   const char* const end = token.data() + token.size();
   const auto [stop, error] = std::from_chars(token.data(), end, value);
-  return error == std::errc{} && stop == end;
+  if (stop != end) return false;
+  if (error == std::errc::result_out_of_range) {
+    // from_chars leaves `value` untouched here; glibc's strtod rounds correctly
+    // (to infinity, a subnormal or zero). The token is ASCII digits, a point and
+    // an exponent, which every locale's strtod reads alike except for the point:
+    // shatter never calls setlocale, so it is the C locale's '.'.
+    value = std::strtod(std::string(token).c_str(), nullptr);
+    return true;
+  }
+  return error == std::errc{};
 }
 
 /// Reads a whole token as an integer of type Integer, failing on overflow.
