@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "robustness/robustness.hpp"
+#include "shatter/kernel/predicates.hpp"
 
 namespace {
 
@@ -85,6 +86,7 @@ int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, cons
     Case c;
     CaseOutcome outcome;
     double seconds = 0;
+    PredicateCounters predicates;  ///< side-of-plane calls made on the case's own thread
   };
   std::vector<Ran> ran(indices.size());
   tbb::task_arena arena(threads == 0 ? tbb::task_arena::automatic : int(threads));
@@ -92,7 +94,10 @@ int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, cons
     tbb::parallel_for(std::size_t(0), indices.size(), [&](std::size_t i) {
       const auto t0 = std::chrono::steady_clock::now();
       Case c = make_case(pool, seed, indices[i]);
+      const PredicateCounters before = predicate_counters();
       CaseOutcome outcome = run_case(c);
+      ran[i].predicates = {predicate_counters().side_of_plane_calls - before.side_of_plane_calls,
+                           predicate_counters().side_of_plane_exact - before.side_of_plane_exact};
       ran[i].seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       // Keep the mesh only where a reproducer needs it.
       if (outcome.failures.empty()) c.mesh = {};
@@ -103,7 +108,10 @@ int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, cons
 
   std::array<ClassTotals, case_class_count> totals{};
   std::size_t failed = 0;
+  PredicateCounters predicates;
   for (const Ran& r : ran) {
+    predicates.side_of_plane_calls += r.predicates.side_of_plane_calls;
+    predicates.side_of_plane_exact += r.predicates.side_of_plane_exact;
     ClassTotals& t = totals[static_cast<std::size_t>(r.c.kind)];
     ++t.cases;
     (r.c.op == Operation::slice ? t.slices : t.fractures) += 1;
@@ -124,6 +132,13 @@ int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, cons
   std::printf("shatter-fuzz: %zu cases from seed %llu (first index %llu), %.1f s wall\n", ran.size(),
               (unsigned long long)seed, (unsigned long long)first, wall);
   print_table(totals);
+  // Counted on each case's own thread: the cuts and checks, not work a fracture
+  // hands to other threads.
+  std::printf("side_of_plane: %llu calls, %llu fell back to exact arithmetic (%.3f%%)\n",
+              (unsigned long long)predicates.side_of_plane_calls, (unsigned long long)predicates.side_of_plane_exact,
+              predicates.side_of_plane_calls
+                  ? 100.0 * double(predicates.side_of_plane_exact) / double(predicates.side_of_plane_calls)
+                  : 0.0);
   std::printf("%zu failing case%s\n", failed, failed == 1 ? "" : "s");
   return failed == 0 ? 0 : 1;
 }
