@@ -1,0 +1,107 @@
+// Fuzz target: slice-from-bytes, the whole cut (meshtree/include/shatter/meshtree/cut.hpp).
+//
+// Input layout: bytes 0-31 the plane as four native doubles (normal x, y, z,
+// offset; a non-finite value or a zero normal skips the input), byte 32 the mesh
+// format (its value mod 4: OFF, OBJ, PLY, STL), the rest the mesh file.
+// Meshes the library refuses as solids (require_valid_solid, self-intersections
+// included) and meshes over max_triangles are skipped.
+//
+// Properties, for both kernels: every piece is a closed, consistently oriented
+// 2-manifold using every vertex (fast kernel: topology is all it promises); the
+// exact kernel's pieces are moreover valid solids decided on exact coordinates
+// (no zero-area triangle, positive volume) whose volumes sum to the input's exactly.
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <typeinfo>
+
+#include <gmpxx.h>
+
+#include "fuzz_support.hpp"
+#include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "shatter/meshtree/cut.hpp"
+#include "support/checks.hpp"
+
+namespace {
+
+using shatter::fuzz::fail;
+using shatter::fuzz::require;
+
+constexpr std::size_t plane_bytes = 4 * sizeof(double);
+
+/// Cuts with one kernel, turning the documented refusal (UnsupportedGeometryError)
+/// into false and any other exception into an abort.
+template <class MeshType, class Result>
+bool try_cut(const MeshType& mesh, const shatter::Plane& plane, Result& result, const char* kernel) {
+  try {
+    result = shatter::cut_mesh(mesh, plane);
+    return true;
+  } catch (const shatter::UnsupportedGeometryError&) {
+    return false;
+  } catch (const std::exception& error) {
+    fail(std::string(kernel) + " cut: unexpected " + typeid(error).name() + ": " + error.what());
+  }
+}
+
+/// The fast kernel's promise: every piece closed, oriented, manifold, no unused vertex.
+void check_fast_cut(const shatter::Mesh& mesh, const shatter::Plane& plane) {
+  shatter::CutResult<shatter::Vec3> result;
+  if (!try_cut(mesh, plane, result, "fast")) return;
+  require(!result.below.empty() || !result.above.empty(), "fast cut returned no piece");
+  for (const auto* side : {&result.below, &result.above}) {
+    for (const shatter::Mesh& piece : *side) {
+      const std::string problem = shatter::test::topology_problem(piece);
+      require(problem.empty(), "fast cut piece is not a closed oriented manifold: " + problem);
+    }
+  }
+}
+
+/// The exact kernel's promise: every piece a valid solid, volumes summing exactly.
+void check_exact_cut(const shatter::Mesh& mesh, const shatter::Plane& plane) {
+  const shatter::ExactMesh exact_mesh = shatter::to_exact(mesh);
+  shatter::CutResult<shatter::ExactPoint> result;
+  if (!try_cut(exact_mesh, plane, result, "exact")) return;
+  require(!result.below.empty() || !result.above.empty(), "exact cut returned no piece");
+  mpq_class six_volume = 0;
+  for (const auto* side : {&result.below, &result.above}) {
+    for (const shatter::ExactMesh& piece : *side) {
+      const std::string problem = shatter::test::exact_solid_problem(piece);
+      require(problem.empty(), "exact cut piece is not a valid solid: " + problem);
+      six_volume += shatter::test::exact_six_volume(piece);
+    }
+  }
+  require(six_volume == shatter::test::exact_six_volume(exact_mesh), "exact cut pieces' volumes do not sum to the input's");
+}
+
+}  // namespace
+
+/// libFuzzer's entry point: one plane and one mesh, cut with both kernels.
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  if (size < plane_bytes + 1) return 0;
+  double values[4];
+  std::memcpy(values, data, plane_bytes);
+  for (const double value : values) {
+    if (!std::isfinite(value)) return 0;
+  }
+  const shatter::Plane plane{{values[0], values[1], values[2]}, values[3]};
+  if (plane.normal.x == 0 && plane.normal.y == 0 && plane.normal.z == 0) return 0;
+
+  const auto format = static_cast<shatter::MeshFormat>(data[plane_bytes] % 4);
+  shatter::Mesh mesh;
+  if (!shatter::fuzz::try_read(shatter::fuzz::as_bytes(data + plane_bytes + 1, size - plane_bytes - 1), format, mesh)) {
+    return 0;
+  }
+  if (mesh.triangles.size() > shatter::fuzz::max_triangles) return 0;
+  try {
+    shatter::require_valid_solid(mesh, "fuzz input", /*allow_self_intersections=*/false);
+  } catch (const shatter::InvalidMeshError&) {
+    return 0;
+  } catch (const std::exception& error) {
+    fail(std::string("require_valid_solid: unexpected ") + typeid(error).name() + ": " + error.what());
+  }
+  check_fast_cut(mesh, plane);
+  check_exact_cut(mesh, plane);
+  return 0;
+}
