@@ -522,7 +522,7 @@ TEST_CASE("a non-convex cap around another's notch: touching is no bond", "[bond
   CHECK(brute_force_bonds(tree).size() == 1);
 }
 
-TEST_CASE("bonds equal the brute-force contact set", "[bonds][build][property]") {
+TEST_CASE("bonds equal the brute-force contact set", "[bonds][build][property][heavy]") {
   const std::vector<NamedMesh> meshes{{"unit-cube", unit_cube()},
                                       {"ellipsoid", ellipsoid({0, 0, 0}, {1.0, 0.8, 0.6}, 12, 6)},
                                       {"torus", torus(1.0, 0.35, 16, 10)},
@@ -559,7 +559,7 @@ TEST_CASE("bonds equal the brute-force contact set", "[bonds][build][property]")
   CHECK(brute_forced == 4 * 3 * 2 + 1);
 }
 
-TEST_CASE("bonds of 256 fragments and of the generated catalogue", "[bonds][build][property]") {
+TEST_CASE("bonds of 256 fragments and of the generated catalogue", "[bonds][build][property][heavy]") {
   SECTION("256 fragments") {
     // The fast kernel only: the exact one is covered at 64 fragments, and its
     // builds are slow.
@@ -592,7 +592,7 @@ TEST_CASE("bonds of 256 fragments and of the generated catalogue", "[bonds][buil
   }
 }
 
-TEST_CASE("bonds of corpus meshes", "[bonds][build][corpus]") {
+TEST_CASE("bonds of corpus meshes", "[bonds][build][corpus][heavy]") {
   std::size_t built = 0;
   for (const std::filesystem::path& path : valid_meshes()) {
     const Mesh mesh = read_mesh(path);

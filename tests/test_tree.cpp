@@ -977,7 +977,7 @@ TEST_CASE("one fragment: the root alone, a leaf holding the input", "[tree][buil
   }
 }
 
-TEST_CASE("2 and 3 fragments: every mesh, strategy and kernel, full validation", "[tree][build][property]") {
+TEST_CASE("2 and 3 fragments: every mesh, strategy and kernel, full validation", "[tree][build][property][heavy]") {
   for (const TestMesh& m : test_meshes()) {
     for (const std::uint32_t fragments : {2u, 3u}) {
       for (const Strategy strategy : all_strategies) {
@@ -992,7 +992,7 @@ TEST_CASE("2 and 3 fragments: every mesh, strategy and kernel, full validation",
   }
 }
 
-TEST_CASE("64 fragments, fast kernel: every strategy, full validation", "[tree][build][property]") {
+TEST_CASE("64 fragments, fast kernel: every strategy, full validation", "[tree][build][property][heavy]") {
   // (sphere.off is left to 2 and 3 fragments: here it costs as much as three
   // other meshes, and the box and the egg cover convex and smooth.)
   const char* meshes[] = {"box", "grid-box-4", "torus-800", "hollow-egg", "nested-shells-island", "two-boxes",
@@ -1007,7 +1007,7 @@ TEST_CASE("64 fragments, fast kernel: every strategy, full validation", "[tree][
   }
 }
 
-TEST_CASE("64 fragments, exact kernel: every strategy, exact volumes", "[tree][build][property][exact]") {
+TEST_CASE("64 fragments, exact kernel: every strategy, exact volumes", "[tree][build][property][exact][heavy]") {
   const char* meshes[] = {"box", "nested-shells-island", "two-boxes", "torus_quad.off"};
   for (const Strategy strategy : all_strategies) {
     for (const char* name : meshes) {
@@ -1018,13 +1018,13 @@ TEST_CASE("64 fragments, exact kernel: every strategy, exact volumes", "[tree][b
 }
 
 // The remedy for the known limitation above: exact cut points leave no needles.
-TEST_CASE("the exact kernel cuts the boxes where the fast kernel's axis planes run out", "[tree][build][exact]") {
+TEST_CASE("the exact kernel cuts the boxes where the fast kernel's axis planes run out", "[tree][build][exact][heavy]") {
   for (const char* name : {"box", "two-boxes"}) {
     run({&test_mesh(name), options_for(256, Strategy::axis, KernelKind::exact, 13), Level::full, false});
   }
 }
 
-TEST_CASE("256 fragments: every strategy, fast kernel, full validation", "[tree][build][property]") {
+TEST_CASE("256 fragments: every strategy, fast kernel, full validation", "[tree][build][property][heavy]") {
   const char* meshes[] = {"box", "torus-800", "hollow-egg", "nested-shells-island", "egg-far-from-origin"};
   for (const Strategy strategy : all_strategies) {
     for (const char* name : meshes) {
@@ -1039,14 +1039,14 @@ TEST_CASE("256 fragments: every strategy, fast kernel, full validation", "[tree]
 // structural invariant, but no self-intersection test, and the hull's convexity
 // and containment on the leaves only. The thread-count comparison runs on one
 // strategy (the others are compared at 64 and 256 fragments).
-TEST_CASE("2048 fragments of the box: every strategy, fast kernel", "[tree][build][property][slow]") {
+TEST_CASE("2048 fragments of the box: every strategy, fast kernel", "[tree][build][property][slow][heavy]") {
   for (const Strategy strategy : all_strategies) {
     run({&test_mesh("box"), options_for(2048, strategy, KernelKind::fast, 17), Level::cheap,
          strategy == Strategy::thesis});
   }
 }
 
-TEST_CASE("2048 fragments of the hollow egg: every strategy, fast kernel", "[tree][build][property][slow]") {
+TEST_CASE("2048 fragments of the hollow egg: every strategy, fast kernel", "[tree][build][property][slow][heavy]") {
   for (const Strategy strategy : all_strategies) {
     run({&test_mesh("hollow-egg"), options_for(2048, strategy, KernelKind::fast, 17), Level::cheap, false});
   }
