@@ -18,7 +18,7 @@ inline std::string repair_flag_help(const std::string& then) {
          "equal positions, remove repeated-vertex, duplicate and zero-area triangles, orient consistently and "
          "outward, stitch and fill holes of up to " +
          std::to_string(RepairOptions{}.max_hole_edges) +
-         " edges, resolve self-intersections where CGAL can. A mesh still invalid after repair is refused as "
+         " edges; self-intersections are named, not resolved. A mesh still invalid after repair is refused as "
          "without the flag. " +
          then;
 }

@@ -375,20 +375,22 @@ TEST_CASE("every bad corpus mesh is repaired or refused as recorded", "[repair][
   CHECK(seen == expected.size());
 }
 
-TEST_CASE("self-intersections: resolved on the camel, refused on cow and elk", "[repair][corpus]") {
+TEST_CASE("self-intersections: left and named by default; the opt-in resolves the camel", "[repair][corpus]") {
+  // By default (and so on the CLI) self-intersections are not resolved: CGAL
+  // 5.5's experimental autorefinement gave build-dependent results on the cow
+  // (see RepairOptions::resolve_self_intersections).
   for (const fs::path& path : self_intersecting_meshes()) {
     const std::string name = path.filename().string();
     INFO(name);
     Mesh mesh = read_mesh(path);
     const RepairReport report = repair_mesh(mesh);
-    const ValidationReport after = validate_mesh(mesh);
+    CHECK_FALSE(names(report, RepairKind::resolved_self_intersections));
+    CHECK(validate_mesh(mesh).find(DefectKind::self_intersection) != nullptr);
     if (name == "camel.off") {
-      CHECK(names(report, RepairKind::resolved_self_intersections));
-      CHECK(after.valid());
-    } else {
-      CHECK_FALSE(names(report, RepairKind::resolved_self_intersections));
-      CHECK_FALSE(report.notes.empty());
-      CHECK(after.find(DefectKind::self_intersection) != nullptr);
+      Mesh opted = read_mesh(path);
+      const RepairReport resolved = repair_mesh(opted, {.resolve_self_intersections = true});
+      CHECK(names(resolved, RepairKind::resolved_self_intersections));
+      CHECK(validate_mesh(opted).valid());
     }
   }
 }

@@ -56,7 +56,12 @@ struct RepairOptions {
   /// the nearest double; the rounded result is checked like any other (see
   /// repair_mesh's guarantees), and the mesh is left as before this step when the
   /// result is not a valid self-intersection-free solid.
-  bool resolve_self_intersections = true;
+  /// Off by default: on the corpus cow, a Release build rejects the sliver CGAL
+  /// 5.5's experimental autorefinement keeps, while a -O1 ASan build of the same
+  /// code accepts it (the orientation of a self-intersecting input, on which the
+  /// acceptance test rests, is not reliable), so the outcome depends on the build.
+  /// Opt in from the library to study it; the CLI does not.
+  bool resolve_self_intersections = false;
 };
 
 struct RepairReport {
