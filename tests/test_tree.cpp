@@ -705,20 +705,6 @@ void check_nodes(const MeshTree& tree, const Mesh& input, Level level) {
 // exact sums of the rounded meshes' volumes. Rounding moves a cut point by at
 // most half an ulp of its coordinates; far from the origin that can exceed 1e-9 of
 // a small fragment's volume, so the bound also allows surface area x 2 ulps.
-double surface_area(const Mesh& mesh) {
-  double area = 0;
-  for (const Triangle& t : mesh.triangles) {
-    area += 0.5 * norm(cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]));
-  }
-  return area;
-}
-
-double largest_coordinate(const Mesh& mesh) {
-  double largest = 0;
-  for (const Vec3& p : mesh.positions) largest = std::max({largest, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
-  return largest;
-}
-
 void check_fast_volumes(const MeshTree& tree) {
   Problems problems(tree, "children's volumes do not sum to the parent's (1e-9 relative, plus area x 2 ulps)");
   std::vector<CGAL::Mpzf> six;

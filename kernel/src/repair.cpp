@@ -30,6 +30,7 @@
 #include <utility>
 #include <vector>
 
+#include "position_key.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
 
@@ -51,25 +52,10 @@ std::string plural(std::size_t count, const char* singular, const char* plural_f
 
 // --- Exact position keys (as the readers weld: -0.0 equals +0.0) ------------------
 
-struct PositionKey {
-  std::uint64_t x, y, z;
-  friend bool operator==(const PositionKey&, const PositionKey&) = default;
-};
-std::uint64_t value_bits(double c) { return std::bit_cast<std::uint64_t>(c == 0.0 ? 0.0 : c); }
-PositionKey key_of(Vec3 p) { return {value_bits(p.x), value_bits(p.y), value_bits(p.z)}; }
+using kernel_detail::PositionKey;
+using kernel_detail::PositionKeyHash;
+using kernel_detail::key_of;
 PositionKey key_of(const CgalPoint& p) { return key_of(Vec3{p.x(), p.y(), p.z()}); }
-struct PositionKeyHash {
-  std::size_t operator()(const PositionKey& k) const {
-    auto mix = [](std::uint64_t v) {
-      v ^= v >> 30;
-      v *= 0xbf58476d1ce4e5b9ULL;
-      v ^= v >> 27;
-      v *= 0x94d049bb133111ebULL;
-      return v ^ (v >> 31);
-    };
-    return static_cast<std::size_t>(mix(k.x) ^ mix(k.y + 0x9e3779b97f4a7c15ULL) ^ mix(k.z + 0x3c6ef372fe94f82aULL));
-  }
-};
 
 CgalPoint to_cgal(Vec3 p) { return CgalPoint(p.x, p.y, p.z); }
 

@@ -1,45 +1,18 @@
 // Welding: one topological vertex per distinct position (DESIGN.md, "Data model").
 
-#include <bit>
 #include <cstdint>
 #include <limits>
 #include <string>
 #include <unordered_map>
 
 #include "io_internal.hpp"
+#include "position_key.hpp"
 
 namespace shatter::io_detail {
 
-namespace {
-
-/// The bit patterns of a position, with -0.0 stored as +0.0 so that the two
-/// zeros, equal as numbers, weld. Every other pair of finite doubles is equal
-/// exactly when its bits are, so the key compares positions by value.
-struct PositionKey {
-  std::uint64_t x, y, z;
-  friend bool operator==(const PositionKey&, const PositionKey&) = default;
-};
-
-std::uint64_t value_bits(double coordinate) { return std::bit_cast<std::uint64_t>(coordinate == 0.0 ? 0.0 : coordinate); }
-
-PositionKey key_of(Vec3 position) { return {value_bits(position.x), value_bits(position.y), value_bits(position.z)}; }
-
-struct PositionKeyHash {
-  std::size_t operator()(const PositionKey& key) const {
-    // splitmix64 finaliser per coordinate: the low bits of doubles from files
-    // are often zero, so they need mixing before the table uses them.
-    auto mix = [](std::uint64_t v) {
-      v ^= v >> 30;
-      v *= 0xbf58476d1ce4e5b9ULL;
-      v ^= v >> 27;
-      v *= 0x94d049bb133111ebULL;
-      return v ^ (v >> 31);
-    };
-    return static_cast<std::size_t>(mix(key.x) ^ mix(key.y + 0x9e3779b97f4a7c15ULL) ^ mix(key.z + 0x3c6ef372fe94f82aULL));
-  }
-};
-
-}  // namespace
+using kernel_detail::key_of;
+using kernel_detail::PositionKey;
+using kernel_detail::PositionKeyHash;
 
 Mesh weld(TriangleSoup soup) {
   if (soup.corner_positions.empty()) refuse("the file holds no faces");

@@ -134,26 +134,12 @@ std::string describe(const Plane& p) {
 
 // --- checks ---------------------------------------------------------------
 
-double surface_area(const Mesh& mesh) {
-  double area = 0;
-  for (const Triangle& t : mesh.triangles) {
-    area += 0.5 * norm(cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]));
-  }
-  return area;
-}
-
-double largest_coordinate(const Mesh& mesh) {
-  double largest = 0;
-  for (const Vec3& p : mesh.positions) largest = std::max({largest, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
-  return largest;
-}
-
 // The fast kernel's volume promise: the pieces' volumes sum to the parent's
 // within 1e-9 relative, plus what rounding each cut point by half an ulp of the
 // largest coordinate can move across the surface (matters far from the origin).
 bool fast_volumes_add_up(const mpq_class& parent_six, const mpq_class& pieces_six, const Mesh& parent) {
   const double difference = std::fabs(mpq_class(pieces_six - parent_six).get_d());
-  const double rounding = 2 * std::numeric_limits<double>::epsilon() * largest_coordinate(parent) * surface_area(parent);
+  const double rounding = 2 * std::numeric_limits<double>::epsilon() * test::largest_coordinate(parent) * test::surface_area(parent);
   return difference <= 1e-9 * std::fabs(parent_six.get_d()) + 6 * rounding;
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
 
 #include "shatter/kernel/validate.hpp"
@@ -103,6 +104,20 @@ std::string canonical_bytes(const Mesh& mesh) {
   put(mesh.corners.uvs.data(), mesh.corners.uvs.size() * sizeof(Vec2));
   put(mesh.corners.tangents.data(), mesh.corners.tangents.size() * sizeof(Vec4));
   return bytes;
+}
+
+double surface_area(const Mesh& mesh) {
+  double area = 0;
+  for (const Triangle& t : mesh.triangles) {
+    area += 0.5 * norm(cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]));
+  }
+  return area;
+}
+
+double largest_coordinate(const Mesh& mesh) {
+  double largest = 0;
+  for (const Vec3& p : mesh.positions) largest = std::max({largest, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
+  return largest;
 }
 
 Box3 bounds(const Mesh& mesh) {

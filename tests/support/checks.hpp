@@ -32,6 +32,11 @@ mpq_class exact_six_volume(const Mesh& mesh);
 /// The mesh's bytes in a canonical binary form, to compare outputs for identity.
 std::string canonical_bytes(const Mesh& mesh);
 
+/// Total area of the triangles, in doubles: for tolerances, never for decisions.
+double surface_area(const Mesh& mesh);
+/// The largest absolute coordinate: what one ulp of rounding is relative to.
+double largest_coordinate(const Mesh& mesh);
+
 /// An axis-aligned box.
 struct Box3 {
   Vec3 lo, hi;
