@@ -203,17 +203,8 @@ int run_slice(const SliceArgs& args) {
   const auto format = parse_mesh_format(args.format);
   if (!format) throw UsageError("--format must be off, obj, ply or stl");
   Mesh mesh = read_mesh(args.mesh);
-  std::optional<RepairReport> repair;
-  if (args.repair) {
-    repair = cli::repair_and_print(mesh, args.mesh);
-    try {
-      require_valid_solid(mesh, args.mesh, args.allow_self_intersections);
-    } catch (const InvalidMeshError& e) {
-      throw InvalidMeshError(std::string(e.what()) + " (after --repair)");
-    }
-  } else {
-    require_valid_solid(mesh, args.mesh, args.allow_self_intersections);
-  }
+  const std::optional<RepairReport> repair =
+      cli::repair_if_asked_then_require_valid(mesh, args.mesh, args.repair, args.allow_self_intersections);
 
   CutOptions options;
   options.interior_uv_scale = args.interior_uv_scale;

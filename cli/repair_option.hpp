@@ -6,9 +6,12 @@
 #include <nlohmann/json.hpp>
 
 #include <iostream>
+#include <optional>
 #include <string>
 
+#include "shatter/kernel/error.hpp"
 #include "shatter/kernel/repair.hpp"
+#include "shatter/kernel/validate.hpp"
 
 namespace shatter::cli {
 
@@ -48,6 +51,24 @@ inline RepairReport repair_and_print(Mesh& mesh, const std::string& name) {
   if (!report.changed() && report.notes.empty()) std::cerr << "repair: " << name << ": no change\n";
   for (const RepairChange& change : report.changes) std::cerr << "repair: " << change.text << '\n';
   for (const RepairNote& note : report.notes) std::cerr << "repair: not done: " << note.text << '\n';
+  return report;
+}
+
+/// The input check of slice and fracture: with `repair`, repairs the mesh
+/// (printing each change) and returns the report; then refuses a mesh that is not
+/// a valid solid with InvalidMeshError, marked "(after --repair)" when repaired.
+inline std::optional<RepairReport> repair_if_asked_then_require_valid(Mesh& mesh, const std::string& name, bool repair,
+                                                                       bool allow_self_intersections) {
+  if (!repair) {
+    require_valid_solid(mesh, name, allow_self_intersections);
+    return std::nullopt;
+  }
+  RepairReport report = repair_and_print(mesh, name);
+  try {
+    require_valid_solid(mesh, name, allow_self_intersections);
+  } catch (const InvalidMeshError& e) {
+    throw InvalidMeshError(std::string(e.what()) + " (after --repair)");
+  }
   return report;
 }
 

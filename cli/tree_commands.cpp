@@ -474,16 +474,7 @@ int run_fracture(const FractureArgs& args) {
 
   Mesh mesh = read_mesh(args.mesh);
   // The builder validates too, but this names the file in the refusal.
-  if (args.repair) {
-    outcome.repair = cli::repair_and_print(mesh, args.mesh);
-    try {
-      require_valid_solid(mesh, args.mesh, args.allow_self_intersections);
-    } catch (const InvalidMeshError& e) {
-      throw InvalidMeshError(std::string(e.what()) + " (after --repair)");
-    }
-  } else {
-    require_valid_solid(mesh, args.mesh, args.allow_self_intersections);
-  }
+  outcome.repair = cli::repair_if_asked_then_require_valid(mesh, args.mesh, args.repair, args.allow_self_intersections);
 
   MeshTree tree;
   const Clock::time_point start = Clock::now();
