@@ -20,6 +20,7 @@
 #include "shatter/kernel/validate.hpp"
 #include "support/checks.hpp"
 #include "support/corpus.hpp"
+#include "support/run_shatter.hpp"
 
 using namespace shatter;
 using namespace shatter::test;
@@ -27,36 +28,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Run {
-  int exit_code;
-  std::string out;
-  std::string err;
-};
-
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
-
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("shatter-cli-test-" + std::to_string(::getpid())) / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir.parent_path());
-  return dir;
-}
-
-// Runs the shatter binary with `arguments` (already shell-quoted).
-Run run_shatter(const std::string& arguments) {
-  const fs::path out = scratch("stdout.txt"), err = scratch("stderr.txt");
-  const std::string command = std::string("'") + SHATTER_EXE + "' " + arguments + " >'" + out.string() + "' 2>'" +
-                              err.string() + "' </dev/null";
-  const int status = std::system(command.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
-
-std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+fs::path scratch(const std::string& name) { return scratch_path("shatter-cli-test", name); }
+Run run_shatter(const std::string& arguments) { return run_shatter_binary("shatter-cli-test", arguments); }
 
 bool is_one_error_line(const std::string& err) {
   return err.rfind("error: ", 0) == 0 && err.find('\n') == err.size() - 1;

@@ -27,6 +27,7 @@
 #include "shatter/kernel/validate.hpp"
 #include "support/checks.hpp"
 #include "support/corpus.hpp"
+#include "support/run_shatter.hpp"
 #include "support/generators.hpp"
 
 using namespace shatter;
@@ -399,35 +400,8 @@ TEST_CASE("self-intersections: left and named by default; the opt-in resolves th
 
 namespace {
 
-struct Run {
-  int exit_code;
-  std::string out;
-  std::string err;
-};
-
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
-
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("shatter-repair-test-" + std::to_string(::getpid())) / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir.parent_path());
-  return dir;
-}
-
-Run run_shatter(const std::string& arguments) {
-  const fs::path out = scratch("stdout.txt"), err = scratch("stderr.txt");
-  const std::string command = std::string("'") + SHATTER_EXE + "' " + arguments + " >'" + out.string() + "' 2>'" +
-                              err.string() + "' </dev/null";
-  const int status = std::system(command.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
-
-std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+fs::path scratch(const std::string& name) { return scratch_path("shatter-repair-test", name); }
+Run run_shatter(const std::string& arguments) { return run_shatter_binary("shatter-repair-test", arguments); }
 fs::path bad(const std::string& name) { return mesh_dir() / "bad" / name; }
 std::string last_line(const std::string& text) {
   const std::size_t end = text.find_last_not_of('\n');

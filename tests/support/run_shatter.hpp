@@ -1,0 +1,57 @@
+#pragma once
+// Running the shatter binary from a test: its exit code and what it printed.
+// Header-only because the binary's path, SHATTER_EXE, is defined per test target.
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#ifndef SHATTER_EXE
+#error "define SHATTER_EXE (the shatter binary's path) for this test target"
+#endif
+
+namespace shatter::test {
+
+struct Run {
+  int exit_code;  ///< -1 when killed by a signal
+  std::string out;
+  std::string err;
+};
+
+/// The whole file as bytes ("" when it cannot be read).
+inline std::string slurp(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return buffer.str();
+}
+
+/// A fresh path `name` in this process's own scratch folder (emptied if it
+/// existed; the folder above it created), under `tag` so test binaries never meet.
+inline std::filesystem::path scratch_path(const std::string& tag, const std::string& name) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / (tag + "-" + std::to_string(::getpid())) / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir.parent_path());
+  return dir;
+}
+
+/// Runs the shatter binary with `arguments` (already shell-quoted), stdin empty,
+/// stdout and stderr captured through files in the `tag` scratch folder.
+inline Run run_shatter_binary(const std::string& tag, const std::string& arguments) {
+  const std::filesystem::path out = scratch_path(tag, "stdout.txt"), err = scratch_path(tag, "stderr.txt");
+  const std::string command = std::string("'") + SHATTER_EXE + "' " + arguments + " >'" + out.string() + "' 2>'" +
+                              err.string() + "' </dev/null";
+  const int status = std::system(command.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+/// A path quoted for the shell.
+inline std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+}  // namespace shatter::test
