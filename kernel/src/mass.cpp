@@ -49,14 +49,14 @@ CornerSums corner_sums(double w0, double w1, double w2) {
   return s;
 }
 
-VolumeIntegrals integrate(const Mesh& mesh, Vec3 origin) {
+VolumeIntegrals integrate(std::span<const Vec3> positions, std::span<const Triangle> triangles, Vec3 origin) {
   VolumeIntegrals sums;
-  const std::size_t vertex_count = mesh.vertex_count();
-  for (const Triangle& t : mesh.triangles) {
+  const std::size_t vertex_count = positions.size();
+  for (const Triangle& t : triangles) {
     if (!indices_in_range(t, vertex_count)) continue;  // precondition broken: stay finite, never read out of range
-    const Vec3 p0 = mesh.positions[t[0]] - origin;
-    const Vec3 p1 = mesh.positions[t[1]] - origin;
-    const Vec3 p2 = mesh.positions[t[2]] - origin;
+    const Vec3 p0 = positions[t[0]] - origin;
+    const Vec3 p1 = positions[t[1]] - origin;
+    const Vec3 p2 = positions[t[2]] - origin;
     // Twice the area vector; its components weight the divergence-theorem terms.
     const Vec3 d = cross(p1 - p0, p2 - p0);
     const CornerSums x = corner_sums(p0.x, p1.x, p2.x);
@@ -113,14 +113,16 @@ bool in_filter_range(double x) {
 
 }  // namespace
 
-MassProperties mass_properties(const Mesh& mesh) {
+MassProperties mass_properties(const Mesh& mesh) { return mass_properties(mesh.positions, mesh.triangles); }
+
+MassProperties mass_properties(std::span<const Vec3> positions, std::span<const Triangle> triangles) {
   MassProperties result;
-  if (mesh.positions.empty()) return result;
+  if (positions.empty()) return result;
   // Integrating about a vertex of the mesh keeps the coordinates small relative to
   // the object's size, so a mesh far from the world origin loses no precision to
   // cancellation between huge first and second moments.
-  const Vec3 origin = mesh.positions.front();
-  const VolumeIntegrals sums = integrate(mesh, origin);
+  const Vec3 origin = positions.front();
+  const VolumeIntegrals sums = integrate(positions, triangles, origin);
   const double volume = sums.one;
   result.volume = volume;
   // A flat (zero-volume) mesh has no centre of mass: report the origin, finite.

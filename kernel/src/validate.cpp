@@ -6,7 +6,13 @@
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
 
+#include <CGAL/box_intersection_d.h>
+
 #include <algorithm>
+#include <array>
+#include <cstring>
+#include <tuple>
+#include <unordered_set>
 #include <cstdint>
 #include <iterator>
 #include <limits>
@@ -17,6 +23,7 @@
 #include <utility>
 
 #include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/predicates.hpp"
 
 namespace shatter {
 namespace {
@@ -400,6 +407,228 @@ void require_valid_solid(const Mesh& mesh, std::string_view name, bool allow_sel
                            std::to_string(self_intersection->count) + " pairs of intersecting triangles, first " +
                            self_intersection->first + " (--allow-self-intersections cuts it anyway)");
   }
+}
+
+namespace {
+
+// Whether the projections of two triangles, dropping `axis`, are both proper
+// triangles and apart except at shared corners: some edge line of one has every
+// corner of the other strictly outside it (corners they share excepted). Then
+// each triangle meets every line along `axis` at most once, so the two can share
+// no point but their shared corners, whatever their heights. Exact (orient2d on
+// the doubles). Nearly coplanar neighbours, which would send orient3d to exact
+// arithmetic, are settled here.
+bool projections_apart(const Mesh& mesh, const Triangle& a, const Triangle& b, int axis) {
+  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+  const auto p2 = [&](VertexIndex v) { return Vec2{mesh.positions[v][i], mesh.positions[v][j]}; };
+  const Vec2 pa[3] = {p2(a[0]), p2(a[1]), p2(a[2])}, pb[3] = {p2(b[0]), p2(b[1]), p2(b[2])};
+  const Sign turn_a = orient2d(pa[0], pa[1], pa[2]), turn_b = orient2d(pb[0], pb[1], pb[2]);
+  if (turn_a == Sign::zero || turn_b == Sign::zero) return false;
+  const auto separates = [&](const Vec2* p, const Triangle& t, Sign turn, const Vec2* q, const Triangle& u) {
+    for (int e = 0; e < 3; ++e) {
+      bool outside = true;
+      for (int k = 0; k < 3 && outside; ++k) {
+        if (u[k] == t[e] || u[k] == t[(e + 1) % 3]) continue;  // a shared corner
+        const Sign s = orient2d(p[e], p[(e + 1) % 3], q[k]);
+        outside = s != Sign::zero && s != turn;
+      }
+      if (outside) return true;
+    }
+    return false;
+  };
+  return separates(pa, a, turn_a, pb, b) || separates(pb, b, turn_b, pa, a);
+}
+
+// Whether two triangles of a mesh meet beyond the vertices and edge they share,
+// exactly (the test of CGAL's self_intersections, on a triangle soup): sharing an
+// edge, only when coplanar and on one side of it; sharing a vertex, when the edge
+// of either opposite the vertex meets the other; otherwise, when they meet. Tried
+// first: their projections apart along the axis of a's largest normal component.
+bool triangles_intersect(const Mesh& mesh, const Triangle& a, const Triangle& b) {
+  using K = CGAL::Epick;
+  {
+    const Vec3 n = cross(mesh.positions[a[1]] - mesh.positions[a[0]], mesh.positions[a[2]] - mesh.positions[a[0]]);
+    const double ax = std::fabs(n.x), ay = std::fabs(n.y), az = std::fabs(n.z);
+    const int axis = ax >= ay && ax >= az ? 0 : ay >= az ? 1 : 2;
+    if (projections_apart(mesh, a, b, axis)) return false;
+  }
+  const auto point = [&](VertexIndex v) {
+    const Vec3& p = mesh.positions[v];
+    return K::Point_3(p.x, p.y, p.z);
+  };
+  int shared = 0, shared_a = -1, shared_b = -1;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      if (a[i] != b[j]) continue;
+      ++shared;
+      if (shared_a < 0) shared_a = i, shared_b = j;
+    }
+  }
+  if (shared >= 3) return true;  // the same triangle twice
+  if (shared == 2) {
+    // The vertex of each not on the shared edge.
+    int ia = 0, ib = 0;
+    for (int i = 0; i < 3; ++i) {
+      if (a[i] != b[0] && a[i] != b[1] && a[i] != b[2]) ia = i;
+      if (b[i] != a[0] && b[i] != a[1] && b[i] != a[2]) ib = i;
+    }
+    const K::Point_3 u = point(a[(ia + 1) % 3]), v = point(a[(ia + 2) % 3]), p = point(a[ia]), q = point(b[ib]);
+    return CGAL::coplanar(u, v, p, q) && CGAL::coplanar_orientation(u, v, p, q) == CGAL::POSITIVE;
+  }
+  const K::Triangle_3 ta(point(a[0]), point(a[1]), point(a[2])), tb(point(b[0]), point(b[1]), point(b[2]));
+  if (shared == 1) {
+    const K::Segment_3 sa(point(a[(shared_a + 1) % 3]), point(a[(shared_a + 2) % 3]));
+    const K::Segment_3 sb(point(b[(shared_b + 1) % 3]), point(b[(shared_b + 2) % 3]));
+    return CGAL::do_intersect(ta, sb) || CGAL::do_intersect(tb, sa);
+  }
+  return CGAL::do_intersect(ta, tb);
+}
+
+// A triangle's corner positions, rotated to start at the lexicographically least,
+// so the same triangle gives the same key whatever its first corner.
+std::array<Vec3, 3> triangle_key(const Mesh& mesh, const Triangle& t) {
+  std::array<Vec3, 3> p{mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]};
+  const auto less = [](const Vec3& a, const Vec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); };
+  int first = 0;
+  for (int i = 1; i < 3; ++i) {
+    if (less(p[i], p[first])) first = i;
+  }
+  return {p[first], p[(first + 1) % 3], p[(first + 2) % 3]};
+}
+
+struct TriangleKeyHash {
+  std::size_t operator()(const std::array<Vec3, 3>& key) const {
+    std::size_t h = 0;
+    for (const Vec3& p : key) {
+      for (const double x : {p.x, p.y, p.z}) {
+        std::uint64_t bits;
+        const double y = x == 0 ? 0.0 : x;
+        std::memcpy(&bits, &y, sizeof bits);
+        h = (h ^ bits) * 0x9E3779B97F4A7C15ull;
+      }
+    }
+    return h;
+  }
+};
+struct TriangleKeyEqual {
+  bool operator()(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) const {
+    for (int i = 0; i < 3; ++i) {
+      if (!(a[i].x == b[i].x && a[i].y == b[i].y && a[i].z == b[i].z)) return false;
+    }
+    return true;
+  }
+};
+
+}  // namespace
+
+ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted) {
+  ValidationOptions without;
+  without.check_self_intersections = false;
+  ValidationReport report = validate_mesh(mesh, without);
+  if (!report.valid()) return report;
+  std::unordered_set<std::array<Vec3, 3>, TriangleKeyHash, TriangleKeyEqual> known;
+  if (trusted) {
+    known.reserve(trusted->triangles.size());
+    for (const Triangle& t : trusted->triangles) known.insert(triangle_key(*trusted, t));
+  }
+  using Box = CGAL::Box_intersection_d::Box_with_handle_d<double, 3, std::size_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
+  std::vector<Box> all, fresh;
+  all.reserve(mesh.triangles.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    double lo[3], hi[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      lo[axis] = hi[axis] = mesh.positions[tri[0]][axis];
+      for (int c = 1; c < 3; ++c) {
+        lo[axis] = std::min(lo[axis], mesh.positions[tri[c]][axis]);
+        hi[axis] = std::max(hi[axis], mesh.positions[tri[c]][axis]);
+      }
+    }
+    const Box box(CGAL::Bbox_3(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]), t);
+    all.push_back(box);
+    if (!trusted || !known.count(triangle_key(mesh, tri))) fresh.push_back(box);
+  }
+  report.self_intersections_checked = true;
+  if (fresh.empty()) return report;
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  std::vector<std::uint8_t> is_fresh(mesh.triangles.size(), 0);
+  for (const Box& b : fresh) is_fresh[b.handle()] = 1;
+  CGAL::box_intersection_d(
+      fresh.begin(), fresh.end(), all.begin(), all.end(),
+      [&](const Box& a, const Box& b) {
+        const std::size_t i = a.handle(), j = b.handle();
+        if (i == j || (is_fresh[j] && j < i)) return;  // each fresh pair once
+        if (triangles_intersect(mesh, mesh.triangles[i], mesh.triangles[j])) pairs.emplace_back(std::min(i, j), std::max(i, j));
+      },
+      std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
+  if (!pairs.empty()) {
+    std::sort(pairs.begin(), pairs.end());
+    report.defects.push_back({DefectKind::self_intersection, pairs.size(),
+                              "triangles " + std::to_string(pairs.front().first) + " and " +
+                                  std::to_string(pairs.front().second)});
+  }
+  return report;
+}
+
+bool certify_star_shaped(const Mesh& mesh, const Vec3& centre) {
+  using Point = CGAL::Epick::Point_3;
+  const auto point = [](const Vec3& p) { return Point(p.x, p.y, p.z); };
+  const Point c = point(centre);
+  const std::size_t n = mesh.positions.size();
+  // Every triangle has the centre strictly behind it.
+  for (const Triangle& t : mesh.triangles) {
+    if (CGAL::orientation(point(mesh.positions[t[0]]), point(mesh.positions[t[1]]), point(mesh.positions[t[2]]), c) !=
+        CGAL::NEGATIVE) {
+      return false;
+    }
+  }
+  // The triangles around each vertex, in order: for triangle (v, a, b) the next is
+  // the one holding the directed edge (v, b).
+  std::unordered_map<std::uint64_t, std::uint32_t> triangle_of_edge;
+  triangle_of_edge.reserve(3 * mesh.triangles.size());
+  std::vector<std::uint32_t> some_triangle(n, std::numeric_limits<std::uint32_t>::max());
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      triangle_of_edge[std::uint64_t{tri[k]} << 32 | tri[(k + 1) % 3]] = t;
+      some_triangle[tri[k]] = t;
+    }
+  }
+  const auto corner_of = [&](std::uint32_t t, VertexIndex v) {
+    const Triangle& tri = mesh.triangles[t];
+    return tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+  };
+  for (VertexIndex v = 0; v < n; ++v) {
+    if (some_triangle[v] == std::numeric_limits<std::uint32_t>::max()) return false;
+    const Point pv = point(mesh.positions[v]);
+    // The ring w_1 .. w_k around v. Each step w_i -> w_{i+1} turns by an angle in
+    // (0, pi) about the axis centre -> v (its triangle faces away from the centre).
+    // The ring winds once exactly when, with s_i the side of w_i of the plane
+    // through the axis and w_1, exactly one step goes from s < 0 to s >= 0 (the
+    // last one, back to w_1, included).
+    const std::uint32_t first = some_triangle[v];
+    const Triangle& t0 = mesh.triangles[first];
+    const VertexIndex w1 = t0[(corner_of(first, v) + 1) % 3];
+    const Point p1 = point(mesh.positions[w1]);
+    std::uint32_t t = first;
+    int crossings = 0;
+    CGAL::Orientation previous = CGAL::COPLANAR;  // s_1 = 0: w_1 is on the plane
+    for (std::size_t steps = 0;; ++steps) {
+      if (steps > mesh.triangles.size()) return false;
+      const Triangle& tri = mesh.triangles[t];
+      const VertexIndex next = tri[(corner_of(t, v) + 2) % 3];
+      const CGAL::Orientation s =
+          next == w1 ? CGAL::COPLANAR : CGAL::orientation(c, pv, p1, point(mesh.positions[next]));
+      if (previous == CGAL::NEGATIVE && s != CGAL::NEGATIVE) ++crossings;
+      previous = s;
+      const auto it = triangle_of_edge.find(std::uint64_t{v} << 32 | next);
+      if (it == triangle_of_edge.end()) return false;
+      t = it->second;
+      if (t == first) break;
+    }
+    if (crossings != 1) return false;
+  }
+  return true;
 }
 
 }  // namespace shatter

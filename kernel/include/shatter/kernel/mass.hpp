@@ -3,6 +3,7 @@
 // (exact polynomial integrals over the enclosed volume, unit density).
 
 #include <array>
+#include <span>
 
 #include "shatter/kernel/mesh.hpp"
 
@@ -23,6 +24,11 @@ struct MassProperties {
 /// numbers are meaningless but finite for finite input. Evaluated relative to the
 /// first vertex, so far-from-origin meshes keep their precision.
 MassProperties mass_properties(const Mesh& mesh);
+
+/// The same for a closed oriented surface given as positions and triangles over
+/// them (the triangles may be any oriented decomposition of the surface, e.g. fans
+/// of polygon faces including flat ones). Same preconditions.
+MassProperties mass_properties(std::span<const Vec3> positions, std::span<const Triangle> triangles);
 
 /// Signed volume only (cheaper). Same preconditions.
 double signed_volume(const Mesh& mesh);

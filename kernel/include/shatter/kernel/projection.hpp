@@ -12,6 +12,20 @@
 
 namespace shatter {
 
+/// An orthonormal basis (u, v) of a plane with u x v = n / |n|: cap UVs are
+/// coordinates in it, and u is the caps' tangent. Rounded; it only places
+/// attributes, never decides geometry.
+struct PlaneBasis {
+  Vec3 normal, u, v;
+
+  explicit PlaneBasis(const Plane& plane) : normal(normalized(plane.normal)) {
+    const Vec3 a{std::fabs(normal.x), std::fabs(normal.y), std::fabs(normal.z)};
+    const Vec3 least = a.x <= a.y && a.x <= a.z ? Vec3{1, 0, 0} : a.y <= a.z ? Vec3{0, 1, 0} : Vec3{0, 0, 1};
+    u = normalized(cross(least, normal));
+    v = cross(normal, u);
+  }
+};
+
 struct PlaneProjection {
   int u_axis = 0;
   int v_axis = 1;

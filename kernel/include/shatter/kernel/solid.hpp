@@ -1,0 +1,137 @@
+#pragma once
+// The plane kernel's solid: a closed polyhedral surface whose faces are polygons on
+// planes of a fixed set and whose vertices are defined points (implicit.hpp).
+//
+// A face is one connected region of its supporting plane: an outer loop and any
+// number of holes, each loop a cycle of corners over vertex indices, counter-
+// clockwise seen from outside the solid (the face's outward side). The edge from a
+// corner to the next corner of its loop lies on the face's plane and on a second,
+// known line: the input segment it came from, or the face's plane met by the plane
+// of the face across the edge. A new vertex where a cut crosses the edge is then
+// defined from that line and the cut, never from the edge's endpoints, which is
+// what keeps every predicate's degree bounded at any depth.
+//
+// Faces stay polygons between cuts; they are triangulated only for output
+// (rounded meshes, mass properties). Topology is carried by index: every
+// undirected edge is used by exactly two corners, in opposite directions.
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "shatter/kernel/implicit.hpp"
+#include "shatter/kernel/mesh.hpp"
+
+namespace shatter {
+
+inline constexpr std::uint32_t no_index = std::numeric_limits<std::uint32_t>::max();
+
+/// The line an edge lies on, besides its face's plane.
+struct EdgeLine {
+  /// The plane of the face across the edge; PlaneRef{no_index} when that face is
+  /// coplanar with this one (then the edge is an input segment).
+  PlaneRef other{no_index};
+  /// The input points p < q of the input edge the edge lies on, or no_index.
+  std::uint32_t p = no_index, q = no_index;
+
+  bool is_segment() const { return p != no_index; }
+  friend bool operator==(const EdgeLine&, const EdgeLine&) = default;
+};
+
+struct SolidCorner {
+  VertexIndex vertex = 0;
+  EdgeLine line;  ///< of the edge from this corner to the next corner of its loop
+};
+
+struct SolidLoop {
+  std::uint32_t first_corner = 0, corner_count = 0;
+};
+
+struct SolidFace {
+  PlaneRef plane;         ///< supporting plane
+  bool reversed = false;  ///< outward normal is -n of the plane
+  /// One loop, and no right turn (decided exactly): a convex polygon, possibly
+  /// with collinear corners.
+  bool convex = false;
+  SurfaceId surface = original_surface;  ///< 0 for the input's surface, else the cap id
+  /// The input triangle this face lies in (its attributes are interpolated from
+  /// it), for surface 0; unused for caps.
+  std::uint32_t source = 0;
+  std::uint32_t first_loop = 0, loop_count = 0;
+};
+
+/// A closed plane-based solid (one outer shell and its cavities, or, before
+/// separation, any closed set of faces).
+struct Solid {
+  std::vector<PointDef> defs;       ///< per vertex
+  std::vector<ApproxPoint> approx;  ///< per vertex, approximate(defs[v])
+  std::vector<SolidFace> faces;
+  std::vector<SolidLoop> loops;
+  std::vector<SolidCorner> corners;
+  /// Decided exactly: every edge convex or flat and one shell. A cut of a convex
+  /// solid gives one convex solid per side.
+  bool convex = false;
+
+  std::size_t vertex_count() const { return defs.size(); }
+};
+
+/// A directed edge between two vertices, with its line (as SolidCorner::line).
+struct LoopEdge {
+  VertexIndex from = 0, to = 0;
+  EdgeLine line;
+};
+
+/// Faces over a vertex numbering kept elsewhere (a side of a split, a cap).
+struct FaceSet {
+  std::vector<SolidFace> faces;  ///< their loops index `loops`
+  std::vector<SolidLoop> loops;  ///< their corners index `corners`
+  std::vector<SolidCorner> corners;
+
+  void clear() {
+    faces.clear();
+    loops.clear();
+    corners.clear();
+  }
+};
+
+/// The input planes and input points a build's solids are defined over: one plane
+/// per input face (a maximal edge-connected set of coplanar input triangles when
+/// merged, else one triangle), held as three of its points.
+struct InputGeometry {
+  std::vector<Vec3> points;
+  std::vector<std::array<VertexIndex, 3>> planes;
+  std::vector<ApproxPlane> plane_approx;
+
+  /// A PlaneSet over these inputs and the given cut planes.
+  PlaneSet plane_set(std::span<const Plane> cuts) const { return {points, planes, plane_approx, cuts}; }
+};
+
+/// Converts a closed, oriented, 2-manifold triangle mesh with positive volume
+/// (validate_mesh) into a plane-based solid over `geometry`, whose points must be
+/// `mesh.positions` (the caller sets them; input planes are appended).
+/// With `merge_coplanar`, edge-connected input triangles on one plane (decided
+/// exactly) and of one surface id become one polygon face, with the vertices inside such a face dropped;
+/// without it (a mesh with attributes, which are interpolated per input
+/// triangle), every triangle is its own face. A face's `source` is one of its
+/// triangles, its surface id theirs. Decides convexity exactly. Throws InvalidMeshError if the mesh is
+/// not closed and oriented.
+Solid solid_from_mesh(const Mesh& mesh, bool merge_coplanar, InputGeometry& geometry);
+
+/// Whether the solid is convex, decided exactly: its faces form one edge-connected
+/// shell and at every edge some vertex of the face across lies strictly inside the
+/// face's plane, or all of them on it (a flat edge). Precondition: closed (every
+/// directed edge matched by its reverse). O(sum over edges of the face sizes).
+bool solid_is_convex(const PlaneSet& set, const Solid& solid);
+
+/// The outward side of a face's plane at a point: side() of the plane, negated when
+/// the face is reversed, so negative means inside the face's half-space.
+Sign outward_side(const PlaneSet& set, const SolidFace& face, const PointDef& point, const ApproxPoint& approx);
+
+/// Checks a solid's structure: every corner's vertex in range, every loop of at
+/// least 3 corners, every undirected edge used by exactly two corners in opposite
+/// directions, every vertex used, and every corner's vertex lying on its face's
+/// plane and on its edge's line (exact predicates). Returns an empty string when
+/// sound, else the first defect in words. For tests and debug checks; O(corners).
+std::string check_solid(const PlaneSet& set, const Solid& solid);
+
+}  // namespace shatter

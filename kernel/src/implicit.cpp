@@ -1,0 +1,478 @@
+#include "shatter/kernel/implicit.hpp"
+
+#include <CGAL/Mpzf.h>
+#include <mpfr.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace shatter {
+namespace {
+
+// --- number types -------------------------------------------------------------
+// Every polynomial below is written once, as a template over its number type, and
+// run over four: Estimate (floating point with a running error bound: the filter),
+// CGAL::Mpzf (exact ring arithmetic on doubles: the fall-back), and Degree and
+// Magnitude, which run the same code symbolically to derive its bit-length bound.
+
+constexpr double unit_roundoff = 0x1p-53;
+// A product whose exact value is subnormal may lose up to half of 2^-1074; sums of
+// doubles are exact in the subnormal range, so only products add this.
+constexpr double underflow_error = 0x1p-1074;
+// The error bounds are themselves computed in floating point, each operation on
+// non-negative terms losing at most a relative u; no polynomial here takes more
+// than 2^10 of them, so inflating the final bound by 2^-40 covers that loss.
+constexpr double bound_inflation = 1 + 0x1p-40;
+// rounded_position accepts a floating-point quotient within this relative bound.
+constexpr double rounding_tolerance = 0x1p-40;
+// output_point snaps a cut point to an end of its input segment within this many
+// ulps of the end's largest coordinate.
+constexpr double snap_ulps = 64;
+
+Estimate operator+(Estimate a, Estimate b) {
+  const double sum = a.value + b.value;
+  return {sum, a.error + b.error + unit_roundoff * std::fabs(sum)};
+}
+Estimate operator-(Estimate a, Estimate b) {
+  const double difference = a.value - b.value;
+  return {difference, a.error + b.error + unit_roundoff * std::fabs(difference)};
+}
+Estimate operator-(Estimate a) { return {-a.value, a.error}; }
+Estimate operator*(Estimate a, Estimate b) {
+  const double product = a.value * b.value;
+  return {product, std::fabs(a.value) * b.error + std::fabs(b.value) * a.error + a.error * b.error +
+                       unit_roundoff * std::fabs(product) + underflow_error};
+}
+
+/// The sign of an approximation when its bound certifies it; zero otherwise (the
+/// caller then goes exact). NaN or overflow never certify.
+int certified_sign(Estimate a) {
+  if (std::fabs(a.value) > a.error * bound_inflation) return a.value > 0 ? 1 : -1;
+  return 0;
+}
+
+using Exact = CGAL::Mpzf;
+
+// Degree of a polynomial in the input doubles.
+struct Degree {
+  int value = 0;
+};
+Degree operator+(Degree a, Degree b) { return {std::max(a.value, b.value)}; }
+Degree operator-(Degree a, Degree b) { return {std::max(a.value, b.value)}; }
+Degree operator-(Degree a) { return a; }
+Degree operator*(Degree a, Degree b) { return {a.value + b.value}; }
+
+// The polynomial evaluated on |inputs| = 1 with every operation made additive: an
+// upper bound on the sum of its expanded coefficients' absolute values.
+struct Magnitude {
+  double value = 0;
+};
+Magnitude operator+(Magnitude a, Magnitude b) { return {a.value + b.value}; }
+Magnitude operator-(Magnitude a, Magnitude b) { return {a.value + b.value}; }
+Magnitude operator-(Magnitude a) { return a; }
+Magnitude operator*(Magnitude a, Magnitude b) { return {a.value * b.value}; }
+
+// An input double as each number type.
+template <class NT>
+NT input(double value);
+template <>
+Estimate input<Estimate>(double value) { return {value, 0}; }
+template <>
+Exact input<Exact>(double value) { return Exact(value); }
+template <>
+Degree input<Degree>(double) { return {1}; }
+template <>
+Magnitude input<Magnitude>(double) { return {1}; }
+
+template <class NT>
+struct V3 {
+  NT x, y, z;
+};
+template <class NT>
+V3<NT> operator-(const V3<NT>& a, const V3<NT>& b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+template <class NT>
+V3<NT> cross(const V3<NT>& a, const V3<NT>& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+template <class NT>
+NT dot(const V3<NT>& a, const V3<NT>& b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
+template <class NT>
+struct P4 {
+  V3<NT> n;
+  NT d;
+};
+template <class NT>
+struct H4 {
+  NT x, y, z, w;
+};
+
+template <class NT>
+V3<NT> input_point(const PlaneSet& set, std::uint32_t index) {
+  const Vec3& p = set.points[index];
+  return {input<NT>(p.x), input<NT>(p.y), input<NT>(p.z)};
+}
+
+// The input plane through p0, p1, p2: n = (p1 - p0) x (p2 - p0), d = -n·p0.
+template <class NT>
+P4<NT> input_plane_from_points(const V3<NT>& p0, const V3<NT>& p1, const V3<NT>& p2) {
+  const V3<NT> n = cross(p1 - p0, p2 - p0);
+  return {n, -dot(n, p0)};
+}
+
+template <class NT>
+P4<NT> plane_coefficients(const PlaneSet& set, PlaneRef plane) {
+  if (plane.is_cut()) {
+    const Plane& cut = set.cuts[plane.index()];
+    return {{input<NT>(cut.normal.x), input<NT>(cut.normal.y), input<NT>(cut.normal.z)}, input<NT>(cut.offset)};
+  }
+  const auto& points = set.inputs[plane.index()];
+  return input_plane_from_points(input_point<NT>(set, points[0]), input_point<NT>(set, points[1]),
+                                 input_point<NT>(set, points[2]));
+}
+// The filter reads input planes from their cache instead of recomputing them.
+template <>
+P4<Estimate> plane_coefficients<Estimate>(const PlaneSet& set, PlaneRef plane) {
+  const ApproxPlane a = set.approx(plane);
+  return {{a.a, a.b, a.c}, a.d};
+}
+
+template <class NT>
+NT evaluate(const P4<NT>& plane, const V3<NT>& p) {
+  return dot(plane.n, p) + plane.d;
+}
+
+// The homogeneous coordinates of a definition, as in implicit.hpp.
+template <class NT>
+H4<NT> homogeneous(const PlaneSet& set, const PointDef& point) {
+  switch (point.kind) {
+    case PointKind::input: {
+      const V3<NT> p = input_point<NT>(set, point.a);
+      return {p.x, p.y, p.z, input<NT>(1.0)};
+    }
+    case PointKind::segment_plane: {
+      const V3<NT> p = input_point<NT>(set, point.a), q = input_point<NT>(set, point.b);
+      const P4<NT> plane = plane_coefficients<NT>(set, point.planes[0]);
+      const NT at_p = evaluate(plane, p), at_q = evaluate(plane, q);
+      return {p.x * at_q - q.x * at_p, p.y * at_q - q.y * at_p, p.z * at_q - q.z * at_p, at_q - at_p};
+    }
+    case PointKind::three_planes: {
+      const P4<NT> a = plane_coefficients<NT>(set, point.planes[0]);
+      const P4<NT> b = plane_coefficients<NT>(set, point.planes[1]);
+      const P4<NT> c = plane_coefficients<NT>(set, point.planes[2]);
+      const V3<NT> bc = cross(b.n, c.n), ca = cross(c.n, a.n), ab = cross(a.n, b.n);
+      return {-(a.d * bc.x + b.d * ca.x + c.d * ab.x), -(a.d * bc.y + b.d * ca.y + c.d * ab.y),
+              -(a.d * bc.z + b.d * ca.z + c.d * ab.z), dot(a.n, bc)};
+    }
+  }
+  return {};
+}
+
+template <class NT>
+H4<NT> negated(const H4<NT>& h) {
+  return {-h.x, -h.y, -h.z, -h.w};
+}
+
+// Exact homogeneous coordinates with w > 0.
+H4<Exact> exact_normalised(const PlaneSet& set, const PointDef& point) {
+  H4<Exact> h = homogeneous<Exact>(set, point);
+  const int s = h.w.sign();
+  if (s == 0) throw std::domain_error("degenerate point definition: its planes do not meet in one point");
+  return s < 0 ? negated(h) : h;
+}
+
+H4<Estimate> cached(const ApproxPoint& p) { return {p.x, p.y, p.z, p.w}; }
+
+template <class NT>
+NT side_value(const P4<NT>& plane, const H4<NT>& h) {
+  return plane.n.x * h.x + plane.n.y * h.y + plane.n.z * h.z + plane.d * h.w;
+}
+
+Sign to_sign(int s) { return s < 0 ? Sign::negative : s > 0 ? Sign::positive : Sign::zero; }
+
+template <class NT>
+NT coordinate(const H4<NT>& h, int axis) {
+  return axis == 0 ? h.x : axis == 1 ? h.y : h.z;
+}
+
+// det [[p_i, p_j, p_w], [q_i, q_j, q_w], [r_i, r_j, r_w]] for the kept axes i, j.
+template <class NT>
+NT projected_orientation(int i, int j, const H4<NT>& p, const H4<NT>& q, const H4<NT>& r) {
+  const NT pi = coordinate(p, i), pj = coordinate(p, j);
+  const NT qi = coordinate(q, i), qj = coordinate(q, j);
+  const NT ri = coordinate(r, i), rj = coordinate(r, j);
+  return pi * (qj * r.w - rj * q.w) - pj * (qi * r.w - ri * q.w) + p.w * (qi * rj - ri * qj);
+}
+
+// (n_A × n_B)·(q̃ p_w - p̃ q_w): the order of q after p along the line A ∩ B.
+template <class NT>
+NT along_value(const P4<NT>& a, const P4<NT>& b, const H4<NT>& p, const H4<NT>& q) {
+  const V3<NT> direction = cross(a.n, b.n);
+  const V3<NT> difference{q.x * p.w - p.x * q.w, q.y * p.w - p.y * q.w, q.z * p.w - p.z * q.w};
+  return dot(direction, difference);
+}
+
+mpq_class to_mpq(const Exact& value) { return static_cast<mpq_class>(value); }
+
+double correctly_rounded(const mpq_class& value) {
+  mpfr_t rounded;
+  mpfr_init2(rounded, 53);
+  // Subnormal results need the exponent range of doubles, or MPFR would keep 53
+  // bits where a double keeps fewer.
+  const mpfr_exp_t old_emin = mpfr_get_emin(), old_emax = mpfr_get_emax();
+  mpfr_set_emin(-1073);
+  mpfr_set_emax(1024);
+  const int inexact = mpfr_set_q(rounded, value.get_mpq_t(), MPFR_RNDN);
+  mpfr_subnormalize(rounded, inexact, MPFR_RNDN);
+  const double result = mpfr_get_d(rounded, MPFR_RNDN);
+  mpfr_set_emin(old_emin);
+  mpfr_set_emax(old_emax);
+  mpfr_clear(rounded);
+  return result;
+}
+
+}  // namespace
+
+ApproxPlane PlaneSet::approx(PlaneRef plane) const {
+  if (plane.is_cut()) {
+    const Plane& cut = cuts[plane.index()];
+    return {{cut.normal.x, 0}, {cut.normal.y, 0}, {cut.normal.z, 0}, {cut.offset, 0}};
+  }
+  return input_approx[plane.index()];
+}
+
+ApproxPlane approximate_input_plane(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+  auto point = [](const Vec3& p) { return V3<Estimate>{{p.x, 0}, {p.y, 0}, {p.z, 0}}; };
+  const P4<Estimate> plane = input_plane_from_points(point(p0), point(p1), point(p2));
+  return {plane.n.x, plane.n.y, plane.n.z, plane.d};
+}
+
+bool on_plane_by_definition(const PlaneSet& set, PlaneRef plane, const PointDef& point) {
+  if (point.defined_on(plane)) return true;
+  if (plane.is_cut()) return false;
+  // An input plane holds the three input points it is defined by, and the meet of
+  // the line through two of them with any plane.
+  const auto& defining = set.inputs[plane.index()];
+  auto defines = [&](std::uint32_t p) { return p == defining[0] || p == defining[1] || p == defining[2]; };
+  if (point.kind == PointKind::input) return defines(point.a);
+  if (point.kind == PointKind::segment_plane) return defines(point.a) && defines(point.b);
+  return false;
+}
+
+ImplicitCounters& implicit_counters() {
+  thread_local ImplicitCounters counters;
+  return counters;
+}
+
+ApproxPoint approximate(const PlaneSet& set, const PointDef& point) {
+  if (point.kind == PointKind::input) {
+    const Vec3& p = set.points[point.a];
+    return {{p.x, 0}, {p.y, 0}, {p.z, 0}, {1, 0}};
+  }
+  H4<Estimate> h = homogeneous<Estimate>(set, point);
+  int s = certified_sign(h.w);
+  if (s == 0) {
+    ++implicit_counters().approximate_exact;
+    s = homogeneous<Exact>(set, point).w.sign();
+    if (s == 0) throw std::domain_error("degenerate point definition: its planes do not meet in one point");
+  }
+  if (s < 0) h = negated(h);
+  return {h.x, h.y, h.z, h.w};
+}
+
+Sign side(const PlaneSet& set, PlaneRef plane, const PointDef& point, const ApproxPoint& approx) {
+  if (on_plane_by_definition(set, plane, point)) return Sign::zero;
+  ImplicitCounters& counters = implicit_counters();
+  ++counters.side_calls;
+  const int s = certified_sign(side_value(plane_coefficients<Estimate>(set, plane), cached(approx)));
+  if (s != 0) return to_sign(s);
+  ++counters.side_exact;
+  return to_sign(side_value(plane_coefficients<Exact>(set, plane), exact_normalised(set, point)).sign());
+}
+
+Sign side(const PlaneSet& set, const Plane& plane, const PointDef& point, const ApproxPoint& approx) {
+  ImplicitCounters& counters = implicit_counters();
+  ++counters.side_calls;
+  const P4<Estimate> coefficients{{{plane.normal.x, 0}, {plane.normal.y, 0}, {plane.normal.z, 0}}, {plane.offset, 0}};
+  const int s = certified_sign(side_value(coefficients, cached(approx)));
+  if (s != 0) return to_sign(s);
+  ++counters.side_exact;
+  const P4<Exact> exact{{Exact(plane.normal.x), Exact(plane.normal.y), Exact(plane.normal.z)}, Exact(plane.offset)};
+  return to_sign(side_value(exact, exact_normalised(set, point)).sign());
+}
+
+Projection projection_of(const PlaneSet& set, PlaneRef plane) {
+  const ApproxPlane a = set.approx(plane);
+  const Estimate components[3] = {a.a, a.b, a.c};
+  int axis = 0;
+  for (int k = 1; k < 3; ++k) {
+    if (std::fabs(components[k].value) > std::fabs(components[axis].value)) axis = k;
+  }
+  int s = certified_sign(components[axis]);
+  if (s == 0) {
+    // Every component is within its error of zero: decide exactly, taking the
+    // first non-zero component.
+    const P4<Exact> exact = plane_coefficients<Exact>(set, plane);
+    const Exact* n[3] = {&exact.n.x, &exact.n.y, &exact.n.z};
+    for (axis = 0; axis < 3 && n[axis]->sign() == 0; ++axis) {
+    }
+    if (axis == 3) throw std::domain_error("plane with a zero normal");
+    s = n[axis]->sign();
+  }
+  return {axis, s < 0};
+}
+
+Sign orient_in_plane(const PlaneSet& set, Projection projection, const PointDef& p, const ApproxPoint& pa,
+                     const PointDef& q, const ApproxPoint& qa, const PointDef& r, const ApproxPoint& ra) {
+  ImplicitCounters& counters = implicit_counters();
+  ++counters.orient_calls;
+  if (p == q || q == r || r == p) return Sign::zero;
+  const int i = (projection.axis + 1) % 3, j = (projection.axis + 2) % 3;
+  int s = certified_sign(projected_orientation(i, j, cached(pa), cached(qa), cached(ra)));
+  if (s == 0) {
+    ++counters.orient_exact;
+    s = projected_orientation(i, j, exact_normalised(set, p), exact_normalised(set, q), exact_normalised(set, r))
+            .sign();
+  }
+  return to_sign(projection.flipped ? -s : s);
+}
+
+Sign orient_in_plane(const PlaneSet& set, Projection projection, const PointDef& p, const ApproxPoint& pa,
+                     const PointDef& q, const ApproxPoint& qa, Vec2 m) {
+  ImplicitCounters& counters = implicit_counters();
+  ++counters.orient_calls;
+  const int i = (projection.axis + 1) % 3, j = (projection.axis + 2) % 3;
+  auto lifted = [&](auto zero, auto mi, auto mj, auto one) {
+    using NT = decltype(zero);
+    H4<NT> h{zero, zero, zero, one};
+    (i == 0 ? h.x : i == 1 ? h.y : h.z) = mi;
+    (j == 0 ? h.x : j == 1 ? h.y : h.z) = mj;
+    return h;
+  };
+  int s = certified_sign(projected_orientation(
+      i, j, cached(pa), cached(qa), lifted(Estimate{0, 0}, Estimate{m.x, 0}, Estimate{m.y, 0}, Estimate{1, 0})));
+  if (s == 0) {
+    ++counters.orient_exact;
+    s = projected_orientation(i, j, exact_normalised(set, p), exact_normalised(set, q),
+                              lifted(Exact(0.0), Exact(m.x), Exact(m.y), Exact(1.0)))
+            .sign();
+  }
+  return to_sign(projection.flipped ? -s : s);
+}
+
+Sign compare_along(const PlaneSet& set, PlaneRef line_a, PlaneRef line_b, const PointDef& p, const ApproxPoint& pa,
+                   const PointDef& q, const ApproxPoint& qa) {
+  ImplicitCounters& counters = implicit_counters();
+  ++counters.order_calls;
+  if (p == q) return Sign::zero;
+  const int s = certified_sign(along_value(plane_coefficients<Estimate>(set, line_a),
+                                           plane_coefficients<Estimate>(set, line_b), cached(pa), cached(qa)));
+  if (s != 0) return to_sign(s);
+  ++counters.order_exact;
+  return to_sign(along_value(plane_coefficients<Exact>(set, line_a), plane_coefficients<Exact>(set, line_b),
+                             exact_normalised(set, p), exact_normalised(set, q))
+                     .sign());
+}
+
+Sign compare_coordinate(const PlaneSet& set, int axis, const PointDef& p, const ApproxPoint& pa, const PointDef& q,
+                        const ApproxPoint& qa) {
+  ImplicitCounters& counters = implicit_counters();
+  ++counters.order_calls;
+  if (p == q) return Sign::zero;
+  auto value = [axis](const auto& ph, const auto& qh) { return coordinate(qh, axis) * ph.w - coordinate(ph, axis) * qh.w; };
+  const int s = certified_sign(value(cached(pa), cached(qa)));
+  if (s != 0) return to_sign(s);
+  ++counters.order_exact;
+  return to_sign(value(exact_normalised(set, p), exact_normalised(set, q)).sign());
+}
+
+Sign compare_normals(const PlaneSet& set, PlaneRef a, PlaneRef b) {
+  const int s = certified_sign(dot(plane_coefficients<Estimate>(set, a).n, plane_coefficients<Estimate>(set, b).n));
+  if (s != 0) return to_sign(s);
+  return to_sign(dot(plane_coefficients<Exact>(set, a).n, plane_coefficients<Exact>(set, b).n).sign());
+}
+
+Vec3 rounded_position(const PlaneSet& set, const PointDef& point, const ApproxPoint& approx) {
+  if (point.kind == PointKind::input) return set.points[point.a];
+  // q = x/w with |x - x̂| <= ex, |w - ŵ| <= ew (ŵ > 0): |x/w - x̂/ŵ| <= (ex + |x̂/ŵ| ew) / (ŵ - ew),
+  // and the division rounds once more. Accepted when that is within 2^-40 of |x/w|
+  // (a few thousand ulps at worst; in practice the quotient is usually the
+  // correctly rounded value or next to it, see the rounding audit).
+  const double w = approx.w.value, ew = approx.w.error;
+  Vec3 result;
+  double* out[3] = {&result.x, &result.y, &result.z};
+  const Estimate coordinates[3] = {approx.x, approx.y, approx.z};
+  bool exact_needed = !(w - ew * bound_inflation > 0);
+  for (int k = 0; k < 3 && !exact_needed; ++k) {
+    const double q = coordinates[k].value / w;
+    const double bound =
+        (coordinates[k].error + std::fabs(q) * ew) / (w - ew) * bound_inflation + unit_roundoff * std::fabs(q);
+    if (!(bound <= rounding_tolerance * std::fabs(q)) || !std::isfinite(q) ||
+        (q != 0 && std::fabs(q) < 0x1p-1000)) {
+      exact_needed = true;
+    }
+    *out[k] = q;
+  }
+  if (!exact_needed) return result;
+  ++implicit_counters().rounding_exact;
+  const std::array<mpq_class, 3> exact = exact_coordinates(set, point);
+  return {correctly_rounded(exact[0]), correctly_rounded(exact[1]), correctly_rounded(exact[2])};
+}
+
+OutputPoint output_point(const PlaneSet& set, const PointDef& point, const ApproxPoint& approx) {
+  const Vec3 rounded = rounded_position(set, point, approx);
+  if (point.kind != PointKind::segment_plane) return {rounded, point};
+  for (const std::uint32_t end : {point.a, point.b}) {
+    const Vec3& p = set.points[end];
+    const double largest = std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
+    const double reach = snap_ulps * (std::nextafter(largest, INFINITY) - largest);
+    if (std::fabs(rounded.x - p.x) <= reach && std::fabs(rounded.y - p.y) <= reach &&
+        std::fabs(rounded.z - p.z) <= reach) {
+      // A point that doubles hold exactly lost nothing to rounding: nothing to
+      // repair, and its tiny faces keep their shape as written.
+      const std::array<mpq_class, 3> exact = exact_coordinates(set, point);
+      if (exact[0] == rounded.x && exact[1] == rounded.y && exact[2] == rounded.z) return {rounded, point};
+      return {p, PointDef::input(end)};
+    }
+  }
+  return {rounded, point};
+}
+
+Vec3 output_position(const PlaneSet& set, const PointDef& point, const ApproxPoint& approx) {
+  return output_point(set, point, approx).position;
+}
+
+std::array<mpq_class, 3> exact_coordinates(const PlaneSet& set, const PointDef& point) {
+  const H4<Exact> h = exact_normalised(set, point);
+  const mpq_class w = to_mpq(h.w);
+  return {to_mpq(h.x) / w, to_mpq(h.y) / w, to_mpq(h.z) / w};
+}
+
+std::array<mpq_class, 4> exact_homogeneous(const PlaneSet& set, const PointDef& point) {
+  const H4<Exact> h = homogeneous<Exact>(set, point);
+  return {to_mpq(h.x), to_mpq(h.y), to_mpq(h.z), to_mpq(h.w)};
+}
+
+PredicateBound side_bound(const PlaneSet& set, PlaneRef plane, const PointDef& point) {
+  const Degree degree = side_value(plane_coefficients<Degree>(set, plane), homogeneous<Degree>(set, point));
+  const Magnitude magnitude =
+      side_value(plane_coefficients<Magnitude>(set, plane), homogeneous<Magnitude>(set, point));
+  return {degree.value, static_cast<int>(std::ceil(std::log2(magnitude.value)))};
+}
+
+PredicateBound orient_bound(const PlaneSet& set, Projection projection, const PointDef& p, const PointDef& q,
+                            const PointDef& r) {
+  const int i = (projection.axis + 1) % 3, j = (projection.axis + 2) % 3;
+  const Degree degree = projected_orientation(i, j, homogeneous<Degree>(set, p), homogeneous<Degree>(set, q),
+                                              homogeneous<Degree>(set, r));
+  const Magnitude magnitude = projected_orientation(i, j, homogeneous<Magnitude>(set, p),
+                                                    homogeneous<Magnitude>(set, q), homogeneous<Magnitude>(set, r));
+  return {degree.value, static_cast<int>(std::ceil(std::log2(magnitude.value)))};
+}
+
+}  // namespace shatter
