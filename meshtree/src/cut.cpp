@@ -1,23 +1,11 @@
 #include "shatter/meshtree/cut.hpp"
 
+#include "shatter/kernel/projection.hpp"
 #include "shatter/meshtree/separate.hpp"
 #include "shatter/slicer/slice.hpp"
 
 namespace shatter {
 namespace {
-
-// An orthonormal basis (u, v) of the plane with u x v = n / |n|: cap UVs are
-// coordinates in it, and u is the cap's tangent.
-struct PlaneBasis {
-  Vec3 normal, u, v;
-
-  explicit PlaneBasis(const Plane& plane) : normal(normalized(plane.normal)) {
-    const Vec3 a{std::fabs(normal.x), std::fabs(normal.y), std::fabs(normal.z)};
-    const Vec3 least = a.x <= a.y && a.x <= a.z ? Vec3{1, 0, 0} : a.y <= a.z ? Vec3{0, 1, 0} : Vec3{0, 0, 1};
-    u = normalized(cross(least, normal));
-    v = cross(normal, u);
-  }
-};
 
 // Appends one side's copy of the cap: triangles reversed for the above side, whose
 // outward normal is -n, with attributes for the channels the mesh carries.

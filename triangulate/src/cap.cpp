@@ -247,10 +247,10 @@ std::vector<Point2> project_all(const std::vector<VertexIndex>& vertices, Projec
 template <class K, class Point, class Point2, class Project>
 std::optional<Cap<Point>> fan_or_cdt(std::span<const Edge> border,
                                      const std::vector<std::vector<VertexIndex>>& loops,
-                                     Project&& project) {
+                                     Project&& project, bool allow_fan = true) {
   Cap<Point> cap;
   cap.loop_count = loops.size();
-  if (loops.size() == 1) {
+  if (allow_fan && loops.size() == 1) {
     std::vector<Point2> loop_points = project_all<Point2>(loops[0], project);
     if (auto fan = try_fan(loops[0], loop_points)) {
       cap.triangles = std::move(*fan);
@@ -323,12 +323,12 @@ Cap<Vec3> triangulate_cap(std::span<const Vec3> positions, std::span<const Edge>
 }
 
 Cap<ExactPoint> triangulate_cap(std::span<const ExactPoint> positions, std::span<const Edge> border,
-                                const Plane& plane) {
+                                const Plane& plane, bool allow_fan) {
   if (border.empty()) return {};
   const PlaneProjection projection = PlaneProjection::of(plane);
   const auto loops = link_loops(border);
   auto exact = fan_or_cdt<ExactKernel, ExactPoint, ExactKernel::Point_2>(
-      border, loops, [&](VertexIndex v) { return projection(positions[v]); });
+      border, loops, [&](VertexIndex v) { return projection(positions[v]); }, allow_fan);
   if (exact) return std::move(*exact);
   return steiner_fan<ExactPoint>(positions, loops);
 }

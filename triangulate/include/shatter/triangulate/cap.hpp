@@ -53,8 +53,11 @@ using ExactPositionFn = std::function<ExactPoint(VertexIndex)>;
 /// Throws UnsupportedGeometryError only if even steiner_fan cannot close it.
 Cap<Vec3> triangulate_cap(std::span<const Vec3> positions, std::span<const Edge> border,
                           const Plane& plane, const ExactPositionFn& exact_position);
+/// `allow_fan` false skips method 1: the constrained Delaunay triangulation, whose
+/// triangles are as far from slivers as the loops allow (used to retriangulate a
+/// face whose fan's slivers did not survive rounding).
 Cap<ExactPoint> triangulate_cap(std::span<const ExactPoint> positions, std::span<const Edge> border,
-                                const Plane& plane);
+                                const Plane& plane, bool allow_fan = true);
 
 /// The check every cap passes before it is accepted: true when no edge of
 /// `triangles` is degenerate or used twice in one direction, every border edge is

@@ -1,0 +1,46 @@
+#pragma once
+// One complete cut of a plane-based solid: split (slicer), caps (triangulate),
+// then the pieces of each side separated into solids, each with its vertices
+// numbered compactly.
+
+#include <cstdint>
+#include <vector>
+
+#include "shatter/kernel/solid.hpp"
+
+namespace shatter {
+
+struct SolidCut {
+  std::vector<Solid> below;  ///< solids on the n·x + d < 0 side
+  std::vector<Solid> above;  ///< solids on the n·x + d > 0 side
+  /// True when the plane misses or only touches the solid: nothing is cut, and
+  /// below and above are empty.
+  bool plane_missed = false;
+  std::size_t cap_faces = 0;  ///< connected regions of the cap (each an outer loop and its holes)
+  std::size_t cap_loops = 0;  ///< loops of the cap, holes included
+};
+
+/// What an untouched shell of the input is: which input shell an input triangle
+/// lies on, and for each input shell the outer shell of its input solid (itself
+/// for an outer shell, the shell around it for a cavity). A cut leaves shells it
+/// does not touch whole; these tables tell a standalone solid from a cavity.
+struct InputShells {
+  std::vector<std::uint32_t> shell_of_triangle;
+  std::vector<std::uint32_t> outer_of_shell;
+};
+
+/// Cuts `solid` by the cut plane `cut` of `set` and closes both sides.
+/// Preconditions: as split_solid (a sound, embedded solid over `set`).
+/// Guarantees: every solid closed (every directed edge matched by its reverse),
+/// one outer shell with the cavities inside it, faces connected regions, cap
+/// faces on `cut` with surface id `cap_surface`, no unused vertex; children of a
+/// convex solid are convex (no predicate spent on it), others have `convex`
+/// decided exactly. Their union is the solid and they meet only on the cut
+/// (exactly: no point is rounded). Deterministic: solids in the order of their
+/// first face. Throws UnsupportedGeometryError as split_solid and make_caps.
+/// `shells` describes the input shells (InputShells) for the faces' `source`
+/// triangles; it matters only when a cut leaves a whole shell untouched.
+SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, SurfaceId cap_surface,
+                   const InputShells& shells);
+
+}  // namespace shatter

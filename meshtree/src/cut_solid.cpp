@@ -1,0 +1,387 @@
+#include "shatter/meshtree/cut_solid.hpp"
+
+#include <algorithm>
+#include <numeric>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/face_loops.hpp"
+#include "shatter/kernel/index_map.hpp"
+#include "shatter/slicer/split.hpp"
+#include "shatter/triangulate/cap_faces.hpp"
+
+namespace shatter {
+namespace {
+
+class UnionFind {
+ public:
+  void reset(std::size_t n) {
+    parent_.resize(n);
+    std::iota(parent_.begin(), parent_.end(), 0u);
+  }
+  std::uint32_t find(std::uint32_t x) {
+    while (parent_[x] != x) {
+      parent_[x] = parent_[parent_[x]];
+      x = parent_[x];
+    }
+    return x;
+  }
+  void unite(std::uint32_t a, std::uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a < b) parent_[b] = a;
+    else if (b < a) parent_[a] = b;
+  }
+
+ private:
+  std::vector<std::uint32_t> parent_;
+};
+
+// Appends `from`'s faces to `to`, renumbering their loops and corners.
+void append_faces(const FaceSet& from, FaceSet& to) {
+  const auto loop_base = static_cast<std::uint32_t>(to.loops.size());
+  const auto corner_base = static_cast<std::uint32_t>(to.corners.size());
+  for (SolidFace face : from.faces) {
+    face.first_loop += loop_base;
+    to.faces.push_back(face);
+  }
+  for (SolidLoop loop : from.loops) {
+    loop.first_corner += corner_base;
+    to.loops.push_back(loop);
+  }
+  to.corners.insert(to.corners.end(), from.corners.begin(), from.corners.end());
+}
+
+// The solid made of the given faces of `faces`, its vertices numbered compactly in
+// order of first use.
+Solid extract(std::span<const PointDef> defs, std::span<const ApproxPoint> approx, const FaceSet& faces,
+              std::span<const std::uint32_t> chosen, std::vector<VertexIndex>& local) {
+  Solid solid;
+  local.assign(defs.size(), no_index);
+  for (std::uint32_t f : chosen) {
+    SolidFace face = faces.faces[f];
+    const std::uint32_t first_loop = face.first_loop;
+    face.first_loop = static_cast<std::uint32_t>(solid.loops.size());
+    for (std::uint32_t l = first_loop; l < first_loop + face.loop_count; ++l) {
+      const SolidLoop& loop = faces.loops[l];
+      solid.loops.push_back({static_cast<std::uint32_t>(solid.corners.size()), loop.corner_count});
+      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
+        SolidCorner corner = faces.corners[loop.first_corner + i];
+        if (local[corner.vertex] == no_index) {
+          local[corner.vertex] = static_cast<VertexIndex>(solid.defs.size());
+          solid.defs.push_back(defs[corner.vertex]);
+          solid.approx.push_back(approx[corner.vertex]);
+        }
+        corner.vertex = local[corner.vertex];
+        solid.corners.push_back(corner);
+      }
+    }
+    solid.faces.push_back(face);
+  }
+  return solid;
+}
+
+// --- placing an untouched cavity ------------------------------------------------
+// A shell of the solid that the cut did not touch is a cavity (the outer shell is
+// always touched when the plane crosses the solid). When its side fell into several
+// solids it belongs to the one around it, found by an exact ray cast from one of
+// its vertices (an input point) to a far input-like point: the parity of the faces
+// crossed. A ray through an edge, a vertex or along a plane is degenerate and is
+// cast again in another direction.
+
+bool solid_contains(const PlaneSet& set, const Solid& solid, std::uint32_t point_index) {
+  const Vec3 p = set.points[point_index];
+  Vec3 lo = p, hi = p;
+  for (const ApproxPoint& a : solid.approx) {
+    const Vec3 v{a.x.value / a.w.value, a.y.value / a.w.value, a.z.value / a.w.value};
+    lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
+    hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
+  }
+  const double reach = 4 * (std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) + std::fabs(p.x) + std::fabs(p.y) +
+                            std::fabs(p.z)) + 1;
+  // Directions with no simple relation to the axes or to each other.
+  static constexpr double directions[][3] = {{1, 0.3183098861837907, 0.1414213562373095},
+                                             {-0.2718281828459045, 1, 0.5772156649015329},
+                                             {0.6180339887498949, -0.4142135623730950, 1},
+                                             {-1, -0.7071067811865476, 0.2236067977499790},
+                                             {0.1732050807568877, 1, -0.8660254037844386},
+                                             {0.9, 0.8, -1}};
+  std::vector<Vec3> points(set.points.begin(), set.points.end());
+  const auto far_index = static_cast<std::uint32_t>(points.size());
+  points.emplace_back();
+  std::vector<PointDef> defs(solid.defs);
+  std::vector<ApproxPoint> approx(solid.approx);
+  const auto hit_index = static_cast<VertexIndex>(defs.size());
+  defs.emplace_back();
+  approx.emplace_back();
+  for (const auto& d : directions) {
+    points[far_index] = {p.x + reach * d[0], p.y + reach * d[1], p.z + reach * d[2]};
+    const PlaneSet extended{points, set.inputs, set.input_approx, set.cuts};
+    const PointDef from = PointDef::input(point_index), to = PointDef::input(far_index);
+    const ApproxPoint from_approx = approximate(extended, from), to_approx = approximate(extended, to);
+    bool odd = false, degenerate = false;
+    try {
+      for (const SolidFace& face : solid.faces) {
+        const Sign s_from = side(extended, face.plane, from, from_approx);
+        const Sign s_to = side(extended, face.plane, to, to_approx);
+        if (s_to == Sign::zero) {
+          degenerate = true;  // the far point on a face's plane: try another direction
+          break;
+        }
+        // A ray starting on a face's plane leaves it at once (the far point is off
+        // it): no crossing. (The cavity's vertex is not on the piece's surface.)
+        if (s_from == Sign::zero || s_from == s_to) continue;
+        defs[hit_index] = PointDef::segment_plane(point_index, far_index, face.plane);
+        approx[hit_index] = approximate(extended, defs[hit_index]);
+        const FaceGeometry geometry{extended, defs, approx, projection_of(extended, face.plane), face.reversed};
+        std::vector<LoopEdge> loop;
+        bool inside = false;
+        for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+          const SolidLoop& solid_loop = solid.loops[l];
+          loop.clear();
+          for (std::uint32_t i = 0; i < solid_loop.corner_count; ++i) {
+            loop.push_back({solid.corners[solid_loop.first_corner + i].vertex,
+                            solid.corners[solid_loop.first_corner + (i + 1) % solid_loop.corner_count].vertex,
+                            {}});
+          }
+          if (inside_loop(geometry, hit_index, loop)) inside = !inside;
+        }
+        if (inside) odd = !odd;
+      }
+    } catch (const UnsupportedGeometryError&) {
+      degenerate = true;  // the ray met an edge of a face
+    }
+    if (!degenerate) return odd;
+  }
+  throw UnsupportedGeometryError("cannot place a cavity: every ray cast from it was degenerate");
+}
+
+// Appends solid `part`'s faces and vertices to `host`.
+void absorb(Solid& host, const Solid& part) {
+  const auto vertex_base = static_cast<VertexIndex>(host.defs.size());
+  const auto loop_base = static_cast<std::uint32_t>(host.loops.size());
+  const auto corner_base = static_cast<std::uint32_t>(host.corners.size());
+  host.defs.insert(host.defs.end(), part.defs.begin(), part.defs.end());
+  host.approx.insert(host.approx.end(), part.approx.begin(), part.approx.end());
+  for (SolidFace f : part.faces) {
+    f.first_loop += loop_base;
+    host.faces.push_back(f);
+  }
+  for (SolidLoop l : part.loops) {
+    l.first_corner += corner_base;
+    host.loops.push_back(l);
+  }
+  for (SolidCorner c : part.corners) {
+    c.vertex += vertex_base;
+    host.corners.push_back(c);
+  }
+}
+
+// The pieces of one side: its faces plus its cap, separated into edge-connected
+// shells. A shell with a cap face is the outer shell of a piece (the cut crossed
+// it). A shell without one was not touched, so it is a whole input shell, and
+// the input tells what it is: an outer shell is a solid of its own, a cavity
+// joins its own outer shell when that is whole too, and otherwise the piece
+// around it (an exact ray cast; pieces with a cap face are never nested).
+void separate_side(const PlaneSet& set, std::span<const PointDef> defs, std::span<const ApproxPoint> approx,
+                   const FaceSet& faces, std::size_t first_cap_face, bool parent_convex, const InputShells& shells,
+                   std::vector<Solid>& out) {
+  thread_local std::vector<VertexIndex> local;
+  thread_local std::vector<std::uint32_t> chosen;
+  if (parent_convex) {
+    chosen.resize(faces.faces.size());
+    std::iota(chosen.begin(), chosen.end(), 0u);
+    out.push_back(extract(defs, approx, faces, chosen, local));
+    out.back().convex = true;
+    return;
+  }
+  thread_local UnionFind components;
+  thread_local IndexMap face_of_edge;
+  components.reset(faces.faces.size());
+  face_of_edge.reset(faces.corners.size());
+  for (std::uint32_t f = 0; f < faces.faces.size(); ++f) {
+    const SolidFace& face = faces.faces[f];
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+      const SolidLoop& loop = faces.loops[l];
+      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
+        const VertexIndex u = faces.corners[loop.first_corner + i].vertex;
+        const VertexIndex v = faces.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
+        const std::uint32_t other = face_of_edge.insert(undirected_edge_key(u, v), f);
+        if (other != f) components.unite(f, other);
+      }
+    }
+  }
+  thread_local std::vector<std::uint8_t> touched;
+  thread_local std::vector<std::uint32_t> group_of_root;
+  touched.assign(faces.faces.size(), 0);
+  for (std::uint32_t f = static_cast<std::uint32_t>(first_cap_face); f < faces.faces.size(); ++f) {
+    touched[components.find(f)] = 1;
+  }
+  // Components in order of their first face, so the output is deterministic.
+  group_of_root.assign(faces.faces.size(), no_index);
+  std::vector<std::vector<std::uint32_t>> groups;
+  std::vector<std::uint8_t> group_touched;
+  for (std::uint32_t f = 0; f < faces.faces.size(); ++f) {
+    const std::uint32_t root = components.find(f);
+    if (group_of_root[root] == no_index) {
+      group_of_root[root] = static_cast<std::uint32_t>(groups.size());
+      groups.emplace_back();
+      group_touched.push_back(touched[root]);
+    }
+    groups[group_of_root[root]].push_back(f);
+  }
+  auto input_shell_of = [&](const std::vector<std::uint32_t>& group) {
+    return shells.shell_of_triangle[faces.faces[group.front()].source];
+  };
+  // Pieces: touched shells, then whole outer shells; remember which input shell
+  // each whole outer shell is.
+  const std::size_t first = out.size();
+  std::vector<std::uint32_t> whole_outer_shell;  // per piece: input shell id, or no_index if touched
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    const bool is_piece =
+        group_touched[g] || shells.outer_of_shell[input_shell_of(groups[g])] == input_shell_of(groups[g]);
+    if (!is_piece) continue;
+    out.push_back(extract(defs, approx, faces, groups[g], local));
+    whole_outer_shell.push_back(group_touched[g] ? no_index : input_shell_of(groups[g]));
+  }
+  const std::size_t piece_count = out.size() - first;
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    if (group_touched[g]) continue;
+    const std::uint32_t shell = input_shell_of(groups[g]);
+    const std::uint32_t outer = shells.outer_of_shell[shell];
+    if (outer == shell) continue;  // a piece already
+    std::size_t owner = out.size();
+    for (std::size_t k = 0; k < piece_count; ++k) {
+      if (whole_outer_shell[k] == outer) owner = first + k;
+    }
+    if (owner == out.size()) {
+      // Its outer shell was cut: the touched piece around it.
+      const SolidFace& face = faces.faces[groups[g].front()];
+      const std::uint32_t point = defs[faces.corners[faces.loops[face.first_loop].first_corner].vertex].a;
+      std::size_t candidates = 0, last = out.size();
+      for (std::size_t k = 0; k < piece_count; ++k) {
+        if (whole_outer_shell[k] != no_index) continue;
+        ++candidates;
+        last = first + k;
+      }
+      if (candidates == 1) {
+        owner = last;
+      } else {
+        for (std::size_t k = 0; k < piece_count && owner == out.size(); ++k) {
+          if (whole_outer_shell[k] == no_index && solid_contains(set, out[first + k], point)) owner = first + k;
+        }
+      }
+      if (owner == out.size()) throw UnsupportedGeometryError("cannot place a cavity: no piece contains it");
+    }
+    absorb(out[owner], extract(defs, approx, faces, groups[g], local));
+  }
+  for (std::size_t k = first; k < out.size(); ++k) out[k].convex = solid_is_convex(set, out[k]);
+}
+
+// Whether segment u -> v starts into the interior of a cap region at u, where
+// the region's boundary runs a -> u -> b (region on the left): the "in cone" test
+// of polygon triangulation (O'Rourke, "Computational Geometry in C", 1998, 1.6).
+bool starts_inside(const FaceGeometry& g, VertexIndex a, VertexIndex u, VertexIndex b, VertexIndex v) {
+  if (v == a || v == b) return false;
+  if (g.orient(a, u, b) != Sign::negative) {  // convex (or straight) corner
+    return g.orient(u, v, a) == Sign::positive && g.orient(v, u, b) == Sign::positive;
+  }
+  return !(g.orient(u, v, b) != Sign::negative && g.orient(v, u, a) != Sign::negative);
+}
+
+// The plane touching the surface inside the solid: a vertex on the cut that no
+// border edge reaches lying inside the cap (a cavity's corner on the plane), or
+// an edge on the cut whose two faces went to one side running through the cap
+// (a concave edge of the surface lying in the plane). The piece is then pinched
+// there: exactly, it is not a 2-manifold solid, and no mesh of it is valid.
+// Refused, never approximated.
+void refuse_pinches(const PlaneSet& set, PlaneRef cut, const SplitSolid& split, const FaceSet& below_cap) {
+  thread_local std::vector<std::uint8_t> on_border;
+  on_border.assign(split.defs.size(), 0);
+  for (const LoopEdge& e : split.border) on_border[e.from] = on_border[e.to] = 1;
+  bool any_zero_off_border = false, any_zero_edge = false;
+  for (std::size_t v = 0; v < split.defs.size(); ++v) {
+    if (split.sides[v] != Sign::zero) continue;
+    if (on_border[v]) any_zero_edge = true;  // possibly a chord between border vertices; checked below
+    else any_zero_off_border = true;
+  }
+  if (!any_zero_off_border && !any_zero_edge) return;
+  const FaceGeometry geometry{set, split.defs, split.approx, projection_of(set, cut), false};
+  const auto pinched = [] {
+    throw UnsupportedGeometryError(
+        "the cut plane touches the surface inside the solid (a cavity's corner or a concave edge lies on it, "
+        "within the cut): a piece would be pinched there, which no valid mesh represents");
+  };
+  std::vector<LoopEdge> loop;
+  if (any_zero_off_border) {
+    for (std::size_t v = 0; v < split.defs.size(); ++v) {
+      if (split.sides[v] != Sign::zero || on_border[v]) continue;
+      for (const SolidFace& face : below_cap.faces) {
+        bool inside = false;
+        for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+          const SolidLoop& cap_loop = below_cap.loops[l];
+          loop.clear();
+          for (std::uint32_t i = 0; i < cap_loop.corner_count; ++i) {
+            loop.push_back({below_cap.corners[cap_loop.first_corner + i].vertex,
+                            below_cap.corners[cap_loop.first_corner + (i + 1) % cap_loop.corner_count].vertex, {}});
+          }
+          if (inside_loop(geometry, static_cast<VertexIndex>(v), loop)) inside = !inside;
+        }
+        if (inside) pinched();
+      }
+    }
+  }
+  if (!any_zero_edge) return;
+  // Edges on the cut that are not border edges (both faces on one side), each
+  // tested at its ends against the cap corners there.
+  thread_local IndexMap border_edges;
+  border_edges.reset(split.border.size());
+  for (const LoopEdge& e : split.border) border_edges.insert(undirected_edge_key(e.from, e.to), 1);
+  for (const FaceSet* side_faces : {&split.below, &split.above}) {
+    for (const SolidLoop& l : side_faces->loops) {
+      for (std::uint32_t i = 0; i < l.corner_count; ++i) {
+        const VertexIndex u = side_faces->corners[l.first_corner + i].vertex;
+        const VertexIndex v = side_faces->corners[l.first_corner + (i + 1) % l.corner_count].vertex;
+        if (split.sides[u] != Sign::zero || split.sides[v] != Sign::zero) continue;
+        if (border_edges.find(undirected_edge_key(u, v)) != IndexMap::absent) continue;
+        for (const SolidLoop& c : below_cap.loops) {
+          for (std::uint32_t k = 0; k < c.corner_count; ++k) {
+            const VertexIndex at = below_cap.corners[c.first_corner + k].vertex;
+            if (at != u && at != v) continue;
+            const VertexIndex before = below_cap.corners[c.first_corner + (k + c.corner_count - 1) % c.corner_count].vertex;
+            const VertexIndex after = below_cap.corners[c.first_corner + (k + 1) % c.corner_count].vertex;
+            if (starts_inside(geometry, before, at, after, at == u ? v : u)) pinched();
+          }
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, SurfaceId cap_surface,
+                   const InputShells& shells) {
+  thread_local SplitSolid split;
+  thread_local FaceSet below_cap, above_cap, side;
+  SolidCut result;
+  split_solid(set, solid, cut, split);
+  if (split.plane_misses) {
+    result.plane_missed = true;
+    return result;
+  }
+  make_caps(set, cut, split.defs, split.approx, split.border, solid.convex, cap_surface, below_cap, above_cap);
+  refuse_pinches(set, cut, split, below_cap);
+  result.cap_faces = below_cap.faces.size();
+  result.cap_loops = below_cap.loops.size();
+  for (const bool below : {true, false}) {
+    side.clear();
+    append_faces(below ? split.below : split.above, side);
+    const std::size_t first_cap = side.faces.size();
+    append_faces(below ? below_cap : above_cap, side);
+    separate_side(set, split.defs, split.approx, side, first_cap, solid.convex, shells,
+                  below ? result.below : result.above);
+  }
+  return result;
+}
+
+}  // namespace shatter

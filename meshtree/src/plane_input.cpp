@@ -1,0 +1,93 @@
+#include "shatter/meshtree/plane_input.hpp"
+
+#include <numeric>
+
+#include "shatter/kernel/index_map.hpp"
+#include "shatter/kernel/mass.hpp"
+#include "shatter/meshtree/separate.hpp"
+
+namespace shatter {
+namespace {
+
+void append_mesh(const Mesh& part, Mesh& whole) {
+  const auto base = static_cast<VertexIndex>(whole.positions.size());
+  whole.positions.insert(whole.positions.end(), part.positions.begin(), part.positions.end());
+  for (Triangle t : part.triangles) whole.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  whole.surfaces.insert(whole.surfaces.end(), part.surfaces.begin(), part.surfaces.end());
+  whole.corners.normals.insert(whole.corners.normals.end(), part.corners.normals.begin(), part.corners.normals.end());
+  whole.corners.uvs.insert(whole.corners.uvs.end(), part.corners.uvs.begin(), part.corners.uvs.end());
+  whole.corners.tangents.insert(whole.corners.tangents.end(), part.corners.tangents.begin(),
+                                part.corners.tangents.end());
+}
+
+}  // namespace
+
+PlaneInput prepare_plane_input(const Mesh& mesh) {
+  PlaneInput input;
+  const std::vector<Mesh> solids = separate_solids(mesh);
+  std::vector<std::size_t> first_triangle;
+  for (const Mesh& solid : solids) {
+    first_triangle.push_back(input.mesh.triangles.size());
+    append_mesh(solid, input.mesh);
+  }
+  first_triangle.push_back(input.mesh.triangles.size());
+
+  // Shells: edge-connected triangles; in each solid the outward one is the outer.
+  const std::size_t triangle_count = input.mesh.triangles.size();
+  std::vector<std::uint32_t> parent(triangle_count);
+  std::iota(parent.begin(), parent.end(), 0u);
+  auto find = [&](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  IndexMap triangle_of_edge(3 * triangle_count);
+  for (std::uint32_t t = 0; t < triangle_count; ++t) {
+    const Triangle& tri = input.mesh.triangles[t];
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t other = triangle_of_edge.insert(undirected_edge_key(tri[c], tri[(c + 1) % 3]), t);
+      if (other != t) {
+        const std::uint32_t a = find(t), b = find(other);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);
+      }
+    }
+  }
+  std::vector<std::uint32_t> shell_of_root(triangle_count, no_index);
+  input.shells.shell_of_triangle.resize(triangle_count);
+  std::vector<std::vector<TriangleIndex>> shell_triangles;
+  for (std::uint32_t t = 0; t < triangle_count; ++t) {
+    const std::uint32_t root = find(t);
+    if (shell_of_root[root] == no_index) {
+      shell_of_root[root] = static_cast<std::uint32_t>(shell_triangles.size());
+      shell_triangles.emplace_back();
+    }
+    input.shells.shell_of_triangle[t] = shell_of_root[root];
+    shell_triangles[shell_of_root[root]].push_back(t);
+  }
+  input.shells.outer_of_shell.assign(shell_triangles.size(), no_index);
+  for (std::size_t s = 0; s + 1 < first_triangle.size(); ++s) {
+    // The shells of solid s, and the one facing outward among them.
+    std::uint32_t outer = no_index;
+    std::vector<std::uint32_t> members;
+    for (std::size_t t = first_triangle[s]; t < first_triangle[s + 1]; ++t) {
+      const std::uint32_t shell = input.shells.shell_of_triangle[t];
+      if (members.empty() || members.back() != shell) {
+        if (std::find(members.begin(), members.end(), shell) == members.end()) members.push_back(shell);
+      }
+    }
+    for (const std::uint32_t shell : members) {
+      Mesh part;
+      part.positions = input.mesh.positions;
+      for (TriangleIndex t : shell_triangles[shell]) part.triangles.push_back(input.mesh.triangles[t]);
+      if (signed_volume_sign(part) == Sign::positive) outer = shell;
+    }
+    for (const std::uint32_t shell : members) input.shells.outer_of_shell[shell] = outer == no_index ? shell : outer;
+  }
+
+  const bool has_attributes =
+      input.mesh.corners.has_normals() || input.mesh.corners.has_uvs() || input.mesh.corners.has_tangents();
+  input.geometry.points = input.mesh.positions;
+  input.solid = solid_from_mesh(input.mesh, !has_attributes, input.geometry);
+  return input;
+}
+
+}  // namespace shatter

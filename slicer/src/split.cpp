@@ -1,0 +1,335 @@
+#include "shatter/slicer/split.hpp"
+
+#include <algorithm>
+#include <string>
+#include <utility>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/face_loops.hpp"
+
+namespace shatter {
+namespace {
+
+bool both_zero(Sign a, Sign b) { return a == Sign::zero && b == Sign::zero; }
+
+// A corner of a face's loop after the crossing vertices are inserted: the edge
+// from it to the next augmented corner lies on `line`.
+struct AugmentedCorner {
+  VertexIndex vertex;
+  EdgeLine line;
+};
+
+class Splitter {
+ public:
+  Splitter(const PlaneSet& set, const Solid& solid, PlaneRef cut, SplitSolid& out)
+      : set_(set), solid_(solid), cut_(cut), out_(out) {}
+
+  void run() {
+    const std::size_t n = solid_.defs.size();
+    out_.defs.assign(solid_.defs.begin(), solid_.defs.end());
+    out_.approx.assign(solid_.approx.begin(), solid_.approx.end());
+    out_.sides.resize(n);
+    bool any_below = false, any_above = false;
+    for (std::size_t v = 0; v < n; ++v) {
+      const Sign s = side(set_, cut_, out_.defs[v], out_.approx[v]);
+      out_.sides[v] = s;
+      any_below |= s == Sign::negative;
+      any_above |= s == Sign::positive;
+    }
+    out_.below.clear();
+    out_.above.clear();
+    out_.border.clear();
+    out_.plane_misses = !(any_below && any_above);
+    out_.all_below = !any_above;
+    if (out_.plane_misses) return;
+    out_.new_vertex_of_edge.reset(solid_.corners.size() / 4 + 8);
+    zero_edges_below_.clear();
+    zero_edges_above_.clear();
+    for (const SolidFace& face : solid_.faces) split_face(face);
+    collect_border();
+  }
+
+ private:
+  Sign sign_of(VertexIndex v) const { return out_.sides[v]; }
+
+  // The vertex where the cut crosses the edge u-v of `face` (lying on `line`),
+  // made once per undirected edge.
+  VertexIndex crossing_vertex(VertexIndex u, VertexIndex v, const SolidFace& face, const EdgeLine& line) {
+    const auto candidate = static_cast<VertexIndex>(out_.defs.size());
+    const VertexIndex found = out_.new_vertex_of_edge.insert(undirected_edge_key(u, v), candidate);
+    if (found != candidate) return found;
+    PointDef def;
+    if (line.is_segment()) {
+      def = PointDef::segment_plane(line.p, line.q, cut_);
+    } else {
+      PlaneRef a = face.plane, b = line.other;
+      if (b.bits < a.bits) std::swap(a, b);
+      def = PointDef::three_planes(a, b, cut_);
+    }
+    out_.defs.push_back(def);
+    out_.approx.push_back(approximate(set_, def));
+    out_.sides.push_back(Sign::zero);
+    return candidate;
+  }
+
+  // The face's loops with crossing vertices inserted, into augmented_ (loop l is
+  // augmented_[loop_start_[l], loop_start_[l + 1])).
+  void augment(const SolidFace& face) {
+    augmented_.clear();
+    loop_start_.clear();
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+      loop_start_.push_back(static_cast<std::uint32_t>(augmented_.size()));
+      const SolidLoop& loop = solid_.loops[l];
+      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
+        const SolidCorner& corner = solid_.corners[loop.first_corner + i];
+        const VertexIndex next = solid_.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
+        augmented_.push_back({corner.vertex, corner.line});
+        const Sign a = sign_of(corner.vertex), b = sign_of(next);
+        if ((a == Sign::negative && b == Sign::positive) || (a == Sign::positive && b == Sign::negative)) {
+          augmented_.push_back({crossing_vertex(corner.vertex, next, face, corner.line), corner.line});
+        }
+      }
+    }
+    loop_start_.push_back(static_cast<std::uint32_t>(augmented_.size()));
+  }
+
+  // The line of a new edge along the cut, inside a part of `face`.
+  EdgeLine cut_line() const {
+    EdgeLine line;
+    line.other = cut_;
+    return line;
+  }
+
+  void split_face(const SolidFace& face) {
+    bool any_below = false, any_above = false;
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+      const SolidLoop& loop = solid_.loops[l];
+      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
+        const Sign s = sign_of(solid_.corners[loop.first_corner + i].vertex);
+        any_below |= s == Sign::negative;
+        any_above |= s == Sign::positive;
+      }
+    }
+    if (!any_below && !any_above) {
+      // In the plane: the lid of the side its outward normal looks out of.
+      Sign facing = compare_normals(set_, face.plane, cut_);
+      if (face.reversed) facing = flip(facing);
+      copy_face(face, facing == Sign::positive ? out_.below : out_.above, facing == Sign::positive);
+    } else if (!any_below) {
+      copy_face(face, out_.above, false);
+    } else if (!any_above) {
+      copy_face(face, out_.below, true);
+    } else if (face.convex) {
+      augment(face);
+      emit_convex_part(face, Sign::negative, out_.below, true);
+      emit_convex_part(face, Sign::positive, out_.above, false);
+    } else {
+      augment(face);
+      split_general(face);
+    }
+  }
+
+  void note_zero_edge(VertexIndex u, VertexIndex v, const SolidFace& face, const EdgeLine& line, bool below) {
+    if (!both_zero(sign_of(u), sign_of(v))) return;
+    // On the cap, the edge lies on the cut and on this face's plane.
+    LoopEdge edge{u, v, line};
+    edge.line.other = face.plane;
+    (below ? zero_edges_below_ : zero_edges_above_).push_back(edge);
+  }
+
+  void copy_face(const SolidFace& face, FaceSet& side_faces, bool below) {
+    SolidFace copy = face;
+    copy.first_loop = static_cast<std::uint32_t>(side_faces.loops.size());
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+      const SolidLoop& loop = solid_.loops[l];
+      side_faces.loops.push_back({static_cast<std::uint32_t>(side_faces.corners.size()), loop.corner_count});
+      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
+        const SolidCorner& corner = solid_.corners[loop.first_corner + i];
+        side_faces.corners.push_back(corner);
+        note_zero_edge(corner.vertex, solid_.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex, face,
+                       corner.line, below);
+      }
+    }
+    side_faces.faces.push_back(copy);
+  }
+
+  // A convex face's part on one side: its augmented corners of that side or on the
+  // plane, in order, form one run; the one jump between non-consecutive corners is
+  // the new edge along the cut.
+  void emit_convex_part(const SolidFace& face, Sign keep, FaceSet& side_faces, bool below) {
+    const auto count = static_cast<std::uint32_t>(augmented_.size());
+    std::uint32_t start = 0;
+    while (sign_of(augmented_[start].vertex) != keep) ++start;
+    SolidFace part = face;
+    part.first_loop = static_cast<std::uint32_t>(side_faces.loops.size());
+    part.loop_count = 1;
+    const auto first_corner = static_cast<std::uint32_t>(side_faces.corners.size());
+    // Walk from `start`; emit kept corners; the line of each emitted corner is
+    // decided when its successor is known.
+    std::uint32_t previous = no_index;
+    for (std::uint32_t step = 0; step < count; ++step) {
+      const std::uint32_t i = (start + step) % count;
+      if (sign_of(augmented_[i].vertex) == flip(keep)) continue;
+      if (previous != no_index) close_edge(face, side_faces, previous, i, below);
+      side_faces.corners.push_back({augmented_[i].vertex, EdgeLine{}});
+      previous = i;
+    }
+    close_edge(face, side_faces, previous, start, below);
+    side_faces.loops.push_back({first_corner, static_cast<std::uint32_t>(side_faces.corners.size()) - first_corner});
+    side_faces.faces.push_back(part);
+  }
+
+  // Sets the line of the last emitted corner (augmented index `from`), whose
+  // successor in the part is augmented index `to`.
+  void close_edge(const SolidFace& face, FaceSet& side_faces, std::uint32_t from, std::uint32_t to, bool below) {
+    const auto count = static_cast<std::uint32_t>(augmented_.size());
+    const EdgeLine line = (from + 1) % count == to ? augmented_[from].line : cut_line();
+    side_faces.corners.back().line = line;
+    note_zero_edge(augmented_[from].vertex, augmented_[to].vertex, face, line, below);
+  }
+
+  // --- faces that are not convex, or have holes -----------------------------------
+  // The parts of the cut line inside the face are found by a sweep along the line:
+  // shifting the line infinitesimally to one side, the face's boundary crosses it
+  // exactly at the edges from a vertex on the line to a vertex strictly on that
+  // side, so the parity of those edges met so far tells whether the face is there.
+  // A gap between consecutive points on the line with the face on both sides is a
+  // new edge of both parts.
+
+  void split_general(const SolidFace& face) {
+    const std::uint32_t loops = static_cast<std::uint32_t>(loop_start_.size()) - 1;
+    zero_points_.clear();
+    for (std::uint32_t l = 0; l < loops; ++l) {
+      for (std::uint32_t i = loop_start_[l]; i < loop_start_[l + 1]; ++i) {
+        const std::uint32_t j = i + 1 == loop_start_[l + 1] ? loop_start_[l] : i + 1;
+        const VertexIndex u = augmented_[i].vertex, v = augmented_[j].vertex;
+        const Sign su = sign_of(u), sv = sign_of(v);
+        if (su == Sign::zero && sv != Sign::zero) count_at(u, sv);
+        if (sv == Sign::zero && su != Sign::zero) count_at(v, su);
+        if (su == Sign::zero) touch(u);
+        if (sv == Sign::zero) touch(v);
+      }
+    }
+    // Order along d = n_out × n_cut; a reversed face's outward normal is -n.
+    const bool reversed = face.reversed;
+    std::sort(zero_points_.begin(), zero_points_.end(), [&](const ZeroPoint& a, const ZeroPoint& b) {
+      Sign s = compare_along(set_, face.plane, cut_, out_.defs[a.vertex], out_.approx[a.vertex], out_.defs[b.vertex],
+                             out_.approx[b.vertex]);
+      if (reversed) s = flip(s);
+      if (s == Sign::zero && a.vertex != b.vertex) {
+        throw UnsupportedGeometryError("split: two distinct vertices at one point of a face (the solid is not embedded)");
+      }
+      return s == Sign::positive;
+    });
+    below_edges_.clear();
+    above_edges_.clear();
+    // The face's own edges, each to the side it bounds.
+    for (std::uint32_t l = 0; l < loops; ++l) {
+      for (std::uint32_t i = loop_start_[l]; i < loop_start_[l + 1]; ++i) {
+        const std::uint32_t j = i + 1 == loop_start_[l + 1] ? loop_start_[l] : i + 1;
+        const VertexIndex u = augmented_[i].vertex, v = augmented_[j].vertex;
+        const Sign su = sign_of(u), sv = sign_of(v);
+        const LoopEdge edge{u, v, augmented_[i].line};
+        if (both_zero(su, sv)) {
+          // An edge along the cut bounds the side its face lies on. The face is on
+          // the edge's left, and left of d = n_out x n_cut is the -n_cut side
+          // (n_out x (n_out x n_cut) has component -(|n_out|^2 |n_cut|^2 -
+          // (n_out·n_cut)^2) < 0 along n_cut): along +d the face is below.
+          Sign s = compare_along(set_, face.plane, cut_, out_.defs[u], out_.approx[u], out_.defs[v], out_.approx[v]);
+          if (reversed) s = flip(s);
+          (s == Sign::positive ? below_edges_ : above_edges_).push_back(edge);
+        } else if (su != Sign::positive && sv != Sign::positive) {
+          below_edges_.push_back(edge);
+        } else {
+          above_edges_.push_back(edge);
+        }
+      }
+    }
+    // New edges where the face lies on both sides of the line.
+    bool inside_below = false, inside_above = false;
+    for (std::size_t k = 0; k + 1 < zero_points_.size(); ++k) {
+      inside_below ^= (zero_points_[k].below_count & 1u) != 0;
+      inside_above ^= (zero_points_[k].above_count & 1u) != 0;
+      if (inside_below && inside_above) {
+        const VertexIndex a = zero_points_[k].vertex, b = zero_points_[k + 1].vertex;
+        below_edges_.push_back({a, b, cut_line()});
+        above_edges_.push_back({b, a, cut_line()});
+      }
+    }
+    emit_parts(face, below_edges_, out_.below, true);
+    emit_parts(face, above_edges_, out_.above, false);
+  }
+
+  struct ZeroPoint {
+    VertexIndex vertex;
+    std::uint32_t below_count, above_count;
+  };
+  void touch(VertexIndex v) {
+    for (const ZeroPoint& p : zero_points_) {
+      if (p.vertex == v) return;
+    }
+    zero_points_.push_back({v, 0, 0});
+  }
+  void count_at(VertexIndex v, Sign other) {
+    touch(v);
+    for (ZeroPoint& p : zero_points_) {
+      if (p.vertex != v) continue;
+      (other == Sign::negative ? p.below_count : p.above_count) += 1;
+      return;
+    }
+  }
+
+  void emit_parts(const SolidFace& face, std::vector<LoopEdge>& edges, FaceSet& side_faces, bool below) {
+    const Projection projection = projection_of(set_, face.plane);
+    const FaceGeometry geometry{set_, out_.defs, out_.approx, projection, face.reversed};
+    regions_.clear();
+    group_into_regions(geometry, edges, regions_);
+    for (const Region& region : regions_) {
+      SolidFace part = face;
+      part.first_loop = static_cast<std::uint32_t>(side_faces.loops.size());
+      part.loop_count = static_cast<std::uint32_t>(region.loops.size());
+      for (const auto& loop : region.loops) {
+        side_faces.loops.push_back(
+            {static_cast<std::uint32_t>(side_faces.corners.size()), static_cast<std::uint32_t>(loop.size())});
+        for (const LoopEdge& edge : loop) {
+          side_faces.corners.push_back({edge.from, edge.line});
+          note_zero_edge(edge.from, edge.to, face, edge.line, below);
+        }
+      }
+      part.convex = region.loops.size() == 1 && is_convex_loop(geometry, region.loops.front());
+      side_faces.faces.push_back(part);
+    }
+  }
+
+  // Border edges: edges on the cut whose two faces went to different sides.
+  void collect_border() {
+    above_zero_map_.reset(zero_edges_above_.size());
+    for (std::uint32_t i = 0; i < zero_edges_above_.size(); ++i) {
+      above_zero_map_.insert(directed_edge_key(zero_edges_above_[i].from, zero_edges_above_[i].to), i);
+    }
+    for (const LoopEdge& edge : zero_edges_below_) {
+      if (above_zero_map_.find(directed_edge_key(edge.to, edge.from)) != IndexMap::absent) out_.border.push_back(edge);
+    }
+  }
+
+  const PlaneSet& set_;
+  const Solid& solid_;
+  PlaneRef cut_;
+  SplitSolid& out_;
+
+  std::vector<AugmentedCorner> augmented_;
+  std::vector<std::uint32_t> loop_start_;
+  std::vector<ZeroPoint> zero_points_;
+  std::vector<LoopEdge> below_edges_, above_edges_;
+  std::vector<Region> regions_;
+  std::vector<LoopEdge> zero_edges_below_, zero_edges_above_;
+  IndexMap above_zero_map_;
+};
+
+}  // namespace
+
+void split_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, SplitSolid& out) {
+  Splitter(set, solid, cut, out).run();
+}
+
+}  // namespace shatter

@@ -1,0 +1,85 @@
+#pragma once
+// Output of the plane kernel: a plane-based solid triangulated and rounded to
+// doubles once, then certified, so that what shatter writes is a valid mesh.
+//
+// 1. Round: every vertex to doubles, by rounded_position (a function of its
+//    definition alone: pieces that share a vertex share its position bit for bit).
+// 2. Triangulate each face polygon over its own vertices, decided on the exact
+//    points: a convex face by a fan from a corner that sees every other edge at a
+//    non-zero angle; any other face by a constrained Delaunay triangulation of its
+//    rounded projection, kept only if every triangle is counter-clockwise in exact
+//    arithmetic (then it triangulates the exact polygon: the boundary winds once
+//    around every inner point and no triangle is negative), else of its exact
+//    points. A face with k corners gets k - 2 triangles plus 2 per hole.
+// 3. Certify the rounded mesh exactly (validate_mesh, self-intersections
+//    included) and repair what rounding broke, as iterated snap rounding does
+//    (Hobby 1999; Halperin & Packer 2002): vertices that rounded onto one point are
+//    merged and the triangles they flatten removed; a fold is retried with another
+//    triangulation of the faces involved; the result is checked again. What cannot
+//    be repaired is reported, never written as valid.
+
+#include <string>
+
+#include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/solid.hpp"
+
+namespace shatter {
+
+struct SolidMeshOptions {
+  /// The input mesh whose triangles the faces' `source` indices name, to
+  /// interpolate per-corner attributes from; nullptr for none. Caps get the cut's
+  /// normal, planar UVs times interior_uv_scale and the plane's tangent for the
+  /// channels this mesh has.
+  const Mesh* attributes = nullptr;
+  double interior_uv_scale = 1.0;
+  /// A valid mesh this one shares most triangles with (the mesh of the solid this
+  /// one was cut from), or nullptr: certification then tests only the pairs of
+  /// triangles not both found in it (validate_mesh_against).
+  const Mesh* trusted = nullptr;
+  /// Certify without the self-intersection check, and accept vertices where the
+  /// surface touches itself (a self-intersecting input was accepted on request:
+  /// only the topology can be promised).
+  bool allow_self_intersections = false;
+};
+
+/// The solid's faces triangulated over its rounded vertices (steps 1 and 2), with
+/// surface ids and attributes; not yet certified. Vertices are the solid's, in its
+/// order. Throws UnsupportedGeometryError if a face cannot be triangulated over
+/// its own vertices (only a non-embedded solid gets there).
+Mesh triangulate_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options = {});
+
+/// Appends the triangles of face `face` of `solid` (over the solid's vertex
+/// indices, counter-clockwise seen from outside) to `out`: a fan from a corner
+/// that makes no flat triangle when the face is convex, else a constrained
+/// triangulation checked in exact arithmetic (see the file comment).
+/// `positions`: the vertices' rounded or approximate positions, which only guide
+/// the first attempt. `attempt` 0 is the cheapest; later attempts (round_solid's
+/// repairs) take the fan whose thinnest triangle is roundest, then the next
+/// corners, and the exact constrained Delaunay triangulation for other faces.
+/// Throws UnsupportedGeometryError as triangulate_solid.
+void triangulate_face(const PlaneSet& set, const Solid& solid, std::uint32_t face, std::span<const Vec3> positions,
+                      std::vector<Triangle>& out, std::size_t attempt = 0);
+
+/// The result of round_solid.
+struct RoundedSolid {
+  Mesh mesh;
+  bool valid = false;       ///< the mesh passes validate_mesh with self-intersections
+  std::size_t merged_vertices = 0;  ///< vertices merged because they rounded onto one point
+  std::size_t retriangulated_faces = 0;  ///< faces whose triangulation was changed to undo a fold
+  std::string defect;       ///< when not valid: validate_mesh's summary of what is left
+};
+
+/// Steps 1 to 3. Preconditions: `solid` sound and embedded (check_solid), over `set`.
+/// Guarantees: `valid` is true exactly when `mesh` passes validate_mesh (closed,
+/// oriented, 2-manifold, positive volume, no zero-area triangle, no unused vertex,
+/// no self-intersection); deterministic.
+RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options = {});
+
+/// The solid's mass properties (unit density), integrated over its faces' fans on
+/// the vertices' floating-point approximations, each within a few ulps of the exact
+/// vertex: volume, centroid and inertia carry a relative error of order 1e-15 times
+/// (surface area x size / volume), the conditioning of the divergence theorem.
+MassProperties solid_mass_properties(const Solid& solid);
+
+}  // namespace shatter

@@ -1,0 +1,457 @@
+#include "shatter/triangulate/solid_mesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <unordered_map>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/index_map.hpp"
+#include "shatter/kernel/projection.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "shatter/triangulate/cap.hpp"
+
+namespace shatter {
+namespace {
+
+// Orientation of (a, b, c) on a face, seen from the face's outward side. Exact.
+Sign outward_orient(const PlaneSet& set, const SolidFace& face, Projection projection, const Solid& solid,
+                    VertexIndex a, VertexIndex b, VertexIndex c) {
+  const Sign s = orient_in_plane(set, projection, solid.defs[a], solid.approx[a], solid.defs[b], solid.approx[b],
+                                 solid.defs[c], solid.approx[c]);
+  return face.reversed ? flip(s) : s;
+}
+
+// A fan of a convex polygon from corner `apex` is a triangulation exactly when no
+// fan triangle is flat: the polygon is convex, so none is clockwise.
+bool fan_from(const PlaneSet& set, const SolidFace& face, Projection projection, const Solid& solid,
+              std::span<const VertexIndex> corners, std::size_t apex, std::vector<Triangle>& out) {
+  const std::size_t k = corners.size();
+  const VertexIndex a = corners[apex];
+  if (k > 3) {
+    for (std::size_t i = 1; i + 1 < k; ++i) {
+      const VertexIndex b = corners[(apex + i) % k], c = corners[(apex + i + 1) % k];
+      if (outward_orient(set, face, projection, solid, a, b, c) != Sign::positive) return false;
+    }
+  }
+  for (std::size_t i = 1; i + 1 < k; ++i) out.push_back({a, corners[(apex + i) % k], corners[(apex + i + 1) % k]});
+  return true;
+}
+
+// The fan apex whose thinnest triangle is the least thin (twice the area over the
+// longest edge squared, on the vertices' approximations): a choice among exactly
+// valid fans, made only to keep slivers out of what rounding must preserve.
+std::size_t roundest_apex(const Solid& solid, std::span<const VertexIndex> corners) {
+  const std::size_t k = corners.size();
+  auto point = [&](VertexIndex v) {
+    const ApproxPoint& a = solid.approx[v];
+    return Vec3{a.x.value / a.w.value, a.y.value / a.w.value, a.z.value / a.w.value};
+  };
+  std::size_t best = 0;
+  double best_quality = -1;
+  for (std::size_t apex = 0; apex < k; ++apex) {
+    const Vec3 a = point(corners[apex]);
+    double quality = INFINITY;
+    for (std::size_t i = 1; i + 1 < k; ++i) {
+      const Vec3 b = point(corners[(apex + i) % k]), c = point(corners[(apex + i + 1) % k]);
+      const double longest = std::max({dot(b - a, b - a), dot(c - b, c - b), dot(a - c, a - c)});
+      quality = std::min(quality, norm(cross(b - a, c - a)) / longest);
+    }
+    if (quality > best_quality) best_quality = quality, best = apex;
+  }
+  return best;
+}
+
+ExactPoint exact_point(const PlaneSet& set, const PointDef& def) {
+  const std::array<mpq_class, 3> c = exact_coordinates(set, def);
+  return ExactPoint(ExactKernel::FT(c[0]), ExactKernel::FT(c[1]), ExactKernel::FT(c[2]));
+}
+
+// Any face that is not one convex loop: a constrained Delaunay triangulation of
+// its loops (triangulate_cap), on the rounded points, kept when every triangle is
+// counter-clockwise in exact arithmetic, else on the exact points.
+void triangulate_region(const PlaneSet& set, const SolidFace& face, Projection projection, const Solid& solid,
+                        std::span<const Vec3> rounded, std::vector<Triangle>& out, bool exact_delaunay) {
+  std::vector<VertexIndex> vertices;  // local -> solid vertex
+  IndexMap local_of(16);
+  std::vector<Edge> border;
+  auto local = [&](VertexIndex v) {
+    const auto candidate = static_cast<VertexIndex>(vertices.size());
+    const VertexIndex found = local_of.insert(v, candidate);
+    if (found == candidate) vertices.push_back(v);
+    return found;
+  };
+  for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+    const SolidLoop& loop = solid.loops[l];
+    for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
+      const VertexIndex u = solid.corners[loop.first_corner + i].vertex;
+      const VertexIndex v = solid.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
+      border.push_back({local(u), local(v)});
+    }
+  }
+  // The projection's plane, as a normal along the dropped axis with the sign of the
+  // face's outward normal there: triangulate_cap then works seen from outside.
+  Plane plane;
+  const double sign = (projection.flipped != face.reversed) ? -1.0 : 1.0;
+  (projection.axis == 0 ? plane.normal.x : projection.axis == 1 ? plane.normal.y : plane.normal.z) = sign;
+  std::vector<Vec3> local_rounded;
+  for (VertexIndex v : vertices) local_rounded.push_back(rounded[v]);
+  std::vector<ExactPoint> exact_points;
+  auto exact_of = [&](VertexIndex v) -> ExactPoint {
+    if (exact_points.empty()) {
+      for (VertexIndex w : vertices) exact_points.push_back(exact_point(set, solid.defs[w]));
+    }
+    return exact_points[v];
+  };
+  // The rounded attempt needs no exact positions: every triangle is checked
+  // exactly below, which also rules out exactly collinear ones.
+  Cap<Vec3> cap;
+  if (!exact_delaunay) cap = triangulate_cap(local_rounded, border, plane, {});
+  auto all_positive = [&](const std::vector<Triangle>& triangles) {
+    return std::all_of(triangles.begin(), triangles.end(), [&](const Triangle& t) {
+      return outward_orient(set, face, projection, solid, vertices[t[0]], vertices[t[1]], vertices[t[2]]) ==
+             Sign::positive;
+    });
+  };
+  if (exact_delaunay || !cap.added_points.empty() || !all_positive(cap.triangles)) {
+    exact_of(0);
+    Cap<ExactPoint> exact = triangulate_cap(std::span<const ExactPoint>(exact_points), border, plane, !exact_delaunay);
+    if (!exact.added_points.empty() || !all_positive(exact.triangles)) {
+      throw UnsupportedGeometryError("cannot triangulate a face over its own vertices (the solid is not embedded)");
+    }
+    cap.triangles = std::move(exact.triangles);
+  }
+  for (const Triangle& t : cap.triangles) out.push_back({vertices[t[0]], vertices[t[1]], vertices[t[2]]});
+}
+
+// Per-corner attributes at a point of input triangle `source`: the corner's own
+// value at one of its vertices, else interpolated with barycentric coordinates
+// of the rounded point projected into the triangle (attributes never decide
+// geometry, so rounded arithmetic serves).
+struct AttributeSource {
+  const Mesh& input;
+  bool normals, uvs, tangents;
+
+  void append(TriangleIndex source, const PointDef& def, const Vec3& p, CornerAttributes& out) const {
+    const Triangle& t = input.triangles[source];
+    double w[3] = {0, 0, 0};
+    int corner = -1;
+    if (def.kind == PointKind::input) {
+      for (int c = 0; c < 3; ++c) {
+        if (t[c] == def.a) corner = c;
+      }
+    }
+    if (corner >= 0) {
+      w[corner] = 1;
+    } else {
+      const Vec3 a = input.positions[t[0]], b = input.positions[t[1]], c = input.positions[t[2]];
+      const Vec3 n = cross(b - a, c - a);
+      const double area = dot(n, n);
+      if (area > 0) {
+        w[0] = dot(cross(b - p, c - p), n) / area;
+        w[1] = dot(cross(c - p, a - p), n) / area;
+        w[2] = dot(cross(a - p, b - p), n) / area;
+      }
+      double total = 0;
+      for (double& x : w) {
+        x = std::clamp(x, 0.0, 1.0);
+        total += x;
+      }
+      if (!(total > 0)) w[0] = total = 1;
+      for (double& x : w) x /= total;
+    }
+    const std::size_t base = 3 * std::size_t{source};
+    if (normals) {
+      Vec3 n;
+      for (int c = 0; c < 3; ++c) n = n + input.corners.normals[base + c] * w[c];
+      out.normals.push_back(corner >= 0 ? input.corners.normals[base + corner] : normalized(n));
+    }
+    if (uvs) {
+      Vec2 uv;
+      for (int c = 0; c < 3; ++c) {
+        uv.x += input.corners.uvs[base + c].x * w[c];
+        uv.y += input.corners.uvs[base + c].y * w[c];
+      }
+      out.uvs.push_back(corner >= 0 ? input.corners.uvs[base + corner] : uv);
+    }
+    if (tangents) {
+      if (corner >= 0) {
+        out.tangents.push_back(input.corners.tangents[base + corner]);
+      } else {
+        Vec3 d;
+        for (int c = 0; c < 3; ++c) {
+          const Vec4& g = input.corners.tangents[base + c];
+          d = d + Vec3{g.x, g.y, g.z} * w[c];
+        }
+        d = normalized(d);
+        out.tangents.push_back({d.x, d.y, d.z, input.corners.tangents[base].w});
+      }
+    }
+  }
+};
+
+struct PositionHash {
+  std::size_t operator()(const Vec3& p) const {
+    auto bits = [](double x) {
+      std::uint64_t b;
+      x = x == 0 ? 0.0 : x;  // -0.0 and +0.0 are one position
+      std::memcpy(&b, &x, sizeof b);
+      return b;
+    };
+    return bits(p.x) * 0x9E3779B97F4A7C15ull ^ bits(p.y) * 0xC2B2AE3D27D4EB4Full ^ bits(p.z);
+  }
+};
+struct PositionEqual {
+  bool operator()(const Vec3& a, const Vec3& b) const { return a.x == b.x && a.y == b.y && a.z == b.z; }
+};
+
+// A face whose boundary lost corners to merging: its loops over the merged
+// vertices (each standing for the point it was placed at: the input point it
+// snapped to, or its own), triangulated by the exact constrained Delaunay
+// triangulation of their projection. Snapped points are off the face's plane by
+// a hair, so the result is a triangulation of the projected polygon only; the
+// certification that follows vouches for it in 3D.
+bool triangulate_merged_face(const PlaneSet& set, const SolidFace& face,
+                             std::span<const std::vector<VertexIndex>> loops, std::span<const PointDef> placed,
+                             Projection projection, std::vector<Triangle>& out) {
+  std::vector<VertexIndex> vertices;
+  IndexMap local_of(16);
+  std::vector<Edge> border;
+  auto local = [&](VertexIndex v) {
+    const auto candidate = static_cast<VertexIndex>(vertices.size());
+    const VertexIndex found = local_of.insert(v, candidate);
+    if (found == candidate) vertices.push_back(v);
+    return found;
+  };
+  for (const auto& loop : loops) {
+    for (std::size_t i = 0; i < loop.size(); ++i) border.push_back({local(loop[i]), local(loop[(i + 1) % loop.size()])});
+  }
+  Plane plane;
+  const double sign = (projection.flipped != face.reversed) ? -1.0 : 1.0;
+  (projection.axis == 0 ? plane.normal.x : projection.axis == 1 ? plane.normal.y : plane.normal.z) = sign;
+  std::vector<ExactPoint> points;
+  for (VertexIndex v : vertices) points.push_back(exact_point(set, placed[v]));
+  const Cap<ExactPoint> cap = triangulate_cap(std::span<const ExactPoint>(points), border, plane, false);
+  if (!cap.added_points.empty() || cap.triangles.empty()) return false;
+  for (const Triangle& t : cap.triangles) out.push_back({vertices[t[0]], vertices[t[1]], vertices[t[2]]});
+  return true;
+}
+
+// Steps 1 and 2 (see solid_mesh.hpp): positions, vertices merged where they
+// rounded onto one point, faces triangulated. Returns false when a face could not
+// be triangulated after merging (then no valid mesh comes from this attempt).
+bool triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options, std::size_t attempt,
+                 Mesh& mesh, std::size_t& merged) {
+  const std::size_t n = solid.defs.size();
+  std::vector<Vec3> positions(n);
+  std::vector<PointDef> placed(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    const OutputPoint point = output_point(set, solid.defs[v], solid.approx[v]);
+    positions[v] = point.position;
+    placed[v] = point.placed;
+  }
+  // One representative per position.
+  std::vector<VertexIndex> representative(n);
+  merged = 0;
+  {
+    std::unordered_map<Vec3, VertexIndex, PositionHash, PositionEqual> first_at;
+    first_at.reserve(n);
+    for (VertexIndex v = 0; v < n; ++v) {
+      const auto [it, inserted] = first_at.emplace(positions[v], v);
+      representative[v] = it->second;
+      merged += inserted ? 0 : 1;
+    }
+  }
+  const Mesh* input = options.attributes;
+  const bool normals = input && input->corners.has_normals();
+  const bool uvs = input && input->corners.has_uvs();
+  const bool tangents = input && input->corners.has_tangents();
+  std::vector<Triangle> face_triangles;
+  std::vector<std::vector<VertexIndex>> loops;
+  std::vector<VertexIndex> out_index(n, no_index);
+  mesh = Mesh{};
+  for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+    const SolidFace& face = solid.faces[f];
+    face_triangles.clear();
+    bool changed = false;
+    if (merged > 0) {
+      loops.clear();
+      for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+        const SolidLoop& loop = solid.loops[l];
+        std::vector<VertexIndex> corners;
+        for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
+          const VertexIndex v = representative[solid.corners[loop.first_corner + i].vertex];
+          changed |= v != solid.corners[loop.first_corner + i].vertex;
+          if (corners.empty() || corners.back() != v) corners.push_back(v);
+        }
+        while (corners.size() > 1 && corners.back() == corners.front()) corners.pop_back();
+        if (corners.size() >= 3) loops.push_back(std::move(corners));
+      }
+    }
+    if (!changed) {
+      triangulate_face(set, solid, f, positions, face_triangles, attempt);
+    } else if (!loops.empty()) {
+      if (!triangulate_merged_face(set, face, loops, placed, projection_of(set, face.plane), face_triangles)) {
+        return false;
+      }
+    }
+    const bool cap = face.surface != original_surface;
+    PlaneBasis basis(Plane{});
+    Vec3 cap_normal;
+    if (cap && (normals || uvs || tangents)) {
+      const ApproxPlane a = set.approx(face.plane);
+      basis = PlaneBasis(Plane{{a.a.value, a.b.value, a.c.value}, a.d.value});
+      cap_normal = face.reversed ? -basis.normal : basis.normal;
+    }
+    for (Triangle t : face_triangles) {
+      if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) continue;
+      for (VertexIndex& v : t) {
+        if (out_index[v] == no_index) {
+          out_index[v] = static_cast<VertexIndex>(mesh.positions.size());
+          mesh.positions.push_back(positions[v]);
+        }
+      }
+      mesh.triangles.push_back({out_index[t[0]], out_index[t[1]], out_index[t[2]]});
+      mesh.surfaces.push_back(face.surface);
+      for (VertexIndex v : t) {
+        if (!cap) {
+          if (input && (normals || uvs || tangents)) {
+            AttributeSource{*input, normals, uvs, tangents}.append(face.source, solid.defs[v], positions[v],
+                                                                   mesh.corners);
+          }
+          continue;
+        }
+        const Vec3 p = positions[v];
+        if (normals) mesh.corners.normals.push_back(cap_normal);
+        if (uvs) {
+          mesh.corners.uvs.push_back(
+              {dot(p, basis.u) * options.interior_uv_scale, dot(p, basis.v) * options.interior_uv_scale});
+        }
+        if (tangents) mesh.corners.tangents.push_back({basis.u.x, basis.u.y, basis.u.z, face.reversed ? -1.0 : 1.0});
+      }
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+void triangulate_face(const PlaneSet& set, const Solid& solid, std::uint32_t face_index,
+                      std::span<const Vec3> positions, std::vector<Triangle>& out, std::size_t attempt) {
+  const SolidFace& face = solid.faces[face_index];
+  const Projection projection = projection_of(set, face.plane);
+  const std::size_t first = out.size();
+  if (face.loop_count == 1 && face.convex) {
+    thread_local std::vector<VertexIndex> corners;
+    const SolidLoop& loop = solid.loops[face.first_loop];
+    corners.clear();
+    for (std::uint32_t i = 0; i < loop.corner_count; ++i) corners.push_back(solid.corners[loop.first_corner + i].vertex);
+    // Attempt 0 takes the first corner whose fan has no flat triangle; later ones
+    // start from the roundest fan, then its neighbours.
+    const std::size_t start = attempt == 0 ? 0 : roundest_apex(solid, corners) + (attempt - 1);
+    for (std::size_t step = 0; step < corners.size(); ++step) {
+      out.resize(first);
+      if (fan_from(set, face, projection, solid, corners, (start + step) % corners.size(), out)) return;
+    }
+    out.resize(first);
+  }
+  triangulate_region(set, face, projection, solid, positions, out, attempt > 0);
+}
+
+namespace {
+
+Vec3 vertex_average(const Mesh& mesh) {
+  Vec3 sum;
+  for (const Vec3& p : mesh.positions) sum = sum + p;
+  return sum * (1.0 / static_cast<double>(mesh.positions.size()));
+}
+
+}  // namespace
+
+Mesh triangulate_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options) {
+  Mesh mesh;
+  std::size_t merged = 0;
+  if (!triangulate(set, solid, options, 0, mesh, merged)) {
+    throw UnsupportedGeometryError("cannot triangulate a face whose corners rounded together");
+  }
+  return mesh;
+}
+
+RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options) {
+  RoundedSolid result;
+  ValidationReport first_report;
+  // Attempt 0 is the cheapest triangulation. A fold that rounding made comes from
+  // a sliver triangle (a corner nearly on the line of its neighbours, where two
+  // input faces are nearly coplanar); later attempts take the roundest fans and
+  // the exact Delaunay triangulation, which keep such corners out of slivers.
+  constexpr std::size_t attempts = 4;
+  for (std::size_t attempt = 0; attempt < attempts; ++attempt) {
+    Mesh mesh;
+    std::size_t merged = 0;
+    ValidationReport report;
+    if (!triangulate(set, solid, options, attempt, mesh, merged)) {
+      report.defects.push_back({DefectKind::zero_area_triangle, 1, "a face whose corners rounded together"});
+    } else if (solid.convex && merged == 0 && certify_star_shaped(mesh, vertex_average(mesh))) {
+      // A convex solid's rounding certified in O(T) exact orientations.
+      result.mesh = std::move(mesh);
+      result.merged_vertices = 0;
+      result.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
+      result.valid = true;
+      return result;
+    } else {
+      ValidationOptions validation;
+      validation.check_self_intersections = !options.allow_self_intersections;
+      report = validation.check_self_intersections ? validate_mesh_against(mesh, options.trusted)
+                                                   : validate_mesh(mesh, validation);
+      if (options.allow_self_intersections) {
+        // A surface allowed to cross itself may touch itself at a vertex.
+        std::erase_if(report.defects, [](const Defect& d) { return d.kind == DefectKind::non_manifold_vertex; });
+      }
+      if (mesh.triangles.empty()) {
+        // Every vertex rounded onto a few points and the whole piece flattened
+        // away: no defect is left to name, but nothing is left either.
+        report.defects.push_back({DefectKind::zero_area_triangle, solid.faces.size(),
+                                  "the whole piece (it is thinner than the rounding of its coordinates)"});
+      }
+    }
+    if (attempt == 0) {
+      first_report = report;
+      result.mesh = mesh;
+      result.merged_vertices = merged;
+    }
+    if (report.valid()) {
+      result.mesh = std::move(mesh);
+      result.merged_vertices = merged;
+      result.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
+      result.valid = true;
+      return result;
+    }
+  }
+  result.defect = first_report.summary();
+  return result;
+}
+
+MassProperties solid_mass_properties(const Solid& solid) {
+  thread_local std::vector<Vec3> points;
+  thread_local std::vector<Triangle> fans;
+  points.clear();
+  fans.clear();
+  for (const ApproxPoint& a : solid.approx) {
+    points.push_back({a.x.value / a.w.value, a.y.value / a.w.value, a.z.value / a.w.value});
+  }
+  for (const SolidFace& face : solid.faces) {
+    const VertexIndex centre = solid.corners[solid.loops[face.first_loop].first_corner].vertex;
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+      const SolidLoop& loop = solid.loops[l];
+      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
+        const VertexIndex a = solid.corners[loop.first_corner + i].vertex;
+        const VertexIndex b = solid.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
+        if (a != centre && b != centre) fans.push_back({centre, a, b});
+      }
+    }
+  }
+  return mass_properties(points, fans);
+}
+
+}  // namespace shatter
