@@ -20,6 +20,9 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/cut.hpp"
+#include "shatter/meshtree/cut_solid.hpp"
+#include "shatter/meshtree/plane_input.hpp"
+#include "shatter/triangulate/solid_mesh.hpp"
 #include "repair_option.hpp"
 #include "tree_commands.hpp"
 
@@ -109,7 +112,7 @@ int run_validate(const ValidateArgs& args) {
 struct SliceArgs {
   std::string mesh;
   std::string plane;
-  std::string kernel = "fast";
+  std::string kernel = "plane";
   bool allow_self_intersections = false;
   std::string out;
   std::string format = "off";
@@ -214,9 +217,11 @@ int run_slice(const SliceArgs& args) {
   bool plane_missed = false;
   CapMethod cap_method = CapMethod::none;
   std::size_t cap_loops = 0, cap_triangles = 0;
+  std::string cap_method_text;
   auto take = [&](auto&& result) {
     plane_missed = result.plane_missed;
     cap_method = result.cap_method;
+    cap_method_text = cap_method_name(cap_method);
     cap_loops = result.cap_loops;
     cap_triangles = result.cap_triangles;
     if (plane_missed) {
@@ -226,7 +231,42 @@ int run_slice(const SliceArgs& args) {
       pieces = pieces_of(result);
     }
   };
-  if (args.kernel == "fast") {
+  if (args.kernel == "plane") {
+    // Exact cut, then every piece rounded once and certified: a piece that cannot
+    // be written as a valid mesh fails the command before anything is written.
+    const PlaneInput input = prepare_plane_input(mesh);
+    const std::vector<Plane> cuts{plane};
+    const PlaneSet set = input.geometry.plane_set(cuts);
+    const SolidCut result = cut_solid(set, input.solid, PlaneRef::cut(0), options.cap_surface, input.shells);
+    plane_missed = result.plane_missed;
+    cap_method_text = "polygon";
+    cap_loops = result.cap_loops;
+    if (plane_missed) {
+      Sign s = Sign::zero;
+      for (std::size_t v = 0; v < input.solid.defs.size() && s == Sign::zero; ++v) {
+        s = side(set, PlaneRef::cut(0), input.solid.defs[v], input.solid.approx[v]);
+      }
+      pieces.push_back({s == Sign::positive ? "above" : "below", mesh});
+    }
+    SolidMeshOptions meshing;
+    meshing.attributes = &input.mesh;
+    meshing.interior_uv_scale = args.interior_uv_scale;
+    meshing.allow_self_intersections = args.allow_self_intersections;
+    for (const auto* side_solids : {&result.below, &result.above}) {
+      const std::string side_name = side_solids == &result.below ? "below" : "above";
+      for (std::size_t i = 0; i < side_solids->size(); ++i) {
+        RoundedSolid rounded = round_solid(set, (*side_solids)[i], meshing);
+        if (!rounded.valid) {
+          throw RefusedInput("piece " + side_name + "-" + std::to_string(i) +
+                             " cannot be rounded to doubles as a valid mesh: " + rounded.defect);
+        }
+        for (SurfaceId surface : rounded.mesh.surfaces) {
+          if (side_solids == &result.below && surface == options.cap_surface) ++cap_triangles;
+        }
+        pieces.push_back({side_name, std::move(rounded.mesh)});
+      }
+    }
+  } else if (args.kernel == "fast") {
     take(cut_mesh(mesh, plane, options));
   } else {
     take(cut_mesh(to_exact(mesh), plane, options));
@@ -256,7 +296,7 @@ int run_slice(const SliceArgs& args) {
              {"kernel", args.kernel},
              {"plane", {plane.normal.x, plane.normal.y, plane.normal.z, plane.offset}},
              {"plane_missed", plane_missed},
-             {"cap", {{"method", cap_method_name(cap_method)}, {"loops", cap_loops}, {"triangles", cap_triangles}}},
+             {"cap", {{"method", cap_method_text}, {"loops", cap_loops}, {"triangles", cap_triangles}}},
              {"input_volume", signed_volume(mesh)},
              {"total_volume", total_volume},
              {"invalid_embeddings", invalid_embeddings},
@@ -329,10 +369,11 @@ int main(int argc, char** argv) {
   slice->add_option("--plane", slice_args.plane, "The plane n.x + d = 0 as nx,ny,nz,d (n need not be unit length)")
       ->required();
   slice->add_option("--kernel", slice_args.kernel,
-                    "fast: double coordinates, exact predicates, rounded intersection points (topology always "
-                    "valid; pieces whose rounded embedding is not are counted). exact: exact intersection points; "
-                    "volumes add up exactly; output rounded once to doubles")
-      ->check(CLI::IsMember({"fast", "exact"}))
+                    "plane (default): vertices defined as meets of planes, never constructed; the cut is exact and "
+                    "each piece is rounded once and certified valid (a piece that cannot be written valid fails "
+                    "with exit 3). exact: CGAL exact rationals, rounded once to doubles. fast: rounded intersection "
+                    "points (topology always valid; pieces whose rounded embedding is not are counted)")
+      ->check(CLI::IsMember({"plane", "exact", "fast"}))
       ->capture_default_str();
   slice->add_flag("--allow-self-intersections", slice_args.allow_self_intersections,
                   "Cut a self-intersecting (or self-touching) mesh instead of refusing it; pieces are closed and "

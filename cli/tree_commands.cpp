@@ -204,8 +204,8 @@ BuildOptions build_options_of(const FractureArgs& args) {
       enum_named(args.strategy, {Strategy::thesis, Strategy::balanced, Strategy::axis}, &strategy_name);
   if (!strategy) throw CommandUsageError("--strategy must be thesis, balanced or axis, got '" + args.strategy + "'");
   options.strategy = *strategy;
-  const auto kernel = enum_named(args.kernel, {KernelKind::fast, KernelKind::exact}, &kernel_name);
-  if (!kernel) throw CommandUsageError("--kernel must be fast or exact, got '" + args.kernel + "'");
+  const auto kernel = enum_named(args.kernel, {KernelKind::plane, KernelKind::exact, KernelKind::fast}, &kernel_name);
+  if (!kernel) throw CommandUsageError("--kernel must be plane, exact or fast, got '" + args.kernel + "'");
   options.kernel = *kernel;
   options.interior_uv_scale = args.interior_uv_scale;
   options.allow_self_intersections = args.allow_self_intersections;
@@ -426,10 +426,10 @@ CLI::App* add_fracture_command(CLI::App& app, FractureArgs& args) {
       ->check(CLI::IsMember({"thesis", "balanced", "axis"}))
       ->capture_default_str();
   command->add_option("--kernel", args.kernel,
-                      "fast: double coordinates, exact predicates, rounded intersection points (topology always "
-                      "valid). exact: exact intersection points, volumes add up exactly; stored rounded once to "
-                      "doubles. Slower")
-      ->check(CLI::IsMember({"fast", "exact"}))
+                      "plane (default): vertices defined as meets of planes, exact at any depth; every node is "
+                      "rounded once and certified valid. exact: CGAL exact rationals, volumes add up exactly; "
+                      "stored rounded once to doubles. fast: rounded intersection points (topology always valid)")
+      ->check(CLI::IsMember({"plane", "exact", "fast"}))
       ->capture_default_str();
   command->add_option("--threads", args.threads,
                       "Worker threads; 0 uses every hardware thread. Changes the speed only, never the output")

@@ -28,7 +28,7 @@ struct FractureArgs {
   std::uint32_t fragments = 0;
   std::uint64_t seed = 1;
   std::string strategy = "thesis";
-  std::string kernel = "fast";
+  std::string kernel = "plane";
   /// 0: one worker per hardware thread. Never changes the tree.
   unsigned threads = 0;
   double interior_uv_scale = 1.0;

@@ -1,14 +1,17 @@
 // Properties of the .shatter file: the bytes are exactly the layout file.hpp
 // documents; trees round-trip field by field and bit for bit (hand-built ones with
-// every kind of special double, and built ones); and every truncation, every
-// single-byte change and a catalogue of hostile files are refused with
-// CorruptFileError naming the defect, never a crash or an allocation beyond a
-// small multiple of the input (checked by counting every operator new).
+// every kind of special double, and built ones of every kernel, the plane
+// kernel's exact representation and recomputed caches included); version 1 files
+// still read; and every truncation, every single-byte change and a catalogue of
+// hostile files are refused with CorruptFileError naming the defect, never a
+// crash or an allocation beyond a small multiple of the input (checked by
+// counting every operator new).
 
 #include <catch2/catch.hpp>
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <bit>
@@ -112,6 +115,16 @@ bool same(double a, double b) { return bits(a) == bits(b); }
 bool same(Vec2 a, Vec2 b) { return same(a.x, b.x) && same(a.y, b.y); }
 bool same(Vec3 a, Vec3 b) { return same(a.x, b.x) && same(a.y, b.y) && same(a.z, b.z); }
 bool same(Vec4 a, Vec4 b) { return same(a.x, b.x) && same(a.y, b.y) && same(a.z, b.z) && same(a.w, b.w); }
+bool same(const Plane& a, const Plane& b) { return same(a.normal, b.normal) && same(a.offset, b.offset); }
+bool same(Estimate a, Estimate b) { return same(a.value, b.value) && same(a.error, b.error); }
+bool same(const ApproxPoint& a, const ApproxPoint& b) { return same(a.x, b.x) && same(a.y, b.y) && same(a.z, b.z) && same(a.w, b.w); }
+bool same(const ApproxPlane& a, const ApproxPlane& b) { return same(a.a, b.a) && same(a.b, b.b) && same(a.c, b.c) && same(a.d, b.d); }
+bool same(const SolidFace& a, const SolidFace& b) {
+  return a.plane == b.plane && a.reversed == b.reversed && a.convex == b.convex && a.surface == b.surface && a.source == b.source &&
+         a.first_loop == b.first_loop && a.loop_count == b.loop_count;
+}
+bool same(const SolidLoop& a, const SolidLoop& b) { return a.first_corner == b.first_corner && a.corner_count == b.corner_count; }
+bool same(const SolidCorner& a, const SolidCorner& b) { return a.vertex == b.vertex && a.line == b.line; }
 
 template <class T>
 bool same_all(const std::vector<T>& a, const std::vector<T>& b) {
@@ -129,6 +142,16 @@ std::string mesh_difference(const Mesh& a, const Mesh& b) {
   if (!same_all(a.corners.normals, b.corners.normals)) return "normals";
   if (!same_all(a.corners.uvs, b.corners.uvs)) return "uvs";
   if (!same_all(a.corners.tangents, b.corners.tangents)) return "tangents";
+  return {};
+}
+
+std::string solid_difference(const Solid& a, const Solid& b) {
+  if (a.defs != b.defs) return "defs";
+  if (!same_all(a.approx, b.approx)) return "approx";
+  if (!same_all(a.faces, b.faces)) return "faces";
+  if (!same_all(a.loops, b.loops)) return "loops";
+  if (!same_all(a.corners, b.corners)) return "corners";
+  if (a.convex != b.convex) return "convex";
   return {};
 }
 
@@ -157,7 +180,13 @@ std::string tree_difference(const MeshTree& a, const MeshTree& b) {
         na.leaf_count != nb.leaf_count || na.seed != nb.seed) {
       return node + "scalars";
     }
+    if (na.convex != nb.convex) return node + "convex";
+    if (const std::string d = solid_difference(na.solid, nb.solid); !d.empty()) return node + "solid " + d;
   }
+  if (!same_all(a.geometry.points, b.geometry.points)) return "geometry points";
+  if (a.geometry.planes != b.geometry.planes) return "geometry planes";
+  if (!same_all(a.geometry.plane_approx, b.geometry.plane_approx)) return "geometry plane_approx";
+  if (!same_all(a.cut_planes, b.cut_planes)) return "cut_planes";
   if (a.leaf_nodes != b.leaf_nodes) return "leaf_nodes";
   if (a.bonds.size() != b.bonds.size()) return "bond count";
   for (std::size_t i = 0; i < a.bonds.size(); ++i) {
@@ -168,6 +197,15 @@ std::string tree_difference(const MeshTree& a, const MeshTree& b) {
     }
   }
   return {};
+}
+
+/// "equal", or where two files first differ (printing the files themselves
+/// would flood the report with binary).
+std::string byte_difference(std::string_view a, std::string_view b) {
+  const auto [in_a, in_b] = std::mismatch(a.begin(), a.end(), b.begin(), b.end());
+  if (in_a == a.end() && in_b == b.end()) return "equal";
+  return "first difference at byte " + std::to_string(in_a - a.begin()) + " (sizes " + std::to_string(a.size()) + " and " +
+         std::to_string(b.size()) + ")";
 }
 
 /// decode(encode(tree)) equals tree and encodes to the same bytes.
@@ -299,6 +337,19 @@ MeshTree deep_tree() {
   return tree;
 }
 
+/// A plane-kernel tree (the default kernel): the unit cube in 4 fragments. Its
+/// exact representation fills GEOM and SOLD; built once.
+const MeshTree& small_plane_tree() {
+  static const MeshTree tree = [] {
+    BuildOptions options;
+    options.fragments = 4;
+    options.seed = 7;
+    options.threads = 1;
+    return build_mesh_tree(test::unit_cube(), options);
+  }();
+  return tree;
+}
+
 // ---------------------------------------------------------------------------
 // The layout as file.hpp documents it, written independently of the library:
 // the test of the documentation, and the way to craft files with correct
@@ -337,7 +388,7 @@ struct Bytes {
 
 const std::string magic_bytes("\x89SHT\r\n\x1a\n", 8);
 
-std::string file_header(std::uint32_t version = 1) { return Bytes{}.text(magic_bytes).u32(version).data; }
+std::string file_header(std::uint32_t version = 2) { return Bytes{}.text(magic_bytes).u32(version).data; }
 
 std::string section(std::string_view tag, std::string_view payload) {
   return Bytes{}.text(tag).u64(payload.size()).u32(reference_crc32(payload)).text(payload).data;
@@ -394,19 +445,88 @@ std::string bonds_payload(const std::vector<Bond>& bonds) {
   return out.data;
 }
 
-/// The documented file of `tree`, whatever its content: no validation.
-std::string reference_file(const MeshTree& tree) {
-  return file_header() + section("OPTS", options_payload(tree.options)) + section("NODE", nodes_payload(tree.nodes)) +
-         section("MESH", meshes_payload(tree.nodes, false)) + section("HULL", meshes_payload(tree.nodes, true)) +
-         section("BOND", bonds_payload(tree.bonds)) + section("END ", "");
+std::string geometry_payload(const InputGeometry& g) {
+  Bytes out;
+  out.u32(static_cast<std::uint32_t>(g.points.size())).u32(static_cast<std::uint32_t>(g.planes.size()));
+  for (const Vec3& p : g.points) out.vec3(p);
+  for (const auto& plane : g.planes) out.u32(plane[0]).u32(plane[1]).u32(plane[2]);
+  return out.data;
 }
 
-/// A file with the given NODE payload and otherwise the sections of `tree`.
-std::string file_with_nodes_payload(const MeshTree& tree, const std::string& nodes) {
-  return file_header() + section("OPTS", options_payload(tree.options)) + section("NODE", nodes) +
-         section("MESH", meshes_payload(tree.nodes, false)) + section("HULL", meshes_payload(tree.nodes, true)) +
-         section("BOND", bonds_payload(tree.bonds)) + section("END ", "");
+/// One SOLD record. The fields a vertex's kind does not use are written as they
+/// are (zero in a valid tree), so that invalid trees reach the reader.
+std::string solid_record(const MeshTreeNode& node) {
+  const Solid& s = node.solid;
+  Bytes out;
+  out.u8(static_cast<std::uint8_t>((node.convex ? 1 : 0) | (s.convex ? 2 : 0)));
+  out.u32(static_cast<std::uint32_t>(s.defs.size())).u32(static_cast<std::uint32_t>(s.faces.size()));
+  out.u32(static_cast<std::uint32_t>(s.loops.size())).u32(static_cast<std::uint32_t>(s.corners.size()));
+  for (const PointDef& d : s.defs) {
+    out.u8(static_cast<std::uint8_t>(d.kind));
+    if (d.kind == PointKind::three_planes) {
+      out.u32(d.planes[0].bits).u32(d.planes[1].bits).u32(d.planes[2].bits);
+    } else {
+      out.u32(d.a).u32(d.b).u32(d.planes[0].bits);
+    }
+  }
+  for (const SolidFace& f : s.faces) {
+    out.u32(f.plane.bits).u8(static_cast<std::uint8_t>((f.reversed ? 1 : 0) | (f.convex ? 2 : 0))).u32(f.surface).u32(f.source).u32(f.loop_count);
+  }
+  for (const SolidLoop& l : s.loops) out.u32(l.corner_count);
+  // A segment is written when p is a point; (none, q) drops q, which the
+  // invalid-tree cases below rely on only through the encoder.
+  for (const SolidCorner& c : s.corners) {
+    out.u32(c.vertex).u32(c.line.other.bits).u8(c.line.p != no_index ? 1 : 0);
+    if (c.line.p != no_index) out.u32(c.line.p).u32(c.line.q);
+  }
+  return out.data;
 }
+
+std::string solids_payload(const MeshTree& tree) {
+  if (tree.geometry.points.empty()) return Bytes{}.u32(0).data;
+  std::string out = Bytes{}.u32(static_cast<std::uint32_t>(tree.nodes.size())).data;
+  for (const MeshTreeNode& n : tree.nodes) out += solid_record(n);
+  return out;
+}
+
+/// The payloads of `tree`'s sections by tag, in the order encode_shatter writes
+/// them (version 2), each replaceable.
+struct Payloads {
+  std::vector<std::pair<std::string, std::string>> parts;
+
+  explicit Payloads(const MeshTree& tree)
+      : parts{{"OPTS", options_payload(tree.options)},      {"NODE", nodes_payload(tree.nodes)},
+              {"MESH", meshes_payload(tree.nodes, false)}, {"HULL", meshes_payload(tree.nodes, true)},
+              {"BOND", bonds_payload(tree.bonds)},         {"GEOM", geometry_payload(tree.geometry)},
+              {"SOLD", solids_payload(tree)}} {}
+  Payloads& with(std::string_view tag, std::string payload) {
+    for (auto& [t, p] : parts) {
+      if (t == tag) p = std::move(payload);
+    }
+    return *this;
+  }
+  std::string& operator[](std::string_view tag) {
+    for (auto& [t, p] : parts) {
+      if (t == tag) return p;
+    }
+    throw std::logic_error("no such section");
+  }
+  /// The file; version 1 leaves out GEOM and SOLD.
+  std::string file(std::uint32_t version = 2) const {
+    std::string bytes = file_header(version);
+    for (const auto& [tag, payload] : parts) {
+      if (version == 1 && (tag == "GEOM" || tag == "SOLD")) continue;
+      bytes += section(tag, payload);
+    }
+    return bytes + section("END ", "");
+  }
+};
+
+/// The documented file of `tree`, whatever its content: no validation.
+std::string reference_file(const MeshTree& tree, std::uint32_t version = 2) { return Payloads(tree).file(version); }
+
+/// A file with the given NODE payload and otherwise the sections of `tree`.
+std::string file_with_nodes_payload(const MeshTree& tree, const std::string& nodes) { return Payloads(tree).with("NODE", nodes).file(); }
 
 /// Refused, with a message holding `expected`.
 void check_refused(const std::string& bytes, const std::string& expected) {
@@ -436,7 +556,7 @@ Mesh with_attributes(Mesh mesh) {
 // ---------------------------------------------------------------------------
 
 TEST_CASE("encode_shatter writes exactly the layout file.hpp documents", "[shatter_file]") {
-  for (const MeshTree& tree : {two_leaf_tree(), deep_tree()}) {
+  for (const MeshTree& tree : {two_leaf_tree(), deep_tree(), small_plane_tree()}) {
     const std::string bytes = encode_shatter(tree);
     CHECK(bytes == reference_file(tree));
     CHECK(bytes.substr(0, 12) == file_header());
@@ -471,7 +591,7 @@ TEST_CASE("built trees round-trip exactly", "[shatter_file][build]") {
                                                {"ellipsoid with attributes", with_attributes(test::ellipsoid({0, 0, 0}, {1, 1.5, 2}, 12, 8))}};
   for (const test::NamedMesh& input : meshes) {
     for (const Strategy strategy : {Strategy::thesis, Strategy::balanced, Strategy::axis}) {
-      for (const KernelKind kernel : {KernelKind::fast, KernelKind::exact}) {
+      for (const KernelKind kernel : {KernelKind::fast, KernelKind::exact, KernelKind::plane}) {
         for (const std::uint32_t fragments : {2u, 3u, 64u}) {
           // Keep the suite fast (building dominates): N = 64 on the box with every
           // strategy and kernel, on the other meshes with one combination.
@@ -498,18 +618,18 @@ TEST_CASE("built trees round-trip exactly", "[shatter_file][build]") {
 }
 
 TEST_CASE("every truncation of a file is refused as truncated", "[shatter_file][damage]") {
-  const std::string bytes = encode_shatter(two_leaf_tree());
-  for (std::size_t length = 0; length < bytes.size(); ++length) {
-    const std::optional<std::string> message = refusal(std::string_view(bytes).substr(0, length));
-    INFO("prefix of " << length << " of " << bytes.size() << " bytes");
-    REQUIRE(message.has_value());
-    CHECK(message->find("truncated") != std::string::npos);
+  for (const std::string& bytes : {encode_shatter(two_leaf_tree()), encode_shatter(small_plane_tree())}) {
+    for (std::size_t length = 0; length < bytes.size(); ++length) {
+      const std::optional<std::string> message = refusal(std::string_view(bytes).substr(0, length));
+      INFO("prefix of " << length << " of " << bytes.size() << " bytes");
+      REQUIRE(message.has_value());
+      CHECK(message->find("truncated") != std::string::npos);
+    }
   }
 }
 
 TEST_CASE("every single-byte change is refused", "[shatter_file][damage]") {
-  SECTION("every byte of a small file, three ways") {
-    const std::string bytes = encode_shatter(two_leaf_tree());
+  const auto every_byte_three_ways = [](const std::string& bytes) {
     std::vector<std::string> accepted;  // collected rather than asserted one by one, to stay fast
     for (std::size_t position = 0; position < bytes.size(); ++position) {
       for (const int change : {0x01, 0x20, 0xFF}) {
@@ -518,9 +638,12 @@ TEST_CASE("every single-byte change is refused", "[shatter_file][damage]") {
         if (!refusal(damaged)) accepted.push_back("byte " + std::to_string(position) + " xor " + std::to_string(change));
       }
     }
-    INFO(accepted.size() << " changes accepted, the first: " << (accepted.empty() ? std::string("none") : accepted.front()));
+    INFO(bytes.size() << "-byte file: " << accepted.size() << " changes accepted, the first: "
+                      << (accepted.empty() ? std::string("none") : accepted.front()));
     CHECK(accepted.empty());
-  }
+  };
+  SECTION("every byte of a small file, three ways") { every_byte_three_ways(encode_shatter(two_leaf_tree())); }
+  SECTION("every byte of a small plane-kernel file, three ways") { every_byte_three_ways(encode_shatter(small_plane_tree())); }
   SECTION("2000 random positions in built trees' files") {
     std::vector<std::string> files = {encode_shatter(deep_tree())};
     for (const auto& [mesh, strategy] : {std::pair{test::torus(2, 0.6, 16, 10), Strategy::thesis},
@@ -552,14 +675,14 @@ TEST_CASE("random damage behind correct checksums is refused or decodes to a val
     std::string tag, payload;
   };
   test::Random random(77);
-  for (const MeshTree& tree : {two_leaf_tree(), deep_tree()}) {
-    const std::vector<Part> parts = {{"OPTS", options_payload(tree.options)},      {"NODE", nodes_payload(tree.nodes)},
-                                     {"MESH", meshes_payload(tree.nodes, false)}, {"HULL", meshes_payload(tree.nodes, true)},
-                                     {"BOND", bonds_payload(tree.bonds)}};
+  for (const MeshTree& tree : {two_leaf_tree(), deep_tree(), small_plane_tree()}) {
+    std::vector<Part> parts;
+    for (const auto& [tag, payload] : Payloads(tree).parts) parts.push_back({tag, payload});
     int refused = 0, accepted = 0;
     for (int sample = 0; sample < 1500; ++sample) {
       std::vector<Part> damaged = parts;
       Part& victim = damaged[random.index(damaged.size())];
+      const std::string victim_tag = victim.tag;
       const std::size_t changes = 1 + random.index(4);
       for (std::size_t c = 0; c < changes; ++c) {
         // Small values are the interesting ones in counts and indices.
@@ -584,7 +707,8 @@ TEST_CASE("random damage behind correct checksums is refused or decodes to a val
       ++accepted;
       std::string again;
       REQUIRE_NOTHROW(again = encode_shatter(*decoded));
-      REQUIRE(again == bytes);
+      INFO("damaged " << victim_tag);
+      REQUIRE(byte_difference(again, bytes) == "equal");
     }
     CHECK(refused > 0);
     CHECK(accepted > 0);  // changes to doubles and seeds are not damage a reader can see
@@ -617,6 +741,8 @@ TEST_CASE("hostile section tables are refused", "[shatter_file][hostile]") {
   const std::string opts = section("OPTS", options_payload(tree.options)), nodes = section("NODE", nodes_payload(tree.nodes)),
                     meshes = section("MESH", meshes_payload(tree.nodes, false)), hulls = section("HULL", meshes_payload(tree.nodes, true)),
                     bonds = section("BOND", bonds_payload(tree.bonds)), end = section("END ", "");
+  // GEOM and SOLD (version 2): what a tree without an exact representation stores.
+  const std::string exact = section("GEOM", geometry_payload(tree.geometry)) + section("SOLD", solids_payload(tree));
 
   SECTION("a section length of 2^63") {
     const std::string huge = Bytes{}.text("NODE").u64(std::uint64_t{1} << 63).u32(0).data;
@@ -629,19 +755,24 @@ TEST_CASE("hostile section tables are refused", "[shatter_file][hostile]") {
   SECTION("a damaged checksum") {
     std::string bad = nodes;
     bad[12] = static_cast<char>(bad[12] ^ 1);
-    check_refused(file_header() + opts + bad + meshes + hulls + bonds + end, "NODE section at byte 55 fails its checksum");
+    check_refused(file_header() + opts + bad + meshes + hulls + bonds + exact + end, "NODE section at byte 55 fails its checksum");
   }
   SECTION("missing, repeated, unknown and trailing sections") {
-    check_refused(file_header() + opts + nodes + meshes + bonds + end, "no HULL section");
-    check_refused(file_header() + opts + nodes + nodes + meshes + hulls + bonds + end, "repeats the one at byte");
-    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + section("FUTR", "x") + end, "unknown section 'FUTR'");
-    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + section("\x01\xFFzz", "") + end, "unknown section '\\x01\\xFFzz'");
-    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + end + "x", "1 bytes follow the END section");
-    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + section("END ", "x"), "must be empty");
-    check_refused(file_header() + opts + nodes + meshes + hulls + bonds, "without the END section");
+    check_refused(file_header() + opts + nodes + meshes + bonds + exact + end, "no HULL section");
+    check_refused(file_header() + opts + nodes + nodes + meshes + hulls + bonds + exact + end, "repeats the one at byte");
+    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + exact + section("FUTR", "x") + end, "unknown section 'FUTR'");
+    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + exact + section("\x01\xFFzz", "") + end, "unknown section '\\x01\\xFFzz'");
+    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + exact + end + "x", "1 bytes follow the END section");
+    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + exact + section("END ", "x"), "must be empty");
+    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + exact, "without the END section");
+    // Version 2 needs GEOM and SOLD; version 1 does not know them.
+    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + end, "no GEOM section");
+    check_refused(file_header() + opts + nodes + meshes + hulls + bonds + section("GEOM", geometry_payload(tree.geometry)) + end, "no SOLD section");
+    check_refused(file_header(1) + opts + nodes + meshes + hulls + bonds + exact + end, "unknown section 'GEOM'");
   }
   SECTION("optional sections are skipped and the order of sections is free") {
-    const std::string reordered = file_header() + section("xtra", "later data") + bonds + hulls + section("note", "") + meshes + nodes + opts + end;
+    const std::string reordered = file_header() + section("xtra", "later data") + bonds + section("SOLD", solids_payload(tree)) + hulls +
+                                  section("note", "") + meshes + section("GEOM", geometry_payload(tree.geometry)) + nodes + opts + end;
     const MeshTree decoded = decode_within_budget(reordered);
     CHECK(tree_difference(tree, decoded).empty());
     CHECK(encode_shatter(decoded) == encode_shatter(tree));
@@ -650,15 +781,7 @@ TEST_CASE("hostile section tables are refused", "[shatter_file][hostile]") {
 
 TEST_CASE("hostile counts are refused before anything is allocated", "[shatter_file][hostile]") {
   const MeshTree tree = two_leaf_tree();
-  const auto with_section = [&](std::string_view tag, const std::string& payload) {
-    const std::string opts = std::string_view(tag) == "OPTS" ? payload : options_payload(tree.options);
-    const std::string nodes = std::string_view(tag) == "NODE" ? payload : nodes_payload(tree.nodes);
-    const std::string meshes = std::string_view(tag) == "MESH" ? payload : meshes_payload(tree.nodes, false);
-    const std::string hulls = std::string_view(tag) == "HULL" ? payload : meshes_payload(tree.nodes, true);
-    const std::string bonds = std::string_view(tag) == "BOND" ? payload : bonds_payload(tree.bonds);
-    return file_header() + section("OPTS", opts) + section("NODE", nodes) + section("MESH", meshes) + section("HULL", hulls) +
-           section("BOND", bonds) + section("END ", "");
-  };
+  const auto with_section = [&](std::string_view tag, const std::string& payload) { return Payloads(tree).with(tag, payload).file(); };
   check_refused(with_section("NODE", Bytes{}.u32(0xFFFFFFFFu).u64(0).data), "4294967295 nodes need at least 165 bytes each");
   check_refused(with_section("NODE", Bytes{}.u32(0).data), "node count 0");
   // A node whose child count claims 2^32 - 1 children.
@@ -699,7 +822,7 @@ TEST_CASE("enum and bool bytes out of range are refused", "[shatter_file][hostil
     return good.substr(0, 12) + section("OPTS", payload) + good.substr(opts_payload + 27);
   };
   check_refused(with_byte(12, 3), "OPTS section, byte 40: strategy 3 is unknown");
-  check_refused(with_byte(13, 2), "kernel 2 is unknown");
+  check_refused(with_byte(13, 3), "kernel 3 is unknown");
   check_refused(with_byte(26, 2), "allow_self_intersections is 2 (must be 0 or 1)");
   std::string nodes = nodes_payload(tree.nodes);
   nodes[4 + 24] = 5;  // above_parent_plane of the root
@@ -814,4 +937,413 @@ TEST_CASE("write_shatter_file and read_shatter_file", "[shatter_file][io]") {
   CHECK_THROWS_AS(read_shatter_file(directory / "damaged.shatter"), CorruptFileError);
   CHECK_THROWS_WITH(read_shatter_file(directory / "damaged.shatter"), Catch::StartsWith((directory / "damaged.shatter").string() + ": damaged"));
   std::filesystem::remove_all(directory);
+}
+
+// ---------------------------------------------------------------------------
+// Version 2: the plane kernel's exact representation (GEOM, SOLD), and version 1
+
+namespace {
+
+/// The file offset of `tag`'s payload in Payloads::file() (version 2).
+std::size_t payload_offset(const Payloads& payloads, std::string_view tag) {
+  std::size_t at = 12;
+  for (const auto& [t, payload] : payloads.parts) {
+    if (t == tag) return at + 16;
+    at += 16 + payload.size();
+  }
+  throw std::logic_error("no such section");
+}
+
+/// What encode_shatter writes for a tree read from a version 1 file laid out as
+/// version 1's encoder laid it out: the same bytes with version 2, and an empty
+/// GEOM (8 zero bytes) and SOLD (4) before END.
+std::string converted_from_version_1(std::string_view v1) {
+  return std::string(v1.substr(0, 8)) + Bytes{}.u32(2).data + std::string(v1.substr(12, v1.size() - 12 - 16)) +
+         section("GEOM", std::string(8, '\0')) + section("SOLD", std::string(4, '\0')) + section("END ", "");
+}
+
+std::string read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+/// The committed fuzz corpus of the .shatter reader, next to this file.
+std::filesystem::path shatter_corpus() { return std::filesystem::path(__FILE__).parent_path() / "fuzz" / "corpus" / "fuzz_read_shatter"; }
+
+/// The index of the first node (from the back, so a leaf) whose solid has a face
+/// on a cut plane and a vertex of kind three_planes.
+std::size_t deep_node(const MeshTree& tree) {
+  for (std::size_t k = tree.nodes.size(); k-- > 1;) {
+    const Solid& s = tree.nodes[k].solid;
+    const bool cut_face = std::any_of(s.faces.begin(), s.faces.end(), [](const SolidFace& f) { return f.plane.is_cut(); });
+    const bool three = std::any_of(s.defs.begin(), s.defs.end(), [](const PointDef& d) { return d.kind == PointKind::three_planes; });
+    if (cut_face && three) return k;
+  }
+  throw std::logic_error("no node with a cut face and a three_planes vertex");
+}
+
+}  // namespace
+
+TEST_CASE("version 1 files still read, as trees without an exact representation", "[shatter_file][v1]") {
+  SECTION("built by the reference writer") {
+    for (const MeshTree& tree : {two_leaf_tree(), deep_tree()}) {
+      const std::string v1 = reference_file(tree, 1);
+      REQUIRE(v1.substr(8, 4) == Bytes{}.u32(1).data);
+      const MeshTree decoded = decode_within_budget(v1);
+      CHECK(tree_difference(tree, decoded).empty());
+      CHECK(decoded.geometry.points.empty());
+      CHECK(decoded.cut_planes.empty());
+      const std::string v2 = encode_shatter(decoded);
+      CHECK(byte_difference(v2, converted_from_version_1(v1)) == "equal");
+      CHECK(byte_difference(v2, reference_file(tree)) == "equal");
+    }
+  }
+  SECTION("the committed corpus files written by version 1's encoder") {
+    for (const char* name : {"cube-4-fragments.shatter", "cube-2-fragments-exact.shatter", "optional-section-before-end.shatter"}) {
+      INFO(name);
+      const std::string v1 = read_bytes(shatter_corpus() / name);
+      REQUIRE(v1.size() > 12);
+      REQUIRE(v1.substr(8, 4) == Bytes{}.u32(1).data);
+      const MeshTree decoded = decode_within_budget(v1);
+      CHECK(decoded.options.kernel != KernelKind::plane);
+      CHECK(decoded.geometry.points.empty());
+      CHECK(decoded.leaf_count() >= 2);
+      for (const MeshTreeNode& node : decoded.nodes) CHECK((node.solid.defs.empty() && !node.convex && !node.hull.positions.empty()));
+      const std::string v2 = encode_shatter(decoded);
+      check_round_trip(decoded);
+      if (std::string_view(name) != "optional-section-before-end.shatter") CHECK(byte_difference(v2, converted_from_version_1(v1)) == "equal");
+    }
+  }
+  SECTION("every truncation and single-byte change of a version 1 file is refused") {
+    const std::string v1 = reference_file(two_leaf_tree(), 1);
+    for (std::size_t length = 0; length < v1.size(); ++length) REQUIRE(refusal(std::string_view(v1).substr(0, length)));
+    std::size_t accepted = 0;
+    for (std::size_t position = 0; position < v1.size(); ++position) {
+      for (const int change : {0x01, 0x20, 0xFF}) {
+        std::string damaged = v1;
+        damaged[position] = static_cast<char>(static_cast<unsigned char>(damaged[position]) ^ change);
+        if (!refusal(damaged)) ++accepted;
+      }
+    }
+    CHECK(accepted == 0);
+  }
+  SECTION("other versions are refused, naming the versions read") {
+    std::string v3 = encode_shatter(small_plane_tree());
+    v3.replace(8, 4, Bytes{}.u32(3).data);
+    check_refused(v3, "unsupported .shatter format version 3 at byte 8 (this build reads versions 1 to 2: the file is from a newer shatter");
+  }
+}
+
+TEST_CASE("plane-kernel trees round-trip exactly, exact representation and caches included", "[shatter_file][build]") {
+  // build_mesh_tree's default kernel is the plane kernel. Every generated mesh,
+  // every strategy, a few fragment counts; decode must give back every solid,
+  // the input geometry, the cut planes and the recomputed caches bit for bit.
+  std::size_t convex = 0, non_convex = 0, trees = 0;
+  for (const test::NamedMesh& input : test::generated_meshes()) {
+    for (const Strategy strategy : {Strategy::thesis, Strategy::balanced, Strategy::axis}) {
+      for (const std::uint32_t fragments : {1u, 3u, 12u, 48u}) {
+        BuildOptions options;
+        options.fragments = fragments;
+        options.seed = 100 + fragments;
+        options.strategy = strategy;
+        INFO(input.name << ", " << strategy_name(strategy) << ", N = " << fragments);
+        const MeshTree tree = build_mesh_tree(input.mesh, options);
+        REQUIRE(tree.options.kernel == KernelKind::plane);
+        REQUIRE(tree.leaf_count() >= fragments);
+        REQUIRE(!tree.geometry.points.empty());
+        REQUIRE(tree.cut_planes.size() == tree.nodes.size());
+        for (const MeshTreeNode& node : tree.nodes) {
+          REQUIRE(!node.solid.defs.empty());
+          (node.convex ? convex : non_convex) += 1;
+          if (node.convex) REQUIRE(node.hull.positions.empty());
+        }
+        check_round_trip(tree);
+        ++trees;
+      }
+    }
+  }
+  CHECK(trees == 120);
+  CHECK(convex > 0);
+  CHECK(non_convex > 0);
+}
+
+TEST_CASE("hostile counts in GEOM and SOLD are refused before anything is allocated", "[shatter_file][hostile]") {
+  const MeshTree& tree = small_plane_tree();
+  const Solid& root = tree.nodes[0].solid;
+  const auto with = [&](std::string_view tag, const std::string& payload) { return Payloads(tree).with(tag, payload).file(); };
+  const std::string geometry = geometry_payload(tree.geometry), solids = solids_payload(tree);
+  const auto patched = [](std::string payload, std::size_t at, std::uint32_t value) {
+    payload.replace(at, 4, Bytes{}.u32(value).data);
+    return payload;
+  };
+  const auto patched_byte = [](std::string payload, std::size_t at, std::uint8_t value) {
+    payload[at] = static_cast<char>(value);
+    return payload;
+  };
+  const std::size_t points = tree.geometry.points.size(), nodes = tree.nodes.size();
+
+  check_refused(with("GEOM", patched(geometry, 0, 0xFFFFFFFFu)), "4294967295 input points need at least 24 bytes each");
+  check_refused(with("GEOM", patched(geometry, 4, 0xFFFFFFFFu)), "4294967295 input planes need at least 12 bytes each");
+  check_refused(with("GEOM", Bytes{}.u32(0).u32(1).data), "1 input planes need at least 12 bytes each, but only 0 bytes remain");
+  check_refused(with("GEOM", geometry + "!"), "GEOM section, byte");
+  check_refused(with("GEOM", geometry + "!"), "1 unexpected bytes after the last record");
+  check_refused(with("GEOM", geometry.substr(0, 8 + 24 * points - 1)),
+                std::to_string(points) + " input points need at least 24 bytes each, but only " + std::to_string(24 * points - 1) + " bytes remain");
+
+  // Records for every node when GEOM holds points, none otherwise.
+  check_refused(with("SOLD", patched(solids, 0, 0xFFFFFFFFu)), "4294967295 solids for " + std::to_string(nodes) + " nodes");
+  check_refused(with("SOLD", patched(solids, 0, 0)), "0 solids for " + std::to_string(nodes) + " nodes");
+  MeshTree fast = two_leaf_tree();
+  check_refused(Payloads(fast).with("SOLD", Bytes{}.u32(3).data).file(), "3 solids, but GEOM holds no input points");
+
+  // The root's record starts at payload byte 4: u8 flags, then V, F, L, C.
+  const std::size_t V = root.defs.size(), F = root.faces.size();
+  check_refused(with("SOLD", patched(solids, 5, 0xFFFFFFFFu)), "node 0: 4294967295 vertex definitions need at least 13 bytes each");
+  check_refused(with("SOLD", patched(solids, 9, 0xFFFFFFFFu)), "node 0: 4294967295 faces need at least 17 bytes each");
+  check_refused(with("SOLD", patched(solids, 13, 0xFFFFFFFFu)), "node 0: 4294967295 loops need at least 4 bytes each");
+  check_refused(with("SOLD", patched(solids, 17, 0xFFFFFFFFu)), "node 0: 4294967295 corners need at least 9 bytes each");
+  const std::size_t faces_at = 21 + 13 * V, loops_at = faces_at + 17 * F;
+  check_refused(with("SOLD", patched(solids, faces_at + 13, 0xFFFFFFFFu)), "node 0: the faces claim 4294967295 loops or more");
+  check_refused(with("SOLD", patched(solids, loops_at, 0xFFFFFFFFu)), "node 0: the loops claim 4294967295 corners or more");
+  check_refused(with("SOLD", patched_byte(solids, 4, 4)), "node 0: unknown solid flag bits 0x04");
+  check_refused(with("SOLD", patched_byte(solids, faces_at + 4, 0x82)), "node 0: unknown face flag bits 0x82");
+  check_refused(with("SOLD", patched_byte(solids, 21, 3)), "node 0: vertex 0 has unknown kind 3");
+  // The last record ends with its corners: 9 bytes each, 8 more with a segment.
+  const Solid& last = tree.nodes.back().solid;
+  const std::size_t last_corners = last.corners.size();
+  if (std::none_of(last.corners.begin(), last.corners.end(), [](const SolidCorner& c) { return c.line.is_segment(); })) {
+    check_refused(with("SOLD", solids.substr(0, solids.size() - 1)), "node " + std::to_string(nodes - 1) + ": " + std::to_string(last_corners) +
+                                                                          " corners need at least 9 bytes each, but only " +
+                                                                          std::to_string(9 * last_corners - 1) + " bytes remain");
+  } else {
+    check_refused(with("SOLD", solids.substr(0, solids.size() - 1)), "node " + std::to_string(nodes - 1) + ": the payload ends inside corner");
+  }
+  // Corner segments: the flag is 0 or 1, and a flagged segment is two points.
+  const std::size_t corners_at = loops_at + 4 * root.loops.size();
+  REQUIRE(root.corners[0].line.is_segment());  // the input's edges are input segments
+  check_refused(with("SOLD", patched_byte(solids, corners_at + 8, 2)), "node 0: corner segment flag is 2 (must be 0 or 1)");
+  check_refused(with("SOLD", patched(solids, corners_at + 9, no_index)), "node 0: corner 0 has a segment flag, but its segment is none");
+  check_refused(with("SOLD", solids + "!"), "1 unexpected bytes after the last record");
+  // One more loop than the faces hold (a loop of no corners, so the loops still
+  // fit the corners): a loop no face owns.
+  const std::size_t L = root.loops.size();
+  std::string extra_loop = patched(solids, 13, static_cast<std::uint32_t>(L + 1));
+  extra_loop.insert(loops_at + 4 * L, Bytes{}.u32(0).data);
+  check_refused(with("SOLD", extra_loop), "the solid of node 0 has " + std::to_string(L + 1) + " loops, but its faces hold " + std::to_string(L));
+}
+
+TEST_CASE("invalid exact representations with correct checksums are refused", "[shatter_file][hostile]") {
+  // As "invalid trees with correct checksums": each case breaks one structural
+  // invariant of the exact representation, is written by the reference writer,
+  // and the reader names the defect and its section; the encoder refuses the
+  // same tree with the same words.
+  struct Case {
+    std::string name;
+    MeshTree tree;
+    std::string expected;  ///< in both messages
+    std::string where;     ///< in the reader's message
+  };
+  std::vector<Case> cases;
+  const MeshTree& base = small_plane_tree();
+  const std::size_t P = base.geometry.points.size(), Q = base.geometry.planes.size();
+  const auto add = [&](std::string name, auto&& change, std::string expected, std::string where) {
+    MeshTree tree = base;
+    change(tree);
+    cases.push_back({std::move(name), std::move(tree), std::move(expected), std::move(where)});
+  };
+  const Payloads payloads(base);
+  const std::size_t geometry_at = payload_offset(payloads, "GEOM"), solids_at = payload_offset(payloads, "SOLD");
+  const std::size_t k = deep_node(base);  // a node below at least one cut
+  const Solid& deep = base.nodes[k].solid;
+  const std::string node_k = "the solid of node " + std::to_string(k) + " ";
+  const std::size_t cut_face =
+      std::find_if(deep.faces.begin(), deep.faces.end(), [](const SolidFace& f) { return f.plane.is_cut(); }) - deep.faces.begin();
+  const std::size_t three =
+      std::find_if(deep.defs.begin(), deep.defs.end(), [](const PointDef& d) { return d.kind == PointKind::three_planes; }) - deep.defs.begin();
+  const auto sibling = static_cast<NodeIndex>(k + 1 < base.nodes.size() && base.nodes[k + 1].parent == base.nodes[k].parent ? k + 1 : k - 1);
+
+  add("input point NaN", [](MeshTree& t) { t.geometry.points[3].y = std::numeric_limits<double>::quiet_NaN(); },
+      "input point 3 has a coordinate that is NaN or infinite", "GEOM section, byte " + std::to_string(geometry_at + 8 + 3 * 24) + ": ");
+  add("input point infinite", [](MeshTree& t) { t.geometry.points[0].z = -std::numeric_limits<double>::infinity(); },
+      "input point 0 has a coordinate that is NaN or infinite", "GEOM section");
+  add("input plane beyond the points", [&](MeshTree& t) { t.geometry.planes[1][2] = static_cast<VertexIndex>(P); },
+      "input plane 1 names input point " + std::to_string(P) + ", but there are only " + std::to_string(P) + " input points",
+      "GEOM section, byte " + std::to_string(geometry_at + 8 + 24 * P + 12) + ": ");
+  add("cut plane of an internal node infinite",
+      [](MeshTree& t) { t.nodes[0].plane.offset = t.cut_planes[0].offset = std::numeric_limits<double>::infinity(); },
+      "node 0 has a plane with a NaN or infinite coefficient", "NODE section");
+  add("input vertex beyond the points", [&](MeshTree& t) { t.nodes[0].solid.defs[2].a = static_cast<std::uint32_t>(P); },
+      "the solid of node 0 vertex 2 (input) names input point " + std::to_string(P) + ", but there are only", "SOLD section, byte " + std::to_string(solids_at + 4) + ": ");
+  add("input vertex with a field its kind does not use", [](MeshTree& t) { t.nodes[0].solid.defs[0].b = 5; },
+      "the solid of node 0 vertex 0 (input) has b = 5, a field its kind does not use (must be 0)", "SOLD section");
+  add("input vertex with a plane", [](MeshTree& t) { t.nodes[0].solid.defs[0].planes[0] = PlaneRef::input(1); },
+      "vertex 0 (input) has plane 0 = 0x00000001, a field its kind does not use", "SOLD section");
+  add("vertex of an unknown kind", [](MeshTree& t) { t.nodes[0].solid.defs[1].kind = static_cast<PointKind>(7); },
+      "vertex 1 has unknown kind 7", "SOLD section");
+  add("face on its own node's cut plane", [&](MeshTree& t) { t.nodes[k].solid.faces[cut_face].plane = PlaneRef::cut(static_cast<std::uint32_t>(k)); },
+      node_k + "face " + std::to_string(cut_face) + " names cut plane " + std::to_string(k), "SOLD section");
+  add("face on a sibling's cut plane", [&](MeshTree& t) { t.nodes[k].solid.faces[cut_face].plane = PlaneRef::cut(sibling); },
+      "but node " + std::to_string(sibling) + " is not an ancestor of node " + std::to_string(k), "SOLD section");
+  add("root on a cut plane", [](MeshTree& t) { t.nodes[0].solid.faces[0].plane = PlaneRef::cut(0); },
+      "the solid of node 0 face 0 names cut plane 0 (0x80000000), but node 0 is not an ancestor of node 0", "SOLD section");
+  add("face on an input plane beyond the planes", [&](MeshTree& t) { t.nodes[k].solid.faces[0].plane = PlaneRef::input(static_cast<std::uint32_t>(Q)); },
+      node_k + "face 0 names input plane " + std::to_string(Q) + ", but there are only " + std::to_string(Q) + " input planes", "SOLD section");
+  add("three_planes vertex on a node beyond the tree", [&](MeshTree& t) { t.nodes[k].solid.defs[three].planes[2] = PlaneRef::cut(1000); },
+      node_k + "vertex " + std::to_string(three) + " (three_planes) plane 2 names cut plane 1000 (0x800003E8), but node 1000 is not an ancestor",
+      "SOLD section");
+  add("three_planes vertex with the none sentinel", [&](MeshTree& t) { t.nodes[k].solid.defs[three].planes[0] = PlaneRef{no_index}; },
+      "plane 0 names cut plane 2147483647 (0xFFFFFFFF)", "SOLD section");
+  add("corner line on an input plane beyond the planes",
+      [&](MeshTree& t) { t.nodes[k].solid.corners[1].line.other = PlaneRef::input(static_cast<std::uint32_t>(Q + 5)); },
+      node_k + "corner 1 line names input plane " + std::to_string(Q + 5), "SOLD section");
+  add("corner segment not p < q", [&](MeshTree& t) { t.nodes[k].solid.corners[2].line = {PlaneRef{no_index}, 5, 3}; },
+      node_k + "corner 2 has segment (5, 3), not two input points p < q < " + std::to_string(P), "SOLD section");
+  add("corner segment beyond the points", [&](MeshTree& t) { t.nodes[k].solid.corners[0].line.p = 0; t.nodes[k].solid.corners[0].line.q = static_cast<std::uint32_t>(P); },
+      node_k + "corner 0 has segment (0, " + std::to_string(P) + ")", "SOLD section");
+  add("face without a loop",
+      [&](MeshTree& t) {
+        Solid& s = t.nodes[k].solid;
+        s.faces[1].loop_count += s.faces[0].loop_count;
+        s.faces[1].first_loop = 0;
+        s.faces[0].loop_count = 0;
+      },
+      node_k + "face 0 has no loop", "SOLD section");
+  add("loop of two corners",
+      [&](MeshTree& t) {
+        Solid& s = t.nodes[k].solid;
+        s.loops[1].corner_count += s.loops[0].corner_count - 2;
+        s.loops[1].first_corner = 2;
+        s.loops[0].corner_count = 2;
+      },
+      node_k + "loop 0 has 2 corners (a loop has at least 3)", "SOLD section");
+  add("corner vertex beyond the vertices", [&](MeshTree& t) { t.nodes[k].solid.corners[3].vertex = static_cast<VertexIndex>(deep.defs.size()); },
+      node_k + "corner 3 has vertex " + std::to_string(deep.defs.size()) + ", but there are only " + std::to_string(deep.defs.size()) + " vertices",
+      "SOLD section");
+  add("corner repeating the next corner's vertex",
+      [&](MeshTree& t) { t.nodes[k].solid.corners[0].vertex = t.nodes[k].solid.corners[1].vertex; },
+      node_k + "corner 0 repeats vertex " + std::to_string(deep.corners[1].vertex) + " of the corner after it", "SOLD section");
+  add("a loop reversed: its edges used twice",
+      [&](MeshTree& t) {
+        Solid& s = t.nodes[k].solid;
+        std::reverse(s.corners.begin(), s.corners.begin() + s.loops[0].corner_count);
+      },
+      "is used twice", "SOLD section");
+  add("a vertex no corner uses",
+      [&](MeshTree& t) {
+        Solid& s = t.nodes[k].solid;
+        s.defs.push_back(PointDef::input(0));
+        s.approx.push_back(approximate(t.plane_set(), s.defs.back()));
+      },
+      node_k + "vertex " + std::to_string(deep.defs.size()) + " is used by no corner", "SOLD section");
+  add("a convex node with a hull",
+      [&](MeshTree& t) {
+        t.nodes[k].convex = true;
+        t.nodes[k].hull = test::unit_cube();
+      },
+      "node " + std::to_string(k) + " is convex, so its hull must be empty (its mesh is its hull), but the hull has 8 vertices and 12 triangles",
+      "HULL section");
+  add("a degenerate vertex (the same plane twice)",
+      [&](MeshTree& t) {
+        PointDef& d = t.nodes[k].solid.defs[three];
+        d.planes[1] = d.planes[0];
+      },
+      node_k + "vertex " + std::to_string(three) + " (three_planes): degenerate point definition", "SOLD section");
+  {
+    // A corner moved to a vertex adjacent to neither of its loop neighbours:
+    // the old edges lose their reverses, and no edge is duplicated.
+    const Solid& s = deep;
+    std::vector<std::pair<VertexIndex, VertexIndex>> edges;
+    for (const SolidLoop& loop : s.loops) {
+      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
+        edges.emplace_back(s.corners[loop.first_corner + i].vertex, s.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex);
+      }
+    }
+    const auto adjacent = [&](VertexIndex a, VertexIndex b) {
+      return std::find(edges.begin(), edges.end(), std::pair{a, b}) != edges.end() || std::find(edges.begin(), edges.end(), std::pair{b, a}) != edges.end();
+    };
+    const std::uint32_t n = s.loops[0].corner_count;
+    const VertexIndex before = s.corners[n - 1].vertex, after = s.corners[1].vertex;
+    std::optional<VertexIndex> moved;
+    for (VertexIndex w = 0; w < s.defs.size() && !moved; ++w) {
+      if (w != before && w != after && w != s.corners[0].vertex && !adjacent(w, before) && !adjacent(w, after)) moved = w;
+    }
+    if (moved) {
+      add("an open solid", [&](MeshTree& t) { t.nodes[k].solid.corners[0].vertex = *moved; }, "has no reverse: the solid is open", "SOLD section");
+    } else {
+      WARN("no vertex to move for the open-solid case");
+    }
+  }
+
+  for (const Case& c : cases) {
+    INFO(c.name);
+    check_refused(reference_file(c.tree), c.where);
+    check_refused(reference_file(c.tree), c.expected);
+    CHECK_THROWS_AS(encode_shatter(c.tree), std::invalid_argument);
+    CHECK_THROWS_WITH(encode_shatter(c.tree), Catch::Contains(c.expected));
+  }
+}
+
+TEST_CASE("encode_shatter refuses exact representations a reader could not rebuild", "[shatter_file]") {
+  // Defects the layout cannot even express (the reader derives these fields), or
+  // caches that would not come back as they are: the encoder's precondition.
+  const MeshTree& base = small_plane_tree();
+  const std::size_t k = deep_node(base);
+  const std::size_t three = std::find_if(base.nodes[k].solid.defs.begin(), base.nodes[k].solid.defs.end(),
+                                         [](const PointDef& d) { return d.kind == PointKind::three_planes; }) -
+                            base.nodes[k].solid.defs.begin();
+  const auto refused = [&](auto&& change, const std::string& expected) {
+    MeshTree tree = base;
+    change(tree);
+    INFO("expected: " << expected);
+    CHECK_THROWS_WITH(encode_shatter(tree), Catch::Contains(expected));
+  };
+  refused([&](MeshTree& t) { t.nodes[k].solid.approx[three].x.value += 1; },
+          "the solid of node " + std::to_string(k) + " vertex " + std::to_string(three) + " (three_planes): approx is not approximate()");
+  refused([&](MeshTree& t) { t.nodes[k].solid.approx[three].w.error = t.nodes[k].solid.approx[three].w.error * 2 + 1; },
+          "approx is not approximate() of its definition (a stale cache)");
+  refused([&](MeshTree& t) { t.nodes[k].solid.approx.pop_back(); }, "approx entries for");
+  refused([](MeshTree& t) { t.geometry.plane_approx[2].d.value = -t.geometry.plane_approx[2].d.value - 1; },
+          "geometry.plane_approx[2] is not approximate_input_plane of input plane 2 (a stale cache)");
+  refused([](MeshTree& t) { t.geometry.plane_approx.pop_back(); }, "plane_approx entries for");
+  refused([](MeshTree& t) { t.cut_planes.pop_back(); }, "cut_planes has");
+  refused([&](MeshTree& t) { t.cut_planes[k].offset = 1; }, "cut_planes[" + std::to_string(k) + "] is not");
+  refused([](MeshTree& t) { t.cut_planes[0].offset += 1; }, "cut_planes[0] is not node 0's plane");
+  refused([&](MeshTree& t) { t.nodes[k].solid.faces[1].first_loop += 1; }, "face 1 starts at loop");
+  refused([&](MeshTree& t) { t.nodes[k].solid.loops[1].first_corner -= 1; }, "loop 1 starts at corner");
+  refused([&](MeshTree& t) { t.nodes[k].solid.defs[three].a = 4; }, "(three_planes) has a = 4, a field its kind does not use");
+  refused(
+      [&](MeshTree& t) {
+        t.nodes[k].solid.corners[0].line.p = no_index;
+        t.nodes[k].solid.corners[0].line.q = 1;
+      },
+      "corner 0 has segment (4294967295, 1), not two input points p < q");
+  refused(
+      [&](MeshTree& t) {
+        for (PointDef& d : t.nodes[k].solid.defs) {
+          if (d.kind == PointKind::three_planes) {
+            d = PointDef::segment_plane(0, 1, d.planes[0]);
+            d.planes[2] = PlaneRef::input(1);
+            break;
+          }
+        }
+      },
+      "(segment_plane) has plane 2 = 0x00000001, a field its kind does not use");
+
+  // A tree without input points carries nothing of the exact representation.
+  MeshTree fast = two_leaf_tree();
+  fast.nodes[1].convex = true;
+  fast.nodes[1].hull = Mesh{};
+  CHECK_THROWS_WITH(encode_shatter(fast), Catch::Contains("node 1 is marked convex, but the tree has no exact representation"));
+  fast = two_leaf_tree();
+  fast.nodes[2].solid = base.nodes[0].solid;
+  CHECK_THROWS_WITH(encode_shatter(fast), Catch::Contains("node 2 has a solid, but the tree has no geometry"));
+  fast = two_leaf_tree();
+  fast.cut_planes.resize(3);
+  CHECK_THROWS_WITH(encode_shatter(fast), Catch::Contains("cut_planes has 3 planes, but the tree has no exact representation"));
+  fast = two_leaf_tree();
+  fast.geometry.planes.push_back({0, 0, 0});
+  fast.geometry.plane_approx.resize(1);
+  CHECK_THROWS_WITH(encode_shatter(fast), Catch::Contains("geometry has 1 input planes but no input points"));
+  check_refused(reference_file(fast), "GEOM section, byte");
+  check_refused(reference_file(fast), "geometry has 1 input planes but no input points");
 }

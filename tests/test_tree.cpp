@@ -44,6 +44,7 @@
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cover.hpp"
 #include "shatter/meshtree/file.hpp"
+#include "shatter/triangulate/solid_mesh.hpp"
 #include "support/checks.hpp"
 #include "support/corpus.hpp"
 #include "support/generators.hpp"
@@ -54,7 +55,7 @@ using namespace shatter::test;
 namespace {
 
 constexpr Strategy all_strategies[] = {Strategy::thesis, Strategy::balanced, Strategy::axis};
-constexpr KernelKind all_kernels[] = {KernelKind::fast, KernelKind::exact};
+constexpr KernelKind all_kernels[] = {KernelKind::plane, KernelKind::fast, KernelKind::exact};
 
 // A double in full (17 significant digits), for messages.
 std::string num(double x) {
@@ -382,6 +383,39 @@ std::string hull_problem(const Mesh& mesh, const Mesh& hull, bool complete) {
   return {};
 }
 
+// The plane kernel's hull of a non-convex internal node is built from its
+// children's hulls: a valid convex solid (exact orientation at every edge) that
+// contains every vertex of the node's mesh (each on or behind every hull
+// triangle, exactly); it may exceed the hull of the node's own vertices by the
+// rounding of cut points inside the node.
+std::string containing_hull_problem(const Mesh& mesh, const Mesh& hull) {
+  if (const std::string problem = solid_problem(hull); !problem.empty()) return "not a valid solid: " + problem;
+  if (std::any_of(hull.surfaces.begin(), hull.surfaces.end(), [](SurfaceId s) { return s != 0; })) {
+    return "a surface id other than 0";
+  }
+  std::map<std::pair<VertexIndex, VertexIndex>, VertexIndex> far_corner;
+  for (const Triangle& t : hull.triangles) {
+    for (int c = 0; c < 3; ++c) far_corner[{t[c], t[(c + 1) % 3]}] = t[(c + 2) % 3];
+  }
+  for (std::size_t i = 0; i < hull.triangles.size(); ++i) {
+    const Triangle& t = hull.triangles[i];
+    const EpickPoint a = epick(hull.positions[t[0]]), b = epick(hull.positions[t[1]]), c = epick(hull.positions[t[2]]);
+    for (int k = 0; k < 3; ++k) {
+      const auto across = far_corner.find({t[(k + 1) % 3], t[k]});
+      if (across == far_corner.end()) return "open at triangle " + std::to_string(i);
+      if (CGAL::orientation(a, b, c, epick(hull.positions[across->second])) == CGAL::POSITIVE) {
+        return "not convex at an edge of triangle " + std::to_string(i);
+      }
+    }
+    for (const Vec3& p : mesh.positions) {
+      if (CGAL::orientation(a, b, c, epick(p)) == CGAL::POSITIVE) {
+        return "mesh vertex " + vec_text(p) + " lies outside hull triangle " + std::to_string(i);
+      }
+    }
+  }
+  return {};
+}
+
 // --- the checks ---------------------------------------------------------------------
 
 // Parent, children, depth, preorder and leaf ranges; returns false when the
@@ -623,7 +657,18 @@ void check_nodes(const MeshTree& tree, const Mesh& input, Level level) {
     }
 
     const auto hull_start = std::chrono::steady_clock::now();
-    if (const std::string h = hull_problem(mesh, node.hull, level == Level::full || node.is_leaf()); !h.empty()) {
+    if (node.convex) {
+      // A convex node (plane kernel) is its own hull: convex exactly as a solid,
+      // which rounding keeps up to the flat edges inside its faces.
+      if (!node.hull.positions.empty()) out.add(hull, "a convex node stores a separate hull");
+      if (&tree.hull_of(v) != &node.mesh) out.add(hull, "hull_of a convex node is not its mesh");
+      if (!solid_is_convex(tree.plane_set(), node.solid)) out.add(hull, "marked convex, but its solid is not");
+    } else if (tree.options.kernel == KernelKind::plane && !node.is_leaf()) {
+      if (level == Level::full) {
+        if (const std::string h = containing_hull_problem(mesh, node.hull); !h.empty()) out.add(hull, h);
+      }
+    } else if (const std::string h = hull_problem(mesh, node.hull, level == Level::full || node.is_leaf());
+               !h.empty()) {
       out.add(hull, h);
     }
     out.hull_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - hull_start).count();
@@ -805,6 +850,74 @@ void check_exact(const MeshTree& tree, const std::vector<ExactMesh>& exact, cons
   for (const Problems* p : {&solid, &rounding, &volumes, &planes}) expect_none(*p);
 }
 
+// The plane kernel: every node's exact solid is sound (check_solid: closed, every
+// vertex exactly on its faces' planes and edge lines), lies exactly on its side of
+// every ancestor's plane, has its caps on their cuts' planes, rounds to the node's
+// mesh (deterministically), is convex exactly when marked so; children's exact
+// volumes sum exactly to the parent's, the leaves' to the input's. `exact_volumes`
+// off skips the rational volumes (the largest trees).
+void check_plane(const MeshTree& tree, const Mesh& input, bool exact_volumes) {
+  REQUIRE(tree.cut_planes.size() == tree.nodes.size());
+  const PlaneSet set = tree.plane_set();
+  Problems sound(tree, "exact solid not sound (check_solid)");
+  Problems sides(tree, "exact vertices vs the ancestors' planes");
+  Problems caps(tree, "cap faces vs their cuts");
+  Problems rounding(tree, "node mesh is not the solid rounded");
+  Problems convexity(tree, "convex flag");
+  Problems volumes(tree, "children's exact volumes do not sum exactly to the parent's");
+  std::vector<std::vector<std::pair<int, std::string>>> found(tree.nodes.size());
+  std::vector<mpq_class> six(tree.nodes.size());
+  for_each_node_in_parallel(tree.nodes.size(), [&](NodeIndex v) {
+    const MeshTreeNode& node = tree.nodes[v];
+    auto& out = found[v];
+    if (const std::string problem = check_solid(set, node.solid); !problem.empty()) {
+      out.emplace_back(0, problem);
+      return;
+    }
+    for (NodeIndex child = v, a = node.parent; a != no_node; child = a, a = tree.nodes[a].parent) {
+      const Sign wrong = tree.nodes[child].above_parent_plane ? Sign::negative : Sign::positive;
+      for (std::size_t i = 0; i < node.solid.defs.size(); ++i) {
+        if (side(set, PlaneRef::cut(a), node.solid.defs[i], node.solid.approx[i]) == wrong) {
+          out.emplace_back(1, "vertex " + std::to_string(i) + " on the wrong side of ancestor " + std::to_string(a));
+          break;
+        }
+      }
+    }
+    for (const SolidFace& face : node.solid.faces) {
+      if (face.surface == original_surface) continue;
+      if (!face.plane.is_cut() || cap_surface_of(face.plane.index()) != face.surface) {
+        out.emplace_back(2, "a cap face (surface " + std::to_string(face.surface) + ") not on its cut's plane");
+        break;
+      }
+    }
+    if (v != 0) {
+      SolidMeshOptions meshing;
+      meshing.attributes = nullptr;
+      const RoundedSolid again = round_solid(set, node.solid, meshing);
+      if (!again.valid || again.mesh.positions != node.mesh.positions || again.mesh.triangles != node.mesh.triangles) {
+        out.emplace_back(3, again.valid ? "rounding again gives another mesh" : "rounding again fails: " + again.defect);
+      }
+    }
+    if (node.convex != solid_is_convex(set, node.solid)) out.emplace_back(4, "convex flag differs from the solid");
+    if (exact_volumes) six[v] = exact_six_volume(set, node.solid);
+  });
+  std::array<Problems*, 5> kinds{&sound, &sides, &caps, &rounding, &convexity};
+  for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+    for (const auto& [kind, text] : found[v]) kinds[static_cast<std::size_t>(kind)]->add(v, text);
+  }
+  if (exact_volumes) {
+    if (six[0] != exact_six_volume(input)) volumes.add(0, "the root's exact volume is not the input's");
+    for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+      const MeshTreeNode& node = tree.nodes[v];
+      if (node.is_leaf()) continue;
+      mpq_class total = 0;
+      for (const NodeIndex c : node.children) total += six[c];
+      if (total != six[v]) volumes.add(v, "children " + num(total.get_d() / 6) + " vs parent " + num(six[v].get_d() / 6));
+    }
+  }
+  for (const Problems* p : {&sound, &sides, &caps, &rounding, &convexity, &volumes}) expect_none(*p);
+}
+
 // Minimal cover: the cover of all leaves is the root, and of each node's leaf
 // range that node alone.
 void check_cover(const MeshTree& tree) {
@@ -892,6 +1005,7 @@ void check_tree(const Case& c, const Built& built) {
   check_fast_volumes(tree);
   timer.lap("volumes");
   if (c.options.kernel == KernelKind::exact) check_exact(tree, built.exact, input);
+  if (c.options.kernel == KernelKind::plane) check_plane(tree, input, c.level == Level::full);
   timer.lap("exact");
   check_cover(tree);
   check_bonds_match(tree);
@@ -1040,6 +1154,97 @@ TEST_CASE("2048 fragments of the hollow egg: every strategy, fast kernel", "[tre
 
 // --- determinism ---------------------------------------------------------------------
 
+// --- the plane kernel ----------------------------------------------------------------
+// Valid by construction: the builder redraws a plane only when it misses a node,
+// never validates, and every node is checked here in full (check_nodes with the
+// self-intersection test, and check_plane: exact soundness, sides, exact volume
+// sums, deterministic certified rounding).
+
+TEST_CASE("64 fragments, plane kernel: every strategy, every node exact and certified",
+          "[tree][build][property][plane][heavy]") {
+  const char* meshes[] = {"box", "grid-box-4", "torus-800", "hollow-egg", "nested-shells-island", "two-boxes",
+                          "sliver", "torus-tiny-1e-6", "torus-huge-1e6", "egg-far-from-origin", "torus_quad.off",
+                          "double-torus-example.off", "helmet.off", "pinion.off", "spool.off"};
+  for (const Strategy strategy : all_strategies) {
+    for (const char* name : meshes) {
+      const std::string mesh = name;
+      run({&test_mesh(mesh), options_for(64, strategy, KernelKind::plane, 7), Level::full,
+           mesh == "torus-800" || mesh == "nested-shells-island"});
+    }
+  }
+}
+
+TEST_CASE("256 fragments, plane kernel: every strategy, full validation", "[tree][build][property][plane][heavy]") {
+  const char* meshes[] = {"box", "torus-800", "hollow-egg", "nested-shells-island", "egg-far-from-origin",
+                          "sliver", "torus-tiny-1e-6", "helmet.off"};
+  for (const Strategy strategy : all_strategies) {
+    for (const char* name : meshes) {
+      const std::string mesh = name;
+      run({&test_mesh(mesh), options_for(256, strategy, KernelKind::plane, 13), Level::full,
+           mesh == "nested-shells-island"});
+    }
+  }
+}
+
+TEST_CASE("2048 fragments, plane kernel: box, hollow egg and torus, every strategy",
+          "[tree][build][property][plane][slow][heavy]") {
+  for (const char* name : {"box", "hollow-egg", "torus-800"}) {
+    for (const Strategy strategy : all_strategies) {
+      run({&test_mesh(name), options_for(2048, strategy, KernelKind::plane, 17), Level::cheap,
+           strategy == Strategy::thesis && std::string(name) == "box"});
+    }
+  }
+}
+
+namespace {
+
+// The issue's unit cube [0,1]^3 (corners in binary order, x fastest) and the cube
+// [-1,1]^3, each with its vertices renumbered by a seeded permutation (the
+// builder must not depend on the numbering to reach N).
+Mesh renumbered_cube(double lo, double hi, std::uint64_t seed) {
+  std::vector<Vec3> corners;
+  for (int k = 0; k < 8; ++k) corners.push_back({k & 1 ? hi : lo, k & 2 ? hi : lo, k & 4 ? hi : lo});
+  std::vector<Triangle> faces = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                                 {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  std::vector<VertexIndex> permutation{0, 1, 2, 3, 4, 5, 6, 7};
+  Random random(seed);
+  for (std::size_t i = permutation.size(); i > 1; --i) std::swap(permutation[i - 1], permutation[random.index(i)]);
+  std::vector<Vec3> positions(8);
+  for (VertexIndex v = 0; v < 8; ++v) positions[permutation[v]] = corners[v];
+  for (Triangle& t : faces) {
+    for (VertexIndex& v : t) v = permutation[v];
+  }
+  return mesh_from(positions, faces);
+}
+
+void run_cubes(std::uint32_t fragments, std::initializer_list<std::uint64_t> seeds, Level level) {
+  for (const auto& [lo, hi] : {std::pair{0.0, 1.0}, std::pair{-1.0, 1.0}}) {
+    for (const std::uint64_t seed : seeds) {
+      const TestMesh cube{"cube[" + num(lo) + "," + num(hi) + "] renumbered " + std::to_string(seed),
+                          renumbered_cube(lo, hi, seed), true};
+      for (const Strategy strategy : all_strategies) {
+        run({&cube, options_for(fragments, strategy, KernelKind::plane, seed), level, false});
+      }
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("cubes, renumbered, seeds 1 to 8, every strategy: 512 fragments, every node checked",
+          "[tree][build][property][plane][heavy]") {
+  run_cubes(512, {1, 2, 3, 4, 5, 6, 7, 8}, Level::cheap);
+}
+
+TEST_CASE("cubes, renumbered: 4096 fragments", "[tree][build][property][plane][slow][heavy]") {
+  run_cubes(4096, {1, 2}, Level::cheap);
+}
+
+// The long run (hidden: `test_tree "[long]"`): what CI cannot afford.
+TEST_CASE("cubes, renumbered, seeds 1 to 8, every strategy: 65,536 fragments", "[.][long]") {
+  run_cubes(65536, {1, 2, 3, 4, 5, 6, 7, 8}, Level::cheap);
+}
+
 TEST_CASE("the same options give the same bytes, another seed another tree", "[tree][build]") {
   const TestMesh& m = test_mesh("torus-800");
   for (const Strategy strategy : all_strategies) {
@@ -1176,8 +1381,11 @@ TEST_CASE("planes that keep failing end in UnsupportedGeometryError", "[tree][bu
   // A plane through the centroid always has volume on both sides, so it cannot
   // miss a solid; what keeps failing is a solid thinner than rounding. This
   // tetrahedron is one ulp on a side (2^-32 at 2^20): every crossing point rounds
-  // onto a corner of its ulp grid, so every piece is degenerate, in both kernels
-  // (the exact one rounds its pieces for storage).
+  // onto a corner of its ulp grid, so nearly every piece is degenerate in every
+  // kernel (the exact and plane kernels round their pieces for storage). The plane
+  // kernel certifies each rounding and tries other planes; now and then one gives
+  // pieces that round validly (cut points landing on the grid), and then the tree
+  // must pass every check.
   const double base = 1048576.0, ulp = 0x1p-32;
   const Mesh tiny = mesh_from({{base, base, base}, {base + ulp, base, base}, {base, base + ulp, base}, {base, base, base + ulp}},
                               {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}});
@@ -1190,7 +1398,12 @@ TEST_CASE("planes that keep failing end in UnsupportedGeometryError", "[tree][bu
         INFO(strategy_name(strategy) << " " << kernel_name(kernel) << " max_plane_tries " << tries);
         try {
           const MeshTree tree = build_mesh_tree(tiny, options);
-          FAIL_CHECK("no error: a tree of " << tree.nodes.size() << " nodes");
+          if (kernel == KernelKind::plane) {
+            const TestMesh named{"tiny tetrahedron", tiny, true};
+            check_tree({&named, options, Level::full, false}, Built{tree, {}});
+          } else {
+            FAIL_CHECK("no error: a tree of " << tree.nodes.size() << " nodes");
+          }
         } catch (const UnsupportedGeometryError& error) {
           // A clear message: it names the number of planes tried.
           CHECK(std::string(error.what()).find(std::to_string(tries)) != std::string::npos);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -20,6 +21,9 @@
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/cut.hpp"
+#include "shatter/meshtree/cut_solid.hpp"
+#include "shatter/meshtree/plane_input.hpp"
+#include "shatter/triangulate/solid_mesh.hpp"
 
 namespace shatter {
 
@@ -36,6 +40,7 @@ std::string_view kernel_name(KernelKind kernel) {
   switch (kernel) {
     case KernelKind::fast: return "fast";
     case KernelKind::exact: return "exact";
+    case KernelKind::plane: return "plane";
   }
   return "unknown";
 }
@@ -96,6 +101,19 @@ struct BoundingBox {
   Vec3 lo, hi;
 };
 
+BoundingBox bounding_box(const Solid& solid) {
+  auto point = [](const ApproxPoint& a) {
+    return Vec3{a.x.value / a.w.value, a.y.value / a.w.value, a.z.value / a.w.value};
+  };
+  BoundingBox box{point(solid.approx.front()), point(solid.approx.front())};
+  for (const ApproxPoint& a : solid.approx) {
+    const Vec3 p = point(a);
+    box.lo = {std::min(box.lo.x, p.x), std::min(box.lo.y, p.y), std::min(box.lo.z, p.z)};
+    box.hi = {std::max(box.hi.x, p.x), std::max(box.hi.y, p.y), std::max(box.hi.z, p.z)};
+  }
+  return box;
+}
+
 BoundingBox bounding_box(const Mesh& mesh) {
   BoundingBox box{mesh.positions.front(), mesh.positions.front()};
   for (const Vec3& p : mesh.positions) {
@@ -149,6 +167,10 @@ bool grazes_a_vertex(const Mesh& mesh, const Plane& plane, double diagonal) {
 struct BuildNode {
   Mesh mesh;
   ExactMesh exact;  // exact kernel: the solid the rounded mesh stands for
+  Solid solid;      // plane kernel: the exact solid (meshes are made after the build)
+  // Plane kernel: the cut planes of the node's ancestors by depth; the solid's
+  // vertices refer to them as PlaneRef::cut(depth).
+  std::vector<Plane> path;
   MassProperties mass;
   Plane plane;
   bool above_parent_plane = false;
@@ -186,8 +208,16 @@ class Builder {
   Builder(const BuildOptions& options, bool keep_exact, const LeafProgressFn& progress)
       : options_(options), keep_exact_(keep_exact), progress_(progress) {}
 
-  std::unique_ptr<BuildNode> root(const Mesh& mesh) const {
+  std::unique_ptr<BuildNode> root(const Mesh& mesh) {
     auto node = std::make_unique<BuildNode>();
+    if (options_.kernel == KernelKind::plane) {
+      plane_input_ = prepare_plane_input(mesh);
+      node->solid = plane_input_->solid;
+      node->mesh = mesh;  // the root is the input as given (validated on the way in)
+      node->mass = mass_properties(node->mesh);
+      node->seed = root_seed(options_.seed);
+      return node;
+    }
     node->mesh = mesh;
     if (options_.kernel == KernelKind::exact) node->exact = to_exact(mesh);
     node->mass = mass_properties(node->mesh);
@@ -198,6 +228,10 @@ class Builder {
   /// Cuts `node` and attaches its children. A pure function of the node (its mesh,
   /// seed and depth) and the options: which thread runs it, and when, never shows.
   void cut(BuildNode& node) const {
+    if (options_.kernel == KernelKind::plane) {
+      cut_plane_kernel(node);
+      return;
+    }
     NodeRandom random(node.seed);
     CutOptions cut_options;
     cut_options.cap_surface = node.depth + 1;  // made global once the tree is numbered
@@ -245,10 +279,85 @@ class Builder {
   }
 
   const BuildOptions& options() const { return options_; }
+  const PlaneInput& plane_input() const { return *plane_input_; }
   std::uint64_t planes_missed() const { return planes_missed_; }
   std::uint64_t planes_rejected() const { return planes_rejected_; }
 
  private:
+  // The plane kernel: the cut is exact, so nothing about the solids is checked.
+  // Each child is rounded to doubles at once and certified (round_solid); a plane
+  // is redrawn when it misses the node, or, exceedingly rarely, when a child
+  // cannot be written as a valid double mesh (a sliver thinner than the rounding
+  // of its coordinates: the exact tree would be valid, its rounding would not).
+  void cut_plane_kernel(BuildNode& node) const {
+    NodeRandom random(node.seed);
+    const BoundingBox box = bounding_box(node.solid);
+    std::vector<Plane> path = node.path;
+    path.emplace_back();
+    const PlaneRef cut = PlaneRef::cut(node.depth);
+    const PlaneSet set = plane_input_->geometry.plane_set(path);
+    SolidMeshOptions meshing;
+    meshing.attributes = &plane_input_->mesh;
+    meshing.interior_uv_scale = options_.interior_uv_scale;
+    meshing.allow_self_intersections = options_.allow_self_intersections;
+    meshing.trusted = &node.mesh;  // certified (the root: the validated input)
+    std::uint32_t missed = 0, unroundable = 0;
+    std::string last_defect;
+    for (std::uint32_t attempt = 0; attempt < options_.max_plane_tries; ++attempt) {
+      path.back() = draw_plane(options_.strategy, box, node.mass.centroid, random);
+      SolidCut result;
+      try {
+        result = cut_solid(set, node.solid, cut, node.depth + 1, plane_input_->shells);
+      } catch (const UnsupportedGeometryError& error) {
+        // The plane touches the surface inside the solid (a pinch): exactly
+        // degenerate, never met by a random plane but by constructed ones.
+        ++unroundable;
+        last_defect = error.what();
+        continue;
+      }
+      if (result.plane_missed) {
+        ++missed;
+        continue;
+      }
+      std::vector<std::unique_ptr<BuildNode>> children;
+      bool rounded = true;
+      for (auto* solids : {&result.below, &result.above}) {
+        for (Solid& solid : *solids) {
+          RoundedSolid mesh = round_solid(set, solid, meshing);
+          if (!mesh.valid) {
+            rounded = false;
+            last_defect = mesh.defect;
+            break;
+          }
+          auto child = std::make_unique<BuildNode>();
+          child->mesh = std::move(mesh.mesh);
+          child->mass = mass_properties(child->mesh);
+          child->solid = std::move(solid);
+          child->path = path;
+          child->above_parent_plane = solids == &result.above;
+          child->depth = node.depth + 1;
+          child->seed = child_seed(node.seed, children.size());
+          children.push_back(std::move(child));
+        }
+        if (!rounded) break;
+      }
+      if (!rounded) {
+        ++unroundable;
+        continue;
+      }
+      node.children = std::move(children);
+      node.plane = path.back();
+      planes_missed_ += missed;
+      planes_rejected_ += unroundable;
+      return;
+    }
+    throw UnsupportedGeometryError(
+        "cannot cut a fragment at depth " + std::to_string(node.depth) + ": of " +
+        std::to_string(options_.max_plane_tries) + " planes, " + std::to_string(missed) + " missed it and " +
+        std::to_string(unroundable) + " gave a piece that cannot be written as a valid double mesh" +
+        (last_defect.empty() ? std::string() : " (" + last_defect + ")"));
+  }
+
   // The promise of the tree is that every stored mesh is a valid solid. The fast
   // kernel rounds each crossing point, and the exact kernel rounds each node once
   // for storage; where a plane passes within rounding of a vertex that can fold a
@@ -296,6 +405,7 @@ class Builder {
   }
 
   const BuildOptions& options_;
+  std::optional<PlaneInput> plane_input_;
   bool keep_exact_;
   const LeafProgressFn& progress_;
   std::atomic<std::size_t> leaves_done_{0};
@@ -465,6 +575,24 @@ void number_tree(BuildNode& root, MeshTree& tree, std::vector<ExactMesh>* exact_
     for (SurfaceId& surface : node.mesh.surfaces) {
       if (surface != original_surface) surface = cap_surface_of(path[surface - 1]);
     }
+    // Likewise the plane kernel's cut planes, referred to by depth until now.
+    node.solid = std::move(built.solid);
+    node.convex = node.solid.convex;
+    for (SolidFace& face : node.solid.faces) {
+      if (face.surface != original_surface) face.surface = cap_surface_of(path[face.surface - 1]);
+      if (face.plane.is_cut()) face.plane = PlaneRef::cut(path[face.plane.index()]);
+    }
+    for (SolidCorner& corner : node.solid.corners) {
+      if (corner.line.other.bits != no_index && corner.line.other.is_cut()) {
+        corner.line.other = PlaneRef::cut(path[corner.line.other.index()]);
+      }
+    }
+    for (PointDef& def : node.solid.defs) {
+      const int planes = def.kind == PointKind::segment_plane ? 1 : def.kind == PointKind::three_planes ? 3 : 0;
+      for (int k = 0; k < planes; ++k) {
+        if (def.planes[k].is_cut()) def.planes[k] = PlaneRef::cut(path[def.planes[k].index()]);
+      }
+    }
     node.mass = built.mass;
     node.parent = pending.parent;
     node.plane = built.plane;
@@ -501,6 +629,52 @@ void dismantle(std::unique_ptr<BuildNode> root) {
     std::unique_ptr<BuildNode> node = std::move(stack.back());
     stack.pop_back();
     for (auto& child : node->children) stack.push_back(std::move(child));
+  }
+}
+
+// The plane kernel's hulls, from the leaves up: a convex node (decided exactly)
+// is its own hull; any other leaf's hull is that of its vertices; any other
+// internal node's is that of its children's hull vertices, which hold all of its
+// own vertices (every vertex of a node is a vertex of a child) and far fewer
+// points. Such a hull contains the node's mesh (it may exceed the hull of the
+// node's own vertices by the rounding of the cut points inside it). Each depth is
+// done in parallel, deepest first; pure functions of the meshes, so the bytes do
+// not depend on the schedule.
+void plane_hulls(tbb::task_arena& arena, MeshTree& tree) {
+  std::vector<std::vector<NodeIndex>> by_depth;
+  for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+    const std::uint32_t depth = tree.nodes[v].depth;
+    if (by_depth.size() <= depth) by_depth.resize(depth + 1);
+    by_depth[depth].push_back(v);
+  }
+  for (std::size_t d = by_depth.size(); d-- > 0;) {
+    const std::vector<NodeIndex>& level = by_depth[d];
+    arena.execute([&] {
+      tbb::parallel_for(std::size_t{0}, level.size(), [&](std::size_t i) {
+        MeshTreeNode& node = tree.nodes[level[i]];
+        if (node.convex) return;
+        if (node.is_leaf()) {
+          node.hull = convex_hull_of(node.mesh);
+          return;
+        }
+        std::vector<Vec3> points;
+        for (const NodeIndex c : node.children) {
+          const Mesh& child_hull = tree.hull_of(c);
+          points.insert(points.end(), child_hull.positions.begin(), child_hull.positions.end());
+        }
+        node.hull = convex_hull_of_points(points);
+      });
+    });
+  }
+}
+
+// The plane kernel's tree keeps the input planes and the node planes that the
+// nodes' exact solids are defined over.
+void keep_plane_geometry(const PlaneInput& input, MeshTree& tree) {
+  tree.geometry = input.geometry;
+  tree.cut_planes.resize(tree.nodes.size());
+  for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
+    tree.cut_planes[i] = tree.nodes[i].is_leaf() ? Plane{} : tree.nodes[i].plane;
   }
 }
 
@@ -543,15 +717,18 @@ ExactBuild build(const Mesh& mesh, const BuildOptions& options, bool keep_exact,
   timing.cutting_seconds = seconds_since(phase_start);
   timing.planes_missed = builder.planes_missed();
   timing.planes_rejected = builder.planes_rejected();
+  if (options.kernel == KernelKind::plane) keep_plane_geometry(builder.plane_input(), result.tree);
   phase_start = std::chrono::steady_clock::now();
-  // Hulls are pure functions of their meshes, so computing them after the build,
-  // in parallel, changes nothing but the time.
-  arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, result.tree.nodes.size(), [&](std::size_t i) {
-      MeshTreeNode& node = result.tree.nodes[i];
-      node.hull = convex_hull_of(node.mesh);
+  if (options.kernel == KernelKind::plane) {
+    plane_hulls(arena, result.tree);
+  } else {
+    // Hulls are pure functions of their meshes, so computing them after the
+    // build, in parallel, changes nothing but the time.
+    arena.execute([&] {
+      tbb::parallel_for(std::size_t{0}, result.tree.nodes.size(),
+                        [&](std::size_t i) { result.tree.nodes[i].hull = convex_hull_of(result.tree.nodes[i].mesh); });
     });
-  });
+  }
   timing.hull_seconds = seconds_since(phase_start);
   phase_start = std::chrono::steady_clock::now();
   result.tree.bonds = find_bonds(result.tree);

@@ -11,18 +11,22 @@
 #include <array>
 #include <bit>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <tuple>
 #include <utility>
 #include <vector>
 
 #include "shatter/kernel/error.hpp"
+#include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/io.hpp"
+#include "shatter/kernel/solid.hpp"
 
 namespace shatter {
 
@@ -42,6 +46,8 @@ constexpr Tag nodes_tag = {'N', 'O', 'D', 'E'};
 constexpr Tag meshes_tag = {'M', 'E', 'S', 'H'};
 constexpr Tag hulls_tag = {'H', 'U', 'L', 'L'};
 constexpr Tag bonds_tag = {'B', 'O', 'N', 'D'};
+constexpr Tag geometry_tag = {'G', 'E', 'O', 'M'};  // version 2
+constexpr Tag solids_tag = {'S', 'O', 'L', 'D'};    // version 2
 constexpr Tag end_tag = {'E', 'N', 'D', ' '};
 
 // Bytes on disk, the least each record can take: counts are checked against these
@@ -56,6 +62,21 @@ constexpr std::size_t normal_size = 24;
 constexpr std::size_t uv_size = 16;
 constexpr std::size_t tangent_size = 32;
 constexpr std::size_t bond_size = 68;
+constexpr std::size_t geometry_header_size = 8;  // point count, input plane count
+constexpr std::size_t point_size = 24;
+constexpr std::size_t input_plane_size = 12;
+constexpr std::size_t solid_record_min_size = 17;  // flags and four counts
+constexpr std::size_t point_def_size = 13;
+constexpr std::size_t face_size = 17;
+constexpr std::size_t loop_size = 4;
+constexpr std::size_t corner_min_size = 9;  // without its segment
+constexpr std::size_t segment_size = 8;
+
+// SOLD flag bits: per node, and per face.
+constexpr std::uint8_t node_convex_bit = 1;
+constexpr std::uint8_t solid_convex_bit = 2;
+constexpr std::uint8_t face_reversed_bit = 1;
+constexpr std::uint8_t face_convex_bit = 2;
 
 constexpr std::uint8_t normals_bit = 1;
 constexpr std::uint8_t uvs_bit = 2;
@@ -65,7 +86,8 @@ constexpr std::uint8_t known_channel_bits = normals_bit | uvs_bit | tangents_bit
 // The largest enum values this version knows; a new Strategy or KernelKind must
 // be added here (and to the layout comment) to be stored.
 constexpr std::uint8_t last_strategy = static_cast<std::uint8_t>(Strategy::axis);
-constexpr std::uint8_t last_kernel = static_cast<std::uint8_t>(KernelKind::exact);
+constexpr std::uint8_t last_kernel = static_cast<std::uint8_t>(KernelKind::plane);
+constexpr std::uint8_t last_point_kind = static_cast<std::uint8_t>(PointKind::three_planes);
 
 constexpr std::uint64_t max_u32 = std::numeric_limits<std::uint32_t>::max();
 
@@ -117,11 +139,11 @@ std::string str(std::uint64_t value) { return std::to_string(value); }
 // Validation, shared by the encoder (a precondition) and the decoder (trust)
 
 /// Where a defect is: which record of which part of the tree.
-enum class Part { options, node, leaf_list, mesh, hull, bond };
+enum class Part { options, node, leaf_list, mesh, hull, bond, point, input_plane, cut_planes, solid };
 
 struct Defect {
   Part part;
-  std::size_t index;  ///< node, leaf or bond index; 0 for options
+  std::size_t index;  ///< node, leaf, bond, point or input plane index; 0 for options and cut_planes
   std::string message;
 };
 
@@ -305,7 +327,268 @@ std::optional<Defect> bonds_defect(const MeshTree& tree) {
   return std::nullopt;
 }
 
-std::optional<Defect> first_defect(const MeshTree& tree) {
+// --- the exact representation (plane kernel) ---------------------------------
+
+bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
+bool same_bits(const Plane& a, const Plane& b) {
+  return same_bits(a.normal.x, b.normal.x) && same_bits(a.normal.y, b.normal.y) && same_bits(a.normal.z, b.normal.z) &&
+         same_bits(a.offset, b.offset);
+}
+
+/// MeshTree::cut_planes as the tree's nodes define it: each node's plane, zero
+/// for leaves.
+Plane cut_plane_of(const MeshTreeNode& node) { return node.is_leaf() ? Plane{} : node.plane; }
+
+bool solid_is_empty(const Solid& solid) {
+  return solid.defs.empty() && solid.approx.empty() && solid.faces.empty() && solid.loops.empty() && solid.corners.empty() &&
+         !solid.convex;
+}
+
+std::string point_kind_name(PointKind kind) {
+  switch (kind) {
+    case PointKind::input: return "input";
+    case PointKind::segment_plane: return "segment_plane";
+    case PointKind::three_planes: return "three_planes";
+  }
+  return "kind " + str(static_cast<std::uint8_t>(kind));
+}
+
+/// What the plane kernel's checks need to know about the tree, computed once.
+struct ExactContext {
+  std::size_t point_count = 0;
+  std::size_t input_plane_count = 0;
+  /// In preorder node a's subtree is [a, subtree_end[a]), so a is a strict
+  /// ancestor of k exactly when a < k < subtree_end[a].
+  std::vector<NodeIndex> subtree_end;
+};
+
+/// Buffers reused from one solid to the next, so that checking every node's
+/// solid allocates about as much as checking the largest.
+struct SolidScratch {
+  std::vector<std::uint64_t> edges;
+  std::vector<char> used;
+};
+
+/// Why `plane` may not appear in node `node`'s solid, or nothing: it must be an
+/// input plane in range, or the cut plane of a strict ancestor of the node.
+std::optional<std::string> plane_defect(PlaneRef plane, std::size_t node, const ExactContext& context) {
+  if (plane.is_cut()) {
+    const std::uint32_t owner = plane.index();
+    if (owner < node && node < context.subtree_end[owner]) return std::nullopt;
+    return "names cut plane " + str(owner) + " (" + hex(plane.bits, 8) + "), but node " + str(owner) + " is not an ancestor of node " +
+           str(node) + " (a solid only lies on its ancestors' cut planes)";
+  }
+  if (plane.index() < context.input_plane_count) return std::nullopt;
+  return "names input plane " + str(plane.index()) + ", but there are only " + str(context.input_plane_count) + " input planes";
+}
+
+std::optional<std::string> point_defect(std::uint32_t point, const ExactContext& context) {
+  if (point < context.point_count) return std::nullopt;
+  return "names input point " + str(point) + ", but there are only " + str(context.point_count) + " input points";
+}
+
+/// The first structural defect of node `node`'s solid (file.hpp lists the checks),
+/// or nothing. `caches`: also require one approx per vertex (the encoder's
+/// precondition; the decoder computes them after these checks).
+std::optional<std::string> solid_defect(const Solid& solid, std::size_t node, const ExactContext& context, bool caches, SolidScratch& scratch) {
+  const std::size_t vertex_count = solid.defs.size(), loop_count = solid.loops.size(), corner_count = solid.corners.size();
+  for (const auto& [name, size] : std::array<std::pair<const char*, std::size_t>, 4>{
+           {{"vertices", vertex_count}, {"faces", solid.faces.size()}, {"loops", loop_count}, {"corners", corner_count}}}) {
+    if (size > max_u32) return "has " + str(size) + " " + name + ", more than a u32 can count";
+  }
+  if (caches && solid.approx.size() != vertex_count) {
+    return "has " + str(solid.approx.size()) + " approx entries for " + str(vertex_count) + " vertices";
+  }
+
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    const PointDef& def = solid.defs[v];
+    const auto kind = static_cast<std::uint8_t>(def.kind);
+    if (kind > last_point_kind) return "vertex " + str(v) + " has unknown kind " + str(kind);
+    const auto name = [&] { return "vertex " + str(v) + " (" + point_kind_name(def.kind) + ") "; };
+    // How many of a, b and planes[] the kind uses; the rest must be zero.
+    const int points_used = def.kind == PointKind::input ? 1 : def.kind == PointKind::segment_plane ? 2 : 0;
+    const int planes_used = def.kind == PointKind::input ? 0 : def.kind == PointKind::segment_plane ? 1 : 3;
+    const std::array<std::uint32_t, 2> points = {def.a, def.b};
+    for (int k = 0; k < 2; ++k) {
+      if (k < points_used) {
+        if (auto problem = point_defect(points[k], context)) return name() + *problem;
+      } else if (points[k] != 0) {
+        return name() + "has " + (k == 0 ? "a" : "b") + " = " + str(points[k]) + ", a field its kind does not use (must be 0)";
+      }
+    }
+    for (int k = 0; k < 3; ++k) {
+      if (k < planes_used) {
+        if (auto problem = plane_defect(def.planes[k], node, context)) return name() + "plane " + str(k) + " " + *problem;
+      } else if (def.planes[k].bits != 0) {
+        return name() + "has plane " + str(k) + " = " + hex(def.planes[k].bits, 8) + ", a field its kind does not use (must be 0)";
+      }
+    }
+  }
+
+  std::uint64_t next_loop = 0;
+  for (std::size_t f = 0; f < solid.faces.size(); ++f) {
+    const SolidFace& face = solid.faces[f];
+    const auto name = [&] { return "face " + str(f) + " "; };
+    if (auto problem = plane_defect(face.plane, node, context)) return name() + *problem;
+    if (face.loop_count == 0) return name() + "has no loop";
+    if (face.first_loop != next_loop) {
+      return name() + "starts at loop " + str(face.first_loop) + ", but the faces before it end at loop " + str(next_loop) +
+             " (faces take the loops in order)";
+    }
+    next_loop += face.loop_count;
+    if (next_loop > loop_count) return name() + "has loops up to " + str(next_loop) + ", but there are only " + str(loop_count) + " loops";
+  }
+  if (next_loop != loop_count) return "has " + str(loop_count) + " loops, but its faces hold " + str(next_loop);
+
+  std::uint64_t next_corner = 0;
+  for (std::size_t l = 0; l < loop_count; ++l) {
+    const SolidLoop& loop = solid.loops[l];
+    const auto name = [&] { return "loop " + str(l) + " "; };
+    if (loop.corner_count < 3) return name() + "has " + str(loop.corner_count) + " corners (a loop has at least 3)";
+    if (loop.first_corner != next_corner) {
+      return name() + "starts at corner " + str(loop.first_corner) + ", but the loops before it end at corner " + str(next_corner) +
+             " (loops take the corners in order)";
+    }
+    next_corner += loop.corner_count;
+    if (next_corner > corner_count) {
+      return name() + "has corners up to " + str(next_corner) + ", but there are only " + str(corner_count) + " corners";
+    }
+  }
+  if (next_corner != corner_count) return "has " + str(corner_count) + " corners, but its loops hold " + str(next_corner);
+
+  for (std::size_t c = 0; c < corner_count; ++c) {
+    const SolidCorner& corner = solid.corners[c];
+    const auto name = [&] { return "corner " + str(c) + " "; };
+    if (corner.vertex >= vertex_count) {
+      return name() + "has vertex " + str(corner.vertex) + ", but there are only " + str(vertex_count) + " vertices";
+    }
+    if (corner.line.other.bits != no_index) {
+      if (auto problem = plane_defect(corner.line.other, node, context)) return name() + "line " + *problem;
+    }
+    const EdgeLine& line = corner.line;
+    if (line.p != no_index || line.q != no_index) {
+      if (!(line.p < line.q && line.q < context.point_count)) {
+        return name() + "has segment (" + str(line.p) + ", " + str(line.q) + "), not two input points p < q < " + str(context.point_count) +
+               " nor none (both " + hex(no_index, 8) + ")";
+      }
+    }
+  }
+
+  // Closed: every directed edge used once, and its reverse used too.
+  scratch.edges.clear();
+  scratch.used.assign(vertex_count, 0);
+  for (const SolidLoop& loop : solid.loops) {
+    for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
+      const VertexIndex from = solid.corners[loop.first_corner + i].vertex;
+      const VertexIndex to = solid.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
+      if (from == to) return "corner " + str(loop.first_corner + i) + " repeats vertex " + str(from) + " of the corner after it";
+      scratch.used[from] = 1;
+      scratch.edges.push_back((std::uint64_t{from} << 32) | to);
+    }
+  }
+  std::sort(scratch.edges.begin(), scratch.edges.end());
+  const auto edge_name = [](std::uint64_t edge) { return "edge (" + str(edge >> 32) + ", " + str(edge & 0xFFFFFFFFu) + ") "; };
+  if (const auto twice = std::adjacent_find(scratch.edges.begin(), scratch.edges.end()); twice != scratch.edges.end()) {
+    return edge_name(*twice) + "is used twice";
+  }
+  for (const std::uint64_t edge : scratch.edges) {
+    const std::uint64_t reverse = (edge << 32) | (edge >> 32);
+    if (!std::binary_search(scratch.edges.begin(), scratch.edges.end(), reverse)) return edge_name(edge) + "has no reverse: the solid is open";
+  }
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    if (scratch.used[v] == 0) return "vertex " + str(v) + " is used by no corner";
+  }
+  return std::nullopt;
+}
+
+/// The exact representation's defects: geometry, cut planes, convex flags and
+/// solids (file.hpp, decode_shatter). Requires a valid structure.
+std::optional<Defect> exact_defect(const MeshTree& tree, bool caches) {
+  const InputGeometry& geometry = tree.geometry;
+  const std::size_t node_count = tree.nodes.size();
+  if (caches && geometry.plane_approx.size() != geometry.planes.size()) {
+    return Defect{Part::cut_planes, 0,
+                  "geometry has " + str(geometry.plane_approx.size()) + " plane_approx entries for " + str(geometry.planes.size()) + " input planes"};
+  }
+  if (geometry.points.empty()) {
+    // No exact representation: nothing of it may be present.
+    if (!geometry.planes.empty()) {
+      return Defect{Part::input_plane, 0, "geometry has " + str(geometry.planes.size()) + " input planes but no input points"};
+    }
+    if (!tree.cut_planes.empty()) {
+      return Defect{Part::cut_planes, 0,
+                    "cut_planes has " + str(tree.cut_planes.size()) + " planes, but the tree has no exact representation (no input points)"};
+    }
+    for (std::size_t k = 0; k < node_count; ++k) {
+      if (!solid_is_empty(tree.nodes[k].solid)) {
+        return Defect{Part::solid, k, "node " + str(k) + " has a solid, but the tree has no geometry (no input points)"};
+      }
+      if (tree.nodes[k].convex) {
+        return Defect{Part::solid, k, "node " + str(k) + " is marked convex, but the tree has no exact representation (no input points)"};
+      }
+    }
+    return std::nullopt;
+  }
+
+  ExactContext context;
+  context.point_count = geometry.points.size();
+  context.input_plane_count = geometry.planes.size();
+  if (context.point_count > max_u32) {
+    return Defect{Part::point, 0, "geometry has " + str(context.point_count) + " input points, more than a u32 can count"};
+  }
+  if (context.input_plane_count > PlaneRef::cut_bit) {
+    return Defect{Part::input_plane, 0,
+                  "geometry has " + str(context.input_plane_count) + " input planes, more than a plane reference can name (2^31)"};
+  }
+  for (std::size_t i = 0; i < context.point_count; ++i) {
+    if (!finite(geometry.points[i])) return Defect{Part::point, i, "input point " + str(i) + " has a coordinate that is NaN or infinite"};
+  }
+  for (std::size_t j = 0; j < context.input_plane_count; ++j) {
+    for (const VertexIndex point : geometry.planes[j]) {
+      if (point >= context.point_count) {
+        return Defect{Part::input_plane, j,
+                      "input plane " + str(j) + " names input point " + str(point) + ", but there are only " + str(context.point_count) + " input points"};
+      }
+    }
+  }
+  if (tree.cut_planes.size() != node_count) {
+    return Defect{Part::cut_planes, 0, "cut_planes has " + str(tree.cut_planes.size()) + " planes for " + str(node_count) + " nodes"};
+  }
+  for (std::size_t k = 0; k < node_count; ++k) {
+    const MeshTreeNode& node = tree.nodes[k];
+    if (!same_bits(tree.cut_planes[k], cut_plane_of(node))) {
+      return Defect{Part::cut_planes, k,
+                    "cut_planes[" + str(k) + "] is not " + (node.is_leaf() ? std::string("zero (node ") + str(k) + " is a leaf)" : "node " + str(k) + "'s plane")};
+    }
+    if (!node.is_leaf() && !(finite(node.plane.normal) && std::isfinite(node.plane.offset))) {
+      return Defect{Part::node, k, "node " + str(k) + " has a plane with a NaN or infinite coefficient (a cut plane of the exact representation)"};
+    }
+  }
+
+  context.subtree_end.resize(node_count);
+  for (std::size_t k = node_count; k-- > 0;) {
+    const MeshTreeNode& node = tree.nodes[k];
+    context.subtree_end[k] = node.is_leaf() ? static_cast<NodeIndex>(k + 1) : context.subtree_end[node.children.back()];
+  }
+  SolidScratch scratch;
+  for (std::size_t k = 0; k < node_count; ++k) {
+    const MeshTreeNode& node = tree.nodes[k];
+    if (node.convex && !(node.hull.positions.empty() && node.hull.triangles.empty())) {
+      return Defect{Part::hull, k,
+                    "node " + str(k) + " is convex, so its hull must be empty (its mesh is its hull), but the hull has " +
+                        str(node.hull.positions.size()) + " vertices and " + str(node.hull.triangles.size()) + " triangles"};
+    }
+    if (auto problem = solid_defect(node.solid, k, context, caches, scratch)) {
+      return Defect{Part::solid, k, "the solid of node " + str(k) + " " + *problem};
+    }
+  }
+  return std::nullopt;
+}
+
+/// The first defect of `tree`, or nothing. `caches`: also check that the
+/// exact representation's caches are sized (the encoder's precondition).
+std::optional<Defect> first_defect(const MeshTree& tree, bool caches) {
   if (auto defect = options_defect(tree.options)) return defect;
   if (auto defect = structure_defect(tree.nodes)) return defect;
   if (auto defect = leaf_list_defect(tree)) return defect;
@@ -313,7 +596,8 @@ std::optional<Defect> first_defect(const MeshTree& tree) {
     if (auto problem = mesh_defect(tree.nodes[k].mesh)) return Defect{Part::mesh, k, "the mesh of node " + str(k) + " " + *problem};
     if (auto problem = mesh_defect(tree.nodes[k].hull)) return Defect{Part::hull, k, "the hull of node " + str(k) + " " + *problem};
   }
-  return bonds_defect(tree);
+  if (auto defect = bonds_defect(tree)) return defect;
+  return exact_defect(tree, caches);
 }
 
 // ---------------------------------------------------------------------------
@@ -426,6 +710,63 @@ std::string bonds_payload(const std::vector<Bond>& bonds) {
   return out.take();
 }
 
+std::string geometry_payload(const InputGeometry& geometry) {
+  ByteWriter out;
+  out.count32(geometry.points.size());
+  out.count32(geometry.planes.size());
+  for (const Vec3& point : geometry.points) out.vec3(point);
+  for (const auto& plane : geometry.planes) {
+    for (const VertexIndex point : plane) out.u32(point);
+  }
+  return out.take();
+}
+
+/// One record per node when the tree has an exact representation, else none.
+std::string solids_payload(const MeshTree& tree) {
+  ByteWriter out;
+  const bool exact = !tree.geometry.points.empty();
+  out.count32(exact ? tree.nodes.size() : 0);
+  if (!exact) return out.take();
+  for (const MeshTreeNode& node : tree.nodes) {
+    const Solid& solid = node.solid;
+    out.u8(static_cast<std::uint8_t>((node.convex ? node_convex_bit : 0) | (solid.convex ? solid_convex_bit : 0)));
+    out.count32(solid.defs.size());
+    out.count32(solid.faces.size());
+    out.count32(solid.loops.size());
+    out.count32(solid.corners.size());
+    for (const PointDef& def : solid.defs) {
+      out.u8(static_cast<std::uint8_t>(def.kind));
+      // The validator has checked that the fields a kind does not use are zero.
+      if (def.kind == PointKind::three_planes) {
+        for (const PlaneRef plane : def.planes) out.u32(plane.bits);
+      } else {
+        out.u32(def.a);
+        out.u32(def.b);
+        out.u32(def.planes[0].bits);
+      }
+    }
+    for (const SolidFace& face : solid.faces) {
+      out.u32(face.plane.bits);
+      out.u8(static_cast<std::uint8_t>((face.reversed ? face_reversed_bit : 0) | (face.convex ? face_convex_bit : 0)));
+      out.u32(face.surface);
+      out.u32(face.source);
+      out.u32(face.loop_count);
+    }
+    for (const SolidLoop& loop : solid.loops) out.u32(loop.corner_count);
+    for (const SolidCorner& corner : solid.corners) {
+      out.u32(corner.vertex);
+      out.u32(corner.line.other.bits);
+      // The validator has checked that p and q are both none or both points.
+      out.u8(corner.line.is_segment() ? 1 : 0);
+      if (corner.line.is_segment()) {
+        out.u32(corner.line.p);
+        out.u32(corner.line.q);
+      }
+    }
+  }
+  return out.take();
+}
+
 void append_section(ByteWriter& file, Tag tag, std::string_view payload) {
   file.tag(tag);
   file.u64(payload.size());
@@ -456,10 +797,13 @@ struct Section {
 };
 
 struct SectionTable {
+  std::uint32_t version = 0;
   std::optional<Section> options, nodes, meshes, hulls, bonds;
+  std::optional<Section> geometry, solids;  // version 2
 };
 
-void check_file_header(std::string_view bytes) {
+/// Checks the magic and returns the version, one this reader knows.
+std::uint32_t check_file_header(std::string_view bytes) {
   const std::size_t magic_bytes_present = std::min(bytes.size(), magic.size());
   for (std::size_t k = 0; k < magic_bytes_present; ++k) {
     if (static_cast<unsigned char>(bytes[k]) != magic[k]) {
@@ -470,22 +814,28 @@ void check_file_header(std::string_view bytes) {
     refuse("truncated .shatter file: " + str(bytes.size()) + " bytes, shorter than the " + str(file_header_size) + "-byte header");
   }
   const std::uint32_t version = load_u32(bytes, magic.size());
-  if (version != shatter_format_version) {
-    refuse("unsupported .shatter format version " + str(version) + " at byte " + str(magic.size()) + " (this build reads version " +
-           str(shatter_format_version) + (version > shatter_format_version ? ": the file is from a newer shatter, or damaged)" : ")"));
+  if (version < shatter_oldest_format_version || version > shatter_format_version) {
+    refuse("unsupported .shatter format version " + str(version) + " at byte " + str(magic.size()) + " (this build reads versions " +
+           str(shatter_oldest_format_version) + " to " + str(shatter_format_version) +
+           (version > shatter_format_version ? ": the file is from a newer shatter, or damaged)" : ")"));
   }
+  return version;
 }
 
 /// Splits the file into its sections, checking every checksum, and keeps the
 /// ones this version reads (see the reading rules in file.hpp).
 SectionTable read_section_table(std::string_view bytes) {
-  check_file_header(bytes);
   SectionTable table;
-  const std::array<std::pair<Tag, std::optional<Section>*>, 5> known = {{{options_tag, &table.options},
-                                                                         {nodes_tag, &table.nodes},
-                                                                         {meshes_tag, &table.meshes},
-                                                                         {hulls_tag, &table.hulls},
-                                                                         {bonds_tag, &table.bonds}}};
+  table.version = check_file_header(bytes);
+  // Version 1 knows the first five; GEOM and SOLD are unknown tags there.
+  const std::array<std::pair<Tag, std::optional<Section>*>, 7> all_known = {{{options_tag, &table.options},
+                                                                             {nodes_tag, &table.nodes},
+                                                                             {meshes_tag, &table.meshes},
+                                                                             {hulls_tag, &table.hulls},
+                                                                             {bonds_tag, &table.bonds},
+                                                                             {geometry_tag, &table.geometry},
+                                                                             {solids_tag, &table.solids}}};
+  const std::span<const std::pair<Tag, std::optional<Section>*>> known(all_known.data(), table.version == 1 ? 5 : 7);
   std::size_t position = file_header_size;
   while (true) {
     if (position == bytes.size()) refuse("truncated .shatter file: ends at byte " + str(position) + " without the END section");
@@ -605,6 +955,11 @@ class PayloadReader {
     return value == 1;
   }
 
+  /// Refuses a field of `size` bytes if the payload ends before it.
+  void need(std::size_t size, const char* field) const {
+    if (remaining() < size) fail("the payload ends inside " + std::string(field));
+  }
+
   /// Refuses `count` records of at least `record_size` bytes each if they
   /// cannot fit in what is left, before the caller allocates for them.
   void check_room(std::uint64_t count, std::size_t record_size, const char* what) const {
@@ -623,10 +978,6 @@ class PayloadReader {
   }
 
  private:
-  void need(std::size_t size, const char* field) const {
-    if (remaining() < size) fail("the payload ends inside " + std::string(field));
-  }
-
   std::string_view payload_;
   std::size_t payload_offset_;
   std::size_t position_ = 0;
@@ -696,6 +1047,11 @@ Mesh read_mesh_record(PayloadReader& in) {
   const std::size_t channels_at = in.offset();
   const std::uint8_t channels = in.u8("channel flags");
   if ((channels & ~known_channel_bits) != 0) in.fail_at(channels_at, "unknown attribute channel bits " + hex(channels, 2));
+  // A channel is present when it holds values, so a mesh without triangles has
+  // none; accepting bits here would decode to a mesh that encodes differently.
+  if (triangle_count == 0 && channels != 0) {
+    in.fail_at(channels_at, "attribute channel bits " + hex(channels, 2) + " for a mesh without triangles (must be 0)");
+  }
 
   in.check_room(vertex_count, vertex_size, "vertices");
   mesh.positions.resize(vertex_count);
@@ -764,9 +1120,123 @@ std::vector<Bond> read_bonds(const Section& section) {
   return bonds;
 }
 
+InputGeometry read_geometry(const Section& section) {
+  PayloadReader in(section);
+  InputGeometry geometry;
+  const std::uint32_t point_count = in.u32("the point count");
+  const std::uint32_t plane_count = in.u32("the input plane count");
+  in.check_room(point_count, point_size, "input points");
+  geometry.points.resize(point_count);
+  for (Vec3& point : geometry.points) point = in.vec3("input point");
+  in.check_room(plane_count, input_plane_size, "input planes");
+  geometry.planes.resize(plane_count);
+  for (auto& plane : geometry.planes) {
+    for (VertexIndex& point : plane) point = in.u32("input plane");
+  }
+  in.expect_end();
+  return geometry;
+}
+
+/// Reads each node's exact solid and convex flag; `exact`: GEOM holds input
+/// points, so there is one record per node (else none). Faces' first loops and
+/// loops' first corners are the running sums of the counts before them.
+void read_solids(const Section& section, std::vector<MeshTreeNode>& nodes, bool exact, std::vector<std::size_t>& record_offsets) {
+  PayloadReader in(section);
+  const std::uint32_t record_count = in.u32("the solid count");
+  if (!exact && record_count != 0) {
+    in.fail(str(record_count) + " solids, but GEOM holds no input points (a tree without an exact representation stores none)");
+  }
+  if (exact && record_count != nodes.size()) in.fail(str(record_count) + " solids for " + str(nodes.size()) + " nodes");
+  in.check_room(record_count, solid_record_min_size, "solids");
+  record_offsets.resize(record_count);
+  for (std::size_t k = 0; k < record_count; ++k) {
+    record_offsets[k] = in.offset();
+    in.set_record("node " + str(k));
+    MeshTreeNode& node = nodes[k];
+    Solid& solid = node.solid;
+    const std::size_t flags_at = in.offset();
+    const std::uint8_t flags = in.u8("solid flags");
+    if ((flags & ~(node_convex_bit | solid_convex_bit)) != 0) in.fail_at(flags_at, "unknown solid flag bits " + hex(flags, 2));
+    node.convex = (flags & node_convex_bit) != 0;
+    solid.convex = (flags & solid_convex_bit) != 0;
+    const std::uint32_t vertex_count = in.u32("vertex count");
+    const std::uint32_t face_count = in.u32("face count");
+    const std::uint32_t loop_count = in.u32("loop count");
+    const std::uint32_t corner_count = in.u32("corner count");
+
+    in.check_room(vertex_count, point_def_size, "vertex definitions");
+    solid.defs.resize(vertex_count);
+    for (std::size_t v = 0; v < vertex_count; ++v) {
+      PointDef& def = solid.defs[v];
+      const std::size_t kind_at = in.offset();
+      const std::uint8_t kind = in.u8("vertex kind");
+      if (kind > last_point_kind) in.fail_at(kind_at, "vertex " + str(v) + " has unknown kind " + str(kind));
+      def.kind = static_cast<PointKind>(kind);
+      // Fields a kind does not use land where the validator refuses non-zero ones.
+      if (def.kind == PointKind::three_planes) {
+        for (PlaneRef& plane : def.planes) plane.bits = in.u32("vertex plane");
+      } else {
+        def.a = in.u32("vertex point");
+        def.b = in.u32("vertex point");
+        def.planes[0].bits = in.u32("vertex plane");
+      }
+    }
+
+    in.check_room(face_count, face_size, "faces");
+    solid.faces.resize(face_count);
+    std::uint64_t next_loop = 0;
+    for (SolidFace& face : solid.faces) {
+      face.plane.bits = in.u32("face plane");
+      const std::size_t face_flags_at = in.offset();
+      const std::uint8_t face_flags = in.u8("face flags");
+      if ((face_flags & ~(face_reversed_bit | face_convex_bit)) != 0) in.fail_at(face_flags_at, "unknown face flag bits " + hex(face_flags, 2));
+      face.reversed = (face_flags & face_reversed_bit) != 0;
+      face.convex = (face_flags & face_convex_bit) != 0;
+      face.surface = in.u32("face surface");
+      face.source = in.u32("face source");
+      const std::size_t count_at = in.offset();
+      face.loop_count = in.u32("face loop count");
+      face.first_loop = static_cast<std::uint32_t>(next_loop);
+      next_loop += face.loop_count;
+      if (next_loop > loop_count) in.fail_at(count_at, "the faces claim " + str(next_loop) + " loops or more, of " + str(loop_count));
+    }
+
+    in.check_room(loop_count, loop_size, "loops");
+    solid.loops.resize(loop_count);
+    std::uint64_t next_corner = 0;
+    for (SolidLoop& loop : solid.loops) {
+      const std::size_t count_at = in.offset();
+      loop.corner_count = in.u32("loop corner count");
+      loop.first_corner = static_cast<std::uint32_t>(next_corner);
+      next_corner += loop.corner_count;
+      if (next_corner > corner_count) in.fail_at(count_at, "the loops claim " + str(next_corner) + " corners or more, of " + str(corner_count));
+    }
+
+    in.check_room(corner_count, corner_min_size, "corners");
+    solid.corners.resize(corner_count);
+    for (std::size_t c = 0; c < corner_count; ++c) {
+      SolidCorner& corner = solid.corners[c];
+      corner.vertex = in.u32("corner vertex");
+      corner.line.other.bits = in.u32("corner line plane");
+      const std::size_t segment_at = in.offset();
+      const bool segment = in.boolean("corner segment flag");
+      if (segment) {
+        in.need(segment_size, "corner segment");
+        corner.line.p = in.u32("corner segment");
+        corner.line.q = in.u32("corner segment");
+        // A segment of two "none" points would come back as no segment (flag 0).
+        if (corner.line.p == no_index) in.fail_at(segment_at, "corner " + str(c) + " has a segment flag, but its segment is none");
+      }
+    }
+  }
+  in.set_record("");
+  in.expect_end();
+}
+
 /// Where each record of a decoded tree came from, to place a defect in the file.
 struct RecordOffsets {
-  std::vector<std::size_t> nodes, meshes, hulls;
+  std::vector<std::size_t> nodes, meshes, hulls, solids;
+  std::size_t point_count = 0;
 };
 
 std::string located(const Defect& defect, const SectionTable& sections, const RecordOffsets& offsets) {
@@ -793,6 +1263,24 @@ std::string located(const Defect& defect, const SectionTable& sections, const Re
       tag = bonds_tag;
       at = sections.bonds->payload_offset + 8 + bond_size * defect.index;
       break;
+    // The exact representation's parts exist only in version 2 files; cut_planes
+    // is recomputed by the reader, so never at fault in a file.
+    case Part::point:
+    case Part::input_plane:
+    case Part::cut_planes:
+      if (sections.geometry) {
+        tag = geometry_tag;
+        at = sections.geometry->payload_offset;
+        if (defect.part == Part::point) at += geometry_header_size + point_size * defect.index;
+        if (defect.part == Part::input_plane) at += geometry_header_size + point_size * offsets.point_count + input_plane_size * defect.index;
+      }
+      break;
+    case Part::solid:
+      if (sections.solids) {
+        tag = solids_tag;
+        at = defect.index < offsets.solids.size() ? offsets.solids[defect.index] : sections.solids->payload_offset;
+      }
+      break;
   }
   return "invalid tree in .shatter file: " + section_name(tag) + " section, byte " + str(at) + ": " + defect.message;
 }
@@ -812,12 +1300,56 @@ std::string read_whole_file(const std::filesystem::path& path) {
   return bytes;
 }
 
+/// The caches the file does not store, computed from what it does store: input
+/// planes' approximations (approximate_input_plane) and every solid vertex's
+/// (approximate() over the tree's PlaneSet). `fill`: store them in the tree (the
+/// decoder; `fill` is `&tree`); otherwise compare them with the tree's, bit for bit (the encoder:
+/// equal caches are what makes decode(encode(tree)) equal to the tree).
+/// Requires a tree that passed first_defect. Returns the first vertex whose
+/// definition is degenerate (its planes meet in no single point), or, when
+/// comparing, the first cache entry that differs.
+std::optional<Defect> caches_defect(const MeshTree& tree, MeshTree* fill) {
+  const InputGeometry& geometry = tree.geometry;
+  if (geometry.points.empty()) return std::nullopt;
+  if (fill) fill->geometry.plane_approx.resize(geometry.planes.size());
+  for (std::size_t j = 0; j < geometry.planes.size(); ++j) {
+    const auto& plane = geometry.planes[j];
+    const ApproxPlane approx = approximate_input_plane(geometry.points[plane[0]], geometry.points[plane[1]], geometry.points[plane[2]]);
+    if (fill) {
+      fill->geometry.plane_approx[j] = approx;
+    } else if (std::memcmp(&approx, &geometry.plane_approx[j], sizeof approx) != 0) {
+      return Defect{Part::input_plane, j, "geometry.plane_approx[" + str(j) + "] is not approximate_input_plane of input plane " + str(j) + " (a stale cache)"};
+    }
+  }
+  // Made after plane_approx is filled: the set views it.
+  const PlaneSet set = tree.plane_set();
+  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+    const Solid& solid = tree.nodes[k].solid;
+    if (fill) fill->nodes[k].solid.approx.resize(solid.defs.size());
+    for (std::size_t v = 0; v < solid.defs.size(); ++v) {
+      const auto vertex = [&] { return "the solid of node " + str(k) + " vertex " + str(v) + " (" + point_kind_name(solid.defs[v].kind) + ")"; };
+      ApproxPoint approx;
+      try {
+        approx = approximate(set, solid.defs[v]);
+      } catch (const std::domain_error& error) {
+        return Defect{Part::solid, k, vertex() + ": " + error.what()};
+      }
+      if (fill) {
+        fill->nodes[k].solid.approx[v] = approx;
+      } else if (std::memcmp(&approx, &solid.approx[v], sizeof approx) != 0) {
+        return Defect{Part::solid, k, vertex() + ": approx is not approximate() of its definition (a stale cache)"};
+      }
+    }
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::string encode_shatter(const MeshTree& tree) {
-  if (const std::optional<Defect> defect = first_defect(tree)) {
-    throw std::invalid_argument("encode_shatter: invalid tree: " + defect->message);
-  }
+  std::optional<Defect> defect = first_defect(tree, true);
+  if (!defect) defect = caches_defect(tree, nullptr);
+  if (defect) throw std::invalid_argument("encode_shatter: invalid tree: " + defect->message);
   ByteWriter file;
   for (const unsigned char byte : magic) file.u8(byte);
   file.u32(shatter_format_version);
@@ -826,6 +1358,8 @@ std::string encode_shatter(const MeshTree& tree) {
   append_section(file, meshes_tag, meshes_payload(tree.nodes, &MeshTreeNode::mesh));
   append_section(file, hulls_tag, meshes_payload(tree.nodes, &MeshTreeNode::hull));
   append_section(file, bonds_tag, bonds_payload(tree.bonds));
+  append_section(file, geometry_tag, geometry_payload(tree.geometry));
+  append_section(file, solids_tag, solids_payload(tree));
   append_section(file, end_tag, {});
   return file.take();
 }
@@ -839,8 +1373,18 @@ MeshTree decode_shatter(std::string_view bytes) {
   read_meshes(*sections.meshes, tree.nodes, &MeshTreeNode::mesh, offsets.meshes);
   read_meshes(*sections.hulls, tree.nodes, &MeshTreeNode::hull, offsets.hulls);
   tree.bonds = read_bonds(*sections.bonds);
+  if (sections.version >= 2) {
+    tree.geometry = read_geometry(*sections.geometry);
+    offsets.point_count = tree.geometry.points.size();
+    read_solids(*sections.solids, tree.nodes, !tree.geometry.points.empty(), offsets.solids);
+  }
   tree.leaf_nodes = leaves_in_order(tree.nodes);
-  if (const std::optional<Defect> defect = first_defect(tree)) refuse(located(*defect, sections, offsets));
+  if (!tree.geometry.points.empty()) {
+    tree.cut_planes.resize(tree.nodes.size());
+    for (std::size_t k = 0; k < tree.nodes.size(); ++k) tree.cut_planes[k] = cut_plane_of(tree.nodes[k]);
+  }
+  if (const std::optional<Defect> defect = first_defect(tree, false)) refuse(located(*defect, sections, offsets));
+  if (const std::optional<Defect> defect = caches_defect(tree, &tree)) refuse(located(*defect, sections, offsets));
   return tree;
 }
 

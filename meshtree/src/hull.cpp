@@ -186,10 +186,13 @@ Mesh canonical_hull(const std::vector<Vec3>& positions, const std::vector<Triang
 
 Mesh convex_hull_of(const Mesh& mesh) {
   if (convex_surface(mesh)) return canonical_hull(mesh.positions, mesh.triangles);
+  return convex_hull_of_points(mesh.positions);
+}
 
+Mesh convex_hull_of_points(std::span<const Vec3> input) {
   std::vector<EpickPoint> points;
-  points.reserve(mesh.positions.size());
-  for (const Vec3& p : mesh.positions) points.push_back(to_epick(p));
+  points.reserve(input.size());
+  for (const Vec3& p : input) points.push_back(to_epick(p));
   CGAL::Surface_mesh<EpickPoint> hull_mesh;
   CGAL::convex_hull_3(points.begin(), points.end(), hull_mesh);
 

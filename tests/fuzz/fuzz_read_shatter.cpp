@@ -1,13 +1,18 @@
 // Fuzz target: the .shatter reader (meshtree/include/shatter/meshtree/file.hpp).
 // Properties: hostile bytes are refused with CorruptFileError only; a decoded tree
-// keeps the invariants decode_shatter promises, encodes without complaint, and
+// keeps the invariants decode_shatter promises (the exact representation's
+// cross-references and caches included), encodes without complaint, and
 // re-encoding is a fixed point (decode(encode(t)) encodes to the same bytes); when
-// the input is laid out as encode_shatter lays a file out (its five sections in
-// order, then END, nothing optional), re-encoding gives the input back byte for byte.
-// Each input is tried as it is and with its section checksums repaired.
+// the input is laid out as encode_shatter lays a file out (version 2: its seven
+// sections in order, then END, nothing optional), re-encoding gives the input back
+// byte for byte, and a version 1 file so laid out (five sections, then END)
+// re-encodes to exactly its version 2 conversion (version 2, empty GEOM and SOLD
+// before END). Each input is tried as it is and with its section checksums
+// repaired.
 
 #include <array>
 #include <cstring>
+#include <span>
 #include <string>
 #include <typeinfo>
 
@@ -51,12 +56,23 @@ std::uint64_t read_u64(std::string_view bytes, std::size_t offset) {
   return value;
 }
 
-/// True when the sections of an accepted file are exactly those encode_shatter
-/// writes, in its order: OPTS NODE MESH HULL BOND END. Only then can the bytes
-/// be expected back from re-encoding (optional sections are skipped by the
-/// reader, and the reader accepts the required ones in any order).
-bool has_canonical_layout(std::string_view bytes) {
-  static constexpr std::array<const char*, 6> order = {"OPTS", "NODE", "MESH", "HULL", "BOND", "END "};
+/// The little-endian u32 at `offset`. Precondition: 4 bytes are there.
+std::uint32_t read_u32(std::string_view bytes, std::size_t offset) {
+  std::uint32_t value = 0;
+  for (int k = 3; k >= 0; --k) value = (value << 8) | static_cast<unsigned char>(bytes[offset + k]);
+  return value;
+}
+
+/// True when the sections of an accepted file are exactly those the encoder of
+/// its version writes, in its order: OPTS NODE MESH HULL BOND, then GEOM SOLD
+/// (version 2), then END. Only then can the bytes be expected back from
+/// re-encoding (optional sections are skipped by the reader, and the reader
+/// accepts the required ones in any order).
+bool has_canonical_layout(std::string_view bytes, std::uint32_t version) {
+  static constexpr std::array<const char*, 8> version_2 = {"OPTS", "NODE", "MESH", "HULL", "BOND", "GEOM", "SOLD", "END "};
+  static constexpr std::array<const char*, 6> version_1 = {"OPTS", "NODE", "MESH", "HULL", "BOND", "END "};
+  const std::span<const char* const> order = version == 1 ? std::span<const char* const>(version_1) : std::span<const char* const>(version_2);
+  if (bytes.size() < 12 || read_u32(bytes, 8) != version) return false;
   std::size_t offset = 12;
   for (const char* tag : order) {
     if (bytes.size() - offset < 16) return false;
@@ -66,6 +82,74 @@ bool has_canonical_layout(std::string_view bytes) {
     offset += 16 + static_cast<std::size_t>(length);
   }
   return offset == bytes.size();
+}
+
+/// What encode_shatter writes for the tree of a canonical version 1 file: the
+/// same bytes with version 2, and GEOM (8 zero bytes) and SOLD (4) before END.
+std::string converted_from_version_1(std::string_view v1) {
+  const auto section = [](const char* tag, std::size_t length) {
+    const std::string payload(length, '\0');
+    const auto checksum = static_cast<std::uint32_t>(
+        crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(payload.data()), static_cast<uInt>(payload.size())));
+    std::string bytes(tag, 4);
+    for (int k = 0; k < 8; ++k) bytes += static_cast<char>((std::uint64_t{length} >> (8 * k)) & 0xFF);
+    for (int k = 0; k < 4; ++k) bytes += static_cast<char>((checksum >> (8 * k)) & 0xFF);
+    return bytes + payload;
+  };
+  std::string v2(v1.substr(0, v1.size() - 16));  // END is the last 16 bytes
+  v2[8] = 2;
+  v2[9] = v2[10] = v2[11] = 0;
+  return v2 + section("GEOM", 8) + section("SOLD", 4) + section("END ", 0);
+}
+
+/// The exact representation's cross-references (a cheap subset of what the
+/// reader checks: the indices an out-of-bounds access would follow) and caches.
+void check_exact_invariants(const shatter::MeshTree& tree) {
+  const shatter::InputGeometry& geometry = tree.geometry;
+  require(geometry.plane_approx.size() == geometry.planes.size(), "decoded plane_approx not sized");
+  if (geometry.points.empty()) {
+    require(geometry.planes.empty() && tree.cut_planes.empty(), "decoded exact representation without input points");
+    for (const shatter::MeshTreeNode& node : tree.nodes) {
+      require(node.solid.defs.empty() && node.solid.faces.empty() && !node.convex, "decoded solid without input points");
+    }
+    return;
+  }
+  require(tree.cut_planes.size() == tree.nodes.size(), "decoded cut_planes not one per node");
+  for (const auto& plane : geometry.planes) {
+    for (const shatter::VertexIndex p : plane) require(p < geometry.points.size(), "decoded input plane point out of range");
+  }
+  const auto plane_ok = [&](shatter::PlaneRef plane, std::size_t node) {
+    return plane.is_cut() ? plane.index() < node && !tree.nodes[plane.index()].is_leaf() : plane.index() < geometry.planes.size();
+  };
+  for (std::size_t n = 0; n < tree.nodes.size(); ++n) {
+    const shatter::MeshTreeNode& node = tree.nodes[n];
+    const shatter::Solid& solid = node.solid;
+    require(!node.convex || node.hull.positions.empty(), "decoded convex node with a hull");
+    require(solid.approx.size() == solid.defs.size(), "decoded approx not one per vertex");
+    for (const shatter::PointDef& def : solid.defs) {
+      if (def.kind == shatter::PointKind::input) require(def.a < geometry.points.size(), "decoded input vertex out of range");
+      if (def.kind == shatter::PointKind::segment_plane) {
+        require(def.a < geometry.points.size() && def.b < geometry.points.size() && plane_ok(def.planes[0], n), "decoded segment_plane vertex out of range");
+      }
+      if (def.kind == shatter::PointKind::three_planes) {
+        for (const shatter::PlaneRef plane : def.planes) require(plane_ok(plane, n), "decoded three_planes vertex out of range");
+      }
+      require(static_cast<std::uint8_t>(def.kind) <= 2, "decoded vertex kind out of range");
+    }
+    for (const shatter::SolidFace& face : solid.faces) {
+      require(plane_ok(face.plane, n), "decoded face plane out of range");
+      require(face.loop_count >= 1 && std::uint64_t{face.first_loop} + face.loop_count <= solid.loops.size(), "decoded face loops out of range");
+    }
+    for (const shatter::SolidLoop& loop : solid.loops) {
+      require(loop.corner_count >= 3 && std::uint64_t{loop.first_corner} + loop.corner_count <= solid.corners.size(), "decoded loop corners out of range");
+    }
+    for (const shatter::SolidCorner& corner : solid.corners) {
+      require(corner.vertex < solid.defs.size(), "decoded corner vertex out of range");
+      require(corner.line.other.bits == shatter::no_index || plane_ok(corner.line.other, n), "decoded corner line plane out of range");
+      require(corner.line.p == shatter::no_index ? corner.line.q == shatter::no_index : corner.line.p < corner.line.q && corner.line.q < geometry.points.size(),
+              "decoded corner segment out of range");
+    }
+  }
 }
 
 /// Checks the cross-references decode_shatter promises the rest of the library
@@ -92,6 +176,7 @@ void check_tree_invariants(const shatter::MeshTree& tree) {
     require(bond.first < bond.second && bond.second < tree.leaf_count(), "decoded bond leaves out of order or range");
     require(bond.cut_node < tree.nodes.size(), "decoded bond cut node out of range");
   }
+  check_exact_invariants(tree);
 }
 
 /// The bytes with every section's CRC-32 field set to its payload's checksum, as
@@ -122,8 +207,11 @@ void check_decoding(std::string_view bytes) {
   require(try_decode(encoded, again, "decode_shatter of a re-encoded tree"),
           "decode_shatter refused bytes encode_shatter wrote");
   require(encode_or_fail(again, "second re-encoding") == encoded, "re-encoding a decoded tree is not a fixed point");
-  if (has_canonical_layout(bytes)) {
+  if (has_canonical_layout(bytes, 2)) {
     require(encoded == bytes, "a file in encode_shatter's layout does not re-encode to the same bytes");
+  }
+  if (has_canonical_layout(bytes, 1)) {
+    require(encoded == converted_from_version_1(bytes), "a version 1 file in its encoder's layout does not re-encode to its version 2 conversion");
   }
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/mesh.hpp"
 
 namespace shatter::test {
@@ -28,6 +29,10 @@ std::string exact_solid_problem(const ExactMesh& mesh);
 /// Six times the volume, exactly, as a rational.
 mpq_class exact_six_volume(const ExactMesh& mesh);
 mpq_class exact_six_volume(const Mesh& mesh);
+
+/// Six times the volume of a plane-based solid, exactly: the divergence theorem
+/// over fans of its faces, on the vertices' exact rational coordinates.
+mpq_class exact_six_volume(const PlaneSet& set, const Solid& solid);
 
 /// The mesh's bytes in a canonical binary form, to compare outputs for identity.
 std::string canonical_bytes(const Mesh& mesh);

@@ -47,7 +47,20 @@ namespace shatter {
 /// clearly apart, and O(t^2) only when they touch without overlapping. Single
 /// thread; memory O(T + bonds). On a 65,536-fragment cube (9.5 million cap
 /// triangles, as the builder slices caps) it takes about 3 s on one core.
+/// A plane-kernel tree (one with cut_planes) is handled by find_plane_bonds.
 std::vector<Bond> find_bonds(const MeshTree& tree);
+
+/// The bonds of a plane-kernel tree, decided on the nodes' exact solids: leaves a
+/// (below node k's plane) and b (above it) are bonded on k iff some cap face of a
+/// and some cap face of b on plane k have interior points in common, decided with
+/// exact orientation predicates on the faces' defined vertices (non-convex faces
+/// through an exact triangulation). Area and centroid are measured on the rounded
+/// overlap, as find_bonds does; same ordering and guarantees.
+/// Preconditions: a tree built by the plane kernel (or read from a file that
+/// stores its exact solids). Complexity: per cut, a sweep of its faces' boxes,
+/// then per candidate pair O(corners) exact predicates when they overlap
+/// clearly, O(corners^2) when they only touch.
+std::vector<Bond> find_plane_bonds(const MeshTree& tree);
 
 /// The seed's bond rule: every pair of leaves whose closed axis-aligned bounding
 /// boxes (of the leaf meshes' positions) overlap, touching included.

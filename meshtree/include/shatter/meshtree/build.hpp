@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <vector>
 
 #include "shatter/kernel/exact.hpp"
@@ -20,12 +21,15 @@ using LeafProgressFn = std::function<void(std::size_t leaves_done)>;
 /// Where a build's time went, and how often a drawn plane was not used. The
 /// counts are part of the deterministic build; the seconds are wall-clock.
 struct BuildReport {
-  double cutting_seconds = 0;  ///< cutting, validating the pieces, mass properties
+  /// Cutting, mass properties, and making the stored meshes: validating the
+  /// pieces (fast, exact kernels) or rounding them once, certified (plane kernel).
+  double cutting_seconds = 0;
   double hull_seconds = 0;     ///< convex hulls of every node (in parallel)
   double bond_seconds = 0;     ///< find_bonds
   std::uint64_t planes_missed = 0;    ///< drawn planes that missed their node
   /// Drawn planes that passed within 1e-8 of the node's size of a vertex, or whose
-  /// rounded pieces were not valid solids.
+  /// rounded pieces were not valid solids (fast, exact kernels); plane kernel:
+  /// planes that left a piece that cannot be written as a valid double mesh.
   std::uint64_t planes_rejected = 0;
 };
 
@@ -66,5 +70,9 @@ ExactBuild build_mesh_tree_keeping_exact(const Mesh& mesh, const BuildOptions& o
 /// own hull, without a hull computation, when it is one edge-connected piece.
 /// Precondition: the mesh is closed and oriented with positive volume.
 Mesh convex_hull_of(const Mesh& mesh);
+
+/// The convex hull of a point set, in the same canonical form (CGAL
+/// convex_hull_3, exact predicates). Precondition: the points span a volume.
+Mesh convex_hull_of_points(std::span<const Vec3> points);
 
 }  // namespace shatter

@@ -4,15 +4,16 @@
 // and a reader that refuses damaged, truncated or hostile files with
 // CorruptFileError instead of crashing or allocating what the file claims.
 //
-// Layout, format version 1. Every integer is little-endian; f64 is the binary64
-// bit pattern stored as a u64 (so NaN payloads and -0.0 survive); values are
-// written byte by byte, so the bytes are the same on every host.
+// Layout, format version 2 (version 1 is version 2 without the GEOM and SOLD
+// sections; see "Versions" below). Every integer is little-endian; f64 is the
+// binary64 bit pattern stored as a u64 (so NaN payloads and -0.0 survive); values
+// are written byte by byte, so the bytes are the same on every host.
 //
 //   header, 12 bytes
 //     0   8  magic 89 53 48 54 0D 0A 1A 0A ("\x89SHT\r\n\x1a\n", as PNG: the
 //            high byte catches 7-bit transfers, CR LF and LF catch newline
 //            translation, 1A stops DOS `type`)
-//     8   4  u32 format version = 1
+//     8   4  u32 format version = 2
 //   then sections, each 16 + L bytes
 //     0   4  tag, four ASCII bytes
 //     4   8  u64 L, the payload length
@@ -21,7 +22,7 @@
 //
 // Sections, written in this order:
 //   OPTS  BuildOptions, 27 bytes: u32 fragments, u64 seed, u8 strategy
-//         (0 thesis, 1 balanced, 2 axis), u8 kernel (0 fast, 1 exact),
+//         (0 thesis, 1 balanced, 2 axis), u8 kernel (0 fast, 1 exact, 2 plane),
 //         f64 interior_uv_scale, u32 max_plane_tries, u8 allow_self_intersections
 //         (0 or 1). `threads` is not stored: it never changes a tree, and leaving
 //         it out keeps files of one build byte-identical on every thread count; a
@@ -34,23 +35,65 @@
 //         165 + 4c bytes.
 //   MESH  u32 n, then per node in index order its mesh:
 //         u32 vertex count V, u32 triangle count T, u8 channels (bit 0 normals,
-//         bit 1 uvs, bit 2 tangents; other bits 0), V x f64 x3 positions,
+//         bit 1 uvs, bit 2 tangents; other bits 0; all 0 when T = 0, since a
+//         channel is present only with values), V x f64 x3 positions,
 //         T x u32 x3 triangles, T x u32 surfaces, then the present channels in
 //         that order, 3T values each (corner c of triangle t at 3t + c): normals
 //         f64 x3, uvs f64 x2, tangents f64 x4.
-//   HULL  the hulls, laid out as MESH.
+//   HULL  the hulls, laid out as MESH. A convex node (SOLD) has an empty hull.
 //   BOND  u64 bond count B, then per bond: u32 first, u32 second, u32 cut_node,
 //         f64 area, f64 x3 centroid, f64 x3 normal; 68 bytes.
+//   GEOM  MeshTree::geometry, the plane kernel's input: u32 point count P,
+//         u32 input plane count Q, P x f64 x3 points (x, y, z), Q x u32 x3
+//         input planes (three point indices); 8 + 24P + 12Q bytes. P = 0 means
+//         the tree has no exact representation (fast and exact kernels): then
+//         Q = 0 too, and the payload is 8 zero bytes.
+//   SOLD  the nodes' exact solids: u32 record count, 0 when P = 0, else n; then
+//         per node in index order (only when there are records):
+//           u8 flags: bit 0 MeshTreeNode::convex, bit 1 Solid::convex; other
+//              bits 0
+//           u32 vertex count V, u32 face count F, u32 loop count L,
+//           u32 corner count C
+//           V x vertex definition (PointDef), 13 bytes: u8 kind, u32 x3 fields
+//              kind 0 input:         point a, 0, 0
+//              kind 1 segment_plane: point a, point b, plane
+//              kind 2 three_planes:  plane, plane, plane
+//           F x face (SolidFace), 17 bytes: u32 plane, u8 flags (bit 0
+//              reversed, bit 1 convex; other bits 0), u32 surface, u32 source,
+//              u32 loop count
+//           L x loop (SolidLoop), 4 bytes: u32 corner count
+//           C x corner (SolidCorner), 9 or 17 bytes: u32 vertex, u32
+//              line.other (a plane, or FFFFFFFF for none), u8 segment (0 or
+//              1), then only when segment is 1: u32 line.p, u32 line.q (input
+//              points p < q; with segment 0 both are none, FFFFFFFF)
+//         17 + 13V + 17F + 4L + 9C + 8S bytes, S the corners with a segment
+//         (input edges: few, once cuts dominate). A plane is a PlaneRef: bit 31 set,
+//         cut plane (the plane of the node whose index is in bits 0-30); clear,
+//         input plane (an index into GEOM's planes). Faces take their loops and
+//         loops their corners in order: face f's first loop is the sum of the
+//         loop counts of faces before it, and likewise for loops' first corners.
 //   END   empty payload; the last section, nothing may follow it.
-// leaf_nodes is not stored: it is the leaves in node order, recomputed on reading
-// and checked against every node's first_leaf and leaf_count.
+// Not stored, recomputed on reading: leaf_nodes (the leaves in node order, checked
+// against every node's first_leaf and leaf_count); MeshTree::cut_planes (empty
+// when P = 0, else every node's plane, zero for leaves); and the floating-point
+// caches InputGeometry::plane_approx (approximate_input_plane of each input
+// plane's points) and Solid::approx (approximate() of each vertex over
+// MeshTree::plane_set()), which are deterministic functions of what is stored.
 //
-// Reading rules. OPTS, NODE, MESH, HULL, BOND must each occur exactly once, in any
-// order, before END. An unknown tag whose first byte is a lower-case ASCII letter
-// marks optional data a later version may add: its checksum is verified and it is
-// skipped. Any other unknown tag is refused, so data a reader would misunderstand
-// is never silently dropped. A version other than 1 is refused; a later version
-// that only adds optional sections keeps version 1.
+// Reading rules. OPTS, NODE, MESH, HULL, BOND and (version 2) GEOM, SOLD must
+// each occur exactly once, in any order, before END. An unknown tag whose first byte is a lower-case
+// ASCII letter marks optional data a later version may add: its checksum is
+// verified and it is skipped. Any other unknown tag is refused, so data a reader
+// would misunderstand is never silently dropped.
+//
+// Versions. Version 2 added GEOM and SOLD (the plane kernel's exact
+// representation, so a tree can be re-cut exactly) and kernel 2 in OPTS. A
+// version 1 file has the first five sections only (GEOM and SOLD are unknown
+// tags there, and refused); it reads as a tree without an exact representation,
+// and encode_shatter writes that tree as version 2: for a file as version 1's
+// encoder laid it out, the same bytes with version 2 and, before END, a GEOM
+// section of 8 zero bytes and a SOLD section of 4. Any other version is refused;
+// a later version that only adds optional sections keeps its number.
 
 #include <cstdint>
 #include <filesystem>
@@ -61,20 +104,26 @@
 
 namespace shatter {
 
-/// The version encode_shatter writes and the only one decode_shatter reads.
-inline constexpr std::uint32_t shatter_format_version = 1;
+/// The version encode_shatter writes; decode_shatter reads it and version 1.
+inline constexpr std::uint32_t shatter_format_version = 2;
+/// The oldest version decode_shatter reads.
+inline constexpr std::uint32_t shatter_oldest_format_version = 1;
 
-/// The bytes of the .shatter file of `tree` (layout above).
+/// The bytes of the .shatter file of `tree` (layout above), always of version
+/// shatter_format_version.
 /// Precondition: `tree` is valid, i.e. passes every check decode_shatter makes
-/// (as every tree build_mesh_tree returns does); otherwise throws
-/// std::invalid_argument naming the first defect, so no file is ever written
-/// that could not be read back.
+/// (as every tree build_mesh_tree returns does), and its caches are what the
+/// reader will recompute: geometry.plane_approx[j] is approximate_input_plane of
+/// input plane j's points and every solid's approx[v] is approximate() of its
+/// definition over plane_set(), bit for bit (as in every built tree; checked, at
+/// the cost of recomputing them); otherwise throws std::invalid_argument naming
+/// the first defect, so no file is ever written that could not be read back.
 /// Guarantees: deterministic (equal trees give equal bytes; `threads` is
 /// ignored), and decode_shatter returns a tree equal to `tree` field by field,
 /// every double bit for bit, except options.threads, which comes back 0.
 std::string encode_shatter(const MeshTree& tree);
 
-/// The tree stored in `bytes`.
+/// The tree stored in `bytes` (format version 1 or 2).
 /// Throws CorruptFileError, with a one-line message naming the defect and its
 /// place (section and byte offset), when the bytes are not a .shatter file, are
 /// of another version, truncated, fail a checksum, or decode to a tree that breaks
@@ -85,10 +134,32 @@ std::string encode_shatter(const MeshTree& tree);
 /// (surfaces and attribute channels sized by construction); bonds with
 /// first < second < leaf count, sorted by (first, second, cut_node), cut_node the
 /// internal node whose cut separates the two leaves; enum and bool bytes in range.
+/// The exact representation (GEOM, SOLD) is checked for structure, not geometry:
+///   - without input points, no input plane, no solid and no convex node;
+///   - input points and the planes of internal nodes finite (the exact
+///     predicates take them as exact doubles), input planes' point indices in
+///     range;
+///   - in every node's solid: vertex kinds in range and unused definition fields
+///     zero; point indices in range; every plane an input plane in range or the
+///     cut plane of an ancestor of the node (a strict one: the node's own plane
+///     cuts it into its children); line.p < line.q < point count, or both none;
+///     every face with a loop, every loop with at least 3 corners, faces' loop
+///     ranges and loops' corner ranges contiguous and covering all loops and
+///     corners; corners' vertices in range, no corner repeating the vertex
+///     before it; every directed edge used once and matched by its reverse
+///     (closed); every vertex used;
+///   - a convex node's hull empty (its mesh is its hull);
+///   - every vertex definition non-degenerate (approximate() finds a point),
+///     which recomputing the caches decides.
+/// Not checked (exact predicates, too costly for a reader): that vertices lie on
+/// their faces' planes and edges' lines, faces' orientation and convexity flags,
+/// the solids' embedding, nor that a face's `source` names a triangle of the
+/// input (the input as the build prepared it is not stored).
 /// Never reads outside `bytes`, and never allocates more than a small multiple of
 /// bytes.size(), whatever the counts in the file claim.
-/// Guarantees: the result can be trusted by the rest of the library, and
-/// encode_shatter of it gives `bytes` back for any file encode_shatter wrote.
+/// Guarantees: the result can be trusted by the rest of the library as far as
+/// the checks above go, and encode_shatter of it gives `bytes` back for any file
+/// encode_shatter wrote.
 MeshTree decode_shatter(std::string_view bytes);
 
 /// Writes encode_shatter(tree) to `path` atomically (write_file_atomically):

@@ -11,6 +11,7 @@
 
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/vec.hpp"
 
 namespace shatter {
@@ -35,8 +36,11 @@ enum class Strategy : std::uint8_t {
   axis = 2,
 };
 
-/// Which kernel constructs the cut points (DESIGN.md, "Exact arithmetic").
-enum class KernelKind : std::uint8_t { fast = 0, exact = 1 };
+/// Which kernel cuts (DESIGN.md, "Exact arithmetic"). `plane`: plane-based
+/// vertices (kernel/implicit.hpp), exact at any depth and rounded once, certified,
+/// for output; the default. `exact`: CGAL Epeck rationals, the reference.
+/// `fast`: rounded cut points, exact predicates; kept only for comparison.
+enum class KernelKind : std::uint8_t { fast = 0, exact = 1, plane = 2 };
 
 std::string_view strategy_name(Strategy strategy);
 std::string_view kernel_name(KernelKind kernel);
@@ -47,12 +51,13 @@ struct BuildOptions {
   std::uint32_t fragments = 2;  ///< stop at the first leaf count >= this (>= 1)
   std::uint64_t seed = 1;
   Strategy strategy = Strategy::thesis;
-  KernelKind kernel = KernelKind::fast;
+  KernelKind kernel = KernelKind::plane;
   double interior_uv_scale = 1.0;
   /// Planes drawn for one node before the build fails. A plane is redrawn when it
-  /// misses the node, when it passes within 1e-8 of the node's bounding-box
-  /// diagonal of a vertex (it would leave needles later planes cannot cut), or when
-  /// a piece's stored (rounded) mesh would not be a valid solid.
+  /// misses the node. With the fast and exact kernels also when it passes within
+  /// 1e-8 of the node's bounding-box diagonal of a vertex (it would leave needles
+  /// later planes cannot cut), or when a piece's stored (rounded) mesh would not
+  /// be a valid solid; the plane kernel never redraws for numerical reasons.
   std::uint32_t max_plane_tries = 64;
   /// Accept a self-intersecting input (only topology is promised then).
   bool allow_self_intersections = false;
@@ -82,6 +87,12 @@ struct MeshTreeNode {
   /// The convex hull of `mesh` (outward triangles over its own positions; every
   /// surface id 0, no attributes), for colliders.
   Mesh hull;
+  /// Plane kernel: the node's exact solid, its vertices defined over
+  /// MeshTree::plane_set() (cut plane k is node k's plane). Empty otherwise.
+  Solid solid;
+  /// Plane kernel: the solid is convex (decided exactly), so `mesh` is its own
+  /// hull and `hull` is left empty. Use MeshTree::hull_of.
+  bool convex = false;
   NodeIndex parent = no_node;
   std::vector<NodeIndex> children;  ///< empty for a leaf; otherwise two or more
   Plane plane;                      ///< the plane that cut this node (internal nodes only)
@@ -101,9 +112,19 @@ struct MeshTree {
   std::vector<MeshTreeNode> nodes;   ///< depth-first preorder; nodes[0] is the root
   std::vector<NodeIndex> leaf_nodes; ///< leaf i is nodes[leaf_nodes[i]]
   std::vector<Bond> bonds;           ///< sorted by (first, second, cut_node)
+  /// Plane kernel: the input points and input planes the nodes' solids are
+  /// defined over. Empty otherwise.
+  InputGeometry geometry;
+  /// Plane kernel: every node's plane in node order (zero for leaves), the cut
+  /// planes of plane_set(). Empty otherwise.
+  std::vector<Plane> cut_planes;
 
   std::size_t leaf_count() const { return leaf_nodes.size(); }
   const MeshTreeNode& leaf(LeafIndex i) const { return nodes[leaf_nodes[i]]; }
+  /// The planes the nodes' exact solids are defined over (plane kernel).
+  PlaneSet plane_set() const { return geometry.plane_set(cut_planes); }
+  /// A node's convex hull: its own mesh when it is convex, else `hull`.
+  const Mesh& hull_of(NodeIndex node) const { return nodes[node].convex ? nodes[node].mesh : nodes[node].hull; }
 };
 
 /// The surface id cap triangles of the cut at `node` carry.

@@ -1,0 +1,364 @@
+// Bonds of a plane-kernel tree, decided on the exact solids.
+//
+// A leaf's cap faces on cut k are polygons on plane k with defined vertices. Two
+// leaves on opposite sides of k are bonded when a cap face of each has interior
+// points in common. Convex faces are tested as they are; others as the triangles
+// of an exact triangulation (triangulate_face). Two convex polygons' interiors
+// meet iff no edge line of either has the other on its closed outer side (their
+// Minkowski difference is a convex polygon whose edges are theirs); that is
+// decided with exact orientations. The common case is settled faster: the
+// centroid of the rounded clip of the two (a double point) is tested exactly to
+// lie strictly inside both. The overlap's area and centroid are measured on the
+// rounded clip, a construction that never decides anything.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <span>
+#include <vector>
+
+#include "clip2d.hpp"
+#include "shatter/meshtree/bonds.hpp"
+#include "shatter/triangulate/solid_mesh.hpp"
+
+namespace shatter {
+namespace {
+
+using detail::Clipper;
+
+// One convex part of a cap face: corners counter-clockwise in the projection's
+// raw frame, as vertex indices of the leaf's solid and as rounded 2D points.
+struct Part {
+  std::uint32_t first, count;  // into CutFaces::corners / points
+  double min_u, max_u, min_v, max_v;
+};
+
+struct CapFace {
+  LeafIndex leaf;
+  bool above;
+  std::uint32_t first_part, part_count;
+  double min_u, max_u, min_v, max_v;
+};
+
+// A rigorous bound on how far a vertex's floating-point quotient x/w lies from
+// the exact coordinate (as in rounded_position), so boxes can be grown to hold
+// the exact polygons.
+double quotient_error(const Estimate& x, const Estimate& w) {
+  const double q = x.value / w.value;
+  return (x.error + std::fabs(q) * w.error) / (w.value - w.error) * (1 + 0x1p-40) + 0x1p-52 * std::fabs(q);
+}
+
+class PlaneBonds {
+ public:
+  explicit PlaneBonds(const MeshTree& tree) : tree_(tree), set_(tree.plane_set()) {}
+
+  std::vector<Bond> run() {
+    gather_faces_by_cut();
+    std::vector<Bond> bonds;
+    for (NodeIndex k = 0; k < tree_.nodes.size(); ++k) {
+      if (start_[k + 1] - start_[k] < 2) continue;
+      run_cut(k, bonds);
+    }
+    std::sort(bonds.begin(), bonds.end(), [](const Bond& a, const Bond& b) {
+      if (a.first != b.first) return a.first < b.first;
+      if (a.second != b.second) return a.second < b.second;
+      return a.cut_node < b.cut_node;
+    });
+    return bonds;
+  }
+
+ private:
+  struct FaceRef {
+    NodeIndex cut;
+    LeafIndex leaf;
+    std::uint32_t face;
+  };
+
+  // Which side of cut `k` a leaf lies on: the side of the child whose range holds it.
+  bool leaf_is_above(NodeIndex cut, LeafIndex leaf) const {
+    for (const NodeIndex child : tree_.nodes[cut].children) {
+      const MeshTreeNode& c = tree_.nodes[child];
+      if (leaf >= c.first_leaf && leaf - c.first_leaf < c.leaf_count) return c.above_parent_plane;
+    }
+    return false;
+  }
+
+  void gather_faces_by_cut() {
+    refs_.clear();
+    for (LeafIndex leaf = 0; leaf < tree_.leaf_count(); ++leaf) {
+      const Solid& solid = tree_.leaf(leaf).solid;
+      for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+        const SurfaceId surface = solid.faces[f].surface;
+        if (surface == original_surface || surface - 1 >= tree_.nodes.size()) continue;
+        const NodeIndex cut = surface - 1;
+        const MeshTreeNode& node = tree_.nodes[cut];
+        if (node.is_leaf() || leaf < node.first_leaf || leaf - node.first_leaf >= node.leaf_count) continue;
+        refs_.push_back({cut, leaf, f});
+      }
+    }
+    // Counting sort by cut, keeping leaf order within a cut.
+    start_.assign(tree_.nodes.size() + 1, 0);
+    for (const FaceRef& ref : refs_) ++start_[ref.cut + 1];
+    for (std::size_t k = 0; k < tree_.nodes.size(); ++k) start_[k + 1] += start_[k];
+    order_.resize(refs_.size());
+    std::vector<std::size_t> next(start_.begin(), start_.end() - 1);
+    for (std::uint32_t r = 0; r < refs_.size(); ++r) order_[next[refs_[r].cut]++] = r;
+  }
+
+  Vec2 project(const ApproxPoint& a) const {
+    const double w = a.w.value;
+    const double c[3] = {a.x.value / w, a.y.value / w, a.z.value / w};
+    return {c[(axis_ + 1) % 3], c[(axis_ + 2) % 3]};
+  }
+  double project_error(const ApproxPoint& a) const {
+    const Estimate c[3] = {a.x, a.y, a.z};
+    return std::max(quotient_error(c[(axis_ + 1) % 3], a.w), quotient_error(c[(axis_ + 2) % 3], a.w));
+  }
+
+  // The face's convex parts, counter-clockwise in the raw projection frame.
+  void add_face(const FaceRef& ref) {
+    const Solid& solid = tree_.leaf(ref.leaf).solid;
+    const SolidFace& face = solid.faces[ref.face];
+    CapFace cap{ref.leaf, leaf_is_above(ref.cut, ref.leaf), static_cast<std::uint32_t>(parts_.size()), 0,
+                INFINITY, -INFINITY, INFINITY, -INFINITY};
+    // Faces run counter-clockwise seen from outside; seen in the raw frame that is
+    // clockwise when exactly one of (reversed face, mirrored frame) holds.
+    const bool reverse = face.reversed != flipped_;
+    triangles_.clear();
+    if (face.loop_count == 1 && face.convex) {
+      const SolidLoop& loop = solid.loops[face.first_loop];
+      part_vertices_.clear();
+      for (std::uint32_t i = 0; i < loop.corner_count; ++i) part_vertices_.push_back(solid.corners[loop.first_corner + i].vertex);
+      add_part(solid, part_vertices_, reverse, cap);
+    } else {
+      points3_.clear();
+      for (const ApproxPoint& a : solid.approx) {
+        points3_.push_back({a.x.value / a.w.value, a.y.value / a.w.value, a.z.value / a.w.value});
+      }
+      triangulate_face(set_, solid, ref.face, points3_, triangles_);
+      for (const Triangle& t : triangles_) {
+        part_vertices_.assign(t.begin(), t.end());
+        add_part(solid, part_vertices_, reverse, cap);
+      }
+    }
+    cap.part_count = static_cast<std::uint32_t>(parts_.size()) - cap.first_part;
+    faces_.push_back(cap);
+  }
+
+  void add_part(const Solid& solid, std::vector<VertexIndex>& vertices, bool reverse, CapFace& cap) {
+    if (reverse) std::reverse(vertices.begin(), vertices.end());
+    Part part{static_cast<std::uint32_t>(corners_.size()), static_cast<std::uint32_t>(vertices.size()), INFINITY,
+              -INFINITY, INFINITY, -INFINITY};
+    for (VertexIndex v : vertices) {
+      const Vec2 p = project(solid.approx[v]);
+      const double e = project_error(solid.approx[v]);
+      corners_.push_back(v);
+      points_.push_back(p);
+      part.min_u = std::min(part.min_u, p.x - e);
+      part.max_u = std::max(part.max_u, p.x + e);
+      part.min_v = std::min(part.min_v, p.y - e);
+      part.max_v = std::max(part.max_v, p.y + e);
+    }
+    cap.min_u = std::min(cap.min_u, part.min_u);
+    cap.max_u = std::max(cap.max_u, part.max_u);
+    cap.min_v = std::min(cap.min_v, part.min_v);
+    cap.max_v = std::max(cap.max_v, part.max_v);
+    parts_.push_back(part);
+  }
+
+  void run_cut(NodeIndex k, std::vector<Bond>& bonds) {
+    const Projection projection = projection_of(set_, PlaneRef::cut(k));
+    axis_ = projection.axis;
+    flipped_ = projection.flipped;
+    raw_ = Projection{axis_, false};
+    faces_.clear();
+    parts_.clear();
+    corners_.clear();
+    points_.clear();
+    for (std::size_t r = start_[k]; r < start_[k + 1]; ++r) add_face(refs_[order_[r]]);
+    const Plane& plane = tree_.cut_planes[k];
+    const double n[3] = {plane.normal.x, plane.normal.y, plane.normal.z};
+    area_scale_ = norm(plane.normal) / std::fabs(n[axis_]);
+    plane_ = plane;
+    reference_ = points_.front();
+    const Vec3 unit = normalized(plane.normal);
+
+    // Sweep the faces by min u; each side keeps the faces still reaching the line.
+    sweep_.resize(faces_.size());
+    for (std::uint32_t i = 0; i < faces_.size(); ++i) sweep_[i] = i;
+    std::sort(sweep_.begin(), sweep_.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return faces_[a].min_u < faces_[b].min_u || (!(faces_[b].min_u < faces_[a].min_u) && a < b);
+    });
+    active_[0].clear();
+    active_[1].clear();
+    pending_.clear();
+    for (const std::uint32_t index : sweep_) {
+      const CapFace& face = faces_[index];
+      auto& others = active_[face.above ? 0 : 1];
+      std::size_t kept = 0;
+      for (const std::uint32_t other_index : others) {
+        const CapFace& other = faces_[other_index];
+        if (other.max_u < face.min_u) continue;
+        others[kept++] = other_index;
+        if (other.max_v < face.min_v || other.min_v > face.max_v) continue;
+        const CapFace& below = face.above ? other : face;
+        const CapFace& above = face.above ? face : other;
+        measure_pair(below, above);
+      }
+      others.resize(kept);
+      active_[face.above ? 1 : 0].push_back(index);
+    }
+    // Leaves may meet on a cut through several faces (non-convex leaves): sum them.
+    std::sort(pending_.begin(), pending_.end(), [](const Pending& a, const Pending& b) {
+      return a.below != b.below ? a.below < b.below : a.above < b.above;
+    });
+    for (std::size_t i = 0; i < pending_.size();) {
+      std::size_t j = i;
+      Clipper::Measure total;
+      bool touching = false;
+      double box[4] = {INFINITY, -INFINITY, INFINITY, -INFINITY};
+      for (; j < pending_.size() && pending_[j].below == pending_[i].below && pending_[j].above == pending_[i].above;
+           ++j) {
+        touching |= pending_[j].touching;
+        total.area += pending_[j].measure.area;
+        total.area_times_u += pending_[j].measure.area_times_u;
+        total.area_times_v += pending_[j].measure.area_times_v;
+        box[0] = std::min(box[0], pending_[j].box[0]);
+        box[1] = std::max(box[1], pending_[j].box[1]);
+        box[2] = std::min(box[2], pending_[j].box[2]);
+        box[3] = std::max(box[3], pending_[j].box[3]);
+      }
+      if (touching) {
+        const LeafIndex below = pending_[i].below, above = pending_[i].above;
+        double u, v;
+        if (total.area > 0) {
+          u = reference_.x + total.area_times_u / total.area;
+          v = reference_.y + total.area_times_v / total.area;
+        } else {
+          // The overlap exists exactly but its area rounds to nothing: the centre
+          // of the overlapping parts' box overlap.
+          u = 0.5 * (box[0] + box[1]);
+          v = 0.5 * (box[2] + box[3]);
+        }
+        Bond bond;
+        bond.first = std::min(below, above);
+        bond.second = std::max(below, above);
+        bond.cut_node = k;
+        bond.area = total.area * area_scale_;
+        bond.centroid = lift(u, v);
+        bond.normal = bond.first == below ? unit : -unit;  // from below into above is +n
+        bonds.push_back(bond);
+      }
+      i = j;
+    }
+  }
+
+  struct Pending {
+    LeafIndex below, above;
+    bool touching;
+    Clipper::Measure measure;
+    double box[4];
+  };
+
+  std::span<const Vec2> points_of(const Part& p) const { return {points_.data() + p.first, p.count}; }
+
+  void measure_pair(const CapFace& below, const CapFace& above) {
+    Pending pending{below.leaf, above.leaf, false, {}, {INFINITY, -INFINITY, INFINITY, -INFINITY}};
+    const Solid& below_solid = tree_.leaf(below.leaf).solid;
+    const Solid& above_solid = tree_.leaf(above.leaf).solid;
+    bool any_box = false;
+    for (std::uint32_t i = below.first_part; i < below.first_part + below.part_count; ++i) {
+      for (std::uint32_t j = above.first_part; j < above.first_part + above.part_count; ++j) {
+        const Part& a = parts_[i];
+        const Part& b = parts_[j];
+        if (a.max_u < b.min_u || b.max_u < a.min_u || a.max_v < b.min_v || b.max_v < a.min_v) continue;
+        any_box = true;
+        const Clipper::Measure m = clipper_.overlap(points_of(a), points_of(b), reference_);
+        bool overlap = false;
+        if (m.area > 0) {
+          const Vec2 witness{reference_.x + m.area_times_u / m.area, reference_.y + m.area_times_v / m.area};
+          overlap = strictly_inside(below_solid, a, witness) && strictly_inside(above_solid, b, witness);
+        }
+        if (!overlap) overlap = !separated(below_solid, a, above_solid, b) && !separated(above_solid, b, below_solid, a);
+        if (!overlap) continue;
+        pending.touching = true;
+        pending.measure.area += m.area;
+        pending.measure.area_times_u += m.area_times_u;
+        pending.measure.area_times_v += m.area_times_v;
+        pending.box[0] = std::min(pending.box[0], std::max(a.min_u, b.min_u));
+        pending.box[1] = std::max(pending.box[1], std::min(a.max_u, b.max_u));
+        pending.box[2] = std::min(pending.box[2], std::max(a.min_v, b.min_v));
+        pending.box[3] = std::max(pending.box[3], std::min(a.max_v, b.max_v));
+      }
+    }
+    if (any_box && pending.touching) pending_.push_back(pending);
+  }
+
+  // Whether a double point of the projection lies strictly inside a convex part:
+  // strictly left of every edge, exactly.
+  bool strictly_inside(const Solid& solid, const Part& part, Vec2 p) const {
+    for (std::uint32_t e = 0; e < part.count; ++e) {
+      const VertexIndex x = corners_[part.first + e], y = corners_[part.first + (e + 1) % part.count];
+      if (orient_in_plane(set_, raw_, solid.defs[x], solid.approx[x], solid.defs[y], solid.approx[y], p) !=
+          Sign::positive) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  // Whether an edge line of `part` has all of `other` on its closed outer side.
+  bool separated(const Solid& solid, const Part& part, const Solid& other_solid, const Part& other) const {
+    for (std::uint32_t e = 0; e < part.count; ++e) {
+      const VertexIndex x = corners_[part.first + e], y = corners_[part.first + (e + 1) % part.count];
+      bool all_outside = true;
+      for (std::uint32_t c = 0; c < other.count && all_outside; ++c) {
+        const VertexIndex z = corners_[other.first + c];
+        all_outside = orient_in_plane(set_, raw_, solid.defs[x], solid.approx[x], solid.defs[y], solid.approx[y],
+                                      other_solid.defs[z], other_solid.approx[z]) != Sign::positive;
+      }
+      if (all_outside) return true;
+    }
+    return false;
+  }
+
+  // The point of the cut plane over (u, v) of its projection.
+  Vec3 lift(double u, double v) const {
+    const int i = (axis_ + 1) % 3, j = (axis_ + 2) % 3;
+    const double n[3] = {plane_.normal.x, plane_.normal.y, plane_.normal.z};
+    std::array<double, 3> xyz{};
+    xyz[static_cast<std::size_t>(i)] = u;
+    xyz[static_cast<std::size_t>(j)] = v;
+    xyz[static_cast<std::size_t>(axis_)] = -(plane_.offset + n[i] * u + n[j] * v) / n[axis_];
+    return {xyz[0], xyz[1], xyz[2]};
+  }
+
+  const MeshTree& tree_;
+  const PlaneSet set_;
+  std::vector<FaceRef> refs_;
+  std::vector<std::size_t> start_;
+  std::vector<std::uint32_t> order_;
+  int axis_ = 2;
+  bool flipped_ = false;
+  Projection raw_;
+  std::vector<CapFace> faces_;
+  std::vector<Part> parts_;
+  std::vector<VertexIndex> corners_;
+  std::vector<Vec2> points_;
+  std::vector<VertexIndex> part_vertices_;
+  std::vector<Triangle> triangles_;
+  std::vector<Vec3> points3_;
+  std::vector<std::uint32_t> sweep_;
+  std::array<std::vector<std::uint32_t>, 2> active_;
+  std::vector<Pending> pending_;
+  Clipper clipper_;
+  double area_scale_ = 1;
+  Plane plane_;
+  Vec2 reference_;
+};
+
+}  // namespace
+
+std::vector<Bond> find_plane_bonds(const MeshTree& tree) { return PlaneBonds(tree).run(); }
+
+}  // namespace shatter
