@@ -1,15 +1,18 @@
 #pragma once
-// What both benchmarks share: the peer's mesh type and conversion, the median of
-// repeated timings, and number formatting for the Markdown tables.
+// What the benchmarks share: the peer's mesh type and conversion, the median of
+// repeated timings, number formatting for the Markdown tables, and the CGAL clip
+// replay of a mesh tree's planes in a forked, time-limited child.
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "shatter/kernel/mesh.hpp"
+#include "shatter/meshtree/tree.hpp"
 
 namespace shatter::bench {
 
@@ -29,5 +32,50 @@ std::string fixed(double value, int digits);
 
 /// 65536 -> "65,536".
 std::string with_thousands(std::uint64_t value);
+
+/// A measurement that was not taken (printed "–", an empty CSV field).
+inline constexpr double not_measured = std::numeric_limits<double>::quiet_NaN();
+
+/// Seconds with about four significant digits, never in exponent form; "–" for NaN.
+std::string seconds_text(double s);
+
+// ---------------------------------------------------------------------------
+// The peer CGAL 5.5 PMP::clip(clip_volume(true)) on Surface_mesh<Epick>, replaying
+// the very planes of a shatter tree. For each internal node in preorder, the
+// peer's piece for that node is clipped on both sides of the node's plane (two
+// copies, clipped by the plane and by its opposite), each side is split into
+// connected components, and those are matched to the node's children on that side
+// by nearest area-weighted surface centroid. A side whose clip returns false or
+// throws, or whose component count differs from shatter's child count, ends the
+// replay of those children's subtrees: counted, and their leaves reported missing.
+// Its time is the sum of the clip and split_connected_components calls only.
+
+/// What one replay did; a timeout or crash keeps the progress made before it.
+struct PeerResult {
+  enum class Status { ok, timeout, crashed, error } status = Status::ok;
+  double clip_seconds = not_measured;  ///< a lower bound unless status is ok
+  std::size_t internal_nodes = 0, nodes_done = 0;
+  std::size_t failed_clips = 0, threw = 0, mismatches = 0, missing = 0;
+  long pieces = -1, invalid = -1;  ///< leaf pieces produced and how many are invalid; -1 = not checked
+  bool clipping_finished = false;
+  std::string detail;  ///< why it is not ok
+
+  std::string status_name() const;
+  /// Seconds to compare with, when the replay ran to its end.
+  double comparable_seconds() const { return status == Status::ok ? clip_seconds : not_measured; }
+};
+
+struct ReplayLimits {
+  double timeout_seconds = 60;    ///< wall clock of the whole replay, checks included
+  std::uint64_t memory_mb = 8192; ///< address space the child may add to this process's
+  /// Check every leaf piece (closed, no self-intersection, volume > 0) after the clock.
+  bool check_pieces = true;
+};
+
+/// Replays `tree` (built from `input`) with CGAL clip in a forked child process
+/// under `limits`, because after a few levels rounded points can make CGAL's
+/// pieces degenerate and clip may then hang, explode or crash. Throws
+/// std::runtime_error only when pipe or fork fails.
+PeerResult replay_with_cgal_isolated(const MeshTree& tree, const Mesh& input, const ReplayLimits& limits);
 
 }  // namespace shatter::bench

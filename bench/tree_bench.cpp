@@ -44,19 +44,6 @@
 // be byte-identical); every peer leaf piece through is_closed, does_self_intersect
 // and volume > 0.
 
-#include <CGAL/Polygon_mesh_processing/clip.h>
-#include <CGAL/Polygon_mesh_processing/connected_components.h>
-#include <CGAL/Polygon_mesh_processing/measure.h>
-#include <CGAL/Polygon_mesh_processing/self_intersections.h>
-#include <CGAL/Surface_mesh.h>
-#include <CGAL/boost/graph/helpers.h>
-
-#include <poll.h>
-#include <signal.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <array>
 #include <cerrno>
@@ -90,19 +77,16 @@
 
 namespace {
 
-namespace PMP = CGAL::Polygon_mesh_processing;
-using shatter::bench::CgalMesh;
-using shatter::bench::Epick;
 using shatter::bench::fixed;
-using shatter::bench::to_cgal;
+using shatter::bench::not_measured;
+using shatter::bench::PeerResult;
+using shatter::bench::seconds_text;
 using shatter::bench::with_thousands;
 using Clock = std::chrono::steady_clock;
 using shatter::KernelKind;
 using shatter::MeshTree;
 using shatter::NodeIndex;
 using shatter::Strategy;
-
-constexpr double not_measured = std::numeric_limits<double>::quiet_NaN();
 
 constexpr const char* usage_text =
     "usage: shatter-bench-tree [--quick] [--csv FILE] [--mesh-dir DIR] [--seed S]\n"
@@ -223,12 +207,6 @@ double seconds_between(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
-/// Seconds with about four significant digits, never in exponent form.
-std::string seconds_text(double s) {
-  if (std::isnan(s)) return "–";
-  return fixed(s, s < 0.001 ? 6 : s < 0.01 ? 5 : s < 0.1 ? 4 : s < 1 ? 3 : s < 100 ? 2 : 1);
-}
-
 /// `digits` significant digits, exponent form only for tiny values (a sliver fragment).
 std::string significant(double value, int digits) {
   if (std::isnan(value)) return "–";
@@ -320,299 +298,10 @@ LeafSummary summarize_leaves(const MeshTree& tree, bool validate) {
 // ---------------------------------------------------------------------------
 // The peer: CGAL clip replaying a tree's planes.
 
-/// Area-weighted centroid of the surface, computed the same way for both sides of
-/// the matching; it needs no closed surface, unlike a volume centroid. Falls back
-/// to the vertex average for a surface of zero area.
-template <class TriangleVisitor>
-shatter::Vec3 surface_centroid(TriangleVisitor for_each_triangle) {
-  shatter::Vec3 weighted{}, vertex_sum{};
-  double area = 0;
-  std::size_t corners = 0;
-  for_each_triangle([&](shatter::Vec3 a, shatter::Vec3 b, shatter::Vec3 c) {
-    const double w = shatter::norm(shatter::cross(b - a, c - a));
-    weighted = weighted + (a + b + c) * (w / 3.0);
-    area += w;
-    vertex_sum = vertex_sum + a + b + c;
-    corners += 3;
-  });
-  if (area > 0) return weighted * (1.0 / area);
-  return corners ? vertex_sum * (1.0 / static_cast<double>(corners)) : shatter::Vec3{};
-}
-
-shatter::Vec3 surface_centroid(const shatter::Mesh& mesh) {
-  return surface_centroid([&](auto&& visit) {
-    for (const auto& [a, b, c] : mesh.triangles) visit(mesh.positions[a], mesh.positions[b], mesh.positions[c]);
-  });
-}
-
-shatter::Vec3 surface_centroid(const CgalMesh& mesh) {
-  return surface_centroid([&](auto&& visit) {
-    for (const auto face : mesh.faces()) {
-      std::array<shatter::Vec3, 3> corner{};
-      std::size_t k = 0;
-      for (const auto v : CGAL::vertices_around_face(mesh.halfedge(face), mesh)) {
-        const auto& p = mesh.point(v);
-        if (k < 3) corner[k] = {p.x(), p.y(), p.z()};
-        ++k;
-      }
-      if (k == 3) visit(corner[0], corner[1], corner[2]);
-    }
-  });
-}
-
-/// Pairs every component with one child, closest centroids first. Returns for each
-/// component the index into `children`.
-std::vector<std::size_t> match_by_centroid(const std::vector<CgalMesh>& components, const MeshTree& tree,
-                                           const std::vector<NodeIndex>& children) {
-  struct Pair {
-    double distance;
-    std::size_t component, child;
-  };
-  std::vector<shatter::Vec3> child_centroids;
-  for (const NodeIndex child : children) child_centroids.push_back(surface_centroid(tree.nodes[child].mesh));
-  std::vector<Pair> pairs;
-  for (std::size_t i = 0; i < components.size(); ++i) {
-    const shatter::Vec3 c = surface_centroid(components[i]);
-    for (std::size_t j = 0; j < children.size(); ++j) pairs.push_back({shatter::norm(c - child_centroids[j]), i, j});
-  }
-  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
-    return a.distance != b.distance ? a.distance < b.distance
-                                    : std::pair(a.component, a.child) < std::pair(b.component, b.child);
-  });
-  constexpr std::size_t unassigned = std::numeric_limits<std::size_t>::max();
-  std::vector<std::size_t> child_of(components.size(), unassigned);
-  std::vector<bool> taken(children.size(), false);
-  for (const Pair& p : pairs) {
-    if (child_of[p.component] != unassigned || taken[p.child]) continue;
-    child_of[p.component] = p.child;
-    taken[p.child] = true;
-  }
-  return child_of;
-}
-
-bool peer_piece_valid(const CgalMesh& piece) {
-  if (piece.number_of_faces() == 0 || !CGAL::is_triangle_mesh(piece) || !CGAL::is_closed(piece)) return false;
-  if (PMP::does_self_intersect(piece)) return false;
-  return PMP::volume(piece) > 0;
-}
-
-/// Runs in the forked child: replays the tree with CGAL and reports through `send`
-/// (one line at a time, see PeerResult parsing in the parent).
-void replay_with_cgal(const MeshTree& tree, const shatter::Mesh& input, bool check_pieces,
-                      const std::function<void(const std::string&)>& send) {
-  const std::size_t internal_nodes = tree.nodes.size() - tree.leaf_count();
-  std::size_t nodes_done = 0, failed_clips = 0, threw = 0, mismatches = 0, missing = 0;
-  double clip_seconds = 0;
-  auto report_progress = [&] {
-    send("progress " + std::to_string(nodes_done) + " " + std::to_string(internal_nodes) + " " +
-         fixed(clip_seconds, 6));
-  };
-
-  std::vector<std::optional<CgalMesh>> piece(tree.nodes.size());
-  piece[0] = to_cgal(input);
-  auto last_report = Clock::now();
-  for (std::size_t index = 0; index < tree.nodes.size(); ++index) {
-    const auto& node = tree.nodes[index];
-    if (node.is_leaf() || !piece[index]) continue;
-    // Two copies, made outside the clock: clip keeps the plane's negative side.
-    std::array<CgalMesh, 2> side{*piece[index], std::move(*piece[index])};
-    piece[index].reset();
-    const Epick::Plane_3 below_plane(node.plane.normal.x, node.plane.normal.y, node.plane.normal.z,
-                                     node.plane.offset);
-    const std::array<Epick::Plane_3, 2> plane{below_plane, below_plane.opposite()};
-    std::array<bool, 2> clipped{false, false}, thrown{false, false};
-    std::array<std::vector<CgalMesh>, 2> components;
-    for (std::size_t s = 0; s < 2; ++s) {
-      try {
-        const auto t0 = Clock::now();
-        clipped[s] = PMP::clip(side[s], plane[s], CGAL::parameters::clip_volume(true));
-        if (clipped[s]) {
-          side[s].collect_garbage();  // the default index maps need dense indices
-          PMP::split_connected_components(side[s], components[s]);
-        }
-        clip_seconds += seconds_between(t0, Clock::now());
-      } catch (...) {
-        thrown[s] = true;
-      }
-    }
-    ++nodes_done;
-    for (std::size_t s = 0; s < 2; ++s) {
-      std::vector<NodeIndex> children;
-      for (const NodeIndex child : node.children)
-        if (tree.nodes[child].above_parent_plane == (s == 1)) children.push_back(child);
-      const bool usable = !thrown[s] && clipped[s] && components[s].size() == children.size();
-      if (thrown[s]) {
-        ++threw;
-      } else if (!clipped[s]) {
-        ++failed_clips;
-      } else if (!usable) {
-        ++mismatches;
-      }
-      if (!usable) {
-        for (const NodeIndex child : children) missing += tree.nodes[child].leaf_count;
-        continue;
-      }
-      const auto child_of = match_by_centroid(components[s], tree, children);
-      for (std::size_t k = 0; k < child_of.size(); ++k) piece[children[child_of[k]]] = std::move(components[s][k]);
-    }
-    if (seconds_between(last_report, Clock::now()) > 0.25) {
-      report_progress();
-      last_report = Clock::now();
-    }
-  }
-  send("clipped " + fixed(clip_seconds, 6) + " " + std::to_string(nodes_done) + " " + std::to_string(internal_nodes) +
-       " " + std::to_string(failed_clips) + " " + std::to_string(threw) + " " + std::to_string(mismatches) + " " +
-       std::to_string(missing));
-  if (!check_pieces) return;
-  std::size_t pieces = 0, invalid = 0;
-  for (const NodeIndex leaf : tree.leaf_nodes) {
-    if (!piece[leaf]) continue;
-    ++pieces;
-    bool valid = false;
-    try {
-      valid = peer_piece_valid(*piece[leaf]);
-    } catch (...) {
-    }
-    invalid += !valid;
-  }
-  send("checked " + std::to_string(pieces) + " " + std::to_string(invalid));
-}
-
-struct PeerResult {
-  enum class Status { ok, timeout, crashed, error } status = Status::ok;
-  double clip_seconds = not_measured;  ///< a lower bound unless status is ok
-  std::size_t internal_nodes = 0, nodes_done = 0;
-  std::size_t failed_clips = 0, threw = 0, mismatches = 0, missing = 0;
-  long pieces = -1, invalid = -1;  ///< leaf pieces produced and how many are invalid; -1 = not checked
-  bool clipping_finished = false;
-  std::string detail;  ///< why it is not ok
-
-  std::string status_name() const {
-    switch (status) {
-      case Status::ok: return "ok";
-      case Status::timeout: return "timeout";
-      case Status::crashed: return "crashed";
-      case Status::error: return "error";
-    }
-    return "?";
-  }
-  /// Seconds to compare with, when the replay ran to its end.
-  double comparable_seconds() const { return status == Status::ok ? clip_seconds : not_measured; }
-};
-
-void apply_peer_line(const std::string& line, PeerResult& result) {
-  std::istringstream in(line);
-  std::string tag;
-  in >> tag;
-  if (tag == "progress") {
-    in >> result.nodes_done >> result.internal_nodes >> result.clip_seconds;
-  } else if (tag == "clipped") {
-    in >> result.clip_seconds >> result.nodes_done >> result.internal_nodes >> result.failed_clips >> result.threw >>
-        result.mismatches >> result.missing;
-    result.clipping_finished = true;
-  } else if (tag == "checked") {
-    in >> result.pieces >> result.invalid;
-  } else if (tag == "error") {
-    result.status = PeerResult::Status::error;
-    std::getline(in >> std::ws, result.detail);
-  }
-}
-
-/// Writes all of `text` to a pipe; the parent may already be gone, then it stops.
-void write_all(int fd, const std::string& text) {
-  std::size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return;
-    done += static_cast<std::size_t>(n);
-  }
-}
-
-/// The address space the process uses now, so the child's limit can be "this much more".
-std::uint64_t current_address_space_bytes() {
-  std::ifstream statm("/proc/self/statm");
-  std::uint64_t pages = 0;
-  statm >> pages;
-  return pages * static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE));
-}
-
+/// The CGAL replay (bench_support) under this run's limits.
 PeerResult run_peer_isolated(const MeshTree& tree, const shatter::Mesh& input, const Plan& plan) {
-  int fds[2];
-  if (::pipe(fds) != 0) throw std::runtime_error(std::string("pipe failed: ") + std::strerror(errno));
-  // Flush first, or the child's copy of buffered output would be written twice.
-  std::cout.flush();
-  std::cerr.flush();
-  std::fflush(nullptr);
-  const pid_t pid = ::fork();
-  if (pid < 0) throw std::runtime_error(std::string("fork failed: ") + std::strerror(errno));
-  if (pid == 0) {
-    ::close(fds[0]);
-    // Should this process be orphaned while CGAL hangs, it still ends.
-    ::alarm(static_cast<unsigned>(std::ceil(plan.peer_timeout)) + 30);
-    const rlim_t limit =
-        static_cast<rlim_t>(current_address_space_bytes() + plan.options.peer_memory_mb * 1024 * 1024);
-    const rlimit address_space{limit, limit};
-    ::setrlimit(RLIMIT_AS, &address_space);
-    const int out = fds[1];
-    try {
-      replay_with_cgal(tree, input, plan.options.validate, [out](const std::string& line) { write_all(out, line + "\n"); });
-    } catch (const std::exception& e) {
-      write_all(out, std::string("error ") + e.what() + "\n");
-    } catch (...) {
-      write_all(out, "error unknown exception\n");
-    }
-    ::close(out);
-    ::_exit(0);  // no destructors or atexit handlers of the parent's state
-  }
-
-  ::close(fds[1]);
-  PeerResult result;
-  std::string pending;
-  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                           std::chrono::duration<double>(plan.peer_timeout));
-  bool timed_out = false;
-  for (;;) {
-    const double remaining = seconds_between(Clock::now(), deadline);
-    if (remaining <= 0) {
-      timed_out = true;
-      break;
-    }
-    pollfd watch{fds[0], POLLIN, 0};
-    const int ready = ::poll(&watch, 1, static_cast<int>(std::min(remaining * 1000.0, 1000.0)) + 1);
-    if (ready < 0 && errno == EINTR) continue;
-    if (ready <= 0) continue;
-    char buffer[4096];
-    const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;  // end of file: the child is done (or died)
-    pending.append(buffer, static_cast<std::size_t>(n));
-    for (std::size_t eol; (eol = pending.find('\n')) != std::string::npos;) {
-      apply_peer_line(pending.substr(0, eol), result);
-      pending.erase(0, eol + 1);
-    }
-  }
-  if (timed_out) ::kill(pid, SIGKILL);
-  ::close(fds[0]);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-
-  const std::string progress = std::to_string(result.nodes_done) + "/" + std::to_string(result.internal_nodes) +
-                               " nodes clipped in " + seconds_text(result.clip_seconds) + " s";
-  if (timed_out) {
-    result.status = PeerResult::Status::timeout;
-    result.detail = "no result within " + fixed(plan.peer_timeout, 0) + " s (" +
-                    (result.clipping_finished ? "clipping finished, checking pieces" : progress) + ")";
-  } else if (WIFSIGNALED(status)) {
-    result.status = PeerResult::Status::crashed;
-    result.detail = std::string("signal ") + std::to_string(WTERMSIG(status)) + " (" +
-                    ::strsignal(WTERMSIG(status)) + ") after " + progress;
-  } else if (result.status == PeerResult::Status::ok && !result.clipping_finished) {
-    result.status = PeerResult::Status::error;
-    result.detail = "the replay ended without a result after " + progress;
-  }
-  return result;
+  return shatter::bench::replay_with_cgal_isolated(
+      tree, input, {plan.peer_timeout, plan.options.peer_memory_mb, plan.options.validate});
 }
 
 // ---------------------------------------------------------------------------

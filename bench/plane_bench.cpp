@@ -1,0 +1,1383 @@
+// shatter-bench-plane: the project's performance targets (issue item 7) measured
+// on the plane kernel, one thread, every row with its peers in the same run.
+//
+// Rows: the unit cube [-0.5,0.5]^3 (12 triangles) cut into 256, 65,536 and 2^20 =
+// 1,048,576 fragments; knot1.off (tests/data, 6,400 triangles) subdivided by edge
+// midpoints until it has >= 50,000 triangles (each triangle into 4, flat: 6,400 ->
+// 25,600 -> 102,400) and, when ../shared/meshes/fandisk.off is there, fandisk
+// subdivided once (12,946 -> 51,784 triangles, the solid the targets were set on),
+// each cut into 256 and 65,536 fragments. Midpoint subdivision makes coplanar
+// triangles, and the plane kernel merges coplanar edge-connected triangles of a
+// mesh without attributes back into polygon faces (solid_from_mesh): the plane
+// kernel cuts fewer input faces than the mesh has triangles, the column "plane
+// faces" says how many (a midpoint that rounds off its edge keeps its triangles apart).
+//
+// shatter: build_mesh_tree with KernelKind::plane, Strategy::thesis, seed 1 (--seed),
+// threads = 1. The clock (std::chrono::steady_clock) runs around build_mesh_tree
+// only: validating the input (with self-intersections), the cuts and mass
+// properties ("cut", BuildReport::cutting_seconds), rounding every node to a
+// certified valid double mesh ("round", BuildReport::rounding_seconds; a builder
+// that rounds each piece as it cuts reports no such field, and "round" then
+// reads "in cut"), the convex hulls of every node ("hulls") and the bonds
+// ("bonds"); "other" is the rest of the total (the input check, with
+// self-intersections, and the bookkeeping between the phases).
+// Every run is a fresh forked child process, so every build starts from the same
+// heap; the tree is destroyed after the clock stops. Runs are repeated until >= 3
+// runs and >= 0.3 s (a run longer than 10 s is not repeated); every figure is the
+// median over the runs (phases each their own median).
+//   - µs/split (all levels) = median cut seconds / internal nodes (every split of
+//     the tree, the top levels' big nodes included).
+//   - µs/split (last level) = (cut seconds to N - cut seconds to N/2) / (internal
+//     nodes to N - internal nodes to N/2): the marginal cost of the splits that
+//     take the tree from N/2 to N fragments, i.e. the deepest level's splits (the
+//     builder does not report per-level time, so this is a second build to N/2,
+//     timed the same way; with the same seeds the N/2 tree is the top of the N
+//     tree, up to where a cut leaves more than two pieces and shares differ).
+//   - ns/output triangle = median total seconds / triangles of every node's mesh
+//     (internal nodes included: the tree stores them all).
+//   - peak MB = VmHWM of the child right after build_mesh_tree returned (tree
+//     alive), first run; it includes the resident set inherited from the bench
+//     (its VmRSS before the build, "baseline" in the CSV, a few MB after
+//     malloc_trim), and the caption says how much that was at most.
+//   - invalid leaves: validate_mesh (closed, oriented, manifold, positive volume,
+//     no zero-area triangle, no self-intersection) on every leaf of the first run's
+//     tree, outside the clock (or, with --validate-sample M, M evenly spaced leaves).
+//
+// Peer 1, Manifold 3.5.4 (npm manifold-3d, WebAssembly under Node, single thread):
+// bench/peers/manifold/fracture.mjs --json, the same method (random plane through
+// each piece's volume centroid, every connected component re-split, until N
+// pieces), same seed, not the same planes (see that folder's README.md). Its time
+// is its own (performance.now() around the fracture loop, after loading); median
+// of --repeat 3 (1 above 65,536), within --manifold-timeout per repeat; its peak
+// memory is the node process's ru_maxrss. The mesh goes to it through a temporary
+// OFF file (shortest round-trip decimals: the same doubles). When node or
+// node_modules is missing its cells say "not available".
+//
+// Peer 2, CGAL 5.5 PMP::clip(clip_volume(true)) on Surface_mesh<Epick>, replaying
+// the very planes of the first run's tree (bench_support: replay_with_cgal_isolated,
+// as shatter-bench-tree does) in a forked child with a wall-clock limit
+// (--peer-timeout) and an address-space limit, for rows up to --cgal-max; its time
+// is the sum of its clip and split_connected_components calls; a timeout is
+// reported with the progress made.
+//
+// The machine is shared (2 cores): read the ratios measured in the same run.
+
+#include <fcntl.h>
+#include <malloc.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "bench_support.hpp"
+#include "shatter/kernel/io.hpp"
+#include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/plane_input.hpp"
+#include "shatter/meshtree/stats.hpp"
+#include "shatter/meshtree/tree.hpp"
+#include "support/generators.hpp"
+
+namespace {
+
+using shatter::bench::fixed;
+using shatter::bench::not_measured;
+using shatter::bench::PeerResult;
+using shatter::bench::seconds_text;
+using shatter::bench::with_thousands;
+using Clock = std::chrono::steady_clock;
+using Json = nlohmann::json;
+namespace fs = std::filesystem;
+
+// ---------------------------------------------------------------------------
+// Options.
+
+struct Options {
+  bool quick = false;
+  std::optional<fs::path> csv;
+  std::string rows;  ///< empty: the default rows
+  std::optional<std::uint32_t> max_fragments;
+  std::uint64_t seed = 1;
+  fs::path mesh_dir = SHATTER_MESH_DIR;
+  fs::path knot = SHATTER_SOURCE_DIR "/tests/data/knot1.off";
+  fs::path manifold_script = SHATTER_SOURCE_DIR "/bench/peers/manifold/fracture.mjs";
+  std::string node = "node";
+  double manifold_timeout = 300;
+  std::optional<int> manifold_repeat;
+  bool no_manifold = false;
+  double peer_timeout = 60;
+  std::uint64_t peer_memory_mb = 8192;
+  std::uint32_t cgal_max = 65536;
+  bool no_cgal = false;
+  bool no_peers = false;
+  bool no_validate = false;
+  std::uint32_t validate_sample = 0;  ///< 0: every leaf
+  bool no_last_level = false;
+  double no_repeat_seconds = 10;
+};
+
+struct Repeat {
+  int min_runs = 3;
+  double min_total_seconds = 0.3;
+  int max_runs = 1000;
+  double no_repeat_seconds = 10;
+};
+
+// ---------------------------------------------------------------------------
+// Small helpers.
+
+double seconds_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+std::string ratio_text(double r) {
+  if (std::isnan(r) || std::isinf(r)) return "–";
+  return fixed(r, r < 10 ? 2 : 1);
+}
+
+std::string number_text(double v, int digits) { return std::isnan(v) ? "–" : fixed(v, digits); }
+
+double median_of(const std::vector<double>& v) { return shatter::bench::median(v, not_measured); }
+
+/// A field of /proc/self/status in kB ("VmHWM", "VmRSS"); 0 when absent.
+std::uint64_t proc_status_kb(const std::string& field) {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind(field + ":", 0) != 0) continue;
+    std::istringstream in(line.substr(field.size() + 1));
+    std::uint64_t kb = 0;
+    in >> kb;
+    return kb;
+  }
+  return 0;
+}
+
+/// Writes all of `text` to a pipe; the reader may already be gone, then it stops.
+void write_all(int fd, const std::string& text) {
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return;
+    done += static_cast<std::size_t>(n);
+  }
+}
+
+/// Reads `fd` to its end.
+std::string read_all(int fd) {
+  std::string out;
+  char buffer[65536];
+  for (;;) {
+    const ssize_t n = ::read(fd, buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    out.append(buffer, static_cast<std::size_t>(n));
+  }
+  return out;
+}
+
+std::string signal_text(int status) {
+  return "signal " + std::to_string(WTERMSIG(status)) + " (" + ::strsignal(WTERMSIG(status)) + ")";
+}
+
+// ---------------------------------------------------------------------------
+// Inputs.
+
+/// Each triangle into four by its edge midpoints (shared per edge, so the mesh
+/// stays closed and welded); flat: the new vertices are (a + b) / 2 in doubles.
+shatter::Mesh subdivide_midpoints(const shatter::Mesh& mesh) {
+  shatter::Mesh out;
+  out.positions = mesh.positions;
+  std::unordered_map<std::uint64_t, shatter::VertexIndex> midpoint_of;
+  auto midpoint = [&](shatter::VertexIndex a, shatter::VertexIndex b) {
+    const std::uint64_t key = (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b);
+    const auto [it, inserted] = midpoint_of.try_emplace(key, static_cast<shatter::VertexIndex>(out.positions.size()));
+    if (inserted) out.positions.push_back((mesh.positions[a] + mesh.positions[b]) * 0.5);
+    return it->second;
+  };
+  for (const auto& [a, b, c] : mesh.triangles) {
+    const auto ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+    out.triangles.push_back({a, ab, ca});
+    out.triangles.push_back({ab, b, bc});
+    out.triangles.push_back({ca, bc, c});
+    out.triangles.push_back({ab, bc, ca});
+  }
+  out.surfaces.assign(out.triangles.size(), shatter::original_surface);
+  return out;
+}
+
+struct Input {
+  std::string key;           ///< used in row ids: cube, knot1x16, fandiskx4
+  std::string name;          ///< for the tables
+  std::string origin;        ///< where it comes from, for the notes
+  shatter::Mesh mesh;
+  std::size_t plane_faces = 0;  ///< faces of the plane kernel's input solid (coplanar triangles merged)
+  bool available = false;
+  std::string missing;  ///< why not, if not
+};
+
+Input make_cube() {
+  Input in;
+  in.key = "cube";
+  in.name = "cube";
+  in.origin = "[-0.5,0.5]^3, 12 triangles";
+  in.mesh = shatter::test::box({-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5});
+  in.available = true;
+  return in;
+}
+
+/// `path` subdivided until it has at least `min_triangles` triangles.
+Input make_subdivided(const std::string& stem, const fs::path& path, std::size_t min_triangles) {
+  Input in;
+  in.key = stem;
+  if (!fs::exists(path)) {
+    in.name = stem;
+    in.missing = path.string() + " not found";
+    return in;
+  }
+  shatter::Mesh mesh = shatter::read_mesh(path);
+  const std::size_t original = mesh.triangle_count();
+  int levels = 0;
+  while (mesh.triangle_count() < min_triangles) {
+    mesh = subdivide_midpoints(mesh);
+    ++levels;
+  }
+  const int factor = 1 << (2 * levels);
+  in.key = stem + "x" + std::to_string(factor);
+  in.name = path.filename().string() + " ×" + std::to_string(factor);
+  in.origin = path.filename().string() + " (" + with_thousands(original) + " triangles) subdivided " +
+              std::to_string(levels) + "× by edge midpoints";
+  in.mesh = std::move(mesh);
+  in.available = true;
+  return in;
+}
+
+// ---------------------------------------------------------------------------
+// shatter: one build in a forked child.
+
+/// BuildReport::rounding_seconds where the builder reports rounding as its own
+/// phase; NaN where rounding happens inside the cut (and cutting_seconds holds it).
+template <class Report>
+double rounding_seconds_of(const Report& report) {
+  if constexpr (requires { report.rounding_seconds; })
+    return report.rounding_seconds;
+  else
+    return not_measured;
+}
+
+/// What one run measured (the first run also checks its tree and runs the CGAL replay).
+struct BuildRun {
+  bool ok = false;
+  std::string error;
+  double seconds = not_measured;
+  shatter::BuildReport report;
+  double rounding_seconds = not_measured;  ///< NaN: inside cutting_seconds
+  std::size_t leaves = 0, nodes = 0;
+  std::uint32_t max_depth = 0;
+  std::uint64_t node_triangles = 0, leaf_triangles = 0;
+  double peak_mb = not_measured, baseline_mb = not_measured;
+  // First run only.
+  long invalid = -1;  ///< -1: not checked
+  std::size_t validated = 0;
+  std::string first_invalid;
+  double validate_seconds = not_measured;
+  std::optional<PeerResult> cgal;
+};
+
+struct ChildTasks {
+  bool validate = false;
+  std::uint32_t validate_sample = 0;
+  bool cgal = false;
+  shatter::bench::ReplayLimits cgal_limits;
+};
+
+Json peer_to_json(const PeerResult& p) {
+  return Json{{"status", static_cast<int>(p.status)},
+              {"clip_seconds", std::isnan(p.clip_seconds) ? Json(nullptr) : Json(p.clip_seconds)},
+              {"internal_nodes", p.internal_nodes},
+              {"nodes_done", p.nodes_done},
+              {"failed_clips", p.failed_clips},
+              {"threw", p.threw},
+              {"mismatches", p.mismatches},
+              {"missing", p.missing},
+              {"pieces", p.pieces},
+              {"invalid", p.invalid},
+              {"clipping_finished", p.clipping_finished},
+              {"detail", p.detail}};
+}
+
+PeerResult peer_from_json(const Json& j) {
+  PeerResult p;
+  p.status = static_cast<PeerResult::Status>(j.at("status").get<int>());
+  p.clip_seconds = j.at("clip_seconds").is_null() ? not_measured : j.at("clip_seconds").get<double>();
+  p.internal_nodes = j.at("internal_nodes");
+  p.nodes_done = j.at("nodes_done");
+  p.failed_clips = j.at("failed_clips");
+  p.threw = j.at("threw");
+  p.mismatches = j.at("mismatches");
+  p.missing = j.at("missing");
+  p.pieces = j.at("pieces");
+  p.invalid = j.at("invalid");
+  p.clipping_finished = j.at("clipping_finished");
+  p.detail = j.at("detail");
+  return p;
+}
+
+/// Runs in the child: builds, measures, checks; returns the JSON the parent reads.
+Json build_in_child(const shatter::Mesh& mesh, const shatter::BuildOptions& options, const ChildTasks& tasks) {
+  Json out;
+  const std::uint64_t baseline_kb = proc_status_kb("VmRSS");
+  shatter::BuildReport report;
+  const auto t0 = Clock::now();
+  const shatter::MeshTree tree = shatter::build_mesh_tree(mesh, options, {}, &report);
+  const double seconds = seconds_between(t0, Clock::now());
+  const std::uint64_t peak_kb = proc_status_kb("VmHWM");
+
+  std::uint64_t node_triangles = 0, leaf_triangles = 0;
+  for (const auto& node : tree.nodes) {
+    node_triangles += node.mesh.triangle_count();
+    if (node.is_leaf()) leaf_triangles += node.mesh.triangle_count();
+  }
+  std::uint32_t max_depth = 0;
+  for (const auto& node : tree.nodes) max_depth = std::max(max_depth, node.depth);
+  out["seconds"] = seconds;
+  out["cutting"] = report.cutting_seconds;
+  const double rounding = rounding_seconds_of(report);
+  out["rounding"] = std::isnan(rounding) ? Json(nullptr) : Json(rounding);
+  out["hull"] = report.hull_seconds;
+  out["bond"] = report.bond_seconds;
+  out["missed"] = report.planes_missed;
+  out["rejected"] = report.planes_rejected;
+  out["leaves"] = tree.leaf_count();
+  out["nodes"] = tree.nodes.size();
+  out["max_depth"] = max_depth;
+  out["node_triangles"] = node_triangles;
+  out["leaf_triangles"] = leaf_triangles;
+  out["peak_kb"] = peak_kb;
+  out["baseline_kb"] = baseline_kb;
+
+  if (tasks.validate) {
+    const auto v0 = Clock::now();
+    const std::size_t leaves = tree.leaf_count();
+    const std::size_t count =
+        tasks.validate_sample > 0 && leaves > tasks.validate_sample ? tasks.validate_sample : leaves;
+    long invalid = 0;
+    std::string first;
+    for (std::size_t k = 0; k < count; ++k) {
+      // Evenly spaced over the leaf order when sampling; every leaf otherwise.
+      const std::size_t i = count == leaves ? k : static_cast<std::size_t>((static_cast<std::uint64_t>(k) * leaves) / count);
+      const shatter::NodeIndex node = tree.leaf_nodes[i];
+      const auto check = shatter::validate_mesh(tree.nodes[node].mesh);
+      if (check.valid()) continue;
+      if (invalid++ == 0)
+        first = "leaf " + std::to_string(i) + " (node " + std::to_string(node) + ", depth " +
+                std::to_string(tree.nodes[node].depth) + "): " + check.summary();
+    }
+    out["validated"] = count;
+    out["invalid"] = invalid;
+    out["first_invalid"] = first;
+    out["validate_seconds"] = seconds_between(v0, Clock::now());
+  }
+  if (tasks.cgal) {
+    PeerResult peer;
+    try {
+      peer = shatter::bench::replay_with_cgal_isolated(tree, mesh, tasks.cgal_limits);
+    } catch (const std::exception& e) {  // pipe or fork failed: the peer's problem
+      peer.status = PeerResult::Status::error;
+      peer.detail = e.what();
+    }
+    out["cgal"] = peer_to_json(peer);
+  }
+  return out;
+}
+
+BuildRun run_build(const shatter::Mesh& mesh, const shatter::BuildOptions& options, const ChildTasks& tasks) {
+  // Hand freed heap back first, so the child's inherited resident set (part of
+  // its VmHWM) is little more than the inputs.
+  ::malloc_trim(0);
+  int fds[2];
+  if (::pipe(fds) != 0) throw std::runtime_error(std::string("pipe failed: ") + std::strerror(errno));
+  std::cout.flush();
+  std::cerr.flush();
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) throw std::runtime_error(std::string("fork failed: ") + std::strerror(errno));
+  if (pid == 0) {
+    ::close(fds[0]);
+    Json out;
+    try {
+      out = build_in_child(mesh, options, tasks);
+      out["ok"] = true;
+    } catch (const std::exception& e) {
+      out = Json{{"ok", false}, {"error", e.what()}};
+    } catch (...) {
+      out = Json{{"ok", false}, {"error", "unknown exception"}};
+    }
+    write_all(fds[1], out.dump());
+    ::close(fds[1]);
+    ::_exit(0);  // no destructors of the parent's state
+  }
+  ::close(fds[1]);
+  const std::string text = read_all(fds[0]);
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  BuildRun run;
+  if (WIFSIGNALED(status)) {
+    run.error = "the build's process died: " + signal_text(status);
+    return run;
+  }
+  Json j;
+  try {
+    j = Json::parse(text);
+  } catch (const std::exception&) {
+    run.error = "the build's process sent no result (exit status " + std::to_string(WEXITSTATUS(status)) + ")";
+    return run;
+  }
+  if (!j.at("ok").get<bool>()) {
+    run.error = j.at("error").get<std::string>();
+    return run;
+  }
+  run.ok = true;
+  run.seconds = j.at("seconds");
+  run.report.cutting_seconds = j.at("cutting");
+  run.rounding_seconds = j.at("rounding").is_null() ? not_measured : j.at("rounding").get<double>();
+  run.report.hull_seconds = j.at("hull");
+  run.report.bond_seconds = j.at("bond");
+  run.report.planes_missed = j.at("missed");
+  run.report.planes_rejected = j.at("rejected");
+  run.leaves = j.at("leaves");
+  run.nodes = j.at("nodes");
+  run.max_depth = j.at("max_depth");
+  run.node_triangles = j.at("node_triangles");
+  run.leaf_triangles = j.at("leaf_triangles");
+  run.peak_mb = j.at("peak_kb").get<double>() / 1024.0;
+  run.baseline_mb = j.at("baseline_kb").get<double>() / 1024.0;
+  if (j.contains("validated")) {
+    run.validated = j.at("validated");
+    run.invalid = j.at("invalid");
+    run.first_invalid = j.at("first_invalid");
+    run.validate_seconds = j.at("validate_seconds");
+  }
+  if (j.contains("cgal")) run.cgal = peer_from_json(j.at("cgal"));
+  return run;
+}
+
+/// A build timed over repeated runs; the first run's tree is checked.
+struct Timed {
+  bool ok = false;
+  std::string error;
+  BuildRun first;
+  int runs = 0;
+  double seconds = not_measured, cutting = not_measured, rounding = not_measured, hull = not_measured,
+         bond = not_measured;
+
+  std::size_t internal_nodes() const { return first.nodes - first.leaves; }
+  double other() const { return seconds - cutting - (std::isnan(rounding) ? 0.0 : rounding) - hull - bond; }
+};
+
+Timed time_build(const shatter::Mesh& mesh, std::uint32_t fragments, std::uint64_t seed, const Repeat& repeat,
+                 const ChildTasks& first_tasks) {
+  shatter::BuildOptions options;
+  options.fragments = fragments;
+  options.seed = seed;
+  options.strategy = shatter::Strategy::thesis;
+  options.kernel = shatter::KernelKind::plane;
+  options.threads = 1;
+  Timed timed;
+  std::vector<double> total, cutting, rounding, hull, bond;
+  double sum = 0;
+  for (int run = 0; run < repeat.max_runs; ++run) {
+    BuildRun r = run_build(mesh, options, run == 0 ? first_tasks : ChildTasks{});
+    if (!r.ok) {
+      timed.error = r.error;
+      if (run == 0) return timed;
+      break;
+    }
+    total.push_back(r.seconds);
+    cutting.push_back(r.report.cutting_seconds);
+    rounding.push_back(r.rounding_seconds);
+    hull.push_back(r.report.hull_seconds);
+    bond.push_back(r.report.bond_seconds);
+    sum += r.seconds;
+    if (run == 0) timed.first = std::move(r);
+    if (run < 3) std::cerr << " " << seconds_text(total.back()) << std::flush;
+    if (total.back() > repeat.no_repeat_seconds) break;
+    if (static_cast<int>(total.size()) >= repeat.min_runs && sum >= repeat.min_total_seconds) break;
+  }
+  timed.ok = true;
+  timed.runs = static_cast<int>(total.size());
+  if (timed.runs > 3) std::cerr << " ... (" << timed.runs << " runs, median " << seconds_text(median_of(total)) << ")";
+  timed.seconds = median_of(total);
+  timed.cutting = median_of(cutting);
+  timed.rounding = median_of(rounding);
+  timed.hull = median_of(hull);
+  timed.bond = median_of(bond);
+  return timed;
+}
+
+// ---------------------------------------------------------------------------
+// Manifold: fracture.mjs in a child process.
+
+struct ManifoldResult {
+  enum class Status { not_run, unavailable, ok, timeout, failed } status = Status::not_run;
+  std::string detail;
+  int repeat = 0;
+  double seconds = not_measured;  ///< median of its repeats
+  std::vector<double> runs;
+  std::uint64_t pieces = 0, triangles = 0, bad_pieces = 0, rounds = 0;
+  double peak_rss_mb = not_measured;  ///< its own sampling (process.memoryUsage.rss)
+  double maxrss_mb = not_measured;    ///< the node process's ru_maxrss (wait4)
+  double wall_seconds = not_measured; ///< the node process's whole life, loading included
+  double wasm_mb = not_measured;      ///< WASM linear memory after the last repeat
+  double volume_error = not_measured;
+  std::string version, node_version;
+
+  bool ok() const { return status == Status::ok; }
+  std::string status_name() const {
+    switch (status) {
+      case Status::not_run: return "not run";
+      case Status::unavailable: return "not available";
+      case Status::ok: return "ok";
+      case Status::timeout: return "timeout";
+      case Status::failed: return "failed";
+    }
+    return "?";
+  }
+};
+
+/// `name` as an executable: itself when it holds a '/', else found on PATH.
+std::optional<fs::path> find_executable(const std::string& name) {
+  if (name.find('/') != std::string::npos) {
+    if (::access(name.c_str(), X_OK) == 0) return fs::path(name);
+    return std::nullopt;
+  }
+  const char* path = std::getenv("PATH");
+  std::istringstream dirs(path ? path : "");
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    if (dir.empty()) continue;
+    const fs::path candidate = fs::path(dir) / name;
+    if (::access(candidate.c_str(), X_OK) == 0) return candidate;
+  }
+  return std::nullopt;
+}
+
+/// Why Manifold cannot run, or empty when it can.
+std::string manifold_unavailable(const Options& o) {
+  if (!find_executable(o.node)) return "node not found";
+  if (!fs::exists(o.manifold_script)) return o.manifold_script.string() + " not found";
+  if (!fs::exists(o.manifold_script.parent_path() / "node_modules" / "manifold-3d" / "package.json"))
+    return "manifold-3d not installed (run npm ci in " + o.manifold_script.parent_path().string() + ")";
+  return {};
+}
+
+ManifoldResult run_manifold(const Options& o, const fs::path& off, std::uint32_t fragments, int repeat) {
+  ManifoldResult result;
+  result.repeat = repeat;
+  const fs::path node = *find_executable(o.node);
+  std::vector<std::string> args{node.string()};
+  // The WASM heap is capped at 4 GiB whatever this says; the JS heap of a million
+  // pieces' handles may need more than Node's default.
+  if (fragments > 65536) args.push_back("--max-old-space-size=16384");
+  for (const std::string& a : {o.manifold_script.string(), std::string("--mesh"), off.string(), std::string("--fragments"),
+                               std::to_string(fragments), std::string("--seed"), std::to_string(o.seed),
+                               std::string("--repeat"), std::to_string(repeat), std::string("--json")})
+    args.push_back(a);
+
+  int out_pipe[2], err_pipe[2];
+  if (::pipe(out_pipe) != 0 || ::pipe(err_pipe) != 0)
+    throw std::runtime_error(std::string("pipe failed: ") + std::strerror(errno));
+  std::cout.flush();
+  std::cerr.flush();
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) throw std::runtime_error(std::string("fork failed: ") + std::strerror(errno));
+  if (pid == 0) {
+    ::dup2(out_pipe[1], 1);
+    ::dup2(err_pipe[1], 2);
+    ::close(out_pipe[0]);
+    ::close(out_pipe[1]);
+    ::close(err_pipe[0]);
+    ::close(err_pipe[1]);
+    const int devnull = ::open("/dev/null", O_RDONLY);
+    if (devnull >= 0) ::dup2(devnull, 0);
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  const auto started = Clock::now();
+  ::close(out_pipe[1]);
+  ::close(err_pipe[1]);
+  std::string out, err;
+  // The limit is per repeat: the process gets --manifold-timeout times its repeats.
+  const double limit = o.manifold_timeout * repeat;
+  const auto deadline =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limit));
+  bool timed_out = false;
+  int open_fds = 2;
+  pollfd watch[2] = {{out_pipe[0], POLLIN, 0}, {err_pipe[0], POLLIN, 0}};
+  while (open_fds > 0) {
+    const double remaining = seconds_between(Clock::now(), deadline);
+    if (remaining <= 0) {
+      timed_out = true;
+      break;
+    }
+    const int ready = ::poll(watch, 2, static_cast<int>(std::min(remaining * 1000.0, 1000.0)) + 1);
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready <= 0) continue;
+    for (int k = 0; k < 2; ++k) {
+      if (watch[k].fd < 0 || !(watch[k].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+      char buffer[65536];
+      const ssize_t n = ::read(watch[k].fd, buffer, sizeof buffer);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        ::close(watch[k].fd);
+        watch[k].fd = -1;
+        --open_fds;
+        continue;
+      }
+      (k == 0 ? out : err).append(buffer, static_cast<std::size_t>(n));
+    }
+  }
+  if (timed_out) ::kill(pid, SIGKILL);
+  for (auto& w : watch)
+    if (w.fd >= 0) ::close(w.fd);
+  int status = 0;
+  rusage usage{};
+  while (::wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
+  }
+  result.maxrss_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;  // kB on Linux
+  result.wall_seconds = seconds_between(started, Clock::now());
+  auto last_line = [](std::string text) {
+    while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.pop_back();
+    const auto at = text.find_last_of('\n');
+    return at == std::string::npos ? text : text.substr(at + 1);
+  };
+  if (timed_out) {
+    result.status = ManifoldResult::Status::timeout;
+    result.detail = "no result within " + fixed(limit, 0) + " s (" + std::to_string(repeat) + " × --manifold-timeout)";
+    return result;
+  }
+  if (WIFSIGNALED(status) || WEXITSTATUS(status) != 0) {
+    result.status = ManifoldResult::Status::failed;
+    result.detail = (WIFSIGNALED(status) ? signal_text(status) : "exit " + std::to_string(WEXITSTATUS(status))) +
+                    " after " + seconds_text(result.wall_seconds) + " s, peak RSS " + fixed(result.maxrss_mb, 0) +
+                    " MB" + (err.empty() ? "" : ": " + last_line(err));
+    return result;
+  }
+  try {
+    const Json j = Json::parse(out);
+    result.seconds = j.at("seconds").at("median");
+    result.runs = j.at("seconds").at("runs").get<std::vector<double>>();
+    result.pieces = j.at("pieces");
+    result.triangles = j.at("total_triangles");
+    result.bad_pieces = j.at("bad_pieces");
+    result.rounds = j.at("rounds");
+    result.peak_rss_mb = j.at("peak_rss_mb");
+    const auto& wasm = j.at("wasm_memory_mb_after_each_repeat");
+    if (!wasm.empty()) result.wasm_mb = wasm.back();
+    result.volume_error = j.at("volume_relative_error");
+    result.version = j.at("manifold_3d_version");
+    result.node_version = j.at("node_version");
+    result.status = ManifoldResult::Status::ok;
+    if (result.pieces < fragments) result.detail = "only " + std::to_string(result.pieces) + " pieces";
+    if (result.bad_pieces > 0)
+      result.detail += (result.detail.empty() ? "" : "; ") + std::to_string(result.bad_pieces) + " bad pieces";
+  } catch (const std::exception& e) {
+    result.status = ManifoldResult::Status::failed;
+    result.detail = std::string("unreadable output: ") + e.what();
+  }
+  return result;
+}
+
+// ---------------------------------------------------------------------------
+// Rows.
+
+struct RowSpec {
+  std::string input;  ///< Input::key prefix: cube, knot1, fandisk
+  std::uint32_t fragments = 0;
+};
+
+struct Row {
+  std::string id;
+  const Input* input = nullptr;
+  std::uint32_t fragments = 0;
+  Timed full;
+  std::optional<Timed> half;  ///< the build to N/2, for the last level's splits
+  ManifoldResult manifold;
+  std::string cgal_skipped;   ///< why the CGAL replay was not run, if not
+  bool failed = false;
+  std::string note;
+
+  void add_note(const std::string& text) { note += (note.empty() ? "" : "; ") + text; }
+  const std::optional<PeerResult>& cgal() const { return full.first.cgal; }
+  double us_per_split_all() const {
+    return full.ok && full.internal_nodes() > 0 ? full.cutting * 1e6 / static_cast<double>(full.internal_nodes())
+                                                : not_measured;
+  }
+  double us_per_split_last() const {
+    if (!full.ok || !half || !half->ok || full.internal_nodes() <= half->internal_nodes()) return not_measured;
+    return (full.cutting - half->cutting) * 1e6 / static_cast<double>(full.internal_nodes() - half->internal_nodes());
+  }
+  double ns_per_triangle() const {
+    return full.ok && full.first.node_triangles > 0 ? full.seconds * 1e9 / static_cast<double>(full.first.node_triangles)
+                                                     : not_measured;
+  }
+  double manifold_ratio() const { return manifold.ok() && full.ok ? manifold.seconds / full.seconds : not_measured; }
+  double leaf_triangles_over_manifold() const {
+    return manifold.ok() && full.ok && manifold.triangles > 0
+               ? static_cast<double>(full.first.leaf_triangles) / static_cast<double>(manifold.triangles)
+               : not_measured;
+  }
+  double cgal_ratio() const { return cgal() && full.ok ? cgal()->comparable_seconds() / full.seconds : not_measured; }
+  double cgal_ratio_to_cutting() const {
+    return cgal() && full.ok ? cgal()->comparable_seconds() / full.cutting : not_measured;
+  }
+};
+
+const std::vector<RowSpec> default_rows = {{"cube", 256},    {"cube", 65536},    {"cube", 1u << 20},
+                                           {"knot1", 256},   {"knot1", 65536},   {"fandisk", 256},
+                                           {"fandisk", 65536}};
+
+/// The rows --rows selects: comma-separated row ids (cube-65536, knot1x16-256) or
+/// input names (cube, knot1x16, knot1, fandiskx4, fandisk) meaning all their rows.
+std::vector<RowSpec> select_rows(const std::string& list) {
+  if (list.empty() || list == "all") return default_rows;
+  std::vector<RowSpec> rows;
+  std::istringstream in(list);
+  std::string item;
+  // "knot1", "knot1x16" -> "knot1": a prefix, optionally followed by x and digits.
+  auto input_of = [](const std::string& name) -> std::optional<std::string> {
+    for (const std::string prefix : {"cube", "knot1", "fandisk"}) {
+      if (name == prefix) return prefix;
+      if (name.rfind(prefix + "x", 0) == 0 && name.size() > prefix.size() + 1 &&
+          name.find_first_not_of("0123456789", prefix.size() + 1) == std::string::npos)
+        return prefix;
+    }
+    return std::nullopt;
+  };
+  while (std::getline(in, item, ',')) {
+    if (item.empty()) continue;
+    std::optional<std::string> whole = input_of(item);
+    if (whole) {
+      for (const RowSpec& r : default_rows)
+        if (r.input == *whole) rows.push_back(r);
+      continue;
+    }
+    const auto dash = item.rfind('-');
+    std::optional<std::string> name = dash == std::string::npos ? std::nullopt : input_of(item.substr(0, dash));
+    std::uint64_t n = 0;
+    try {
+      std::size_t used = 0;
+      if (name) n = std::stoull(item.substr(dash + 1), &used);
+      if (name && used != item.size() - dash - 1) n = 0;
+    } catch (const std::exception&) {
+      n = 0;
+    }
+    if (!name || n < 1 || n > (1u << 22))
+      throw std::runtime_error("--rows: unknown row '" + item +
+                               "' (want cube, knot1x16, fandiskx4, or one of them with -N, e.g. cube-65536)");
+    rows.push_back({*name, static_cast<std::uint32_t>(n)});
+  }
+  return rows;
+}
+
+const Input* input_for(const std::string& prefix, const std::vector<Input>& inputs) {
+  for (const Input& i : inputs)
+    if (i.key.rfind(prefix, 0) == 0) return &i;
+  return nullptr;
+}
+
+/// Writes every input a Manifold row needs to a temporary OFF file, once.
+class OffFiles {
+ public:
+  ~OffFiles() {
+    std::error_code ignored;
+    for (const auto& [key, path] : paths_) fs::remove(path, ignored);
+  }
+  fs::path get(const Input& input) {
+    const auto it = paths_.find(input.key);
+    if (it != paths_.end()) return it->second;
+    const fs::path path =
+        fs::temp_directory_path() / ("shatter-bench-plane-" + std::to_string(::getpid()) + "-" + input.key + ".off");
+    shatter::write_mesh(input.mesh, path, shatter::MeshFormat::off);
+    paths_[input.key] = path;
+    return path;
+  }
+
+ private:
+  std::map<std::string, fs::path> paths_;
+};
+
+Row run_row(const RowSpec& spec, const Input& input, const Options& o, const Repeat& repeat, OffFiles& files) {
+  Row row;
+  row.input = &input;
+  row.fragments = spec.fragments;
+  row.id = input.key + "-" + std::to_string(spec.fragments);
+
+  ChildTasks first;
+  first.validate = !o.no_validate;
+  first.validate_sample = o.validate_sample;
+  const bool cgal_wanted = !o.no_peers && !o.no_cgal && spec.fragments <= o.cgal_max;
+  first.cgal = cgal_wanted;
+  first.cgal_limits = {o.peer_timeout, o.peer_memory_mb, !o.no_validate};
+  row.cgal_skipped = o.no_peers || o.no_cgal ? "not run (--no-peers/--no-cgal)"
+                     : !cgal_wanted         ? "not run (N above --cgal-max " + with_thousands(o.cgal_max) + ")"
+                                            : "";
+
+  std::cerr << row.id << ": shatter" << std::flush;
+  row.full = time_build(input.mesh, spec.fragments, o.seed, repeat, first);
+  if (!row.full.ok) {
+    row.failed = true;
+    row.add_note("build failed: " + row.full.error);
+  } else {
+    if (row.full.first.leaves < spec.fragments) {
+      row.failed = true;
+      row.add_note("only " + std::to_string(row.full.first.leaves) + " leaves");
+    }
+    if (row.full.first.invalid > 0) {
+      row.failed = true;
+      row.add_note(std::to_string(row.full.first.invalid) + " invalid leaves, first " + row.full.first.first_invalid);
+    }
+    if (!row.full.error.empty()) row.add_note("a repeat failed: " + row.full.error);
+    if (row.full.first.cgal)
+      std::cerr << " [CGAL " << row.full.first.cgal->status_name() << " "
+                << seconds_text(row.full.first.cgal->clip_seconds) << " s]" << std::flush;
+  }
+  if (!o.no_last_level && spec.fragments >= 2 && row.full.ok) {
+    std::cerr << "; to N/2" << std::flush;
+    row.half = time_build(input.mesh, spec.fragments / 2, o.seed, repeat, ChildTasks{});
+    if (!row.half->ok) row.add_note("build to N/2 failed: " + row.half->error);
+  }
+  if (o.no_peers || o.no_manifold) {
+    row.manifold.status = ManifoldResult::Status::not_run;
+    row.manifold.detail = "--no-peers/--no-manifold";
+  } else if (const std::string why = manifold_unavailable(o); !why.empty()) {
+    row.manifold.status = ManifoldResult::Status::unavailable;
+    row.manifold.detail = why;
+  } else {
+    const int r = o.manifold_repeat.value_or(o.quick ? 1 : spec.fragments <= 65536 ? 3 : 1);
+    std::cerr << "; Manifold x" << r << std::flush;
+    try {
+      row.manifold = run_manifold(o, files.get(input), spec.fragments, r);
+    } catch (const std::exception& e) {
+      row.manifold.status = ManifoldResult::Status::failed;
+      row.manifold.detail = e.what();
+    }
+    std::cerr << " " << row.manifold.status_name() << " " << seconds_text(row.manifold.seconds) << " s" << std::flush;
+  }
+  std::cerr << (row.failed ? " FAILED: " + row.note : "") << "\n";
+  return row;
+}
+
+// ---------------------------------------------------------------------------
+// The targets (issue item 7) and the native reference of the WASM peer.
+
+/// Native Manifold 3.5 on these 2-core machines, as given to the project (seconds).
+struct NativeFigure {
+  std::string input_prefix;
+  std::uint32_t fragments;
+  double low, high;
+};
+const std::vector<NativeFigure> native_manifold = {
+    {"cube", 256, 0.03, 0.05}, {"cube", 65536, 9.0, 10.5}, {"fandisk", 256, 1.05, 1.05}};
+
+struct Verdict {
+  std::string target, row, figure, verdict;
+};
+
+const Row* find_row(const std::vector<Row>& rows, const std::string& prefix, std::uint32_t n) {
+  for (const Row& r : rows)
+    if (r.input->key.rfind(prefix, 0) == 0 && r.fragments == n) return &r;
+  return nullptr;
+}
+
+std::string time_verdict(double seconds, double limit) {
+  if (std::isnan(seconds)) return "not measured";
+  if (seconds <= limit) return "met";
+  return "missed by " + seconds_text(seconds - limit) + " s (" + ratio_text(seconds / limit) + "× the target)";
+}
+
+std::vector<Verdict> judge(const std::vector<Row>& rows) {
+  std::vector<Verdict> out;
+  if (const Row* r = find_row(rows, "cube", 65536)) {
+    out.push_back({"cube → 65,536 in ≤ 0.5 s, hulls, bonds and mass properties included", r->id,
+                   seconds_text(r->full.seconds) + " s", time_verdict(r->full.seconds, 0.5)});
+  }
+  for (const std::string prefix : {"fandisk", "knot1"}) {
+    if (const Row* r = find_row(rows, prefix, 256)) {
+      out.push_back({"the ≥ 50k-triangle solid → 256 in ≤ 0.1 s", r->id + " (" + with_thousands(r->input->mesh.triangle_count()) +
+                         " triangles)",
+                     seconds_text(r->full.seconds) + " s", time_verdict(r->full.seconds, 0.1)});
+    }
+  }
+  for (const std::string prefix : {"cube", "fandisk", "knot1"}) {
+    const Row* r = find_row(rows, prefix, 65536);
+    if (!r) continue;
+    Verdict v{"≥ 20× faster than Manifold at 65,536 (same run, Manifold in WASM)", r->id, "", ""};
+    const double ratio = r->manifold_ratio();
+    if (std::isnan(ratio)) {
+      v.figure = "–";
+      v.verdict = "not measured (Manifold " + r->manifold.status_name() + ")";
+    } else {
+      v.figure = ratio_text(ratio) + "× (" + seconds_text(r->manifold.seconds) + " s / " + seconds_text(r->full.seconds) + " s)";
+      v.verdict = ratio >= 20 ? "met" : "missed by a factor " + ratio_text(20 / ratio) + " (needs 20×)";
+    }
+    if (prefix == "cube") {
+      // Against the native figure the project was given, too.
+      const double native_ratio_low = 9.0 / r->full.seconds, native_ratio_high = 10.5 / r->full.seconds;
+      if (r->full.ok)
+        v.figure += "; against native 9–10.5 s: " + ratio_text(native_ratio_low) + "–" + ratio_text(native_ratio_high) + "×";
+    }
+    out.push_back(v);
+  }
+  if (const Row* r = find_row(rows, "cube", 1u << 20)) {
+    Verdict v{"cube → 2^20 with zero invalid leaves, peak memory stated", r->id, "", ""};
+    if (!r->full.ok) {
+      v.figure = "–";
+      v.verdict = "missed: " + r->note;
+    } else {
+      const BuildRun& f = r->full.first;
+      v.figure = (f.invalid < 0 ? std::string("not validated") : with_thousands(static_cast<std::uint64_t>(f.invalid)) + " invalid of " +
+                                                                    with_thousands(f.validated) + " validated") +
+                 "; peak " + fixed(f.peak_mb, 0) + " MB; " + seconds_text(r->full.seconds) + " s";
+      v.verdict = f.invalid == 0 ? (f.validated == f.leaves ? "met" : "met on the sample")
+                  : f.invalid < 0 ? "not checked"
+                                  : "missed by " + std::to_string(f.invalid) + " invalid leaves";
+    }
+    out.push_back(v);
+  }
+  if (const Row* r = find_row(rows, "cube", 65536)) {
+    Verdict v{"leaves carry no more triangles than Manifold's (same run)", r->id, "", ""};
+    if (!r->manifold.ok() || !r->full.ok) {
+      v.figure = "–";
+      v.verdict = "not measured (Manifold " + r->manifold.status_name() + ")";
+    } else {
+      const auto s = r->full.first.leaf_triangles, m = r->manifold.triangles;
+      v.figure = with_thousands(s) + " vs " + with_thousands(m);
+      v.verdict = s <= m ? "met (" + ratio_text(static_cast<double>(s) / static_cast<double>(m)) + "× Manifold's)"
+                         : "missed by " + with_thousands(s - m) + " triangles (+" +
+                               fixed(100.0 * static_cast<double>(s - m) / static_cast<double>(m), 1) + "%)";
+    }
+    out.push_back(v);
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// Output.
+
+std::string manifold_seconds_cell(const ManifoldResult& m) {
+  if (m.ok()) return seconds_text(m.seconds);
+  return m.status_name();
+}
+
+std::string cgal_cell(const Row& r) {
+  if (!r.cgal()) return r.cgal_skipped.empty() ? "–" : "not run";
+  const PeerResult& p = *r.cgal();
+  if (p.status == PeerResult::Status::ok) return seconds_text(p.clip_seconds);
+  return p.status_name();
+}
+
+std::string cgal_status(const Row& r) {
+  if (!r.cgal()) return r.cgal_skipped;
+  const PeerResult& p = *r.cgal();
+  std::string text = p.status_name();
+  if (p.status == PeerResult::Status::ok) {
+    text += ": " + (p.pieces < 0 ? std::string("pieces not checked") : std::to_string(p.pieces) + " pieces, " +
+                                                                            std::to_string(p.invalid) + " invalid");
+    if (p.missing) text += ", " + std::to_string(p.missing) + " leaves missing";
+    if (p.failed_clips || p.threw) text += ", clips failed/threw " + std::to_string(p.failed_clips) + "/" + std::to_string(p.threw);
+    if (p.mismatches) text += ", " + std::to_string(p.mismatches) + " component mismatches";
+  }
+  if (!p.detail.empty()) text += ": " + p.detail;
+  return text;
+}
+
+std::string invalid_cell(const Row& r) {
+  if (!r.full.ok) return "–";
+  const BuildRun& f = r.full.first;
+  if (f.invalid < 0) return "n/c";
+  std::string text = with_thousands(static_cast<std::uint64_t>(f.invalid));
+  if (f.validated != f.leaves) text += " of " + with_thousands(f.validated) + " sampled";
+  return text;
+}
+
+void print_tables(std::ostream& out, const std::vector<Row>& rows, const std::vector<Input>& inputs,
+                  const std::vector<std::string>& skipped, const std::vector<Verdict>& verdicts) {
+  out << "### Inputs\n\n| mesh | triangles | plane faces | origin |\n|---|---:|---:|---|\n";
+  for (const Input& i : inputs) {
+    if (!i.available) {
+      out << "| " << i.name << " | – | – | not available: " << i.missing << " |\n";
+      continue;
+    }
+    out << "| " << i.name << " | " << with_thousands(i.mesh.triangle_count()) << " | " << with_thousands(i.plane_faces)
+        << " | " << i.origin << " |\n";
+  }
+  out << "\n\"plane faces\": the faces of the plane kernel's input solid. Midpoint subdivision makes coplanar\n"
+         "triangles, and for a mesh without attributes the plane kernel merges edge-connected coplanar\n"
+         "triangles (decided exactly) back into one polygon face; the 4 triangles of a subdivided one stay apart\n"
+         "when a midpoint rounded off its edge.\n";
+  for (const std::string& s : skipped) out << "\nRow skipped: " << s << ".\n";
+
+  out << "\n### shatter, plane kernel, 1 thread\n\n"
+      << "| row | input triangles | N | leaves | depth | runs | total s | cut / round / hulls / bonds / other s | "
+         "µs/split (all levels) | µs/split (last level, Δ N/2→N) | output triangles (all nodes) | ns/output triangle | "
+         "leaf triangles | per leaf | peak MB | invalid leaves | note |\n"
+      << "|---|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
+  for (const Row& r : rows) {
+    out << "| " << r.id << " | " << with_thousands(r.input->mesh.triangle_count()) << " | " << with_thousands(r.fragments)
+        << " | ";
+    if (!r.full.ok) {
+      out << "– | – | – | – | – | – | – | – | – | – | – | – | – | " << invalid_cell(r) << " | " << r.note << " |\n";
+      continue;
+    }
+    const BuildRun& f = r.full.first;
+    out << with_thousands(f.leaves) << " | " << f.max_depth << " | " << r.full.runs << " | "
+        << seconds_text(r.full.seconds) << " | " << seconds_text(r.full.cutting) << " / "
+        << (std::isnan(r.full.rounding) ? std::string("in cut") : seconds_text(r.full.rounding))
+        << " / " << seconds_text(r.full.hull) << " / " << seconds_text(r.full.bond) << " / "
+        << seconds_text(r.full.other()) << " | " << number_text(r.us_per_split_all(), 2) << " | "
+        << number_text(r.us_per_split_last(), 2) << " | " << with_thousands(f.node_triangles) << " | "
+        << number_text(r.ns_per_triangle(), 1) << " | " << with_thousands(f.leaf_triangles) << " | "
+        << fixed(static_cast<double>(f.leaf_triangles) / static_cast<double>(std::max<std::size_t>(f.leaves, 1)), 1)
+        << " | " << fixed(f.peak_mb, 0) << " | " << invalid_cell(r) << " | " << r.note << " |\n";
+  }
+
+  double baseline = 0;
+  bool rounding_in_cut = false;
+  for (const Row& r : rows) {
+    if (!r.full.ok) continue;
+    baseline = std::max(baseline, r.full.first.baseline_mb);
+    rounding_in_cut = rounding_in_cut || std::isnan(r.full.rounding);
+  }
+  out << "\nTimes are medians over the runs, each phase its own median"
+      << (rounding_in_cut ? "; \"in cut\": this builder rounds and certifies each piece as it cuts (BuildReport has "
+                            "no rounding phase), so rounding is part of \"cut\""
+                          : "")
+      << ". µs/split (last level) is the marginal "
+         "cut time of going from N/2 to N fragments (a second build to N/2) per extra split. Peak MB is the VmHWM of "
+         "the build's own forked process, which inherited at most "
+      << fixed(baseline, 1) << " MB resident from the bench.\n";
+  out << "\n### Peers in the same run\n\n"
+      << "| row | shatter s | Manifold s (WASM) | Manifold runs | Manifold/shatter | Manifold pieces | Manifold triangles | "
+         "shatter leaf / Manifold triangles | Manifold peak RSS MB | CGAL clip s | CGAL/shatter | CGAL/shatter cut | "
+         "CGAL replay |\n"
+      << "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
+  for (const Row& r : rows) {
+    const ManifoldResult& m = r.manifold;
+    std::string runs;
+    for (double s : m.runs) {
+      if (!runs.empty()) runs += ' ';
+      runs += seconds_text(s);
+    }
+    out << "| " << r.id << " | " << seconds_text(r.full.seconds) << " | " << manifold_seconds_cell(m)
+        << (m.ok() || m.detail.empty() ? "" : ": " + m.detail) << " | " << (runs.empty() ? "–" : runs) << " | "
+        << ratio_text(r.manifold_ratio()) << " | " << (m.ok() ? with_thousands(m.pieces) : "–") << " | "
+        << (m.ok() ? with_thousands(m.triangles) : "–") << " | " << ratio_text(r.leaf_triangles_over_manifold()) << " | "
+        << (m.ok() ? fixed(m.maxrss_mb, 0) : "–") << " | " << cgal_cell(r) << " | " << ratio_text(r.cgal_ratio())
+        << " | " << ratio_text(r.cgal_ratio_to_cutting()) << " | " << cgal_status(r) << " |\n";
+  }
+
+  // The WASM caveat, with this run's figures against the native ones.
+  std::string version;
+  for (const Row& r : rows)
+    if (r.manifold.ok()) version = "manifold-3d " + r.manifold.version + " on Node " + r.manifold.node_version;
+  out << "\nManifold runs as WebAssembly (the npm build"
+      << (version.empty() ? "" : ", " + version)
+      << "; single-threaded, 32-bit heap of at most 4 GiB) under Node, not as native code; its time is its own "
+         "fracture loop (median of its repeats), its peak RSS the node process's ru_maxrss. Native Manifold cannot "
+         "be built here; the figures the project was given for native Manifold 3.5 on these 2-core machines, "
+         "against this run's WASM medians:\n\n"
+      << "| row | native Manifold 3.5 s (given) | WASM s (this run) | WASM / native |\n|---|---:|---:|---:|\n";
+  bool any_native = false;
+  for (const NativeFigure& n : native_manifold) {
+    const Row* r = find_row(rows, n.input_prefix, n.fragments);
+    if (!r) continue;
+    any_native = true;
+    const std::string native = n.low == n.high ? fixed(n.low, 2) : fixed(n.low, 2) + "–" + fixed(n.high, 2);
+    std::string ratio = "–";
+    if (r->manifold.ok()) {
+      const double hi = r->manifold.seconds / n.low, lo = r->manifold.seconds / n.high;
+      ratio = n.low == n.high ? ratio_text(lo) : ratio_text(lo) + "–" + ratio_text(hi);
+    }
+    out << "| " << r->id << " | " << native << " | " << manifold_seconds_cell(r->manifold) << " | " << ratio << " |\n";
+  }
+  if (!any_native) out << "| (no row with a native figure was run) | | | |\n";
+  bool single = false;
+  for (const Row& r : rows) single = single || (r.manifold.ok() && r.manifold.repeat == 1);
+  if (single)
+    out << "\nA Manifold time from a single repeat includes V8's warm-up (its first run is the slowest; see "
+           "bench/peers/manifold/README.md).\n";
+  out << "\nA WASM/native ratio near or below 1 means the WASM build is not slower than the native figures here, "
+         "so Manifold/shatter is not inflated by WebAssembly; the estimate rests on figures measured outside this "
+         "run.\n";
+
+  out << "\n### Targets (issue item 7)\n\n| target | row | figure | verdict |\n|---|---|---|---|\n";
+  for (const Verdict& v : verdicts)
+    out << "| " << v.target << " | " << v.row << " | " << v.figure << " | " << v.verdict << " |\n";
+  if (verdicts.empty()) out << "| (none of the targets' rows was run) | | | |\n";
+}
+
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (const char c : text) {
+    if (c == '"') quoted += '"';
+    quoted += c;
+  }
+  return quoted + "\"";
+}
+
+std::string csv_number(double value) {
+  if (std::isnan(value) || std::isinf(value)) return "";
+  std::ostringstream out;
+  out.precision(9);
+  out << value;
+  return out.str();
+}
+
+void write_csv(const fs::path& path, const std::vector<Row>& rows, std::uint64_t seed) {
+  std::ostringstream out;
+  out << "row,mesh,input_triangles,plane_faces,kernel,strategy,threads,seed,fragments,leaves,nodes,max_depth,runs,"
+         "seconds,cutting_seconds,rounding_seconds,hull_seconds,bond_seconds,other_seconds,planes_missed,"
+         "planes_rejected,us_per_split_all_levels,half_fragments,half_runs,half_cutting_seconds,half_internal_nodes,"
+         "us_per_split_last_level,node_triangles,leaf_triangles,ns_per_output_triangle,peak_rss_mb,baseline_rss_mb,"
+         "validated_leaves,invalid_leaves,validate_seconds,manifold_status,manifold_repeat,manifold_seconds,"
+         "manifold_runs,manifold_pieces,manifold_triangles,manifold_bad_pieces,manifold_maxrss_mb,"
+         "manifold_wasm_heap_mb,manifold_over_shatter,leaf_triangles_over_manifold,cgal_status,cgal_seconds,"
+         "cgal_over_shatter,cgal_over_cutting,cgal_nodes_done,cgal_internal_nodes,cgal_pieces,cgal_invalid,"
+         "cgal_missing,failed,note\n";
+  for (const Row& r : rows) {
+    const BuildRun& f = r.full.first;
+    const bool ok = r.full.ok;
+    auto n = [&](double v) { return csv_number(ok ? v : not_measured); };
+    auto u = [&](std::uint64_t v) { return ok ? std::to_string(v) : std::string(); };
+    out << r.id << ',' << csv_field(r.input->name) << ',' << r.input->mesh.triangle_count() << ','
+        << r.input->plane_faces << ",plane,thesis,1," << seed << ',' << r.fragments << ',' << u(f.leaves) << ','
+        << u(f.nodes) << ',' << u(f.max_depth) << ',' << r.full.runs << ',' << n(r.full.seconds) << ','
+        << n(r.full.cutting) << ',' << n(r.full.rounding) << ',' << n(r.full.hull) << ',' << n(r.full.bond) << ','
+        << n(r.full.other()) << ',' << u(f.report.planes_missed) << ',' << u(f.report.planes_rejected) << ','
+        << csv_number(r.us_per_split_all()) << ',';
+    if (r.half && r.half->ok) {
+      out << r.fragments / 2 << ',' << r.half->runs << ',' << csv_number(r.half->cutting) << ','
+          << r.half->internal_nodes() << ',';
+    } else {
+      out << ",,,,";
+    }
+    out << csv_number(r.us_per_split_last()) << ',' << u(f.node_triangles) << ',' << u(f.leaf_triangles) << ','
+        << csv_number(r.ns_per_triangle()) << ',' << n(f.peak_mb) << ',' << n(f.baseline_mb) << ','
+        << (ok && f.invalid >= 0 ? std::to_string(f.validated) : "") << ','
+        << (ok && f.invalid >= 0 ? std::to_string(f.invalid) : "") << ',' << n(f.validate_seconds) << ',';
+    const ManifoldResult& m = r.manifold;
+    std::string runs;
+    for (double s : m.runs) {
+      if (!runs.empty()) runs += ' ';
+      runs += csv_number(s);
+    }
+    out << csv_field(m.status_name()) << ',' << (m.repeat ? std::to_string(m.repeat) : "") << ','
+        << csv_number(m.seconds) << ',' << runs << ',' << (m.ok() ? std::to_string(m.pieces) : "") << ','
+        << (m.ok() ? std::to_string(m.triangles) : "") << ',' << (m.ok() ? std::to_string(m.bad_pieces) : "") << ','
+        << csv_number(m.ok() ? m.maxrss_mb : not_measured) << ',' << csv_number(m.wasm_mb) << ','
+        << csv_number(r.manifold_ratio()) << ',' << csv_number(r.leaf_triangles_over_manifold()) << ',';
+    if (r.cgal()) {
+      const PeerResult& p = *r.cgal();
+      out << p.status_name() << ',' << csv_number(p.clip_seconds) << ',' << csv_number(r.cgal_ratio()) << ','
+          << csv_number(r.cgal_ratio_to_cutting()) << ',' << p.nodes_done << ',' << p.internal_nodes << ','
+          << (p.pieces < 0 ? "" : std::to_string(p.pieces)) << ',' << (p.invalid < 0 ? "" : std::to_string(p.invalid))
+          << ',' << p.missing << ',';
+    } else {
+      out << "not run,,,,,,,,,";
+    }
+    std::string note = r.note;
+    if (!m.ok() && !m.detail.empty()) note += (note.empty() ? "" : "; ") + ("Manifold: " + m.detail);
+    if (m.ok() && !m.detail.empty()) note += (note.empty() ? "" : "; ") + ("Manifold: " + m.detail);
+    if (r.cgal() && !r.cgal()->detail.empty()) note += (note.empty() ? "" : "; ") + ("CGAL: " + r.cgal()->detail);
+    out << (r.failed ? 1 : 0) << ',' << csv_field(note) << '\n';
+  }
+  std::ofstream file(path, std::ios::binary);
+  if (!file) throw std::runtime_error("cannot open " + path.string() + " for writing");
+  file << out.str();
+  if (!file.flush()) throw std::runtime_error("cannot write " + path.string());
+}
+
+// ---------------------------------------------------------------------------
+// Command line (CLI11).
+
+int parse(int argc, char** argv, Options& o) {
+  CLI::App app{
+      "shatter-bench-plane: the project's performance targets (issue item 7) on the plane kernel, 1 thread, "
+      "each row with its peers in the same run: Manifold 3.5.4 (npm manifold-3d, WebAssembly under Node, "
+      "bench/peers/manifold/fracture.mjs) and CGAL 5.5 PMP::clip replaying the same planes. Rows: cube -> 256, "
+      "65,536 and 2^20 fragments; knot1.off subdivided to >= 50,000 triangles (102,400) and fandisk.off "
+      "subdivided once (51,784; when ../shared/meshes has it) -> 256 and 65,536. Prints Markdown tables "
+      "(inputs, shatter, peers, targets) on stdout, progress on stderr. Exit status: 0 when every build "
+      "succeeded with every checked leaf valid, 2 when not (peers and missed targets never count), 1 on errors.",
+      "shatter-bench-plane"};
+  app.add_flag("--quick", o.quick,
+               "Smoke run for CI, seconds long: cube -> 256 only, one run per build, Manifold (1 repeat) "
+               "and CGAL only when available");
+  app.add_option("--csv", o.csv, "Also write one CSV row per table row to this file");
+  app.add_option("--rows", o.rows,
+                 "Comma-separated rows: ids (cube-256, cube-65536, cube-1048576, knot1x16-256, "
+                 "knot1x16-65536, fandiskx4-256, fandiskx4-65536; any N works, e.g. cube-4096) or mesh names "
+                 "(cube, knot1x16, fandiskx4) for all of theirs; default all");
+  app.add_option("--max-fragments", o.max_fragments, "Drop the rows above N fragments")
+      ->check(CLI::Range(1u, 1u << 22));
+  app.add_option("--seed", o.seed, "Root seed of every build and of Manifold's stream")->capture_default_str();
+  app.add_option("--mesh-dir", o.mesh_dir, "Folder holding fandisk.off (optional; its rows are skipped without it)")
+      ->capture_default_str();
+  app.add_option("--knot", o.knot, "knot1.off (bundled)")->capture_default_str();
+  app.add_option("--manifold-script", o.manifold_script, "Manifold's fracture.mjs (needs npm ci in its folder)")
+      ->capture_default_str();
+  app.add_option("--node", o.node, "The Node executable (a name looked up on PATH, or a path)")->capture_default_str();
+  app.add_option("--manifold-timeout", o.manifold_timeout,
+                 "Wall-clock limit of Manifold per repeat, seconds (its process gets this times its repeats)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--manifold-repeat", o.manifold_repeat,
+                 "Manifold's --repeat (default 3 up to 65,536 fragments, 1 above; 1 with --quick)")
+      ->check(CLI::Range(1, 100));
+  app.add_flag("--no-manifold", o.no_manifold, "Skip Manifold");
+  app.add_option("--peer-timeout", o.peer_timeout, "Wall-clock limit of one CGAL replay, seconds")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--peer-memory-mb", o.peer_memory_mb, "Address space a CGAL replay may add")
+      ->check(CLI::Range(std::uint64_t{64}, std::uint64_t{1} << 20))
+      ->capture_default_str();
+  app.add_option("--cgal-max", o.cgal_max, "Largest N replayed by CGAL")->capture_default_str();
+  app.add_flag("--no-cgal", o.no_cgal, "Skip the CGAL replay");
+  app.add_flag("--no-peers", o.no_peers, "Skip both peers");
+  app.add_flag("--no-validate", o.no_validate, "Skip validating the leaves (and CGAL's pieces)");
+  app.add_option("--validate-sample", o.validate_sample,
+                 "Validate only M evenly spaced leaves (leaf i*L/M) of a tree with more than M leaves; 0 = all")
+      ->capture_default_str();
+  app.add_flag("--no-last-level", o.no_last_level, "Skip the second build to N/2 (µs/split of the last level)");
+  app.add_option("--no-repeat-seconds", o.no_repeat_seconds, "A build run longer than this is not repeated")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 1;
+  }
+  return -1;
+}
+
+/// The 1-minute load average (/proc/loadavg), to say how busy the shared machine was.
+std::string load_average() {
+  std::ifstream in("/proc/loadavg");
+  std::string one;
+  in >> one;
+  return one.empty() ? "?" : one;
+}
+
+std::string today() {
+  const std::time_t now = std::time(nullptr);
+  char buffer[32];
+  std::strftime(buffer, sizeof buffer, "%Y-%m-%d", std::localtime(&now));
+  return buffer;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  if (const int code = parse(argc, argv, o); code >= 0) return code;
+  try {
+    Repeat repeat;
+    repeat.no_repeat_seconds = o.no_repeat_seconds;
+    if (o.quick) {
+      repeat.min_runs = 1;
+      repeat.min_total_seconds = 0;
+      repeat.max_runs = 1;
+      if (o.rows.empty()) o.rows = "cube-256";
+    }
+
+    const std::string load_at_start = load_average();
+    std::vector<Input> inputs;
+    inputs.push_back(make_cube());
+    std::vector<RowSpec> specs = select_rows(o.rows);
+    auto wanted = [&](const std::string& prefix) {
+      return std::any_of(specs.begin(), specs.end(), [&](const RowSpec& r) {
+        return r.input == prefix && (!o.max_fragments || r.fragments <= *o.max_fragments);
+      });
+    };
+    if (wanted("knot1")) inputs.push_back(make_subdivided("knot1", o.knot, 50000));
+    if (wanted("fandisk")) inputs.push_back(make_subdivided("fandisk", o.mesh_dir / "fandisk.off", 50000));
+    for (Input& i : inputs) {
+      if (i.available) i.plane_faces = shatter::prepare_plane_input(i.mesh).geometry.planes.size();
+    }
+    if (!wanted("cube")) inputs.erase(inputs.begin());
+
+    OffFiles files;
+    std::vector<Row> rows;
+    std::vector<std::string> skipped;
+    for (const RowSpec& spec : specs) {
+      if (o.max_fragments && spec.fragments > *o.max_fragments) continue;
+      const Input* input = input_for(spec.input, inputs);
+      if (!input || !input->available) {
+        skipped.push_back(spec.input + "-" + std::to_string(spec.fragments) + " (" +
+                          (input ? input->missing : std::string("no input")) + ")");
+        std::cerr << skipped.back() << ": skipped\n";
+        continue;
+      }
+      rows.push_back(run_row(spec, *input, o, repeat, files));
+    }
+    const std::vector<Verdict> verdicts = judge(rows);
+
+    std::cout << "shatter-bench-plane, " << today() << ": seed " << o.seed
+              << "; shatter = build_mesh_tree, plane kernel, thesis strategy, 1 thread, each run in a fresh forked "
+                 "process, median of "
+              << (o.quick ? "1 run (--quick)" : ">= 3 runs and >= 0.3 s (1 run if > " + fixed(o.no_repeat_seconds, 0) + " s)")
+              << "; Manifold = fracture.mjs (WASM), same method and seed, not the same planes, timeout "
+              << fixed(o.manifold_timeout, 0) << " s per repeat; CGAL = PMP::clip replaying shatter's planes, limit "
+              << fixed(o.peer_timeout, 0) << " s; " << ::sysconf(_SC_NPROCESSORS_ONLN)
+              << " hardware threads, shared: 1-minute load average " << load_at_start << " at the start, "
+              << load_average() << " at the end.\n\n";
+    print_tables(std::cout, rows, inputs, skipped, verdicts);
+    if (o.csv) write_csv(*o.csv, rows, o.seed);
+
+    int failures = 0;
+    for (const Row& r : rows) {
+      if (!r.failed) continue;
+      ++failures;
+      std::cerr << "FAILED: " << r.id << ": " << r.note << '\n';
+    }
+    return failures ? 2 : 0;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << '\n';
+    return 1;
+  }
+}
