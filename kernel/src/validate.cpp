@@ -22,6 +22,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/predicates.hpp"
 
@@ -584,13 +585,14 @@ bool certify_star_shaped(const Mesh& mesh, const Vec3& centre) {
   }
   // The triangles around each vertex, in order: for triangle (v, a, b) the next is
   // the one holding the directed edge (v, b).
-  std::unordered_map<std::uint64_t, std::uint32_t> triangle_of_edge;
-  triangle_of_edge.reserve(3 * mesh.triangles.size());
-  std::vector<std::uint32_t> some_triangle(n, std::numeric_limits<std::uint32_t>::max());
+  thread_local IndexMap triangle_of_edge;
+  thread_local std::vector<std::uint32_t> some_triangle;
+  triangle_of_edge.reset(3 * mesh.triangles.size());
+  some_triangle.assign(n, std::numeric_limits<std::uint32_t>::max());
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
     const Triangle& tri = mesh.triangles[t];
     for (int k = 0; k < 3; ++k) {
-      triangle_of_edge[std::uint64_t{tri[k]} << 32 | tri[(k + 1) % 3]] = t;
+      triangle_of_edge.insert(directed_edge_key(tri[k], tri[(k + 1) % 3]), t);
       some_triangle[tri[k]] = t;
     }
   }
@@ -621,9 +623,9 @@ bool certify_star_shaped(const Mesh& mesh, const Vec3& centre) {
           next == w1 ? CGAL::COPLANAR : CGAL::orientation(c, pv, p1, point(mesh.positions[next]));
       if (previous == CGAL::NEGATIVE && s != CGAL::NEGATIVE) ++crossings;
       previous = s;
-      const auto it = triangle_of_edge.find(std::uint64_t{v} << 32 | next);
-      if (it == triangle_of_edge.end()) return false;
-      t = it->second;
+      const std::uint32_t found = triangle_of_edge.find(directed_edge_key(v, next));
+      if (found == IndexMap::absent) return false;
+      t = found;
       if (t == first) break;
     }
     if (crossings != 1) return false;

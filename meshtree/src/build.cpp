@@ -167,10 +167,9 @@ bool grazes_a_vertex(const Mesh& mesh, const Plane& plane, double diagonal) {
 struct BuildNode {
   Mesh mesh;
   ExactMesh exact;  // exact kernel: the solid the rounded mesh stands for
-  Solid solid;      // plane kernel: the exact solid (meshes are made after the build)
-  // Plane kernel: the cut planes of the node's ancestors by depth; the solid's
-  // vertices refer to them as PlaneRef::cut(depth).
-  std::vector<Plane> path;
+  Solid solid;      // plane kernel: the exact solid; its vertices refer to the cut
+                    // plane of the ancestor at depth k as PlaneRef::cut(k)
+  const BuildNode* parent = nullptr;
   MassProperties mass;
   Plane plane;
   bool above_parent_plane = false;
@@ -292,8 +291,10 @@ class Builder {
   void cut_plane_kernel(BuildNode& node) const {
     NodeRandom random(node.seed);
     const BoundingBox box = bounding_box(node.solid);
-    std::vector<Plane> path = node.path;
-    path.emplace_back();
+    // The ancestors' planes by depth, then this node's (drawn below).
+    thread_local std::vector<Plane> path;
+    path.resize(node.depth + 1);
+    for (const BuildNode* a = node.parent; a != nullptr; a = a->parent) path[a->depth] = a->plane;
     const PlaneRef cut = PlaneRef::cut(node.depth);
     const PlaneSet set = plane_input_->geometry.plane_set(path);
     SolidMeshOptions meshing;
@@ -333,7 +334,7 @@ class Builder {
           child->mesh = std::move(mesh.mesh);
           child->mass = mass_properties(child->mesh);
           child->solid = std::move(solid);
-          child->path = path;
+          child->parent = &node;
           child->above_parent_plane = solids == &result.above;
           child->depth = node.depth + 1;
           child->seed = child_seed(node.seed, children.size());

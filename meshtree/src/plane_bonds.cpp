@@ -154,6 +154,7 @@ class PlaneBonds {
       const double e = project_error(solid.approx[v]);
       corners_.push_back(v);
       points_.push_back(p);
+      errors_.push_back(e);
       part.min_u = std::min(part.min_u, p.x - e);
       part.max_u = std::max(part.max_u, p.x + e);
       part.min_v = std::min(part.min_v, p.y - e);
@@ -175,6 +176,7 @@ class PlaneBonds {
     parts_.clear();
     corners_.clear();
     points_.clear();
+    errors_.clear();
     for (std::size_t r = start_[k]; r < start_[k + 1]; ++r) add_face(refs_[order_[r]]);
     const Plane& plane = tree_.cut_planes[k];
     const double n[3] = {plane.normal.x, plane.normal.y, plane.normal.z};
@@ -295,10 +297,26 @@ class PlaneBonds {
   }
 
   // Whether a double point of the projection lies strictly inside a convex part:
-  // strictly left of every edge, exactly.
+  // strictly left of every edge, exactly. Each edge is first tried on the rounded
+  // corners: (b - a) x (p - a) computed in doubles, with a bound on what the
+  // corners' errors (ea, eb: each coordinate within them of the exact one) and
+  // the arithmetic can change; only an edge that bound cannot settle goes to the
+  // exact predicate on the defined points.
   bool strictly_inside(const Solid& solid, const Part& part, Vec2 p) const {
     for (std::uint32_t e = 0; e < part.count; ++e) {
-      const VertexIndex x = corners_[part.first + e], y = corners_[part.first + (e + 1) % part.count];
+      const std::uint32_t i = part.first + e, j = part.first + (e + 1) % part.count;
+      const Vec2 a = points_[i], b = points_[j];
+      const double ea = errors_[i], eb = errors_[j];
+      const double bx = b.x - a.x, by = b.y - a.y, px = p.x - a.x, py = p.y - a.y;
+      const double value = bx * py - by * px;
+      // |Δ(b - a)| <= ea + eb and |Δ(p - a)| <= ea per coordinate; the products
+      // and differences round four more times.
+      const double span = std::fabs(bx) + std::fabs(by) + std::fabs(px) + std::fabs(py) + 2 * (ea + eb);
+      const double bound = (ea + eb) * (std::fabs(px) + std::fabs(py) + ea) * 2 + ea * (std::fabs(bx) + std::fabs(by)) * 2 +
+                           0x1p-50 * span * span;
+      if (value > bound) continue;
+      if (value < -bound) return false;
+      const VertexIndex x = corners_[i], y = corners_[j];
       if (orient_in_plane(set_, raw_, solid.defs[x], solid.approx[x], solid.defs[y], solid.approx[y], p) !=
           Sign::positive) {
         return false;
@@ -345,6 +363,7 @@ class PlaneBonds {
   std::vector<Part> parts_;
   std::vector<VertexIndex> corners_;
   std::vector<Vec2> points_;
+  std::vector<double> errors_;  ///< per corner: how far the rounded 2D point may be from the exact one
   std::vector<VertexIndex> part_vertices_;
   std::vector<Triangle> triangles_;
   std::vector<Vec3> points3_;

@@ -244,33 +244,49 @@ bool triangulate_merged_face(const PlaneSet& set, const SolidFace& face,
 bool triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options, std::size_t attempt,
                  Mesh& mesh, std::size_t& merged) {
   const std::size_t n = solid.defs.size();
-  std::vector<Vec3> positions(n);
-  std::vector<PointDef> placed(n);
+  thread_local std::vector<Vec3> positions;
+  thread_local std::vector<PointDef> placed;
+  positions.resize(n);
+  placed.resize(n);
   for (std::size_t v = 0; v < n; ++v) {
     const OutputPoint point = output_point(set, solid.defs[v], solid.approx[v]);
     positions[v] = point.position;
     placed[v] = point.placed;
   }
-  // One representative per position.
-  std::vector<VertexIndex> representative(n);
+  // One representative per position: an open-addressing table keyed by a hash of
+  // the position, collisions resolved by comparing positions.
+  thread_local std::vector<VertexIndex> representative;
+  representative.resize(n);
   merged = 0;
   {
-    std::unordered_map<Vec3, VertexIndex, PositionHash, PositionEqual> first_at;
-    first_at.reserve(n);
+    thread_local std::vector<VertexIndex> slots;
+    std::size_t capacity = 16;
+    while (capacity < 2 * n) capacity *= 2;
+    slots.assign(capacity, no_index);
     for (VertexIndex v = 0; v < n; ++v) {
-      const auto [it, inserted] = first_at.emplace(positions[v], v);
-      representative[v] = it->second;
-      merged += inserted ? 0 : 1;
+      std::size_t i = PositionHash{}(positions[v]) & (capacity - 1);
+      while (slots[i] != no_index && !PositionEqual{}(positions[slots[i]], positions[v])) i = (i + 1) & (capacity - 1);
+      if (slots[i] == no_index) {
+        slots[i] = v;
+        representative[v] = v;
+      } else {
+        representative[v] = slots[i];
+        ++merged;
+      }
     }
   }
   const Mesh* input = options.attributes;
   const bool normals = input && input->corners.has_normals();
   const bool uvs = input && input->corners.has_uvs();
   const bool tangents = input && input->corners.has_tangents();
-  std::vector<Triangle> face_triangles;
-  std::vector<std::vector<VertexIndex>> loops;
-  std::vector<VertexIndex> out_index(n, no_index);
+  thread_local std::vector<Triangle> face_triangles;
+  thread_local std::vector<std::vector<VertexIndex>> loops;
+  thread_local std::vector<VertexIndex> out_index;
+  out_index.assign(n, no_index);
   mesh = Mesh{};
+  mesh.positions.reserve(n);
+  mesh.triangles.reserve(solid.corners.size());
+  mesh.surfaces.reserve(solid.corners.size());
   for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
     const SolidFace& face = solid.faces[f];
     face_triangles.clear();
