@@ -253,6 +253,7 @@ int run_slice(const SliceArgs& args) {
     meshing.interior_uv_scale = args.interior_uv_scale;
     meshing.allow_self_intersections = args.allow_self_intersections;
     meshing.trusted = &input.mesh;  // validated on the way in: certification tests only what the cut changed
+    meshing.cut = &plane;
     for (const auto* side_solids : {&result.below, &result.above}) {
       const std::string side_name = side_solids == &result.below ? "below" : "above";
       for (std::size_t i = 0; i < side_solids->size(); ++i) {

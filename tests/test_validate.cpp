@@ -364,3 +364,89 @@ TEST_CASE("self-intersecting corpus meshes report the known pair counts", "[vali
     CHECK(validate_mesh(read_mesh(path)).find(DefectKind::self_intersection)->first == crossings->first);
   }
 }
+
+// --- the plane kernel's certificates -------------------------------------------------
+
+TEST_CASE("validate_mesh_against finds what validate_mesh finds, on its own and against a trusted mesh",
+          "[validate][certify]") {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  for (auto& named : test::generated_meshes()) meshes.emplace_back(named.name, std::move(named.mesh));
+  for (const auto& path : test::valid_meshes()) meshes.emplace_back(path.filename().string(), read_mesh(path));
+  for (const auto& path : test::self_intersecting_meshes()) {
+    if (path.filename() != "cow.off") meshes.emplace_back(path.filename().string(), read_mesh(path));
+  }
+  meshes.emplace_back("pierced tetrahedron", pierced_tetrahedron());
+  for (const auto& [name, mesh] : meshes) {
+    INFO(name);
+    const ValidationReport reference = validate_mesh(mesh);
+    const ValidationReport alone = validate_mesh_against(mesh, nullptr);
+    CHECK(kinds(alone) == kinds(reference));
+    if (const Defect* d = reference.find(DefectKind::self_intersection)) {
+      REQUIRE(alone.find(DefectKind::self_intersection) != nullptr);
+      CHECK(alone.find(DefectKind::self_intersection)->count == d->count);
+    }
+    // Against itself only when valid: every pair is then trusted.
+    if (reference.valid()) CHECK(validate_mesh_against(mesh, &mesh).valid());
+  }
+  // Trust never hides a new crossing: the pierced tetrahedron against its own
+  // tetrahedron (the piercing triangles are new).
+  const Mesh pierced = pierced_tetrahedron();
+  Mesh tetrahedron_only = pierced;
+  tetrahedron_only.triangles.resize(4);
+  tetrahedron_only.surfaces.resize(4);
+  const ValidationReport against = validate_mesh_against(pierced, &tetrahedron_only);
+  REQUIRE(against.find(DefectKind::self_intersection) != nullptr);
+  CHECK(against.find(DefectKind::self_intersection)->count == 3);
+}
+
+TEST_CASE("the star-shaped certificate accepts convex solids around an inner point and nothing invalid",
+          "[validate][certify]") {
+  const Mesh box = test::box({0, 0, 0}, {2, 3, 4});
+  CHECK(certify_star_shaped(box, {1, 1.5, 2}));
+  CHECK_FALSE(certify_star_shaped(box, {5, 1.5, 2}));     // outside: triangles face it
+  CHECK_FALSE(certify_star_shaped(box, {0, 1.5, 2}));     // on a face: orientation zero
+  const Mesh sphere = test::ellipsoid({0, 0, 0}, {1, 2, 3}, 16, 12);
+  CHECK(certify_star_shaped(sphere, {0.1, -0.2, 0.3}));
+  const Mesh torus = test::torus(3, 1, 16, 8);
+  CHECK_FALSE(certify_star_shaped(torus, {0, 0, 0}));
+  CHECK_FALSE(certify_star_shaped(torus, {3, 0, 0}));
+  // A surface wrapping its centre twice: a bipyramid whose equator goes around
+  // twice (radius 1, then 1.5), so every triangle faces away from the centre but
+  // the rings around the poles wind twice. It intersects itself; the facing test
+  // alone would pass it, the winding test must not.
+  {
+    const int m = 7;
+    std::vector<Vec3> positions{{0, 0, 1}, {0, 0, -1}};
+    std::vector<Triangle> triangles;
+    for (int k = 0; k < 2 * m; ++k) {
+      const double angle = 4 * M_PI * k / (2 * m), radius = k < m ? 1.0 : 1.5;
+      positions.push_back({radius * std::cos(angle), radius * std::sin(angle), 0});
+    }
+    for (int k = 0; k < 2 * m; ++k) {
+      const auto a = static_cast<VertexIndex>(2 + k), b = static_cast<VertexIndex>(2 + (k + 1) % (2 * m));
+      triangles.push_back({0, a, b});
+      triangles.push_back({1, b, a});
+    }
+    const Mesh double_cover = test::mesh_from(positions, triangles);
+    // Every triangle faces away from the centre (so only the winding test can
+    // reject it): the centre lies behind each, exactly.
+    for (const Triangle& t : double_cover.triangles) {
+      const Vec3 a = positions[t[0]], b = positions[t[1]], c = positions[t[2]];
+      CHECK(dot(cross(b - a, c - a), Vec3{} - a) < 0);
+    }
+    CHECK_FALSE(validate_mesh(double_cover).valid());
+    CHECK_FALSE(certify_star_shaped(double_cover, {0, 0, 0}));
+  }
+  Mesh inward = corner_tetrahedron();
+  reverse_all(inward);
+  CHECK_FALSE(certify_star_shaped(inward, {0.1, 0.1, 0.1}));
+  // Anything the certificate accepts, validate_mesh accepts: every generated
+  // convex mesh around its vertex average.
+  for (const auto& named : test::generated_meshes()) {
+    Vec3 centre;
+    for (const Vec3& p : named.mesh.positions) centre = centre + p;
+    centre = centre * (1.0 / static_cast<double>(named.mesh.positions.size()));
+    INFO(named.name);
+    if (certify_star_shaped(named.mesh, centre)) CHECK(validate_mesh(named.mesh).valid());
+  }
+}

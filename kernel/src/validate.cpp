@@ -440,13 +440,58 @@ bool projections_apart(const Mesh& mesh, const Triangle& a, const Triangle& b, i
   return separates(pa, a, turn_a, pb, b) || separates(pb, b, turn_b, pa, a);
 }
 
+// The sign of orient3d(a, b, c, d) when floating point certifies it, else zero
+// (unknown). Shewchuk's static bound for orient3d ("Adaptive Precision
+// Floating-Point Arithmetic and Fast Robust Geometric Predicates", 1997, errbound
+// A = (7 + 56 eps) eps with eps = 2^-53) on the permanent of the differences;
+// underflow and overflow fail the comparison or are excluded by the magnitude
+// check, and then the caller decides exactly.
+int orient3d_if_clear(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const double adx = a.x - d.x, bdx = b.x - d.x, cdx = c.x - d.x;
+  const double ady = a.y - d.y, bdy = b.y - d.y, cdy = c.y - d.y;
+  const double adz = a.z - d.z, bdz = b.z - d.z, cdz = c.z - d.z;
+  const double bdxcdy = bdx * cdy, cdxbdy = cdx * bdy;
+  const double cdxady = cdx * ady, adxcdy = adx * cdy;
+  const double adxbdy = adx * bdy, bdxady = bdx * ady;
+  const double det = adz * (bdxcdy - cdxbdy) + bdz * (cdxady - adxcdy) + cdz * (adxbdy - bdxady);
+  const double permanent = (std::fabs(bdxcdy) + std::fabs(cdxbdy)) * std::fabs(adz) +
+                           (std::fabs(cdxady) + std::fabs(adxcdy)) * std::fabs(bdz) +
+                           (std::fabs(adxbdy) + std::fabs(bdxady)) * std::fabs(cdz);
+  constexpr double eps = 0x1p-53;
+  const double bound = (7.0 + 56.0 * eps) * eps * permanent;
+  if (!(permanent > 0x1p-900) || !(permanent < 0x1p900)) return 0;
+  if (det > bound) return 1;
+  if (-det > bound) return -1;
+  return 0;
+}
+
+// Whether triangle b, but for the corners it shares with a, lies strictly on one
+// side of a's plane (so it meets a at most in their shared corners), as far as
+// floating point certifies: a quick rejection before any exact test.
+bool strictly_beside(const Mesh& mesh, const Triangle& a, const Triangle& b) {
+  const Vec3& p = mesh.positions[a[0]];
+  const Vec3& q = mesh.positions[a[1]];
+  const Vec3& r = mesh.positions[a[2]];
+  int side = 0;
+  for (const VertexIndex v : b) {
+    if (v == a[0] || v == a[1] || v == a[2]) continue;
+    const int s = orient3d_if_clear(p, q, r, mesh.positions[v]);
+    if (s == 0 || (side != 0 && s != side)) return false;
+    side = s;
+  }
+  return side != 0;
+}
+
 // Whether two triangles of a mesh meet beyond the vertices and edge they share,
 // exactly (the test of CGAL's self_intersections, on a triangle soup): sharing an
 // edge, only when coplanar and on one side of it; sharing a vertex, when the edge
 // of either opposite the vertex meets the other; otherwise, when they meet. Tried
-// first: their projections apart along the axis of a's largest normal component.
+// first, cheapest first: one triangle strictly beside the other's plane (filtered
+// orient3d), then their projections apart along the axis of a's largest normal
+// component (exact 2D orientations, which settle nearly coplanar neighbours).
 bool triangles_intersect(const Mesh& mesh, const Triangle& a, const Triangle& b) {
   using K = CGAL::Epick;
+  if (strictly_beside(mesh, a, b) || strictly_beside(mesh, b, a)) return false;
   {
     const Vec3 n = cross(mesh.positions[a[1]] - mesh.positions[a[0]], mesh.positions[a[2]] - mesh.positions[a[0]]);
     const double ax = std::fabs(n.x), ay = std::fabs(n.y), az = std::fabs(n.z);
@@ -522,7 +567,7 @@ struct TriangleKeyEqual {
 
 }  // namespace
 
-ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted) {
+ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near) {
   ValidationOptions without;
   without.check_self_intersections = false;
   ValidationReport report = validate_mesh(mesh, without);
@@ -535,7 +580,43 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted) {
   using Box = CGAL::Box_intersection_d::Box_with_handle_d<double, 3, std::size_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
   std::vector<Box> all, fresh;
   all.reserve(mesh.triangles.size());
+  // With a plane the new triangles lie along, only triangles within the slab the
+  // new ones span can meet them: each triangle's range of n·p + d, in doubles
+  // widened by a bound on their rounding, against the new ones'.
+  std::vector<std::array<double, 2>> range;
+  double fresh_lo = INFINITY, fresh_hi = -INFINITY;
+  if (near) {
+    range.resize(mesh.triangles.size());
+    double largest = 0;
+    for (const Vec3& p : mesh.positions) {
+      largest = std::max(largest, std::fabs(near->normal.x * p.x) + std::fabs(near->normal.y * p.y) +
+                                      std::fabs(near->normal.z * p.z) + std::fabs(near->offset));
+    }
+    const double slack = 8 * 0x1p-53 * largest;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      double lo = INFINITY, hi = -INFINITY;
+      for (const VertexIndex v : mesh.triangles[t]) {
+        const double d = dot(near->normal, mesh.positions[v]) + near->offset;
+        lo = std::min(lo, d);
+        hi = std::max(hi, d);
+      }
+      range[t] = {lo - slack, hi + slack};
+    }
+  }
+  const std::size_t fresh_reserve = mesh.triangles.size();
+  fresh.reserve(fresh_reserve);
+  std::vector<std::uint8_t> is_new(mesh.triangles.size(), 0);
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (!trusted || !known.count(triangle_key(mesh, mesh.triangles[t]))) {
+      is_new[t] = 1;
+      if (near) {
+        fresh_lo = std::min(fresh_lo, range[t][0]);
+        fresh_hi = std::max(fresh_hi, range[t][1]);
+      }
+    }
+  }
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (near && !is_new[t] && (range[t][1] < fresh_lo || range[t][0] > fresh_hi)) continue;
     const Triangle& tri = mesh.triangles[t];
     double lo[3], hi[3];
     for (int axis = 0; axis < 3; ++axis) {
@@ -547,7 +628,7 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted) {
     }
     const Box box(CGAL::Bbox_3(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]), t);
     all.push_back(box);
-    if (!trusted || !known.count(triangle_key(mesh, tri))) fresh.push_back(box);
+    if (is_new[t]) fresh.push_back(box);
   }
   report.self_intersections_checked = true;
   if (fresh.empty()) return report;

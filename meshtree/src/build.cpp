@@ -306,6 +306,7 @@ class Builder {
     std::string last_defect;
     for (std::uint32_t attempt = 0; attempt < options_.max_plane_tries; ++attempt) {
       path.back() = draw_plane(options_.strategy, box, node.mass.centroid, random);
+      meshing.cut = &path.back();
       SolidCut result;
       try {
         result = cut_solid(set, node.solid, cut, node.depth + 1, plane_input_->shells);

@@ -418,7 +418,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     } else {
       ValidationOptions validation;
       validation.check_self_intersections = !options.allow_self_intersections;
-      report = validation.check_self_intersections ? validate_mesh_against(mesh, options.trusted)
+      report = validation.check_self_intersections ? validate_mesh_against(mesh, options.trusted, options.cut)
                                                    : validate_mesh(mesh, validation);
       if (options.allow_self_intersections) {
         // A surface allowed to cross itself may touch itself at a vertex.

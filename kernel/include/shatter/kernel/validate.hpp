@@ -84,8 +84,11 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
 /// coplanar triangles of a flat face without exact arithmetic), then as CGAL's
 /// self_intersections tests them. Same report as validate_mesh (the
 /// self-intersection count counts only the pairs tested).
+/// `near`: a plane the triangles not in `trusted` are known to lie along (a cut);
+/// only triangles within the slab of n·x + d values those span are then tested
+/// against them (a prefilter in doubles, widened by a bound on its rounding).
 /// Cost: O(T log T) plus the pairs of boxes that meet a tested triangle's box.
-ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted);
+ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near = nullptr);
 
 /// A fast exact certificate that a closed, consistently oriented, 2-manifold,
 /// connected triangle mesh is a valid solid star-shaped around `centre`: every

@@ -37,6 +37,9 @@ struct SolidMeshOptions {
   /// one was cut from), or nullptr: certification then tests only the pairs of
   /// triangles not both found in it (validate_mesh_against).
   const Mesh* trusted = nullptr;
+  /// The cut plane that made this solid from `trusted` (its new triangles lie
+  /// along it), or nullptr: narrows the intersection tests to a slab around it.
+  const Plane* cut = nullptr;
   /// Certify without the self-intersection check, and accept vertices where the
   /// surface touches itself (a self-intersecting input was accepted on request:
   /// only the topology can be promised).
