@@ -15,10 +15,9 @@
 // shatter: build_mesh_tree with KernelKind::plane, Strategy::thesis, seed 1 (--seed),
 // threads = 1. The clock (std::chrono::steady_clock) runs around build_mesh_tree
 // only: validating the input (with self-intersections), the cuts and mass
-// properties ("cut", BuildReport::cutting_seconds), rounding every node to a
-// certified valid double mesh ("round", BuildReport::rounding_seconds; a builder
-// that rounds each piece as it cuts reports no such field, and "round" then
-// reads "in cut"), the convex hulls of every node ("hulls") and the bonds
+// properties, with every piece rounded to a certified valid double mesh as it is
+// cut ("cut", BuildReport::cutting_seconds), the convex hulls of every node
+// ("hulls") and the bonds
 // ("bonds"); "other" is the rest of the total (the input check, with
 // self-intersections, and the bookkeeping between the phases).
 // Every run is a fresh forked child process, so every build starts from the same
@@ -282,23 +281,12 @@ Input make_subdivided(const std::string& stem, const fs::path& path, std::size_t
 // ---------------------------------------------------------------------------
 // shatter: one build in a forked child.
 
-/// BuildReport::rounding_seconds where the builder reports rounding as its own
-/// phase; NaN where rounding happens inside the cut (and cutting_seconds holds it).
-template <class Report>
-double rounding_seconds_of(const Report& report) {
-  if constexpr (requires { report.rounding_seconds; })
-    return report.rounding_seconds;
-  else
-    return not_measured;
-}
-
 /// What one run measured (the first run also checks its tree and runs the CGAL replay).
 struct BuildRun {
   bool ok = false;
   std::string error;
   double seconds = not_measured;
   shatter::BuildReport report;
-  double rounding_seconds = not_measured;  ///< NaN: inside cutting_seconds
   std::size_t leaves = 0, nodes = 0;
   std::uint32_t max_depth = 0;
   std::uint64_t node_triangles = 0, leaf_triangles = 0;
@@ -369,8 +357,6 @@ Json build_in_child(const shatter::Mesh& mesh, const shatter::BuildOptions& opti
   for (const auto& node : tree.nodes) max_depth = std::max(max_depth, node.depth);
   out["seconds"] = seconds;
   out["cutting"] = report.cutting_seconds;
-  const double rounding = rounding_seconds_of(report);
-  out["rounding"] = std::isnan(rounding) ? Json(nullptr) : Json(rounding);
   out["hull"] = report.hull_seconds;
   out["bond"] = report.bond_seconds;
   out["missed"] = report.planes_missed;
@@ -469,7 +455,6 @@ BuildRun run_build(const shatter::Mesh& mesh, const shatter::BuildOptions& optio
   run.ok = true;
   run.seconds = j.at("seconds");
   run.report.cutting_seconds = j.at("cutting");
-  run.rounding_seconds = j.at("rounding").is_null() ? not_measured : j.at("rounding").get<double>();
   run.report.hull_seconds = j.at("hull");
   run.report.bond_seconds = j.at("bond");
   run.report.planes_missed = j.at("missed");
@@ -497,11 +482,11 @@ struct Timed {
   std::string error;
   BuildRun first;
   int runs = 0;
-  double seconds = not_measured, cutting = not_measured, rounding = not_measured, hull = not_measured,
+  double seconds = not_measured, cutting = not_measured, hull = not_measured,
          bond = not_measured;
 
   std::size_t internal_nodes() const { return first.nodes - first.leaves; }
-  double other() const { return seconds - cutting - (std::isnan(rounding) ? 0.0 : rounding) - hull - bond; }
+  double other() const { return seconds - cutting - hull - bond; }
 };
 
 Timed time_build(const shatter::Mesh& mesh, std::uint32_t fragments, std::uint64_t seed, const Repeat& repeat,
@@ -513,7 +498,7 @@ Timed time_build(const shatter::Mesh& mesh, std::uint32_t fragments, std::uint64
   options.kernel = shatter::KernelKind::plane;
   options.threads = 1;
   Timed timed;
-  std::vector<double> total, cutting, rounding, hull, bond;
+  std::vector<double> total, cutting, hull, bond;
   double sum = 0;
   for (int run = 0; run < repeat.max_runs; ++run) {
     BuildRun r = run_build(mesh, options, run == 0 ? first_tasks : ChildTasks{});
@@ -524,7 +509,6 @@ Timed time_build(const shatter::Mesh& mesh, std::uint32_t fragments, std::uint64
     }
     total.push_back(r.seconds);
     cutting.push_back(r.report.cutting_seconds);
-    rounding.push_back(r.rounding_seconds);
     hull.push_back(r.report.hull_seconds);
     bond.push_back(r.report.bond_seconds);
     sum += r.seconds;
@@ -538,7 +522,6 @@ Timed time_build(const shatter::Mesh& mesh, std::uint32_t fragments, std::uint64
   if (timed.runs > 3) std::cerr << " ... (" << timed.runs << " runs, median " << seconds_text(median_of(total)) << ")";
   timed.seconds = median_of(total);
   timed.cutting = median_of(cutting);
-  timed.rounding = median_of(rounding);
   timed.hull = median_of(hull);
   timed.bond = median_of(bond);
   return timed;
@@ -1052,7 +1035,7 @@ void print_tables(std::ostream& out, const std::vector<Row>& rows, const std::ve
   for (const std::string& s : skipped) out << "\nRow skipped: " << s << ".\n";
 
   out << "\n### shatter, plane kernel, 1 thread\n\n"
-      << "| row | input triangles | N | leaves | depth | runs | total s | cut / round / hulls / bonds / other s | "
+      << "| row | input triangles | N | leaves | depth | runs | total s | cut / hulls / bonds / other s | "
          "µs/split (all levels) | µs/split (last level, Δ N/2→N) | output triangles (all nodes) | ns/output triangle | "
          "leaf triangles | per leaf | peak MB | invalid leaves | note |\n"
       << "|---|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
@@ -1066,8 +1049,7 @@ void print_tables(std::ostream& out, const std::vector<Row>& rows, const std::ve
     const BuildRun& f = r.full.first;
     out << with_thousands(f.leaves) << " | " << f.max_depth << " | " << r.full.runs << " | "
         << seconds_text(r.full.seconds) << " | " << seconds_text(r.full.cutting) << " / "
-        << (std::isnan(r.full.rounding) ? std::string("in cut") : seconds_text(r.full.rounding))
-        << " / " << seconds_text(r.full.hull) << " / " << seconds_text(r.full.bond) << " / "
+        << seconds_text(r.full.hull) << " / " << seconds_text(r.full.bond) << " / "
         << seconds_text(r.full.other()) << " | " << number_text(r.us_per_split_all(), 2) << " | "
         << number_text(r.us_per_split_last(), 2) << " | " << with_thousands(f.node_triangles) << " | "
         << number_text(r.ns_per_triangle(), 1) << " | " << with_thousands(f.leaf_triangles) << " | "
@@ -1076,16 +1058,12 @@ void print_tables(std::ostream& out, const std::vector<Row>& rows, const std::ve
   }
 
   double baseline = 0;
-  bool rounding_in_cut = false;
   for (const Row& r : rows) {
     if (!r.full.ok) continue;
     baseline = std::max(baseline, r.full.first.baseline_mb);
-    rounding_in_cut = rounding_in_cut || std::isnan(r.full.rounding);
   }
   out << "\nTimes are medians over the runs, each phase its own median"
-      << (rounding_in_cut ? "; \"in cut\": this builder rounds and certifies each piece as it cuts (BuildReport has "
-                            "no rounding phase), so rounding is part of \"cut\""
-                          : "")
+      << " (\"cut\" includes rounding and certifying every piece, done as each is cut)"
       << ". µs/split (last level) is the marginal "
          "cut time of going from N/2 to N fragments (a second build to N/2) per extra split. Peak MB is the VmHWM of "
          "the build's own forked process, which inherited at most "
@@ -1171,7 +1149,7 @@ std::string csv_number(double value) {
 void write_csv(const fs::path& path, const std::vector<Row>& rows, std::uint64_t seed) {
   std::ostringstream out;
   out << "row,mesh,input_triangles,plane_faces,kernel,strategy,threads,seed,fragments,leaves,nodes,max_depth,runs,"
-         "seconds,cutting_seconds,rounding_seconds,hull_seconds,bond_seconds,other_seconds,planes_missed,"
+         "seconds,cutting_seconds,hull_seconds,bond_seconds,other_seconds,planes_missed,"
          "planes_rejected,us_per_split_all_levels,half_fragments,half_runs,half_cutting_seconds,half_internal_nodes,"
          "us_per_split_last_level,node_triangles,leaf_triangles,ns_per_output_triangle,peak_rss_mb,baseline_rss_mb,"
          "validated_leaves,invalid_leaves,validate_seconds,manifold_status,manifold_repeat,manifold_seconds,"
@@ -1187,7 +1165,7 @@ void write_csv(const fs::path& path, const std::vector<Row>& rows, std::uint64_t
     out << r.id << ',' << csv_field(r.input->name) << ',' << r.input->mesh.triangle_count() << ','
         << r.input->plane_faces << ",plane,thesis,1," << seed << ',' << r.fragments << ',' << u(f.leaves) << ','
         << u(f.nodes) << ',' << u(f.max_depth) << ',' << r.full.runs << ',' << n(r.full.seconds) << ','
-        << n(r.full.cutting) << ',' << n(r.full.rounding) << ',' << n(r.full.hull) << ',' << n(r.full.bond) << ','
+        << n(r.full.cutting) << ',' << n(r.full.hull) << ',' << n(r.full.bond) << ','
         << n(r.full.other()) << ',' << u(f.report.planes_missed) << ',' << u(f.report.planes_rejected) << ','
         << csv_number(r.us_per_split_all()) << ',';
     if (r.half && r.half->ok) {

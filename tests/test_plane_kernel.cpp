@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "shatter/kernel/error.hpp"
@@ -462,12 +463,38 @@ void check_cut_chain(const std::string& name, const Mesh& mesh, std::uint64_t se
     const Vec3 normal = random.direction();
     cuts.push_back({normal, -dot(normal, centre)});
     const PlaneSet set = input.geometry.plane_set(cuts);
-    const SolidCut cut = cut_solid(set, solid, PlaneRef::cut(static_cast<std::uint32_t>(cuts.size() - 1)), static_cast<SurfaceId>(1 + cuts.size()),
-                                   input.shells);
+    const PlaneRef cut_plane = PlaneRef::cut(static_cast<std::uint32_t>(cuts.size() - 1));
+    const SolidCut cut = cut_solid(set, solid, cut_plane, static_cast<SurfaceId>(1 + cuts.size()), input.shells);
     if (cut.plane_missed) continue;
     ++made;
     mpq_class sum = 0;
     std::vector<Piece> made_pieces;
+    // The two sides meet along the cap: the vertices on the cut plane must be
+    // the same exact points on both sides, and must round to the same doubles,
+    // or neighbouring fragments would not share their cap corners as written.
+    std::array<std::vector<std::array<mpq_class, 3>>, 2> on_cap_exact;
+    std::array<std::vector<Vec3>, 2> on_cap_written;
+    for (int side = 0; side < 2; ++side) {
+      for (const Solid& piece : side == 0 ? cut.below : cut.above) {
+        for (std::size_t v = 0; v < piece.vertex_count(); ++v) {
+          if (reference_side(set, cut_plane, piece.defs[v]) != Sign::zero) continue;
+          const Q3 q = reference_point(set, piece.defs[v]);
+          on_cap_exact[side].push_back({q.x, q.y, q.z});
+          on_cap_written[side].push_back(output_position(set, piece.defs[v], piece.approx[v]));
+        }
+      }
+      std::sort(on_cap_exact[side].begin(), on_cap_exact[side].end());
+      on_cap_exact[side].erase(std::unique(on_cap_exact[side].begin(), on_cap_exact[side].end()), on_cap_exact[side].end());
+      std::sort(on_cap_written[side].begin(), on_cap_written[side].end(), [](const Vec3& a, const Vec3& b) {
+        return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+      });
+      on_cap_written[side].erase(std::unique(on_cap_written[side].begin(), on_cap_written[side].end(),
+                                             [](const Vec3& a, const Vec3& b) { return a == b; }),
+                                 on_cap_written[side].end());
+    }
+    CHECK(on_cap_exact[0].size() >= 3);
+    CHECK(on_cap_exact[0] == on_cap_exact[1]);
+    CHECK(on_cap_written[0] == on_cap_written[1]);
     for (const auto* side_solids : {&cut.below, &cut.above}) {
       for (const Solid& piece : *side_solids) {
         INFO("cut " << made << " piece of " << piece.faces.size() << " faces");
