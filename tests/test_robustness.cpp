@@ -4,9 +4,11 @@
 
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <map>
 
 #include "robustness/robustness.hpp"
 #include "shatter/kernel/io.hpp"
@@ -34,13 +36,16 @@ bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; 
 TEST_CASE("a reproducer keeps the case: planes bit for bit, mesh, options") {
   const MeshPool pool = MeshPool::load();
   const fs::path dir = scratch("round-trip");
+  std::size_t plane_cases = 0;
   for (std::uint64_t index = 0; index < 4 * case_class_count; ++index) {
     const Case c = make_case(pool, 99, index);
+    plane_cases += c.kernel == KernelKind::plane;
     INFO(class_name(c.kind) << " " << c.mesh_name);
     const Case back = read_reproducer(write_reproducer(dir, c, "a failure\nwith a second line"));
     CHECK(back.kind == c.kind);
     CHECK(back.op == c.op);
     CHECK(back.kernel == c.kernel);
+    CHECK(back.format == c.format);
     CHECK(back.seed == c.seed);
     CHECK(back.mesh_name == c.mesh_name);
     REQUIRE(back.planes.size() == c.planes.size());
@@ -56,14 +61,37 @@ TEST_CASE("a reproducer keeps the case: planes bit for bit, mesh, options") {
       CHECK(back.build.strategy == c.build.strategy);
       CHECK(back.build.kernel == c.kernel);
     }
-    // Same solid: same triangle count and the same exact volume (the reader may
-    // renumber vertices in order of first use), and a second trip is the identity.
+    // The same mesh, bit for bit: cases number their vertices as readers do, so
+    // a replay cuts the very solid (the plane kernel's points name input points by
+    // index). A second trip is the identity too.
     CHECK(back.mesh.triangles.size() == c.mesh.triangles.size());
     CHECK(test::exact_six_volume(back.mesh) == test::exact_six_volume(c.mesh));
     CHECK(back.mesh.corners.has_normals() == c.mesh.corners.has_normals());
+    CHECK(test::canonical_bytes(back.mesh) == test::canonical_bytes(c.mesh));
     const Case twice = read_reproducer(write_reproducer(dir, back, "again"));
     CHECK(test::canonical_bytes(twice.mesh) == test::canonical_bytes(back.mesh));
   }
+  CHECK(plane_cases > 0);  // the plane kernel's cases are among them
+}
+
+TEST_CASE("kernels are drawn plane 1/2, fast 1/4, exact 1/4; output formats OFF 3/4, others 1/4") {
+  const MeshPool pool = MeshPool::load();
+  std::array<int, kernel_count> kernels{};
+  std::map<MeshFormat, int> formats;
+  constexpr int cases = 400;
+  for (std::uint64_t index = 0; index < cases; ++index) {
+    const Case c = make_case(pool, 20261129, index);
+    ++kernels[kernel_index(c.kernel)];
+    ++formats[c.format];
+    if (c.op == Operation::fracture) CHECK(c.build.kernel == c.kernel);
+  }
+  INFO("fast " << kernels[0] << ", exact " << kernels[1] << ", plane " << kernels[2]);
+  // Large meshes trade exact draws for fast ones, so exact runs a little under 1/4.
+  CHECK(kernels[kernel_index(KernelKind::plane)] >= cases * 45 / 100);
+  CHECK(kernels[kernel_index(KernelKind::fast)] >= cases * 20 / 100);
+  CHECK(kernels[kernel_index(KernelKind::exact)] >= cases * 15 / 100);
+  CHECK(formats[MeshFormat::off] >= cases * 65 / 100);
+  for (MeshFormat f : {MeshFormat::obj, MeshFormat::ply, MeshFormat::stl}) CHECK(formats[f] > 0);
 }
 
 TEST_CASE("cases are a pure function of (seed, index), and every class is drawn") {
@@ -101,6 +129,72 @@ TEST_CASE("the runner's checks catch broken promises") {
   const CaseOutcome outcome = run_case(c);
   CHECK(outcome.failures == std::vector<std::string>{});
   CHECK(outcome.fast_pieces >= 2);
+  CHECK(outcome.written[kernel_index(KernelKind::fast)] == outcome.fast_pieces);
+}
+
+TEST_CASE("plane cases: slice chains and fractures pass, every piece written and read back valid") {
+  Case c;
+  c.kernel = KernelKind::plane;
+  c.mesh = test::staircase(3);
+  // A tread plane (holding faces), then a plane through vertices up to rounding.
+  c.planes = {test::axis_plane_through({1, 0, 1}, 2), test::plane_through({1, 1, 1}, {1, 1, 0.5})};
+  for (MeshFormat format : {MeshFormat::off, MeshFormat::obj, MeshFormat::ply, MeshFormat::stl}) {
+    c.format = format;
+    const CaseOutcome outcome = run_case(c);
+    CHECK(outcome.failures == std::vector<std::string>{});
+    CHECK(outcome.plane_pieces >= 4);
+    CHECK(outcome.written[kernel_index(KernelKind::plane)] + outcome.plane_unroundable == outcome.plane_pieces);
+    CHECK(outcome.invalid_written[kernel_index(KernelKind::plane)] == 0);
+  }
+  // With attributes: every triangle its own face, attributes interpolated.
+  c.mesh = test::with_seams(test::torus(1, 0.3, 12, 8));
+  c.planes = {test::plane_through({0.1, 0, 0}, {1, 0.2, 0.1})};
+  CHECK(run_case(c).failures == std::vector<std::string>{});
+  c.op = Operation::fracture;
+  c.mesh = test::torus(1, 0.3, 12, 8);
+  c.build.kernel = KernelKind::plane;
+  c.build.fragments = 4;
+  c.build.seed = 4;  // a multiple of 4: the 2-thread rebuild is compared too
+  c.seed = 4;
+  const CaseOutcome fracture = run_case(c);
+  CHECK(fracture.failures == std::vector<std::string>{});
+  CHECK(!fracture.refused);
+  CHECK(fracture.written[kernel_index(KernelKind::plane)] >= 4);
+  CHECK(fracture.plane_pieces > fracture.written[kernel_index(KernelKind::plane)]);  // every node, the root too
+}
+
+TEST_CASE("a plane-kernel failure is caught, shrunk to the chain's prefix and reproduced when replayed") {
+  // An inward cube breaks the cut's precondition: the plane kernel's exact volumes
+  // come out negative, a failure at the first cut of a two-cut chain.
+  Case c;
+  c.kernel = KernelKind::plane;
+  c.mesh = test::flipped(test::unit_cube());
+  c.planes = {test::plane_through({0.5, 0.5, 0.5}, {0.3, 0.4, 1}), test::axis_plane_through({0.25, 0, 0}, 0)};
+  const CaseOutcome outcome = run_case(c);
+  REQUIRE(!outcome.failures.empty());
+  REQUIRE(outcome.shrunk.has_value());
+  CHECK(outcome.shrunk->planes.size() == 1);
+  CHECK(outcome.shrunk->kernel == KernelKind::plane);
+  const fs::path dir = scratch("plane-failure");
+  const fs::path path = write_reproducer(dir, *outcome.shrunk, outcome.failures.front());
+  const Case back = read_reproducer(path);
+  CHECK(back.kernel == KernelKind::plane);
+  CHECK(!run_case(back).failures.empty());
+}
+
+TEST_CASE("the plane kernel's predicates agree with the audit's own exact reference") {
+  const PlaneAuditResult r = audit_plane_predicates(30000, 7, 1);
+  CHECK(r.queries == 30000);
+  CHECK(r.disagreements == 0);
+  INFO(r.first_disagreement);
+  for (int row = 0; row < plane_audit_rows; ++row) {
+    INFO(plane_audit_row_name(row));
+    // Every predicate is asked in every band, and the exact band holds true zeros
+    // that the floating-point filter must hand to exact arithmetic.
+    for (int band = 0; band < 3; ++band) CHECK(r.bands[row][band].queries > 0);
+    CHECK(r.bands[row][0].on_plane > 0);
+    CHECK(r.bands[row][0].exact_fallbacks > 0);
+  }
 }
 
 TEST_CASE("degenerate generators give valid solids with exact degeneracies") {

@@ -2,8 +2,10 @@
 // The robustness runner's model: seeded cases drawn from every degenerate class
 // and every mesh, the invariant checks each case must pass, reproducer files, and
 // the predicate audit. shatter-fuzz (main.cpp) is the command line over it;
-// test_regressions replays the reproducers checked in under tests/regressions/.
+// CTest replays the reproducers checked in under tests/regressions/ (shatter-fuzz
+// --replay, one test per file).
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -11,6 +13,8 @@
 #include <string_view>
 #include <vector>
 
+#include "shatter/kernel/implicit.hpp"
+#include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/meshtree/tree.hpp"
 
@@ -42,9 +46,13 @@ std::optional<CaseClass> parse_class(std::string_view name);
 enum class Operation : std::uint8_t { slice, fracture };
 std::string_view operation_name(Operation op);
 
+/// Parses a kernel name ("fast", "exact", "plane").
+std::optional<KernelKind> parse_kernel(std::string_view name);
+
 /// One input: a mesh and what to do with it. `slice` cuts the mesh by planes[0],
 /// then every piece by planes[1], and so on (a chain); `fracture` builds the mesh
-/// tree with `build`.
+/// tree with `build`. Every output piece (each piece of each cut; a fracture's
+/// leaves) is written in `format` and read back.
 struct Case {
   CaseClass kind = CaseClass::random_plane;
   std::string mesh_name;
@@ -53,8 +61,13 @@ struct Case {
   KernelKind kernel = KernelKind::fast;
   std::vector<Plane> planes;
   BuildOptions build;
+  MeshFormat format = MeshFormat::off;  ///< the format output pieces are written in
   std::uint64_t seed = 0;  ///< the seed the case was drawn from (reported, replayed)
 };
+
+/// Index of a kernel in the per-kernel counters: fast 0, exact 1, plane 2.
+inline constexpr std::size_t kernel_count = 3;
+inline std::size_t kernel_index(KernelKind kernel) { return static_cast<std::size_t>(kernel); }
 
 /// What one case showed. A failure is a broken promise; a refusal is the
 /// documented UnsupportedGeometryError (counted, not a failure).
@@ -65,8 +78,22 @@ struct CaseOutcome {
   std::size_t fast_self_intersecting = 0;   ///< of those, embeddings that intersect themselves
   std::size_t fast_degenerate = 0;          ///< of those, other embedding defects (zero area, volume <= 0)
   std::size_t exact_pieces = 0;             ///< exact-kernel solids checked
-  /// The smallest case that still fails: for a chain, the one cut of the piece
-  /// where it first failed; unset when there is nothing smaller.
+  std::size_t plane_pieces = 0;             ///< plane-kernel solids checked (check_solid, exact volume)
+  /// Output pieces written (write_mesh_to_bytes in the case's format) and read
+  /// back, per kernel (kernel_index), and of those the ones validate_mesh (with
+  /// self-intersections) finds invalid as read back. A plane piece invalid as
+  /// written is also a failure; fast and exact ones are counted only.
+  std::array<std::size_t, kernel_count> written{}, invalid_written{};
+  std::size_t plane_unroundable = 0;  ///< plane pieces round_solid refused to write (not a failure)
+  std::size_t plane_pinched = 0;      ///< plane cuts cut_solid refused as pinching a piece (not a failure)
+  /// The plane-kernel predicate calls the checks themselves made (check_solid's
+  /// corners-on-their-planes tests, whose true answers are zero, and the sides
+  /// behind plane_missed), so a report can leave them out of the kernel's own.
+  ImplicitCounters checker_predicates;
+  /// The smallest case that still fails: for a fast or exact chain, the one cut
+  /// of the piece where it first failed; for a plane chain, the chain's planes up
+  /// to that cut, on the same mesh (its pieces are defined from the input); unset
+  /// when there is nothing smaller.
   std::optional<Case> shrunk;
 };
 
@@ -111,5 +138,33 @@ struct AuditResult {
   std::string first_disagreement;
 };
 AuditResult audit_side_of_plane(std::uint64_t queries, std::uint64_t seed, unsigned threads);
+
+/// The plane kernel's predicates (kernel/implicit.hpp) audited the same way,
+/// against an exact reference written here from the definitions in implicit.hpp
+/// (GMP rationals: a segment_plane point as p + t(q - p), a three_planes point by
+/// Cramer's rule; no code shared with kernel/src/implicit.cpp). Each scene is a
+/// lattice (spacing 2^-30..2^30, sometimes shifted up to 2^40 spacings from the
+/// origin) with hub points that many planes and points pass through exactly: cut
+/// planes with small-integer normals through a hub, input planes through three
+/// lattice points around it, segments across it, so that points of every kind
+/// coincide with the hub and lie exactly on planes not among their own. Band 0
+/// keeps the scene exact; band 1 moves three quarters of the constructed cut
+/// planes' offsets by 1-4 ulps (of the plane's n·x terms) and a quarter of the
+/// input points by -4..4 ulps per coordinate; band 2 moves them by 2^3..2^40 ulps
+/// (points: along one axis). Rows: side() for each point kind against cut and input planes,
+/// side() with an explicit plane, orient_in_plane (three defined points, and two
+/// with an explicit point), compare_along, compare_coordinate.
+inline constexpr int plane_audit_rows = 13;
+std::string_view plane_audit_row_name(int row);
+struct PlaneAuditResult {
+  std::uint64_t queries = 0;
+  std::uint64_t disagreements = 0;
+  /// [row][band]: band 0 exact lattice, 1 moved 1-4 ulps, 2 moved 2^3..2^40 ulps.
+  /// exact_fallbacks counts the queries implicit_counters() shows falling back.
+  std::array<std::array<AuditBand, 3>, plane_audit_rows> bands{};
+  std::array<std::array<std::uint64_t, 3>, plane_audit_rows> band_disagreements{};  ///< [row][band]
+  std::string first_disagreement;
+};
+PlaneAuditResult audit_plane_predicates(std::uint64_t queries, std::uint64_t seed, unsigned threads);
 
 }  // namespace shatter::robust
