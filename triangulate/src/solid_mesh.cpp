@@ -211,7 +211,10 @@ struct PositionEqual {
 // snapped to, or its own), triangulated by the exact constrained Delaunay
 // triangulation of their projection. Snapped points are off the face's plane by
 // a hair, so the result is a triangulation of the projected polygon only; the
-// certification that follows vouches for it in 3D.
+// certification that follows vouches for it in 3D. Returns false, adding
+// nothing, when the placed corners bound no polygon the triangulation can cover
+// without new points (a face rounded onto the edges around it, or whose loops
+// now coincide).
 bool triangulate_merged_face(const PlaneSet& set, const SolidFace& face,
                              std::span<const std::vector<VertexIndex>> loops, std::span<const PointDef> placed,
                              Projection projection, std::vector<Triangle>& out) {
@@ -239,9 +242,8 @@ bool triangulate_merged_face(const PlaneSet& set, const SolidFace& face,
 }
 
 // Steps 1 and 2 (see solid_mesh.hpp): positions, vertices merged where they
-// rounded onto one point, faces triangulated. Returns false when a face could not
-// be triangulated after merging (then no valid mesh comes from this attempt).
-bool triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options, std::size_t attempt,
+// rounded onto one point, faces triangulated.
+void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options, std::size_t attempt,
                  Mesh& mesh, std::size_t& merged) {
   const std::size_t n = solid.defs.size();
   thread_local std::vector<Vec3> positions;
@@ -308,9 +310,12 @@ bool triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
     if (!changed) {
       triangulate_face(set, solid, f, positions, face_triangles, attempt);
     } else if (!loops.empty()) {
-      if (!triangulate_merged_face(set, face, loops, placed, projection_of(set, face.plane), face_triangles)) {
-        return false;
-      }
+      // A face that cannot be triangulated over its placed corners is left out.
+      // If it had vanished in the rounding (seen: a thin annulus cap whose two
+      // loops snapped onto the same ridge of vertices) the rest closes up without
+      // it; if not, certification finds the mesh open and refuses it.
+      face_triangles.clear();
+      triangulate_merged_face(set, face, loops, placed, projection_of(set, face.plane), face_triangles);
     }
     const bool cap = face.surface != original_surface;
     PlaneBasis basis(Plane{});
@@ -348,7 +353,6 @@ bool triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
       }
     }
   }
-  return true;
 }
 
 }  // namespace
@@ -388,9 +392,7 @@ Vec3 vertex_average(const Mesh& mesh) {
 Mesh triangulate_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options) {
   Mesh mesh;
   std::size_t merged = 0;
-  if (!triangulate(set, solid, options, 0, mesh, merged)) {
-    throw UnsupportedGeometryError("cannot triangulate a face whose corners rounded together");
-  }
+  triangulate(set, solid, options, 0, mesh, merged);
   return mesh;
 }
 
@@ -406,9 +408,8 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     Mesh mesh;
     std::size_t merged = 0;
     ValidationReport report;
-    if (!triangulate(set, solid, options, attempt, mesh, merged)) {
-      report.defects.push_back({DefectKind::zero_area_triangle, 1, "a face whose corners rounded together"});
-    } else if (solid.convex && merged == 0 && certify_star_shaped(mesh, vertex_average(mesh))) {
+    triangulate(set, solid, options, attempt, mesh, merged);
+    if (solid.convex && merged == 0 && certify_star_shaped(mesh, vertex_average(mesh))) {
       // A convex solid's rounding certified in O(T) exact orientations.
       result.mesh = std::move(mesh);
       result.merged_vertices = 0;

@@ -48,8 +48,11 @@ struct SolidMeshOptions {
 
 /// The solid's faces triangulated over its rounded vertices (steps 1 and 2), with
 /// surface ids and attributes; not yet certified. Vertices are the solid's, in its
-/// order. Throws UnsupportedGeometryError if a face cannot be triangulated over
-/// its own vertices (only a non-embedded solid gets there).
+/// order. A face whose corners merged (rounded onto one position) and that cannot
+/// be triangulated over the merged corners is left out (it vanished, or the mesh
+/// is open and certification will say so). Throws UnsupportedGeometryError if a
+/// face cannot be triangulated over its own vertices (only a non-embedded solid
+/// gets there).
 Mesh triangulate_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options = {});
 
 /// Appends the triangles of face `face` of `solid` (over the solid's vertex
