@@ -68,20 +68,27 @@ ExactPoint exact_point(const PlaneSet& set, const PointDef& def) {
   return ExactPoint(ExactKernel::FT(c[0]), ExactKernel::FT(c[1]), ExactKernel::FT(c[2]));
 }
 
+// A face's own numbering of the solid vertices it uses, in order of first use,
+// as the cap triangulation takes them.
+struct LocalVertices {
+  std::vector<VertexIndex> vertices;  ///< local -> solid vertex
+  IndexMap local_of{16};
+  VertexIndex operator()(VertexIndex v) {
+    const auto candidate = static_cast<VertexIndex>(vertices.size());
+    const VertexIndex found = local_of.insert(v, candidate);
+    if (found == candidate) vertices.push_back(v);
+    return found;
+  }
+};
+
 // Any face that is not one convex loop: a constrained Delaunay triangulation of
 // its loops (triangulate_cap), on the rounded points, kept when every triangle is
 // counter-clockwise in exact arithmetic, else on the exact points.
 void triangulate_region(const PlaneSet& set, const SolidFace& face, Projection projection, const Solid& solid,
                         std::span<const Vec3> rounded, std::vector<Triangle>& out, bool exact_delaunay) {
-  std::vector<VertexIndex> vertices;  // local -> solid vertex
-  IndexMap local_of(16);
+  LocalVertices local;
+  std::vector<VertexIndex>& vertices = local.vertices;
   std::vector<Edge> border;
-  auto local = [&](VertexIndex v) {
-    const auto candidate = static_cast<VertexIndex>(vertices.size());
-    const VertexIndex found = local_of.insert(v, candidate);
-    if (found == candidate) vertices.push_back(v);
-    return found;
-  };
   for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
     const SolidLoop& loop = solid.loops[l];
     for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
@@ -218,15 +225,9 @@ struct PositionEqual {
 bool triangulate_merged_face(const PlaneSet& set, const SolidFace& face,
                              std::span<const std::vector<VertexIndex>> loops, std::span<const PointDef> placed,
                              Projection projection, std::vector<Triangle>& out) {
-  std::vector<VertexIndex> vertices;
-  IndexMap local_of(16);
+  LocalVertices local;
+  std::vector<VertexIndex>& vertices = local.vertices;
   std::vector<Edge> border;
-  auto local = [&](VertexIndex v) {
-    const auto candidate = static_cast<VertexIndex>(vertices.size());
-    const VertexIndex found = local_of.insert(v, candidate);
-    if (found == candidate) vertices.push_back(v);
-    return found;
-  };
   for (const auto& loop : loops) {
     for (std::size_t i = 0; i < loop.size(); ++i) border.push_back({local(loop[i]), local(loop[(i + 1) % loop.size()])});
   }
