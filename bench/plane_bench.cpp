@@ -2,9 +2,9 @@
 // on the plane kernel, one thread, every row with its peers in the same run.
 //
 // Rows: the unit cube [-0.5,0.5]^3 (12 triangles) cut into 256, 65,536 and 2^20 =
-// 1,048,576 fragments; knot1.off (tests/data, 6,400 triangles) subdivided by edge
+// 1,048,576 fragments; knot1.off (tests/data/corpus, 6,400 triangles) subdivided by edge
 // midpoints until it has >= 50,000 triangles (each triangle into 4, flat: 6,400 ->
-// 25,600 -> 102,400) and, when ../shared/meshes/fandisk.off is there, fandisk
+// 25,600 -> 102,400) and fandisk.off from the test corpus
 // subdivided once (12,946 -> 51,784 triangles, the solid the targets were set on),
 // each cut into 256 and 65,536 fragments. Midpoint subdivision makes coplanar
 // triangles, and the plane kernel merges coplanar edge-connected triangles of a
@@ -124,7 +124,7 @@ struct Options {
   std::optional<std::uint32_t> max_fragments;
   std::uint64_t seed = 1;
   fs::path mesh_dir = SHATTER_MESH_DIR;
-  fs::path knot = SHATTER_SOURCE_DIR "/tests/data/knot1.off";
+  fs::path knot = SHATTER_SOURCE_DIR "/tests/data/corpus/knot1.off";
   fs::path manifold_script = SHATTER_SOURCE_DIR "/bench/peers/manifold/fracture.mjs";
   std::string node = "node";
   double manifold_timeout = 300;
@@ -1219,7 +1219,7 @@ int parse(int argc, char** argv, Options& o) {
       "each row with its peers in the same run: Manifold 3.5.4 (npm manifold-3d, WebAssembly under Node, "
       "bench/peers/manifold/fracture.mjs) and CGAL 5.5 PMP::clip replaying the same planes. Rows: cube -> 256, "
       "65,536 and 2^20 fragments; knot1.off subdivided to >= 50,000 triangles (102,400) and fandisk.off "
-      "subdivided once (51,784; when ../shared/meshes has it) -> 256 and 65,536. Prints Markdown tables "
+      "subdivided once (51,784; from the test corpus) -> 256 and 65,536. Prints Markdown tables "
       "(inputs, shatter, peers, targets) on stdout, progress on stderr. Exit status: 0 when every build "
       "succeeded with every checked leaf valid, 2 when not (peers and missed targets never count), 1 on errors.",
       "shatter-bench-plane"};
@@ -1234,7 +1234,7 @@ int parse(int argc, char** argv, Options& o) {
   app.add_option("--max-fragments", o.max_fragments, "Drop the rows above N fragments")
       ->check(CLI::Range(1u, 1u << 22));
   app.add_option("--seed", o.seed, "Root seed of every build and of Manifold's stream")->capture_default_str();
-  app.add_option("--mesh-dir", o.mesh_dir, "Folder holding fandisk.off (optional; its rows are skipped without it)")
+  app.add_option("--mesh-dir", o.mesh_dir, "Folder holding fandisk.off (default: the test corpus; its rows are skipped without it)")
       ->capture_default_str();
   app.add_option("--knot", o.knot, "knot1.off (bundled)")->capture_default_str();
   app.add_option("--manifold-script", o.manifold_script, "Manifold's fracture.mjs (needs npm ci in its folder)")

@@ -308,7 +308,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "shatter-fuzz: seeded robustness cases over every degenerate class (planes through vertices, along edges, "
       "holding faces and a few ulps off; grids; coplanar faces; slivers; nested shells; pinches; near-parallel "
-      "chains; extreme scales; far from the origin; attribute seams) and every mesh of ../shared/meshes, sliced "
+      "chains; extreme scales; far from the origin; attribute seams) and every mesh of the test corpus (tests/data/corpus), sliced "
       "and fractured in the plane, fast and exact kernels, every invariant of DESIGN.md checked and every output "
       "piece written and read back. Exit 0 when every case passes, 1 on "
       "any failure (each writes a reproducer), 2 on usage errors."};
