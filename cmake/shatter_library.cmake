@@ -1,13 +1,21 @@
 # One recipe for every folder's library: public headers under include/, sources
-# beside them, warnings on, and a namespaced alias (shatter::<name>).
+# beside them, warnings on, a namespaced alias (shatter::<name>), and installed
+# with its headers into the shatterTargets export set, under the same name
+# (top-level CMakeLists.txt installs the set and shatterConfig.cmake).
 function(shatter_library name)
   cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
   add_library(shatter_${name} ${ARG_SOURCES})
   add_library(shatter::${name} ALIAS shatter_${name})
+  set_target_properties(shatter_${name} PROPERTIES EXPORT_NAME ${name})
   target_include_directories(shatter_${name} PUBLIC
-    $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>)
+    $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
+    $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(shatter_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   shatter_warnings(shatter_${name})
+  install(TARGETS shatter_${name} EXPORT shatterTargets
+    ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+    LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+  install(DIRECTORY include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 endfunction()
 
 function(shatter_warnings target)

@@ -1,0 +1,67 @@
+// Cuts the unit cube with the installed library and checks the pieces: a plane
+// cut (slicer, through meshtree's cut_mesh) into two halves of volume 1/2, and a
+// mesh tree of 8 fragments (plane kernel) whose leaves are valid solids adding
+// up to the cube, written to .shatter bytes and read back. Exit 0 when all hold.
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/cut.hpp"
+#include "shatter/meshtree/file.hpp"
+
+namespace {
+
+int failures = 0;
+
+void expect(bool holds, const std::string& what) {
+  if (holds) return;
+  std::fprintf(stderr, "cut_a_cube: %s\n", what.c_str());
+  ++failures;
+}
+
+shatter::Mesh unit_cube() {
+  shatter::Mesh cube;
+  for (int i = 0; i < 8; ++i) cube.positions.push_back({double(i & 1), double((i >> 1) & 1), double((i >> 2) & 1)});
+  cube.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                    {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  cube.surfaces.assign(cube.triangles.size(), shatter::original_surface);
+  return cube;
+}
+
+}  // namespace
+
+int main() {
+  const shatter::Mesh cube = unit_cube();
+  expect(shatter::validate_mesh(cube).valid(), "the unit cube is not valid");
+
+  const auto halves = shatter::cut_mesh(cube, shatter::Plane{{0, 0, 1}, -0.5});
+  expect(halves.below.size() == 1 && halves.above.size() == 1, "z = 1/2 does not cut the cube into two pieces");
+  for (const auto* side : {&halves.below, &halves.above}) {
+    for (const shatter::Mesh& half : *side) {
+      expect(shatter::validate_mesh(half).valid(), "a half is not a valid solid");
+      expect(std::fabs(shatter::signed_volume(half) - 0.5) < 1e-15, "a half's volume is not 1/2");
+    }
+  }
+
+  shatter::BuildOptions options;
+  options.fragments = 8;
+  options.seed = 7;
+  const shatter::MeshTree tree = shatter::build_mesh_tree(cube, options);
+  expect(tree.leaf_count() == 8, "the tree has " + std::to_string(tree.leaf_count()) + " leaves, not 8");
+  double volume = 0;
+  for (shatter::LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) {
+    const shatter::Mesh& piece = tree.leaf(leaf).mesh;
+    expect(shatter::validate_mesh(piece).valid(), "leaf " + std::to_string(leaf) + " is not a valid solid");
+    volume += shatter::signed_volume(piece);
+  }
+  expect(std::fabs(volume - 1) < 1e-12, "the leaves' volumes add up to " + std::to_string(volume));
+  const shatter::MeshTree read_back = shatter::decode_shatter(shatter::encode_shatter(tree));
+  expect(read_back.nodes.size() == tree.nodes.size(), "the tree read back has another node count");
+
+  if (failures == 0) std::printf("cut_a_cube: %zu leaves, volume %.17g\n", tree.leaf_count(), volume);
+  return failures == 0 ? 0 : 1;
+}
