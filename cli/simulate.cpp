@@ -50,7 +50,7 @@ bool names_glb(const std::string& path) {
 json parameters_json(const rt::BreakableParameters& p, double margin) {
   return json{{"density_kg_m3", p.density},
               {"frailty_m3_per_N_s", p.frailty},
-              {"impulse_threshold_N_s", p.impulse_threshold},
+              {"impact_speed_m_s", p.impact_speed},
               {"hit_points", p.hit_points},
               {"bonds", rt::bond_mode_name(p.mode)},
               {"impulse", rt::impulse_model_name(p.impulse)},
@@ -196,9 +196,10 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateArgs& args) {
                       "that much damage")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  command->add_option("--threshold", args.scene_options.parameters.impulse_threshold,
-                      "An impact is a contact point whose normal impulse in one step exceeds this, N s (resting "
-                      "contact gives about m g dt per step)")
+  command->add_option("--impact-speed", args.scene_options.parameters.impact_speed,
+                      "An impact is a contact point whose normal impulse in one step exceeds this times the hit "
+                      "cluster's mass, m/s (N s per kg: the speed it alone would give the cluster; resting contact "
+                      "gives about g dt, 0.08 m/s at 1/120 s)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   command->add_option("--hit-points", args.scene_options.parameters.hit_points,

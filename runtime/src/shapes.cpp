@@ -103,6 +103,7 @@ std::shared_ptr<const BreakableShapes> BreakableShapes::create(std::shared_ptr<c
   impl->node_shapes.reserve(tree->nodes.size());
   for (NodeIndex node = 0; node < tree->nodes.size(); ++node) {
     impl->node_shapes.push_back(hull_shape(*tree, node, options.collision_margin));
+    impl->node_masses.push_back(cluster_mass(*tree, std::span<const NodeIndex>(&node, 1), 1.0));
   }
 
   const std::size_t leaves = tree->leaf_count();

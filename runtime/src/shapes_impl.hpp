@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "shatter/runtime/mass.hpp"
 #include "shatter/runtime/shapes.hpp"
 
 namespace shatter::runtime {
@@ -63,6 +64,9 @@ struct BreakableShapes::Impl {
   /// Bullet's compound takes non-const child pointers but never changes a child
   /// during collision, so one shape serves every compound and every world.
   std::vector<std::unique_ptr<btConvexHullShape>> node_shapes;
+  /// Per node, its RigidMass at unit density, so a body of one node needs no
+  /// eigendecomposition.
+  std::vector<RigidMass> node_masses;
 
   /// The bond graph as flat arrays: leaf l's bonds are
   /// adjacent_bond[adjacency_begin[l] .. adjacency_begin[l + 1]), the leaf across

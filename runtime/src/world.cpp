@@ -57,7 +57,7 @@ void check_parameters(const BreakableParameters& p) {
   const auto non_negative = [](double x) { return std::isfinite(x) && x >= 0; };
   require(positive(p.density), "density must be positive and finite (kg/m^3)");
   require(positive(p.frailty), "frailty must be positive and finite (m^3/(N s))");
-  require(non_negative(p.impulse_threshold), "the impulse threshold must be finite and not negative (N s)");
+  require(non_negative(p.impact_speed), "the impact speed must be finite and not negative (m/s)");
   require(positive(p.hit_points), "hit points must be positive and finite");
   require(positive(p.min_distance), "the minimum distance must be positive and finite (m)");
   require(non_negative(p.friction), "friction must be finite and not negative");
@@ -161,8 +161,9 @@ struct ObjectState {
   std::vector<std::uint32_t> leaf_label;
   std::vector<BodyId> label_body;
   /// Scratch of the connectivity search: the search that reached each leaf,
-  /// `none` between searches.
+  /// `none` between searches, and the leaf it reached after this one.
   std::vector<std::uint32_t> search_of_leaf;
+  std::vector<LeafIndex> next_in_search;
 
   const BreakableShapes::Impl& data() const { return shapes->impl(); }
   const MeshTree& tree() const { return shapes->tree(); }
@@ -229,6 +230,10 @@ World::Impl::Impl(const WorldOptions& world_options) : options(world_options) {
   configuration = std::make_unique<btDefaultCollisionConfiguration>();
   dispatcher = std::make_unique<btCollisionDispatcher>(configuration.get());
   broadphase = std::make_unique<btDbvtBroadphase>();
+  // A new body's overlapping pairs are found in the next step's broadphase pass,
+  // with every other moved proxy, rather than one query per body as it is added:
+  // a break adds its bodies at the cost of tree insertions.
+  broadphase->m_deferedcollide = true;
   solver = std::make_unique<btSequentialImpulseConstraintSolver>();
   world = std::make_unique<btDiscreteDynamicsWorld>(dispatcher.get(), broadphase.get(), solver.get(),
                                                     configuration.get());
@@ -256,6 +261,8 @@ World::Impl::~Impl() {
     if (body.rigid) world->removeRigidBody(body.rigid.get());
   }
   if (floor_body) world->removeRigidBody(floor_body.get());
+  // Compounds go before the objects whose shared hull shapes they point to.
+  live.clear();
   world.reset();
 }
 
@@ -340,7 +347,16 @@ void World::Impl::retire(BodyId body) {
 
 ClusterShape World::Impl::precomputed_shape(const ObjectState& object, std::span<const NodeIndex> cover) const {
   ClusterShape shape;
-  shape.mass = cluster_mass(object.tree(), cover, object.parameters.density);
+  const double density = object.parameters.density;
+  if (cover.size() == 1) {
+    // One node: its unit-density mass properties, computed at load, scaled.
+    shape.mass = object.data().node_masses[cover[0]];
+    shape.mass.mass *= density;
+    for (double& value : shape.mass.inertia) value *= density;
+    shape.mass.principal_moments = shape.mass.principal_moments * density;
+  } else {
+    shape.mass = cluster_mass(object.tree(), cover, density);
+  }
   shape.children.reserve(cover.size());
   for (NodeIndex node : cover) shape.children.push_back(object.data().node_shapes[node].get());
   return shape;
@@ -429,16 +445,28 @@ void World::Impl::damage(ObjectState& object, std::uint32_t label, Vec3 tree_poi
 Parts World::Impl::find_parts(ObjectState& object, std::span<const BondIndex> broken) {
   const BreakableShapes::Impl& data = object.data();
   const MeshTree& tree = object.tree();
+  // Each search's leaves form a list threaded through object.next_in_search (no
+  // allocation per search): `first` .. `last` in the order reached, `next` the
+  // first not yet expanded (none when the search has run out).
   struct Search {
-    std::vector<LeafIndex> leaves;  ///< reached, in order; [next, size) still to expand
-    std::size_t next = 0;
+    LeafIndex first = 0, last = 0, next = 0;
+    bool running() const { return next != none; }
   };
   std::vector<Search> searches;
+  const auto reach = [&](std::uint32_t s, LeafIndex leaf) {
+    object.search_of_leaf[leaf] = s;
+    object.next_in_search[leaf] = none;
+    Search& search = searches[s];
+    object.next_in_search[search.last] = leaf;
+    search.last = leaf;
+    if (search.next == none) search.next = leaf;
+  };
   for (BondIndex b : broken) {
     for (LeafIndex end : {tree.bonds[b].first, tree.bonds[b].second}) {
       if (object.search_of_leaf[end] != none) continue;
       object.search_of_leaf[end] = static_cast<std::uint32_t>(searches.size());
-      searches.push_back({{end}, 0});
+      object.next_in_search[end] = none;
+      searches.push_back({end, end, end});
     }
   }
   LeafSets groups(searches.size());
@@ -447,15 +475,15 @@ Parts World::Impl::find_parts(ObjectState& object, std::span<const BondIndex> br
 
   while (running_groups > 1) {
     for (std::uint32_t s = 0; s < searches.size() && running_groups > 1; ++s) {
-      if (searches[s].next == searches[s].leaves.size()) continue;
-      const LeafIndex leaf = searches[s].leaves[searches[s].next++];
+      if (!searches[s].running()) continue;
+      const LeafIndex leaf = searches[s].next;
+      searches[s].next = object.next_in_search[leaf];
       for (std::uint32_t k = data.adjacency_begin[leaf]; k < data.adjacency_begin[leaf + 1]; ++k) {
         if (!object.bond_alive[data.adjacent_bond[k]]) continue;
         const LeafIndex other = data.adjacent_leaf[k];
         const std::uint32_t owner = object.search_of_leaf[other];
         if (owner == none) {
-          object.search_of_leaf[other] = s;
-          searches[s].leaves.push_back(other);
+          reach(s, other);
           continue;
         }
         const std::uint32_t a = groups.find(owner), b = groups.find(s);
@@ -465,7 +493,7 @@ Parts World::Impl::find_parts(ObjectState& object, std::span<const BondIndex> br
         running_in_group[merged] = running_in_group[a] + running_in_group[b];
         --running_groups;  // both were running: a search only meets running ones
       }
-      if (searches[s].next == searches[s].leaves.size()) {
+      if (!searches[s].running()) {
         const std::uint32_t group = groups.find(s);
         if (--running_in_group[group] == 0) --running_groups;
       }
@@ -476,17 +504,17 @@ Parts World::Impl::find_parts(ObjectState& object, std::span<const BondIndex> br
   std::vector<std::uint32_t> part_of_group(searches.size(), none);
   for (std::uint32_t s = 0; s < searches.size(); ++s) {
     const std::uint32_t group = groups.find(s);
-    if (running_in_group[group] > 0) {
+    const bool rest = running_in_group[group] > 0;
+    if (rest) {
       parts.has_rest = true;
-    } else {
-      if (part_of_group[group] == none) {
-        part_of_group[group] = static_cast<std::uint32_t>(parts.found.size());
-        parts.found.emplace_back();
-      }
-      std::vector<LeafIndex>& part = parts.found[part_of_group[group]];
-      part.insert(part.end(), searches[s].leaves.begin(), searches[s].leaves.end());
+    } else if (part_of_group[group] == none) {
+      part_of_group[group] = static_cast<std::uint32_t>(parts.found.size());
+      parts.found.emplace_back();
     }
-    for (LeafIndex leaf : searches[s].leaves) object.search_of_leaf[leaf] = none;
+    for (LeafIndex leaf = searches[s].first; leaf != none; leaf = object.next_in_search[leaf]) {
+      object.search_of_leaf[leaf] = none;
+      if (!rest) parts.found[part_of_group[group]].push_back(leaf);
+    }
   }
   for (std::vector<LeafIndex>& part : parts.found) std::sort(part.begin(), part.end());
   return parts;
@@ -517,7 +545,9 @@ std::vector<BodyId> World::Impl::split_incremental(BodyId body, std::span<const 
   std::vector<NewPart> made;
   for (std::size_t i = 0; i < parts.found.size(); ++i) {
     NewPart part;
-    part.cover = minimal_cover(tree, parts.found[i]);
+    // A lone fragment is its own leaf node; larger parts take the general cover.
+    part.cover = parts.found[i].size() == 1 ? std::vector<NodeIndex>{tree.leaf_nodes[parts.found[i][0]]}
+                                            : minimal_cover(tree, parts.found[i]);
     part.leaf_count = static_cast<std::uint32_t>(parts.found[i].size());
     if (i == keeper) {
       part.label = parent_label;
@@ -681,6 +711,7 @@ ObjectId World::add_breakable(std::shared_ptr<const BreakableShapes> shapes, con
   object.hit_points.assign(tree.bonds.size(), parameters.hit_points);
   object.leaf_label = data.initial_cluster_of_leaf;
   object.search_of_leaf.assign(tree.leaf_count(), none);
+  object.next_in_search.assign(tree.leaf_count(), none);
   w.objects.push_back(std::move(object));
   const Vec3 centre = apply(placement, tree.nodes[0].mass.centroid);
   for (std::uint32_t k = 0; k < data.initial_clusters.size(); ++k) {
@@ -751,12 +782,13 @@ StepReport World::resolve_damage() {
       const auto body = static_cast<BodyId>(index);
       if (w.records[body].kind != BodyKind::cluster) continue;
       const BreakableParameters& parameters = w.objects[w.records[body].object].parameters;
+      const double threshold = parameters.impact_speed * w.records[body].mass.mass;
       const int other_index = bodies[1 - side]->getUserIndex();
       const BodyId other = other_index < 0 ? no_body : static_cast<BodyId>(other_index);
       for (int c = 0; c < contacts; ++c) {
         const btManifoldPoint& point = manifold->getContactPoint(c);
         const double applied = point.getAppliedImpulse();
-        if (!(applied > parameters.impulse_threshold)) continue;
+        if (!(applied > threshold)) continue;
         Impact impact;
         impact.body = body;
         impact.other = other;

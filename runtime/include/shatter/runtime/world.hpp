@@ -92,10 +92,13 @@ struct BreakableParameters {
   /// 2,000 N s (a 50 kg sphere stopped from 40 m/s) breaks bonds within
   /// (f p / hit_points)^(1/3) = 0.46 m of the contact.
   double frailty = 5e-5;
-  /// An impact is a contact whose applied normal impulse in one step exceeds this,
-  /// N s. Resting contact applies about m g dt per step (82 N s for 1,000 kg at
-  /// 1/120 s), well below it.
-  double impulse_threshold = 200;
+  /// An impact is a contact point whose applied normal impulse in one step
+  /// exceeds impact_speed times the hit cluster's mass, in m/s (N s per kg): the
+  /// speed the impulse alone would give the cluster. A threshold per kilogram
+  /// keeps resting contact, about m g dt per step (0.08 m/s of speed at 1/120 s,
+  /// whatever the mass), below it for objects of any size, where a fixed
+  /// impulse would let a heavy object break under its own weight.
+  double impact_speed = 0.5;
   /// Damage a bond takes before it breaks (damage units: f p / s^3 is
   /// dimensionless with the units above). Every bond starts with the same.
   double hit_points = 1;
@@ -110,7 +113,7 @@ struct BreakableParameters {
 };
 
 /// Throws std::invalid_argument naming the first parameter that is not finite or
-/// out of range (density, frailty, hit_points, min_distance > 0; threshold,
+/// out of range (density, frailty, hit_points, min_distance > 0; impact_speed,
 /// friction, restitution >= 0).
 void check_parameters(const BreakableParameters& parameters);
 
@@ -238,8 +241,8 @@ class World {
   /// velocity for ImpulseModel::seed_momentum.
   void advance();
   /// Reads the contact manifolds of the last step, turns contact points of awake
-  /// breakable bodies whose applied impulse exceeds their object's threshold into
-  /// impacts, damages the hit clusters' bonds, and splits every hit cluster whose
+  /// breakable bodies whose applied impulse exceeds their object's impact_speed
+  /// times their mass into impacts, damages the hit clusters' bonds, and splits every hit cluster whose
   /// surviving bonds no longer connect it (BreakMethod). Calling it twice for one
   /// step finds the same contacts again; step() calls it once.
   StepReport resolve_damage();
