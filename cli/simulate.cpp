@@ -48,16 +48,11 @@ bool names_glb(const std::string& path) {
 }
 
 json parameters_json(const rt::BreakableParameters& p, double margin) {
-  return json{{"density_kg_m3", p.density},
-              {"frailty_m3_per_N_s", p.frailty},
-              {"impact_speed_m_s", p.impact_speed},
-              {"hit_points", p.hit_points},
-              {"bonds", rt::bond_mode_name(p.mode)},
-              {"impulse", rt::impulse_model_name(p.impulse)},
-              {"min_distance_m", p.min_distance},
-              {"friction", p.friction},
-              {"restitution", p.restitution},
-              {"method", rt::break_method_name(p.method)},
+  return json{{"density_kg_m3", p.density},          {"frailty_m3_per_N_s", p.frailty},
+              {"impact_speed_m_s", p.impact_speed},  {"hit_points", p.hit_points},
+              {"bonds", rt::bond_mode_name(p.mode)}, {"impulse", rt::impulse_model_name(p.impulse)},
+              {"min_distance_m", p.min_distance},    {"friction", p.friction},
+              {"restitution", p.restitution},        {"method", rt::break_method_name(p.method)},
               {"collision_margin_m", margin}};
 }
 
@@ -120,9 +115,12 @@ json summary_json(const StepSummary& s) {
 }
 
 json break_json(const rt::BreakEvent& event) {
-  return json{{"step", event.step},          {"time_s", event.time},
-              {"object", event.object},      {"cluster", event.body},
-              {"impacts", event.impacts},    {"bonds_broken", event.bonds_broken},
+  return json{{"step", event.step},
+              {"time_s", event.time},
+              {"object", event.object},
+              {"cluster", event.body},
+              {"impacts", event.impacts},
+              {"bonds_broken", event.bonds_broken},
               {"bodies_created", event.created}};
 }
 
@@ -130,8 +128,7 @@ void print_summary(const StepSummary& s) {
   std::cout << "step " << s.step << " t=" << number(s.time) << " s: " << s.live_bodies << " bodies (" << s.clusters
             << " clusters, " << s.awake << " awake), " << s.impacts << " impacts";
   if (s.impacts > 0) std::cout << " (largest " << number(s.largest_impulse) << " N s)";
-  std::cout << ", " << s.bonds_broken
-            << " bonds broken, " << s.bodies_created << " bodies created, kinetic energy "
+  std::cout << ", " << s.bonds_broken << " bonds broken, " << s.bodies_created << " bodies created, kinetic energy "
             << number(s.kinetic_energy) << " J\n";
 }
 
@@ -169,10 +166,11 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateArgs& args) {
       "coordinates), kg, s, N s; y is up, the floor is y = 0. Prints a summary per step and every break; the "
       "same file and options give the same output bytes.");
   command->add_option("tree", args.input, "Mesh tree file (.shatter), as `fracture` writes it")->required();
-  command->add_option("--scene", args.scene,
-                      "drop: the object, tilted, falls onto the floor from --height. shoot: it rests on the floor and "
-                      "a sphere flies at its centre of mass along +x. wall: --wall-rows x --wall-columns copies stand "
-                      "as a wall of bricks (thinnest side facing the shot) and a sphere is shot at the middle")
+  command
+      ->add_option("--scene", args.scene,
+                   "drop: the object, tilted, falls onto the floor from --height. shoot: it rests on the floor and "
+                   "a sphere flies at its centre of mass along +x. wall: --wall-rows x --wall-columns copies stand "
+                   "as a wall of bricks (thinnest side facing the shot) and a sphere is shot at the middle")
       ->check(CLI::IsMember({"drop", "shoot", "wall"}))
       ->capture_default_str();
   command->add_option("--steps", args.steps, "Number of fixed steps to run")
@@ -181,8 +179,9 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateArgs& args) {
   command->add_option("--time-step", args.world.time_step, "Fixed step, s (every step the same)")
       ->check(CLI::Range(1e-6, 1.0))
       ->capture_default_str();
-  command->add_option("--solver-iterations", args.world.solver_iterations,
-                      "Iterations of Bullet's sequential impulse solver per step")
+  command
+      ->add_option("--solver-iterations", args.world.solver_iterations,
+                   "Iterations of Bullet's sequential impulse solver per step")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   command->add_flag("--no-sleep", args.no_sleep,
@@ -191,34 +190,40 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateArgs& args) {
   command->add_option("--density", args.scene_options.parameters.density, "Density of the object, kg/m^3")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  command->add_option("--frailty", args.scene_options.parameters.frailty,
-                      "f in damage = f * p / s^3, m^3/(N s): a bond at distance s from an impact of impulse p takes "
-                      "that much damage")
+  command
+      ->add_option("--frailty", args.scene_options.parameters.frailty,
+                   "f in damage = f * p / s^3, m^3/(N s): a bond at distance s from an impact of impulse p takes "
+                   "that much damage")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  command->add_option("--impact-speed", args.scene_options.parameters.impact_speed,
-                      "An impact is a contact point whose normal impulse in one step exceeds this times the hit "
-                      "cluster's mass, m/s (N s per kg: the speed it alone would give the cluster; resting contact "
-                      "gives about g dt, 0.08 m/s at 1/120 s)")
+  command
+      ->add_option("--impact-speed", args.scene_options.parameters.impact_speed,
+                   "An impact is a contact point whose normal impulse in one step exceeds this times the hit "
+                   "cluster's mass, m/s (N s per kg: the speed it alone would give the cluster; resting contact "
+                   "gives about g dt, 0.08 m/s at 1/120 s)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  command->add_option("--hit-points", args.scene_options.parameters.hit_points,
-                      "Damage a bond takes before it breaks (same units as the damage)")
+  command
+      ->add_option("--hit-points", args.scene_options.parameters.hit_points,
+                   "Damage a bond takes before it breaks (same units as the damage)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  command->add_option("--bonds", args.bonds,
-                      "discrete: a bond breaks when one impact's damage reaches its hit points, lesser hits leave no "
-                      "trace. accumulating: every impact's damage is taken off its hit points; it breaks at zero")
+  command
+      ->add_option("--bonds", args.bonds,
+                   "discrete: a bond breaks when one impact's damage reaches its hit points, lesser hits leave no "
+                   "trace. accumulating: every impact's damage is taken off its hit points; it breaks at zero")
       ->check(CLI::IsMember({"discrete", "accumulating"}))
       ->capture_default_str();
-  command->add_option("--impulse", args.impulse,
-                      "p of an impact. applied: the normal impulse Bullet's solver applied at the contact point. seed: "
-                      "the seed's eq. 5.1, m1 |v1| + m2 |v2| (speeds at the start of the step, a static body counts "
-                      "0), shared among the pair's contact points by their impulses")
+  command
+      ->add_option("--impulse", args.impulse,
+                   "p of an impact. applied: the normal impulse Bullet's solver applied at the contact point. seed: "
+                   "the seed's eq. 5.1, m1 |v1| + m2 |v2| (speeds at the start of the step, a static body counts "
+                   "0), shared among the pair's contact points by their impulses")
       ->check(CLI::IsMember({"applied", "seed"}))
       ->capture_default_str();
-  command->add_option("--min-distance", args.scene_options.parameters.min_distance,
-                      "s is taken as at least this, m, so damage stays finite (at most f p / min^3)")
+  command
+      ->add_option("--min-distance", args.scene_options.parameters.min_distance,
+                   "s is taken as at least this, m, so damage stays finite (at most f p / min^3)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   command->add_option("--friction", args.scene_options.parameters.friction, "Friction coefficient of the object")
@@ -227,34 +232,38 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateArgs& args) {
   command->add_option("--restitution", args.scene_options.parameters.restitution, "Restitution of the object")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  command->add_option("--method", args.method,
-                      "incremental: this runtime (connectivity searched from the broken bonds only, precomputed "
-                      "colliders). seed: the seed's method, to compare (fragment graph rebuilt from all bonds, "
-                      "colliders and masses built on demand): the same breaks, slower")
+  command
+      ->add_option("--method", args.method,
+                   "incremental: this runtime (connectivity searched from the broken bonds only, precomputed "
+                   "colliders). seed: the seed's method, to compare (fragment graph rebuilt from all bonds, "
+                   "colliders and masses built on demand): the same breaks, slower")
       ->check(CLI::IsMember({"incremental", "seed"}))
       ->capture_default_str();
-  command->add_option("--margin", args.shapes.collision_margin,
-                      "Bullet's collision margin around every fragment's hull, m")
+  command
+      ->add_option("--margin", args.shapes.collision_margin,
+                   "Bullet's collision margin around every fragment's hull, m")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
 
-  command->add_option("--height", args.scene_options.height,
-                      "drop: gap between the object's lowest point and the floor at the start, m")
+  command
+      ->add_option("--height", args.scene_options.height,
+                   "drop: gap between the object's lowest point and the floor at the start, m")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  command->add_option("--tilt", args.scene_options.tilt_degrees,
-                      "drop: the object is turned this many degrees about the axis (1, 0, 1) so it lands on an edge")
+  command
+      ->add_option("--tilt", args.scene_options.tilt_degrees,
+                   "drop: the object is turned this many degrees about the axis (1, 0, 1) so it lands on an edge")
       ->check(CLI::Range(-360.0, 360.0))
       ->capture_default_str();
   command->add_option("--projectile-mass", args.scene_options.projectile_mass, "shoot, wall: the sphere's mass, kg")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  command->add_option("--projectile-speed", args.scene_options.projectile_speed,
-                      "shoot, wall: the sphere's speed, m/s")
+  command->add_option("--projectile-speed", args.scene_options.projectile_speed, "shoot, wall: the sphere's speed, m/s")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  command->add_option("--projectile-radius", args.scene_options.projectile_radius,
-                      "shoot, wall: the sphere's radius, m; 0 picks 15% of the object's largest extent")
+  command
+      ->add_option("--projectile-radius", args.scene_options.projectile_radius,
+                   "shoot, wall: the sphere's radius, m; 0 picks 15% of the object's largest extent")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   command->add_option("--wall-rows", args.scene_options.wall_rows, "wall: bricks high")
@@ -266,17 +275,19 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateArgs& args) {
 
   command->add_flag("--json", args.json,
                     "Print one JSON object: the parameters, a summary of every step, every break, the final state");
-  command->add_option("--print-every", args.print_every,
-                      "Text output: a summary line every this many steps (break events are always printed)")
+  command
+      ->add_option("--print-every", args.print_every,
+                   "Text output: a summary line every this many steps (break events are always printed)")
       ->check(CLI::Range(std::uint64_t{1}, std::numeric_limits<std::uint64_t>::max()))
       ->capture_default_str();
   command->add_option("--record", args.record,
                       "Write the run as an animated glTF binary (.glb): one node per body that ever existed, moved "
                       "by translation and rotation channels and shown from its birth (a stepped scale channel); "
                       "written atomically after the last step, its folder created if missing");
-  command->add_option("--record-every", args.record_every,
-                      "With --record: keep every this many steps (each body's first state and its death are always "
-                      "kept)")
+  command
+      ->add_option("--record-every", args.record_every,
+                   "With --record: keep every this many steps (each body's first state and its death are always "
+                   "kept)")
       ->check(CLI::Range(1u, 1'000'000u))
       ->capture_default_str();
   return command;

@@ -53,8 +53,7 @@ RigidMass combine_masses(std::span<const MassProperties> parts, double density) 
 
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
   for (const MassProperties& part : parts) {
-    const Eigen::Vector3d d(part.centroid.x - centroid.x, part.centroid.y - centroid.y,
-                            part.centroid.z - centroid.z);
+    const Eigen::Vector3d d(part.centroid.x - centroid.x, part.centroid.y - centroid.y, part.centroid.z - centroid.z);
     const Eigen::Matrix3d own = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(part.inertia.data());
     inertia += own + part.volume * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
   }

@@ -57,7 +57,8 @@ Mesh unit_sphere() {
     const double polar = std::numbers::pi * i / stacks;
     for (int j = 0; j < slices; ++j) {
       const double azimuth = 2 * std::numbers::pi * j / slices;
-      mesh.positions.push_back({std::sin(polar) * std::cos(azimuth), std::cos(polar), std::sin(polar) * std::sin(azimuth)});
+      mesh.positions.push_back(
+          {std::sin(polar) * std::cos(azimuth), std::cos(polar), std::sin(polar) * std::sin(azimuth)});
     }
   }
   mesh.positions.push_back({0, -1, 0});
@@ -212,7 +213,9 @@ class ModelBuilder {
   tinygltf::Model model_;
 };
 
-std::vector<double> translation_of(const RigidTransform& t) { return {t.translation.x, t.translation.y, t.translation.z}; }
+std::vector<double> translation_of(const RigidTransform& t) {
+  return {t.translation.x, t.translation.y, t.translation.z};
+}
 
 tinygltf::Value body_extras(const BodyRecord& record, BodyId id, double time_step) {
   tinygltf::Value::Object extras;
@@ -273,9 +276,10 @@ std::string Recording::encode_glb(const World& world, double floor_half_size) co
     // valid node has triangles).
     for (std::size_t i = 0; i < selection.size(); ++i) mesh_of_node[set][selection[i]] = first + static_cast<int>(i);
   }
-  const int sphere_mesh = builder.append_meshes(decode(shatter::encode_glb(single_node_tree(unit_sphere()), std::vector<NodeIndex>{0})));
-  const int floor_mesh =
-      builder.append_meshes(decode(shatter::encode_glb(single_node_tree(floor_slab(floor_half_size)), std::vector<NodeIndex>{0})));
+  const int sphere_mesh =
+      builder.append_meshes(decode(shatter::encode_glb(single_node_tree(unit_sphere()), std::vector<NodeIndex>{0})));
+  const int floor_mesh = builder.append_meshes(
+      decode(shatter::encode_glb(single_node_tree(floor_slab(floor_half_size)), std::vector<NodeIndex>{0})));
 
   tinygltf::Model& model = builder.model();
   tinygltf::Scene scene;

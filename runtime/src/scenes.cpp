@@ -11,9 +11,12 @@ namespace shatter::runtime {
 
 std::string_view scene_name(SceneKind kind) {
   switch (kind) {
-    case SceneKind::drop: return "drop";
-    case SceneKind::shoot: return "shoot";
-    case SceneKind::wall: return "wall";
+    case SceneKind::drop:
+      return "drop";
+    case SceneKind::shoot:
+      return "shoot";
+    case SceneKind::wall:
+      return "wall";
   }
   return "unknown";
 }
@@ -106,8 +109,8 @@ Scene set_up_scene(World& world, const std::shared_ptr<const BreakableShapes>& s
     return scene;
   }
 
-  const double largest = std::max({rotated_box(tree, {}).extent().x, rotated_box(tree, {}).extent().y,
-                                   rotated_box(tree, {}).extent().z});
+  const double largest =
+      std::max({rotated_box(tree, {}).extent().x, rotated_box(tree, {}).extent().y, rotated_box(tree, {}).extent().z});
   const double radius = options.projectile_radius > 0 ? options.projectile_radius : 0.15 * largest;
   Vec3 target;
   double front = 0;  // the smallest x of the objects
@@ -141,8 +144,7 @@ Scene set_up_scene(World& world, const std::shared_ptr<const BreakableShapes>& s
   // The sphere starts with its surface a diameter in front of the object and
   // flies straight at the target point.
   const Vec3 start{front - 3 * radius, target.y, target.z};
-  scene.projectile =
-      world.add_sphere(radius, options.projectile_mass, start, Vec3{options.projectile_speed, 0, 0});
+  scene.projectile = world.add_sphere(radius, options.projectile_mass, start, Vec3{options.projectile_speed, 0, 0});
   scene.footprint = std::max(scene.footprint, std::abs(start.x) + radius);
   return scene;
 }

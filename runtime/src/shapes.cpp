@@ -36,7 +36,6 @@ std::unique_ptr<btConvexHullShape> hull_shape(const MeshTree& tree, NodeIndex no
   return shape;
 }
 
-
 // Splits order[begin, end) at its median along the widest axis of its box until
 // at most `leaf_size` centroids are left; nth_element is deterministic, so the
 // tree is the same on every run.

@@ -16,13 +16,13 @@ namespace shatter::runtime {
 /// radius cannot break, so a discrete impact needs only those.
 struct BondSearchTree {
   struct Node {
-    Vec3 lo, hi;                 ///< bounding box of its centroids
-    std::uint32_t begin = 0, end = 0;  ///< its range of `order`
-    std::uint32_t left = 0, right = 0; ///< children; both 0 for a leaf (the root is never a child)
+    Vec3 lo, hi;                        ///< bounding box of its centroids
+    std::uint32_t begin = 0, end = 0;   ///< its range of `order`
+    std::uint32_t left = 0, right = 0;  ///< children; both 0 for a leaf (the root is never a child)
   };
-  std::vector<Node> nodes;        ///< nodes[0] is the root (absent when there are no bonds)
-  std::vector<BondIndex> order;   ///< bonds in leaf order
-  std::vector<Vec3> points;       ///< points[i] is the centroid of bond order[i]
+  std::vector<Node> nodes;       ///< nodes[0] is the root (absent when there are no bonds)
+  std::vector<BondIndex> order;  ///< bonds in leaf order
+  std::vector<Vec3> points;      ///< points[i] is the centroid of bond order[i]
 
   /// Calls visit(bond) for every bond whose centroid c has |c - centre| <= radius
   /// (tested in doubles), in tree order.
@@ -74,8 +74,8 @@ struct BreakableShapes::Impl {
   std::vector<std::uint32_t> adjacency_begin;
   std::vector<BondIndex> adjacent_bond;
   std::vector<LeafIndex> adjacent_leaf;
-  std::vector<Vec3> bond_centroids;  ///< per bond, packed for the damage loop
-  std::vector<LeafIndex> bond_first; ///< per bond, its first leaf (whose cluster is the bond's)
+  std::vector<Vec3> bond_centroids;   ///< per bond, packed for the damage loop
+  std::vector<LeafIndex> bond_first;  ///< per bond, its first leaf (whose cluster is the bond's)
   BondSearchTree bond_search;
 
   std::vector<Cluster> initial_clusters;

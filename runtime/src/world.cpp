@@ -17,12 +17,8 @@ namespace shatter::runtime {
 
 // --- names ------------------------------------------------------------------------
 
-std::string_view bond_mode_name(BondMode mode) {
-  return mode == BondMode::discrete ? "discrete" : "accumulating";
-}
-std::string_view impulse_model_name(ImpulseModel model) {
-  return model == ImpulseModel::applied ? "applied" : "seed";
-}
+std::string_view bond_mode_name(BondMode mode) { return mode == BondMode::discrete ? "discrete" : "accumulating"; }
+std::string_view impulse_model_name(ImpulseModel model) { return model == ImpulseModel::applied ? "applied" : "seed"; }
 std::string_view break_method_name(BreakMethod method) {
   return method == BreakMethod::incremental ? "incremental" : "seed";
 }
@@ -30,7 +26,8 @@ std::string_view break_method_name(BreakMethod method) {
 namespace {
 
 template <class Enum>
-std::optional<Enum> named(std::string_view name, std::initializer_list<Enum> values, std::string_view (*name_of)(Enum)) {
+std::optional<Enum> named(std::string_view name, std::initializer_list<Enum> values,
+                          std::string_view (*name_of)(Enum)) {
   for (Enum value : values) {
     if (name_of(value) == name) return value;
   }
@@ -144,11 +141,11 @@ namespace {
 
 struct LiveBody {
   std::unique_ptr<btRigidBody> rigid;
-  std::unique_ptr<btCollisionShape> shape;                     ///< compound or sphere
-  std::vector<std::unique_ptr<btConvexHullShape>> built_hulls; ///< seed's method only
-  std::vector<BondIndex> seed_graph_edges;                     ///< seed's method only: its rebuilt graph
-  std::uint32_t label = none;  ///< cluster: its label in the object
-  Vec3 start_velocity;         ///< at the start of the last step
+  std::unique_ptr<btCollisionShape> shape;                      ///< compound or sphere
+  std::vector<std::unique_ptr<btConvexHullShape>> built_hulls;  ///< seed's method only
+  std::vector<BondIndex> seed_graph_edges;                      ///< seed's method only: its rebuilt graph
+  std::uint32_t label = none;                                   ///< cluster: its label in the object
+  Vec3 start_velocity;                                          ///< at the start of the last step
 };
 
 struct ObjectState {
@@ -235,8 +232,8 @@ World::Impl::Impl(const WorldOptions& world_options) : options(world_options) {
   // a break adds its bodies at the cost of tree insertions.
   broadphase->m_deferedcollide = true;
   solver = std::make_unique<btSequentialImpulseConstraintSolver>();
-  world = std::make_unique<btDiscreteDynamicsWorld>(dispatcher.get(), broadphase.get(), solver.get(),
-                                                    configuration.get());
+  world =
+      std::make_unique<btDiscreteDynamicsWorld>(dispatcher.get(), broadphase.get(), solver.get(), configuration.get());
   world->setGravity(to_bt(options.gravity));
   btContactSolverInfo& info = world->getSolverInfo();
   info.m_numIterations = options.solver_iterations;
@@ -330,8 +327,8 @@ BodyId World::Impl::add_cluster(ObjectId object, std::vector<NodeIndex> cover, s
   // The part moves as it did inside its parent: v + w x r, w kept.
   const Vec3 part_velocity = velocity + cross(angular, pose.translation - velocity_origin);
   const BreakableParameters& parameters = objects[object].parameters;
-  const BodyId id = add_body(std::move(record), std::move(body), pose, part_velocity, angular,
-                             parameters.friction, parameters.restitution);
+  const BodyId id = add_body(std::move(record), std::move(body), pose, part_velocity, angular, parameters.friction,
+                             parameters.restitution);
   ObjectState& state = objects[object];
   if (label >= state.label_body.size()) state.label_body.resize(label + 1, no_body);
   state.label_body[label] = id;
@@ -686,8 +683,8 @@ BreakEvent World::Impl::break_cluster(BodyId body, std::span<const Impact> impac
   event.bonds_broken = broken.size();
   if (broken.empty()) return event;
   std::sort(broken.begin(), broken.end());
-  event.created = object.parameters.method == BreakMethod::incremental ? split_incremental(body, broken)
-                                                                        : split_seed(body);
+  event.created =
+      object.parameters.method == BreakMethod::incremental ? split_incremental(body, broken) : split_seed(body);
   return event;
 }
 
@@ -938,9 +935,9 @@ double World::kinetic_energy() const {
     if (!impl_->live[b].rigid) continue;
     const BodyState s = state(b);
     const RigidMass& mass = impl_->records[b].mass;
-    energy += 0.5 * mass.mass * dot(s.linear_velocity, s.linear_velocity) +
-              0.5 * dot(s.angular_velocity,
-                        world_inertia_times(s.pose.rotation, mass.principal_moments, s.angular_velocity));
+    energy +=
+        0.5 * mass.mass * dot(s.linear_velocity, s.linear_velocity) +
+        0.5 * dot(s.angular_velocity, world_inertia_times(s.pose.rotation, mass.principal_moments, s.angular_velocity));
   }
   return energy;
 }

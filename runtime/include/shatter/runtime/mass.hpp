@@ -16,8 +16,8 @@ namespace shatter::runtime {
 /// A rigid body's mass properties. Units: kg, m, kg m^2; coordinates are the mesh
 /// tree's ("tree coordinates").
 struct RigidMass {
-  double mass = 0;      ///< density times volume
-  Vec3 centroid;        ///< centre of mass
+  double mass = 0;  ///< density times volume
+  Vec3 centroid;    ///< centre of mass
   /// Inertia tensor about the centroid along the tree's axes, row-major, symmetric.
   Matrix3 inertia{};
   /// The inertia in the body frame: its eigenvalues, ascending.

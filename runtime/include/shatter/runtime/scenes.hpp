@@ -34,10 +34,10 @@ std::optional<SceneKind> scene_named(std::string_view name);
 struct SceneOptions {
   SceneKind kind = SceneKind::drop;
   BreakableParameters parameters;
-  double height = 1.0;         ///< drop: gap between the object's lowest point and the floor, >= 0
-  double tilt_degrees = 20;    ///< drop: turn about (1, 0, 1), so it lands on an edge
-  double projectile_mass = 50;     ///< shoot, wall: > 0
-  double projectile_speed = 40;    ///< shoot, wall: >= 0
+  double height = 1.0;           ///< drop: gap between the object's lowest point and the floor, >= 0
+  double tilt_degrees = 20;      ///< drop: turn about (1, 0, 1), so it lands on an edge
+  double projectile_mass = 50;   ///< shoot, wall: > 0
+  double projectile_speed = 40;  ///< shoot, wall: >= 0
   /// shoot, wall: > 0; 0 picks 15% of the object's largest bounding-box extent.
   double projectile_radius = 0;
   std::uint32_t wall_rows = 2;     ///< wall: >= 1
@@ -46,8 +46,8 @@ struct SceneOptions {
 
 /// What set_up_scene placed.
 struct Scene {
-  std::vector<ObjectId> objects;   ///< every breakable, in placing order
-  BodyId projectile = no_body;     ///< shoot, wall
+  std::vector<ObjectId> objects;  ///< every breakable, in placing order
+  BodyId projectile = no_body;    ///< shoot, wall
   /// Extent of the scene's start on the floor: |x| and |z| of every object's
   /// bounding box and the projectile, m (for drawing a floor).
   double footprint = 0;

@@ -77,9 +77,9 @@ enum class BreakMethod : std::uint8_t {
   seed_rebuild,
 };
 
-std::string_view bond_mode_name(BondMode mode);            ///< "discrete", "accumulating"
-std::string_view impulse_model_name(ImpulseModel model);   ///< "applied", "seed"
-std::string_view break_method_name(BreakMethod method);    ///< "incremental", "seed"
+std::string_view bond_mode_name(BondMode mode);           ///< "discrete", "accumulating"
+std::string_view impulse_model_name(ImpulseModel model);  ///< "applied", "seed"
+std::string_view break_method_name(BreakMethod method);   ///< "incremental", "seed"
 /// The enum value with that name, or nullopt.
 std::optional<BondMode> bond_mode_named(std::string_view name);
 std::optional<ImpulseModel> impulse_model_named(std::string_view name);
@@ -164,10 +164,10 @@ struct BodyState {
 
 /// One contact point that passed the impact threshold.
 struct Impact {
-  BodyId body = no_body;    ///< the breakable body hit
-  BodyId other = no_body;   ///< what hit it; no_body for the floor
-  Vec3 world_point;         ///< on the hit body's surface
-  Vec3 tree_point;          ///< the same point in tree coordinates
+  BodyId body = no_body;       ///< the breakable body hit
+  BodyId other = no_body;      ///< what hit it; no_body for the floor
+  Vec3 world_point;            ///< on the hit body's surface
+  Vec3 tree_point;             ///< the same point in tree coordinates
   double applied_impulse = 0;  ///< Bullet's normal impulse at the point, N s
   double impulse = 0;          ///< p, by the object's ImpulseModel, N s
 };
@@ -175,10 +175,10 @@ struct Impact {
 /// A hit cluster that lost bonds in one step (or one apply_impact call).
 struct BreakEvent {
   std::uint64_t step = 0;
-  double time = 0;              ///< s
+  double time = 0;  ///< s
   ObjectId object = no_object;
-  BodyId body = no_body;        ///< the hit cluster
-  std::size_t impacts = 0;      ///< impacts on it that step
+  BodyId body = no_body;    ///< the hit cluster
+  std::size_t impacts = 0;  ///< impacts on it that step
   std::size_t bonds_broken = 0;
   /// The bodies its parts became, ordered by their smallest leaf; empty when it
   /// lost bonds but stayed connected (it then lives on as it was).
@@ -186,8 +186,8 @@ struct BreakEvent {
 };
 
 struct StepReport {
-  std::uint64_t step = 0;  ///< steps done, this one included
-  double time = 0;         ///< s, step * time_step
+  std::uint64_t step = 0;          ///< steps done, this one included
+  double time = 0;                 ///< s, step * time_step
   std::vector<Impact> impacts;     ///< in Bullet's manifold order
   std::vector<BreakEvent> breaks;  ///< ordered by hit body
 };
@@ -225,8 +225,7 @@ class World {
   /// parameters (check_parameters) or a null `shapes`. The shapes are shared,
   /// never copied.
   ObjectId add_breakable(std::shared_ptr<const BreakableShapes> shapes, const RigidTransform& placement,
-                         const BreakableParameters& parameters, Vec3 linear_velocity = {},
-                         Vec3 angular_velocity = {});
+                         const BreakableParameters& parameters, Vec3 linear_velocity = {}, Vec3 angular_velocity = {});
 
   /// Adds a solid sphere (a projectile): radius m > 0, mass kg > 0, centre and
   /// velocity in world coordinates; continuous collision detection is on for it,
