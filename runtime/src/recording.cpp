@@ -244,6 +244,14 @@ std::string Recording::encode_glb(const World& world, double floor_half_size) co
   const std::span<const BodyRecord> bodies = world.bodies();
   const double dt = world.options().time_step;
   ModelBuilder builder;
+  constexpr std::uint64_t alive = std::numeric_limits<std::uint64_t>::max();
+  // A body gets a node when it has a pose to show: a capture, or its death. One
+  // made and broken within one state (apply_impact twice) was never seen.
+  const auto drawn = [&](BodyId b) {
+    const BodyRecord& record = bodies[b];
+    return b < samples_.size() && record.death_step != record.birth_step &&
+           (!samples_[b].empty() || record.death_step != alive);
+  };
 
   // The tree nodes any recorded cluster uses, per distinct set of shapes, in
   // the order objects were added: each set's meshes are exported once.
@@ -260,8 +268,8 @@ std::string Recording::encode_glb(const World& world, double floor_half_size) co
     }
     set_of_object[o] = set;
   }
-  for (BodyId b = 0; b < bodies.size() && b < samples_.size(); ++b) {
-    if (bodies[b].kind != BodyKind::cluster || samples_[b].empty()) continue;
+  for (BodyId b = 0; b < bodies.size(); ++b) {
+    if (bodies[b].kind != BodyKind::cluster || !drawn(b)) continue;
     for (NodeIndex node : bodies[b].cover) used[set_of_object[bodies[b].object]][node] = true;
   }
   std::vector<std::map<NodeIndex, int>> mesh_of_node(shape_sets.size());
@@ -276,8 +284,13 @@ std::string Recording::encode_glb(const World& world, double floor_half_size) co
     // valid node has triangles).
     for (std::size_t i = 0; i < selection.size(); ++i) mesh_of_node[set][selection[i]] = first + static_cast<int>(i);
   }
-  const int sphere_mesh =
-      builder.append_meshes(decode(shatter::encode_glb(single_node_tree(unit_sphere()), std::vector<NodeIndex>{0})));
+  int sphere_mesh = -1;  // only when a sphere was recorded: glTF frowns on unused meshes
+  for (BodyId b = 0; b < bodies.size(); ++b) {
+    if (bodies[b].kind == BodyKind::sphere && drawn(b) && sphere_mesh < 0) {
+      sphere_mesh = builder.append_meshes(
+          decode(shatter::encode_glb(single_node_tree(unit_sphere()), std::vector<NodeIndex>{0})));
+    }
+  }
   const int floor_mesh = builder.append_meshes(
       decode(shatter::encode_glb(single_node_tree(floor_slab(floor_half_size)), std::vector<NodeIndex>{0})));
 
@@ -305,14 +318,11 @@ std::string Recording::encode_glb(const World& world, double floor_half_size) co
     animation.channels.push_back(std::move(channel));
   };
 
-  for (BodyId b = 0; b < bodies.size() && b < samples_.size(); ++b) {
+  for (BodyId b = 0; b < bodies.size(); ++b) {
+    if (!drawn(b)) continue;
     const BodyRecord& record = bodies[b];
-    if (record.death_step == record.birth_step) continue;  // made and broken in one state: never seen
     std::vector<Sample> keys = samples_[b];
-    if (record.death_step != std::numeric_limits<std::uint64_t>::max()) {
-      keys.push_back({record.death_step, record.death_transform});
-    }
-    if (keys.empty()) continue;  // never seen by a capture and still alive: nothing to draw
+    if (record.death_step != alive) keys.push_back({record.death_step, record.death_transform});
 
     const int node_index = static_cast<int>(model.nodes.size());
     tinygltf::Node node;
@@ -366,7 +376,7 @@ std::string Recording::encode_glb(const World& world, double floor_half_size) co
     }
     shown_times.push_back(static_cast<float>(static_cast<double>(record.birth_step) * dt));
     shown.insert(shown.end(), {1, 1, 1});
-    if (record.death_step != std::numeric_limits<std::uint64_t>::max()) {
+    if (record.death_step != alive) {
       shown_times.push_back(static_cast<float>(static_cast<double>(record.death_step) * dt));
       shown.insert(shown.end(), {0, 0, 0});
     }
