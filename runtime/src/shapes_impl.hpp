@@ -24,8 +24,8 @@ struct BondSearchTree {
   std::vector<BondIndex> order;  ///< bonds in leaf order
   std::vector<Vec3> points;      ///< points[i] is the centroid of bond order[i]
 
-  /// Calls visit(bond) for every bond whose centroid c has |c - centre| <= radius
-  /// (tested in doubles), in tree order.
+  /// Calls visit(bond, |c - centre|^2) for every bond whose centroid c has
+  /// |c - centre| <= radius (tested in doubles), in tree order.
   template <class Visit>
   void for_each_within(Vec3 centre, double radius, Visit&& visit) const {
     if (nodes.empty()) return;
@@ -46,7 +46,8 @@ struct BondSearchTree {
       if (node.left == 0) {
         for (std::uint32_t i = node.begin; i < node.end; ++i) {
           const Vec3 d = points[i] - centre;
-          if (dot(d, d) <= radius2) visit(order[i]);
+          const double distance2 = dot(d, d);
+          if (distance2 <= radius2) visit(order[i], distance2);
         }
       } else {
         stack[top++] = node.right;

@@ -308,9 +308,11 @@ BodyId World::Impl::add_cluster(ObjectId object, std::vector<NodeIndex> cover, s
   const MeshTree& tree = objects[object].tree();
   const bool many_children = cover.size() > 4;  // a child tree pays off only beyond a few children
   auto compound = std::make_unique<btCompoundShape>(many_children, static_cast<int>(cover.size()));
+  const btTransform body_from_tree_bt = to_bt(body_from_tree);
   for (std::size_t i = 0; i < cover.size(); ++i) {
-    const RigidTransform child = compose(body_from_tree, {tree.nodes[cover[i]].mass.centroid, {}});
-    compound->addChildShape(to_bt(child), shape.children[i]);
+    // Every child turns as the body frame does; only its offset differs.
+    const btVector3 offset = body_from_tree_bt(to_bt(tree.nodes[cover[i]].mass.centroid));
+    compound->addChildShape(btTransform(body_from_tree_bt.getBasis(), offset), shape.children[i]);
   }
   BodyRecord record;
   record.kind = BodyKind::cluster;
@@ -401,14 +403,11 @@ void World::Impl::damage(ObjectState& object, std::uint32_t label, Vec3 tree_poi
   const BreakableShapes::Impl& data = object.data();
   const double strength = p.frailty * impulse;
   const double min_cube = p.min_distance * p.min_distance * p.min_distance;
-  const auto damage_at = [&](BondIndex b) {
-    const Vec3 d = data.bond_centroids[b] - tree_point;
-    const double s = std::sqrt(dot(d, d));
-    return s > p.min_distance ? strength / (s * s * s) : strength / min_cube;
-  };
-  const auto hit = [&](BondIndex b) {
+  // `distance2` is the squared distance from the contact to the bond's centroid.
+  const auto hit = [&](BondIndex b, double distance2) {
     if (!object.bond_alive[b] || object.leaf_label[data.bond_first[b]] != label) return;
-    const double amount = damage_at(b);
+    const double s = std::sqrt(distance2);
+    const double amount = s > p.min_distance ? strength / (s * s * s) : strength / min_cube;
     if (p.mode == BondMode::discrete) {
       if (amount < object.hit_points[b]) return;
     } else {
@@ -425,7 +424,10 @@ void World::Impl::damage(ObjectState& object, std::uint32_t label, Vec3 tree_poi
     data.bond_search.for_each_within(tree_point, radius * (1 + 1e-9), hit);
     std::sort(broken.begin() + static_cast<std::ptrdiff_t>(first_broken), broken.end());
   } else {
-    for (BondIndex b = 0; b < object.bond_alive.size(); ++b) hit(b);
+    for (BondIndex b = 0; b < object.bond_alive.size(); ++b) {
+      const Vec3 d = data.bond_centroids[b] - tree_point;
+      hit(b, dot(d, d));
+    }
   }
 }
 
