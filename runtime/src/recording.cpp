@@ -9,21 +9,7 @@
 
 #include "shatter/meshtree/export.hpp"
 
-// tinygltf's implementation is compiled once, in meshtree's export.cpp, with
-// these macros; this file declares it the same way and links against that.
-#define TINYGLTF_NO_STB_IMAGE
-#define TINYGLTF_NO_STB_IMAGE_WRITE
-#define TINYGLTF_NO_EXTERNAL_IMAGE
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wall"
-#pragma GCC diagnostic ignored "-Wextra"
-#pragma GCC diagnostic ignored "-Wpedantic"
-#pragma GCC diagnostic ignored "-Wshadow"
-#pragma GCC diagnostic ignored "-Wconversion"
-#pragma GCC diagnostic ignored "-Wsign-conversion"
-#pragma GCC diagnostic ignored "-Wunused-parameter"
-#include <tiny_gltf.h>
-#pragma GCC diagnostic pop
+#include "shatter/meshtree/tinygltf.hpp"
 
 namespace shatter::runtime {
 

@@ -5,8 +5,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "leaf_sets.hpp"
 #include "shapes_impl.hpp"
+#include "shatter/kernel/union_find.hpp"
 #include "shatter/meshtree/cover.hpp"
 
 namespace shatter::runtime {
@@ -107,7 +107,7 @@ std::shared_ptr<const BreakableShapes> BreakableShapes::create(std::shared_ptr<c
 
   const std::size_t leaves = tree->leaf_count();
   const std::size_t bond_count = tree->bonds.size();
-  LeafSets sets(leaves);
+  UnionFind sets(leaves);
   impl->adjacency_begin.assign(leaves + 1, 0);
   impl->bond_centroids.reserve(bond_count);
   impl->bond_first.reserve(bond_count);
@@ -117,7 +117,7 @@ std::shared_ptr<const BreakableShapes> BreakableShapes::create(std::shared_ptr<c
       throw std::invalid_argument("BreakableShapes: bond " + std::to_string(b) +
                                   " names a leaf out of range, joins a leaf to itself or has a non-finite centroid");
     }
-    sets.join(bond.first, bond.second);
+    sets.unite(bond.first, bond.second);
     ++impl->adjacency_begin[bond.first + 1];
     ++impl->adjacency_begin[bond.second + 1];
     impl->bond_centroids.push_back(bond.centroid);

@@ -9,8 +9,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "leaf_sets.hpp"
 #include "shapes_impl.hpp"
+#include "shatter/kernel/union_find.hpp"
 #include "shatter/meshtree/cover.hpp"
 
 namespace shatter::runtime {
@@ -166,6 +166,12 @@ struct ObjectState {
   const MeshTree& tree() const { return shapes->tree(); }
 };
 
+// A hit cluster's motion as it comes apart, which its parts inherit.
+struct ParentMotion {
+  RigidTransform tree_to_world;
+  Vec3 velocity, angular, centre;
+};
+
 // How a hit cluster comes apart: parts found whole, and at most one "rest", the
 // part no search finished, which is the cluster without the others.
 struct Parts {
@@ -203,6 +209,7 @@ struct World::Impl {
                      ClusterShape shape, const RigidTransform& tree_to_world, Vec3 velocity, Vec3 angular,
                      Vec3 velocity_origin, BodyId parent);
   void retire(BodyId body);
+  ParentMotion retire_parent(BodyId body);
 
   ClusterShape precomputed_shape(const ObjectState& object, std::span<const NodeIndex> cover) const;
   ClusterShape built_shape(const ObjectState& object, std::span<const NodeIndex> cover) const;
@@ -344,6 +351,15 @@ void World::Impl::retire(BodyId body) {
   live[body] = LiveBody{};
 }
 
+// Retires a cluster that came apart, returning the motion its parts take over.
+ParentMotion World::Impl::retire_parent(BodyId body) {
+  const btRigidBody& rigid = *live[body].rigid;
+  const ParentMotion motion{tree_to_world(body), from_bt(rigid.getLinearVelocity()),
+                            from_bt(rigid.getAngularVelocity()), from_bt(rigid.getCenterOfMassPosition())};
+  retire(body);
+  return motion;
+}
+
 ClusterShape World::Impl::precomputed_shape(const ObjectState& object, std::span<const NodeIndex> cover) const {
   ClusterShape shape;
   const double density = object.parameters.density;
@@ -468,7 +484,7 @@ Parts World::Impl::find_parts(ObjectState& object, std::span<const BondIndex> br
       searches.push_back({end, end, end});
     }
   }
-  LeafSets groups(searches.size());
+  UnionFind groups(searches.size());
   std::vector<std::uint32_t> running_in_group(searches.size(), 1);  // valid at group representatives
   std::size_t running_groups = searches.size();
 
@@ -487,7 +503,7 @@ Parts World::Impl::find_parts(ObjectState& object, std::span<const BondIndex> br
         }
         const std::uint32_t a = groups.find(owner), b = groups.find(s);
         if (a == b) continue;
-        groups.join(a, b);
+        groups.unite(a, b);
         const std::uint32_t merged = groups.find(a);
         running_in_group[merged] = running_in_group[a] + running_in_group[b];
         --running_groups;  // both were running: a search only meets running ones
@@ -572,17 +588,12 @@ std::vector<BodyId> World::Impl::split_incremental(BodyId body, std::span<const 
     return tree.nodes[a.cover.front()].first_leaf < tree.nodes[b.cover.front()].first_leaf;
   });
 
-  const RigidTransform parent_tree_to_world = tree_to_world(body);
-  const btRigidBody& rigid = *live[body].rigid;
-  const Vec3 velocity = from_bt(rigid.getLinearVelocity());
-  const Vec3 angular = from_bt(rigid.getAngularVelocity());
-  const Vec3 centre = from_bt(rigid.getCenterOfMassPosition());
-  retire(body);
+  const ParentMotion parent = retire_parent(body);
   std::vector<BodyId> created;
   for (NewPart& part : made) {
     ClusterShape shape = precomputed_shape(object, part.cover);
     created.push_back(add_cluster(object_id, std::move(part.cover), part.leaf_count, part.label, std::move(shape),
-                                  parent_tree_to_world, velocity, angular, centre, body));
+                                  parent.tree_to_world, parent.velocity, parent.angular, parent.centre, body));
   }
   return created;
 }
@@ -628,12 +639,7 @@ std::vector<BodyId> World::Impl::split_seed(BodyId body) {
     for (LeafIndex leaf : parts[k]) part_of[leaf] = k;
   }
 
-  const RigidTransform parent_tree_to_world = tree_to_world(body);
-  const btRigidBody& rigid = *live[body].rigid;
-  const Vec3 velocity = from_bt(rigid.getLinearVelocity());
-  const Vec3 angular = from_bt(rigid.getAngularVelocity());
-  const Vec3 centre = from_bt(rigid.getCenterOfMassPosition());
-  retire(body);
+  const ParentMotion parent = retire_parent(body);
   std::vector<BodyId> created;
   for (std::uint32_t k = 0; k < parts.size(); ++k) {
     // A new graph for the part: its edges copied out of all bonds.
@@ -662,7 +668,8 @@ std::vector<BodyId> World::Impl::split_seed(BodyId body) {
     for (LeafIndex leaf : parts[k]) object.leaf_label[leaf] = label;
     ClusterShape shape = built_shape(object, cover);
     const BodyId id = add_cluster(object_id, std::move(cover), static_cast<std::uint32_t>(parts[k].size()), label,
-                                  std::move(shape), parent_tree_to_world, velocity, angular, centre, body);
+                                  std::move(shape), parent.tree_to_world, parent.velocity, parent.angular,
+                                  parent.centre, body);
     live[id].seed_graph_edges = std::move(edges);
     created.push_back(id);
   }

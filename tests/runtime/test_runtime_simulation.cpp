@@ -15,21 +15,7 @@
 #include "shatter/runtime/scenes.hpp"
 #include "shatter/runtime/world.hpp"
 
-// The same macros as meshtree's export.cpp, which compiles tinygltf's
-// implementation that this test links against.
-#define TINYGLTF_NO_STB_IMAGE
-#define TINYGLTF_NO_STB_IMAGE_WRITE
-#define TINYGLTF_NO_EXTERNAL_IMAGE
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wall"
-#pragma GCC diagnostic ignored "-Wextra"
-#pragma GCC diagnostic ignored "-Wpedantic"
-#pragma GCC diagnostic ignored "-Wshadow"
-#pragma GCC diagnostic ignored "-Wconversion"
-#pragma GCC diagnostic ignored "-Wsign-conversion"
-#pragma GCC diagnostic ignored "-Wunused-parameter"
-#include <tiny_gltf.h>
-#pragma GCC diagnostic pop
+#include "shatter/meshtree/tinygltf.hpp"
 
 using namespace shatter;
 using namespace shatter::test;
