@@ -19,8 +19,10 @@
 // Bullet's world and adding the new ones (their broadphase pairs are found in
 // the next step, for both methods alike).
 // Each repetition starts from a fresh World with the whole cube (made outside the
-// clock); repetitions until >= 7 and >= 0.5 s of timed impacts (at most 2,000);
-// medians, so a repetition the shared machine preempted does not count.
+// clock). The three settings below run in three rounds of back-to-back batches,
+// each setting >= 7 repetitions and >= 0.5 s of timed impacts in all (at most
+// 2,100); medians, so a repetition the shared machine preempted does not count,
+// and a stretch of load falls on all three alike.
 //   - incremental: BreakMethod::incremental, discrete bonds (the default).
 //   - incremental, accumulating: the same impact with accumulating bonds, which
 //     must damage every bond of the hit cluster, so it walks all of them.
@@ -97,30 +99,46 @@ struct ImpactTiming {
   std::size_t bonds_broken = 0, bodies_created = 0;
 };
 
-ImpactTiming time_impact(const Cube& c, double radius, rt::BreakMethod method, rt::BondMode mode, std::size_t min_runs,
-                         double min_seconds) {
-  rt::BreakableParameters parameters;
-  parameters.method = method;
-  parameters.mode = mode;
+// One impact on a fresh world with the whole cube, timed.
+double one_impact(const Cube& c, const rt::BreakableParameters& parameters, double radius, ImpactTiming& timing) {
   const double impulse = parameters.hit_points * radius * radius * radius / parameters.frailty;
-  const Vec3 corner{0.5, 0.5, 0.5};
-  std::vector<double> times;
-  ImpactTiming timing;
-  double total = 0;
-  while ((times.size() < min_runs || total < min_seconds) && times.size() < 2000) {
-    rt::World world;
-    world.add_breakable(c.shapes, {}, parameters);
-    const Clock::time_point start = Clock::now();
-    const rt::BreakEvent event = world.apply_impact(0, corner, impulse);
-    const double seconds = seconds_since(start);
-    times.push_back(seconds);
-    total += seconds;
-    timing.bonds_broken = event.bonds_broken;
-    timing.bodies_created = event.created.size();
+  rt::World world;
+  world.add_breakable(c.shapes, {}, parameters);
+  const Clock::time_point start = Clock::now();
+  const rt::BreakEvent event = world.apply_impact(0, {0.5, 0.5, 0.5}, impulse);
+  const double seconds = seconds_since(start);
+  timing.bonds_broken = event.bonds_broken;
+  timing.bodies_created = event.created.size();
+  return seconds;
+}
+
+// The same impact under each (method, bonds) setting, in three rounds: in each
+// round every setting runs a batch of repetitions back to back (warm caches,
+// as a microbenchmark does) until the batch has ceil(min_runs / 3) and
+// min_seconds / 3 (at most 700), then the next setting. Spreading each
+// setting's batches over the run lets a stretch of load on the shared machine
+// fall on all of them alike; the medians are over all batches.
+std::vector<ImpactTiming> time_impacts(const Cube& c, double radius,
+                                       const std::vector<rt::BreakableParameters>& settings, std::size_t min_runs,
+                                       double min_seconds) {
+  constexpr int rounds = 3;
+  std::vector<ImpactTiming> timings(settings.size());
+  std::vector<std::vector<double>> times(settings.size());
+  for (int round = 0; round < rounds; ++round) {
+    for (std::size_t k = 0; k < settings.size(); ++k) {
+      double total = 0;
+      for (std::size_t runs = 0;
+           (runs < (min_runs + rounds - 1) / rounds || total < min_seconds / rounds) && runs < 700; ++runs) {
+        times[k].push_back(one_impact(c, settings[k], radius, timings[k]));
+        total += times[k].back();
+      }
+    }
   }
-  timing.seconds = median(times, bench::not_measured);
-  timing.runs = times.size();
-  return timing;
+  for (std::size_t k = 0; k < settings.size(); ++k) {
+    timings[k].seconds = median(times[k], bench::not_measured);
+    timings[k].runs = times[k].size();
+  }
+  return timings;
 }
 
 struct StepTiming {
@@ -214,18 +232,21 @@ int main(int argc, char** argv) {
         << "|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (std::uint32_t n : sizes) {
       const Cube& c = cubes[n];
-      const ImpactTiming ours =
-          time_impact(c, radius, rt::BreakMethod::incremental, rt::BondMode::discrete, min_runs, min_seconds);
+      std::vector<rt::BreakableParameters> settings(incremental_only ? 1 : 3);
+      if (!incremental_only) {
+        settings[1].mode = rt::BondMode::accumulating;
+        settings[2].method = rt::BreakMethod::seed_rebuild;
+      }
+      const std::vector<ImpactTiming> timings = time_impacts(c, radius, settings, min_runs, min_seconds);
+      const ImpactTiming& ours = timings[0];
       if (incremental_only) {
         std::cout << "| " << with_thousands(c.tree->leaf_count())
                   << " | incremental only: " << fixed(ours.seconds * 1e6, 1) << " µs, " << ours.bodies_created
                   << " bodies |\n";
         continue;
       }
-      const ImpactTiming accumulating =
-          time_impact(c, radius, rt::BreakMethod::incremental, rt::BondMode::accumulating, min_runs, min_seconds);
-      const ImpactTiming seed =
-          time_impact(c, radius, rt::BreakMethod::seed_rebuild, rt::BondMode::discrete, min_runs, min_seconds);
+      const ImpactTiming& accumulating = timings[1];
+      const ImpactTiming& seed = timings[2];
       // The methods must agree; the smoke run also insists that its impact breaks
       // something off (the full run's small radii on coarse trees need not).
       if (ours.bonds_broken != seed.bonds_broken || ours.bodies_created != seed.bodies_created ||
