@@ -210,6 +210,13 @@ struct World::Impl {
                      Vec3 velocity_origin, BodyId parent);
   void retire(BodyId body);
   ParentMotion retire_parent(BodyId body);
+  // Room for `more` bodies, so a break's new bodies move the records at most
+  // once; growth stays geometric, so many small breaks cost amortised O(1) each.
+  void reserve_bodies(std::size_t more) {
+    const std::size_t needed = records.size() + more;
+    if (records.capacity() < needed) records.reserve(std::max(needed, 2 * records.capacity()));
+    if (live.capacity() < needed) live.reserve(std::max(needed, 2 * live.capacity()));
+  }
 
   ClusterShape precomputed_shape(const ObjectState& object, std::span<const NodeIndex> cover) const;
   ClusterShape built_shape(const ObjectState& object, std::span<const NodeIndex> cover) const;
@@ -589,6 +596,7 @@ std::vector<BodyId> World::Impl::split_incremental(BodyId body, std::span<const 
   });
 
   const ParentMotion parent = retire_parent(body);
+  reserve_bodies(made.size());
   std::vector<BodyId> created;
   for (NewPart& part : made) {
     ClusterShape shape = precomputed_shape(object, part.cover);
@@ -640,6 +648,7 @@ std::vector<BodyId> World::Impl::split_seed(BodyId body) {
   }
 
   const ParentMotion parent = retire_parent(body);
+  reserve_bodies(parts.size());
   std::vector<BodyId> created;
   for (std::uint32_t k = 0; k < parts.size(); ++k) {
     // A new graph for the part: its edges copied out of all bonds.
