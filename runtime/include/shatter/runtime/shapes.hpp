@@ -43,16 +43,19 @@ class BreakableShapes {
  public:
   /// Builds one btConvexHullShape per node of `tree` from MeshTree::hull_of(node)
   /// (its positions, taken relative to the node's centroid so every shape sits
-  /// near its own origin, with ShapeOptions::collision_margin), and the connected
-  /// components of the bond graph over all leaves (union-find), each with its
-  /// bonds: the clusters a new breakable object starts as.
+  /// near its own origin, with ShapeOptions::collision_margin), each node's
+  /// unit-density RigidMass, the bond graph as flat arrays (each leaf's bonds,
+  /// the bonds' centroids, a k-d tree over them), and the connected components
+  /// of the bond graph over all leaves (union-find), each with its bonds and
+  /// minimal cover: the clusters a new breakable object starts as.
   /// Preconditions: `tree` is well formed (as build_mesh_tree and
   /// read_shatter_file return it), non-empty, every node's hull has at least one
   /// position, all finite, every node's volume positive, every bond's leaves in
-  /// range. Throws std::invalid_argument naming the first node or bond at fault
-  /// otherwise, and for a bad ShapeOptions.
-  /// Complexity: O(total hull positions + nodes + bonds · α(leaves)); no hull is
-  /// computed, only copied.
+  /// range and distinct, its centroid finite. Throws std::invalid_argument
+  /// naming the first node or bond at fault otherwise, and for a bad
+  /// ShapeOptions.
+  /// Complexity: O(total hull positions + nodes + bonds log bonds), one 3x3
+  /// eigendecomposition per node; no hull is computed, only copied.
   static std::shared_ptr<const BreakableShapes> create(std::shared_ptr<const MeshTree> tree,
                                                        const ShapeOptions& options = {});
 
