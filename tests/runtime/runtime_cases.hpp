@@ -1,19 +1,22 @@
 #pragma once
 // The runtime tests' catalogue: mesh trees built from generated solids (a box, an
 // ellipsoid, a torus whose fragments' hulls overlap, the seed's hollow egg with a
-// cavity, two boxes whose bond graph starts in two clusters) at a few fragment
-// counts and seeds, each built once per test process, and the property checks
-// the tests share.
+// cavity, two boxes whose bond graph starts in two clusters) and from the knotted
+// tube the repository ships (tests/data/knot1.off), at a few fragment counts and
+// seeds, each built once per test process, and the property checks the tests
+// share.
 
 #include <catch2/catch.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "shatter/kernel/io.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cover.hpp"
 #include "shatter/runtime/world.hpp"
@@ -33,6 +36,7 @@ inline Mesh runtime_mesh(const std::string& mesh) {
   if (mesh == "torus") return torus(0.6, 0.2, 16, 10);
   if (mesh == "hollow-egg") return hollow_egg();
   if (mesh == "two-boxes") return two_boxes();
+  if (mesh == "knot1") return read_mesh(std::filesystem::path(SHATTER_TEST_DATA_DIR) / "knot1.off");
   FAIL("no runtime mesh " << mesh);
   return {};
 }
@@ -58,7 +62,7 @@ inline RuntimeCase runtime_case(const std::string& mesh, std::uint32_t fragments
 /// catalogue of the property tests (never empty).
 inline std::vector<RuntimeCase> runtime_cases() {
   std::vector<RuntimeCase> cases;
-  for (const char* mesh : {"box", "ellipsoid", "torus", "hollow-egg", "two-boxes"}) {
+  for (const char* mesh : {"box", "ellipsoid", "torus", "hollow-egg", "two-boxes", "knot1"}) {
     for (std::uint64_t seed : {1u, 7u}) cases.push_back(runtime_case(mesh, 24, seed));
   }
   cases.push_back(runtime_case("box", 96, 3));
