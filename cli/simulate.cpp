@@ -9,7 +9,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
-#include <limits>
 #include <memory>
 #include <stdexcept>
 
@@ -278,7 +277,8 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateArgs& args) {
   command
       ->add_option("--print-every", args.print_every,
                    "Text output: a summary line every this many steps (break events are always printed)")
-      ->check(CLI::Range(std::uint64_t{1}, std::numeric_limits<std::uint64_t>::max()))
+      // Bounded like --steps, so a negative number (which CLI11 reads as 2^64 - k) is refused.
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{10'000'000}))
       ->capture_default_str();
   command->add_option("--record", args.record,
                       "Write the run as an animated glTF binary (.glb): one node per body that ever existed, moved "

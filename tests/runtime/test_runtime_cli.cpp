@@ -109,7 +109,7 @@ TEST_CASE("simulate's usage mistakes exit 2 and an unwritable recording exits 4,
        {std::string("--scene fall"), std::string("--steps 0"), std::string("--density -1"), std::string("--bonds soft"),
         std::string("--impulse huge"), std::string("--method fast"), std::string("--time-step 0"),
         std::string("--record ") + quoted(dir / "run.txt"), std::string("--record ") + quoted(dir),
-        std::string("--print-every 0"), std::string("--no-such-option")}) {
+        std::string("--print-every 0"), std::string("--print-every -1"), std::string("--steps -1"), std::string("--no-such-option")}) {
     INFO(arguments);
     const Run run = run_shatter("simulate " + quoted(tree) + " " + arguments);
     CHECK(run.exit_code == 2);
