@@ -24,6 +24,7 @@
 #include "shatter/meshtree/plane_input.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "repair_option.hpp"
+#include "simulate.hpp"
 #include "tree_commands.hpp"
 
 namespace {
@@ -398,6 +399,8 @@ int main(int argc, char** argv) {
   CLI::App* info = add_info_command(app, info_args);
   ExportArgs export_args;
   CLI::App* export_command = add_export_command(app, export_args);
+  SimulateArgs simulate_args;
+  CLI::App* simulate = add_simulate_command(app, simulate_args);
 
   try {
     app.parse(argc, argv);
@@ -417,6 +420,7 @@ int main(int argc, char** argv) {
     if (fracture->parsed()) return run_fracture(fracture_args);
     if (info->parsed()) return run_info(info_args);
     if (export_command->parsed()) return run_export(export_args);
+    if (simulate->parsed()) return run_simulate(simulate_args);
     return report_error("no command given (see --help)", usage_error);
   } catch (const UsageError& e) {
     return report_error(e.what(), usage_error);

@@ -27,19 +27,7 @@
 #include "shatter/meshtree/stats.hpp"
 #include "support/generators.hpp"
 
-// The same macros as export.cpp, which compiles tinygltf's implementation: the
-// class's default members depend on them.
-#define TINYGLTF_NO_STB_IMAGE
-#define TINYGLTF_NO_STB_IMAGE_WRITE
-#define TINYGLTF_NO_EXTERNAL_IMAGE
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wall"
-#pragma GCC diagnostic ignored "-Wextra"
-#pragma GCC diagnostic ignored "-Wpedantic"
-#pragma GCC diagnostic ignored "-Wshadow"
-#pragma GCC diagnostic ignored "-Wconversion"
-#include <tiny_gltf.h>
-#pragma GCC diagnostic pop
+#include "shatter/meshtree/tinygltf.hpp"
 
 using namespace shatter;
 namespace fs = std::filesystem;

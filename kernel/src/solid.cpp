@@ -9,30 +9,10 @@
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/predicates.hpp"
+#include "shatter/kernel/union_find.hpp"
 
 namespace shatter {
 namespace {
-
-class UnionFind {
- public:
-  explicit UnionFind(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent_[x] != x) {
-      parent_[x] = parent_[parent_[x]];
-      x = parent_[x];
-    }
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a < b) parent_[b] = a;
-    else if (b < a) parent_[a] = b;
-  }
-
- private:
-  std::vector<std::uint32_t> parent_;
-};
 
 using EpickPoint = CGAL::Epick::Point_3;
 EpickPoint epick(const Vec3& p) { return {p.x, p.y, p.z}; }

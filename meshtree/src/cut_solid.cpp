@@ -6,35 +6,12 @@
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/face_loops.hpp"
 #include "shatter/kernel/index_map.hpp"
+#include "shatter/kernel/union_find.hpp"
 #include "shatter/slicer/split.hpp"
 #include "shatter/triangulate/cap_faces.hpp"
 
 namespace shatter {
 namespace {
-
-class UnionFind {
- public:
-  void reset(std::size_t n) {
-    parent_.resize(n);
-    std::iota(parent_.begin(), parent_.end(), 0u);
-  }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent_[x] != x) {
-      parent_[x] = parent_[parent_[x]];
-      x = parent_[x];
-    }
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a < b) parent_[b] = a;
-    else if (b < a) parent_[a] = b;
-  }
-
- private:
-  std::vector<std::uint32_t> parent_;
-};
 
 // Appends `from`'s faces to `to`, renumbering their loops and corners.
 void append_faces(const FaceSet& from, FaceSet& to) {

@@ -15,24 +15,10 @@
 
 #include "shatter/kernel/error.hpp"
 
-// tinygltf is header-only: its implementation is compiled here, once, without
-// image support (the GLB holds no textures). Tests that decode GLBs include the
-// header with the same macros and link against this implementation.
+// tinygltf is header-only: its implementation is compiled here, once (see
+// tinygltf.hpp, which every other user of tinygltf includes).
 #define TINYGLTF_IMPLEMENTATION
-#define TINYGLTF_NO_STB_IMAGE
-#define TINYGLTF_NO_STB_IMAGE_WRITE
-#define TINYGLTF_NO_EXTERNAL_IMAGE
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wall"
-#pragma GCC diagnostic ignored "-Wextra"
-#pragma GCC diagnostic ignored "-Wpedantic"
-#pragma GCC diagnostic ignored "-Wshadow"
-#pragma GCC diagnostic ignored "-Wconversion"
-#pragma GCC diagnostic ignored "-Wsign-conversion"
-#pragma GCC diagnostic ignored "-Wunused-parameter"
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include <tiny_gltf.h>
-#pragma GCC diagnostic pop
+#include "shatter/meshtree/tinygltf.hpp"
 
 namespace shatter {
 

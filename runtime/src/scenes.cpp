@@ -1,0 +1,152 @@
+#include "shatter/runtime/scenes.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+
+namespace shatter::runtime {
+
+std::string_view scene_name(SceneKind kind) {
+  switch (kind) {
+    case SceneKind::drop:
+      return "drop";
+    case SceneKind::shoot:
+      return "shoot";
+    case SceneKind::wall:
+      return "wall";
+  }
+  return "unknown";
+}
+
+std::optional<SceneKind> scene_named(std::string_view name) {
+  for (SceneKind kind : {SceneKind::drop, SceneKind::shoot, SceneKind::wall}) {
+    if (scene_name(kind) == name) return kind;
+  }
+  return std::nullopt;
+}
+
+namespace {
+
+struct Box {
+  Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+          std::numeric_limits<double>::infinity()};
+  Vec3 hi = -lo;
+  Vec3 extent() const { return hi - lo; }
+};
+
+// The bounding box of the object turned by `rotation`: the root's hull bounds
+// every fragment.
+Box rotated_box(const MeshTree& tree, const Quaternion& rotation) {
+  Box box;
+  for (const Vec3& p : tree.hull_of(0).positions) {
+    const Vec3 q = rotate(rotation, p);
+    box.lo = {std::min(box.lo.x, q.x), std::min(box.lo.y, q.y), std::min(box.lo.z, q.z)};
+    box.hi = {std::max(box.hi.x, q.x), std::max(box.hi.y, q.y), std::max(box.hi.z, q.z)};
+  }
+  return box;
+}
+
+// The rotation that lays the object's bounding-box axes out as a brick in a wall:
+// thinnest along x, middle along y, largest along z, kept proper by turning the
+// thinnest axis around when the permutation alone would mirror.
+Quaternion brick_rotation(const MeshTree& tree) {
+  const Vec3 extent = rotated_box(tree, {}).extent();
+  std::array<int, 3> axes{0, 1, 2};
+  std::stable_sort(axes.begin(), axes.end(), [&](int a, int b) { return extent[a] < extent[b]; });
+  Matrix3 rotation{};  // column j is where tree axis j goes
+  for (int world_axis = 0; world_axis < 3; ++world_axis) {
+    rotation[static_cast<std::size_t>(3 * world_axis + axes[static_cast<std::size_t>(world_axis)])] = 1;
+  }
+  const double determinant = rotation[0] * (rotation[4] * rotation[8] - rotation[5] * rotation[7]) -
+                             rotation[1] * (rotation[3] * rotation[8] - rotation[5] * rotation[6]) +
+                             rotation[2] * (rotation[3] * rotation[7] - rotation[4] * rotation[6]);
+  if (determinant < 0) {
+    for (std::size_t c = 0; c < 3; ++c) rotation[c] = -rotation[c];
+  }
+  return quaternion_of(rotation);
+}
+
+void require(bool ok, const char* what) {
+  if (!ok) throw std::invalid_argument(what);
+}
+
+void check_options(const SceneOptions& o) {
+  check_parameters(o.parameters);
+  require(std::isfinite(o.height) && o.height >= 0, "the drop height must be finite and not negative (m)");
+  require(std::isfinite(o.tilt_degrees), "the tilt must be finite (degrees)");
+  require(std::isfinite(o.projectile_mass) && o.projectile_mass > 0, "the projectile mass must be positive (kg)");
+  require(std::isfinite(o.projectile_speed) && o.projectile_speed >= 0,
+          "the projectile speed must be finite and not negative (m/s)");
+  require(std::isfinite(o.projectile_radius) && o.projectile_radius >= 0,
+          "the projectile radius must be finite and not negative (m; 0 picks one)");
+  require(o.wall_rows >= 1 && o.wall_columns >= 1, "a wall needs at least one row and one column");
+}
+
+double footprint_of(const Box& box) {
+  return std::max({std::abs(box.lo.x), std::abs(box.hi.x), std::abs(box.lo.z), std::abs(box.hi.z)});
+}
+
+}  // namespace
+
+Scene set_up_scene(World& world, const std::shared_ptr<const BreakableShapes>& shapes, const SceneOptions& options) {
+  if (!shapes) throw std::invalid_argument("set_up_scene: no shapes");
+  check_options(options);
+  const MeshTree& tree = shapes->tree();
+  const double margin = shapes->options().collision_margin;
+  const Vec3 centroid = tree.nodes[0].mass.centroid;
+  Scene scene;
+
+  if (options.kind == SceneKind::drop) {
+    const Quaternion rotation = axis_angle({1, 0, 1}, options.tilt_degrees * std::numbers::pi / 180);
+    const Box box = rotated_box(tree, rotation);
+    const Vec3 turned = rotate(rotation, centroid);
+    const RigidTransform placement{{-turned.x, options.height + margin - box.lo.y, -turned.z}, rotation};
+    scene.objects.push_back(world.add_breakable(shapes, placement, options.parameters));
+    scene.footprint = footprint_of({box.lo + placement.translation, box.hi + placement.translation});
+    return scene;
+  }
+
+  const double largest =
+      std::max({rotated_box(tree, {}).extent().x, rotated_box(tree, {}).extent().y, rotated_box(tree, {}).extent().z});
+  const double radius = options.projectile_radius > 0 ? options.projectile_radius : 0.15 * largest;
+  Vec3 target;
+  double front = 0;  // the smallest x of the objects
+  if (options.kind == SceneKind::shoot) {
+    const Box box = rotated_box(tree, {});
+    const RigidTransform placement{{-centroid.x, margin - box.lo.y, -centroid.z}, {}};
+    scene.objects.push_back(world.add_breakable(shapes, placement, options.parameters));
+    target = apply(placement, centroid);
+    front = box.lo.x + placement.translation.x;
+    scene.footprint = footprint_of({box.lo + placement.translation, box.hi + placement.translation});
+  } else {
+    const Quaternion rotation = brick_rotation(tree);
+    const Box box = rotated_box(tree, rotation);
+    const Vec3 size = box.extent();
+    const double gap = 2 * margin;  // bricks touch only through their margins
+    const double width = static_cast<double>(options.wall_columns) * (size.z + gap) - gap;
+    const std::uint32_t target_row = (options.wall_rows - 1) / 2, target_column = (options.wall_columns - 1) / 2;
+    for (std::uint32_t row = 0; row < options.wall_rows; ++row) {
+      for (std::uint32_t column = 0; column < options.wall_columns; ++column) {
+        const Vec3 corner{-size.x / 2, margin + static_cast<double>(row) * (size.y + gap),
+                          -width / 2 + static_cast<double>(column) * (size.z + gap)};
+        const RigidTransform placement{corner - box.lo, rotation};
+        scene.objects.push_back(world.add_breakable(shapes, placement, options.parameters));
+        if (row == target_row && column == target_column) target = apply(placement, centroid);
+      }
+    }
+    front = -size.x / 2;
+    const double height = static_cast<double>(options.wall_rows) * (size.y + gap);
+    scene.footprint = std::max({size.x / 2, width / 2, height});
+  }
+  // The sphere starts with its surface a diameter in front of the object and
+  // flies straight at the target point.
+  const Vec3 start{front - 3 * radius, target.y, target.z};
+  scene.projectile = world.add_sphere(radius, options.projectile_mass, start, Vec3{options.projectile_speed, 0, 0});
+  scene.footprint = std::max(scene.footprint, std::abs(start.x) + radius);
+  return scene;
+}
+
+}  // namespace shatter::runtime
