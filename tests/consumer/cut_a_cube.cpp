@@ -1,9 +1,12 @@
 // Cuts the unit cube with the installed library and checks the pieces: a plane
 // cut (slicer, through meshtree's cut_mesh) into two halves of volume 1/2, and a
 // mesh tree of 8 fragments (plane kernel) whose leaves are valid solids adding
-// up to the cube, written to .shatter bytes and read back. Exit 0 when all hold.
+// up to the cube, written to .shatter bytes and read back, then broken in the
+// runtime (one strong impact at a corner splits the one body into several that
+// together hold all 8 leaves). Exit 0 when all hold.
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 
 #include "shatter/kernel/mass.hpp"
@@ -12,6 +15,8 @@
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cut.hpp"
 #include "shatter/meshtree/file.hpp"
+#include "shatter/runtime/shapes.hpp"
+#include "shatter/runtime/world.hpp"
 
 namespace {
 
@@ -62,6 +67,22 @@ int main() {
   const shatter::MeshTree read_back = shatter::decode_shatter(shatter::encode_shatter(tree));
   expect(read_back.nodes.size() == tree.nodes.size(), "the tree read back has another node count");
 
-  if (failures == 0) std::printf("cut_a_cube: %zu leaves, volume %.17g\n", tree.leaf_count(), volume);
+  // The runtime: the cube as one body, struck at a corner hard enough that the
+  // damage f p / s^3 reaches every bond's hit points.
+  namespace runtime = shatter::runtime;
+  const auto shapes = runtime::BreakableShapes::create(std::make_shared<const shatter::MeshTree>(read_back));
+  runtime::World world;
+  const runtime::ObjectId object = world.add_breakable(shapes, {{0, 0, 0}, {}}, runtime::BreakableParameters{});
+  const std::vector<runtime::BodyId> before = world.live_bodies();
+  expect(before.size() == 1, "the cube does not start as one body");
+  const runtime::BreakEvent event = world.apply_impact(before.front(), {0, 0, 0}, 1e6);
+  expect(event.created.size() >= 2, "a 1e6 N s impact did not split the cube");
+  std::size_t leaves_held = 0;
+  for (runtime::BodyId body : world.live_bodies()) leaves_held += world.leaves_of(body).size();
+  expect(leaves_held == 8, "the bodies after the impact hold " + std::to_string(leaves_held) + " leaves, not 8");
+  expect(world.object_count() == 1 && object == 0, "one object was placed, not one");
+
+  if (failures == 0) std::printf("cut_a_cube: %zu leaves, volume %.17g, %zu bodies after one impact\n", tree.leaf_count(), volume,
+                                 world.live_bodies().size());
   return failures == 0 ? 0 : 1;
 }
