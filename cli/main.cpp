@@ -23,6 +23,7 @@
 #include "shatter/meshtree/cut_solid.hpp"
 #include "shatter/meshtree/plane_input.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
+#include "shatter/version.hpp"
 #include "repair_option.hpp"
 #include "tree_commands.hpp"
 
@@ -349,7 +350,7 @@ int main(int argc, char** argv) {
       "Exit codes: 0 ok, 1 internal error, 2 usage error, 3 invalid input (mesh, geometry or .shatter file), "
       "4 I/O error."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "shatter 0.1.0");
+  app.set_version_flag("--version", "shatter " + std::string(version_string));
 
   ValidateArgs validate_args;
   CLI::App* validate = app.add_subcommand(
