@@ -466,15 +466,17 @@ int run_fracture(const FractureArgs& args) {
   // Every usage check comes before reading the mesh and building.
   FractureOutcome outcome;
   outcome.export_format = leaf_export_format(args);
-  const BuildOptions options = build_options_of(args);
+  BuildOptions options = build_options_of(args);
   if (options.fragments < 1) throw CommandUsageError("--fragments must be at least 1");
   if (std::error_code unknown; fs::is_directory(args.out, unknown)) {
     throw CommandUsageError("--out " + args.out + " is a folder; it names the .shatter file to write");
   }
 
   Mesh mesh = read_mesh(args.mesh);
-  // The builder validates too, but this names the file in the refusal.
+  // The one full check of the input (it names the file in a refusal); the
+  // builder is told, so it does not repeat it.
   outcome.repair = cli::repair_if_asked_then_require_valid(mesh, args.mesh, args.repair, args.allow_self_intersections);
+  options.input_validated = true;
 
   MeshTree tree;
   const Clock::time_point start = Clock::now();

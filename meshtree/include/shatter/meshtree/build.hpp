@@ -35,10 +35,11 @@ struct BuildReport {
 
 /// Builds the mesh tree of `mesh` with `options` (see BuildOptions, Strategy).
 /// Preconditions: options.fragments >= 1 and every triangle of `mesh` on surface 0
-/// (std::invalid_argument otherwise). The mesh is validated first: a mesh that
-/// is not a closed, oriented 2-manifold with positive volume, or that intersects
-/// itself (unless options.allow_self_intersections), is refused with
-/// InvalidMeshError naming its first defect.
+/// (std::invalid_argument otherwise). The mesh is validated first, unless
+/// options.input_validated says the caller did: a mesh that is not a closed,
+/// oriented 2-manifold with positive volume, or that intersects itself (unless
+/// options.allow_self_intersections), is refused with InvalidMeshError naming its
+/// first defect.
 /// Guarantees: at least options.fragments leaves, and no leaf cut that was not
 /// needed to reach that count; every node's stored mesh a valid solid (closed,
 /// oriented, 2-manifold, positive volume, no zero-area triangle, no

@@ -26,7 +26,8 @@
 //         f64 interior_uv_scale, u32 max_plane_tries, u8 allow_self_intersections
 //         (0 or 1). `threads` is not stored: it never changes a tree, and leaving
 //         it out keeps files of one build byte-identical on every thread count; a
-//         decoded tree has threads = 0.
+//         decoded tree has threads = 0. Nor is input_validated (a promise about
+//         a build's input, false in every tree).
 //   NODE  u32 node count n (1 <= n <= 2^32 - 1), then per node in index order:
 //         u32 parent (FFFFFFFF for the root), u32 depth, u32 first_leaf,
 //         u32 leaf_count, u64 seed, u8 above_parent_plane (0 or 1),

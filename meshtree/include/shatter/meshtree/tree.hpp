@@ -63,6 +63,13 @@ struct BuildOptions {
   bool allow_self_intersections = false;
   /// Worker threads; 0 means one per hardware thread. Never changes the output.
   unsigned threads = 0;
+  /// The caller has already refused the input unless it is a valid solid, as
+  /// require_valid_solid(mesh, name, allow_self_intersections) does (the full
+  /// validate_mesh, self-intersections included), so the builder skips that
+  /// check instead of repeating it. Set it only after such a check of this very
+  /// mesh: on any other mesh the build's guarantees do not hold. Never changes
+  /// the output; a built tree's options have it false again.
+  bool input_validated = false;
 };
 
 /// A bond joins two leaves that truly touch: they lie on opposite sides of one
