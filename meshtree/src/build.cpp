@@ -24,6 +24,7 @@
 #include "shatter/meshtree/cut_solid.hpp"
 #include "shatter/meshtree/plane_input.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
+#include "shatter/version.hpp"
 
 namespace shatter {
 
@@ -714,6 +715,7 @@ ExactBuild build(const Mesh& mesh, const BuildOptions& options, bool keep_exact,
   result.tree.options = options;
   result.tree.options.threads = 0;  // never changes the output, so not part of it
   result.tree.options.input_validated = false;  // nor does who checked the input
+  result.tree.shatter_version = std::string(version_string);
   number_tree(*root, result.tree, keep_exact && options.kernel == KernelKind::exact ? &result.exact_meshes : nullptr);
   dismantle(std::move(root));
   BuildReport timing;

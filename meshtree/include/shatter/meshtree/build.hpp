@@ -47,9 +47,10 @@ struct BuildReport {
 /// plane whose rounded pieces are not is redrawn; children partition their parent
 /// (exact kernel: exactly, in the exact solids; fast: up to rounding of the cut
 /// points); leaf ranges contiguous; cap triangles carry cap_surface_of(cut node);
-/// mass properties and hulls filled; bonds = find_bonds(tree). The result depends
-/// only on the mesh and the options other than `threads`: byte-identical on any
-/// machine and thread count.
+/// mass properties and hulls filled; bonds = find_bonds(tree); shatter_version
+/// this library's version_string (shatter/version.hpp). One version of shatter
+/// gives a result that depends only on the mesh and the options other than
+/// `threads`: byte-identical on any machine and thread count.
 /// Throws UnsupportedGeometryError when none of max_plane_tries planes gives a node
 /// valid pieces (all missed it, or its pieces are thinner than rounding).
 /// When `report` is given, it is filled in.

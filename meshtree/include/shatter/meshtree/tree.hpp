@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -116,6 +117,11 @@ struct MeshTreeNode {
 /// What `build_mesh_tree` produces and the .shatter file stores.
 struct MeshTree {
   BuildOptions options;
+  /// The shatter version that built the tree (shatter::version_string, e.g.
+  /// "0.1.0"; build_mesh_tree sets it), kept by the .shatter file. Empty when
+  /// unknown: a tree made by hand, or read from a file written before versions
+  /// were recorded.
+  std::string shatter_version;
   std::vector<MeshTreeNode> nodes;   ///< depth-first preorder; nodes[0] is the root
   std::vector<NodeIndex> leaf_nodes; ///< leaf i is nodes[leaf_nodes[i]]
   std::vector<Bond> bonds;           ///< sorted by (first, second, cut_node)
