@@ -21,6 +21,7 @@ using json = nlohmann::ordered_json;
 json info_json(const InfoArgs& args, const MeshTree& tree, const TreeStats& stats,
                const std::optional<BondRuleComparison>& rules) {
   json out{{"file", args.input}};
+  out["shatter_version"] = tree.shatter_version.empty() ? json(nullptr) : json(tree.shatter_version);
   append_stats_json(out, options_json(tree.options), stats);
   if (rules) {
     out["bounding_box_rule"] = {{"true_bonds", rules->true_bonds},
@@ -36,8 +37,9 @@ void print_info_text(const InfoArgs& args, const MeshTree& tree, const TreeStats
   const VolumeSpread& volume = stats.fragment_volume;
   std::cout << args.input << ": mesh tree of " << stats.node_count << " nodes, " << stats.leaf_count
             << " leaves (fragments), " << stats.internal_count << " internal; leaves at depth " << stats.min_leaf_depth
-            << " to " << stats.max_depth << '\n'
-            << "  built with: fragments " << options.fragments << ", seed " << options.seed << ", strategy "
+            << " to " << stats.max_depth << '\n';
+  if (!tree.shatter_version.empty()) std::cout << "  built by shatter " << tree.shatter_version << '\n';
+  std::cout << "  built with: fragments " << options.fragments << ", seed " << options.seed << ", strategy "
             << strategy_name(options.strategy) << ", kernel " << kernel_name(options.kernel)
             << ", interior UV scale " << options.interior_uv_scale << ", max plane tries " << options.max_plane_tries
             << (options.allow_self_intersections ? ", self-intersections allowed" : "") << '\n'
@@ -63,8 +65,8 @@ Command add_info_command(CLI::App& app) {
   auto args = std::make_shared<InfoArgs>();
   CLI::App* command = app.add_subcommand(
       "info",
-      "Describe a .shatter mesh tree: node, leaf and depth counts, the build options, fragment volume statistics "
-      "(min, median, max, coefficient of variation), bonds and their total area.");
+      "Describe a .shatter mesh tree: node, leaf and depth counts, the shatter version and build options that made "
+      "it, fragment volume statistics (min, median, max, coefficient of variation), bonds and their total area.");
   command->add_option("tree", args->input, "Mesh tree file (.shatter)")->required();
   command->add_flag("--json", args->json, "Print the description as JSON");
   command->add_flag("--compare-bond-rules", args->compare_bond_rules,

@@ -19,9 +19,11 @@ struct InfoArgs {
 /// Declares the `info` subcommand on `app`.
 Command add_info_command(CLI::App& app);
 
-/// Reads the tree and prints its statistics (tree_stats) and build options, as
-/// text or, with --json, as one JSON object. Returns 0. Throws CorruptFileError
-/// or IoError from reading the tree.
+/// Reads the tree and prints its statistics (tree_stats), the shatter version
+/// that built it when the file records one, and its build options, as text or,
+/// with --json, as one JSON object ("shatter_version" is null when the file
+/// records none). Returns 0. Throws CorruptFileError or IoError from reading
+/// the tree.
 int run_info(const InfoArgs& args);
 
 }  // namespace shatter::cli
