@@ -16,9 +16,10 @@
 #include "shatter/kernel/io.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/runtime/recording.hpp"
-#include "tree_commands.hpp"  // CommandUsageError
+#include "errors.hpp"
+#include "output_transaction.hpp"
 
-namespace shatter {
+namespace shatter::cli {
 
 namespace {
 
@@ -35,7 +36,7 @@ std::string number(double value) {
 
 template <class Enum>
 Enum enum_or_usage(std::optional<Enum> value, const char* option, const std::string& text) {
-  if (!value) throw CommandUsageError(std::string(option) + ": unknown value '" + text + "'");
+  if (!value) throw UsageError(std::string(option) + ": unknown value '" + text + "'");
   return *value;
 }
 
@@ -155,7 +156,9 @@ rt::SceneOptions scene_options_of(const SimulateArgs& args) {
 
 }  // namespace
 
-CLI::App* add_simulate_command(CLI::App& app, SimulateArgs& args) {
+Command add_simulate_command(CLI::App& app) {
+  auto args_owner = std::make_shared<SimulateArgs>();
+  SimulateArgs& args = *args_owner;
   CLI::App* command = app.add_subcommand(
       "simulate",
       "Break a .shatter mesh tree in a headless Bullet scene (Breakable Composite Rigid Bodies, seed thesis ch. 5): "
@@ -290,16 +293,16 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateArgs& args) {
                    "kept)")
       ->check(CLI::Range(1u, 1'000'000u))
       ->capture_default_str();
-  return command;
+  return {command, [args_owner] { return run_simulate(*args_owner); }};
 }
 
 int run_simulate(const SimulateArgs& args) {
   // Usage first: nothing is read or run for a command that cannot succeed.
   const rt::SceneOptions scene_options = scene_options_of(args);
   if (!args.record.empty()) {
-    if (!names_glb(args.record)) throw CommandUsageError("--record " + args.record + " must name a .glb file");
+    if (!names_glb(args.record)) throw UsageError("--record " + args.record + " must name a .glb file");
     if (std::error_code unknown; fs::is_directory(args.record, unknown)) {
-      throw CommandUsageError("--record " + args.record + " is a folder; it names the .glb file to write");
+      throw UsageError("--record " + args.record + " is a folder; it names the .glb file to write");
     }
   }
   rt::WorldOptions world_options = args.world;
@@ -317,7 +320,7 @@ int run_simulate(const SimulateArgs& args) {
   try {
     scene = rt::set_up_scene(world, shapes, scene_options);
   } catch (const std::invalid_argument& e) {
-    throw CommandUsageError(e.what());
+    throw UsageError(e.what());
   }
 
   std::optional<rt::Recording> recording;
@@ -349,12 +352,10 @@ int run_simulate(const SimulateArgs& args) {
 
   if (recording) {
     const std::string bytes = recording->encode_glb(world, 1.5 * scene.footprint + 1);
-    if (const fs::path folder = fs::path(args.record).parent_path(); !folder.empty()) {
-      std::error_code error;
-      fs::create_directories(folder, error);
-      if (error) throw IoError("cannot create folder " + folder.string() + ": " + error.message());
-    }
-    write_file_atomically(args.record, bytes);
+    OutputTransaction output;
+    if (const fs::path folder = fs::path(args.record).parent_path(); !folder.empty()) output.create_folder(folder);
+    output.write_file(args.record, bytes);
+    output.commit();
   }
 
   std::size_t clusters = 0;
@@ -396,4 +397,4 @@ int run_simulate(const SimulateArgs& args) {
   return 0;
 }
 
-}  // namespace shatter
+}  // namespace shatter::cli

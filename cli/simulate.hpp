@@ -1,10 +1,8 @@
 #pragma once
 // The `simulate` subcommand: a .shatter mesh tree as a breakable object in a
 // headless Bullet scene (runtime/), with a per-step summary, every break, and an
-// optional animated glTF recording. main.cpp registers it (add_simulate_command)
-// and runs it (run_simulate); exceptions map to exit codes as for the other
-// commands: CommandUsageError -> 2; CorruptFileError, InvalidMeshError -> 3;
-// IoError -> 4; anything else -> 1.
+// optional animated glTF recording. Failures map to exit codes in errors.hpp as
+// for every command.
 
 #include <CLI/CLI.hpp>
 
@@ -14,8 +12,9 @@
 #include "shatter/runtime/scenes.hpp"
 #include "shatter/runtime/shapes.hpp"
 #include "shatter/runtime/world.hpp"
+#include "command.hpp"
 
-namespace shatter {
+namespace shatter::cli {
 
 /// `shatter simulate <file.shatter> --scene drop|shoot|wall [options]`; every
 /// default is the runtime's (BreakableParameters, SceneOptions, WorldOptions).
@@ -38,16 +37,18 @@ struct SimulateArgs {
   std::uint32_t record_every = 1;
 };
 
-/// Declares the `simulate` subcommand on `app`, its arguments bound to `args`;
-/// returns it so the caller can ask whether it was parsed.
-CLI::App* add_simulate_command(CLI::App& app, SimulateArgs& args);
+/// Declares the `simulate` subcommand on `app`.
+Command add_simulate_command(CLI::App& app);
 
 /// Reads the tree (refusing a damaged file as `info` does), sets up the scene,
 /// runs `steps` fixed steps and prints a summary every `print_every` steps and
 /// every break event (JSON with --json: every step). With --record, writes the
-/// run as an animated GLB atomically after the last step (nothing is written if
-/// any step fails). Returns 0. Output depends only on the arguments and the file:
+/// run as an animated GLB after the last step, through an OutputTransaction
+/// (nothing is written, no folder left, if any step fails). Returns 0. Throws
+/// UsageError for options the runtime refuses, CorruptFileError or IoError from
+/// reading the tree, InvalidMeshError for a tree the runtime cannot simulate,
+/// IoError from writing the recording. Output depends only on the arguments and the file:
 /// the same inputs give the same bytes.
 int run_simulate(const SimulateArgs& args);
 
-}  // namespace shatter
+}  // namespace shatter::cli

@@ -44,22 +44,24 @@ std::size_t files_in(const fs::path& dir) {
 // megabytes of binary on failure).
 bool same_bytes(const fs::path& a, const fs::path& b) { return slurp(a) == slurp(b); }
 
-// The tags of the sections (file.hpp's layout: 12-byte header, then tag, u64
-// length, u32 CRC, payload) whose payloads differ between two .shatter files, or
+// The payloads of a .shatter file's sections by tag (file.hpp's layout: 12-byte
+// header, then per section a tag, u64 length, u32 CRC and the payload).
+std::map<std::string, std::string> sections_of(const std::string& bytes) {
+  std::map<std::string, std::string> sections;
+  std::size_t at = 12;
+  while (at + 16 <= bytes.size()) {
+    std::uint64_t length = 0;
+    for (int i = 7; i >= 0; --i) length = length << 8 | static_cast<unsigned char>(bytes[at + 4 + i]);
+    if (length > bytes.size() - at - 16) break;
+    sections[bytes.substr(at, 4)] = bytes.substr(at + 16, length);
+    at += 16 + length;
+  }
+  return sections;
+}
+
+// The tags of the sections whose payloads differ between two .shatter files, or
 // "" when none does: says which part of the tree a failed byte comparison is in.
 std::string differing_sections(const fs::path& a, const fs::path& b) {
-  const auto sections_of = [](const std::string& bytes) {
-    std::map<std::string, std::string> sections;
-    std::size_t at = 12;
-    while (at + 16 <= bytes.size()) {
-      std::uint64_t length = 0;
-      for (int i = 7; i >= 0; --i) length = length << 8 | static_cast<unsigned char>(bytes[at + 4 + i]);
-      if (length > bytes.size() - at - 16) break;
-      sections[bytes.substr(at, 4)] = bytes.substr(at + 16, length);
-      at += 16 + length;
-    }
-    return sections;
-  };
   const auto first = sections_of(slurp(a)), second = sections_of(slurp(b));
   std::string differing;
   for (const auto& [tag, payload] : first) {
@@ -621,4 +623,149 @@ TEST_CASE("fracture draws a progress bar on a terminal and erases it") {
   CHECK(tail.find_first_not_of(" \r\n") == std::string::npos);
   // The summary went to stdout as usual.
   CHECK(slurp(dir / "stdout.txt").find("fragments") != std::string::npos);
+}
+
+// --- the version, the exit-code table, all files or none -------------------------
+
+TEST_CASE("--version prints the project version, the one .shatter files and info carry") {
+  const Run version = run_shatter("--version");
+  CHECK(version.exit_code == 0);
+  CHECK(version.out == std::string("shatter ") + SHATTER_VERSION + "\n");
+  CHECK(version.err.empty());
+
+  const fs::path dir = scratch("version");
+  const Run fracture =
+      run_shatter("fracture " + quoted(mesh_dir() / "cube.off") + " --fragments 3 --out " + quoted(dir / "t.shatter"));
+  REQUIRE(fracture_problem(fracture, dir / "t.shatter") == "");
+  // In the file: the optional `vers` section right after the header, holding the text.
+  const std::string bytes = slurp(dir / "t.shatter");
+  REQUIRE(bytes.size() > 16);
+  CHECK(bytes.substr(12, 4) == "vers");
+  CHECK(sections_of(bytes)["vers"] == SHATTER_VERSION);
+  CHECK(info_of(dir / "t.shatter")["shatter_version"] == SHATTER_VERSION);
+  const Run text = run_shatter("info " + quoted(dir / "t.shatter"));
+  CHECK(text.out.find(std::string("\n  built by shatter ") + SHATTER_VERSION + "\n") != std::string::npos);
+
+  // A file written before versions were recorded: the same file without `vers`.
+  const std::size_t version_section = 16 + sections_of(bytes)["vers"].size();
+  std::ofstream(dir / "old.shatter", std::ios::binary) << bytes.substr(0, 12) + bytes.substr(12 + version_section);
+  const nlohmann::json old_info = info_of(dir / "old.shatter");
+  CHECK(old_info["shatter_version"].is_null());
+  CHECK(old_info["leaves"] == info_of(dir / "t.shatter")["leaves"]);
+  CHECK(run_shatter("info " + quoted(dir / "old.shatter")).out.find("built by shatter") == std::string::npos);
+}
+
+TEST_CASE("every exit code of the table, each with one error line, and --help states the table") {
+  const fs::path dir = scratch("exit-codes");
+  fs::create_directories(dir);
+  const std::string cube = quoted(mesh_dir() / "cube.off");
+  const fs::path tree = dir / "t.shatter";
+  REQUIRE(fracture_problem(run_shatter("fracture " + cube + " --fragments 2 --out " + quoted(tree)), tree) == "");
+  std::string damaged = slurp(tree);
+  damaged[damaged.size() / 2] = static_cast<char>(damaged[damaged.size() / 2] ^ 0x10);
+  std::ofstream(dir / "damaged.shatter", std::ios::binary) << damaged;
+  std::ofstream(dir / "a-file") << "x";
+
+  struct Case {
+    std::string what, arguments;
+    int exit_code;
+    std::string says;
+  };
+  const std::vector<Case> cases = {
+      {"usage: a flag CLI11 refuses", "fracture " + cube + " --fragments 0 --out " + quoted(dir / "u.shatter"), 2,
+       "(see --help)"},
+      {"usage: flags a command finds inconsistent", "validate " + cube + " --out " + quoted(dir / "v.off"), 2,
+       "--out writes the repaired mesh: it needs --repair"},
+      {"invalid mesh", "slice " + quoted(bad_meshes().front()) + " --plane 0,0,1,0 --out " + quoted(dir / "s"), 3,
+       "invalid mesh"},
+      {"damaged .shatter file", "info " + quoted(dir / "damaged.shatter"), 3, "damaged .shatter file"},
+      {"unwritable output", "slice " + cube + " --plane 0,0,1,-0.5 --out " + quoted(dir / "a-file" / "s"), 4,
+       "cannot create output folder"},
+  };
+  for (const Case& c : cases) {
+    INFO(c.what << ": " << c.arguments);
+    const Run run = run_shatter(c.arguments);
+    CHECK(run.exit_code == c.exit_code);
+    CHECK(is_one_error_line(run.err));
+    CHECK(run.err.find(c.says) != std::string::npos);
+  }
+  CHECK(names_in(dir) == std::vector<std::string>{"a-file", "damaged.shatter", "t.shatter"});
+  CHECK(run_shatter("--help").out.find("Exit codes: 0 ok, 1 internal error, 2 usage error, 3 invalid input (mesh, "
+                                       "geometry or .shatter file), 4 I/O error.") != std::string::npos);
+}
+
+// A file name longer than any file system allows (255 bytes): its folder can be
+// made, but the file itself cannot be written, whoever runs the test (root too).
+std::string unwritable_name(const std::string& extension) { return std::string(300, 'x') + "." + extension; }
+
+TEST_CASE("all files or none: slice removes the pieces it wrote when the last one fails") {
+  const fs::path dir = scratch("none-slice");
+  fs::create_directories(dir / "out" / "above-0.off");  // a folder where the last piece goes
+  std::ofstream(dir / "out" / "keep.txt") << "not this run's";
+  const Run run = run_shatter("slice " + quoted(mesh_dir() / "cube.off") + " --plane 0,0,1,-0.5 --out " +
+                              quoted(dir / "out"));
+  CHECK(run.exit_code == 4);
+  CHECK(is_one_error_line(run.err));
+  CHECK(run.err.find("above-0.off") != std::string::npos);
+  CHECK(run.out.empty());
+  // below-0.off was written first, and is gone again; what was there stays.
+  CHECK(names_in(dir / "out") == std::vector<std::string>{"above-0.off", "keep.txt"});
+  CHECK(fs::is_directory(dir / "out" / "above-0.off"));
+  // Without the obstacle the same run writes both pieces: the failure was the last write.
+  fs::remove(dir / "out" / "above-0.off");
+  REQUIRE(run_shatter("slice " + quoted(mesh_dir() / "cube.off") + " --plane 0,0,1,-0.5 --out " + quoted(dir / "out"))
+              .exit_code == 0);
+  CHECK(names_in(dir / "out") == std::vector<std::string>{"above-0.off", "below-0.off", "keep.txt"});
+}
+
+TEST_CASE("all files or none: fracture --export removes the leaves and folders it made when the tree fails") {
+  const fs::path dir = scratch("none-fracture");
+  fs::create_directories(dir);
+  std::ofstream(dir / "keep.txt") << "not this run's";
+  const std::string fracture = "fracture " + quoted(mesh_dir() / "cube.off") + " --fragments 4 --export " +
+                               quoted(dir / "new" / "deeper" / "leaves") + " --out ";
+  const Run run = run_shatter(fracture + quoted(dir / "tree-folder" / unwritable_name("shatter")));
+  CHECK(run.exit_code == 4);
+  CHECK(is_one_error_line(run.err));
+  CHECK(run.out.empty());
+  // The leaves, their three new folders and the tree's new folder are all gone.
+  CHECK(names_in(dir) == std::vector<std::string>{"keep.txt"});
+  // The same run with a tree name that can be written leaves them all.
+  REQUIRE(fracture_problem(run_shatter(fracture + quoted(dir / "tree-folder" / "t.shatter")),
+                           dir / "tree-folder" / "t.shatter") == "");
+  CHECK(files_in(dir / "new" / "deeper" / "leaves") >= 4);
+}
+
+TEST_CASE("all files or none: export removes what it wrote when the last file fails") {
+  const fs::path dir = scratch("none-export");
+  fs::create_directories(dir);
+  const fs::path tree = dir / "t.shatter";
+  REQUIRE(fracture_problem(run_shatter("fracture " + quoted(mesh_dir() / "knot1.off") + " --fragments 5 --out " +
+                                       quoted(tree)),
+                           tree) == "");
+  const std::size_t leaves = info_of(tree)["leaves"];
+  REQUIRE(leaves >= 5);
+
+  // Mesh files into a folder: a folder stands where the last leaf goes.
+  const std::string last_leaf = leaf_file_names(leaves, "off").back();
+  fs::create_directories(dir / "leaves" / last_leaf);
+  const Run folder_run = run_shatter("export " + quoted(tree) + " --out " + quoted(dir / "leaves"));
+  CHECK(folder_run.exit_code == 4);
+  CHECK(is_one_error_line(folder_run.err));
+  CHECK(folder_run.err.find(last_leaf) != std::string::npos);
+  CHECK(names_in(dir / "leaves") == std::vector<std::string>{last_leaf});
+
+  // One GLB in folders the run makes: the file cannot be written, the folders go.
+  const Run glb_run =
+      run_shatter("export " + quoted(tree) + " --out " + quoted(dir / "new" / "glb" / unwritable_name("glb")));
+  CHECK(glb_run.exit_code == 4);
+  CHECK(is_one_error_line(glb_run.err));
+  CHECK(names_in(dir) == std::vector<std::string>{"leaves", "t.shatter"});
+
+  // Without the obstacles the same runs write everything.
+  fs::remove(dir / "leaves" / last_leaf);
+  REQUIRE(run_shatter("export " + quoted(tree) + " --out " + quoted(dir / "leaves")).exit_code == 0);
+  CHECK(names_in(dir / "leaves") == leaf_file_names(leaves, "off"));
+  REQUIRE(run_shatter("export " + quoted(tree) + " --out " + quoted(dir / "new" / "glb" / "t.glb")).exit_code == 0);
+  CHECK(fs::is_regular_file(dir / "new" / "glb" / "t.glb"));
 }

@@ -32,6 +32,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/file.hpp"
+#include "shatter/version.hpp"
 #include "support/generators.hpp"
 
 using namespace shatter;
@@ -164,6 +165,7 @@ std::string tree_difference(const MeshTree& a, const MeshTree& b) {
       oa.allow_self_intersections != ob.allow_self_intersections) {
     return "options";
   }
+  if (a.shatter_version != b.shatter_version) return "shatter_version";
   if (a.nodes.size() != b.nodes.size()) return "node count";
   for (std::size_t k = 0; k < a.nodes.size(); ++k) {
     const MeshTreeNode &na = a.nodes[k], &nb = b.nodes[k];
@@ -498,7 +500,10 @@ struct Payloads {
       : parts{{"OPTS", options_payload(tree.options)},      {"NODE", nodes_payload(tree.nodes)},
               {"MESH", meshes_payload(tree.nodes, false)}, {"HULL", meshes_payload(tree.nodes, true)},
               {"BOND", bonds_payload(tree.bonds)},         {"GEOM", geometry_payload(tree.geometry)},
-              {"SOLD", solids_payload(tree)}} {}
+              {"SOLD", solids_payload(tree)}} {
+    // Optional, and written first when the tree knows its version (built trees do).
+    if (!tree.shatter_version.empty()) parts.insert(parts.begin(), {"vers", tree.shatter_version});
+  }
   Payloads& with(std::string_view tag, std::string payload) {
     for (auto& [t, p] : parts) {
       if (t == tag) p = std::move(payload);
@@ -527,6 +532,19 @@ std::string reference_file(const MeshTree& tree, std::uint32_t version = 2) { re
 
 /// A file with the given NODE payload and otherwise the sections of `tree`.
 std::string file_with_nodes_payload(const MeshTree& tree, const std::string& nodes) { return Payloads(tree).with("NODE", nodes).file(); }
+
+/// Whether `damaged`, `bytes` with the byte at `position` changed, is the one
+/// single-byte change the reading rules let through (file.hpp): the tag of the
+/// optional `vers` section (written first) turned into another lower-case tag,
+/// which is skipped as unknown optional data, so that the file reads as the same
+/// tree without its version.
+bool reads_as_without_version(const std::string& bytes, std::size_t position, const std::string& damaged) {
+  if (bytes.compare(12, 4, "vers") != 0 || position < 12 || position >= 16) return false;
+  if (damaged[12] < 'a' || damaged[12] > 'z') return false;
+  MeshTree expected = decode_within_budget(bytes);
+  expected.shatter_version.clear();
+  return tree_difference(decode_within_budget(damaged), expected).empty();
+}
 
 /// Refused, with a message holding `expected`.
 void check_refused(const std::string& bytes, const std::string& expected) {
@@ -635,7 +653,9 @@ TEST_CASE("every single-byte change is refused", "[shatter_file][damage]") {
       for (const int change : {0x01, 0x20, 0xFF}) {
         std::string damaged = bytes;
         damaged[position] = static_cast<char>(static_cast<unsigned char>(damaged[position]) ^ change);
-        if (!refusal(damaged)) accepted.push_back("byte " + std::to_string(position) + " xor " + std::to_string(change));
+        if (!refusal(damaged) && !reads_as_without_version(bytes, position, damaged)) {
+          accepted.push_back("byte " + std::to_string(position) + " xor " + std::to_string(change));
+        }
       }
     }
     INFO(bytes.size() << "-byte file: " << accepted.size() << " changes accepted, the first: "
@@ -659,8 +679,9 @@ TEST_CASE("every single-byte change is refused", "[shatter_file][damage]") {
       std::string damaged = files[random.index(files.size())];
       const std::size_t position = random.index(damaged.size());
       const auto change = static_cast<unsigned char>(1 + random.index(255));
+      const std::string original = damaged;
       damaged[position] = static_cast<char>(static_cast<unsigned char>(damaged[position]) ^ change);
-      if (refusal(damaged)) continue;
+      if (refusal(damaged) || reads_as_without_version(original, position, damaged)) continue;
       FAIL("byte " << position << " of " << damaged.size() << " xor " << int{change} << " accepted");
     }
   }
@@ -776,6 +797,58 @@ TEST_CASE("hostile section tables are refused", "[shatter_file][hostile]") {
     const MeshTree decoded = decode_within_budget(reordered);
     CHECK(tree_difference(tree, decoded).empty());
     CHECK(encode_shatter(decoded) == encode_shatter(tree));
+  }
+}
+
+TEST_CASE("the version that built a tree is kept in the optional vers section", "[shatter_file][version]") {
+  const MeshTree& built = small_plane_tree();
+  REQUIRE(built.shatter_version == version_string);
+  const std::string bytes = encode_shatter(built);
+  // Right after the header: tag, u64 length, CRC, then the text itself.
+  CHECK(bytes.substr(12, 4) == "vers");
+  CHECK(bytes.substr(16, 8) == Bytes{}.u64(version_string.size()).data);
+  CHECK(bytes.substr(28, version_string.size()) == version_string);
+  CHECK(bytes.substr(28 + version_string.size(), 4) == "OPTS");
+  CHECK(decode_within_budget(bytes).shatter_version == version_string);
+
+  const MeshTree unversioned = two_leaf_tree();
+  REQUIRE(unversioned.shatter_version.empty());
+  MeshTree versioned = unversioned;
+  versioned.shatter_version = "1.22.333-rc.1+build.7";
+
+  SECTION("a tree without a version writes no vers section and reads back without one") {
+    const std::string plain = encode_shatter(unversioned);
+    CHECK(plain.substr(12, 4) == "OPTS");
+    CHECK(decode_within_budget(plain).shatter_version.empty());
+    check_round_trip(versioned);
+  }
+  SECTION("a reader that does not know vers skips it, as version 2 readers before it do") {
+    // The reading rules at work: the same section under a tag this reader does
+    // not know, lower-case first, is skipped and the tree read without a version.
+    std::string renamed = encode_shatter(versioned);
+    renamed.replace(12, 4, "vxyz");
+    CHECK(tree_difference(decode_within_budget(renamed), unversioned).empty());
+  }
+  SECTION("it may stand anywhere before END, in either format version") {
+    const std::string body = Payloads(unversioned).file(1);
+    const std::string before_end = body.substr(0, body.size() - 16) + section("vers", "0.0.1") + section("END ", "");
+    CHECK(decode_within_budget(before_end).shatter_version == "0.0.1");
+  }
+  SECTION("a repeated or malformed vers section is refused") {
+    const std::string body = Payloads(unversioned).file();
+    const auto with_first = [&](const std::string& sections) { return file_header() + sections + body.substr(12); };
+    check_refused(with_first(section("vers", "0.1.0") + section("vers", "0.1.0")), "vers section at byte 33 repeats the one at byte 12");
+    check_refused(with_first(section("vers", "")), "vers section at byte 12: the version is empty");
+    check_refused(with_first(section("vers", std::string(65, '1'))), "the version is 65 bytes long (at most 64)");
+    check_refused(with_first(section("vers", "0.1 beta")), "byte 3 of the version is 0x20");
+    check_refused(with_first(section("vers", "0.1\x80")), "byte 3 of the version is 0x80");
+    CHECK(decode_within_budget(with_first(section("vers", std::string(64, '~')))).shatter_version == std::string(64, '~'));
+  }
+  SECTION("encode_shatter refuses a version a reader would refuse") {
+    for (const std::string& bad : {std::string(65, '1'), std::string("0.1 beta"), std::string("0.1\n")}) {
+      versioned.shatter_version = bad;
+      CHECK_THROWS_AS(encode_shatter(versioned), std::invalid_argument);
+    }
   }
 }
 

@@ -24,6 +24,7 @@
 #include "shatter/meshtree/cut_solid.hpp"
 #include "shatter/meshtree/plane_input.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
+#include "shatter/version.hpp"
 
 namespace shatter {
 
@@ -693,7 +694,7 @@ ExactBuild build(const Mesh& mesh, const BuildOptions& options, bool keep_exact,
       throw std::invalid_argument("build_mesh_tree needs every input triangle on surface 0 (caps are numbered by cut)");
     }
   }
-  require_valid_solid(mesh, "input", options.allow_self_intersections);
+  if (!options.input_validated) require_valid_solid(mesh, "input", options.allow_self_intersections);
 
   const unsigned threads = options.threads == 0 ? static_cast<unsigned>(tbb::info::default_concurrency())
                                                 : options.threads;
@@ -713,6 +714,8 @@ ExactBuild build(const Mesh& mesh, const BuildOptions& options, bool keep_exact,
   ExactBuild result;
   result.tree.options = options;
   result.tree.options.threads = 0;  // never changes the output, so not part of it
+  result.tree.options.input_validated = false;  // nor does who checked the input
+  result.tree.shatter_version = std::string(version_string);
   number_tree(*root, result.tree, keep_exact && options.kernel == KernelKind::exact ? &result.exact_meshes : nullptr);
   dismantle(std::move(root));
   BuildReport timing;

@@ -49,6 +49,8 @@ constexpr Tag bonds_tag = {'B', 'O', 'N', 'D'};
 constexpr Tag geometry_tag = {'G', 'E', 'O', 'M'};  // version 2
 constexpr Tag solids_tag = {'S', 'O', 'L', 'D'};    // version 2
 constexpr Tag end_tag = {'E', 'N', 'D', ' '};
+// Optional by the tag rule (lower-case first letter): readers that predate it skip it.
+constexpr Tag version_tag = {'v', 'e', 'r', 's'};
 
 // Bytes on disk, the least each record can take: counts are checked against these
 // before anything is allocated, which bounds memory by a multiple of the input.
@@ -71,6 +73,7 @@ constexpr std::size_t face_size = 17;
 constexpr std::size_t loop_size = 4;
 constexpr std::size_t corner_min_size = 9;  // without its segment
 constexpr std::size_t segment_size = 8;
+constexpr std::size_t max_version_text_size = 64;
 
 // SOLD flag bits: per node, and per face.
 constexpr std::uint8_t node_convex_bit = 1;
@@ -111,6 +114,20 @@ std::string hex(std::uint64_t value, int digits) {
   std::string text = "0x";
   for (int k = digits - 1; k >= 0; --k) text += digit_chars[(value >> (4 * k)) & 0xF];
   return text;
+}
+
+/// What is wrong with a `vers` payload (file.hpp: 1 to 64 bytes of printable
+/// ASCII, no space), or nullopt. Kept that narrow so it prints as one clean word.
+std::optional<std::string> version_text_problem(std::string_view text) {
+  if (text.empty()) return "the version is empty";
+  if (text.size() > max_version_text_size) {
+    return "the version is " + std::to_string(text.size()) + " bytes long (at most " + std::to_string(max_version_text_size) + ")";
+  }
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    const auto c = static_cast<unsigned char>(text[k]);
+    if (c < 0x21 || c > 0x7E) return "byte " + std::to_string(k) + " of the version is " + hex(c, 2) + " (printable ASCII without spaces only)";
+  }
+  return std::nullopt;
 }
 
 /// A tag as it can be printed in a one-line message: printable ASCII as is,
@@ -800,6 +817,7 @@ struct SectionTable {
   std::uint32_t version = 0;
   std::optional<Section> options, nodes, meshes, hulls, bonds;
   std::optional<Section> geometry, solids;  // version 2
+  std::optional<Section> shatter_version;   // optional, in any version
 };
 
 /// Checks the magic and returns the version, one this reader knows.
@@ -870,7 +888,13 @@ SectionTable read_section_table(std::string_view bytes) {
       break;
     }
     const auto slot = std::find_if(known.begin(), known.end(), [&](const auto& entry) { return entry.first == section.tag; });
-    if (slot != known.end()) {
+    if (section.tag == version_tag) {
+      if (table.shatter_version) {
+        refuse("damaged .shatter file: " + section_name(section.tag) + " section at byte " + str(position) + " repeats the one at byte " +
+               str(table.shatter_version->offset));
+      }
+      table.shatter_version = section;
+    } else if (slot != known.end()) {
       if (*slot->second) {
         refuse("damaged .shatter file: " + section_name(section.tag) + " section at byte " + str(position) + " repeats the one at byte " +
                str((*slot->second)->offset));
@@ -1350,9 +1374,15 @@ std::string encode_shatter(const MeshTree& tree) {
   std::optional<Defect> defect = first_defect(tree, true);
   if (!defect) defect = caches_defect(tree, nullptr);
   if (defect) throw std::invalid_argument("encode_shatter: invalid tree: " + defect->message);
+  if (!tree.shatter_version.empty()) {
+    if (const std::optional<std::string> problem = version_text_problem(tree.shatter_version)) {
+      throw std::invalid_argument("encode_shatter: invalid tree: shatter_version: " + *problem);
+    }
+  }
   ByteWriter file;
   for (const unsigned char byte : magic) file.u8(byte);
   file.u32(shatter_format_version);
+  if (!tree.shatter_version.empty()) append_section(file, version_tag, tree.shatter_version);
   append_section(file, options_tag, options_payload(tree.options));
   append_section(file, nodes_tag, nodes_payload(tree.nodes));
   append_section(file, meshes_tag, meshes_payload(tree.nodes, &MeshTreeNode::mesh));
@@ -1368,6 +1398,12 @@ MeshTree decode_shatter(std::string_view bytes) {
   const SectionTable sections = read_section_table(bytes);
   MeshTree tree;
   RecordOffsets offsets;
+  if (const std::optional<Section>& version = sections.shatter_version) {
+    if (const std::optional<std::string> problem = version_text_problem(version->payload)) {
+      refuse("damaged .shatter file: " + section_name(version_tag) + " section at byte " + str(version->offset) + ": " + *problem);
+    }
+    tree.shatter_version = version->payload;
+  }
   tree.options = read_options(*sections.options);
   tree.nodes = read_nodes(*sections.nodes, offsets.nodes);
   read_meshes(*sections.meshes, tree.nodes, &MeshTreeNode::mesh, offsets.meshes);

@@ -3,8 +3,9 @@
 // keeps the invariants decode_shatter promises (the exact representation's
 // cross-references and caches included), encodes without complaint, and
 // re-encoding is a fixed point (decode(encode(t)) encodes to the same bytes); when
-// the input is laid out as encode_shatter lays a file out (version 2: its seven
-// sections in order, then END, nothing optional), re-encoding gives the input back
+// the input is laid out as encode_shatter lays a file out (version 2: the optional
+// vers section or not, its seven sections in order, then END, nothing else
+// optional), re-encoding gives the input back
 // byte for byte, and a version 1 file so laid out (five sections, then END)
 // re-encodes to exactly its version 2 conversion (version 2, empty GEOM and SOLD
 // before END). Each input is tried as it is and with its section checksums
@@ -64,16 +65,22 @@ std::uint32_t read_u32(std::string_view bytes, std::size_t offset) {
 }
 
 /// True when the sections of an accepted file are exactly those the encoder of
-/// its version writes, in its order: OPTS NODE MESH HULL BOND, then GEOM SOLD
-/// (version 2), then END. Only then can the bytes be expected back from
-/// re-encoding (optional sections are skipped by the reader, and the reader
-/// accepts the required ones in any order).
+/// its version writes, in its order: vers (version 2, when the tree has a
+/// version), OPTS NODE MESH HULL BOND, then GEOM SOLD (version 2), then END. Only
+/// then can the bytes be expected back from re-encoding (unknown optional
+/// sections are skipped by the reader, and the reader accepts the others in any
+/// order).
 bool has_canonical_layout(std::string_view bytes, std::uint32_t version) {
   static constexpr std::array<const char*, 8> version_2 = {"OPTS", "NODE", "MESH", "HULL", "BOND", "GEOM", "SOLD", "END "};
   static constexpr std::array<const char*, 6> version_1 = {"OPTS", "NODE", "MESH", "HULL", "BOND", "END "};
   const std::span<const char* const> order = version == 1 ? std::span<const char* const>(version_1) : std::span<const char* const>(version_2);
   if (bytes.size() < 12 || read_u32(bytes, 8) != version) return false;
   std::size_t offset = 12;
+  if (version == 2 && bytes.size() - offset >= 16 && std::memcmp(bytes.data() + offset, "vers", 4) == 0) {
+    const std::uint64_t length = read_u64(bytes, offset + 4);
+    if (length > bytes.size() - offset - 16) return false;
+    offset += 16 + static_cast<std::size_t>(length);
+  }
   for (const char* tag : order) {
     if (bytes.size() - offset < 16) return false;
     if (std::memcmp(bytes.data() + offset, tag, 4) != 0) return false;

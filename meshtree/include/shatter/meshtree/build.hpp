@@ -35,10 +35,11 @@ struct BuildReport {
 
 /// Builds the mesh tree of `mesh` with `options` (see BuildOptions, Strategy).
 /// Preconditions: options.fragments >= 1 and every triangle of `mesh` on surface 0
-/// (std::invalid_argument otherwise). The mesh is validated first: a mesh that
-/// is not a closed, oriented 2-manifold with positive volume, or that intersects
-/// itself (unless options.allow_self_intersections), is refused with
-/// InvalidMeshError naming its first defect.
+/// (std::invalid_argument otherwise). The mesh is validated first, unless
+/// options.input_validated says the caller did: a mesh that is not a closed,
+/// oriented 2-manifold with positive volume, or that intersects itself (unless
+/// options.allow_self_intersections), is refused with InvalidMeshError naming its
+/// first defect.
 /// Guarantees: at least options.fragments leaves, and no leaf cut that was not
 /// needed to reach that count; every node's stored mesh a valid solid (closed,
 /// oriented, 2-manifold, positive volume, no zero-area triangle, no
@@ -46,9 +47,10 @@ struct BuildReport {
 /// plane whose rounded pieces are not is redrawn; children partition their parent
 /// (exact kernel: exactly, in the exact solids; fast: up to rounding of the cut
 /// points); leaf ranges contiguous; cap triangles carry cap_surface_of(cut node);
-/// mass properties and hulls filled; bonds = find_bonds(tree). The result depends
-/// only on the mesh and the options other than `threads`: byte-identical on any
-/// machine and thread count.
+/// mass properties and hulls filled; bonds = find_bonds(tree); shatter_version
+/// this library's version_string (shatter/version.hpp). One version of shatter
+/// gives a result that depends only on the mesh and the options other than
+/// `threads`: byte-identical on any machine and thread count.
 /// Throws UnsupportedGeometryError when none of max_plane_tries planes gives a node
 /// valid pieces (all missed it, or its pieces are thinner than rounding).
 /// When `report` is given, it is filled in.

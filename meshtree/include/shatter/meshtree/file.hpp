@@ -21,12 +21,17 @@
 //     16  L  payload
 //
 // Sections, written in this order:
+//   vers  optional (see the reading rules): the shatter version that built the
+//         tree, MeshTree::shatter_version, as text: 1 to 64 bytes of printable
+//         ASCII without spaces (0x21-0x7E), e.g. "0.1.0", no terminator. Written
+//         only when the tree has one (every built tree does).
 //   OPTS  BuildOptions, 27 bytes: u32 fragments, u64 seed, u8 strategy
 //         (0 thesis, 1 balanced, 2 axis), u8 kernel (0 fast, 1 exact, 2 plane),
 //         f64 interior_uv_scale, u32 max_plane_tries, u8 allow_self_intersections
 //         (0 or 1). `threads` is not stored: it never changes a tree, and leaving
 //         it out keeps files of one build byte-identical on every thread count; a
-//         decoded tree has threads = 0.
+//         decoded tree has threads = 0. Nor is input_validated (a promise about
+//         a build's input, false in every tree).
 //   NODE  u32 node count n (1 <= n <= 2^32 - 1), then per node in index order:
 //         u32 parent (FFFFFFFF for the root), u32 depth, u32 first_leaf,
 //         u32 leaf_count, u64 seed, u8 above_parent_plane (0 or 1),
@@ -84,7 +89,13 @@
 // each occur exactly once, in any order, before END. An unknown tag whose first byte is a lower-case
 // ASCII letter marks optional data a later version may add: its checksum is
 // verified and it is skipped. Any other unknown tag is refused, so data a reader
-// would misunderstand is never silently dropped.
+// would misunderstand is never silently dropped. `vers` is optional data this
+// reader knows: it may occur at most once, anywhere before END, in a file of
+// either version, and a payload outside its rule is refused; a file without it
+// reads with an empty shatter_version. (A damaged `vers` tag that still starts
+// with a lower-case letter is an unknown optional section, so such a file reads
+// as the same tree without its version: the one single-byte change a reader
+// cannot see, and it loses nothing but the version.)
 //
 // Versions. Version 2 added GEOM and SOLD (the plane kernel's exact
 // representation, so a tree can be re-cut exactly) and kernel 2 in OPTS. A
@@ -93,7 +104,12 @@
 // and encode_shatter writes that tree as version 2: for a file as version 1's
 // encoder laid it out, the same bytes with version 2 and, before END, a GEOM
 // section of 8 zero bytes and a SOLD section of 4. Any other version is refused;
-// a later version that only adds optional sections keeps its number.
+// a later version that only adds optional sections keeps its number. So `vers`
+// (shatter 0.1.0) did not change it: the version is information, not something
+// a reader needs to understand the tree, and as an optional section it is
+// skipped by the version 2 readers written before it, which therefore read the
+// files written since. (Growing OPTS instead would have made those readers
+// refuse every new file: its size is fixed.)
 
 #include <cstdint>
 #include <filesystem>
@@ -118,9 +134,12 @@ inline constexpr std::uint32_t shatter_oldest_format_version = 1;
 /// definition over plane_set(), bit for bit (as in every built tree; checked, at
 /// the cost of recomputing them); otherwise throws std::invalid_argument naming
 /// the first defect, so no file is ever written that could not be read back.
+/// A non-empty shatter_version must follow the `vers` rule (std::invalid_argument
+/// otherwise); an empty one writes no `vers` section.
 /// Guarantees: deterministic (equal trees give equal bytes; `threads` is
 /// ignored), and decode_shatter returns a tree equal to `tree` field by field,
-/// every double bit for bit, except options.threads, which comes back 0.
+/// every double bit for bit, shatter_version included, except options.threads,
+/// which comes back 0.
 std::string encode_shatter(const MeshTree& tree);
 
 /// The tree stored in `bytes` (format version 1 or 2).
@@ -133,7 +152,8 @@ std::string encode_shatter(const MeshTree& tree);
 /// consistent with the children; every triangle index < its mesh's vertex count
 /// (surfaces and attribute channels sized by construction); bonds with
 /// first < second < leaf count, sorted by (first, second, cut_node), cut_node the
-/// internal node whose cut separates the two leaves; enum and bool bytes in range.
+/// internal node whose cut separates the two leaves; enum and bool bytes in range;
+/// a `vers` section at most once, within its rule (it fills shatter_version).
 /// The exact representation (GEOM, SOLD) is checked for structure, not geometry:
 ///   - without input points, no input plane, no solid and no convex node;
 ///   - input points and the planes of internal nodes finite (the exact

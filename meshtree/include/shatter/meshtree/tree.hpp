@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -63,6 +64,13 @@ struct BuildOptions {
   bool allow_self_intersections = false;
   /// Worker threads; 0 means one per hardware thread. Never changes the output.
   unsigned threads = 0;
+  /// The caller has already refused the input unless it is a valid solid, as
+  /// require_valid_solid(mesh, name, allow_self_intersections) does (the full
+  /// validate_mesh, self-intersections included), so the builder skips that
+  /// check instead of repeating it. Set it only after such a check of this very
+  /// mesh: on any other mesh the build's guarantees do not hold. Never changes
+  /// the output; a built tree's options have it false again.
+  bool input_validated = false;
 };
 
 /// A bond joins two leaves that truly touch: they lie on opposite sides of one
@@ -109,6 +117,11 @@ struct MeshTreeNode {
 /// What `build_mesh_tree` produces and the .shatter file stores.
 struct MeshTree {
   BuildOptions options;
+  /// The shatter version that built the tree (shatter::version_string, e.g.
+  /// "0.1.0"; build_mesh_tree sets it), kept by the .shatter file. Empty when
+  /// unknown: a tree made by hand, or read from a file written before versions
+  /// were recorded.
+  std::string shatter_version;
   std::vector<MeshTreeNode> nodes;   ///< depth-first preorder; nodes[0] is the root
   std::vector<NodeIndex> leaf_nodes; ///< leaf i is nodes[leaf_nodes[i]]
   std::vector<Bond> bonds;           ///< sorted by (first, second, cut_node)

@@ -1,0 +1,140 @@
+#include "export.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string_view>
+
+#include "shatter/meshtree/file.hpp"
+#include "errors.hpp"
+
+namespace shatter::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::string_view glb_format = "glb";
+
+bool names_glb_file(const fs::path& path) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension == ".glb";
+}
+
+// The output format: --format if given, else glb for a .glb --out, else off.
+// nullopt stands for glb, which is not a MeshFormat.
+std::optional<MeshFormat> export_format(const ExportArgs& args) {
+  const bool out_is_glb = names_glb_file(args.out);
+  if (args.format.empty()) {
+    if (out_is_glb) return std::nullopt;
+    return MeshFormat::off;
+  }
+  if (args.format == glb_format) {
+    if (fs::is_directory(args.out)) {
+      throw UsageError("--format glb writes one file, but --out " + args.out + " is a folder");
+    }
+    return std::nullopt;
+  }
+  const std::optional<MeshFormat> format = parse_mesh_format(args.format);
+  if (!format) throw UsageError("--format must be off, obj, ply, stl or glb, got '" + args.format + "'");
+  if (out_is_glb) {
+    throw UsageError("--out " + args.out + " names a .glb file but --format is " + args.format +
+                     ", which writes a folder of mesh files");
+  }
+  return format;
+}
+
+NodeSelection selection_of(const std::string& text) {
+  try {
+    return parse_node_selection(text);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--nodes: ") + e.what());
+  }
+}
+
+std::size_t triangles_of(const MeshTree& tree, const std::vector<NodeIndex>& nodes) {
+  std::size_t triangles = 0;
+  for (NodeIndex node : nodes) triangles += tree.nodes[node].mesh.triangle_count();
+  return triangles;
+}
+
+}  // namespace
+
+std::vector<fs::path> write_node_mesh_files(OutputTransaction& output, const MeshTree& tree,
+                                            std::span<const NodeIndex> nodes, const fs::path& folder,
+                                            MeshFormat format, FileNaming naming) {
+  std::vector<fs::path> paths;
+  paths.reserve(nodes.size());
+  for (NodeIndex node : nodes) paths.push_back(folder / mesh_file_name(tree, node, naming, format));
+  output.create_folder(folder);
+  for (std::size_t i = 0; i < nodes.size(); ++i) output.write_mesh(paths[i], tree.nodes[nodes[i]].mesh, format);
+  return paths;
+}
+
+Command add_export_command(CLI::App& app) {
+  auto args = std::make_shared<ExportArgs>();
+  CLI::App* command = app.add_subcommand(
+      "export",
+      "Write the nodes of a .shatter mesh tree as mesh files (one per node, into a folder) or as one glTF binary "
+      "(.glb) holding the whole tree as a node hierarchy.");
+  command->add_option("tree", args->input, "Mesh tree file (.shatter)")->required();
+  command->add_option("--out", args->out,
+                      "Output folder for mesh files (created if missing; leaf-0000.off, ... for --nodes leaves, "
+                      "node-00012.off, ... by node index otherwise), or a .glb file")
+      ->required();
+  command->add_option("--format", args->format,
+                      "off, obj, ply, stl (as `slice` writes them, coordinates kept exactly) or glb (float32 "
+                      "vertices: for viewing). Default: glb when --out ends in .glb, else off")
+      ->check(CLI::IsMember({"off", "obj", "ply", "stl", "glb"}));
+  command->add_option("--nodes", args->nodes,
+                      "Which nodes: leaves (the fragments), all (every level, overlapping), or depth:K (the nodes "
+                      "at depth K and the leaves above it: the solid cut at that level; the root is depth 0)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            try {
+              parse_node_selection(text);
+              return {};
+            } catch (const std::invalid_argument& e) {
+              return e.what();
+            }
+          },
+          "leaves|all|depth:K", "node selection"))
+      ->capture_default_str();
+  return {command, [args] { return run_export(*args); }};
+}
+
+int run_export(const ExportArgs& args) {
+  const std::optional<MeshFormat> format = export_format(args);
+  const NodeSelection selection = selection_of(args.nodes);
+  const MeshTree tree = read_shatter_file(args.input);
+  const std::vector<NodeIndex> nodes = select_nodes(tree, selection);
+
+  OutputTransaction output;
+  if (!format) {
+    const std::string bytes = encode_glb(tree, nodes);
+    if (const fs::path folder = fs::path(args.out).parent_path(); !folder.empty()) output.create_folder(folder);
+    output.write_file(args.out, bytes);
+    output.commit();
+    std::cout << "wrote " << args.out << ": " << tree.nodes.size() << " tree nodes, meshes on " << nodes.size()
+              << " (" << node_selection_name(selection) << "), " << triangles_of(tree, nodes) << " triangles\n";
+    return static_cast<int>(ExitCode::ok);
+  }
+  const std::vector<fs::path> paths =
+      write_node_mesh_files(output, tree, nodes, args.out, *format, file_naming_for(selection));
+  output.commit();
+  std::cout << "wrote " << paths.size() << " " << format_name(*format) << " file(s) ("
+            << node_selection_name(selection) << ") to " << args.out;
+  if (!paths.empty()) {
+    std::cout << ": " << paths.front().filename().string();
+    if (paths.size() > 1) std::cout << " ... " << paths.back().filename().string();
+  }
+  std::cout << ", " << triangles_of(tree, nodes) << " triangles\n";
+  return static_cast<int>(ExitCode::ok);
+}
+
+}  // namespace shatter::cli

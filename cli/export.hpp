@@ -1,0 +1,53 @@
+#pragma once
+// `shatter export <file.shatter> --out <folder|file.glb> [--format off|obj|ply|stl|glb]
+// [--nodes leaves|all|depth:K]`: a .shatter mesh tree as mesh files or one GLB.
+
+#include <CLI/CLI.hpp>
+
+#include <filesystem>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "shatter/kernel/io.hpp"
+#include "shatter/meshtree/export.hpp"
+#include "shatter/meshtree/tree.hpp"
+#include "command.hpp"
+#include "output_transaction.hpp"
+
+namespace shatter::cli {
+
+struct ExportArgs {
+  std::string input;
+  std::string out;
+  /// off, obj, ply, stl or glb; empty: glb when --out ends in .glb, else off.
+  std::string format;
+  /// "leaves", "all" or "depth:K" (parse_node_selection).
+  std::string nodes = "leaves";
+};
+
+/// Declares the `export` subcommand on `app`.
+Command add_export_command(CLI::App& app);
+
+/// Reads the tree and writes the selected nodes: one mesh file per node into the
+/// --out folder (created if missing; leaf-0000.off, ... for leaves,
+/// node-00012.off, ... otherwise), or one GLB file (its folder created if
+/// missing). All files or none (OutputTransaction). Prints what it wrote on
+/// stdout. Returns 0.
+/// Throws UsageError for a bad --format or --nodes, or --format naming a mesh
+/// format while --out ends in .glb (or glb while it names an existing folder),
+/// before reading; CorruptFileError or IoError from reading the tree; IoError
+/// from writing.
+int run_export(const ExportArgs& args);
+
+/// Writes the mesh of every node in `nodes` into `folder` (created if missing)
+/// as `format`, named by mesh_file_name, through `output`, and returns the paths
+/// in the order of `nodes`: what `export` writes into a folder, and `fracture
+/// --export` for the leaves. Every name is made before anything is written.
+/// Throws std::invalid_argument as mesh_file_name does, IoError from writing.
+std::vector<std::filesystem::path> write_node_mesh_files(OutputTransaction& output, const MeshTree& tree,
+                                                         std::span<const NodeIndex> nodes,
+                                                         const std::filesystem::path& folder, MeshFormat format,
+                                                         FileNaming naming);
+
+}  // namespace shatter::cli

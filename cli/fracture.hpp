@@ -1,0 +1,55 @@
+#pragma once
+// `shatter fracture <mesh> --fragments N --out <file.shatter> [--seed S]
+// [--strategy thesis|balanced|axis] [--kernel plane|exact|fast] [--threads T]
+// [--interior-uv-scale X] [--allow-self-intersections] [--repair]
+// [--export <folder> [--format off|obj|ply|stl]] [--json]`: the mesh tree of a
+// solid, written as a .shatter file.
+
+#include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <string>
+
+#include "command.hpp"
+
+namespace shatter::cli {
+
+struct FractureArgs {
+  std::string mesh;
+  std::uint32_t fragments = 0;
+  std::uint64_t seed = 1;
+  std::string strategy = "thesis";
+  std::string kernel = "plane";
+  /// 0: one worker per hardware thread. Never changes the tree.
+  unsigned threads = 0;
+  double interior_uv_scale = 1.0;
+  bool allow_self_intersections = false;
+  std::string out;
+  /// Folder for one mesh file per leaf; empty: no export.
+  std::string export_folder;
+  /// off, obj, ply or stl; empty: off. Only meaningful with export_folder.
+  std::string format;
+  bool json = false;
+  /// Repair the mesh first (read_valid_solid), printing each change.
+  bool repair = false;
+};
+
+/// Declares the `fracture` subcommand on `app`.
+Command add_fracture_command(CLI::App& app);
+
+/// Reads the mesh and checks it once (read_valid_solid; the builder is told,
+/// BuildOptions::input_validated), builds its mesh tree (build_mesh_tree),
+/// writes the .shatter file and, with --export, one mesh file per leaf
+/// (leaf-0000.off, ..., as `export --nodes leaves` writes them), then prints a
+/// summary on stdout (JSON with --json). While a long build runs and stderr is a
+/// terminal, a progress bar is drawn on stderr and erased afterwards; otherwise
+/// nothing goes to stderr. Returns 0.
+/// All outputs or none (OutputTransaction): the leaf files first, the .shatter
+/// file last, and on any failure everything this run created is removed.
+/// Throws UsageError for --format without --export, or an --out that is a
+/// folder (before reading the mesh); what read_valid_solid throws;
+/// UnsupportedGeometryError "cannot fracture <mesh>: ..." when the builder cannot
+/// cut a fragment; IoError from writing.
+int run_fracture(const FractureArgs& args);
+
+}  // namespace shatter::cli

@@ -1,0 +1,93 @@
+#include "info.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <iostream>
+#include <memory>
+#include <optional>
+
+#include "shatter/meshtree/bonds.hpp"
+#include "shatter/meshtree/file.hpp"
+#include "shatter/meshtree/stats.hpp"
+#include "errors.hpp"
+#include "tree_stats_json.hpp"
+
+namespace shatter::cli {
+
+namespace {
+
+using json = nlohmann::ordered_json;
+
+json info_json(const InfoArgs& args, const MeshTree& tree, const TreeStats& stats,
+               const std::optional<BondRuleComparison>& rules) {
+  json out{{"file", args.input}};
+  out["shatter_version"] = tree.shatter_version.empty() ? json(nullptr) : json(tree.shatter_version);
+  append_stats_json(out, options_json(tree.options), stats);
+  if (rules) {
+    out["bounding_box_rule"] = {{"true_bonds", rules->true_bonds},
+                                {"box_bonds", rules->box_bonds},
+                                {"false_box_bonds", rules->false_box_bonds},
+                                {"missed_true_bonds", rules->missed_true_bonds}};
+  }
+  return out;
+}
+
+void print_info_text(const InfoArgs& args, const MeshTree& tree, const TreeStats& stats) {
+  const BuildOptions& options = tree.options;
+  const VolumeSpread& volume = stats.fragment_volume;
+  std::cout << args.input << ": mesh tree of " << stats.node_count << " nodes, " << stats.leaf_count
+            << " leaves (fragments), " << stats.internal_count << " internal; leaves at depth " << stats.min_leaf_depth
+            << " to " << stats.max_depth << '\n';
+  if (!tree.shatter_version.empty()) std::cout << "  built by shatter " << tree.shatter_version << '\n';
+  std::cout << "  built with: fragments " << options.fragments << ", seed " << options.seed << ", strategy "
+            << strategy_name(options.strategy) << ", kernel " << kernel_name(options.kernel)
+            << ", interior UV scale " << options.interior_uv_scale << ", max plane tries " << options.max_plane_tries
+            << (options.allow_self_intersections ? ", self-intersections allowed" : "") << '\n'
+            << "  volume: root " << stats.root_volume << ", leaves together " << stats.total_leaf_volume
+            << " (relative difference " << leaf_volume_relative_error(stats) << ")\n"
+            << "  fragment volume: min " << volume.min << ", median " << volume.median << ", max " << volume.max
+            << ", mean " << volume.mean << ", coefficient of variation " << volume.coefficient_of_variation
+            << '\n'
+            << "  bonds: " << stats.bond_count << ", total area " << stats.total_bond_area << '\n'
+            << "  leaves hold " << stats.leaf_triangles << " triangles (" << stats.leaf_cap_triangles
+            << " on caps) over " << stats.leaf_vertices << " vertices\n";
+}
+
+void print_bond_rules_text(const BondRuleComparison& rules) {
+  std::cout << "  the seed's bounding-box rule: " << rules.box_bonds << " bonded pairs, " << rules.false_box_bonds
+            << " of them false (no cap contact); " << rules.missed_true_bonds << " of the " << rules.true_bonds
+            << " truly touching pairs missed\n";
+}
+
+}  // namespace
+
+Command add_info_command(CLI::App& app) {
+  auto args = std::make_shared<InfoArgs>();
+  CLI::App* command = app.add_subcommand(
+      "info",
+      "Describe a .shatter mesh tree: node, leaf and depth counts, the shatter version and build options that made "
+      "it, fragment volume statistics (min, median, max, coefficient of variation), bonds and their total area.");
+  command->add_option("tree", args->input, "Mesh tree file (.shatter)")->required();
+  command->add_flag("--json", args->json, "Print the description as JSON");
+  command->add_flag("--compare-bond-rules", args->compare_bond_rules,
+                    "Also apply the seed's bond rule (leaves whose bounding boxes overlap) and count its false "
+                    "bonds (pairs with no cap contact) and the true bonds it misses, against the stored true-contact "
+                    "bonds recomputed from the meshes");
+  return {command, [args] { return run_info(*args); }};
+}
+
+int run_info(const InfoArgs& args) {
+  const MeshTree tree = read_shatter_file(args.input);
+  const TreeStats stats = tree_stats(tree);
+  std::optional<BondRuleComparison> rules;
+  if (args.compare_bond_rules) rules = compare_bond_rules(tree);
+  if (args.json) {
+    std::cout << info_json(args, tree, stats, rules).dump(2) << '\n';
+  } else {
+    print_info_text(args, tree, stats);
+    if (rules) print_bond_rules_text(*rules);
+  }
+  return static_cast<int>(ExitCode::ok);
+}
+
+}  // namespace shatter::cli

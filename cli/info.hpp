@@ -1,0 +1,29 @@
+#pragma once
+// `shatter info <file.shatter> [--json] [--compare-bond-rules]`: what a mesh tree
+// holds and how it was made.
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+#include "command.hpp"
+
+namespace shatter::cli {
+
+struct InfoArgs {
+  std::string input;
+  bool json = false;
+  bool compare_bond_rules = false;  ///< also count the seed's bounding-box bonds against the true ones
+};
+
+/// Declares the `info` subcommand on `app`.
+Command add_info_command(CLI::App& app);
+
+/// Reads the tree and prints its statistics (tree_stats), the shatter version
+/// that built it when the file records one, and its build options, as text or,
+/// with --json, as one JSON object ("shatter_version" is null when the file
+/// records none). Returns 0. Throws CorruptFileError or IoError from reading
+/// the tree.
+int run_info(const InfoArgs& args);
+
+}  // namespace shatter::cli

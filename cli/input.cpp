@@ -1,0 +1,84 @@
+#include "input.hpp"
+
+#include <iostream>
+#include <string_view>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/io.hpp"
+
+namespace shatter::cli {
+
+namespace {
+
+std::string_view repair_kind_name(RepairKind kind) {
+  switch (kind) {
+    case RepairKind::merged_duplicate_vertices: return "merged_duplicate_vertices";
+    case RepairKind::removed_repeated_index_triangles: return "removed_repeated_index_triangles";
+    case RepairKind::removed_duplicate_triangles: return "removed_duplicate_triangles";
+    case RepairKind::removed_opposite_triangle_pairs: return "removed_opposite_triangle_pairs";
+    case RepairKind::reversed_triangles: return "reversed_triangles";
+    case RepairKind::stitched_border_edges: return "stitched_border_edges";
+    case RepairKind::fixed_zero_area_triangles: return "fixed_zero_area_triangles";
+    case RepairKind::filled_holes: return "filled_holes";
+    case RepairKind::resolved_self_intersections: return "resolved_self_intersections";
+    case RepairKind::removed_unused_vertices: return "removed_unused_vertices";
+  }
+  return "unknown";
+}
+
+// The lines go to stderr in every mode, JSON included, so a run that then
+// refuses the mesh (and prints no JSON) still shows what was done.
+RepairReport repair_and_print(Mesh& mesh, const std::string& name) {
+  const RepairReport report = repair_mesh(mesh);
+  if (!report.changed() && report.notes.empty()) std::cerr << "repair: " << name << ": no change\n";
+  for (const RepairChange& change : report.changes) std::cerr << "repair: " << change.text << '\n';
+  for (const RepairNote& note : report.notes) std::cerr << "repair: not done: " << note.text << '\n';
+  return report;
+}
+
+}  // namespace
+
+std::string repair_flag_help(const std::string& then) {
+  return "Repair the mesh before using it, printing each change on stderr (`repair: ...`): merge vertices at "
+         "equal positions, remove repeated-vertex, duplicate and zero-area triangles, orient consistently and "
+         "outward, stitch and fill holes of up to " +
+         std::to_string(RepairOptions{}.max_hole_edges) +
+         " edges; self-intersections are named, not resolved. A mesh still invalid after repair is refused as "
+         "without the flag. " +
+         then;
+}
+
+InputMesh read_valid_solid(const std::string& path, bool repair, bool allow_self_intersections) {
+  InputMesh input{read_mesh(path), std::nullopt};
+  if (!repair) {
+    require_valid_solid(input.mesh, path, allow_self_intersections);
+    return input;
+  }
+  input.repair = repair_and_print(input.mesh, path);
+  try {
+    require_valid_solid(input.mesh, path, allow_self_intersections);
+  } catch (const InvalidMeshError& e) {
+    throw InvalidMeshError(std::string(e.what()) + " (after --repair)");
+  }
+  return input;
+}
+
+ValidatedMesh read_and_validate(const std::string& path, bool repair) {
+  InputMesh input{read_mesh(path), std::nullopt};
+  if (repair) input.repair = repair_and_print(input.mesh, path);
+  const ValidationReport report = validate_mesh(input.mesh);
+  return {std::move(input), report};
+}
+
+void add_repair_json(nlohmann::ordered_json& out, const RepairReport& report) {
+  nlohmann::ordered_json changes = nlohmann::ordered_json::array();
+  for (const RepairChange& change : report.changes) {
+    changes.push_back({{"change", repair_kind_name(change.kind)}, {"count", change.count}, {"text", change.text}});
+  }
+  nlohmann::ordered_json notes = nlohmann::ordered_json::array();
+  for (const RepairNote& note : report.notes) notes.push_back(note.text);
+  out["repair"] = std::move(changes);
+  out["repair_not_done"] = std::move(notes);
+}
+
+}  // namespace shatter::cli

@@ -1,0 +1,276 @@
+#include "slice.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/io.hpp"
+#include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "shatter/meshtree/cut.hpp"
+#include "shatter/meshtree/cut_solid.hpp"
+#include "shatter/meshtree/plane_input.hpp"
+#include "shatter/triangulate/solid_mesh.hpp"
+#include "errors.hpp"
+#include "input.hpp"
+#include "output_transaction.hpp"
+
+namespace shatter::cli {
+
+namespace {
+
+using json = nlohmann::ordered_json;
+
+Plane parse_plane(const std::string& text) {
+  std::vector<double> values;
+  const char* p = text.data();
+  const char* end = p + text.size();
+  while (p < end) {
+    double value = 0;
+    const auto [next, error] = std::from_chars(p, end, value);
+    if (error != std::errc() || !std::isfinite(value)) break;
+    values.push_back(value);
+    p = next;
+    if (p == end) break;
+    if (*p != ',') {
+      values.clear();
+      break;
+    }
+    ++p;
+  }
+  if (values.size() != 4 || p != end) {
+    throw UsageError("--plane takes four finite numbers nx,ny,nz,d (the plane n.x + d = 0), got '" + text + "'");
+  }
+  const Plane plane{{values[0], values[1], values[2]}, values[3]};
+  if (plane.normal.x == 0 && plane.normal.y == 0 && plane.normal.z == 0) {
+    throw UsageError("--plane normal must not be zero");
+  }
+  return plane;
+}
+
+std::string_view cap_method_name(CapMethod method) {
+  switch (method) {
+    case CapMethod::none: return "none";
+    case CapMethod::fan: return "fan";
+    case CapMethod::cdt: return "cdt";
+    case CapMethod::exact_cdt: return "exact-cdt";
+    case CapMethod::steiner_fan: return "steiner-fan";
+  }
+  return "unknown";
+}
+
+struct Piece {
+  std::string side;
+  Mesh mesh;
+};
+
+// Output is always doubles: the exact kernel's pieces are rounded once, here.
+Mesh as_output(Mesh& mesh) { return std::move(mesh); }
+Mesh as_output(const ExactMesh& mesh) { return to_fast(mesh); }
+
+template <class Point>
+std::vector<Piece> pieces_of(CutResult<Point>& result) {
+  std::vector<Piece> pieces;
+  for (auto& solid : result.below) pieces.push_back({"below", as_output(solid)});
+  for (auto& solid : result.above) pieces.push_back({"above", as_output(solid)});
+  return pieces;
+}
+
+// What a cut gave, whichever kernel made it.
+struct SliceResult {
+  std::vector<Piece> pieces;
+  bool plane_missed = false;
+  std::string cap_method;
+  std::size_t cap_loops = 0, cap_triangles = 0;
+};
+
+template <class Point>
+SliceResult result_of(CutResult<Point>&& cut, const Mesh& mesh) {
+  SliceResult result;
+  result.plane_missed = cut.plane_missed;
+  result.cap_method = cap_method_name(cut.cap_method);
+  result.cap_loops = cut.cap_loops;
+  result.cap_triangles = cut.cap_triangles;
+  if (cut.plane_missed) {
+    // Whole: the input as it was read, on the side it lies on.
+    result.pieces.push_back({cut.above.empty() ? "below" : "above", mesh});
+  } else {
+    result.pieces = pieces_of(cut);
+  }
+  return result;
+}
+
+// Exact cut, then every piece rounded once and certified: a piece that cannot
+// be written as a valid mesh fails the command before anything is written.
+SliceResult cut_with_plane_kernel(const Mesh& mesh, const Plane& plane, const SliceArgs& args, SurfaceId cap_surface) {
+  const PlaneInput input = prepare_plane_input(mesh);
+  const std::vector<Plane> cuts{plane};
+  const PlaneSet set = input.geometry.plane_set(cuts);
+  const SolidCut cut = cut_solid(set, input.solid, PlaneRef::cut(0), cap_surface, input.shells);
+  SliceResult result;
+  result.plane_missed = cut.plane_missed;
+  result.cap_method = "polygon";
+  result.cap_loops = cut.cap_loops;
+  if (cut.plane_missed) {
+    Sign s = Sign::zero;
+    for (std::size_t v = 0; v < input.solid.defs.size() && s == Sign::zero; ++v) {
+      s = side(set, PlaneRef::cut(0), input.solid.defs[v], input.solid.approx[v]);
+    }
+    result.pieces.push_back({s == Sign::positive ? "above" : "below", mesh});
+  }
+  SolidMeshOptions meshing;
+  meshing.attributes = &input.mesh;
+  meshing.interior_uv_scale = args.interior_uv_scale;
+  meshing.allow_self_intersections = args.allow_self_intersections;
+  meshing.trusted = &input.mesh;  // checked on the way in: certification tests only what the cut changed
+  meshing.cut = &plane;
+  for (const auto* side_solids : {&cut.below, &cut.above}) {
+    const std::string side_name = side_solids == &cut.below ? "below" : "above";
+    for (std::size_t i = 0; i < side_solids->size(); ++i) {
+      RoundedSolid rounded = round_solid(set, (*side_solids)[i], meshing);
+      if (!rounded.valid) {
+        throw UnsupportedGeometryError("piece " + side_name + "-" + std::to_string(i) +
+                                       " cannot be rounded to doubles as a valid mesh: " + rounded.defect);
+      }
+      for (SurfaceId surface : rounded.mesh.surfaces) {
+        if (side_solids == &cut.below && surface == cap_surface) ++result.cap_triangles;
+      }
+      result.pieces.push_back({side_name, std::move(rounded.mesh)});
+    }
+  }
+  return result;
+}
+
+// Writes every piece into `folder` as <side>-<index>.<format>, all or none;
+// returns the names in piece order.
+std::vector<std::string> write_pieces(const std::vector<Piece>& pieces, const std::filesystem::path& folder,
+                                      MeshFormat format) {
+  OutputTransaction output;
+  output.create_folder(folder);
+  std::vector<std::string> names;
+  std::size_t below = 0, above = 0;
+  for (const Piece& piece : pieces) {
+    const std::size_t index = piece.side == "below" ? below++ : above++;
+    const std::string name = piece.side + "-" + std::to_string(index) + "." + std::string(format_name(format));
+    output.write_mesh(folder / name, piece.mesh, format);
+    names.push_back(name);
+  }
+  output.commit();
+  return names;
+}
+
+}  // namespace
+
+Command add_slice_command(CLI::App& app) {
+  auto args = std::make_shared<SliceArgs>();
+  CLI::App* command = app.add_subcommand(
+      "slice", "Cut a closed mesh by one plane; write one file per resulting solid (below-0, above-0, ...).");
+  command->add_option("mesh", args->mesh, "Mesh file (.off, .obj, .ply, .stl)")->required();
+  command->add_option("--plane", args->plane, "The plane n.x + d = 0 as nx,ny,nz,d (n need not be unit length)")
+      ->required();
+  command->add_option("--kernel", args->kernel,
+                      "plane (default): vertices defined as meets of planes, never constructed; the cut is exact and "
+                      "each piece is rounded once and certified valid (a piece that cannot be written valid fails "
+                      "with exit 3). exact: CGAL exact rationals, rounded once to doubles. fast: rounded intersection "
+                      "points (topology always valid; pieces whose rounded embedding is not are counted)")
+      ->check(CLI::IsMember({"plane", "exact", "fast"}))
+      ->capture_default_str();
+  command->add_flag("--allow-self-intersections", args->allow_self_intersections,
+                    "Cut a self-intersecting (or self-touching) mesh instead of refusing it; pieces are closed and "
+                    "oriented, their embedding may overlap");
+  command->add_option("--out", args->out, "Output folder (created if missing)")->required();
+  command->add_option("--format", args->format, "Output format: off, obj, ply (binary, doubles) or stl (ascii)")
+      ->check(CLI::IsMember({"off", "obj", "ply", "stl"}))
+      ->capture_default_str();
+  command->add_option("--interior-uv-scale", args->interior_uv_scale,
+                      "Cap UVs are the cap's plane coordinates times this (used when the mesh has UVs)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  command->add_flag("--json", args->json, "Print pieces, triangles and volumes as JSON");
+  command->add_flag("--repair", args->repair,
+                    repair_flag_help("The repaired mesh is cut (JSON: \"repair\" lists the changes)."));
+  return {command, [args] { return run_slice(*args); }};
+}
+
+int run_slice(const SliceArgs& args) {
+  const Plane plane = parse_plane(args.plane);
+  const auto format = parse_mesh_format(args.format);
+  if (!format) throw UsageError("--format must be off, obj, ply or stl");
+  const InputMesh input = read_valid_solid(args.mesh, args.repair, args.allow_self_intersections);
+  const Mesh& mesh = input.mesh;
+
+  CutOptions options;
+  options.interior_uv_scale = args.interior_uv_scale;
+  for (SurfaceId s : mesh.surfaces) options.cap_surface = std::max(options.cap_surface, s + 1);
+
+  SliceResult result;
+  if (args.kernel == "plane") {
+    result = cut_with_plane_kernel(mesh, plane, args, options.cap_surface);
+  } else if (args.kernel == "fast") {
+    result = result_of(cut_mesh(mesh, plane, options), mesh);
+  } else {
+    result = result_of(cut_mesh(to_exact(mesh), plane, options), mesh);
+  }
+  const std::vector<Piece>& pieces = result.pieces;
+
+  // The fast kernel promises topology; count the pieces whose rounded embedding
+  // is degenerate or self-intersecting instead of hiding them.
+  std::size_t invalid_embeddings = 0;
+  json pieces_json = json::array();
+  double total_volume = 0;
+  const std::vector<std::string> names = write_pieces(pieces, args.out, *format);
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    const ValidationReport report = validate_mesh(pieces[i].mesh);
+    const bool embedding_valid = report.valid();
+    invalid_embeddings += embedding_valid ? 0 : 1;
+    const double volume = signed_volume(pieces[i].mesh);
+    total_volume += volume;
+    pieces_json.push_back({{"file", names[i]},
+                           {"side", pieces[i].side},
+                           {"vertices", pieces[i].mesh.vertex_count()},
+                           {"triangles", pieces[i].mesh.triangle_count()},
+                           {"volume", volume},
+                           {"valid", embedding_valid}});
+  }
+  if (args.json) {
+    json out{{"input", args.mesh},
+             {"kernel", args.kernel},
+             {"plane", {plane.normal.x, plane.normal.y, plane.normal.z, plane.offset}},
+             {"plane_missed", result.plane_missed},
+             {"cap", {{"method", result.cap_method}, {"loops", result.cap_loops}, {"triangles", result.cap_triangles}}},
+             {"input_volume", signed_volume(mesh)},
+             {"total_volume", total_volume},
+             {"invalid_embeddings", invalid_embeddings},
+             {"pieces", pieces_json}};
+    if (input.repair) add_repair_json(out, *input.repair);
+    std::cout << out.dump(2) << '\n';
+  } else {
+    if (result.plane_missed) std::cout << "the plane misses or only touches the mesh: it is returned whole\n";
+    std::cout << pieces.size() << " piece(s) written to " << args.out << '\n';
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+      // Printed from the double, not the JSON value: a volume beyond the double
+      // range (coordinates near 1e300) is JSON null; here it is named.
+      const json& piece = pieces_json[i];
+      const double volume = piece["volume"].get<double>();
+      std::cout << "  " << piece["file"].get<std::string>() << ": " << piece["triangles"] << " triangles, volume "
+                << volume << (std::isfinite(volume) ? "" : " (beyond the double range)")
+                << (piece["valid"].get<bool>() ? "" : " (embedding not valid after rounding)") << '\n';
+    }
+  }
+  if (invalid_embeddings > 0) {
+    std::cerr << "warning: " << invalid_embeddings
+              << " piece(s) have a degenerate or self-intersecting embedding (closed and oriented all the same)\n";
+  }
+  return static_cast<int>(ExitCode::ok);
+}
+
+}  // namespace shatter::cli

@@ -1,0 +1,105 @@
+#include "validate.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <iostream>
+#include <memory>
+#include <optional>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/io.hpp"
+#include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "errors.hpp"
+#include "input.hpp"
+#include "output_transaction.hpp"
+
+namespace shatter::cli {
+
+namespace {
+
+using json = nlohmann::ordered_json;
+
+json defects_json(const ValidationReport& report) {
+  json defects = json::array();
+  for (const Defect& d : report.defects) {
+    defects.push_back({{"defect", defect_name(d.kind)}, {"count", d.count}, {"first", d.first}});
+  }
+  return defects;
+}
+
+void print_json(const ValidateArgs& args, const ValidatedMesh& checked) {
+  const ValidationReport& report = checked.report;
+  json out{{"file", args.mesh},
+           {"vertices", report.vertex_count},
+           {"triangles", report.triangle_count},
+           {"valid", report.valid()},
+           {"self_intersections_checked", report.self_intersections_checked},
+           {"defects", defects_json(report)}};
+  if (checked.input.repair) add_repair_json(out, *checked.input.repair);
+  if (report.valid()) {
+    const MassProperties mass = mass_properties(checked.input.mesh);
+    out["volume"] = mass.volume;
+    out["centroid"] = {mass.centroid.x, mass.centroid.y, mass.centroid.z};
+  }
+  std::cout << out.dump(2) << '\n';
+}
+
+void print_text(const ValidateArgs& args, const ValidatedMesh& checked) {
+  const ValidationReport& report = checked.report;
+  if (report.valid()) {
+    std::cout << args.mesh << ": valid closed oriented 2-manifold, " << report.vertex_count << " vertices, "
+              << report.triangle_count << " triangles, volume " << signed_volume(checked.input.mesh) << '\n';
+    return;
+  }
+  std::cout << args.mesh << ": " << report.vertex_count << " vertices, " << report.triangle_count << " triangles\n";
+  for (const Defect& d : report.defects) {
+    std::cout << "  " << defect_name(d.kind) << ": " << d.count << ", first " << d.first << '\n';
+  }
+}
+
+}  // namespace
+
+Command add_validate_command(CLI::App& app) {
+  auto args = std::make_shared<ValidateArgs>();
+  CLI::App* command = app.add_subcommand(
+      "validate", "Check that a mesh is a closed, oriented 2-manifold solid; name every defect with its count and "
+                  "first element. Exit 3 if it is not.");
+  command->add_option("mesh", args->mesh, "Mesh file (.off, .obj, .ply, .stl)")->required();
+  command->add_flag("--json", args->json, "Print the report as JSON");
+  command->add_flag("--repair", args->repair,
+                    repair_flag_help("The report is then of the repaired mesh (JSON: \"repair\" lists the "
+                                     "changes, \"repair_not_done\" what could not be done)."));
+  command->add_option("--out", args->out,
+                      "With --repair: write the repaired mesh to this file (format from its extension: .off, "
+                      ".obj, .ply, .stl), atomically, only if it is valid");
+  return {command, [args] { return run_validate(*args); }};
+}
+
+int run_validate(const ValidateArgs& args) {
+  std::optional<MeshFormat> out_format;
+  if (!args.out.empty()) {
+    if (!args.repair) throw UsageError("--out writes the repaired mesh: it needs --repair");
+    out_format = format_from_extension(args.out);
+    if (!out_format) throw UsageError("--out " + args.out + ": the extension must be .off, .obj, .ply or .stl");
+  }
+  const ValidatedMesh checked = read_and_validate(args.mesh, args.repair);
+  if (args.json) {
+    print_json(args, checked);
+  } else {
+    print_text(args, checked);
+  }
+  if (!checked.report.valid()) {
+    throw InvalidMeshError("invalid mesh " + args.mesh + (checked.input.repair ? " after --repair: " : ": ") +
+                           checked.report.summary());
+  }
+  if (out_format) {
+    OutputTransaction output;
+    output.write_mesh(args.out, checked.input.mesh, *out_format);
+    output.commit();
+    if (!args.json) std::cout << "wrote " << args.out << '\n';
+  }
+  return static_cast<int>(ExitCode::ok);
+}
+
+}  // namespace shatter::cli
