@@ -150,22 +150,25 @@ SliceResult cut_with_plane_kernel(const Mesh& mesh, const Plane& plane, const Sl
   return result;
 }
 
-// Writes every piece into `folder` as <side>-<index>.<format>, all or none;
-// returns the names in piece order.
-std::vector<std::string> write_pieces(const std::vector<Piece>& pieces, const std::filesystem::path& folder,
-                                      MeshFormat format) {
-  OutputTransaction output;
-  output.create_folder(folder);
+// The file name of every piece, in piece order: <side>-<index>.<format>, each
+// side counted from 0.
+std::vector<std::string> piece_names(const std::vector<Piece>& pieces, MeshFormat format) {
   std::vector<std::string> names;
   std::size_t below = 0, above = 0;
   for (const Piece& piece : pieces) {
     const std::size_t index = piece.side == "below" ? below++ : above++;
-    const std::string name = piece.side + "-" + std::to_string(index) + "." + std::string(format_name(format));
-    output.write_mesh(folder / name, piece.mesh, format);
-    names.push_back(name);
+    names.push_back(piece.side + "-" + std::to_string(index) + "." + std::string(format_name(format)));
   }
-  output.commit();
   return names;
+}
+
+// Writes every piece into `folder` under its name, all or none.
+void write_pieces(const std::vector<Piece>& pieces, const std::vector<std::string>& names,
+                  const std::filesystem::path& folder, MeshFormat format) {
+  OutputTransaction output;
+  output.create_folder(folder);
+  for (std::size_t i = 0; i < pieces.size(); ++i) output.write_mesh(folder / names[i], pieces[i].mesh, format);
+  output.commit();
 }
 
 }  // namespace
@@ -181,7 +184,8 @@ Command add_slice_command(CLI::App& app) {
                       "plane (default): vertices defined as meets of planes, never constructed; the cut is exact and "
                       "each piece is rounded once and certified valid (a piece that cannot be written valid fails "
                       "with exit 3). exact: CGAL exact rationals, rounded once to doubles. fast: rounded intersection "
-                      "points (topology always valid; pieces whose rounded embedding is not are counted)")
+                      "points. exact and fast pieces are validated after rounding; if one is not a valid mesh as "
+                      "written, the command fails with exit 3 and writes nothing")
       ->check(CLI::IsMember({"plane", "exact", "fast"}))
       ->capture_default_str();
   command->add_flag("--allow-self-intersections", args->allow_self_intersections,
@@ -222,24 +226,39 @@ int run_slice(const SliceArgs& args) {
   }
   const std::vector<Piece>& pieces = result.pieces;
 
-  // The fast kernel promises topology; count the pieces whose rounded embedding
-  // is degenerate or self-intersecting instead of hiding them.
-  std::size_t invalid_embeddings = 0;
+  // What is written validates when read back, whatever the kernel: the plane
+  // kernel certified its pieces already; fast and exact round after the cut, so
+  // a piece whose rounded mesh is degenerate or self-intersecting fails the
+  // command before anything is written. The check is validate_mesh on the
+  // bytes' own doubles: what `shatter validate` does to the file. With
+  // --allow-self-intersections the promise is closed and oriented: a piece may
+  // overlap itself, and where the input touched itself the file welds the two
+  // sides into one non-manifold vertex.
+  ValidationOptions piece_checks;
+  piece_checks.check_self_intersections = !args.allow_self_intersections;
+  const std::vector<std::string> names = piece_names(pieces, *format);
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    ValidationReport report = validate_mesh(pieces[i].mesh, piece_checks);
+    if (args.allow_self_intersections) {
+      std::erase_if(report.defects, [](const Defect& d) { return d.kind == DefectKind::non_manifold_vertex; });
+    }
+    if (!report.valid()) {
+      throw UnsupportedGeometryError("piece " + names[i] + " of the " + args.kernel +
+                                     " kernel is not a valid mesh as written (" + report.summary() +
+                                     "); nothing was written. The plane kernel (the default) certifies its pieces");
+    }
+  }
   json pieces_json = json::array();
   double total_volume = 0;
-  const std::vector<std::string> names = write_pieces(pieces, args.out, *format);
+  write_pieces(pieces, names, args.out, *format);
   for (std::size_t i = 0; i < pieces.size(); ++i) {
-    const ValidationReport report = validate_mesh(pieces[i].mesh);
-    const bool embedding_valid = report.valid();
-    invalid_embeddings += embedding_valid ? 0 : 1;
     const double volume = signed_volume(pieces[i].mesh);
     total_volume += volume;
     pieces_json.push_back({{"file", names[i]},
                            {"side", pieces[i].side},
                            {"vertices", pieces[i].mesh.vertex_count()},
                            {"triangles", pieces[i].mesh.triangle_count()},
-                           {"volume", volume},
-                           {"valid", embedding_valid}});
+                           {"volume", volume}});
   }
   if (args.json) {
     json out{{"input", args.mesh},
@@ -249,7 +268,6 @@ int run_slice(const SliceArgs& args) {
              {"cap", {{"method", result.cap_method}, {"loops", result.cap_loops}, {"triangles", result.cap_triangles}}},
              {"input_volume", signed_volume(mesh)},
              {"total_volume", total_volume},
-             {"invalid_embeddings", invalid_embeddings},
              {"pieces", pieces_json}};
     if (input.repair) add_repair_json(out, *input.repair);
     std::cout << out.dump(2) << '\n';
@@ -262,13 +280,8 @@ int run_slice(const SliceArgs& args) {
       const json& piece = pieces_json[i];
       const double volume = piece["volume"].get<double>();
       std::cout << "  " << piece["file"].get<std::string>() << ": " << piece["triangles"] << " triangles, volume "
-                << volume << (std::isfinite(volume) ? "" : " (beyond the double range)")
-                << (piece["valid"].get<bool>() ? "" : " (embedding not valid after rounding)") << '\n';
+                << volume << (std::isfinite(volume) ? "" : " (beyond the double range)") << '\n';
     }
-  }
-  if (invalid_embeddings > 0) {
-    std::cerr << "warning: " << invalid_embeddings
-              << " piece(s) have a degenerate or self-intersecting embedding (closed and oriented all the same)\n";
   }
   return static_cast<int>(ExitCode::ok);
 }
