@@ -155,9 +155,9 @@ export class Viewer {
       if (original.name === EXTERIOR && !this.exteriorMaterial) this.exteriorMaterial = original;
       o.userData.interior = interior;
       o.userData.originalMaterial = original;
-      o.userData.colourMaterial = new THREE.MeshStandardMaterial({
-        color: fragmentColour(colourIndex), roughness: 0.65, metalness: 0, side: THREE.FrontSide,
-      });
+      // A recording's floor is no fragment: it keeps its own material.
+      o.userData.colourMaterial = this.kind === 'recording' && !bodyOf(o) ? original
+        : new THREE.MeshStandardMaterial({ color: fragmentColour(colourIndex), roughness: 0.65, metalness: 0 });
     });
     this.applyMaterials();
   }
