@@ -177,7 +177,10 @@ export class Viewer {
         const glowing = o.userData.glowing || (o.userData.glowing = new Map());
         if (!glowing.has(material.uuid)) {
           const copy = material.clone();
-          if (copy.emissive) copy.emissive.setHex(0x664400);
+          if (copy.emissive) {
+            copy.emissive.setHex(0xff8800);
+            copy.emissiveIntensity = 0.5;
+          }
           glowing.set(material.uuid, copy);
         }
         material = glowing.get(material.uuid);
