@@ -26,6 +26,7 @@
 #include "shatter/meshtree/export.hpp"
 #include "shatter/meshtree/stats.hpp"
 #include "support/generators.hpp"
+#include "support/gltf.hpp"
 
 #include "shatter/meshtree/tinygltf.hpp"
 
@@ -195,36 +196,10 @@ std::vector<std::string> file_names_in(const fs::path& folder) {
   return names;
 }
 
-// --- GLB decoding --------------------------------------------------------------------
+// --- GLB decoding: support/gltf.hpp ------------------------------------------------
 
-tinygltf::Model decode_glb(const std::string& bytes) {
-  tinygltf::Model model;
-  tinygltf::TinyGLTF loader;
-  std::string error, warning;
-  const bool loaded = loader.LoadBinaryFromMemory(&model, &error, &warning,
-                                                  reinterpret_cast<const unsigned char*>(bytes.data()),
-                                                  static_cast<unsigned int>(bytes.size()));
-  INFO("tinygltf error: " << error << " warning: " << warning);
-  REQUIRE(loaded);
-  REQUIRE(error.empty());
-  REQUIRE(warning.empty());
-  return model;
-}
-
-// The elements of an accessor, as T (float or uint32), copied out of the buffer.
-template <class T>
-std::vector<T> accessor_values(const tinygltf::Model& model, int accessor_index, std::size_t components) {
-  const tinygltf::Accessor& accessor = model.accessors.at(static_cast<std::size_t>(accessor_index));
-  const tinygltf::BufferView& view = model.bufferViews.at(static_cast<std::size_t>(accessor.bufferView));
-  const tinygltf::Buffer& buffer = model.buffers.at(static_cast<std::size_t>(view.buffer));
-  const std::size_t count = accessor.count * components;
-  REQUIRE(view.byteStride == 0);
-  REQUIRE(view.byteOffset + accessor.byteOffset + count * sizeof(T) <= buffer.data.size());
-  REQUIRE(count * sizeof(T) <= view.byteLength);
-  std::vector<T> values(count);
-  std::memcpy(values.data(), buffer.data.data() + view.byteOffset + accessor.byteOffset, count * sizeof(T));
-  return values;
-}
+using test::accessor_values;
+using test::decode_glb;
 
 // The triangles of one primitive side (caps or not) of a mesh, in mesh order.
 std::vector<TriangleIndex> triangles_on(const Mesh& mesh, bool interior) {

@@ -10,7 +10,6 @@
 
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <string>
 #include <vector>
 
@@ -19,35 +18,13 @@
 #include "shatter/meshtree/export.hpp"
 #include "support/corpus.hpp"
 #include "support/generators.hpp"
-
-#include "shatter/meshtree/tinygltf.hpp"
+#include "support/gltf.hpp"
 
 using namespace shatter;
+using test::accessor_values;
+using test::decode_glb;
 
 namespace {
-
-tinygltf::Model decode_glb(const std::string& bytes) {
-  tinygltf::Model model;
-  tinygltf::TinyGLTF loader;
-  std::string error, warning;
-  const bool loaded = loader.LoadBinaryFromMemory(&model, &error, &warning,
-                                                  reinterpret_cast<const unsigned char*>(bytes.data()),
-                                                  static_cast<unsigned int>(bytes.size()));
-  INFO("tinygltf error: " << error << " warning: " << warning);
-  REQUIRE(loaded);
-  return model;
-}
-
-template <class T>
-std::vector<T> accessor_values(const tinygltf::Model& model, int accessor_index, std::size_t components) {
-  const tinygltf::Accessor& accessor = model.accessors.at(static_cast<std::size_t>(accessor_index));
-  const tinygltf::BufferView& view = model.bufferViews.at(static_cast<std::size_t>(accessor.bufferView));
-  const tinygltf::Buffer& buffer = model.buffers.at(static_cast<std::size_t>(view.buffer));
-  std::vector<T> values(accessor.count * components);
-  REQUIRE(view.byteOffset + accessor.byteOffset + values.size() * sizeof(T) <= buffer.data.size());
-  std::memcpy(values.data(), buffer.data.data() + view.byteOffset + accessor.byteOffset, values.size() * sizeof(T));
-  return values;
-}
 
 Vec3 unit_face_normal(const Mesh& mesh, TriangleIndex t) {
   const Triangle& tri = mesh.triangles[t];
