@@ -10,6 +10,7 @@
 
 #include "shatter/meshtree/file.hpp"
 #include "errors.hpp"
+#include "viewer_page.hpp"
 
 namespace shatter::cli {
 
@@ -17,36 +18,51 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr std::string_view glb_format = "glb";
+// What export writes: a folder of mesh files, one GLB, or one self-contained
+// viewer page.
+struct ExportFormat {
+  enum class Kind { mesh_files, glb, html } kind = Kind::mesh_files;
+  MeshFormat mesh = MeshFormat::off;  ///< for mesh_files
+};
 
-bool names_glb_file(const fs::path& path) {
+std::string lower_extension(const fs::path& path) {
   std::string extension = path.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension == ".glb";
+  return extension;
 }
 
-// The output format: --format if given, else glb for a .glb --out, else off.
-// nullopt stands for glb, which is not a MeshFormat.
-std::optional<MeshFormat> export_format(const ExportArgs& args) {
-  const bool out_is_glb = names_glb_file(args.out);
+// The output format: --format if given, else glb for a .glb --out, html for an
+// .html or .htm --out, else off.
+ExportFormat export_format(const ExportArgs& args) {
+  using Kind = ExportFormat::Kind;
+  const std::string extension = lower_extension(args.out);
+  const bool out_is_glb = extension == ".glb";
+  const bool out_is_html = extension == ".html" || extension == ".htm";
   if (args.format.empty()) {
-    if (out_is_glb) return std::nullopt;
-    return MeshFormat::off;
+    if (out_is_glb) return {Kind::glb};
+    if (out_is_html) return {Kind::html};
+    return {Kind::mesh_files, MeshFormat::off};
   }
-  if (args.format == glb_format) {
+  if (args.format == "glb" || args.format == "html") {
     if (fs::is_directory(args.out)) {
-      throw UsageError("--format glb writes one file, but --out " + args.out + " is a folder");
+      throw UsageError("--format " + args.format + " writes one file, but --out " + args.out + " is a folder");
     }
-    return std::nullopt;
+    if (args.format == "glb" && out_is_html) {
+      throw UsageError("--out " + args.out + " names an HTML file but --format is glb");
+    }
+    if (args.format == "html" && out_is_glb) {
+      throw UsageError("--out " + args.out + " names a .glb file but --format is html");
+    }
+    return {args.format == "glb" ? Kind::glb : Kind::html};
   }
   const std::optional<MeshFormat> format = parse_mesh_format(args.format);
-  if (!format) throw UsageError("--format must be off, obj, ply, stl or glb, got '" + args.format + "'");
-  if (out_is_glb) {
-    throw UsageError("--out " + args.out + " names a .glb file but --format is " + args.format +
-                     ", which writes a folder of mesh files");
+  if (!format) throw UsageError("--format must be off, obj, ply, stl, glb or html, got '" + args.format + "'");
+  if (out_is_glb || out_is_html) {
+    throw UsageError("--out " + args.out + " names " + (out_is_glb ? "a .glb" : "an HTML") + " file but --format is " +
+                     args.format + ", which writes a folder of mesh files");
   }
-  return format;
+  return {Kind::mesh_files, *format};
 }
 
 NodeSelection selection_of(const std::string& text) {
@@ -80,20 +96,23 @@ Command add_export_command(CLI::App& app) {
   auto args = std::make_shared<ExportArgs>();
   CLI::App* command = app.add_subcommand(
       "export",
-      "Write the nodes of a .shatter mesh tree as mesh files (one per node, into a folder) or as one glTF binary "
-      "(.glb) holding the whole tree as a node hierarchy.");
+      "Write the nodes of a .shatter mesh tree as mesh files (one per node, into a folder), as one glTF binary "
+      "(.glb) holding the whole tree as a node hierarchy, or as one self-contained HTML page: the viewer with the "
+      "tree inline, which opens from disk in a browser with no server (see `shatter view`).");
   command->add_option("tree", args->input, "Mesh tree file (.shatter)")->required();
   command->add_option("--out", args->out,
                       "Output folder for mesh files (created if missing; leaf-0000.off, ... for --nodes leaves, "
-                      "node-00012.off, ... by node index otherwise), or a .glb file")
+                      "node-00012.off, ... by node index otherwise), a .glb file, or an .html file")
       ->required();
   command->add_option("--format", args->format,
-                      "off, obj, ply, stl (as `slice` writes them, coordinates kept exactly) or glb (float32 "
-                      "vertices: for viewing). Default: glb when --out ends in .glb, else off")
-      ->check(CLI::IsMember({"off", "obj", "ply", "stl", "glb"}));
+                      "off, obj, ply, stl (as `slice` writes them, coordinates kept exactly), glb (float32 "
+                      "vertices: for viewing) or html (the viewer page with the GLB inline). Default: glb when --out "
+                      "ends in .glb, html when it ends in .html, else off")
+      ->check(CLI::IsMember({"off", "obj", "ply", "stl", "glb", "html"}));
   command->add_option("--nodes", args->nodes,
                       "Which nodes: leaves (the fragments), all (every level, overlapping), or depth:K (the nodes "
-                      "at depth K and the leaves above it: the solid cut at that level; the root is depth 0)")
+                      "at depth K and the leaves above it: the solid cut at that level; the root is depth 0). "
+                      "Default: leaves; all for html, whose depth slider shows every level")
       ->check(CLI::Validator(
           [](std::string& text) -> std::string {
             try {
@@ -103,31 +122,39 @@ Command add_export_command(CLI::App& app) {
               return e.what();
             }
           },
-          "leaves|all|depth:K", "node selection"))
-      ->capture_default_str();
+          "leaves|all|depth:K", "node selection"));
   return {command, [args] { return run_export(*args); }};
 }
 
 int run_export(const ExportArgs& args) {
-  const std::optional<MeshFormat> format = export_format(args);
-  const NodeSelection selection = selection_of(args.nodes);
+  using Kind = ExportFormat::Kind;
+  const ExportFormat format = export_format(args);
+  if (format.kind == Kind::html) require_viewer("export --format html");
+  // The viewer's depth slider needs every level, so a page holds all nodes unless told otherwise.
+  const NodeSelection selection = selection_of(args.nodes.empty() ? (format.kind == Kind::html ? "all" : "leaves")
+                                                                  : args.nodes);
   const MeshTree tree = read_shatter_file(args.input);
   const std::vector<NodeIndex> nodes = select_nodes(tree, selection);
 
   OutputTransaction output;
-  if (!format) {
-    const std::string bytes = encode_glb(tree, nodes);
+  if (format.kind != Kind::mesh_files) {
+    std::string bytes = encode_glb(tree, nodes);
+    if (format.kind == Kind::html) {
+      bytes = self_contained_viewer_page(fs::path(args.input).filename().string(), bytes);
+    }
     if (const fs::path folder = fs::path(args.out).parent_path(); !folder.empty()) output.create_folder(folder);
     output.write_file(args.out, bytes);
     output.commit();
-    std::cout << "wrote " << args.out << ": " << tree.nodes.size() << " tree nodes, meshes on " << nodes.size()
-              << " (" << node_selection_name(selection) << "), " << triangles_of(tree, nodes) << " triangles\n";
+    std::cout << "wrote " << args.out << (format.kind == Kind::html ? " (the viewer with the tree inline)" : "")
+              << ": " << tree.nodes.size() << " tree nodes, meshes on " << nodes.size() << " ("
+              << node_selection_name(selection) << "), " << triangles_of(tree, nodes) << " triangles\n";
     return static_cast<int>(ExitCode::ok);
   }
+  const MeshFormat mesh_format = format.mesh;
   const std::vector<fs::path> paths =
-      write_node_mesh_files(output, tree, nodes, args.out, *format, file_naming_for(selection));
+      write_node_mesh_files(output, tree, nodes, args.out, mesh_format, file_naming_for(selection));
   output.commit();
-  std::cout << "wrote " << paths.size() << " " << format_name(*format) << " file(s) ("
+  std::cout << "wrote " << paths.size() << " " << format_name(mesh_format) << " file(s) ("
             << node_selection_name(selection) << ") to " << args.out;
   if (!paths.empty()) {
     std::cout << ": " << paths.front().filename().string();

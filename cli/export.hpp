@@ -1,6 +1,7 @@
 #pragma once
-// `shatter export <file.shatter> --out <folder|file.glb> [--format off|obj|ply|stl|glb]
-// [--nodes leaves|all|depth:K]`: a .shatter mesh tree as mesh files or one GLB.
+// `shatter export <file.shatter> --out <folder|file.glb|file.html> [--format off|obj|ply|stl|glb|html]
+// [--nodes leaves|all|depth:K]`: a .shatter mesh tree as mesh files, one GLB, or
+// one self-contained viewer page.
 
 #include <CLI/CLI.hpp>
 
@@ -20,10 +21,12 @@ namespace shatter::cli {
 struct ExportArgs {
   std::string input;
   std::string out;
-  /// off, obj, ply, stl or glb; empty: glb when --out ends in .glb, else off.
+  /// off, obj, ply, stl, glb or html; empty: glb when --out ends in .glb, html
+  /// when it ends in .html or .htm, else off.
   std::string format;
-  /// "leaves", "all" or "depth:K" (parse_node_selection).
-  std::string nodes = "leaves";
+  /// "leaves", "all" or "depth:K" (parse_node_selection); empty: "all" for
+  /// html, "leaves" otherwise.
+  std::string nodes;
 };
 
 /// Declares the `export` subcommand on `app`.
@@ -31,13 +34,14 @@ Command add_export_command(CLI::App& app);
 
 /// Reads the tree and writes the selected nodes: one mesh file per node into the
 /// --out folder (created if missing; leaf-0000.off, ... for leaves,
-/// node-00012.off, ... otherwise), or one GLB file (its folder created if
+/// node-00012.off, ... otherwise), one GLB file, or one HTML page holding the
+/// viewer and that GLB (self_contained_viewer_page; its folder created if
 /// missing). All files or none (OutputTransaction). Prints what it wrote on
 /// stdout. Returns 0.
-/// Throws UsageError for a bad --format or --nodes, or --format naming a mesh
-/// format while --out ends in .glb (or glb while it names an existing folder),
-/// before reading; CorruptFileError or IoError from reading the tree; IoError
-/// from writing.
+/// Throws UsageError for a bad --format or --nodes, a --format that contradicts
+/// the --out extension (or glb or html while --out names an existing folder),
+/// or html in a build without the viewer, before reading; CorruptFileError or
+/// IoError from reading the tree; IoError from writing.
 int run_export(const ExportArgs& args);
 
 /// Writes the mesh of every node in `nodes` into `folder` (created if missing)

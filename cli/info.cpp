@@ -5,11 +5,15 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <stdexcept>
+#include <string>
 
 #include "shatter/meshtree/bonds.hpp"
+#include "shatter/meshtree/export.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/meshtree/stats.hpp"
 #include "errors.hpp"
+#include "node_json.hpp"
 #include "tree_stats_json.hpp"
 
 namespace shatter::cli {
@@ -53,6 +57,17 @@ void print_info_text(const InfoArgs& args, const MeshTree& tree, const TreeStats
             << " on caps) over " << stats.leaf_vertices << " vertices\n";
 }
 
+// One line per node: what the viewer shows when the node is clicked.
+void print_nodes_text(const nlohmann::ordered_json& nodes) {
+  for (const nlohmann::ordered_json& node : nodes) {
+    std::cout << "  node " << node["node"];
+    if (node.contains("leaf")) std::cout << " (leaf " << node["leaf"] << ")";
+    std::cout << ", depth " << node["depth"] << ": volume " << node["volume"].get<double>() << ", "
+              << node["triangles"] << " triangles (" << node["cap_triangles"] << " on caps), "
+              << node["bonds"].size() << " bonds\n";
+  }
+}
+
 void print_bond_rules_text(const BondRuleComparison& rules) {
   std::cout << "  the seed's bounding-box rule: " << rules.box_bonds << " bonded pairs, " << rules.false_box_bonds
             << " of them false (no cap contact); " << rules.missed_true_bonds << " of the " << rules.true_bonds
@@ -73,19 +88,39 @@ Command add_info_command(CLI::App& app) {
                     "Also apply the seed's bond rule (leaves whose bounding boxes overlap) and count its false "
                     "bonds (pairs with no cap contact) and the true bonds it misses, against the stored true-contact "
                     "bonds recomputed from the meshes");
+  command->add_option("--nodes", args->nodes,
+                    "Also describe these nodes one by one: leaves (the fragments), all, or depth:K (the solid cut at "
+                    "depth K), each with its depth, leaf range, volume, centroid, triangles and the bonds that cross "
+                    "its boundary: what the viewer shows when a fragment is clicked");
   return {command, [args] { return run_info(*args); }};
 }
 
 int run_info(const InfoArgs& args) {
+  std::optional<NodeSelection> selection;
+  if (!args.nodes.empty()) {
+    try {
+      selection = parse_node_selection(args.nodes);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--nodes: ") + e.what());
+    }
+  }
   const MeshTree tree = read_shatter_file(args.input);
   const TreeStats stats = tree_stats(tree);
   std::optional<BondRuleComparison> rules;
   if (args.compare_bond_rules) rules = compare_bond_rules(tree);
+  nlohmann::ordered_json nodes;
+  if (selection) nodes = nodes_json(tree, select_nodes(tree, *selection));
   if (args.json) {
-    std::cout << info_json(args, tree, stats, rules).dump(2) << '\n';
+    json out = info_json(args, tree, stats, rules);
+    if (selection) {
+      out["node_selection"] = node_selection_name(*selection);
+      out["node_details"] = std::move(nodes);
+    }
+    std::cout << out.dump(2) << '\n';
   } else {
     print_info_text(args, tree, stats);
     if (rules) print_bond_rules_text(*rules);
+    if (selection) print_nodes_text(nodes);
   }
   return static_cast<int>(ExitCode::ok);
 }

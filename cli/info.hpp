@@ -1,6 +1,6 @@
 #pragma once
-// `shatter info <file.shatter> [--json] [--compare-bond-rules]`: what a mesh tree
-// holds and how it was made.
+// `shatter info <file.shatter> [--json] [--compare-bond-rules] [--nodes leaves|all|depth:K]`:
+// what a mesh tree holds and how it was made.
 
 #include <CLI/CLI.hpp>
 
@@ -14,6 +14,9 @@ struct InfoArgs {
   std::string input;
   bool json = false;
   bool compare_bond_rules = false;  ///< also count the seed's bounding-box bonds against the true ones
+  /// Also describe these nodes, one by one (node_json.hpp): "leaves", "all" or
+  /// "depth:K" as `export --nodes` takes them; empty: none.
+  std::string nodes;
 };
 
 /// Declares the `info` subcommand on `app`.
@@ -22,7 +25,9 @@ Command add_info_command(CLI::App& app);
 /// Reads the tree and prints its statistics (tree_stats), the shatter version
 /// that built it when the file records one, and its build options, as text or,
 /// with --json, as one JSON object ("shatter_version" is null when the file
-/// records none). Returns 0. Throws CorruptFileError or IoError from reading
+/// records none). With --nodes, also each selected node (JSON: "node_details",
+/// as nodes_json gives them; text: one line each). Returns 0. Throws UsageError
+/// for a bad --nodes (before reading), CorruptFileError or IoError from reading
 /// the tree.
 int run_info(const InfoArgs& args);
 

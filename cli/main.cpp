@@ -16,6 +16,7 @@
 #include "simulate.hpp"
 #include "slice.hpp"
 #include "validate.hpp"
+#include "view.hpp"
 
 int main(int argc, char** argv) {
   using namespace shatter;
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
       cli::add_info_command(app),
       cli::add_export_command(app),
       cli::add_simulate_command(app),
+      cli::add_view_command(app),
   };
 
   try {

@@ -26,6 +26,7 @@
 #include "shatter/meshtree/export.hpp"
 #include "shatter/meshtree/stats.hpp"
 #include "support/generators.hpp"
+#include "support/gltf.hpp"
 
 #include "shatter/meshtree/tinygltf.hpp"
 
@@ -195,36 +196,10 @@ std::vector<std::string> file_names_in(const fs::path& folder) {
   return names;
 }
 
-// --- GLB decoding --------------------------------------------------------------------
+// --- GLB decoding: support/gltf.hpp ------------------------------------------------
 
-tinygltf::Model decode_glb(const std::string& bytes) {
-  tinygltf::Model model;
-  tinygltf::TinyGLTF loader;
-  std::string error, warning;
-  const bool loaded = loader.LoadBinaryFromMemory(&model, &error, &warning,
-                                                  reinterpret_cast<const unsigned char*>(bytes.data()),
-                                                  static_cast<unsigned int>(bytes.size()));
-  INFO("tinygltf error: " << error << " warning: " << warning);
-  REQUIRE(loaded);
-  REQUIRE(error.empty());
-  REQUIRE(warning.empty());
-  return model;
-}
-
-// The elements of an accessor, as T (float or uint32), copied out of the buffer.
-template <class T>
-std::vector<T> accessor_values(const tinygltf::Model& model, int accessor_index, std::size_t components) {
-  const tinygltf::Accessor& accessor = model.accessors.at(static_cast<std::size_t>(accessor_index));
-  const tinygltf::BufferView& view = model.bufferViews.at(static_cast<std::size_t>(accessor.bufferView));
-  const tinygltf::Buffer& buffer = model.buffers.at(static_cast<std::size_t>(view.buffer));
-  const std::size_t count = accessor.count * components;
-  REQUIRE(view.byteStride == 0);
-  REQUIRE(view.byteOffset + accessor.byteOffset + count * sizeof(T) <= buffer.data.size());
-  REQUIRE(count * sizeof(T) <= view.byteLength);
-  std::vector<T> values(count);
-  std::memcpy(values.data(), buffer.data.data() + view.byteOffset + accessor.byteOffset, count * sizeof(T));
-  return values;
-}
+using test::accessor_values;
+using test::decode_glb;
 
 // The triangles of one primitive side (caps or not) of a mesh, in mesh order.
 std::vector<TriangleIndex> triangles_on(const Mesh& mesh, bool interior) {
@@ -254,12 +229,13 @@ void require_primitive_matches(const tinygltf::Model& model, const tinygltf::Pri
   const std::vector<TriangleIndex> triangles = triangles_on(mesh, interior);
   REQUIRE(indices.size() == 3 * triangles.size());
 
-  const bool has_normals = primitive.attributes.count("NORMAL") == 1;
+  // Every vertex has a normal (tests/viewer/test_glb_normals.cpp checks which);
+  // on the original surface it is the input's where the mesh has normals.
+  REQUIRE(primitive.attributes.count("NORMAL") == 1);
+  const bool has_input_normals = mesh.corners.has_normals() && !interior;
   const bool has_uvs = primitive.attributes.count("TEXCOORD_0") == 1;
-  REQUIRE(has_normals == mesh.corners.has_normals());
   REQUIRE(has_uvs == mesh.corners.has_uvs());
-  const std::vector<float> normals =
-      has_normals ? accessor_values<float>(model, primitive.attributes.at("NORMAL"), 3) : std::vector<float>{};
+  const std::vector<float> normals = accessor_values<float>(model, primitive.attributes.at("NORMAL"), 3);
   const std::vector<float> uvs =
       has_uvs ? accessor_values<float>(model, primitive.attributes.at("TEXCOORD_0"), 2) : std::vector<float>{};
 
@@ -276,7 +252,7 @@ void require_primitive_matches(const tinygltf::Model& model, const tinygltf::Pri
         CHECK(positions[3 * vertex + axis] <= position_accessor.maxValues[axis]);
       }
       const std::size_t corner = 3 * triangles[i] + c;
-      if (has_normals) {
+      if (has_input_normals) {
         CHECK(normals[3 * vertex] == static_cast<float>(mesh.corners.normals[corner].x));
         CHECK(normals[3 * vertex + 2] == static_cast<float>(mesh.corners.normals[corner].z));
       }
@@ -526,13 +502,14 @@ TEST_CASE("GLB primitives count the tree's exterior and cap triangles") {
     CHECK(triangle_count(model.meshes[m].primitives[1]) == 2);
     CHECK(model.meshes[m].primitives[1].material == 1);
   }
-  // Without attributes the welded vertices are kept: a box's 8 corners, split
-  // between the primitives (the cap square's 4 are also on the exterior).
+  // Without attributes each face is shaded flat: a box face's two triangles
+  // share their face normal, so every face has its own 4 vertices (6 faces on
+  // the root, 5 on the exterior of a child and 1 on its cap).
   const auto vertex_count = [&](const tinygltf::Primitive& primitive) {
     return model.accessors.at(static_cast<std::size_t>(primitive.attributes.at("POSITION"))).count;
   };
-  CHECK(vertex_count(model.meshes[0].primitives[0]) == 8);
-  CHECK(vertex_count(model.meshes[1].primitives[0]) == 8);
+  CHECK(vertex_count(model.meshes[0].primitives[0]) == 24);
+  CHECK(vertex_count(model.meshes[1].primitives[0]) == 20);
   CHECK(vertex_count(model.meshes[1].primitives[1]) == 4);
   const tinygltf::Accessor& root_positions =
       model.accessors.at(static_cast<std::size_t>(model.meshes[0].primitives[0].attributes.at("POSITION")));
@@ -546,9 +523,12 @@ TEST_CASE("GLB un-welds vertices where corner attributes differ") {
   const std::string bytes = encode_glb(tree, leaves);
   require_glb_matches(tree, leaves, bytes);
   const tinygltf::Model model = decode_glb(bytes);
-  // Face normals make every box face its own 4 vertices.
+  // Face normals make every box face its own 4 vertices. Only on the original
+  // surface: caps take their cut plane's normal, and this hand-made tree marks
+  // a slab's faces of several cuts with one cap surface.
   for (const tinygltf::Mesh& mesh : model.meshes) {
     for (const tinygltf::Primitive& primitive : mesh.primitives) {
+      if (primitive.material != 0) continue;
       const std::size_t triangles = model.accessors.at(static_cast<std::size_t>(primitive.indices)).count / 3;
       const std::size_t vertices = model.accessors.at(static_cast<std::size_t>(primitive.attributes.at("NORMAL"))).count;
       CHECK(vertices == 2 * triangles);

@@ -6,7 +6,9 @@
 #include <array>
 #include <bit>
 #include <charconv>
+#include <cmath>
 #include <cstring>
+#include <initializer_list>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -176,7 +178,7 @@ struct CornerKeyHash {
 // The vertices and triangles of one primitive, in glTF's float layout.
 struct PrimitiveData {
   std::vector<float> positions;  // xyz
-  std::vector<float> normals;    // xyz, empty if absent
+  std::vector<float> normals;    // xyz, one per vertex
   std::vector<float> uvs;        // uv, empty if absent
   std::vector<float> tangents;   // xyzw, empty if absent
   std::vector<std::uint32_t> indices;
@@ -201,9 +203,72 @@ void check_mesh_shape(const Mesh& mesh, NodeIndex node) {
   }
 }
 
+// The unit normal of a triangle from its double positions: the cross product of
+// two edges, each first scaled by its largest component so that tiny or huge
+// coordinates neither underflow nor overflow. A triangle without area (never
+// in a valid mesh) covers no pixel; it gets +z, which shades nothing wrong.
+Vec3 face_normal(const Mesh& mesh, const Triangle& triangle) {
+  const auto scaled = [](Vec3 v) {
+    const double largest = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+    return largest > 0 ? v * (1.0 / largest) : v;
+  };
+  const Vec3 a = mesh.positions[triangle[0]];
+  const Vec3 n = cross(scaled(mesh.positions[triangle[1]] - a), scaled(mesh.positions[triangle[2]] - a));
+  const double length = norm(n);
+  if (!(length > 0) || !std::isfinite(length)) return {0, 0, 1};
+  return n * (1.0 / length);
+}
+
+// The outward unit normal of `node`'s caps on the cut of node `cut`: that cut
+// plane's normal, pointing away from the side the node lies on. The side is
+// read from the tree (the child of `cut` the node descends from), so it is
+// exact. A cap whose cut is not an ancestor, or has no plane (only in a tree
+// made by hand), takes its first triangle's own normal instead.
+Vec3 cap_normal(const MeshTree& tree, NodeIndex node, NodeIndex cut, const Mesh& mesh, const Triangle& triangle) {
+  const Vec3 plane_normal = normalized(tree.nodes[cut].plane.normal);
+  if (!(norm(plane_normal) > 0) || !is_finite(plane_normal)) return face_normal(mesh, triangle);  // no plane stored
+  NodeIndex child = node;
+  while (child < tree.nodes.size() && tree.nodes[child].parent != cut && tree.nodes[child].parent != no_node) {
+    child = tree.nodes[child].parent;
+  }
+  if (child < tree.nodes.size() && tree.nodes[child].parent == cut) {
+    // The side n·x + d < 0 lies below the plane, so its cap faces +n.
+    return tree.nodes[child].above_parent_plane ? -plane_normal : plane_normal;
+  }
+  return face_normal(mesh, triangle);
+}
+
+// The normal glTF gets at every corner of `node`'s mesh (3 per triangle): the
+// input's per-corner normals on the original surface where the mesh has them,
+// else each triangle's own (flat) normal; on caps always the cut plane's,
+// outward, so a cap is flat and its edge with the surface stays a sharp crease.
+std::vector<Vec3> export_normals(const MeshTree& tree, NodeIndex node) {
+  const Mesh& mesh = tree.nodes[node].mesh;
+  std::vector<Vec3> normals;
+  normals.reserve(3 * mesh.triangle_count());
+  std::unordered_map<SurfaceId, Vec3> cap_normal_of;
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const SurfaceId surface = mesh.surfaces[t];
+    Vec3 flat;
+    if (surface != original_surface && surface - 1 < tree.nodes.size()) {
+      const auto [found, inserted] = cap_normal_of.try_emplace(surface);
+      if (inserted) found->second = cap_normal(tree, node, surface - 1, mesh, mesh.triangles[t]);
+      flat = found->second;
+    } else if (mesh.corners.has_normals()) {
+      for (std::size_t c = 0; c < 3; ++c) normals.push_back(mesh.corners.normals[3 * t + c]);
+      continue;
+    } else {
+      flat = face_normal(mesh, mesh.triangles[t]);
+    }
+    normals.insert(normals.end(), {flat, flat, flat});
+  }
+  return normals;
+}
+
 // The triangles of `mesh` whose surface is (interior) or is not (exterior) a cap,
-// with each welded vertex split once per distinct corner attribute combination.
-PrimitiveData primitive_of(const Mesh& mesh, bool interior) {
+// with each welded vertex split once per distinct combination of its corner's
+// normal (`normals`, 3 per triangle) and attributes.
+PrimitiveData primitive_of(const Mesh& mesh, const std::vector<Vec3>& normals, bool interior) {
   const CornerAttributes& corners = mesh.corners;
   PrimitiveData data;
   std::unordered_map<CornerKey, std::uint32_t, CornerKeyHash> vertex_of_corner;
@@ -212,14 +277,12 @@ PrimitiveData primitive_of(const Mesh& mesh, bool interior) {
     for (std::size_t c = 0; c < 3; ++c) {
       const std::size_t corner = 3 * t + c;
       const VertexIndex vertex = mesh.triangles[t][c];
+      const Vec3 n = normals[corner];
       CornerKey key;
       key.bits[0] = vertex;
-      if (corners.has_normals()) {
-        const Vec3 n = corners.normals[corner];
-        key.bits[1] = std::bit_cast<std::uint64_t>(n.x);
-        key.bits[2] = std::bit_cast<std::uint64_t>(n.y);
-        key.bits[3] = std::bit_cast<std::uint64_t>(n.z);
-      }
+      key.bits[1] = std::bit_cast<std::uint64_t>(n.x);
+      key.bits[2] = std::bit_cast<std::uint64_t>(n.y);
+      key.bits[3] = std::bit_cast<std::uint64_t>(n.z);
       if (corners.has_uvs()) {
         key.bits[4] = std::bit_cast<std::uint64_t>(corners.uvs[corner].x);
         key.bits[5] = std::bit_cast<std::uint64_t>(corners.uvs[corner].y);
@@ -237,11 +300,7 @@ PrimitiveData primitive_of(const Mesh& mesh, bool interior) {
       const Vec3 p = mesh.positions[vertex];
       data.positions.insert(data.positions.end(),
                             {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)});
-      if (corners.has_normals()) {
-        const Vec3 n = corners.normals[corner];
-        data.normals.insert(data.normals.end(),
-                            {static_cast<float>(n.x), static_cast<float>(n.y), static_cast<float>(n.z)});
-      }
+      data.normals.insert(data.normals.end(), {static_cast<float>(n.x), static_cast<float>(n.y), static_cast<float>(n.z)});
       if (corners.has_uvs()) {
         const Vec2 uv = corners.uvs[corner];
         data.uvs.insert(data.uvs.end(), {static_cast<float>(uv.x), static_cast<float>(1.0 - uv.y)});
@@ -321,7 +380,7 @@ class GltfWriter {
     primitive.mode = TINYGLTF_MODE_TRIANGLES;
     primitive.material = material;
     primitive.attributes["POSITION"] = add_position_accessor(data.positions);
-    if (!data.normals.empty()) primitive.attributes["NORMAL"] = add_float_accessor(data.normals, TINYGLTF_TYPE_VEC3, 3);
+    primitive.attributes["NORMAL"] = add_float_accessor(data.normals, TINYGLTF_TYPE_VEC3, 3);
     if (!data.uvs.empty()) primitive.attributes["TEXCOORD_0"] = add_float_accessor(data.uvs, TINYGLTF_TYPE_VEC2, 2);
     if (!data.tangents.empty()) {
       primitive.attributes["TANGENT"] = add_float_accessor(data.tangents, TINYGLTF_TYPE_VEC4, 4);
@@ -333,11 +392,11 @@ class GltfWriter {
 
   // The mesh of a tree node, or -1 when it has no triangles (glTF needs at
   // least one primitive, and no primitive may be empty).
-  int add_mesh(const Mesh& mesh, const std::string& name) {
+  int add_mesh(const Mesh& mesh, const std::vector<Vec3>& normals, const std::string& name) {
     tinygltf::Mesh gltf_mesh;
     gltf_mesh.name = name;
     for (const bool interior : {false, true}) {
-      const PrimitiveData data = primitive_of(mesh, interior);
+      const PrimitiveData data = primitive_of(mesh, normals, interior);
       if (data.indices.empty()) continue;
       gltf_mesh.primitives.push_back(add_primitive(data, interior ? interior_material : exterior_material));
     }
@@ -368,6 +427,19 @@ tinygltf::Value count_value(std::uint64_t count) {
   return tinygltf::Value(static_cast<double>(count));
 }
 
+tinygltf::Value number_array(std::initializer_list<double> values) {
+  tinygltf::Value::Array array;
+  for (double value : values) array.emplace_back(value);
+  return tinygltf::Value(std::move(array));
+}
+
+tinygltf::Value vec3_value(Vec3 v) { return number_array({v.x, v.y, v.z}); }
+
+std::size_t cap_triangle_count(const Mesh& mesh) {
+  return static_cast<std::size_t>(
+      std::count_if(mesh.surfaces.begin(), mesh.surfaces.end(), [](SurfaceId s) { return s != original_surface; }));
+}
+
 tinygltf::Value extras_of(const MeshTreeNode& node, NodeIndex index) {
   tinygltf::Value::Object extras;
   extras["tree_node"] = count_value(index);
@@ -375,14 +447,37 @@ tinygltf::Value extras_of(const MeshTreeNode& node, NodeIndex index) {
   extras["first_leaf"] = count_value(node.first_leaf);
   extras["leaf_count"] = count_value(node.leaf_count);
   extras["volume"] = tinygltf::Value(node.mass.volume);
+  extras["centroid"] = vec3_value(node.mass.centroid);
+  extras["triangles"] = count_value(node.mesh.triangle_count());
+  extras["cap_triangles"] = count_value(cap_triangle_count(node.mesh));
   if (node.is_leaf()) {
     extras["leaf"] = count_value(node.first_leaf);
   } else {
     const Plane& plane = node.plane;
-    extras["plane"] = tinygltf::Value(tinygltf::Value::Array{
-        tinygltf::Value(plane.normal.x), tinygltf::Value(plane.normal.y), tinygltf::Value(plane.normal.z),
-        tinygltf::Value(plane.offset)});
+    extras["plane"] = number_array({plane.normal.x, plane.normal.y, plane.normal.z, plane.offset});
   }
+  return tinygltf::Value(std::move(extras));
+}
+
+// The scene's extras: who made the tree and its bonds, so a viewer can draw and
+// list them without the .shatter file.
+tinygltf::Value scene_extras(const MeshTree& tree) {
+  tinygltf::Value::Array bonds;
+  bonds.reserve(tree.bonds.size());
+  for (const Bond& bond : tree.bonds) {
+    tinygltf::Value::Object entry;
+    entry["first"] = count_value(bond.first);
+    entry["second"] = count_value(bond.second);
+    entry["cut_node"] = count_value(bond.cut_node);
+    entry["area"] = tinygltf::Value(bond.area);
+    entry["centroid"] = vec3_value(bond.centroid);
+    entry["normal"] = vec3_value(bond.normal);
+    bonds.emplace_back(std::move(entry));
+  }
+  tinygltf::Value::Object extras;
+  extras["shatter_version"] = tinygltf::Value(tree.shatter_version);
+  extras["leaves"] = count_value(tree.leaf_count());
+  extras["bonds"] = tinygltf::Value(std::move(bonds));
   return tinygltf::Value(std::move(extras));
 }
 
@@ -418,12 +513,13 @@ std::string encode_glb(const MeshTree& tree, std::span<const NodeIndex> selectio
     }
     if (selected[i]) {
       check_mesh_shape(node.mesh, i);
-      gltf_node.mesh = writer.add_mesh(node.mesh, gltf_node.name);
+      gltf_node.mesh = writer.add_mesh(node.mesh, export_normals(tree, i), gltf_node.name);
     }
   }
 
   tinygltf::Scene scene;
   scene.name = "mesh tree";
+  scene.extras = scene_extras(tree);
   if (!tree.nodes.empty()) scene.nodes.push_back(0);
   model.scenes.push_back(std::move(scene));
   model.defaultScene = 0;

@@ -96,21 +96,26 @@ inline constexpr std::string_view glb_interior_material = "interior";
 /// its children those of the tree node, named "leaf L" for leaf L and "node i"
 /// otherwise, with identity transforms (meshes are in world coordinates). Each
 /// node's `extras` holds {"tree_node", "depth", "first_leaf", "leaf_count",
-/// "volume"}, plus "leaf" for a leaf or "plane" [nx, ny, nz, d] (the cut
-/// n·x + d = 0) for an internal node. The nodes in `selection` get a mesh of up to
-/// two triangle primitives: the original surface (surface id 0) with material 0
-/// "exterior", and the caps (surface id > 0) with material 1 "interior"; an empty
-/// primitive is left out (the root has no caps), and a node without triangles
-/// gets no mesh.
+/// "volume", "centroid" [x, y, z] (of volume), "triangles", "cap_triangles"},
+/// plus "leaf" for a leaf or "plane" [nx, ny, nz, d] (the cut n·x + d = 0) for an
+/// internal node. The scene's `extras` holds {"shatter_version", "leaves",
+/// "bonds"}, each bond {"first", "second" (leaf indices), "cut_node", "area",
+/// "centroid" [x, y, z], "normal" [x, y, z]} as MeshTree::bonds has them. The
+/// nodes in `selection` get a mesh of up to two triangle primitives: the original
+/// surface (surface id 0) with material 0 "exterior", and the caps (surface id >
+/// 0) with material 1 "interior"; an empty primitive is left out (the root has no
+/// caps), and a node without triangles gets no mesh.
 ///
 /// glTF stores vertices as 32-bit floats, so positions are rounded to float here:
 /// a GLB is for looking at, never for getting exact geometry back (use the
-/// .shatter file or mesh files for that). Per-corner normals, UVs (as (u, 1 - v):
-/// glTF's v axis points down the image, OBJ's and PLY's up) and tangents are
-/// exported where the mesh has them, by splitting each welded vertex into one
-/// glTF vertex per distinct attribute combination; without attributes the welded
-/// vertices are kept (viewers then shade flat, as glTF prescribes). Indices are
-/// UNSIGNED_INT; POSITION accessors carry min and max.
+/// .shatter file or mesh files for that). Every vertex has a NORMAL, so every
+/// viewer shades it: on the original surface the mesh's per-corner normals where
+/// it has them, else each triangle's own (flat shading); on caps the cut plane's
+/// unit normal pointing out of the node, so a cap is flat and its crease with the
+/// surface stays sharp. UVs (as (u, 1 - v): glTF's v axis points down the image,
+/// OBJ's and PLY's up) and tangents are exported where the mesh has them. Each
+/// welded vertex is split into one glTF vertex per distinct combination of normal
+/// and attributes. Indices are UNSIGNED_INT; POSITION accessors carry min and max.
 ///
 /// Deterministic: the same tree and selection give the same bytes. Throws
 /// std::invalid_argument for a selected or child node index out of range,

@@ -1,0 +1,398 @@
+#include "view.hpp"
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+#include <pthread.h>
+#include <sys/socket.h>
+#include <signal.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/export.hpp"
+#include "shatter/meshtree/file.hpp"
+#include "shatter/meshtree/tinygltf.hpp"
+#include "errors.hpp"
+#include "tree_stats_json.hpp"
+#include "viewer_page.hpp"
+
+namespace shatter::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::ordered_json;
+using Clock = std::chrono::steady_clock;
+
+constexpr const char* json_type = "application/json";
+
+std::string lower_extension(const fs::path& path) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension;
+}
+
+std::string read_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError("cannot open " + path.string() + ": " + std::strerror(errno));
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  if (in.bad() || fs::is_directory(path)) throw IoError("cannot read " + path.string());
+  return std::move(bytes).str();
+}
+
+// A .glb is checked as glTF 2.0 binary before it is served, so a damaged file
+// is refused here with tinygltf's reason, not shown as an empty page.
+void require_glb(const fs::path& path, const std::string& bytes) {
+  tinygltf::Model model;
+  tinygltf::TinyGLTF loader;
+  std::string error, warning;
+  if (bytes.size() > 0xFFFFFFFFu ||
+      !loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(bytes.data()),
+                                   static_cast<unsigned int>(bytes.size()))) {
+    std::string reason = error.empty() ? "not a glTF 2.0 binary" : error;
+    while (!reason.empty() && std::isspace(static_cast<unsigned char>(reason.back()))) reason.pop_back();
+    throw CorruptFileError(path.string() + ": not a GLB the viewer can show: " + reason);
+  }
+}
+
+// The tree the editor rebuilds from and what is shown now, shared by the
+// server's threads and the fracture job.
+class Session {
+ public:
+  Session(std::string file, std::optional<MeshTree> tree, std::string glb)
+      : file_(std::move(file)), editable_(tree.has_value()), glb_(std::make_shared<const std::string>(std::move(glb))) {
+    if (tree) {
+      root_ = std::move(tree->nodes[0].mesh);
+      options_ = tree->options;
+    }
+  }
+
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  ~Session() {
+    // A job still running at the stop cannot be interrupted (the builder has no
+    // cancellation); run_view ends the process without waiting for it.
+    if (!job_.joinable()) return;
+    if (running()) {
+      job_.detach();
+    } else {
+      job_.join();
+    }
+  }
+
+  std::shared_ptr<const std::string> glb() const {
+    const std::lock_guard lock(mutex_);
+    return glb_;
+  }
+
+  json session_json() const {
+    const std::lock_guard lock(mutex_);
+    json out{{"file", file_}, {"kind", editable_ ? "tree" : "glb"}, {"editable", editable_},
+             {"generation", generation_}};
+    if (editable_) {
+      json options = options_json(options_);
+      options["seed"] = std::to_string(options_.seed);  // beyond 2^53 a JavaScript number would round it
+      out["options"] = std::move(options);
+    }
+    return out;
+  }
+
+  bool running() const { return state_ == State::running; }
+
+  json job_json() const {
+    const std::lock_guard lock(mutex_);
+    json out{{"state", state_name()},
+             {"leaves_done", leaves_done_.load(std::memory_order_relaxed)},
+             {"fragments", job_options_.fragments},
+             {"generation", generation_}};
+    if (state_ == State::done) {
+      out["leaves"] = leaves_;
+      out["seconds"] = seconds_;
+    }
+    if (state_ == State::failed) out["error"] = error_;
+    return out;
+  }
+
+  /// Starts a fracture of the root solid with `options` in the background.
+  /// Returns an error message instead when the file is not a tree or a job runs.
+  std::optional<std::string> start(const BuildOptions& options) {
+    const std::lock_guard lock(mutex_);
+    if (!editable_) return "this file is a GLB: only a .shatter file can be fractured again";
+    if (state_ == State::running) return "a fracture is already running; wait for it to finish";
+    if (job_.joinable()) job_.join();  // finished: nothing to wait for
+    state_ = State::running;
+    job_options_ = options;
+    leaves_done_.store(0, std::memory_order_relaxed);
+    job_ = std::thread([this, options] { run_job(options); });
+    return std::nullopt;
+  }
+
+ private:
+  enum class State { idle, running, done, failed };
+
+  const char* state_name() const {
+    switch (state_) {
+      case State::idle: return "idle";
+      case State::running: return "running";
+      case State::done: return "done";
+      case State::failed: return "failed";
+    }
+    return "unknown";
+  }
+
+  void run_job(const BuildOptions& options) {
+    const Clock::time_point start = Clock::now();
+    try {
+      const auto progress = [this](std::size_t done) {
+        // Reports come from several workers, possibly out of order: keep the largest.
+        std::size_t seen = leaves_done_.load(std::memory_order_relaxed);
+        while (seen < done && !leaves_done_.compare_exchange_weak(seen, done, std::memory_order_relaxed)) {
+        }
+      };
+      const MeshTree tree = build_mesh_tree(root_, options, progress);
+      const std::vector<NodeIndex> all = select_nodes(tree, NodeSelection{NodeSelectionKind::all});
+      auto glb = std::make_shared<const std::string>(encode_glb(tree, all));
+      const std::lock_guard lock(mutex_);
+      glb_ = std::move(glb);
+      options_ = tree.options;
+      leaves_ = tree.leaf_count();
+      seconds_ = std::chrono::duration<double>(Clock::now() - start).count();
+      ++generation_;
+      state_ = State::done;
+    } catch (...) {
+      // The same words the fracture command would print after "error: ".
+      const Failure failure = failure_of(std::current_exception());
+      const std::lock_guard lock(mutex_);
+      error_ = failure.message;
+      state_ = State::failed;
+    }
+  }
+
+  const std::string file_;
+  const bool editable_;
+  Mesh root_;  // the tree's root solid: what the editor fractures again
+  mutable std::mutex mutex_;
+  std::shared_ptr<const std::string> glb_;  // guarded by mutex_
+  BuildOptions options_;                    // of the tree shown; guarded by mutex_
+  std::uint64_t generation_ = 0;            // guarded by mutex_; counts trees shown
+  std::atomic<State> state_{State::idle};
+  BuildOptions job_options_;  // guarded by mutex_
+  std::atomic<std::size_t> leaves_done_{0};
+  std::size_t leaves_ = 0;  // of the last finished job; guarded by mutex_
+  double seconds_ = 0;      // guarded by mutex_
+  std::string error_;       // guarded by mutex_
+  std::thread job_;
+};
+
+// A whole number from a JSON string or number: the page sends strings, so a
+// seed beyond 2^53 arrives exactly.
+std::optional<std::uint64_t> whole_number(const json& value) {
+  if (value.is_number_unsigned()) return value.get<std::uint64_t>();
+  if (!value.is_string()) return std::nullopt;
+  const std::string& text = value.get_ref<const std::string&>();
+  if (text.empty() || text.size() > 20 || !std::all_of(text.begin(), text.end(), ::isdigit)) return std::nullopt;
+  errno = 0;
+  const unsigned long long parsed = std::strtoull(text.c_str(), nullptr, 10);
+  if (errno == ERANGE) return std::nullopt;
+  return parsed;
+}
+
+// The build options a POST /api/fracture asks for, checked as the fracture
+// command checks its flags. Throws UsageError with the message for the page.
+BuildOptions requested_options(const std::string& body) {
+  const json request = json::parse(body, nullptr, false);
+  if (request.is_discarded() || !request.is_object()) throw UsageError("the request is not a JSON object");
+  BuildOptions options;
+  const std::optional<std::uint64_t> fragments = whole_number(request.value("fragments", json()));
+  if (!fragments || *fragments < 1 || *fragments > 0xFFFFFFFFu) {
+    throw UsageError("fragments must be a whole number from 1 to 4294967295");
+  }
+  options.fragments = static_cast<std::uint32_t>(*fragments);
+  const std::optional<std::uint64_t> seed = whole_number(request.value("seed", json("1")));
+  if (!seed) throw UsageError("seed must be a whole number from 0 to 18446744073709551615");
+  options.seed = *seed;
+  const std::string strategy = request.value("strategy", std::string("thesis"));
+  const std::string kernel = request.value("kernel", std::string("plane"));
+  bool strategy_found = false, kernel_found = false;
+  for (Strategy s : {Strategy::thesis, Strategy::balanced, Strategy::axis}) {
+    if (strategy_name(s) == strategy) options.strategy = s, strategy_found = true;
+  }
+  for (KernelKind k : {KernelKind::plane, KernelKind::exact, KernelKind::fast}) {
+    if (kernel_name(k) == kernel) options.kernel = k, kernel_found = true;
+  }
+  if (!strategy_found) throw UsageError("strategy must be thesis, balanced or axis, got '" + strategy + "'");
+  if (!kernel_found) throw UsageError("kernel must be plane, exact or fast, got '" + kernel + "'");
+  return options;
+}
+
+void send_json(httplib::Response& response, int status, const json& body) {
+  response.status = status;
+  response.set_header("Cache-Control", "no-store");
+  response.set_content(body.dump(), json_type);
+}
+
+void add_routes(httplib::Server& server, Session& session, const std::string& page) {
+  server.Get("/", [&page](const httplib::Request&, httplib::Response& response) {
+    response.set_content(page, "text/html; charset=utf-8");
+  });
+  server.Get("/model.glb", [&session](const httplib::Request&, httplib::Response& response) {
+    const std::shared_ptr<const std::string> glb = session.glb();
+    response.set_header("Cache-Control", "no-store");
+    response.set_content(*glb, "model/gltf-binary");
+  });
+  server.Get("/api/session", [&session](const httplib::Request&, httplib::Response& response) {
+    send_json(response, 200, session.session_json());
+  });
+  server.Get("/api/fracture", [&session](const httplib::Request&, httplib::Response& response) {
+    send_json(response, 200, session.job_json());
+  });
+  server.Post("/api/fracture", [&session](const httplib::Request& request, httplib::Response& response) {
+    BuildOptions options;
+    try {
+      options = requested_options(request.body);
+    } catch (const UsageError& e) {
+      send_json(response, 400, {{"error", e.what()}});
+      return;
+    }
+    if (const std::optional<std::string> refused = session.start(options)) {
+      send_json(response, 409, {{"error", *refused}});
+      return;
+    }
+    send_json(response, 202, session.job_json());
+  });
+  // Every other path, and a handler's failure, answers JSON the page can show.
+  server.set_error_handler([](const httplib::Request& request, httplib::Response& response) {
+    if (response.status == 404) {
+      send_json(response, 404, {{"error", "no such page: " + request.path}});
+    } else if (response.body.empty()) {
+      send_json(response, response.status, {{"error", "the server answered " + std::to_string(response.status)}});
+    }
+  });
+  server.set_exception_handler([](const httplib::Request&, httplib::Response& response, std::exception_ptr error) {
+    send_json(response, 500, {{"error", failure_of(error).message}});
+  });
+}
+
+}  // namespace
+
+Command add_view_command(CLI::App& app) {
+  auto args = std::make_shared<ViewArgs>();
+  CLI::App* command = app.add_subcommand(
+      "view",
+      "Open the viewer: serve it and the file on 127.0.0.1 (this machine only) and print the address to open in a "
+      "browser; Ctrl-C stops. The page explodes the fragments, shows the tree level by level, colours fragments, "
+      "draws bonds, describes a clicked fragment as `info --nodes` does, and replays `simulate --record` files. For "
+      "a .shatter file it also has an editor that fractures the tree's root solid again with other fragments, seed, "
+      "strategy or kernel (nothing is written to disk). For a page that needs no server, see `export --format html`.");
+  command->add_option("file", args->input,
+                      "A mesh tree (.shatter; every level is shown) or a glTF binary (.glb) from `export` or "
+                      "`simulate --record`")
+      ->required();
+  command->add_option("--port", args->port, "Port on 127.0.0.1 to listen on; 0 picks a free one")
+      ->capture_default_str();
+  return {command, [args] { return run_view(*args); }};
+}
+
+int run_view(const ViewArgs& args) {
+  require_viewer("view");
+  const fs::path path(args.input);
+  const std::string extension = lower_extension(path);
+  if (extension != ".shatter" && extension != ".glb") {
+    throw UsageError("view shows a .shatter or .glb file, got '" + args.input + "'");
+  }
+  std::unique_ptr<Session> session;
+  if (extension == ".shatter") {
+    MeshTree tree = read_shatter_file(path);
+    if (tree.nodes.empty()) throw CorruptFileError(args.input + ": the tree has no nodes");
+    std::string glb = encode_glb(tree, select_nodes(tree, NodeSelection{NodeSelectionKind::all}));
+    session = std::make_unique<Session>(path.filename().string(), std::move(tree), std::move(glb));
+  } else {
+    std::string glb = read_bytes(path);
+    require_glb(path, glb);
+    session = std::make_unique<Session>(path.filename().string(), std::nullopt, std::move(glb));
+  }
+  const std::string page = served_viewer_page();
+
+  // SIGINT and SIGTERM are taken by one thread (sigwait), never by a handler,
+  // so stopping the server happens in ordinary code. They are blocked before the
+  // server starts its threads, which inherit the mask.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+  // A browser that closes a connection while a model is being sent must not end the server.
+  ::signal(SIGPIPE, SIG_IGN);
+
+  httplib::Server server;
+  // httplib's default also sets SO_REUSEPORT, which would let a second server
+  // share the port (and its requests) instead of failing; SO_REUSEADDR alone
+  // only allows a restart while old connections linger.
+  server.set_socket_options([](socket_t socket) {
+    const int yes = 1;
+    ::setsockopt(socket, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+  });
+  add_routes(server, *session, page);
+  constexpr const char* host = "127.0.0.1";
+  int port = args.port;
+  if (args.port == 0) {
+    port = server.bind_to_any_port(host);
+  } else if (!server.bind_to_port(host, args.port)) {
+    port = -1;
+  }
+  if (port <= 0) {
+    throw IoError("cannot listen on " + std::string(host) + ":" + std::to_string(args.port) +
+                  " (in use, or not allowed); choose another with --port, or --port 0 for any free one");
+  }
+
+  std::atomic<bool> stopped{false};
+  std::atomic<bool> signalled{false};
+  std::thread signal_thread([&] {
+    const timespec tick{0, 200'000'000};
+    while (!stopped.load()) {
+      if (sigtimedwait(&stop_signals, nullptr, &tick) > 0) {
+        signalled.store(true);
+        server.stop();
+        return;
+      }
+    }
+  });
+  std::cout << "shatter view: " << args.input << " at http://" << host << ":" << port << "/ (Ctrl-C stops)"
+            << std::endl;
+  server.listen_after_bind();
+  stopped.store(true);
+  signal_thread.join();
+  if (!signalled.load()) throw IoError("the server on " + std::string(host) + ":" + std::to_string(port) + " failed");
+  std::cout << "shatter view: stopped" << std::endl;
+  if (session->running()) {
+    // The builder cannot be interrupted and the server is gone: end without
+    // waiting for the abandoned job (it writes nothing).
+    std::cout.flush();
+    std::_Exit(static_cast<int>(ExitCode::ok));
+  }
+  return static_cast<int>(ExitCode::ok);
+}
+
+}  // namespace shatter::cli

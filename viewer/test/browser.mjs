@@ -1,0 +1,504 @@
+// The viewer in a real browser (issue 13): Debian's chromium, driven by
+// playwright-core from the build's node_modules, against `shatter view` and a
+// page written by `shatter export --format html`. CTest runs one case per
+// process (tests/viewer/CMakeLists.txt):
+//
+//   node browser.mjs setup        knot1 fractured into 24 fragments, a drop simulation recorded, the tree written
+//                                 as a page, and `shatter info --json --nodes all` of it
+//   node browser.mjs served-tree  `shatter view tree.shatter`: no console error; one mesh per leaf; the explode
+//                                 slider spreads the centroids strictly more at each step; the depth slider shows as
+//                                 many meshes as `info --nodes depth:K` lists, for every K; a click on a fragment
+//                                 shows `info`'s volume, triangles, depth and bonds; the bond overlay draws info's
+//                                 bond count; the colour and interior switches change the picture; a screenshot is
+//                                 not blank (kept); Ctrl-C stops the server with exit 0
+//   node browser.mjs file-page    the exported page from a file:// URL: the same checks of meshes, depth, click
+//   node browser.mjs replay       `shatter view drop.glb`: scrubbing and playing move the bodies
+//   node browser.mjs editor       the editor re-fractures on the server with progress, giving the tree the
+//                                 fracture command gives; bad input and server errors show as messages
+//   node browser.mjs server       the command: 127.0.0.1 only, 404 as JSON, refused files and busy ports, SIGTERM
+//
+// Environment (set by CTest): SHATTER_EXE, SHATTER_CHROMIUM, SHATTER_NODE_MODULES, SHATTER_MESH,
+// SHATTER_TEST_WORK (scratch), SHATTER_TEST_ARTIFACTS (screenshots kept).
+
+import assert from 'node:assert/strict';
+import { execFileSync, spawn } from 'node:child_process';
+import { mkdirSync, readFileSync, writeFileSync, existsSync } from 'node:fs';
+import { createRequire } from 'node:module';
+import net from 'node:net';
+import os from 'node:os';
+import path from 'node:path';
+import { pathToFileURL } from 'node:url';
+
+const env = (name) => {
+  const value = process.env[name];
+  if (!value) throw new Error(`${name} is not set (CTest sets it: see tests/viewer/CMakeLists.txt)`);
+  return value;
+};
+const shatter = env('SHATTER_EXE');
+const work = env('SHATTER_TEST_WORK');
+const artifacts = env('SHATTER_TEST_ARTIFACTS');
+const requireFromBuild = createRequire(path.join(env('SHATTER_NODE_MODULES'), 'package.json'));
+const { chromium } = requireFromBuild('playwright-core');
+
+const file = (name) => path.join(work, name);
+const LEAVES = 24;
+
+function run(...args) {
+  return execFileSync(shatter, args, { encoding: 'utf8', maxBuffer: 1 << 28, stdio: ['ignore', 'pipe', 'pipe'], timeout: 120000 });
+}
+
+function runFailing(...args) {
+  try {
+    execFileSync(shatter, args, { encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'], timeout: 60000 });
+  } catch (error) {
+    return { code: error.status, stderr: error.stderr };
+  }
+  throw new Error(`shatter ${args.join(' ')} succeeded but should have failed`);
+}
+
+const info = (shatterFile, nodes) => JSON.parse(run('info', shatterFile, '--json', '--nodes', nodes));
+
+// --- the server ------------------------------------------------------------------
+
+/** Starts `shatter view <file> --port 0`; resolves with {url, proc, output} once it prints its address. */
+function startView(target, extra = []) {
+  return new Promise((resolve, reject) => {
+    const proc = spawn(shatter, ['view', target, '--port', '0', ...extra], { stdio: ['ignore', 'pipe', 'pipe'] });
+    const state = { out: '', err: '' };
+    const timer = setTimeout(() => reject(new Error(`shatter view printed no address in 60 s: ${state.out}${state.err}`)),
+      60000);
+    proc.stdout.on('data', (chunk) => {
+      state.out += chunk;
+      const match = /at (http:\/\/127\.0\.0\.1:(\d+)\/) \(Ctrl-C stops\)/.exec(state.out);
+      if (match) {
+        clearTimeout(timer);
+        resolve({ url: match[1], port: Number(match[2]), proc, state });
+      }
+    });
+    proc.stderr.on('data', (chunk) => { state.err += chunk; });
+    proc.on('exit', (code) => {
+      clearTimeout(timer);
+      reject(new Error(`shatter view exited with ${code} before serving: ${state.err}`));
+    });
+  });
+}
+
+/** Sends `signal` and resolves with the exit code, failing if the server does not stop within 10 s. */
+function stopView(server, signal = 'SIGINT') {
+  return new Promise((resolve, reject) => {
+    const timer = setTimeout(() => reject(new Error(`shatter view did not stop on ${signal}`)), 10000);
+    server.proc.removeAllListeners('exit');
+    server.proc.on('exit', (code, sig) => {
+      clearTimeout(timer);
+      resolve({ code, signal: sig });
+    });
+    server.proc.kill(signal);
+  });
+}
+
+// --- the browser -------------------------------------------------------------------
+
+async function openBrowser() {
+  return chromium.launch({
+    executablePath: env('SHATTER_CHROMIUM'),
+    headless: true,
+    // WebGL on the CPU (SwiftShader): CI machines have no GPU. The rest keeps chromium off the network.
+    args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-background-networking',
+      '--disable-component-update', '--disable-sync', '--no-first-run', '--disable-quic', '--allow-file-access-from-files'],
+  });
+}
+
+/** Opens `url` and waits until the viewer has shown its data; collects console errors and page errors. */
+async function openViewer(browser, url) {
+  const page = await browser.newPage({ viewport: { width: 1100, height: 720 } });
+  const errors = [];
+  page.on('console', (message) => { if (message.type() === 'error') errors.push(message.text()); });
+  page.on('pageerror', (error) => errors.push(String(error)));
+  const started = Date.now();
+  await page.goto(url);
+  await page.waitForFunction(() => window.shatterViewer && (window.shatterViewer.ready || window.shatterViewer.error),
+    null, { timeout: 120000 });
+  const loadSeconds = (Date.now() - started) / 1000;
+  const error = await page.evaluate(() => window.shatterViewer.error);
+  assert.equal(error, null, `the viewer failed: ${error}`);
+  // Two frames drawn, so what a screenshot shows is the loaded model.
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  console.log(`page ready in ${loadSeconds.toFixed(2)} s`);
+  return { page, errors, loadSeconds };
+}
+
+const state = (page) => page.evaluate(() => window.shatterViewer.state());
+
+/** Sets a slider or number input as a user would: its value, then the input event the page listens to. */
+async function setInput(page, id, value) {
+  await page.evaluate(([i, v]) => {
+    const element = document.getElementById(i);
+    element.value = String(v);
+    element.dispatchEvent(new Event('input', { bubbles: true }));
+  }, [id, value]);
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(r)));
+}
+
+async function setCheckbox(page, id, on) {
+  const box = page.locator(`#${id}`);
+  if ((await box.isChecked()) !== on) await box.click();
+}
+
+/** Mean distance of the shown centroids from their mean: how spread the fragments are. */
+function spread(centroids) {
+  const mean = [0, 1, 2].map((k) => centroids.reduce((s, c) => s + c[k], 0) / centroids.length);
+  return centroids.reduce((s, c) => s + Math.hypot(c[0] - mean[0], c[1] - mean[1], c[2] - mean[2]), 0)
+    / centroids.length;
+}
+
+/**
+ * Takes a screenshot, keeps it in the artefacts folder, and returns its pixel statistics (decoded in the page):
+ * the fraction of pixels that differ from the background, the number of distinct colours, and the raw RGBA.
+ */
+async function screenshot(page, name) {
+  mkdirSync(artifacts, { recursive: true });
+  const png = await page.screenshot({ path: path.join(artifacts, `${name}.png`) });
+  return page.evaluate(async (b64) => {
+    const image = new Image();
+    image.src = `data:image/png;base64,${b64}`;
+    await image.decode();
+    const canvas = document.createElement('canvas');
+    canvas.width = image.width;
+    canvas.height = image.height;
+    const context = canvas.getContext('2d');
+    context.drawImage(image, 0, 0);
+    // The 3D view only: the middle of the window, between the panels.
+    const x0 = Math.floor(image.width * 0.3), x1 = Math.floor(image.width * 0.7);
+    const y0 = Math.floor(image.height * 0.15), y1 = Math.floor(image.height * 0.85);
+    const data = context.getImageData(x0, y0, x1 - x0, y1 - y0).data;
+    const background = [0x15, 0x17, 0x1c];
+    let differing = 0;
+    const colours = new Set();
+    for (let i = 0; i < data.length; i += 4) {
+      if (Math.abs(data[i] - background[0]) + Math.abs(data[i + 1] - background[1])
+        + Math.abs(data[i + 2] - background[2]) > 24) ++differing;
+      colours.add((data[i] >> 3) << 10 | (data[i + 1] >> 3) << 5 | (data[i + 2] >> 3));
+    }
+    return { covered: differing / (data.length / 4), colours: colours.size, pixels: Array.from(data) };
+  }, png.toString('base64'));
+}
+
+function pixelDifference(a, b) {
+  let differing = 0;
+  for (let i = 0; i < a.pixels.length; i += 4) {
+    if (Math.abs(a.pixels[i] - b.pixels[i]) + Math.abs(a.pixels[i + 1] - b.pixels[i + 1])
+      + Math.abs(a.pixels[i + 2] - b.pixels[i + 2]) > 24) ++differing;
+  }
+  return differing / (a.pixels.length / 4);
+}
+
+function assertNotBlank(shot, what) {
+  console.log(`${what}: ${(100 * shot.covered).toFixed(1)} % of the view covered, ${shot.colours} colours`);
+  assert.ok(shot.covered > 0.05, `${what}: the screenshot is (nearly) blank: ${shot.covered}`);
+  assert.ok(shot.colours > 20, `${what}: the screenshot has only ${shot.colours} colours`);
+}
+
+// --- checks shared by the served and the file page ---------------------------------
+
+async function checkLeavesShown(page, infoAll) {
+  const s = await state(page);
+  assert.equal(s.kind, 'tree');
+  assert.equal(s.leaves, infoAll.leaves);
+  assert.equal(s.meshesShown, infoAll.leaves, 'one mesh per leaf at the deepest level');
+  const leafNodes = infoAll.node_details.filter((n) => n.leaf !== undefined).map((n) => n.node);
+  assert.deepEqual(s.shown, leafNodes);
+}
+
+async function checkDepthSlider(page, treeFile) {
+  const s = await state(page);
+  assert.deepEqual(s.depths, [...Array(s.depths.length).keys()], 'every level has its meshes');
+  for (let i = 0; i < s.depths.length; ++i) {
+    await setInput(page, 'depth', i);
+    const at = await state(page);
+    const expected = info(treeFile, `depth:${s.depths[i]}`).node_details.map((n) => n.node);
+    assert.equal(at.meshesShown, expected.length, `depth ${s.depths[i]}: meshes shown`);
+    assert.deepEqual(at.shown, expected, `depth ${s.depths[i]}: nodes shown`);
+  }
+  console.log(`depth slider: ${s.depths.length} levels, each as info --nodes depth:K lists it`);
+  await setInput(page, 'depth', s.depths.length - 1);
+}
+
+/** Clicks leaf `leaf`'s fragment on screen and compares the info panel with `info --json --nodes all`. */
+async function checkClick(page, infoAll, leaf) {
+  const expected = infoAll.node_details.find((n) => n.leaf === leaf);
+  const pixel = await page.evaluate((i) => window.shatterViewer.pixelOf(i), expected.node);
+  assert.ok(pixel, `leaf ${leaf} is not visible anywhere on screen`);
+  await page.mouse.click(pixel.x, pixel.y);
+  const panel = await page.evaluate(() => {
+    const field = (name) => document.querySelector(`#info-body [data-field="${name}"]`)?.dataset.value;
+    return {
+      node: field('node'), leaf: field('leaf'), depth: field('depth'), volume: field('volume'),
+      triangles: field('triangles'), cap: field('cap_triangles'), bonds: field('bond_count'),
+      list: Array.from(document.querySelectorAll('#info-body li')).map((li) => ({
+        leaf: Number(li.dataset.leaf), other: Number(li.dataset.other), area: Number(li.dataset.area) })),
+      visible: !document.getElementById('info-body').hidden,
+    };
+  });
+  assert.ok(panel.visible, 'the info panel shows after a click');
+  assert.equal(Number(panel.node), expected.node);
+  assert.equal(Number(panel.leaf), leaf);
+  assert.equal(Number(panel.depth), expected.depth);
+  assert.equal(Number(panel.volume), expected.volume, 'the volume is info\'s, to the last bit');
+  assert.equal(Number(panel.triangles), expected.triangles);
+  assert.equal(Number(panel.cap), expected.cap_triangles);
+  assert.equal(Number(panel.bonds), expected.bonds.length);
+  assert.deepEqual(panel.list, expected.bonds);
+  console.log(`click on leaf ${leaf}: volume ${panel.volume}, ${panel.triangles} triangles, ${panel.bonds} bonds, as info`);
+}
+
+// --- cases -------------------------------------------------------------------------------
+
+const cases = {
+  async setup() {
+    mkdirSync(work, { recursive: true });
+    run('fracture', env('SHATTER_MESH'), '--fragments', String(LEAVES), '--seed', '3', '--out', file('tree.shatter'));
+    run('simulate', file('tree.shatter'), '--scene', 'drop', '--steps', '150', '--record', file('drop.glb'));
+    run('export', file('tree.shatter'), '--format', 'html', '--out', file('tree.html'));
+    writeFileSync(file('info-all.json'), run('info', file('tree.shatter'), '--json', '--nodes', 'all'));
+    const infoAll = JSON.parse(readFileSync(file('info-all.json'), 'utf8'));
+    assert.ok(infoAll.leaves >= LEAVES && infoAll.bonds.count > 0);
+    console.log(`test data: ${infoAll.nodes} nodes, ${infoAll.leaves} leaves, ${infoAll.bonds.count} bonds`);
+  },
+
+  async 'served-tree'() {
+    const infoAll = JSON.parse(readFileSync(file('info-all.json'), 'utf8'));
+    const server = await startView(file('tree.shatter'));
+    const browser = await openBrowser();
+    try {
+      const { page, errors } = await openViewer(browser, server.url);
+      await checkLeavesShown(page, infoAll);
+
+      const spreads = [];
+      for (const amount of [0, 0.2, 0.4, 0.6, 0.8, 1]) {
+        await setInput(page, 'explode', amount);
+        spreads.push(spread((await state(page)).centroids));
+      }
+      for (let i = 1; i < spreads.length; ++i) assert.ok(spreads[i] > spreads[i - 1], `spread ${spreads}`);
+      console.log(`explode: centroid spread ${spreads.map((s) => s.toFixed(4)).join(' < ')}`);
+
+      await checkDepthSlider(page, file('tree.shatter'));
+
+      await setInput(page, 'explode', 0.35);
+      for (const leaf of [0, Math.floor(infoAll.leaves / 2), infoAll.leaves - 1]) await checkClick(page, infoAll, leaf);
+
+      await setCheckbox(page, 'show-bonds', true);
+      assert.equal((await state(page)).bondSegments, infoAll.bonds.count, 'a segment per bond between leaves');
+      await setInput(page, 'depth', 1);
+      const depthOne = info(file('tree.shatter'), 'depth:1').node_details;
+      const ownerOf = (leaf) => depthOne.findIndex((n) => leaf >= n.first_leaf && leaf < n.first_leaf + n.leaf_count);
+      const crossing = new Set();
+      for (const n of infoAll.node_details.filter((d) => d.leaf !== undefined)) {
+        for (const b of n.bonds) {
+          if (ownerOf(b.leaf) !== ownerOf(b.other)) crossing.add(`${Math.min(b.leaf, b.other)}-${Math.max(b.leaf, b.other)}`);
+        }
+      }
+      assert.equal((await state(page)).bondSegments, crossing.size, 'at depth 1, the bonds between its pieces');
+      const depths = (await state(page)).depths;
+      await setInput(page, 'depth', depths.length - 1);
+
+      const coloured = await screenshot(page, 'served-tree');
+      assertNotBlank(coloured, 'served tree');
+      await setCheckbox(page, 'interior-material', false);
+      const noInterior = await screenshot(page, 'served-tree-no-interior');
+      await setCheckbox(page, 'colour-fragments', false);
+      const plain = await screenshot(page, 'served-tree-plain');
+      assertNotBlank(plain, 'served tree, file materials');
+      const interiorChange = pixelDifference(coloured, noInterior);
+      const colourChange = pixelDifference(noInterior, plain);
+      console.log(`interior switch changes ${(100 * interiorChange).toFixed(1)} % of the view, colour switch ${(100 * colourChange).toFixed(1)} %`);
+      assert.ok(interiorChange > 0.005, 'the interior material switch changes the caps');
+      assert.ok(colourChange > 0.05, 'the colour switch changes the fragments');
+      assert.deepEqual(errors, [], 'console errors');
+    } finally {
+      await browser.close();
+    }
+    const stopped = await stopView(server, 'SIGINT');
+    assert.equal(stopped.code, 0, `exit code after Ctrl-C: ${stopped.code} ${stopped.signal}`);
+    assert.match(server.state.out, /shatter view: stopped/);
+  },
+
+  async 'file-page'() {
+    const infoAll = JSON.parse(readFileSync(file('info-all.json'), 'utf8'));
+    const browser = await openBrowser();
+    try {
+      const url = pathToFileURL(file('tree.html')).href;
+      const { page, errors } = await openViewer(browser, url);
+      await checkLeavesShown(page, infoAll);
+      await checkDepthSlider(page, file('tree.shatter'));
+      await setInput(page, 'explode', 0.5);
+      await checkClick(page, infoAll, 1);
+      assertNotBlank(await screenshot(page, 'file-page'), 'file page');
+      assert.equal(await page.locator('#editor').isHidden(), true, 'no editor without a server');
+      assert.deepEqual(errors, [], 'console errors');
+    } finally {
+      await browser.close();
+    }
+  },
+
+  async replay() {
+    const server = await startView(file('drop.glb'));
+    const browser = await openBrowser();
+    try {
+      const { page, errors } = await openViewer(browser, server.url);
+      const start = await state(page);
+      assert.equal(start.kind, 'recording');
+      assert.ok(start.duration > 0 && start.bodies.length > 0);
+      assert.equal(await page.locator('#timeline').isVisible(), true);
+      const moved = (a, b) => a.bodies.some((x, i) => x.position.some((v, k) => Math.abs(v - b.bodies[i].position[k]) > 1e-6)
+        || x.quaternion.some((v, k) => Math.abs(v - b.bodies[i].quaternion[k]) > 1e-6));
+      await setInput(page, 'time', start.duration / 2);
+      const middle = await state(page);
+      assert.ok(Math.abs(middle.time - start.duration / 2) < 1e-9);
+      assert.ok(moved(start, middle), 'scrubbing to the middle moves the bodies');
+      await setInput(page, 'time', 0);
+      const back = await state(page);
+      assert.ok(!moved(start, back), 'scrubbing back to 0 restores the first pose');
+      await page.locator('#play').click();
+      await page.waitForFunction(() => window.shatterViewer.state().time > 0.05, null, { timeout: 30000 });
+      const playing = await state(page);
+      assert.ok(moved(start, playing), 'playing moves the bodies');
+      assert.equal(await page.locator('#play').textContent(), 'Pause');
+      await page.locator('#play').click();
+      const paused = (await state(page)).time;
+      await page.waitForTimeout(300);
+      assert.equal((await state(page)).time, paused, 'pause stops the clock');
+      console.log(`replay: ${start.bodies.length} bodies over ${start.duration.toFixed(3)} s; played to ${paused.toFixed(3)} s`);
+      assertNotBlank(await screenshot(page, 'replay'), 'replay');
+      assert.deepEqual(errors, [], 'console errors');
+    } finally {
+      await browser.close();
+    }
+    assert.equal((await stopView(server)).code, 0);
+  },
+
+  async editor() {
+    const server = await startView(file('tree.shatter'));
+    const browser = await openBrowser();
+    try {
+      const { page, errors } = await openViewer(browser, server.url);
+      assert.equal(await page.locator('#editor').isVisible(), true, 'the editor shows for a served .shatter');
+      assert.equal(await page.locator('#edit-fragments').inputValue(), String(LEAVES), 'filled with the tree\'s options');
+
+      // Watch the progress bar: it must appear while the server works.
+      await page.evaluate(() => {
+        window.progressSeen = false;
+        new MutationObserver(() => {
+          if (!document.getElementById('edit-progress').hidden) window.progressSeen = true;
+        }).observe(document.getElementById('edit-progress'), { attributes: true });
+      });
+      await page.locator('#edit-fragments').fill('40');
+      await page.locator('#edit-seed').fill('5');
+      await page.locator('#edit-strategy').selectOption('balanced');
+      await page.locator('#edit-run').click();
+      await page.waitForFunction(() => /Fractured into/.test(document.getElementById('edit-status').textContent),
+        null, { timeout: 120000 });
+      const rebuilt = await state(page);
+      assert.ok(await page.evaluate(() => window.progressSeen), 'a progress bar while the server fractures');
+      // The same tree the fracture command makes with those options.
+      const reference = file('editor-reference.shatter');
+      run('fracture', env('SHATTER_MESH'), '--fragments', '40', '--seed', '5', '--strategy', 'balanced', '--out', reference);
+      const referenceInfo = info(reference, 'leaves');
+      assert.equal(rebuilt.leaves, referenceInfo.leaves);
+      assert.equal(rebuilt.meshesShown, referenceInfo.leaves);
+      const leafNode = referenceInfo.node_details[3];
+      await setInput(page, 'explode', 0.4);
+      await checkClick(page, { node_details: referenceInfo.node_details }, leafNode.leaf);
+      console.log(`editor: fractured again into ${rebuilt.leaves} fragments, as \`fracture\` does`);
+
+      // The page refuses what it can check itself ...
+      await page.locator('#edit-fragments').fill('0');
+      await page.locator('#edit-run').click();
+      await page.locator('#message').waitFor({ state: 'visible' });
+      assert.match(await page.locator('#message').textContent(), /Fragments must be a whole number/);
+      // ... and shows what the server refuses.
+      await page.locator('#edit-fragments').fill('8');
+      await page.evaluate(() => {
+        const option = document.createElement('option');
+        option.textContent = 'voronoi';
+        document.getElementById('edit-strategy').appendChild(option);
+        document.getElementById('edit-strategy').value = 'voronoi';
+      });
+      await page.locator('#edit-run').click();
+      await page.waitForFunction(() => /strategy must be thesis, balanced or axis/.test(
+        document.getElementById('message').textContent), null, { timeout: 30000 });
+      // A second job while one runs is refused with 409 and a reason.
+      const conflict = await page.evaluate(async () => {
+        const post = (body) => fetch('api/fracture', { method: 'POST', body: JSON.stringify(body) });
+        const first = await post({ fragments: '600', seed: '1', strategy: 'thesis', kernel: 'plane' });
+        const second = await post({ fragments: '8', seed: '1', strategy: 'thesis', kernel: 'plane' });
+        return { first: first.status, second: second.status, error: (await second.json()).error };
+      });
+      assert.equal(conflict.first, 202);
+      assert.equal(conflict.second, 409);
+      assert.match(conflict.error, /already running/);
+      // Errors the builder raises come back as the job's error.
+      await page.waitForFunction(async () => (await (await fetch('api/fracture')).json()).state !== 'running', null,
+        { timeout: 120000, polling: 200 });
+      const bad = await page.evaluate(async () => (await fetch('api/fracture', { method: 'POST', body: '{"fragments": "x"}' })).json());
+      assert.match(bad.error, /fragments must be a whole number/);
+      const missing = await page.evaluate(async () => {
+        const r = await fetch('no/such/thing');
+        return { status: r.status, body: await r.json() };
+      });
+      assert.equal(missing.status, 404);
+      assert.match(missing.body.error, /no such page/);
+      assert.deepEqual(errors.filter((e) => !/the server responded with a status of (400|404|409)/.test(e)), [],
+        'console errors (the refused requests above excepted)');
+    } finally {
+      await browser.close();
+    }
+    assert.equal((await stopView(server)).code, 0);
+  },
+
+  async server() {
+    // Listens on 127.0.0.1 only: another address of this machine is refused.
+    const server = await startView(file('tree.shatter'));
+    const others = Object.values(os.networkInterfaces()).flat().filter((a) => a && a.family === 'IPv4' && !a.internal);
+    for (const address of others) {
+      const refused = await new Promise((resolve) => {
+        const socket = net.connect({ host: address.address, port: server.port });
+        socket.once('connect', () => { socket.destroy(); resolve(false); });
+        socket.once('error', () => resolve(true));
+      });
+      assert.ok(refused, `the server answered on ${address.address}`);
+    }
+    console.log(`127.0.0.1 only: refused on ${others.length} other address(es)`);
+    // The port is taken: a second server on it fails with exit 4 and one line.
+    const busy = runFailing('view', file('tree.shatter'), '--port', String(server.port));
+    assert.equal(busy.code, 4);
+    assert.match(busy.stderr, /^error: cannot listen on 127\.0\.0\.1:\d+ .*--port/);
+    assert.equal((await stopView(server, 'SIGTERM')).code, 0, 'SIGTERM stops it too');
+
+    const wrongKind = runFailing('view', env('SHATTER_MESH'));
+    assert.equal(wrongKind.code, 2);
+    assert.match(wrongKind.stderr, /^error: view shows a \.shatter or \.glb file/);
+    const damaged = file('damaged.glb');
+    writeFileSync(damaged, Buffer.from('glTF but not really'));
+    const refusedGlb = runFailing('view', damaged);
+    assert.equal(refusedGlb.code, 3);
+    assert.match(refusedGlb.stderr, /^error: .*damaged\.glb: not a GLB the viewer can show/);
+    const truncated = file('truncated.shatter');
+    writeFileSync(truncated, readFileSync(file('tree.shatter')).subarray(0, 100));
+    assert.equal(runFailing('view', truncated).code, 3);
+    assert.equal(runFailing('view', file('missing.shatter')).code, 4);
+    assert.ok(!existsSync(file('missing.shatter')));
+  },
+};
+
+const name = process.argv[2];
+if (!cases[name]) {
+  console.error(`usage: node browser.mjs <${Object.keys(cases).join('|')}>`);
+  process.exit(2);
+}
+const started = Date.now();
+cases[name]().then(() => {
+  console.log(`${name}: passed in ${((Date.now() - started) / 1000).toFixed(1)} s`);
+}, (error) => {
+  console.error(`${name}: FAILED: ${error.stack || error}`);
+  process.exit(1);
+});
