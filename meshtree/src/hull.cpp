@@ -1,3 +1,5 @@
+#include "shatter/meshtree/hull.hpp"
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/convex_hull_3.h>
@@ -10,7 +12,6 @@
 #include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/predicates.hpp"
 #include "shatter/kernel/union_find.hpp"
-#include "shatter/meshtree/build.hpp"
 
 namespace shatter {
 namespace {

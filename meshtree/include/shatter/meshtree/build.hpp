@@ -5,7 +5,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
-#include <span>
 #include <vector>
 
 #include "shatter/kernel/exact.hpp"
@@ -65,16 +64,5 @@ struct ExactBuild {
   std::vector<ExactMesh> exact_meshes;
 };
 ExactBuild build_mesh_tree_keeping_exact(const Mesh& mesh, const BuildOptions& options);
-
-/// The convex hull of a closed mesh's vertices as an outward triangle mesh (surface
-/// ids 0, no attributes), computed with CGAL convex_hull_3 (exact predicates). A
-/// mesh that is convex already (every edge convex or flat, decided exactly) is its
-/// own hull, without a hull computation, when it is one edge-connected piece.
-/// Precondition: the mesh is closed and oriented with positive volume.
-Mesh convex_hull_of(const Mesh& mesh);
-
-/// The convex hull of a point set, in the same canonical form (CGAL
-/// convex_hull_3, exact predicates). Precondition: the points span a volume.
-Mesh convex_hull_of_points(std::span<const Vec3> points);
 
 }  // namespace shatter
