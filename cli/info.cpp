@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "shatter/meshtree/bonds.hpp"
+#include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/meshtree/stats.hpp"
 #include "errors.hpp"

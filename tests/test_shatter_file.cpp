@@ -30,6 +30,7 @@
 
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/mass.hpp"
+#include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/version.hpp"

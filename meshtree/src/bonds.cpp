@@ -12,6 +12,7 @@
 
 #include "shatter/kernel/predicates.hpp"
 #include "shatter/kernel/projection.hpp"
+#include "shatter/meshtree/tree.hpp"
 #include "clip2d.hpp"
 
 namespace shatter {

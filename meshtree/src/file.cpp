@@ -27,6 +27,9 @@
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/solid.hpp"
+#include "shatter/meshtree/bonds.hpp"
+#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/tree.hpp"
 
 namespace shatter {
 

@@ -24,6 +24,7 @@
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cut.hpp"
 #include "shatter/meshtree/cut_solid.hpp"
+#include "shatter/meshtree/exact_build.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/meshtree/plane_input.hpp"
 #include "shatter/slicer/slice.hpp"
