@@ -21,6 +21,7 @@
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cover.hpp"
 #include "shatter/runtime/world.hpp"
+#include "support/checks.hpp"
 #include "support/generators.hpp"
 
 namespace shatter::test {
@@ -54,6 +55,7 @@ inline RuntimeCase runtime_case(const std::string& mesh, std::uint32_t fragments
   options.seed = seed;
   options.threads = 1;
   auto tree = std::make_shared<const MeshTree>(build_mesh_tree(runtime_mesh(mesh), options));
+  CHECK(test::tree_problem(*tree, true) == "");
   RuntimeCase c{name, tree, runtime::BreakableShapes::create(tree)};
   built.emplace(name, c);
   return c;
