@@ -1,6 +1,6 @@
 #pragma once
-// `shatter info <file.shatter> [--json] [--compare-bond-rules]`: what a mesh tree
-// holds and how it was made.
+// `shatter info <file.shatter> [--json] [--compare-bond-rules] [--check]`: what a
+// mesh tree holds and how it was made, and on request whether it holds together.
 
 #include <CLI/CLI.hpp>
 
@@ -14,6 +14,9 @@ struct InfoArgs {
   std::string input;
   bool json = false;
   bool compare_bond_rules = false;  ///< also count the seed's bounding-box bonds against the true ones
+  /// Also check every node's geometry (validate_tree with geometry), before
+  /// printing anything.
+  bool check = false;
 };
 
 /// Declares the `info` subcommand on `app`.
@@ -22,8 +25,12 @@ Command add_info_command(CLI::App& app);
 /// Reads the tree and prints its statistics (tree_stats), the shatter version
 /// that built it when the file records one, and its build options, as text or,
 /// with --json, as one JSON object ("shatter_version" is null when the file
-/// records none). Returns 0. Throws CorruptFileError or IoError from reading
-/// the tree.
+/// records none). With --check, first runs validate_tree with its geometry
+/// checks (the reader has checked the structure and computed the caches of every
+/// file it reads) and adds a "check: valid" line, or "check": "valid" in JSON.
+/// Returns 0. Throws CorruptFileError or IoError from reading the tree, and
+/// CorruptFileError naming the part and index at fault ("<file>: invalid tree:
+/// <part> <index>: ...") when the check fails; nothing is printed then.
 int run_info(const InfoArgs& args);
 
 }  // namespace shatter::cli
