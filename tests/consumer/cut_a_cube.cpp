@@ -13,10 +13,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/validate.hpp"
-#include "shatter/meshtree/build.hpp"
-#include "shatter/meshtree/cut.hpp"
-#include "shatter/meshtree/file.hpp"
-#include "shatter/meshtree/validate_tree.hpp"
+#include "shatter/meshtree/meshtree.hpp"  // the whole API, as an installed user would include it
 #include "shatter/runtime/shapes.hpp"
 #include "shatter/runtime/world.hpp"
 
