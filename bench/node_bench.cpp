@@ -21,6 +21,7 @@
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cut.hpp"
+#include "shatter/meshtree/hull.hpp"
 #include "support/generators.hpp"
 
 namespace {

@@ -56,6 +56,7 @@
 
 #include "bench_support.hpp"
 #include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/tree.hpp"
 #include "shatter/runtime/scenes.hpp"
 #include "shatter/runtime/shapes.hpp"
 #include "shatter/runtime/world.hpp"

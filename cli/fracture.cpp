@@ -24,6 +24,7 @@
 #include "shatter/meshtree/export.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/meshtree/stats.hpp"
+#include "shatter/meshtree/tree.hpp"
 #include "errors.hpp"
 #include "export.hpp"
 #include "input.hpp"

@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/stats.hpp"
 #include "shatter/meshtree/tree.hpp"
 

@@ -276,7 +276,9 @@ MeshTree build(const Mesh& mesh, Strategy strategy, KernelKind kernel, std::uint
   options.strategy = strategy;
   options.kernel = kernel;
   options.seed = seed;
-  return build_mesh_tree(mesh, options);
+  MeshTree tree = build_mesh_tree(mesh, options);
+  CHECK(tree_problem(tree) == "");
+  return tree;
 }
 
 constexpr Strategy all_strategies[] = {Strategy::thesis, Strategy::balanced, Strategy::axis};
@@ -621,6 +623,7 @@ TEST_CASE("find_bonds on 65,536 fragments of a cube", "[.][bench]") {
     options.seed = 3;
     const auto build_start = std::chrono::steady_clock::now();
     tree = build_mesh_tree(unit_cube(), options);
+    CHECK(tree_problem(tree) == "");
     WARN("build " << std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count() << " s");
     if (cache != nullptr) write_shatter_file(cache, tree);
   }

@@ -10,6 +10,7 @@
 
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cover.hpp"
+#include "support/checks.hpp"
 #include "support/generators.hpp"
 
 using namespace shatter;
@@ -259,6 +260,7 @@ TEST_CASE("minimal cover on a built tree", "[cover][build]") {
   options.strategy = Strategy::thesis;
   options.seed = 5;
   const MeshTree tree = build_mesh_tree(unit_cube(), options);
+  CHECK(tree_problem(tree, true) == "");
   const std::size_t n = tree.leaf_count();
   REQUIRE(n >= 24);
   std::vector<LeafIndex> all(n);

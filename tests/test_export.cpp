@@ -25,6 +25,7 @@
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/export.hpp"
 #include "shatter/meshtree/stats.hpp"
+#include "support/checks.hpp"
 #include "support/generators.hpp"
 #include "support/gltf.hpp"
 
@@ -588,6 +589,7 @@ TEST_CASE("built trees: partitions, GLBs and statistics agree with the tree") {
     options.strategy = strategy;
     const MeshTree tree = build_mesh_tree(torus, options);
     INFO(strategy_name(strategy));
+    CHECK(test::tree_problem(tree, true) == "");
     const std::uint32_t deepest = max_depth_of(tree);
     for (std::uint32_t depth = 0; depth <= deepest; ++depth) {
       require_partition(tree, select_nodes(tree, {NodeSelectionKind::depth, depth}));

@@ -12,6 +12,7 @@
 
 #include "robustness/robustness.hpp"
 #include "shatter/kernel/io.hpp"
+#include "shatter/meshtree/build.hpp"
 #include "support/checks.hpp"
 #include "support/degenerate.hpp"
 #include "support/generators.hpp"

@@ -30,9 +30,11 @@
 
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/mass.hpp"
+#include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/version.hpp"
+#include "support/checks.hpp"
 #include "support/generators.hpp"
 
 using namespace shatter;
@@ -623,6 +625,7 @@ TEST_CASE("built trees round-trip exactly", "[shatter_file][build]") {
           INFO(input.name << ", " << strategy_name(strategy) << ", " << kernel_name(kernel) << ", N = " << fragments);
           const MeshTree tree = build_mesh_tree(input.mesh, options);
           REQUIRE(tree.leaf_count() >= fragments);
+          CHECK(test::tree_problem(tree) == "");
           check_round_trip(tree);
           if (input.name == "ellipsoid with attributes") {
             CHECK(tree.nodes.back().mesh.corners.has_normals());
@@ -1121,6 +1124,7 @@ TEST_CASE("plane-kernel trees round-trip exactly, exact representation and cache
         options.strategy = strategy;
         INFO(input.name << ", " << strategy_name(strategy) << ", N = " << fragments);
         const MeshTree tree = build_mesh_tree(input.mesh, options);
+        CHECK(test::tree_problem(tree) == "");
         REQUIRE(tree.options.kernel == KernelKind::plane);
         REQUIRE(tree.leaf_count() >= fragments);
         REQUIRE(!tree.geometry.points.empty());

@@ -43,6 +43,7 @@
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cover.hpp"
+#include "shatter/meshtree/exact_build.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "support/checks.hpp"
@@ -418,89 +419,26 @@ std::string containing_hull_problem(const Mesh& mesh, const Mesh& hull) {
 
 // --- the checks ---------------------------------------------------------------------
 
-// Parent, children, depth, preorder and leaf ranges; returns false when the
-// structure is too broken for the other checks to index safely.
+// The tree's structure and caches, as validate_tree checks them (links,
+// preorder, depths, leaf ranges, leaf_nodes, the meshes' indices, bonds, the
+// exact representation); then, independently of its geometry level, that every
+// internal node is cut by a finite plane with children on both sides. Returns
+// false when the structure is too broken for the other checks to index safely.
 bool check_structure(const MeshTree& tree) {
-  Problems problems(tree, "structure (parent/children/depth/preorder/leaf ranges)");
-  const std::size_t n = tree.nodes.size();
-  REQUIRE(n >= 1);
-  const MeshTreeNode& root = tree.nodes[0];
-  if (root.parent != no_node) problems.add(0, "the root has a parent");
-  if (root.depth != 0) problems.add(0, "the root's depth is not 0");
-  if (root.first_leaf != 0 || root.leaf_count != tree.leaf_count()) {
-    problems.add(0, "the root's leaf range is [" + std::to_string(root.first_leaf) + ", +" +
-                        std::to_string(root.leaf_count) + "), not all " + std::to_string(tree.leaf_count()) +
-                        " leaves");
-  }
-
-  // Children indices must be in range and after their parent before anything
-  // else may follow them.
-  for (NodeIndex v = 0; v < n; ++v) {
-    for (const NodeIndex c : tree.nodes[v].children) {
-      if (c <= v || c >= n) {
-        problems.add(v, "child index " + std::to_string(c) + " out of preorder range");
-        expect_none(problems);
-        return false;
-      }
-    }
-  }
-  // Subtree sizes (children follow their parent in preorder).
-  std::vector<std::size_t> size(n, 1);
-  for (std::size_t v = n; v-- > 0;) {
-    for (const NodeIndex c : tree.nodes[v].children) size[v] += size[c];
-  }
-  if (size[0] != n) problems.add_global("the root's subtree has " + std::to_string(size[0]) + " of " +
-                                        std::to_string(n) + " nodes");
-
-  std::size_t leaves = 0;
-  for (NodeIndex v = 0; v < n; ++v) {
+  const std::string problem = tree_problem(tree);
+  INFO("validate_tree: " << problem);
+  CHECK(problem.empty());
+  if (!problem.empty()) return false;
+  Problems problems(tree, "cuts (a finite plane, children on both sides of it)");
+  for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
     const MeshTreeNode& node = tree.nodes[v];
-    if (node.is_leaf()) {
-      ++leaves;
-      if (node.leaf_count != 1) problems.add(v, "a leaf with leaf_count " + std::to_string(node.leaf_count));
-      if (node.first_leaf >= tree.leaf_count() || tree.leaf_nodes[node.first_leaf] != v) {
-        problems.add(v, "leaf_nodes[first_leaf = " + std::to_string(node.first_leaf) + "] is not this leaf");
-      }
-      continue;
-    }
-    if (node.children.size() < 2) problems.add(v, "an internal node with one child");
+    if (node.is_leaf()) continue;
     if (!is_finite(node.plane.normal) || !std::isfinite(node.plane.offset) || norm(node.plane.normal) == 0) {
       problems.add(v, "an internal node without a finite plane");
     }
-    if (node.children.front() != v + 1) problems.add(v, "first child is not the next node in preorder");
-    LeafIndex next_leaf = node.first_leaf;
-    NodeIndex next_node = v + 1;
     bool below = false, above = false;
-    for (const NodeIndex c : node.children) {
-      const MeshTreeNode& child = tree.nodes[c];
-      if (c != next_node) problems.add(v, "child " + std::to_string(c) + " is not where preorder puts it");
-      next_node = static_cast<NodeIndex>(c + size[c]);
-      if (child.parent != v) problems.add(c, "parent link " + std::to_string(child.parent) + " != " + std::to_string(v));
-      if (child.depth != node.depth + 1) problems.add(c, "depth is not the parent's + 1");
-      if (child.first_leaf != next_leaf) {
-        problems.add(c, "leaf range starts at " + std::to_string(child.first_leaf) + ", not right after its elder "
-                        "sibling's (" + std::to_string(next_leaf) + ")");
-      }
-      next_leaf = child.first_leaf + child.leaf_count;
-      (child.above_parent_plane ? above : below) = true;
-    }
-    if (next_leaf != node.first_leaf + node.leaf_count) {
-      problems.add(v, "leaf range [" + std::to_string(node.first_leaf) + ", +" + std::to_string(node.leaf_count) +
-                          ") is not the union of its children's");
-    }
+    for (const NodeIndex c : node.children) (tree.nodes[c].above_parent_plane ? above : below) = true;
     if (!below || !above) problems.add(v, "a cut whose children are all on one side of its plane");
-  }
-  if (leaves != tree.leaf_count()) {
-    problems.add_global(std::to_string(leaves) + " leaf nodes but " + std::to_string(tree.leaf_count()) +
-                        " entries in leaf_nodes");
-  }
-  for (std::size_t i = 1; i < tree.leaf_nodes.size(); ++i) {
-    if (tree.leaf_nodes[i] <= tree.leaf_nodes[i - 1]) problems.add_global("leaf_nodes not in node (preorder) order");
-  }
-  for (std::size_t i = 0; i < tree.leaf_nodes.size(); ++i) {
-    if (tree.leaf_nodes[i] >= n || !tree.nodes[tree.leaf_nodes[i]].is_leaf()) {
-      problems.add_global("leaf_nodes[" + std::to_string(i) + "] is not a leaf node");
-    }
   }
   expect_none(problems);
   return problems.count() == 0;
@@ -1293,6 +1231,7 @@ TEST_CASE("the progress callback reports every leaf once", "[tree][build]") {
                                             const std::lock_guard<std::mutex> lock(mutex);
                                             reported.push_back(done);
                                           });
+    CHECK(tree_problem(tree) == "");
     std::sort(reported.begin(), reported.end());
     std::vector<std::size_t> expected(tree.leaf_count());
     for (std::size_t i = 0; i < expected.size(); ++i) expected[i] = i + 1;
@@ -1431,6 +1370,7 @@ TEST_CASE("planes that keep failing end in UnsupportedGeometryError", "[tree][bu
   // One fragment needs no cut, so nothing can fail.
   const MeshTree single = build_mesh_tree(tiny, options_for(1, Strategy::axis, KernelKind::fast, 1));
   CHECK(single.nodes.size() == 1);
+  CHECK(tree_problem(single, true) == "");
 }
 
 TEST_CASE("a plane between separate solids parts them without a cap", "[tree][build]") {

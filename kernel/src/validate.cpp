@@ -16,7 +16,6 @@
 #include <cstdint>
 #include <iterator>
 #include <limits>
-#include <numeric>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -25,6 +24,7 @@
 #include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/predicates.hpp"
+#include "shatter/kernel/union_find.hpp"
 
 namespace shatter {
 namespace {
@@ -56,29 +56,6 @@ std::string triangle_text(std::size_t t) { return "triangle " + std::to_string(t
 std::string edge_text(const EdgeRecord& e) {
   return "edge (" + std::to_string(e.low) + ", " + std::to_string(e.high) + ")";
 }
-
-// Union-find over triangle corners, to group the corners at each vertex into fans.
-class CornerFans {
- public:
-  explicit CornerFans(std::size_t corner_count) : parent_(corner_count) {
-    std::iota(parent_.begin(), parent_.end(), std::uint32_t{0});
-  }
-  std::uint32_t root(std::uint32_t c) {
-    while (parent_[c] != c) {
-      parent_[c] = parent_[parent_[c]];  // path halving keeps chains short
-      c = parent_[c];
-    }
-    return c;
-  }
-  void join(std::uint32_t a, std::uint32_t b) {
-    a = root(a);
-    b = root(b);
-    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
-  }
-
- private:
-  std::vector<std::uint32_t> parent_;
-};
 
 // Collects the defects of one kind: the count and the first element.
 struct Tally {
@@ -298,7 +275,7 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
   // group sits where separate fans touch. Vertices on non-manifold edges are left
   // to that defect: their fans are split by definition.
   Tally non_manifold_vertices;
-  CornerFans fans(3 * triangle_count);
+  UnionFind fans(3 * triangle_count);  // corners joined across manifold edges: the fans
   for (const EdgeRecord& edge : edges) {
     if (edge.triangle_count() != 2) continue;
     for (VertexIndex v : {edge.low, edge.high}) {
@@ -308,7 +285,7 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
         const std::uint32_t t = corner / 3, c = corner % 3;
         corner_at_v[side] = mesh.triangles[t][c] == v ? corner : 3 * t + (c + 1) % 3;
       }
-      fans.join(corner_at_v[0], corner_at_v[1]);
+      fans.unite(corner_at_v[0], corner_at_v[1]);
     }
   }
   constexpr std::uint32_t no_fan = std::numeric_limits<std::uint32_t>::max();
@@ -318,7 +295,7 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
     if (!in_topology[t]) continue;
     for (std::uint32_t c = 0; c < 3; ++c) {
       const VertexIndex v = mesh.triangles[t][c];
-      const std::uint32_t fan = fans.root(static_cast<std::uint32_t>(3 * t + c));
+      const std::uint32_t fan = fans.find(static_cast<std::uint32_t>(3 * t + c));
       if (fan_of_vertex[v] == no_fan) {
         fan_of_vertex[v] = fan;
       } else if (fan_of_vertex[v] != fan) {
@@ -370,7 +347,7 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
         for (std::uint32_t c = 0; c < 3; ++c) {
           const VertexIndex v = mesh.triangles[t][c];
           if (!several_fans[v]) continue;
-          const std::uint32_t fan = fans.root(static_cast<std::uint32_t>(3 * t + c));
+          const std::uint32_t fan = fans.find(static_cast<std::uint32_t>(3 * t + c));
           if (fan == fan_of_vertex[v]) continue;
           const auto [it, inserted] = copy_of_fan.try_emplace(fan, static_cast<VertexIndex>(positions.size()));
           if (inserted) positions.push_back(mesh.positions[v]);

@@ -22,7 +22,10 @@
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/cut.hpp"
 #include "shatter/meshtree/cut_solid.hpp"
+#include "shatter/meshtree/exact_build.hpp"
+#include "shatter/meshtree/hull.hpp"
 #include "shatter/meshtree/plane_input.hpp"
+#include "shatter/meshtree/tree.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "shatter/version.hpp"
 

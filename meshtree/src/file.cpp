@@ -1,7 +1,8 @@
 // The .shatter file (layout in file.hpp). The encoder writes every field byte by
 // byte; the decoder checks every count against the bytes left before it
-// allocates; and one validator serves both, so whatever the encoder accepts the
-// decoder accepts, and a decoded tree keeps every MeshTree invariant.
+// allocates; and one validator, validate_tree, serves both, so whatever the
+// encoder accepts the decoder accepts, and a decoded tree keeps every MeshTree
+// invariant.
 
 #include "shatter/meshtree/file.hpp"
 
@@ -11,15 +12,12 @@
 #include <array>
 #include <bit>
 #include <cerrno>
-#include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
 #include <stdexcept>
-#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -27,10 +25,22 @@
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/solid.hpp"
+#include "shatter/meshtree/bonds.hpp"
+#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/tree.hpp"
+#include "shatter/meshtree/validate_tree.hpp"
+#include "tree_checks.hpp"
 
 namespace shatter {
 
 namespace {
+
+using detail::cut_plane_of;
+using detail::hex;
+using detail::last_kernel;
+using detail::last_point_kind;
+using detail::last_strategy;
+using detail::leaves_in_order;
 
 // ---------------------------------------------------------------------------
 // Constants of the layout
@@ -86,14 +96,6 @@ constexpr std::uint8_t uvs_bit = 2;
 constexpr std::uint8_t tangents_bit = 4;
 constexpr std::uint8_t known_channel_bits = normals_bit | uvs_bit | tangents_bit;
 
-// The largest enum values this version knows; a new Strategy or KernelKind must
-// be added here (and to the layout comment) to be stored.
-constexpr std::uint8_t last_strategy = static_cast<std::uint8_t>(Strategy::axis);
-constexpr std::uint8_t last_kernel = static_cast<std::uint8_t>(KernelKind::plane);
-constexpr std::uint8_t last_point_kind = static_cast<std::uint8_t>(PointKind::three_planes);
-
-constexpr std::uint64_t max_u32 = std::numeric_limits<std::uint32_t>::max();
-
 // ---------------------------------------------------------------------------
 // Small helpers
 
@@ -107,13 +109,6 @@ std::uint32_t crc_of(std::string_view bytes) {
     bytes.remove_prefix(length);
   }
   return static_cast<std::uint32_t>(crc);
-}
-
-std::string hex(std::uint64_t value, int digits) {
-  static constexpr char digit_chars[] = "0123456789ABCDEF";
-  std::string text = "0x";
-  for (int k = digits - 1; k >= 0; --k) text += digit_chars[(value >> (4 * k)) & 0xF];
-  return text;
 }
 
 /// What is wrong with a `vers` payload (file.hpp: 1 to 64 bytes of printable
@@ -151,471 +146,6 @@ std::string section_name(Tag tag) { return tag == end_tag ? std::string("END") :
 std::string str(std::uint64_t value) { return std::to_string(value); }
 
 [[noreturn]] void refuse(const std::string& message) { throw CorruptFileError(message); }
-
-// ---------------------------------------------------------------------------
-// Validation, shared by the encoder (a precondition) and the decoder (trust)
-
-/// Where a defect is: which record of which part of the tree.
-enum class Part { options, node, leaf_list, mesh, hull, bond, point, input_plane, cut_planes, solid };
-
-struct Defect {
-  Part part;
-  std::size_t index;  ///< node, leaf, bond, point or input plane index; 0 for options and cut_planes
-  std::string message;
-};
-
-std::optional<Defect> options_defect(const BuildOptions& options) {
-  if (options.fragments == 0) return Defect{Part::options, 0, "options.fragments is 0 (must be at least 1)"};
-  if (static_cast<std::uint8_t>(options.strategy) > last_strategy) {
-    return Defect{Part::options, 0, "options.strategy " + str(static_cast<std::uint8_t>(options.strategy)) + " is not a known strategy"};
-  }
-  if (static_cast<std::uint8_t>(options.kernel) > last_kernel) {
-    return Defect{Part::options, 0, "options.kernel " + str(static_cast<std::uint8_t>(options.kernel)) + " is not a known kernel"};
-  }
-  return std::nullopt;
-}
-
-/// Checks the links, preorder, child counts, depths and leaf ranges. Walks the
-/// children lists from the root expecting node indices 1, 2, 3, ... in visiting
-/// order, so a cycle, a node with two parents, a gap or a wrong order is caught
-/// at the first listing that breaks the sequence, and the walk ends after at most
-/// n visits whatever the links are.
-std::optional<Defect> structure_defect(const std::vector<MeshTreeNode>& nodes) {
-  const std::size_t node_count = nodes.size();
-  if (node_count == 0) return Defect{Part::node, 0, "the tree has no nodes (it needs at least its root)"};
-  if (node_count > max_u32) {
-    return Defect{Part::node, 0, "the tree has " + str(node_count) + " nodes, more than node indices can number"};
-  }
-  if (nodes[0].parent != no_node) {
-    return Defect{Part::node, 0, "node 0 (the root) has parent " + str(nodes[0].parent) + " instead of none"};
-  }
-  if (nodes[0].depth != 0) return Defect{Part::node, 0, "node 0 (the root) has depth " + str(nodes[0].depth) + " instead of 0"};
-
-  struct Visit {
-    NodeIndex node;
-    std::size_t next_child;
-  };
-  std::vector<Visit> stack = {{0, 0}};
-  std::size_t next_in_preorder = 1;
-  while (!stack.empty()) {
-    const NodeIndex node = stack.back().node;
-    const std::vector<NodeIndex>& children = nodes[node].children;
-    if (children.size() == 1) {
-      return Defect{Part::node, node, "node " + str(node) + " has one child (an internal node has two or more)"};
-    }
-    if (stack.back().next_child == children.size()) {
-      stack.pop_back();
-      continue;
-    }
-    const NodeIndex child = children[stack.back().next_child++];
-    if (child != next_in_preorder) {
-      std::string problem = "node " + str(node) + " lists child " + str(child);
-      if (child >= node_count) {
-        problem += ", but there are only " + str(node_count) + " nodes";
-      } else if (child < next_in_preorder) {
-        problem += ", which already has its place in the tree (a cycle, or a node listed twice)";
-      } else {
-        problem += ", but depth-first preorder puts node " + str(next_in_preorder) + " there";
-      }
-      return Defect{Part::node, node, problem};
-    }
-    const MeshTreeNode& child_node = nodes[child];
-    if (child_node.parent != node) {
-      return Defect{Part::node, child,
-                    "node " + str(child) + " has parent " + (child_node.parent == no_node ? std::string("none") : str(child_node.parent)) +
-                        ", but node " + str(node) + " lists it as a child"};
-    }
-    if (std::uint64_t{child_node.depth} != std::uint64_t{nodes[node].depth} + 1) {
-      return Defect{Part::node, child,
-                    "node " + str(child) + " has depth " + str(child_node.depth) + ", but its parent's depth is " + str(nodes[node].depth)};
-    }
-    ++next_in_preorder;
-    stack.push_back({child, 0});
-  }
-  if (next_in_preorder != node_count) {
-    return Defect{Part::node, next_in_preorder, "node " + str(next_in_preorder) + " is not reachable from the root"};
-  }
-
-  // In preorder every subtree is an index range, and so are its leaves: a node's
-  // first leaf is the number of leaves before it, its count the sum over its children.
-  std::vector<std::uint32_t> leaves_below(node_count, 0);
-  for (std::size_t k = node_count; k-- > 0;) {
-    if (nodes[k].is_leaf()) {
-      leaves_below[k] = 1;
-    } else {
-      for (const NodeIndex child : nodes[k].children) leaves_below[k] += leaves_below[child];
-    }
-  }
-  std::uint32_t leaves_before = 0;
-  for (std::size_t k = 0; k < node_count; ++k) {
-    const MeshTreeNode& node = nodes[k];
-    if (node.first_leaf != leaves_before || node.leaf_count != leaves_below[k]) {
-      return Defect{Part::node, k,
-                    "node " + str(k) + " claims leaves [" + str(node.first_leaf) + ", +" + str(node.leaf_count) + "), but its subtree holds [" +
-                        str(leaves_before) + ", +" + str(leaves_below[k]) + ")"};
-    }
-    if (node.is_leaf()) ++leaves_before;
-  }
-  return std::nullopt;
-}
-
-std::vector<NodeIndex> leaves_in_order(const std::vector<MeshTreeNode>& nodes) {
-  std::vector<NodeIndex> leaves;
-  for (std::size_t k = 0; k < nodes.size(); ++k) {
-    if (nodes[k].is_leaf()) leaves.push_back(static_cast<NodeIndex>(k));
-  }
-  return leaves;
-}
-
-std::optional<Defect> leaf_list_defect(const MeshTree& tree) {
-  const std::vector<NodeIndex> expected = leaves_in_order(tree.nodes);
-  if (tree.leaf_nodes.size() != expected.size()) {
-    return Defect{Part::leaf_list, 0, "leaf_nodes lists " + str(tree.leaf_nodes.size()) + " leaves, but the tree has " + str(expected.size())};
-  }
-  for (std::size_t i = 0; i < expected.size(); ++i) {
-    if (tree.leaf_nodes[i] != expected[i]) {
-      return Defect{Part::leaf_list, i, "leaf_nodes[" + str(i) + "] is node " + str(tree.leaf_nodes[i]) + ", but leaf " + str(i) + " is node " + str(expected[i])};
-    }
-  }
-  return std::nullopt;
-}
-
-/// The first BasicMesh invariant `mesh` breaks, or nothing.
-std::optional<std::string> mesh_defect(const Mesh& mesh) {
-  if (mesh.positions.size() > max_u32) return "has " + str(mesh.positions.size()) + " vertices, more than a u32 can count";
-  if (mesh.triangles.size() > max_u32) return "has " + str(mesh.triangles.size()) + " triangles, more than a u32 can count";
-  const std::size_t triangle_count = mesh.triangles.size();
-  if (mesh.surfaces.size() != triangle_count) {
-    return "has " + str(mesh.surfaces.size()) + " surface ids for " + str(triangle_count) + " triangles";
-  }
-  const std::array<std::pair<const char*, std::size_t>, 3> channels = {
-      {{"normals", mesh.corners.normals.size()}, {"uvs", mesh.corners.uvs.size()}, {"tangents", mesh.corners.tangents.size()}}};
-  for (const auto& [name, size] : channels) {
-    if (size != 0 && size != 3 * triangle_count) {
-      return std::string("has ") + str(size) + " " + name + " for " + str(triangle_count) + " triangles (need 0 or 3 per triangle)";
-    }
-  }
-  for (std::size_t t = 0; t < triangle_count; ++t) {
-    for (std::size_t corner = 0; corner < 3; ++corner) {
-      const VertexIndex vertex = mesh.triangles[t][corner];
-      if (vertex >= mesh.positions.size()) {
-        return "triangle " + str(t) + " corner " + str(corner) + " has vertex index " + str(vertex) + ", but there are only " +
-               str(mesh.positions.size()) + " vertices";
-      }
-    }
-  }
-  return std::nullopt;
-}
-
-/// The child of `node` whose leaf range holds `leaf`, or no_node.
-NodeIndex child_holding(const std::vector<MeshTreeNode>& nodes, NodeIndex node, LeafIndex leaf) {
-  for (const NodeIndex child : nodes[node].children) {
-    if (leaf - nodes[child].first_leaf < nodes[child].leaf_count) return child;  // unsigned: also rejects leaf < first_leaf
-  }
-  return no_node;
-}
-
-/// Bonds in range, sorted, each between two leaves its cut_node's cut separates
-/// (cut_node is their lowest common ancestor: both below it, under different
-/// children). Requires a valid structure.
-std::optional<Defect> bonds_defect(const MeshTree& tree) {
-  const std::size_t leaf_count = tree.leaf_nodes.size();
-  for (std::size_t i = 0; i < tree.bonds.size(); ++i) {
-    const Bond& bond = tree.bonds[i];
-    const std::string name = "bond " + str(i) + " (" + str(bond.first) + ", " + str(bond.second) + ", cut node " +
-                             (bond.cut_node == no_node ? std::string("none") : str(bond.cut_node)) + ")";
-    if (bond.first >= bond.second) return Defect{Part::bond, i, name + " does not have first < second"};
-    if (bond.second >= leaf_count) return Defect{Part::bond, i, name + " names a leaf beyond the " + str(leaf_count) + " leaves"};
-    if (bond.cut_node >= tree.nodes.size() || tree.nodes[bond.cut_node].is_leaf()) {
-      return Defect{Part::bond, i, name + " does not name an internal node as its cut"};
-    }
-    const NodeIndex first_side = child_holding(tree.nodes, bond.cut_node, bond.first);
-    const NodeIndex second_side = child_holding(tree.nodes, bond.cut_node, bond.second);
-    if (first_side == no_node || second_side == no_node || first_side == second_side) {
-      return Defect{Part::bond, i, name + " joins leaves that the cut of its cut node does not separate"};
-    }
-    if (i > 0) {
-      const Bond& previous = tree.bonds[i - 1];
-      if (std::tie(previous.first, previous.second, previous.cut_node) > std::tie(bond.first, bond.second, bond.cut_node)) {
-        return Defect{Part::bond, i, name + " is out of order (bonds are sorted by first, second, cut node)"};
-      }
-    }
-  }
-  return std::nullopt;
-}
-
-// --- the exact representation (plane kernel) ---------------------------------
-
-bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
-bool same_bits(const Plane& a, const Plane& b) {
-  return same_bits(a.normal.x, b.normal.x) && same_bits(a.normal.y, b.normal.y) && same_bits(a.normal.z, b.normal.z) &&
-         same_bits(a.offset, b.offset);
-}
-
-/// MeshTree::cut_planes as the tree's nodes define it: each node's plane, zero
-/// for leaves.
-Plane cut_plane_of(const MeshTreeNode& node) { return node.is_leaf() ? Plane{} : node.plane; }
-
-bool solid_is_empty(const Solid& solid) {
-  return solid.defs.empty() && solid.approx.empty() && solid.faces.empty() && solid.loops.empty() && solid.corners.empty() &&
-         !solid.convex;
-}
-
-std::string point_kind_name(PointKind kind) {
-  switch (kind) {
-    case PointKind::input: return "input";
-    case PointKind::segment_plane: return "segment_plane";
-    case PointKind::three_planes: return "three_planes";
-  }
-  return "kind " + str(static_cast<std::uint8_t>(kind));
-}
-
-/// What the plane kernel's checks need to know about the tree, computed once.
-struct ExactContext {
-  std::size_t point_count = 0;
-  std::size_t input_plane_count = 0;
-  /// In preorder node a's subtree is [a, subtree_end[a]), so a is a strict
-  /// ancestor of k exactly when a < k < subtree_end[a].
-  std::vector<NodeIndex> subtree_end;
-};
-
-/// Buffers reused from one solid to the next, so that checking every node's
-/// solid allocates about as much as checking the largest.
-struct SolidScratch {
-  std::vector<std::uint64_t> edges;
-  std::vector<char> used;
-};
-
-/// Why `plane` may not appear in node `node`'s solid, or nothing: it must be an
-/// input plane in range, or the cut plane of a strict ancestor of the node.
-std::optional<std::string> plane_defect(PlaneRef plane, std::size_t node, const ExactContext& context) {
-  if (plane.is_cut()) {
-    const std::uint32_t owner = plane.index();
-    if (owner < node && node < context.subtree_end[owner]) return std::nullopt;
-    return "names cut plane " + str(owner) + " (" + hex(plane.bits, 8) + "), but node " + str(owner) + " is not an ancestor of node " +
-           str(node) + " (a solid only lies on its ancestors' cut planes)";
-  }
-  if (plane.index() < context.input_plane_count) return std::nullopt;
-  return "names input plane " + str(plane.index()) + ", but there are only " + str(context.input_plane_count) + " input planes";
-}
-
-std::optional<std::string> point_defect(std::uint32_t point, const ExactContext& context) {
-  if (point < context.point_count) return std::nullopt;
-  return "names input point " + str(point) + ", but there are only " + str(context.point_count) + " input points";
-}
-
-/// The first structural defect of node `node`'s solid (file.hpp lists the checks),
-/// or nothing. `caches`: also require one approx per vertex (the encoder's
-/// precondition; the decoder computes them after these checks).
-std::optional<std::string> solid_defect(const Solid& solid, std::size_t node, const ExactContext& context, bool caches, SolidScratch& scratch) {
-  const std::size_t vertex_count = solid.defs.size(), loop_count = solid.loops.size(), corner_count = solid.corners.size();
-  for (const auto& [name, size] : std::array<std::pair<const char*, std::size_t>, 4>{
-           {{"vertices", vertex_count}, {"faces", solid.faces.size()}, {"loops", loop_count}, {"corners", corner_count}}}) {
-    if (size > max_u32) return "has " + str(size) + " " + name + ", more than a u32 can count";
-  }
-  if (caches && solid.approx.size() != vertex_count) {
-    return "has " + str(solid.approx.size()) + " approx entries for " + str(vertex_count) + " vertices";
-  }
-
-  for (std::size_t v = 0; v < vertex_count; ++v) {
-    const PointDef& def = solid.defs[v];
-    const auto kind = static_cast<std::uint8_t>(def.kind);
-    if (kind > last_point_kind) return "vertex " + str(v) + " has unknown kind " + str(kind);
-    const auto name = [&] { return "vertex " + str(v) + " (" + point_kind_name(def.kind) + ") "; };
-    // How many of a, b and planes[] the kind uses; the rest must be zero.
-    const int points_used = def.kind == PointKind::input ? 1 : def.kind == PointKind::segment_plane ? 2 : 0;
-    const int planes_used = def.kind == PointKind::input ? 0 : def.kind == PointKind::segment_plane ? 1 : 3;
-    const std::array<std::uint32_t, 2> points = {def.a, def.b};
-    for (int k = 0; k < 2; ++k) {
-      if (k < points_used) {
-        if (auto problem = point_defect(points[k], context)) return name() + *problem;
-      } else if (points[k] != 0) {
-        return name() + "has " + (k == 0 ? "a" : "b") + " = " + str(points[k]) + ", a field its kind does not use (must be 0)";
-      }
-    }
-    for (int k = 0; k < 3; ++k) {
-      if (k < planes_used) {
-        if (auto problem = plane_defect(def.planes[k], node, context)) return name() + "plane " + str(k) + " " + *problem;
-      } else if (def.planes[k].bits != 0) {
-        return name() + "has plane " + str(k) + " = " + hex(def.planes[k].bits, 8) + ", a field its kind does not use (must be 0)";
-      }
-    }
-  }
-
-  std::uint64_t next_loop = 0;
-  for (std::size_t f = 0; f < solid.faces.size(); ++f) {
-    const SolidFace& face = solid.faces[f];
-    const auto name = [&] { return "face " + str(f) + " "; };
-    if (auto problem = plane_defect(face.plane, node, context)) return name() + *problem;
-    if (face.loop_count == 0) return name() + "has no loop";
-    if (face.first_loop != next_loop) {
-      return name() + "starts at loop " + str(face.first_loop) + ", but the faces before it end at loop " + str(next_loop) +
-             " (faces take the loops in order)";
-    }
-    next_loop += face.loop_count;
-    if (next_loop > loop_count) return name() + "has loops up to " + str(next_loop) + ", but there are only " + str(loop_count) + " loops";
-  }
-  if (next_loop != loop_count) return "has " + str(loop_count) + " loops, but its faces hold " + str(next_loop);
-
-  std::uint64_t next_corner = 0;
-  for (std::size_t l = 0; l < loop_count; ++l) {
-    const SolidLoop& loop = solid.loops[l];
-    const auto name = [&] { return "loop " + str(l) + " "; };
-    if (loop.corner_count < 3) return name() + "has " + str(loop.corner_count) + " corners (a loop has at least 3)";
-    if (loop.first_corner != next_corner) {
-      return name() + "starts at corner " + str(loop.first_corner) + ", but the loops before it end at corner " + str(next_corner) +
-             " (loops take the corners in order)";
-    }
-    next_corner += loop.corner_count;
-    if (next_corner > corner_count) {
-      return name() + "has corners up to " + str(next_corner) + ", but there are only " + str(corner_count) + " corners";
-    }
-  }
-  if (next_corner != corner_count) return "has " + str(corner_count) + " corners, but its loops hold " + str(next_corner);
-
-  for (std::size_t c = 0; c < corner_count; ++c) {
-    const SolidCorner& corner = solid.corners[c];
-    const auto name = [&] { return "corner " + str(c) + " "; };
-    if (corner.vertex >= vertex_count) {
-      return name() + "has vertex " + str(corner.vertex) + ", but there are only " + str(vertex_count) + " vertices";
-    }
-    if (corner.line.other.bits != no_index) {
-      if (auto problem = plane_defect(corner.line.other, node, context)) return name() + "line " + *problem;
-    }
-    const EdgeLine& line = corner.line;
-    if (line.p != no_index || line.q != no_index) {
-      if (!(line.p < line.q && line.q < context.point_count)) {
-        return name() + "has segment (" + str(line.p) + ", " + str(line.q) + "), not two input points p < q < " + str(context.point_count) +
-               " nor none (both " + hex(no_index, 8) + ")";
-      }
-    }
-  }
-
-  // Closed: every directed edge used once, and its reverse used too.
-  scratch.edges.clear();
-  scratch.used.assign(vertex_count, 0);
-  for (const SolidLoop& loop : solid.loops) {
-    for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
-      const VertexIndex from = solid.corners[loop.first_corner + i].vertex;
-      const VertexIndex to = solid.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
-      if (from == to) return "corner " + str(loop.first_corner + i) + " repeats vertex " + str(from) + " of the corner after it";
-      scratch.used[from] = 1;
-      scratch.edges.push_back((std::uint64_t{from} << 32) | to);
-    }
-  }
-  std::sort(scratch.edges.begin(), scratch.edges.end());
-  const auto edge_name = [](std::uint64_t edge) { return "edge (" + str(edge >> 32) + ", " + str(edge & 0xFFFFFFFFu) + ") "; };
-  if (const auto twice = std::adjacent_find(scratch.edges.begin(), scratch.edges.end()); twice != scratch.edges.end()) {
-    return edge_name(*twice) + "is used twice";
-  }
-  for (const std::uint64_t edge : scratch.edges) {
-    const std::uint64_t reverse = (edge << 32) | (edge >> 32);
-    if (!std::binary_search(scratch.edges.begin(), scratch.edges.end(), reverse)) return edge_name(edge) + "has no reverse: the solid is open";
-  }
-  for (std::size_t v = 0; v < vertex_count; ++v) {
-    if (scratch.used[v] == 0) return "vertex " + str(v) + " is used by no corner";
-  }
-  return std::nullopt;
-}
-
-/// The exact representation's defects: geometry, cut planes, convex flags and
-/// solids (file.hpp, decode_shatter). Requires a valid structure.
-std::optional<Defect> exact_defect(const MeshTree& tree, bool caches) {
-  const InputGeometry& geometry = tree.geometry;
-  const std::size_t node_count = tree.nodes.size();
-  if (caches && geometry.plane_approx.size() != geometry.planes.size()) {
-    return Defect{Part::cut_planes, 0,
-                  "geometry has " + str(geometry.plane_approx.size()) + " plane_approx entries for " + str(geometry.planes.size()) + " input planes"};
-  }
-  if (geometry.points.empty()) {
-    // No exact representation: nothing of it may be present.
-    if (!geometry.planes.empty()) {
-      return Defect{Part::input_plane, 0, "geometry has " + str(geometry.planes.size()) + " input planes but no input points"};
-    }
-    if (!tree.cut_planes.empty()) {
-      return Defect{Part::cut_planes, 0,
-                    "cut_planes has " + str(tree.cut_planes.size()) + " planes, but the tree has no exact representation (no input points)"};
-    }
-    for (std::size_t k = 0; k < node_count; ++k) {
-      if (!solid_is_empty(tree.nodes[k].solid)) {
-        return Defect{Part::solid, k, "node " + str(k) + " has a solid, but the tree has no geometry (no input points)"};
-      }
-      if (tree.nodes[k].convex) {
-        return Defect{Part::solid, k, "node " + str(k) + " is marked convex, but the tree has no exact representation (no input points)"};
-      }
-    }
-    return std::nullopt;
-  }
-
-  ExactContext context;
-  context.point_count = geometry.points.size();
-  context.input_plane_count = geometry.planes.size();
-  if (context.point_count > max_u32) {
-    return Defect{Part::point, 0, "geometry has " + str(context.point_count) + " input points, more than a u32 can count"};
-  }
-  if (context.input_plane_count > PlaneRef::cut_bit) {
-    return Defect{Part::input_plane, 0,
-                  "geometry has " + str(context.input_plane_count) + " input planes, more than a plane reference can name (2^31)"};
-  }
-  for (std::size_t i = 0; i < context.point_count; ++i) {
-    if (!finite(geometry.points[i])) return Defect{Part::point, i, "input point " + str(i) + " has a coordinate that is NaN or infinite"};
-  }
-  for (std::size_t j = 0; j < context.input_plane_count; ++j) {
-    for (const VertexIndex point : geometry.planes[j]) {
-      if (point >= context.point_count) {
-        return Defect{Part::input_plane, j,
-                      "input plane " + str(j) + " names input point " + str(point) + ", but there are only " + str(context.point_count) + " input points"};
-      }
-    }
-  }
-  if (tree.cut_planes.size() != node_count) {
-    return Defect{Part::cut_planes, 0, "cut_planes has " + str(tree.cut_planes.size()) + " planes for " + str(node_count) + " nodes"};
-  }
-  for (std::size_t k = 0; k < node_count; ++k) {
-    const MeshTreeNode& node = tree.nodes[k];
-    if (!same_bits(tree.cut_planes[k], cut_plane_of(node))) {
-      return Defect{Part::cut_planes, k,
-                    "cut_planes[" + str(k) + "] is not " + (node.is_leaf() ? std::string("zero (node ") + str(k) + " is a leaf)" : "node " + str(k) + "'s plane")};
-    }
-    if (!node.is_leaf() && !(finite(node.plane.normal) && std::isfinite(node.plane.offset))) {
-      return Defect{Part::node, k, "node " + str(k) + " has a plane with a NaN or infinite coefficient (a cut plane of the exact representation)"};
-    }
-  }
-
-  context.subtree_end.resize(node_count);
-  for (std::size_t k = node_count; k-- > 0;) {
-    const MeshTreeNode& node = tree.nodes[k];
-    context.subtree_end[k] = node.is_leaf() ? static_cast<NodeIndex>(k + 1) : context.subtree_end[node.children.back()];
-  }
-  SolidScratch scratch;
-  for (std::size_t k = 0; k < node_count; ++k) {
-    const MeshTreeNode& node = tree.nodes[k];
-    if (node.convex && !(node.hull.positions.empty() && node.hull.triangles.empty())) {
-      return Defect{Part::hull, k,
-                    "node " + str(k) + " is convex, so its hull must be empty (its mesh is its hull), but the hull has " +
-                        str(node.hull.positions.size()) + " vertices and " + str(node.hull.triangles.size()) + " triangles"};
-    }
-    if (auto problem = solid_defect(node.solid, k, context, caches, scratch)) {
-      return Defect{Part::solid, k, "the solid of node " + str(k) + " " + *problem};
-    }
-  }
-  return std::nullopt;
-}
-
-/// The first defect of `tree`, or nothing. `caches`: also check that the
-/// exact representation's caches are sized (the encoder's precondition).
-std::optional<Defect> first_defect(const MeshTree& tree, bool caches) {
-  if (auto defect = options_defect(tree.options)) return defect;
-  if (auto defect = structure_defect(tree.nodes)) return defect;
-  if (auto defect = leaf_list_defect(tree)) return defect;
-  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
-    if (auto problem = mesh_defect(tree.nodes[k].mesh)) return Defect{Part::mesh, k, "the mesh of node " + str(k) + " " + *problem};
-    if (auto problem = mesh_defect(tree.nodes[k].hull)) return Defect{Part::hull, k, "the hull of node " + str(k) + " " + *problem};
-  }
-  if (auto defect = bonds_defect(tree)) return defect;
-  return exact_defect(tree, caches);
-}
 
 // ---------------------------------------------------------------------------
 // Encoding
@@ -1263,43 +793,46 @@ struct RecordOffsets {
   std::size_t point_count = 0;
 };
 
-std::string located(const Defect& defect, const SectionTable& sections, const RecordOffsets& offsets) {
+std::string located(const TreeDefect& defect, const SectionTable& sections, const RecordOffsets& offsets) {
   Tag tag = nodes_tag;
   std::size_t at = sections.nodes->payload_offset;
   switch (defect.part) {
-    case Part::options:
+    case TreePart::options:
       tag = options_tag;
       at = sections.options->payload_offset;
       break;
-    case Part::node:
+    case TreePart::node:
+    case TreePart::leaf_range:
       if (defect.index < offsets.nodes.size()) at = offsets.nodes[defect.index];
       break;
-    case Part::leaf_list: break;  // recomputed by the reader, so never at fault
-    case Part::mesh:
+    case TreePart::leaf_list: break;  // recomputed by the reader, so never at fault
+    case TreePart::mesh:
       tag = meshes_tag;
       at = offsets.meshes[defect.index];
       break;
-    case Part::hull:
+    case TreePart::hull:
       tag = hulls_tag;
       at = offsets.hulls[defect.index];
       break;
-    case Part::bond:
+    case TreePart::bond:
       tag = bonds_tag;
       at = sections.bonds->payload_offset + 8 + bond_size * defect.index;
       break;
     // The exact representation's parts exist only in version 2 files; cut_planes
     // is recomputed by the reader, so never at fault in a file.
-    case Part::point:
-    case Part::input_plane:
-    case Part::cut_planes:
+    case TreePart::input_point:
+    case TreePart::input_plane:
+    case TreePart::cut_planes:
       if (sections.geometry) {
         tag = geometry_tag;
         at = sections.geometry->payload_offset;
-        if (defect.part == Part::point) at += geometry_header_size + point_size * defect.index;
-        if (defect.part == Part::input_plane) at += geometry_header_size + point_size * offsets.point_count + input_plane_size * defect.index;
+        if (defect.part == TreePart::input_point) at += geometry_header_size + point_size * defect.index;
+        if (defect.part == TreePart::input_plane) {
+          at += geometry_header_size + point_size * offsets.point_count + input_plane_size * defect.index;
+        }
       }
       break;
-    case Part::solid:
+    case TreePart::solid:
       if (sections.solids) {
         tag = solids_tag;
         at = defect.index < offsets.solids.size() ? offsets.solids[defect.index] : sections.solids->payload_offset;
@@ -1324,56 +857,12 @@ std::string read_whole_file(const std::filesystem::path& path) {
   return bytes;
 }
 
-/// The caches the file does not store, computed from what it does store: input
-/// planes' approximations (approximate_input_plane) and every solid vertex's
-/// (approximate() over the tree's PlaneSet). `fill`: store them in the tree (the
-/// decoder; `fill` is `&tree`); otherwise compare them with the tree's, bit for bit (the encoder:
-/// equal caches are what makes decode(encode(tree)) equal to the tree).
-/// Requires a tree that passed first_defect. Returns the first vertex whose
-/// definition is degenerate (its planes meet in no single point), or, when
-/// comparing, the first cache entry that differs.
-std::optional<Defect> caches_defect(const MeshTree& tree, MeshTree* fill) {
-  const InputGeometry& geometry = tree.geometry;
-  if (geometry.points.empty()) return std::nullopt;
-  if (fill) fill->geometry.plane_approx.resize(geometry.planes.size());
-  for (std::size_t j = 0; j < geometry.planes.size(); ++j) {
-    const auto& plane = geometry.planes[j];
-    const ApproxPlane approx = approximate_input_plane(geometry.points[plane[0]], geometry.points[plane[1]], geometry.points[plane[2]]);
-    if (fill) {
-      fill->geometry.plane_approx[j] = approx;
-    } else if (std::memcmp(&approx, &geometry.plane_approx[j], sizeof approx) != 0) {
-      return Defect{Part::input_plane, j, "geometry.plane_approx[" + str(j) + "] is not approximate_input_plane of input plane " + str(j) + " (a stale cache)"};
-    }
-  }
-  // Made after plane_approx is filled: the set views it.
-  const PlaneSet set = tree.plane_set();
-  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
-    const Solid& solid = tree.nodes[k].solid;
-    if (fill) fill->nodes[k].solid.approx.resize(solid.defs.size());
-    for (std::size_t v = 0; v < solid.defs.size(); ++v) {
-      const auto vertex = [&] { return "the solid of node " + str(k) + " vertex " + str(v) + " (" + point_kind_name(solid.defs[v].kind) + ")"; };
-      ApproxPoint approx;
-      try {
-        approx = approximate(set, solid.defs[v]);
-      } catch (const std::domain_error& error) {
-        return Defect{Part::solid, k, vertex() + ": " + error.what()};
-      }
-      if (fill) {
-        fill->nodes[k].solid.approx[v] = approx;
-      } else if (std::memcmp(&approx, &solid.approx[v], sizeof approx) != 0) {
-        return Defect{Part::solid, k, vertex() + ": approx is not approximate() of its definition (a stale cache)"};
-      }
-    }
-  }
-  return std::nullopt;
-}
-
 }  // namespace
 
 std::string encode_shatter(const MeshTree& tree) {
-  std::optional<Defect> defect = first_defect(tree, true);
-  if (!defect) defect = caches_defect(tree, nullptr);
-  if (defect) throw std::invalid_argument("encode_shatter: invalid tree: " + defect->message);
+  if (const TreeValidationReport report = validate_tree(tree); !report.valid()) {
+    throw std::invalid_argument("encode_shatter: invalid tree: " + report.defect->message);
+  }
   if (!tree.shatter_version.empty()) {
     if (const std::optional<std::string> problem = version_text_problem(tree.shatter_version)) {
       throw std::invalid_argument("encode_shatter: invalid tree: shatter_version: " + *problem);
@@ -1419,8 +908,11 @@ MeshTree decode_shatter(std::string_view bytes) {
     tree.cut_planes.resize(tree.nodes.size());
     for (std::size_t k = 0; k < tree.nodes.size(); ++k) tree.cut_planes[k] = cut_plane_of(tree.nodes[k]);
   }
-  if (const std::optional<Defect> defect = first_defect(tree, false)) refuse(located(*defect, sections, offsets));
-  if (const std::optional<Defect> defect = caches_defect(tree, &tree)) refuse(located(*defect, sections, offsets));
+  // The caches are not stored: the structure is checked without them, then they are computed.
+  if (const std::optional<TreeDefect> defect = validate_tree(tree, {.caches = false}).defect) {
+    refuse(located(*defect, sections, offsets));
+  }
+  if (const std::optional<TreeDefect> defect = detail::fill_caches(tree)) refuse(located(*defect, sections, offsets));
   return tree;
 }
 

@@ -1,3 +1,5 @@
+#include "shatter/meshtree/hull.hpp"
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/convex_hull_3.h>
@@ -9,7 +11,7 @@
 
 #include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/predicates.hpp"
-#include "shatter/meshtree/build.hpp"
+#include "shatter/kernel/union_find.hpp"
 
 namespace shatter {
 namespace {
@@ -18,11 +20,6 @@ using Epick = CGAL::Epick;
 using EpickPoint = Epick::Point_3;
 
 EpickPoint to_epick(const Vec3& p) { return {p.x, p.y, p.z}; }
-
-std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t x) {
-  while (parent[x] != x) x = parent[x] = parent[parent[x]];
-  return x;
-}
 
 // A closed, connected, outward surface that is convex or flat at every edge bounds
 // a convex body, so checking each edge's two triangles, and that the triangles are
@@ -38,8 +35,7 @@ bool convex_surface(const Mesh& mesh) {
     const Triangle& tri = mesh.triangles[t];
     for (int c = 0; c < 3; ++c) triangle_of_edge.insert(directed_edge_key(tri[c], tri[(c + 1) % 3]), t);
   }
-  std::vector<std::uint32_t> piece(mesh.triangles.size());
-  for (std::uint32_t t = 0; t < piece.size(); ++t) piece[t] = t;
+  UnionFind piece_of(mesh.triangles.size());
   std::size_t pieces = mesh.triangles.size();
   for (TriangleIndex t = 0; t < mesh.triangles.size(); ++t) {
     const Triangle& tri = mesh.triangles[t];
@@ -56,11 +52,7 @@ bool convex_surface(const Mesh& mesh) {
       }
       // Positive: d lies on the side the triangle's outward normal points to.
       if (CGAL::orientation(a, b, c, to_epick(mesh.positions[d])) == CGAL::POSITIVE) return false;
-      const std::uint32_t p = find_root(piece, t), q = find_root(piece, n);
-      if (p != q) {
-        piece[p] = q;
-        --pieces;
-      }
+      if (piece_of.unite(t, n)) --pieces;
     }
   }
   return pieces == 1;
@@ -130,8 +122,7 @@ Mesh canonical_hull(const std::vector<Vec3>& positions, const std::vector<Triang
   for (std::uint32_t t = 0; t < triangles.size(); ++t) {
     for (int k = 0; k < 3; ++k) triangle_of_edge.insert(directed_edge_key(triangles[t][k], triangles[t][(k + 1) % 3]), t);
   }
-  std::vector<std::uint32_t> facet(triangles.size());
-  for (std::uint32_t t = 0; t < triangles.size(); ++t) facet[t] = t;
+  UnionFind facet_of(triangles.size());
   for (std::uint32_t t = 0; t < triangles.size(); ++t) {
     const Triangle& tri = triangles[t];
     for (int k = 0; k < 3; ++k) {
@@ -143,13 +134,13 @@ Mesh canonical_hull(const std::vector<Vec3>& positions, const std::vector<Triang
       }
       if (CGAL::orientation(to_epick(positions[tri[0]]), to_epick(positions[tri[1]]), to_epick(positions[tri[2]]),
                             to_epick(positions[opposite])) == CGAL::COPLANAR) {
-        facet[find_root(facet, t)] = find_root(facet, n);
+        facet_of.unite(t, n);
       }
     }
   }
   std::vector<std::vector<VertexIndex>> corners_of(triangles.size());
   for (std::uint32_t t = 0; t < triangles.size(); ++t) {
-    auto& corners = corners_of[find_root(facet, t)];
+    auto& corners = corners_of[facet_of.find(t)];
     corners.insert(corners.end(), triangles[t].begin(), triangles[t].end());
   }
   std::vector<std::vector<VertexIndex>> polygons;

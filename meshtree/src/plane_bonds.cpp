@@ -19,6 +19,7 @@
 
 #include "clip2d.hpp"
 #include "shatter/meshtree/bonds.hpp"
+#include "shatter/meshtree/tree.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 
 namespace shatter {

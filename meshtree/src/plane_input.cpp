@@ -1,9 +1,10 @@
 #include "shatter/meshtree/plane_input.hpp"
 
-#include <numeric>
+#include <algorithm>
 
 #include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/union_find.hpp"
 #include "shatter/meshtree/separate.hpp"
 
 namespace shatter {
@@ -34,28 +35,20 @@ PlaneInput prepare_plane_input(const Mesh& mesh) {
 
   // Shells: edge-connected triangles; in each solid the outward one is the outer.
   const std::size_t triangle_count = input.mesh.triangles.size();
-  std::vector<std::uint32_t> parent(triangle_count);
-  std::iota(parent.begin(), parent.end(), 0u);
-  auto find = [&](std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  UnionFind shell_sets(triangle_count);
   IndexMap triangle_of_edge(3 * triangle_count);
   for (std::uint32_t t = 0; t < triangle_count; ++t) {
     const Triangle& tri = input.mesh.triangles[t];
     for (int c = 0; c < 3; ++c) {
       const std::uint32_t other = triangle_of_edge.insert(undirected_edge_key(tri[c], tri[(c + 1) % 3]), t);
-      if (other != t) {
-        const std::uint32_t a = find(t), b = find(other);
-        if (a != b) parent[std::max(a, b)] = std::min(a, b);
-      }
+      if (other != t) shell_sets.unite(t, other);
     }
   }
   std::vector<std::uint32_t> shell_of_root(triangle_count, no_index);
   input.shells.shell_of_triangle.resize(triangle_count);
   std::vector<std::vector<TriangleIndex>> shell_triangles;
   for (std::uint32_t t = 0; t < triangle_count; ++t) {
-    const std::uint32_t root = find(t);
+    const std::uint32_t root = shell_sets.find(t);
     if (shell_of_root[root] == no_index) {
       shell_of_root[root] = static_cast<std::uint32_t>(shell_triangles.size());
       shell_triangles.emplace_back();

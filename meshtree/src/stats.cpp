@@ -6,6 +6,8 @@
 #include <cmath>
 #include <numeric>
 
+#include "shatter/meshtree/bonds.hpp"
+
 namespace shatter {
 
 double median_of(std::vector<double>& values) {

@@ -7,6 +7,7 @@
 
 #include "shapes_impl.hpp"
 #include "shatter/kernel/union_find.hpp"
+#include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/cover.hpp"
 
 namespace shatter::runtime {

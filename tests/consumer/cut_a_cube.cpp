@@ -1,9 +1,10 @@
 // Cuts the unit cube with the installed library and checks the pieces: a plane
 // cut (slicer, through meshtree's cut_mesh) into two halves of volume 1/2, and a
-// mesh tree of 8 fragments (plane kernel) whose leaves are valid solids adding
-// up to the cube, written to .shatter bytes and read back, then broken in the
-// runtime (one strong impact at a corner splits the one body into several that
-// together hold all 8 leaves). Exit 0 when all hold.
+// mesh tree of 8 fragments (plane kernel) that validate_tree accepts, geometry
+// included, whose leaves are valid solids adding up to the cube, written to
+// .shatter bytes and read back, then broken in the runtime (one strong impact at
+// a corner splits the one body into several that together hold all 8 leaves).
+// Exit 0 when all hold.
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -12,9 +13,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/validate.hpp"
-#include "shatter/meshtree/build.hpp"
-#include "shatter/meshtree/cut.hpp"
-#include "shatter/meshtree/file.hpp"
+#include "shatter/meshtree/meshtree.hpp"  // the whole API, as an installed user would include it
 #include "shatter/runtime/shapes.hpp"
 #include "shatter/runtime/world.hpp"
 
@@ -57,6 +56,8 @@ int main() {
   options.seed = 7;
   const shatter::MeshTree tree = shatter::build_mesh_tree(cube, options);
   expect(tree.leaf_count() == 8, "the tree has " + std::to_string(tree.leaf_count()) + " leaves, not 8");
+  const shatter::TreeValidationReport report = shatter::validate_tree(tree, {.geometry = true});
+  expect(report.valid(), "validate_tree: " + report.summary());
   double volume = 0;
   for (shatter::LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) {
     const shatter::Mesh& piece = tree.leaf(leaf).mesh;

@@ -20,6 +20,7 @@
 #include <zlib.h>
 
 #include "fuzz_support.hpp"
+#include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/file.hpp"
 
 namespace {

@@ -19,6 +19,7 @@
 #include "robustness/robustness.hpp"
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/predicates.hpp"
+#include "shatter/meshtree/build.hpp"
 
 namespace {
 

@@ -24,6 +24,7 @@
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cut.hpp"
 #include "shatter/meshtree/cut_solid.hpp"
+#include "shatter/meshtree/exact_build.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/meshtree/plane_input.hpp"
 #include "shatter/slicer/slice.hpp"
@@ -575,31 +576,18 @@ struct Checker {
     }
   }
 
-  void check_leaf_ranges(const MeshTree& tree) {
-    for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
-      const MeshTreeNode& node = tree.nodes[v];
-      if (node.is_leaf()) {
-        if (node.leaf_count != 1 || tree.leaf_nodes.at(node.first_leaf) != v) fail("node " + std::to_string(v) + ": leaf range");
-        continue;
-      }
-      LeafIndex next = node.first_leaf;
-      for (NodeIndex child : node.children) {
-        if (tree.nodes[child].first_leaf != next || tree.nodes[child].parent != v) {
-          fail("node " + std::to_string(v) + ": children's leaf ranges are not contiguous");
-        }
-        next += tree.nodes[child].leaf_count;
-      }
-      if (next != node.first_leaf + node.leaf_count) fail("node " + std::to_string(v) + ": leaf ranges do not cover it");
-    }
-  }
-
   void fracture() {
     BuildOptions options = c.build;
     options.threads = 1;
     ExactBuild built = build_mesh_tree_keeping_exact(c.mesh, options);
     const MeshTree& tree = built.tree;
     if (tree.leaf_count() < options.fragments) fail("fewer leaves than fragments asked for");
-    check_leaf_ranges(tree);
+    // Links, leaf ranges, meshes' indices, bonds, the exact representation: the
+    // rest of this check indexes through them.
+    if (const std::string problem = test::tree_problem(tree); !problem.empty()) {
+      fail("the tree: " + problem);
+      return;
+    }
     std::vector<mpq_class> six;
     for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
       const Mesh& mesh = tree.nodes[v].mesh;

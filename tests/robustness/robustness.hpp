@@ -16,6 +16,7 @@
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mesh.hpp"
+#include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/tree.hpp"
 
 namespace shatter::robust {

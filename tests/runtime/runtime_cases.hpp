@@ -17,9 +17,11 @@
 #include <vector>
 
 #include "shatter/kernel/io.hpp"
+#include "shatter/kernel/union_find.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cover.hpp"
 #include "shatter/runtime/world.hpp"
+#include "support/checks.hpp"
 #include "support/generators.hpp"
 
 namespace shatter::test {
@@ -53,6 +55,7 @@ inline RuntimeCase runtime_case(const std::string& mesh, std::uint32_t fragments
   options.seed = seed;
   options.threads = 1;
   auto tree = std::make_shared<const MeshTree>(build_mesh_tree(runtime_mesh(mesh), options));
+  CHECK(test::tree_problem(*tree, true) == "");
   RuntimeCase c{name, tree, runtime::BreakableShapes::create(tree)};
   built.emplace(name, c);
   return c;
@@ -127,22 +130,16 @@ inline void check_bodies(const runtime::World& world, runtime::ObjectId object, 
   }
   // Bodies are the connected components of the surviving bonds.
   const std::span<const std::uint8_t> alive = world.bonds_alive(object);
-  std::vector<std::uint32_t> component(tree.leaf_count());
-  for (LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) component[leaf] = leaf;
-  const auto find = [&](std::uint32_t x) {
-    while (component[x] != x) x = component[x] = component[component[x]];
-    return x;
-  };
+  UnionFind components(tree.leaf_count());
   for (std::size_t b = 0; b < tree.bonds.size(); ++b) {
     if (!alive[b]) continue;
     CHECK(owner[tree.bonds[b].first] == owner[tree.bonds[b].second]);
-    const std::uint32_t x = find(tree.bonds[b].first), y = find(tree.bonds[b].second);
-    component[std::max(x, y)] = std::min(x, y);
+    components.unite(tree.bonds[b].first, tree.bonds[b].second);
   }
   std::map<runtime::BodyId, std::uint32_t> component_of_body;
   for (LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) {
-    const auto [it, inserted] = component_of_body.emplace(owner[leaf], find(leaf));
-    CHECK(it->second == find(leaf));  // one body, one component
+    const auto [it, inserted] = component_of_body.emplace(owner[leaf], components.find(leaf));
+    CHECK(it->second == components.find(leaf));  // one body, one component
   }
   std::map<std::uint32_t, runtime::BodyId> body_of_component;
   for (const auto& [body, comp] : component_of_body) {

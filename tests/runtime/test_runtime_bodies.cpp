@@ -11,6 +11,7 @@
 
 #include "runtime_cases.hpp"
 #include "shatter/kernel/mass.hpp"
+#include "shatter/meshtree/bonds.hpp"
 #include "shatter/runtime/mass.hpp"
 #include "shatter/runtime/world.hpp"
 

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "shatter/kernel/validate.hpp"
+#include "shatter/meshtree/validate_tree.hpp"
 
 namespace shatter::test {
 namespace {
@@ -58,6 +59,11 @@ std::string topology_problem(const Mesh& mesh) {
     }
   }
   return {};
+}
+
+std::string tree_problem(const MeshTree& tree, bool geometry) {
+  const TreeValidationReport report = validate_tree(tree, {.geometry = geometry});
+  return report.valid() ? std::string() : report.summary();
 }
 
 std::string exact_solid_problem(const ExactMesh& mesh) {

@@ -7,8 +7,9 @@
 #include <vector>
 
 #include "shatter/kernel/exact.hpp"
-#include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/solid.hpp"
+#include "shatter/meshtree/tree.hpp"
 
 namespace shatter::test {
 
@@ -21,6 +22,13 @@ std::string solid_problem(const Mesh& mesh);
 /// vertex used: the fast kernel's guarantee whatever rounding did to the
 /// embedding. Otherwise the first such defect.
 std::string topology_problem(const Mesh& mesh);
+
+/// Empty when validate_tree finds nothing wrong with `tree`: its structure and
+/// caches, and with `geometry` every node's plane, mass, mesh and hull too
+/// (TreeValidationOptions::geometry, the costly part). Otherwise the report's
+/// summary, naming the part and index at fault. The check every test makes after
+/// a build.
+std::string tree_problem(const MeshTree& tree, bool geometry = false);
 
 /// solid_problem for an exact mesh, decided on the exact coordinates: topology as
 /// topology_problem, then no exactly collinear triangle, then positive volume.

@@ -28,12 +28,14 @@ class UnionFind {
     }
     return x;
   }
-  /// Joins the sets of a and b. Precondition: a, b < n.
-  void unite(std::uint32_t a, std::uint32_t b) {
+  /// Joins the sets of a and b. Precondition: a, b < n. Returns true when they
+  /// were two sets (so a caller can count the sets left without a second find).
+  bool unite(std::uint32_t a, std::uint32_t b) {
     a = find(a);
     b = find(b);
     if (a < b) parent_[b] = a;
     else if (b < a) parent_[a] = b;
+    return a != b;
   }
 
  private:

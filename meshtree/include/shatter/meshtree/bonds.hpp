@@ -8,9 +8,27 @@
 #include <utility>
 #include <vector>
 
-#include "shatter/meshtree/tree.hpp"
+#include "shatter/kernel/vec.hpp"
+#include "shatter/meshtree/tree_index.hpp"
 
 namespace shatter {
+
+/// A bond joins two leaves that truly touch: they lie on opposite sides of one
+/// cut and their caps on that plane overlap in positive area.
+struct Bond {
+  LeafIndex first = 0;   ///< first < second
+  LeafIndex second = 0;
+  NodeIndex cut_node = no_node;  ///< the node whose plane both caps lie on
+  /// Area of the caps' overlap: > 0 exactly; as a rounded double it is 0 only
+  /// when the exact overlap is below the double range's resolution.
+  double area = 0;
+  Vec3 centroid;                 ///< area-weighted centroid of the overlap
+  Vec3 normal;                   ///< unit normal of the plane, from `first` into `second`
+};
+
+// tree.hpp includes this header (a tree holds its bonds): the functions below
+// take the tree by a forward declaration.
+struct MeshTree;
 
 /// Every true bond of the tree's leaves: one Bond per (leaf pair, cut node).
 ///

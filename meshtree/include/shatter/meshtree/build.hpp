@@ -1,18 +1,76 @@
 #pragma once
 // The recursive builder: cuts a solid into at least N fragments and keeps every
-// level as a MeshTree (seed thesis ch. 4, listing 4.1), then finds the bonds.
+// level as a MeshTree (seed thesis ch. 4, listing 4.1), then finds the bonds; and
+// the options that decide what it builds. A tree records those options, so
+// tree.hpp includes this header; the declarations here therefore name MeshTree
+// by a forward declaration, and tree.hpp is included last, for the callers.
+// build_mesh_tree_keeping_exact, which needs the exact kernel's number types, is
+// in exact_build.hpp.
 
 #include <cstddef>
 #include <cstdint>
 #include <functional>
-#include <span>
-#include <vector>
+#include <string_view>
 
-#include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/mesh.hpp"
-#include "shatter/meshtree/tree.hpp"
 
 namespace shatter {
+
+/// How the builder picks the next plane and the next node to cut.
+enum class Strategy : std::uint8_t {
+  /// A random plane through the node's volume centroid; a node's fragment budget is
+  /// shared evenly among its children, whatever their size (the seed's method).
+  thesis = 0,
+  /// A random plane through the centroid, always cutting the largest-volume leaf
+  /// next, which evens out fragment sizes.
+  balanced = 1,
+  /// Planes across the node's longest bounding-box axis (X, Y or Z) near the
+  /// centroid, with offset and angle jitter (as PhysX APEX slices); the budget is
+  /// shared among the children in proportion to their volume.
+  axis = 2,
+};
+
+/// Which kernel cuts (DESIGN.md, "Exact arithmetic"). `plane`: plane-based
+/// vertices (kernel/implicit.hpp), exact at any depth and rounded once, certified,
+/// for output; the default. `exact`: CGAL Epeck rationals, the reference.
+/// `fast`: rounded cut points, exact predicates; kept only for comparison.
+enum class KernelKind : std::uint8_t { fast = 0, exact = 1, plane = 2 };
+
+/// The strategy's name as the CLI spells it ("thesis", "balanced", "axis");
+/// "unknown" for a value outside the enum. Never throws.
+std::string_view strategy_name(Strategy strategy);
+/// The kernel's name as the CLI spells it ("fast", "exact", "plane"); "unknown"
+/// for a value outside the enum. Never throws.
+std::string_view kernel_name(KernelKind kernel);
+
+/// Everything that decides a tree's contents. Two builds with equal options on
+/// equal input give byte-identical trees, whatever `threads` is.
+struct BuildOptions {
+  std::uint32_t fragments = 2;  ///< stop at the first leaf count >= this (>= 1)
+  std::uint64_t seed = 1;
+  Strategy strategy = Strategy::thesis;
+  KernelKind kernel = KernelKind::plane;
+  double interior_uv_scale = 1.0;
+  /// Planes drawn for one node before the build fails. A plane is redrawn when it
+  /// misses the node. With the fast and exact kernels also when it passes within
+  /// 1e-8 of the node's bounding-box diagonal of a vertex (it would leave needles
+  /// later planes cannot cut), or when a piece's stored (rounded) mesh would not
+  /// be a valid solid; the plane kernel never redraws for numerical reasons.
+  std::uint32_t max_plane_tries = 64;
+  /// Accept a self-intersecting input (only topology is promised then).
+  bool allow_self_intersections = false;
+  /// Worker threads; 0 means one per hardware thread. Never changes the output.
+  unsigned threads = 0;
+  /// The caller has already refused the input unless it is a valid solid, as
+  /// require_valid_solid(mesh, name, allow_self_intersections) does (the full
+  /// validate_mesh, self-intersections included), so the builder skips that
+  /// check instead of repeating it. Set it only after such a check of this very
+  /// mesh: on any other mesh the build's guarantees do not hold. Never changes
+  /// the output; a built tree's options have it false again.
+  bool input_validated = false;
+};
+
+struct MeshTree;
 
 /// Called once per finished leaf with the number finished so far. May be called
 /// from any worker thread, concurrently: it must be thread-safe and cheap.
@@ -57,24 +115,8 @@ struct BuildReport {
 MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const LeafProgressFn& progress = {},
                          BuildReport* report = nullptr);
 
-/// The same build, also returning every node's exact solid (node order) when
-/// options.kernel is exact (empty otherwise): the tree's meshes are those solids
-/// rounded to the nearest doubles, so only these show that volumes add up exactly.
-struct ExactBuild {
-  MeshTree tree;
-  std::vector<ExactMesh> exact_meshes;
-};
-ExactBuild build_mesh_tree_keeping_exact(const Mesh& mesh, const BuildOptions& options);
-
-/// The convex hull of a closed mesh's vertices as an outward triangle mesh (surface
-/// ids 0, no attributes), computed with CGAL convex_hull_3 (exact predicates). A
-/// mesh that is convex already (every edge convex or flat, decided exactly) is its
-/// own hull, without a hull computation, when it is one edge-connected piece.
-/// Precondition: the mesh is closed and oriented with positive volume.
-Mesh convex_hull_of(const Mesh& mesh);
-
-/// The convex hull of a point set, in the same canonical form (CGAL
-/// convex_hull_3, exact predicates). Precondition: the points span a volume.
-Mesh convex_hull_of_points(std::span<const Vec3> points);
-
 }  // namespace shatter
+
+// Last, and on purpose: MeshTree complete for every caller of build_mesh_tree
+// (tree.hpp needs BuildOptions above, so it cannot come first).
+#include "shatter/meshtree/tree.hpp"  // IWYU pragma: export

@@ -127,13 +127,14 @@ inline constexpr std::uint32_t shatter_oldest_format_version = 1;
 
 /// The bytes of the .shatter file of `tree` (layout above), always of version
 /// shatter_format_version.
-/// Precondition: `tree` is valid, i.e. passes every check decode_shatter makes
-/// (as every tree build_mesh_tree returns does), and its caches are what the
-/// reader will recompute: geometry.plane_approx[j] is approximate_input_plane of
-/// input plane j's points and every solid's approx[v] is approximate() of its
-/// definition over plane_set(), bit for bit (as in every built tree; checked, at
-/// the cost of recomputing them); otherwise throws std::invalid_argument naming
-/// the first defect, so no file is ever written that could not be read back.
+/// Precondition: `tree` passes validate_tree (validate_tree.hpp), caches
+/// included, as every tree build_mesh_tree returns does: every check
+/// decode_shatter makes holds, and the caches are what the reader will
+/// recompute: geometry.plane_approx[j] is approximate_input_plane of input plane
+/// j's points and every solid's approx[v] is approximate() of its definition
+/// over plane_set(), bit for bit (checked, at the cost of recomputing them).
+/// Otherwise throws std::invalid_argument with the defect's message, so no file
+/// is ever written that could not be read back.
 /// A non-empty shatter_version must follow the `vers` rule (std::invalid_argument
 /// otherwise); an empty one writes no `vers` section.
 /// Guarantees: deterministic (equal trees give equal bytes; `threads` is
@@ -146,8 +147,9 @@ std::string encode_shatter(const MeshTree& tree);
 /// Throws CorruptFileError, with a one-line message naming the defect and its
 /// place (section and byte offset), when the bytes are not a .shatter file, are
 /// of another version, truncated, fail a checksum, or decode to a tree that breaks
-/// any MeshTree invariant: node 0 the root without a parent; parent and children
-/// links consistent, nodes in depth-first preorder, internal nodes with two or
+/// a MeshTree invariant validate_tree checks without the caches (the message then
+/// ends with the TreeDefect's): node 0 the root without a parent; parent and
+/// children links consistent, nodes in depth-first preorder, internal nodes with two or
 /// more children, depth = parent's depth + 1; leaf ranges contiguous and
 /// consistent with the children; every triangle index < its mesh's vertex count
 /// (surfaces and attribute channels sized by construction); bonds with

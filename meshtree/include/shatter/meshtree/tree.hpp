@@ -3,88 +3,22 @@
 // every solid a cut produced as a child of the solid it was cut from, the
 // fragments at the leaves. Nodes are stored in depth-first preorder and leaves are
 // numbered in that order, so every node's leaves form one contiguous range.
+// A tree records the options that built it (build.hpp) and its bonds (bonds.hpp);
+// those headers declare their functions on a forward-declared MeshTree.
 
 #include <cstdint>
-#include <limits>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/vec.hpp"
+#include "shatter/meshtree/bonds.hpp"
+#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/tree_index.hpp"
 
 namespace shatter {
-
-/// Index of a node in MeshTree::nodes.
-using NodeIndex = std::uint32_t;
-/// Index of a leaf (fragment) in depth-first order: MeshTree::leaf_nodes[i].
-using LeafIndex = std::uint32_t;
-inline constexpr NodeIndex no_node = std::numeric_limits<NodeIndex>::max();
-
-/// How the builder picks the next plane and the next node to cut.
-enum class Strategy : std::uint8_t {
-  /// A random plane through the node's volume centroid; a node's fragment budget is
-  /// shared evenly among its children, whatever their size (the seed's method).
-  thesis = 0,
-  /// A random plane through the centroid, always cutting the largest-volume leaf
-  /// next, which evens out fragment sizes.
-  balanced = 1,
-  /// Planes across the node's longest bounding-box axis (X, Y or Z) near the
-  /// centroid, with offset and angle jitter (as PhysX APEX slices); the budget is
-  /// shared among the children in proportion to their volume.
-  axis = 2,
-};
-
-/// Which kernel cuts (DESIGN.md, "Exact arithmetic"). `plane`: plane-based
-/// vertices (kernel/implicit.hpp), exact at any depth and rounded once, certified,
-/// for output; the default. `exact`: CGAL Epeck rationals, the reference.
-/// `fast`: rounded cut points, exact predicates; kept only for comparison.
-enum class KernelKind : std::uint8_t { fast = 0, exact = 1, plane = 2 };
-
-std::string_view strategy_name(Strategy strategy);
-std::string_view kernel_name(KernelKind kernel);
-
-/// Everything that decides a tree's contents. Two builds with equal options on
-/// equal input give byte-identical trees, whatever `threads` is.
-struct BuildOptions {
-  std::uint32_t fragments = 2;  ///< stop at the first leaf count >= this (>= 1)
-  std::uint64_t seed = 1;
-  Strategy strategy = Strategy::thesis;
-  KernelKind kernel = KernelKind::plane;
-  double interior_uv_scale = 1.0;
-  /// Planes drawn for one node before the build fails. A plane is redrawn when it
-  /// misses the node. With the fast and exact kernels also when it passes within
-  /// 1e-8 of the node's bounding-box diagonal of a vertex (it would leave needles
-  /// later planes cannot cut), or when a piece's stored (rounded) mesh would not
-  /// be a valid solid; the plane kernel never redraws for numerical reasons.
-  std::uint32_t max_plane_tries = 64;
-  /// Accept a self-intersecting input (only topology is promised then).
-  bool allow_self_intersections = false;
-  /// Worker threads; 0 means one per hardware thread. Never changes the output.
-  unsigned threads = 0;
-  /// The caller has already refused the input unless it is a valid solid, as
-  /// require_valid_solid(mesh, name, allow_self_intersections) does (the full
-  /// validate_mesh, self-intersections included), so the builder skips that
-  /// check instead of repeating it. Set it only after such a check of this very
-  /// mesh: on any other mesh the build's guarantees do not hold. Never changes
-  /// the output; a built tree's options have it false again.
-  bool input_validated = false;
-};
-
-/// A bond joins two leaves that truly touch: they lie on opposite sides of one
-/// cut and their caps on that plane overlap in positive area.
-struct Bond {
-  LeafIndex first = 0;   ///< first < second
-  LeafIndex second = 0;
-  NodeIndex cut_node = no_node;  ///< the node whose plane both caps lie on
-  /// Area of the caps' overlap: > 0 exactly; as a rounded double it is 0 only
-  /// when the exact overlap is below the double range's resolution.
-  double area = 0;
-  Vec3 centroid;                 ///< area-weighted centroid of the overlap
-  Vec3 normal;                   ///< unit normal of the plane, from `first` into `second`
-};
 
 struct MeshTreeNode {
   /// The closed solid, a valid one (validate_mesh finds no defect; with

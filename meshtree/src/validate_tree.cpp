@@ -1,0 +1,745 @@
+// The tree checker (validate_tree.hpp). The structural checks come first and in
+// a fixed order, because each later one indexes through what the earlier ones
+// proved: links before leaf ranges, leaf ranges before bonds, the structure
+// before the exact representation. The .shatter reader and encoder call these
+// same checks (through validate_tree and tree_checks.hpp), so whatever the
+// encoder accepts the reader accepts.
+
+#include "shatter/meshtree/validate_tree.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "shatter/kernel/implicit.hpp"
+#include "shatter/kernel/solid.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "tree_checks.hpp"
+
+namespace shatter {
+
+namespace detail {
+
+std::string hex(std::uint64_t value, int digits) {
+  static constexpr char digit_chars[] = "0123456789ABCDEF";
+  std::string text = "0x";
+  for (int k = digits - 1; k >= 0; --k) text += digit_chars[(value >> (4 * k)) & 0xF];
+  return text;
+}
+
+std::vector<NodeIndex> leaves_in_order(const std::vector<MeshTreeNode>& nodes) {
+  std::vector<NodeIndex> leaves;
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    if (nodes[k].is_leaf()) leaves.push_back(static_cast<NodeIndex>(k));
+  }
+  return leaves;
+}
+
+Plane cut_plane_of(const MeshTreeNode& node) { return node.is_leaf() ? Plane{} : node.plane; }
+
+// The checks, in detail's own unnamed namespace: they see what they share with
+// the reader (tree_checks.hpp) by its plain name.
+namespace {
+
+constexpr std::uint64_t max_u32 = std::numeric_limits<std::uint32_t>::max();
+
+std::string str(std::uint64_t value) { return std::to_string(value); }
+
+// A double in full (17 significant digits): a message must not round a tiny
+// volume to 0.
+std::string full_digits(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", value);
+  return text;
+}
+
+// --- the structure ----------------------------------------------------------------
+
+std::optional<TreeDefect> options_defect(const BuildOptions& options) {
+  if (options.fragments == 0) return TreeDefect{TreePart::options, 0, "options.fragments is 0 (must be at least 1)"};
+  if (static_cast<std::uint8_t>(options.strategy) > last_strategy) {
+    return TreeDefect{
+        TreePart::options, 0,
+        "options.strategy " + str(static_cast<std::uint8_t>(options.strategy)) + " is not a known strategy"};
+  }
+  if (static_cast<std::uint8_t>(options.kernel) > last_kernel) {
+    return TreeDefect{TreePart::options, 0,
+                      "options.kernel " + str(static_cast<std::uint8_t>(options.kernel)) + " is not a known kernel"};
+  }
+  return std::nullopt;
+}
+
+/// Checks the links, preorder, child counts, depths and leaf ranges. Walks the
+/// children lists from the root expecting node indices 1, 2, 3, ... in visiting
+/// order, so a cycle, a node with two parents, a gap or a wrong order is caught
+/// at the first listing that breaks the sequence, and the walk ends after at most
+/// n visits whatever the links are.
+std::optional<TreeDefect> structure_defect(const std::vector<MeshTreeNode>& nodes) {
+  const std::size_t node_count = nodes.size();
+  if (node_count == 0) return TreeDefect{TreePart::node, 0, "the tree has no nodes (it needs at least its root)"};
+  if (node_count > max_u32) {
+    return TreeDefect{TreePart::node, 0,
+                      "the tree has " + str(node_count) + " nodes, more than node indices can number"};
+  }
+  if (nodes[0].parent != no_node) {
+    return TreeDefect{TreePart::node, 0, "node 0 (the root) has parent " + str(nodes[0].parent) + " instead of none"};
+  }
+  if (nodes[0].depth != 0)
+    return TreeDefect{TreePart::node, 0, "node 0 (the root) has depth " + str(nodes[0].depth) + " instead of 0"};
+
+  struct Visit {
+    NodeIndex node;
+    std::size_t next_child;
+  };
+  std::vector<Visit> stack = {{0, 0}};
+  std::size_t next_in_preorder = 1;
+  while (!stack.empty()) {
+    const NodeIndex node = stack.back().node;
+    const std::vector<NodeIndex>& children = nodes[node].children;
+    if (children.size() == 1) {
+      return TreeDefect{TreePart::node, node,
+                        "node " + str(node) + " has one child (an internal node has two or more)"};
+    }
+    if (stack.back().next_child == children.size()) {
+      stack.pop_back();
+      continue;
+    }
+    const NodeIndex child = children[stack.back().next_child++];
+    if (child != next_in_preorder) {
+      std::string problem = "node " + str(node) + " lists child " + str(child);
+      if (child >= node_count) {
+        problem += ", but there are only " + str(node_count) + " nodes";
+      } else if (child < next_in_preorder) {
+        problem += ", which already has its place in the tree (a cycle, or a node listed twice)";
+      } else {
+        problem += ", but depth-first preorder puts node " + str(next_in_preorder) + " there";
+      }
+      return TreeDefect{TreePart::node, node, problem};
+    }
+    const MeshTreeNode& child_node = nodes[child];
+    if (child_node.parent != node) {
+      return TreeDefect{TreePart::node, child,
+                        "node " + str(child) + " has parent " +
+                            (child_node.parent == no_node ? std::string("none") : str(child_node.parent)) +
+                            ", but node " + str(node) + " lists it as a child"};
+    }
+    if (std::uint64_t{child_node.depth} != std::uint64_t{nodes[node].depth} + 1) {
+      return TreeDefect{TreePart::node, child,
+                        "node " + str(child) + " has depth " + str(child_node.depth) + ", but its parent's depth is " +
+                            str(nodes[node].depth)};
+    }
+    ++next_in_preorder;
+    stack.push_back({child, 0});
+  }
+  if (next_in_preorder != node_count) {
+    return TreeDefect{TreePart::node, next_in_preorder,
+                      "node " + str(next_in_preorder) + " is not reachable from the root"};
+  }
+
+  // In preorder every subtree is an index range, and so are its leaves: a node's
+  // first leaf is the number of leaves before it, its count the sum over its children.
+  std::vector<std::uint32_t> leaves_below(node_count, 0);
+  for (std::size_t k = node_count; k-- > 0;) {
+    if (nodes[k].is_leaf()) {
+      leaves_below[k] = 1;
+    } else {
+      for (const NodeIndex child : nodes[k].children) leaves_below[k] += leaves_below[child];
+    }
+  }
+  std::uint32_t leaves_before = 0;
+  for (std::size_t k = 0; k < node_count; ++k) {
+    const MeshTreeNode& node = nodes[k];
+    if (node.first_leaf != leaves_before || node.leaf_count != leaves_below[k]) {
+      return TreeDefect{TreePart::leaf_range, k,
+                        "node " + str(k) + " claims leaves [" + str(node.first_leaf) + ", +" + str(node.leaf_count) +
+                            "), but its subtree holds [" + str(leaves_before) + ", +" + str(leaves_below[k]) + ")"};
+    }
+    if (node.is_leaf()) ++leaves_before;
+  }
+  return std::nullopt;
+}
+
+std::optional<TreeDefect> leaf_list_defect(const MeshTree& tree) {
+  const std::vector<NodeIndex> expected = leaves_in_order(tree.nodes);
+  if (tree.leaf_nodes.size() != expected.size()) {
+    return TreeDefect{
+        TreePart::leaf_list, 0,
+        "leaf_nodes lists " + str(tree.leaf_nodes.size()) + " leaves, but the tree has " + str(expected.size())};
+  }
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    if (tree.leaf_nodes[i] != expected[i]) {
+      return TreeDefect{TreePart::leaf_list, i,
+                        "leaf_nodes[" + str(i) + "] is node " + str(tree.leaf_nodes[i]) + ", but leaf " + str(i) +
+                            " is node " + str(expected[i])};
+    }
+  }
+  return std::nullopt;
+}
+
+/// The first BasicMesh invariant `mesh` breaks, or nothing.
+std::optional<std::string> mesh_defect(const Mesh& mesh) {
+  if (mesh.positions.size() > max_u32)
+    return "has " + str(mesh.positions.size()) + " vertices, more than a u32 can count";
+  if (mesh.triangles.size() > max_u32)
+    return "has " + str(mesh.triangles.size()) + " triangles, more than a u32 can count";
+  const std::size_t triangle_count = mesh.triangles.size();
+  if (mesh.surfaces.size() != triangle_count) {
+    return "has " + str(mesh.surfaces.size()) + " surface ids for " + str(triangle_count) + " triangles";
+  }
+  const std::array<std::pair<const char*, std::size_t>, 3> channels = {{{"normals", mesh.corners.normals.size()},
+                                                                        {"uvs", mesh.corners.uvs.size()},
+                                                                        {"tangents", mesh.corners.tangents.size()}}};
+  for (const auto& [name, size] : channels) {
+    if (size != 0 && size != 3 * triangle_count) {
+      return std::string("has ") + str(size) + " " + name + " for " + str(triangle_count) +
+             " triangles (need 0 or 3 per triangle)";
+    }
+  }
+  for (std::size_t t = 0; t < triangle_count; ++t) {
+    for (std::size_t corner = 0; corner < 3; ++corner) {
+      const VertexIndex vertex = mesh.triangles[t][corner];
+      if (vertex >= mesh.positions.size()) {
+        return "triangle " + str(t) + " corner " + str(corner) + " has vertex index " + str(vertex) +
+               ", but there are only " + str(mesh.positions.size()) + " vertices";
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+/// The child of `node` whose leaf range holds `leaf`, or no_node.
+NodeIndex child_holding(const std::vector<MeshTreeNode>& nodes, NodeIndex node, LeafIndex leaf) {
+  for (const NodeIndex child : nodes[node].children) {
+    if (leaf - nodes[child].first_leaf < nodes[child].leaf_count)
+      return child;  // unsigned: also rejects leaf < first_leaf
+  }
+  return no_node;
+}
+
+/// Bonds in range, sorted, each between two leaves its cut_node's cut separates
+/// (cut_node is their lowest common ancestor: both below it, under different
+/// children). Requires a valid structure.
+std::optional<TreeDefect> bonds_defect(const MeshTree& tree) {
+  const std::size_t leaf_count = tree.leaf_nodes.size();
+  for (std::size_t i = 0; i < tree.bonds.size(); ++i) {
+    const Bond& bond = tree.bonds[i];
+    const std::string name = "bond " + str(i) + " (" + str(bond.first) + ", " + str(bond.second) + ", cut node " +
+                             (bond.cut_node == no_node ? std::string("none") : str(bond.cut_node)) + ")";
+    if (bond.first >= bond.second) return TreeDefect{TreePart::bond, i, name + " does not have first < second"};
+    if (bond.second >= leaf_count)
+      return TreeDefect{TreePart::bond, i, name + " names a leaf beyond the " + str(leaf_count) + " leaves"};
+    if (bond.cut_node >= tree.nodes.size() || tree.nodes[bond.cut_node].is_leaf()) {
+      return TreeDefect{TreePart::bond, i, name + " does not name an internal node as its cut"};
+    }
+    const NodeIndex first_side = child_holding(tree.nodes, bond.cut_node, bond.first);
+    const NodeIndex second_side = child_holding(tree.nodes, bond.cut_node, bond.second);
+    if (first_side == no_node || second_side == no_node || first_side == second_side) {
+      return TreeDefect{TreePart::bond, i, name + " joins leaves that the cut of its cut node does not separate"};
+    }
+    if (i > 0) {
+      const Bond& previous = tree.bonds[i - 1];
+      if (std::tie(previous.first, previous.second, previous.cut_node) >
+          std::tie(bond.first, bond.second, bond.cut_node)) {
+        return TreeDefect{TreePart::bond, i, name + " is out of order (bonds are sorted by first, second, cut node)"};
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+// --- the exact representation (plane kernel) ---------------------------------
+
+bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
+bool same_bits(const Plane& a, const Plane& b) {
+  return same_bits(a.normal.x, b.normal.x) && same_bits(a.normal.y, b.normal.y) && same_bits(a.normal.z, b.normal.z) &&
+         same_bits(a.offset, b.offset);
+}
+
+bool solid_is_empty(const Solid& solid) {
+  return solid.defs.empty() && solid.approx.empty() && solid.faces.empty() && solid.loops.empty() &&
+         solid.corners.empty() && !solid.convex;
+}
+
+std::string point_kind_name(PointKind kind) {
+  switch (kind) {
+    case PointKind::input:
+      return "input";
+    case PointKind::segment_plane:
+      return "segment_plane";
+    case PointKind::three_planes:
+      return "three_planes";
+  }
+  return "kind " + str(static_cast<std::uint8_t>(kind));
+}
+
+/// What the plane kernel's checks need to know about the tree, computed once.
+struct ExactContext {
+  std::size_t point_count = 0;
+  std::size_t input_plane_count = 0;
+  /// In preorder node a's subtree is [a, subtree_end[a]), so a is a strict
+  /// ancestor of k exactly when a < k < subtree_end[a].
+  std::vector<NodeIndex> subtree_end;
+};
+
+/// Buffers reused from one solid to the next, so that checking every node's
+/// solid allocates about as much as checking the largest.
+struct SolidScratch {
+  std::vector<std::uint64_t> edges;
+  std::vector<char> used;
+};
+
+/// Why `plane` may not appear in node `node`'s solid, or nothing: it must be an
+/// input plane in range, or the cut plane of a strict ancestor of the node.
+std::optional<std::string> plane_defect(PlaneRef plane, std::size_t node, const ExactContext& context) {
+  if (plane.is_cut()) {
+    const std::uint32_t owner = plane.index();
+    if (owner < node && node < context.subtree_end[owner]) return std::nullopt;
+    return "names cut plane " + str(owner) + " (" + hex(plane.bits, 8) + "), but node " + str(owner) +
+           " is not an ancestor of node " + str(node) + " (a solid only lies on its ancestors' cut planes)";
+  }
+  if (plane.index() < context.input_plane_count) return std::nullopt;
+  return "names input plane " + str(plane.index()) + ", but there are only " + str(context.input_plane_count) +
+         " input planes";
+}
+
+std::optional<std::string> point_defect(std::uint32_t point, const ExactContext& context) {
+  if (point < context.point_count) return std::nullopt;
+  return "names input point " + str(point) + ", but there are only " + str(context.point_count) + " input points";
+}
+
+/// The first structural defect of node `node`'s solid (file.hpp lists the checks),
+/// or nothing. `caches`: also require one approx per vertex (the encoder's
+/// precondition; the decoder computes them after these checks).
+std::optional<std::string> solid_defect(const Solid& solid, std::size_t node, const ExactContext& context, bool caches,
+                                        SolidScratch& scratch) {
+  const std::size_t vertex_count = solid.defs.size(), loop_count = solid.loops.size(),
+                    corner_count = solid.corners.size();
+  for (const auto& [name, size] : std::array<std::pair<const char*, std::size_t>, 4>{{{"vertices", vertex_count},
+                                                                                      {"faces", solid.faces.size()},
+                                                                                      {"loops", loop_count},
+                                                                                      {"corners", corner_count}}}) {
+    if (size > max_u32) return "has " + str(size) + " " + name + ", more than a u32 can count";
+  }
+  if (caches && solid.approx.size() != vertex_count) {
+    return "has " + str(solid.approx.size()) + " approx entries for " + str(vertex_count) + " vertices";
+  }
+
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    const PointDef& def = solid.defs[v];
+    const auto kind = static_cast<std::uint8_t>(def.kind);
+    if (kind > last_point_kind) return "vertex " + str(v) + " has unknown kind " + str(kind);
+    const auto name = [&] { return "vertex " + str(v) + " (" + point_kind_name(def.kind) + ") "; };
+    // How many of a, b and planes[] the kind uses; the rest must be zero.
+    const int points_used = def.kind == PointKind::input ? 1 : def.kind == PointKind::segment_plane ? 2 : 0;
+    const int planes_used = def.kind == PointKind::input ? 0 : def.kind == PointKind::segment_plane ? 1 : 3;
+    const std::array<std::uint32_t, 2> points = {def.a, def.b};
+    for (int k = 0; k < 2; ++k) {
+      if (k < points_used) {
+        if (auto problem = point_defect(points[k], context)) return name() + *problem;
+      } else if (points[k] != 0) {
+        return name() + "has " + (k == 0 ? "a" : "b") + " = " + str(points[k]) +
+               ", a field its kind does not use (must be 0)";
+      }
+    }
+    for (int k = 0; k < 3; ++k) {
+      if (k < planes_used) {
+        if (auto problem = plane_defect(def.planes[k], node, context))
+          return name() + "plane " + str(k) + " " + *problem;
+      } else if (def.planes[k].bits != 0) {
+        return name() + "has plane " + str(k) + " = " + hex(def.planes[k].bits, 8) +
+               ", a field its kind does not use (must be 0)";
+      }
+    }
+  }
+
+  std::uint64_t next_loop = 0;
+  for (std::size_t f = 0; f < solid.faces.size(); ++f) {
+    const SolidFace& face = solid.faces[f];
+    const auto name = [&] { return "face " + str(f) + " "; };
+    if (auto problem = plane_defect(face.plane, node, context)) return name() + *problem;
+    if (face.loop_count == 0) return name() + "has no loop";
+    if (face.first_loop != next_loop) {
+      return name() + "starts at loop " + str(face.first_loop) + ", but the faces before it end at loop " +
+             str(next_loop) + " (faces take the loops in order)";
+    }
+    next_loop += face.loop_count;
+    if (next_loop > loop_count)
+      return name() + "has loops up to " + str(next_loop) + ", but there are only " + str(loop_count) + " loops";
+  }
+  if (next_loop != loop_count) return "has " + str(loop_count) + " loops, but its faces hold " + str(next_loop);
+
+  std::uint64_t next_corner = 0;
+  for (std::size_t l = 0; l < loop_count; ++l) {
+    const SolidLoop& loop = solid.loops[l];
+    const auto name = [&] { return "loop " + str(l) + " "; };
+    if (loop.corner_count < 3) return name() + "has " + str(loop.corner_count) + " corners (a loop has at least 3)";
+    if (loop.first_corner != next_corner) {
+      return name() + "starts at corner " + str(loop.first_corner) + ", but the loops before it end at corner " +
+             str(next_corner) + " (loops take the corners in order)";
+    }
+    next_corner += loop.corner_count;
+    if (next_corner > corner_count) {
+      return name() + "has corners up to " + str(next_corner) + ", but there are only " + str(corner_count) +
+             " corners";
+    }
+  }
+  if (next_corner != corner_count)
+    return "has " + str(corner_count) + " corners, but its loops hold " + str(next_corner);
+
+  for (std::size_t c = 0; c < corner_count; ++c) {
+    const SolidCorner& corner = solid.corners[c];
+    const auto name = [&] { return "corner " + str(c) + " "; };
+    if (corner.vertex >= vertex_count) {
+      return name() + "has vertex " + str(corner.vertex) + ", but there are only " + str(vertex_count) + " vertices";
+    }
+    if (corner.line.other.bits != no_index) {
+      if (auto problem = plane_defect(corner.line.other, node, context)) return name() + "line " + *problem;
+    }
+    const EdgeLine& line = corner.line;
+    if (line.p != no_index || line.q != no_index) {
+      if (!(line.p < line.q && line.q < context.point_count)) {
+        return name() + "has segment (" + str(line.p) + ", " + str(line.q) + "), not two input points p < q < " +
+               str(context.point_count) + " nor none (both " + hex(no_index, 8) + ")";
+      }
+    }
+  }
+
+  // Closed: every directed edge used once, and its reverse used too.
+  scratch.edges.clear();
+  scratch.used.assign(vertex_count, 0);
+  for (const SolidLoop& loop : solid.loops) {
+    for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
+      const VertexIndex from = solid.corners[loop.first_corner + i].vertex;
+      const VertexIndex to = solid.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
+      if (from == to)
+        return "corner " + str(loop.first_corner + i) + " repeats vertex " + str(from) + " of the corner after it";
+      scratch.used[from] = 1;
+      scratch.edges.push_back((std::uint64_t{from} << 32) | to);
+    }
+  }
+  std::sort(scratch.edges.begin(), scratch.edges.end());
+  const auto edge_name = [](std::uint64_t edge) {
+    return "edge (" + str(edge >> 32) + ", " + str(edge & 0xFFFFFFFFu) + ") ";
+  };
+  if (const auto twice = std::adjacent_find(scratch.edges.begin(), scratch.edges.end()); twice != scratch.edges.end()) {
+    return edge_name(*twice) + "is used twice";
+  }
+  for (const std::uint64_t edge : scratch.edges) {
+    const std::uint64_t reverse = (edge << 32) | (edge >> 32);
+    if (!std::binary_search(scratch.edges.begin(), scratch.edges.end(), reverse))
+      return edge_name(edge) + "has no reverse: the solid is open";
+  }
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    if (scratch.used[v] == 0) return "vertex " + str(v) + " is used by no corner";
+  }
+  return std::nullopt;
+}
+
+/// The exact representation's defects: geometry, cut planes, convex flags and
+/// solids (file.hpp, decode_shatter). Requires a valid structure.
+std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
+  const InputGeometry& geometry = tree.geometry;
+  const std::size_t node_count = tree.nodes.size();
+  if (caches && geometry.plane_approx.size() != geometry.planes.size()) {
+    return TreeDefect{TreePart::input_plane, 0,
+                      "geometry has " + str(geometry.plane_approx.size()) + " plane_approx entries for " +
+                          str(geometry.planes.size()) + " input planes"};
+  }
+  if (geometry.points.empty()) {
+    // No exact representation: nothing of it may be present.
+    if (!geometry.planes.empty()) {
+      return TreeDefect{TreePart::input_plane, 0,
+                        "geometry has " + str(geometry.planes.size()) + " input planes but no input points"};
+    }
+    if (!tree.cut_planes.empty()) {
+      return TreeDefect{TreePart::cut_planes, 0,
+                        "cut_planes has " + str(tree.cut_planes.size()) +
+                            " planes, but the tree has no exact representation (no input points)"};
+    }
+    for (std::size_t k = 0; k < node_count; ++k) {
+      if (!solid_is_empty(tree.nodes[k].solid)) {
+        return TreeDefect{TreePart::solid, k,
+                          "node " + str(k) + " has a solid, but the tree has no geometry (no input points)"};
+      }
+      if (tree.nodes[k].convex) {
+        return TreeDefect{
+            TreePart::solid, k,
+            "node " + str(k) + " is marked convex, but the tree has no exact representation (no input points)"};
+      }
+    }
+    return std::nullopt;
+  }
+
+  ExactContext context;
+  context.point_count = geometry.points.size();
+  context.input_plane_count = geometry.planes.size();
+  if (context.point_count > max_u32) {
+    return TreeDefect{TreePart::input_point, 0,
+                      "geometry has " + str(context.point_count) + " input points, more than a u32 can count"};
+  }
+  if (context.input_plane_count > PlaneRef::cut_bit) {
+    return TreeDefect{TreePart::input_plane, 0,
+                      "geometry has " + str(context.input_plane_count) +
+                          " input planes, more than a plane reference can name (2^31)"};
+  }
+  for (std::size_t i = 0; i < context.point_count; ++i) {
+    if (!finite(geometry.points[i]))
+      return TreeDefect{TreePart::input_point, i,
+                        "input point " + str(i) + " has a coordinate that is NaN or infinite"};
+  }
+  for (std::size_t j = 0; j < context.input_plane_count; ++j) {
+    for (const VertexIndex point : geometry.planes[j]) {
+      if (point >= context.point_count) {
+        return TreeDefect{TreePart::input_plane, j,
+                          "input plane " + str(j) + " names input point " + str(point) + ", but there are only " +
+                              str(context.point_count) + " input points"};
+      }
+    }
+  }
+  if (tree.cut_planes.size() != node_count) {
+    return TreeDefect{TreePart::cut_planes, 0,
+                      "cut_planes has " + str(tree.cut_planes.size()) + " planes for " + str(node_count) + " nodes"};
+  }
+  for (std::size_t k = 0; k < node_count; ++k) {
+    const MeshTreeNode& node = tree.nodes[k];
+    if (!same_bits(tree.cut_planes[k], cut_plane_of(node))) {
+      return TreeDefect{
+          TreePart::cut_planes, k,
+          "cut_planes[" + str(k) + "] is not " +
+              (node.is_leaf() ? std::string("zero (node ") + str(k) + " is a leaf)" : "node " + str(k) + "'s plane")};
+    }
+    if (!node.is_leaf() && !(finite(node.plane.normal) && std::isfinite(node.plane.offset))) {
+      return TreeDefect{
+          TreePart::node, k,
+          "node " + str(k) +
+              " has a plane with a NaN or infinite coefficient (a cut plane of the exact representation)"};
+    }
+  }
+
+  context.subtree_end.resize(node_count);
+  for (std::size_t k = node_count; k-- > 0;) {
+    const MeshTreeNode& node = tree.nodes[k];
+    context.subtree_end[k] = node.is_leaf() ? static_cast<NodeIndex>(k + 1) : context.subtree_end[node.children.back()];
+  }
+  SolidScratch scratch;
+  for (std::size_t k = 0; k < node_count; ++k) {
+    const MeshTreeNode& node = tree.nodes[k];
+    if (node.convex && !(node.hull.positions.empty() && node.hull.triangles.empty())) {
+      return TreeDefect{
+          TreePart::hull, k,
+          "node " + str(k) + " is convex, so its hull must be empty (its mesh is its hull), but the hull has " +
+              str(node.hull.positions.size()) + " vertices and " + str(node.hull.triangles.size()) + " triangles"};
+    }
+    if (auto problem = solid_defect(node.solid, k, context, caches, scratch)) {
+      return TreeDefect{TreePart::solid, k, "the solid of node " + str(k) + " " + *problem};
+    }
+  }
+  return std::nullopt;
+}
+
+/// The first defect of `tree`, or nothing. `caches`: also check that the
+/// exact representation's caches are sized (the encoder's precondition).
+std::optional<TreeDefect> first_defect(const MeshTree& tree, bool caches) {
+  if (auto defect = options_defect(tree.options)) return defect;
+  if (auto defect = structure_defect(tree.nodes)) return defect;
+  if (auto defect = leaf_list_defect(tree)) return defect;
+  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+    if (auto problem = mesh_defect(tree.nodes[k].mesh))
+      return TreeDefect{TreePart::mesh, k, "the mesh of node " + str(k) + " " + *problem};
+    if (auto problem = mesh_defect(tree.nodes[k].hull))
+      return TreeDefect{TreePart::hull, k, "the hull of node " + str(k) + " " + *problem};
+  }
+  if (auto defect = bonds_defect(tree)) return defect;
+  return exact_defect(tree, caches);
+}
+
+// --- the caches --------------------------------------------------------------------
+
+/// The caches the file does not store, computed from what it does store: input
+/// planes' approximations (approximate_input_plane) and every solid vertex's
+/// (approximate() over the tree's PlaneSet). `fill`: store them in the tree (the
+/// decoder; `fill` is `&tree`); otherwise compare them with the tree's, bit for bit (the encoder:
+/// equal caches are what makes decode(encode(tree)) equal to the tree).
+/// Requires a tree that passed first_defect. Returns the first vertex whose
+/// definition is degenerate (its planes meet in no single point), or, when
+/// comparing, the first cache entry that differs.
+std::optional<TreeDefect> caches_defect(const MeshTree& tree, MeshTree* fill) {
+  const InputGeometry& geometry = tree.geometry;
+  if (geometry.points.empty()) return std::nullopt;
+  if (fill) fill->geometry.plane_approx.resize(geometry.planes.size());
+  for (std::size_t j = 0; j < geometry.planes.size(); ++j) {
+    const auto& plane = geometry.planes[j];
+    const ApproxPlane approx =
+        approximate_input_plane(geometry.points[plane[0]], geometry.points[plane[1]], geometry.points[plane[2]]);
+    if (fill) {
+      fill->geometry.plane_approx[j] = approx;
+    } else if (std::memcmp(&approx, &geometry.plane_approx[j], sizeof approx) != 0) {
+      return TreeDefect{TreePart::input_plane, j,
+                        "geometry.plane_approx[" + str(j) + "] is not approximate_input_plane of input plane " +
+                            str(j) + " (a stale cache)"};
+    }
+  }
+  // Made after plane_approx is filled: the set views it.
+  const PlaneSet set = tree.plane_set();
+  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+    const Solid& solid = tree.nodes[k].solid;
+    if (fill) fill->nodes[k].solid.approx.resize(solid.defs.size());
+    for (std::size_t v = 0; v < solid.defs.size(); ++v) {
+      const auto vertex = [&] {
+        return "the solid of node " + str(k) + " vertex " + str(v) + " (" + point_kind_name(solid.defs[v].kind) + ")";
+      };
+      ApproxPoint approx;
+      try {
+        approx = approximate(set, solid.defs[v]);
+      } catch (const std::domain_error& error) {
+        return TreeDefect{TreePart::solid, k, vertex() + ": " + error.what()};
+      }
+      if (fill) {
+        fill->nodes[k].solid.approx[v] = approx;
+      } else if (std::memcmp(&approx, &solid.approx[v], sizeof approx) != 0) {
+        return TreeDefect{TreePart::solid, k,
+                          vertex() + ": approx is not approximate() of its definition (a stale cache)"};
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+// --- the geometry (TreeValidationOptions::geometry) -------------------------------
+
+// Defects a tree built with allow_self_intersections may have: its pieces are
+// promised closed, oriented and manifold only (BuildOptions).
+bool embedding_defect(DefectKind kind) {
+  return kind == DefectKind::zero_area_triangle || kind == DefectKind::inward_orientation ||
+         kind == DefectKind::self_intersection;
+}
+
+/// The first geometric defect of node `k`: its plane and children's sides, its
+/// mass, its mesh, its hull. Requires a tree that passed first_defect.
+std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k) {
+  const MeshTreeNode& node = tree.nodes[k];
+  const std::string name = "node " + str(k);
+  if (!node.is_leaf()) {
+    const Plane& plane = node.plane;
+    if (!(finite(plane.normal) && std::isfinite(plane.offset))) {
+      return TreeDefect{TreePart::node, k, name + " is cut by a plane with a NaN or infinite coefficient"};
+    }
+    if (plane.normal.x == 0 && plane.normal.y == 0 && plane.normal.z == 0) {
+      return TreeDefect{TreePart::node, k, name + " is cut by a plane with a zero normal"};
+    }
+    // A plane that leaves the whole node on one side has not cut it.
+    const auto above = [&](NodeIndex child) { return tree.nodes[child].above_parent_plane; };
+    if (std::all_of(node.children.begin(), node.children.end(), above) ||
+        std::none_of(node.children.begin(), node.children.end(), above)) {
+      return TreeDefect{TreePart::node, k,
+                        name + " has all its " + str(node.children.size()) + " children on one side of its plane"};
+    }
+  }
+  const MassProperties& mass = node.mass;
+  const bool mass_finite = finite(mass.centroid) && std::all_of(mass.inertia.begin(), mass.inertia.end(),
+                                                                [](double entry) { return std::isfinite(entry); });
+  if (!(mass.volume > 0 && std::isfinite(mass.volume) && mass_finite)) {
+    return TreeDefect{TreePart::node, k,
+                      name + " has mass properties that are not finite or a volume that is not positive (volume " +
+                          full_digits(mass.volume) + ")"};
+  }
+
+  // validate_mesh finds nothing wrong with no triangles at all.
+  if (node.mesh.triangles.empty()) return TreeDefect{TreePart::mesh, k, "the mesh of " + name + " is empty"};
+  const bool topology_only = tree.options.allow_self_intersections;
+  ValidationReport mesh_report = validate_mesh(node.mesh, {.check_self_intersections = !topology_only});
+  if (topology_only) {
+    std::erase_if(mesh_report.defects, [](const Defect& defect) { return embedding_defect(defect.kind); });
+  }
+  if (!mesh_report.valid()) {
+    return TreeDefect{TreePart::mesh, k, "the mesh of " + name + " is not a valid solid: " + mesh_report.summary()};
+  }
+  // A convex node is its own hull (the structure checked that none is stored).
+  if (!node.convex) {
+    if (node.hull.triangles.empty()) {
+      return TreeDefect{TreePart::hull, k, "the hull of " + name + " is empty, and the node is not marked convex"};
+    }
+    const ValidationReport hull_report = validate_mesh(node.hull, {.check_self_intersections = false});
+    if (!hull_report.valid()) {
+      return TreeDefect{TreePart::hull, k, "the hull of " + name + " is not a valid solid: " + hull_report.summary()};
+    }
+  }
+  return std::nullopt;
+}
+
+/// The geometric defect of the lowest-numbered node that has one. Nodes are
+/// checked in parallel, each on its own, so the answer never depends on threads.
+std::optional<TreeDefect> geometry_defect(const MeshTree& tree) {
+  std::vector<std::optional<TreeDefect>> defect_of_node(tree.nodes.size());
+  tbb::parallel_for(std::size_t{0}, tree.nodes.size(),
+                    [&](std::size_t k) { defect_of_node[k] = node_geometry_defect(tree, static_cast<NodeIndex>(k)); });
+  for (std::optional<TreeDefect>& defect : defect_of_node) {
+    if (defect) return std::move(defect);
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<TreeDefect> fill_caches(MeshTree& tree) { return caches_defect(tree, &tree); }
+
+}  // namespace detail
+
+std::string_view tree_part_name(TreePart part) {
+  switch (part) {
+    case TreePart::options:
+      return "options";
+    case TreePart::node:
+      return "node";
+    case TreePart::leaf_range:
+      return "leaf range";
+    case TreePart::leaf_list:
+      return "leaf list";
+    case TreePart::mesh:
+      return "mesh";
+    case TreePart::hull:
+      return "hull";
+    case TreePart::bond:
+      return "bond";
+    case TreePart::input_point:
+      return "input point";
+    case TreePart::input_plane:
+      return "input plane";
+    case TreePart::cut_planes:
+      return "cut planes";
+    case TreePart::solid:
+      return "solid";
+  }
+  return "unknown";
+}
+
+std::string TreeValidationReport::summary() const {
+  if (!defect) return "valid";
+  std::string where(tree_part_name(defect->part));
+  if (defect->part != TreePart::options) where.append(" ").append(detail::str(defect->index));
+  return where + ": " + defect->message;
+}
+
+TreeValidationReport validate_tree(const MeshTree& tree, const TreeValidationOptions& options) {
+  TreeValidationReport report;
+  report.defect = detail::first_defect(tree, options.caches);
+  if (!report.defect && options.caches) report.defect = detail::caches_defect(tree, nullptr);
+  if (!report.defect && options.geometry) {
+    report.geometry_checked = true;
+    report.defect = detail::geometry_defect(tree);
+  }
+  return report;
+}
+
+}  // namespace shatter
