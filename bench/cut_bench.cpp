@@ -30,10 +30,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -41,6 +39,7 @@
 #include <vector>
 
 #include "bench_support.hpp"
+#include "csv.hpp"
 #include "shatter/meshtree/cut_solid.hpp"
 #include "shatter/meshtree/plane_input.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
@@ -55,6 +54,7 @@ namespace {
 
 namespace PMP = CGAL::Polygon_mesh_processing;
 using shatter::bench::CgalMesh;
+using shatter::bench::CsvWriter;
 using shatter::bench::Epick;
 using shatter::bench::fixed;
 using shatter::bench::to_cgal;
@@ -360,27 +360,26 @@ void print_markdown(std::ostream& out, const std::vector<Row>& rows) {
 }
 
 void write_csv(const std::filesystem::path& path, const std::vector<Row>& rows) {
-  std::ostringstream out;
-  out << "mesh,triangles,plane_ms,plane_ns_per_triangle,fast_ms,fast_ns_per_triangle,exact_ms,exact_ns_per_triangle,cgal_clip_ms,"
-         "cgal_over_fast,cgal_over_exact,runs_fast,runs_exact,runs_cgal,to_exact_ms,pieces_fast,pieces_exact,"
-         "pieces_cgal,fast_pieces_valid,cgal_sides_closed,cgal_sides_without_self_intersection,cgal_clip_ok,"
-         "cgal_over_plane,runs_plane,prepare_plane_input_ms,pieces_plane,plane_pieces_valid\n";
-  out.precision(9);
+  CsvWriter csv(
+      "mesh,triangles,plane_ms,plane_ns_per_triangle,fast_ms,fast_ns_per_triangle,exact_ms,exact_ns_per_triangle,"
+      "cgal_clip_ms,cgal_over_fast,cgal_over_exact,runs_fast,runs_exact,runs_cgal,to_exact_ms,pieces_fast,"
+      "pieces_exact,pieces_cgal,fast_pieces_valid,cgal_sides_closed,cgal_sides_without_self_intersection,"
+      "cgal_clip_ok,cgal_over_plane,runs_plane,prepare_plane_input_ms,pieces_plane,plane_pieces_valid");
   for (const auto& r : rows) {
-    out << r.name << ',' << r.triangles << ',' << r.plane.median_ms << ','
-        << ns_per_triangle(r.plane.median_ms, r.triangles) << ',' << r.fast.median_ms << ','
-        << ns_per_triangle(r.fast.median_ms, r.triangles) << ',' << r.exact.median_ms << ','
-        << ns_per_triangle(r.exact.median_ms, r.triangles) << ',' << r.cgal.median_ms << ','
-        << r.cgal.median_ms / r.fast.median_ms << ',' << r.cgal.median_ms / r.exact.median_ms << ',' << r.fast.runs
-        << ',' << r.exact.runs << ',' << r.cgal.runs << ',' << r.exact.setup_ms << ',' << r.fast_pieces << ','
-        << r.exact_pieces << ',' << r.cgal_pieces << ',' << r.fast_valid << ',' << r.cgal_closed << ','
-        << r.cgal_self_free << ',' << (r.cgal_ok ? 1 : 0) << ',' << r.cgal.median_ms / r.plane.median_ms << ','
-        << r.plane.runs << ',' << r.plane.setup_ms << ',' << r.plane_pieces << ',' << r.plane_valid << '\n';
+    csv.field(r.name).field(r.triangles);
+    for (const Timing* t : {&r.plane, &r.fast, &r.exact}) {
+      csv.field(t->median_ms).field(ns_per_triangle(t->median_ms, r.triangles));
+    }
+    csv.field(r.cgal.median_ms).field(r.cgal.median_ms / r.fast.median_ms).field(r.cgal.median_ms / r.exact.median_ms);
+    csv.field(r.fast.runs).field(r.exact.runs).field(r.cgal.runs).field(r.exact.setup_ms);
+    csv.field(r.fast_pieces).field(r.exact_pieces).field(r.cgal_pieces);
+    // -1: not checked (--no-validate).
+    csv.field(r.fast_valid).field(r.cgal_closed).field(r.cgal_self_free).field(r.cgal_ok);
+    csv.field(r.cgal.median_ms / r.plane.median_ms).field(r.plane.runs).field(r.plane.setup_ms);
+    csv.field(r.plane_pieces).field(r.plane_valid);
+    csv.end_row();
   }
-  std::ofstream file(path, std::ios::binary);
-  if (!file) throw std::runtime_error("cannot open " + path.string() + " for writing");
-  file << out.str();
-  if (!file.flush()) throw std::runtime_error("cannot write " + path.string());
+  csv.save(path);
 }
 
 Options parse(int argc, char** argv) {

@@ -54,12 +54,10 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <iostream>
 #include <limits>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -67,6 +65,7 @@
 #include <vector>
 
 #include "bench_support.hpp"
+#include "csv.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/validate.hpp"
@@ -77,6 +76,7 @@
 
 namespace {
 
+using shatter::bench::CsvWriter;
 using shatter::bench::fixed;
 using shatter::bench::not_measured;
 using shatter::bench::PeerResult;
@@ -635,64 +635,44 @@ void print_meshes(std::ostream& out, const std::vector<MeshLine>& lines, std::ui
   }
 }
 
-std::string csv_field(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (const char c : text) {
-    if (c == '"') quoted += '"';
-    quoted += c;
-  }
-  return quoted + "\"";
-}
-
-std::string csv_number(double value) {
-  if (std::isnan(value) || std::isinf(value)) return "";
-  std::ostringstream out;
-  out.precision(9);
-  out << value;
-  return out.str();
-}
-
 void write_csv(const std::filesystem::path& path, const std::vector<const Row*>& rows) {
-  std::ostringstream out;
-  out << "section,mesh,triangles,strategy,kernel,threads,fragments_requested,leaves,nodes,runs,seconds,us_per_cut,"
-         "cutting_seconds,hull_seconds,bond_seconds,planes_missed,planes_rejected,"
-         "max_depth,invalid_leaves,volume_cv,smallest_volume_over_mean,tree_fingerprint,peer_status,peer_seconds,peer_ratio,"
-         "peer_nodes_done,peer_internal_nodes,peer_pieces,peer_invalid,peer_missing,peer_failed,peer_threw,"
-         "peer_mismatches,failed,note\n";
+  CsvWriter csv(
+      "section,mesh,triangles,strategy,kernel,threads,fragments_requested,leaves,nodes,runs,seconds,us_per_cut,"
+      "cutting_seconds,hull_seconds,bond_seconds,planes_missed,planes_rejected,max_depth,invalid_leaves,volume_cv,"
+      "smallest_volume_over_mean,tree_fingerprint,peer_status,peer_seconds,peer_ratio,peer_nodes_done,"
+      "peer_internal_nodes,peer_pieces,peer_invalid,peer_missing,peer_failed,peer_threw,peer_mismatches,failed,note");
   for (const Row* r : rows) {
     char fingerprint[17];
     std::snprintf(fingerprint, sizeof fingerprint, "%016llx",
                   static_cast<unsigned long long>(r->leaf_summary.fingerprint));
-    out << r->section << ',' << csv_field(r->mesh) << ',' << r->triangles << ','
-        << shatter::strategy_name(r->strategy) << ',' << shatter::kernel_name(r->kernel) << ',' << r->threads << ','
-        << r->fragments << ',' << r->leaves << ',' << r->nodes << ',' << r->runs << ',' << csv_number(r->seconds)
-        << ',' << csv_number(r->us_per_cut()) << ',' << csv_number(r->built ? r->report.cutting_seconds : not_measured)
-        << ',' << csv_number(r->built ? r->report.hull_seconds : not_measured) << ','
-        << csv_number(r->built ? r->report.bond_seconds : not_measured) << ','
-        << (r->built ? std::to_string(r->report.planes_missed) : "") << ','
-        << (r->built ? std::to_string(r->report.planes_rejected) : "") << ',' << r->leaf_summary.max_depth << ','
-        << (r->leaf_summary.invalid < 0 ? "" : std::to_string(r->leaf_summary.invalid))
-        << ',' << csv_number(r->leaf_summary.volume_cv) << ',' << csv_number(r->leaf_summary.smallest_over_mean)
-        << ',' << (r->built ? fingerprint : "") << ',';
+    csv.field(r->section).field(r->mesh).field(r->triangles).field(shatter::strategy_name(r->strategy));
+    csv.field(shatter::kernel_name(r->kernel)).field(r->threads).field(r->fragments).field(r->leaves);
+    csv.field(r->nodes).field(r->runs).field(r->seconds).field(r->us_per_cut());
+    csv.field(r->built ? r->report.cutting_seconds : not_measured);
+    csv.field(r->built ? r->report.hull_seconds : not_measured);
+    csv.field(r->built ? r->report.bond_seconds : not_measured);
+    csv.field_if(r->built, r->report.planes_missed).field_if(r->built, r->report.planes_rejected);
+    csv.field(r->leaf_summary.max_depth).field_if(r->leaf_summary.invalid >= 0, r->leaf_summary.invalid);
+    csv.field(r->leaf_summary.volume_cv).field(r->leaf_summary.smallest_over_mean);
+    csv.field_if(r->built, std::string_view(fingerprint));
     if (r->peer) {
       const PeerResult& p = *r->peer;
-      out << p.status_name() << ',' << csv_number(p.clip_seconds) << ',' << csv_number(r->peer_ratio()) << ','
-          << p.nodes_done << ',' << p.internal_nodes << ',' << (p.pieces < 0 ? "" : std::to_string(p.pieces)) << ','
-          << (p.invalid < 0 ? "" : std::to_string(p.invalid)) << ',' << p.missing << ',' << p.failed_clips << ','
-          << p.threw << ',' << p.mismatches << ',';
+      csv.field(p.status_name()).field(p.clip_seconds).field(r->peer_ratio()).field(p.nodes_done);
+      csv.field(p.internal_nodes).field_if(p.pieces >= 0, p.pieces).field_if(p.invalid >= 0, p.invalid);
+      csv.field(p.missing).field(p.failed_clips).field(p.threw).field(p.mismatches);
     } else {
-      out << "not run,,,,,,,,,,,";
+      csv.field("not run").empty(10);
     }
     std::string note = r->note;
     if (r->peer && !r->peer->detail.empty()) note += (note.empty() ? "" : "; ") + ("peer: " + r->peer->detail);
-    out << (r->failed ? 1 : 0) << ',' << csv_field(note) << '\n';
+    csv.field(r->failed).field(note);
+    csv.end_row();
   }
-  std::ofstream file(path, std::ios::binary);
-  if (!file) throw std::runtime_error("cannot open " + path.string() + " for writing");
-  file << out.str();
-  if (!file.flush()) throw std::runtime_error("cannot write " + path.string());
+  csv.save(path);
 }
+
+// ---------------------------------------------------------------------------
+// Command line.
 
 // ---------------------------------------------------------------------------
 // Command line.
