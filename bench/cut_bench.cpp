@@ -24,11 +24,12 @@
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/boost/graph/helpers.h>
 
+#include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -39,6 +40,7 @@
 #include <vector>
 
 #include "bench_support.hpp"
+#include "command_line.hpp"
 #include "csv.hpp"
 #include "shatter/meshtree/cut_solid.hpp"
 #include "shatter/meshtree/plane_input.hpp"
@@ -60,26 +62,6 @@ using shatter::bench::fixed;
 using shatter::bench::to_cgal;
 using shatter::bench::with_thousands;
 using Clock = std::chrono::steady_clock;
-
-constexpr const char* usage_text =
-    "usage: shatter-bench-cut [--mesh-dir DIR] [--csv FILE] [--sphere-subdivisions K] [--quick]\n"
-    "                         [--no-validate]\n"
-    "\n"
-    "One cut through the volume centroid (normal = normalised (0.3, 0.5, 0.8)) of\n"
-    "knot1.off, fandisk.off and a subdivided icosahedron sphere (20 * 4^K triangles).\n"
-    "Times shatter::cut_mesh with the fast and the exact kernel and CGAL PMP\n"
-    "clip(..., clip_volume(true)) on both sides of the same plane; prints a Markdown\n"
-    "table (median of >= 3 runs and >= 0.3 s) and per-method pieces and validity.\n"
-    "\n"
-    "options:\n"
-    "  --mesh-dir DIR            folder holding knot1.off and fandisk.off\n"
-    "                            (default: " SHATTER_MESH_DIR ")\n"
-    "  --csv FILE                also write the results as CSV to FILE\n"
-    "  --sphere-subdivisions K   subdivisions of the icosahedron, 0..10 (default 8:\n"
-    "                            1,310,720 triangles; --quick default 6)\n"
-    "  --quick                   smoke run: 1 run per measurement, sphere 4^6\n"
-    "  --no-validate             skip the validity checks of the outputs\n"
-    "  -h, --help                show this help\n";
 
 struct Options {
   std::filesystem::path mesh_dir = SHATTER_MESH_DIR;
@@ -382,49 +364,34 @@ void write_csv(const std::filesystem::path& path, const std::vector<Row>& rows) 
   csv.save(path);
 }
 
-Options parse(int argc, char** argv) {
-  Options options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error(arg + " needs a value");
-      return argv[++i];
-    };
-    if (arg == "-h" || arg == "--help") {
-      std::cout << usage_text;
-      std::exit(0);
-    } else if (arg == "--mesh-dir") {
-      options.mesh_dir = value();
-    } else if (arg == "--csv") {
-      options.csv = value();
-    } else if (arg == "--sphere-subdivisions") {
-      const std::string text = value();
-      std::size_t used = 0;
-      int k = -1;
-      try {
-        k = std::stoi(text, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used != text.size() || k < 0 || k > 10)
-        throw std::runtime_error("--sphere-subdivisions wants an integer 0..10, got '" + text + "'");
-      options.sphere_subdivisions = k;
-    } else if (arg == "--quick") {
-      options.quick = true;
-    } else if (arg == "--no-validate") {
-      options.validate = false;
-    } else {
-      throw std::runtime_error("unknown argument '" + arg + "' (see --help)");
-    }
-  }
-  return options;
+/// Declares the command line: every option, its help and its checks, filling `options`.
+void add_options(CLI::App& app, Options& options) {
+  app.description(
+      "shatter-bench-cut: one cut through the volume centroid (normal = normalised (0.3, 0.5, 0.8)) of "
+      "knot1.off, fandisk.off and a subdivided icosahedron sphere (20 * 4^K triangles). Times shatter's plane "
+      "kernel (cut_solid and the certified rounding of every piece; prepare_plane_input timed apart), "
+      "cut_mesh with the fast and the exact kernel (to_exact timed apart), and CGAL PMP "
+      "clip(..., clip_volume(true)) on both sides of the same plane. Prints Markdown tables (median of >= 3 runs "
+      "and >= 0.3 s; 1 run if > 60 s) with each method's pieces and their validity. Exit status: 0 on success, "
+      "1 on a usage error or any failure.");
+  app.add_option("--mesh-dir", options.mesh_dir, "Folder holding knot1.off and fandisk.off")->capture_default_str();
+  app.add_option("--csv", options.csv, "Also write the results as CSV to this file (one row per mesh)");
+  app.add_option("--sphere-subdivisions", options.sphere_subdivisions,
+                 "Subdivisions K of the icosahedron, 0..10 (default 8: 1,310,720 triangles; 6 with --quick)")
+      ->check(CLI::Range(0, 10));
+  app.add_flag("--quick", options.quick, "Smoke run (CI): 1 run per measurement, sphere 20 * 4^6");
+  app.add_flag_callback("--no-validate", [&options] { options.validate = false; },
+                        "Skip the validity checks of the outputs");
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  Options options;
+  CLI::App app{"", "shatter-bench-cut"};
+  add_options(app, options);
+  if (const auto code = shatter::bench::parse_command_line(app, argc, argv, 1)) return *code;
   try {
-    const Options options = parse(argc, argv);
     RepeatPolicy policy;
     if (options.quick) {
       policy.min_runs = 1;

@@ -94,6 +94,7 @@
 #include <vector>
 
 #include "bench_support.hpp"
+#include "command_line.hpp"
 #include "csv.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mesh.hpp"
@@ -1246,12 +1247,7 @@ int parse(int argc, char** argv, Options& o) {
   app.add_option("--no-repeat-seconds", o.no_repeat_seconds, "A build run longer than this is not repeated")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 1;
-  }
-  return -1;
+  return shatter::bench::parse_command_line(app, argc, argv, 1).value_or(-1);
 }
 
 /// The 1-minute load average (/proc/loadavg), to say how busy the shared machine was.
