@@ -42,6 +42,7 @@
 #include "bench_support.hpp"
 #include "command_line.hpp"
 #include "csv.hpp"
+#include "shatter/generators/corpus.hpp"
 #include "shatter/meshtree/cut_solid.hpp"
 #include "shatter/meshtree/plane_input.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
@@ -64,7 +65,7 @@ using shatter::bench::with_thousands;
 using Clock = std::chrono::steady_clock;
 
 struct Options {
-  std::filesystem::path mesh_dir = SHATTER_MESH_DIR;
+  std::filesystem::path mesh_dir = shatter::test::mesh_dir();
   std::optional<std::filesystem::path> csv;
   std::optional<int> sphere_subdivisions;
   bool quick = false;

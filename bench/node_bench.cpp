@@ -20,11 +20,11 @@
 
 #include "bench_support.hpp"
 #include "command_line.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cut.hpp"
-#include "support/generators.hpp"
 
 namespace {
 

@@ -96,6 +96,8 @@
 #include "bench_support.hpp"
 #include "command_line.hpp"
 #include "csv.hpp"
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/validate.hpp"
@@ -103,7 +105,6 @@
 #include "shatter/meshtree/plane_input.hpp"
 #include "shatter/meshtree/stats.hpp"
 #include "shatter/meshtree/tree.hpp"
-#include "support/generators.hpp"
 
 namespace {
 
@@ -127,8 +128,8 @@ struct Options {
   std::string rows;  ///< empty: the default rows
   std::optional<std::uint32_t> max_fragments;
   std::uint64_t seed = 1;
-  fs::path mesh_dir = SHATTER_MESH_DIR;
-  fs::path knot = SHATTER_SOURCE_DIR "/tests/data/corpus/knot1.off";
+  fs::path mesh_dir = shatter::test::mesh_dir();
+  fs::path knot = shatter::test::mesh_dir() / "knot1.off";
   fs::path manifold_script = SHATTER_SOURCE_DIR "/bench/peers/manifold/fracture.mjs";
   std::string node = "node";
   double manifold_timeout = 300;

@@ -57,11 +57,11 @@
 
 #include "bench_support.hpp"
 #include "csv.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/runtime/scenes.hpp"
 #include "shatter/runtime/shapes.hpp"
 #include "shatter/runtime/world.hpp"
-#include "support/generators.hpp"
 
 namespace {
 

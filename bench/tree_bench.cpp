@@ -68,13 +68,14 @@
 #include "bench_support.hpp"
 #include "command_line.hpp"
 #include "csv.hpp"
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/stats.hpp"
 #include "shatter/meshtree/tree.hpp"
-#include "support/generators.hpp"
 
 namespace {
 
@@ -94,7 +95,7 @@ using shatter::Strategy;
 // Options.
 
 struct Options {
-  std::filesystem::path mesh_dir = SHATTER_MESH_DIR;
+  std::filesystem::path mesh_dir = shatter::test::mesh_dir();
   std::optional<std::filesystem::path> csv;
   std::uint64_t seed = 1;
   bool quick = false;

@@ -19,13 +19,13 @@
 #include <string>
 #include <vector>
 
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/export.hpp"
 #include "shatter/meshtree/stats.hpp"
-#include "support/generators.hpp"
 
 #include "shatter/meshtree/tinygltf.hpp"
 

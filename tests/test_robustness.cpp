@@ -11,10 +11,10 @@
 #include <map>
 
 #include "robustness/robustness.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "support/checks.hpp"
 #include "support/degenerate.hpp"
-#include "support/generators.hpp"
 
 using namespace shatter;
 using namespace shatter::robust;

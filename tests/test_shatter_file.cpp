@@ -28,12 +28,13 @@
 #include <utility>
 #include <vector>
 
+#include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/version.hpp"
-#include "support/generators.hpp"
 
 using namespace shatter;
 

@@ -16,11 +16,11 @@
 #include <string>
 #include <vector>
 
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cover.hpp"
 #include "shatter/runtime/world.hpp"
-#include "support/generators.hpp"
 
 namespace shatter::test {
 
