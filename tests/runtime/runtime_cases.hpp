@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "shatter/generators/corpus.hpp"
 #include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/meshtree/build.hpp"
@@ -36,7 +37,7 @@ inline Mesh runtime_mesh(const std::string& mesh) {
   if (mesh == "torus") return torus(0.6, 0.2, 16, 10);
   if (mesh == "hollow-egg") return hollow_egg();
   if (mesh == "two-boxes") return two_boxes();
-  if (mesh == "knot1") return read_mesh(std::filesystem::path(SHATTER_TEST_DATA_DIR) / "knot1.off");
+  if (mesh == "knot1") return read_mesh(mesh_dir() / "knot1.off");
   FAIL("no runtime mesh " << mesh);
   return {};
 }
