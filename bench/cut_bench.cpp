@@ -24,16 +24,15 @@
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/boost/graph/helpers.h>
 
+#include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -41,6 +40,9 @@
 #include <vector>
 
 #include "bench_support.hpp"
+#include "command_line.hpp"
+#include "csv.hpp"
+#include "shatter/generators/corpus.hpp"
 #include "shatter/meshtree/cut_solid.hpp"
 #include "shatter/meshtree/plane_input.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
@@ -55,34 +57,15 @@ namespace {
 
 namespace PMP = CGAL::Polygon_mesh_processing;
 using shatter::bench::CgalMesh;
+using shatter::bench::CsvWriter;
 using shatter::bench::Epick;
 using shatter::bench::fixed;
 using shatter::bench::to_cgal;
 using shatter::bench::with_thousands;
 using Clock = std::chrono::steady_clock;
 
-constexpr const char* usage_text =
-    "usage: shatter-bench-cut [--mesh-dir DIR] [--csv FILE] [--sphere-subdivisions K] [--quick]\n"
-    "                         [--no-validate]\n"
-    "\n"
-    "One cut through the volume centroid (normal = normalised (0.3, 0.5, 0.8)) of\n"
-    "knot1.off, fandisk.off and a subdivided icosahedron sphere (20 * 4^K triangles).\n"
-    "Times shatter::cut_mesh with the fast and the exact kernel and CGAL PMP\n"
-    "clip(..., clip_volume(true)) on both sides of the same plane; prints a Markdown\n"
-    "table (median of >= 3 runs and >= 0.3 s) and per-method pieces and validity.\n"
-    "\n"
-    "options:\n"
-    "  --mesh-dir DIR            folder holding knot1.off and fandisk.off\n"
-    "                            (default: " SHATTER_MESH_DIR ")\n"
-    "  --csv FILE                also write the results as CSV to FILE\n"
-    "  --sphere-subdivisions K   subdivisions of the icosahedron, 0..10 (default 8:\n"
-    "                            1,310,720 triangles; --quick default 6)\n"
-    "  --quick                   smoke run: 1 run per measurement, sphere 4^6\n"
-    "  --no-validate             skip the validity checks of the outputs\n"
-    "  -h, --help                show this help\n";
-
 struct Options {
-  std::filesystem::path mesh_dir = SHATTER_MESH_DIR;
+  std::filesystem::path mesh_dir = shatter::test::mesh_dir();
   std::optional<std::filesystem::path> csv;
   std::optional<int> sphere_subdivisions;
   bool quick = false;
@@ -360,72 +343,56 @@ void print_markdown(std::ostream& out, const std::vector<Row>& rows) {
 }
 
 void write_csv(const std::filesystem::path& path, const std::vector<Row>& rows) {
-  std::ostringstream out;
-  out << "mesh,triangles,plane_ms,plane_ns_per_triangle,fast_ms,fast_ns_per_triangle,exact_ms,exact_ns_per_triangle,cgal_clip_ms,"
-         "cgal_over_fast,cgal_over_exact,runs_fast,runs_exact,runs_cgal,to_exact_ms,pieces_fast,pieces_exact,"
-         "pieces_cgal,fast_pieces_valid,cgal_sides_closed,cgal_sides_without_self_intersection,cgal_clip_ok,"
-         "cgal_over_plane,runs_plane,prepare_plane_input_ms,pieces_plane,plane_pieces_valid\n";
-  out.precision(9);
+  CsvWriter csv(
+      "mesh,triangles,plane_ms,plane_ns_per_triangle,fast_ms,fast_ns_per_triangle,exact_ms,exact_ns_per_triangle,"
+      "cgal_clip_ms,cgal_over_fast,cgal_over_exact,runs_fast,runs_exact,runs_cgal,to_exact_ms,pieces_fast,"
+      "pieces_exact,pieces_cgal,fast_pieces_valid,cgal_sides_closed,cgal_sides_without_self_intersection,"
+      "cgal_clip_ok,cgal_over_plane,runs_plane,prepare_plane_input_ms,pieces_plane,plane_pieces_valid");
   for (const auto& r : rows) {
-    out << r.name << ',' << r.triangles << ',' << r.plane.median_ms << ','
-        << ns_per_triangle(r.plane.median_ms, r.triangles) << ',' << r.fast.median_ms << ','
-        << ns_per_triangle(r.fast.median_ms, r.triangles) << ',' << r.exact.median_ms << ','
-        << ns_per_triangle(r.exact.median_ms, r.triangles) << ',' << r.cgal.median_ms << ','
-        << r.cgal.median_ms / r.fast.median_ms << ',' << r.cgal.median_ms / r.exact.median_ms << ',' << r.fast.runs
-        << ',' << r.exact.runs << ',' << r.cgal.runs << ',' << r.exact.setup_ms << ',' << r.fast_pieces << ','
-        << r.exact_pieces << ',' << r.cgal_pieces << ',' << r.fast_valid << ',' << r.cgal_closed << ','
-        << r.cgal_self_free << ',' << (r.cgal_ok ? 1 : 0) << ',' << r.cgal.median_ms / r.plane.median_ms << ','
-        << r.plane.runs << ',' << r.plane.setup_ms << ',' << r.plane_pieces << ',' << r.plane_valid << '\n';
+    csv.field(r.name).field(r.triangles);
+    for (const Timing* t : {&r.plane, &r.fast, &r.exact}) {
+      csv.field(t->median_ms).field(ns_per_triangle(t->median_ms, r.triangles));
+    }
+    csv.field(r.cgal.median_ms).field(r.cgal.median_ms / r.fast.median_ms).field(r.cgal.median_ms / r.exact.median_ms);
+    csv.field(r.fast.runs).field(r.exact.runs).field(r.cgal.runs).field(r.exact.setup_ms);
+    csv.field(r.fast_pieces).field(r.exact_pieces).field(r.cgal_pieces);
+    // -1: not checked (--no-validate).
+    csv.field(r.fast_valid).field(r.cgal_closed).field(r.cgal_self_free).field(r.cgal_ok);
+    csv.field(r.cgal.median_ms / r.plane.median_ms).field(r.plane.runs).field(r.plane.setup_ms);
+    csv.field(r.plane_pieces).field(r.plane_valid);
+    csv.end_row();
   }
-  std::ofstream file(path, std::ios::binary);
-  if (!file) throw std::runtime_error("cannot open " + path.string() + " for writing");
-  file << out.str();
-  if (!file.flush()) throw std::runtime_error("cannot write " + path.string());
+  csv.save(path);
 }
 
-Options parse(int argc, char** argv) {
-  Options options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error(arg + " needs a value");
-      return argv[++i];
-    };
-    if (arg == "-h" || arg == "--help") {
-      std::cout << usage_text;
-      std::exit(0);
-    } else if (arg == "--mesh-dir") {
-      options.mesh_dir = value();
-    } else if (arg == "--csv") {
-      options.csv = value();
-    } else if (arg == "--sphere-subdivisions") {
-      const std::string text = value();
-      std::size_t used = 0;
-      int k = -1;
-      try {
-        k = std::stoi(text, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used != text.size() || k < 0 || k > 10)
-        throw std::runtime_error("--sphere-subdivisions wants an integer 0..10, got '" + text + "'");
-      options.sphere_subdivisions = k;
-    } else if (arg == "--quick") {
-      options.quick = true;
-    } else if (arg == "--no-validate") {
-      options.validate = false;
-    } else {
-      throw std::runtime_error("unknown argument '" + arg + "' (see --help)");
-    }
-  }
-  return options;
+/// Declares the command line: every option, its help and its checks, filling `options`.
+void add_options(CLI::App& app, Options& options) {
+  app.description(
+      "shatter-bench-cut: one cut through the volume centroid (normal = normalised (0.3, 0.5, 0.8)) of "
+      "knot1.off, fandisk.off and a subdivided icosahedron sphere (20 * 4^K triangles). Times shatter's plane "
+      "kernel (cut_solid and the certified rounding of every piece; prepare_plane_input timed apart), "
+      "cut_mesh with the fast and the exact kernel (to_exact timed apart), and CGAL PMP "
+      "clip(..., clip_volume(true)) on both sides of the same plane. Prints Markdown tables (median of >= 3 runs "
+      "and >= 0.3 s; 1 run if > 60 s) with each method's pieces and their validity. Exit status: 0 on success, "
+      "1 on a usage error or any failure.");
+  app.add_option("--mesh-dir", options.mesh_dir, "Folder holding knot1.off and fandisk.off")->capture_default_str();
+  app.add_option("--csv", options.csv, "Also write the results as CSV to this file (one row per mesh)");
+  app.add_option("--sphere-subdivisions", options.sphere_subdivisions,
+                 "Subdivisions K of the icosahedron, 0..10 (default 8: 1,310,720 triangles; 6 with --quick)")
+      ->check(CLI::Range(0, 10));
+  app.add_flag("--quick", options.quick, "Smoke run (CI): 1 run per measurement, sphere 20 * 4^6");
+  app.add_flag_callback("--no-validate", [&options] { options.validate = false; },
+                        "Skip the validity checks of the outputs");
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  Options options;
+  CLI::App app{"", "shatter-bench-cut"};
+  add_options(app, options);
+  if (const auto code = shatter::bench::parse_command_line(app, argc, argv, 1)) return *code;
   try {
-    const Options options = parse(argc, argv);
     RepeatPolicy policy;
     if (options.quick) {
       policy.min_runs = 1;

@@ -94,6 +94,10 @@
 #include <vector>
 
 #include "bench_support.hpp"
+#include "command_line.hpp"
+#include "csv.hpp"
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/validate.hpp"
@@ -101,10 +105,11 @@
 #include "shatter/meshtree/plane_input.hpp"
 #include "shatter/meshtree/stats.hpp"
 #include "shatter/meshtree/tree.hpp"
-#include "support/generators.hpp"
 
 namespace {
 
+using shatter::bench::CsvWriter;
+using shatter::bench::csv_number;
 using shatter::bench::fixed;
 using shatter::bench::not_measured;
 using shatter::bench::PeerResult;
@@ -123,8 +128,8 @@ struct Options {
   std::string rows;  ///< empty: the default rows
   std::optional<std::uint32_t> max_fragments;
   std::uint64_t seed = 1;
-  fs::path mesh_dir = SHATTER_MESH_DIR;
-  fs::path knot = SHATTER_SOURCE_DIR "/tests/data/corpus/knot1.off";
+  fs::path mesh_dir = shatter::test::mesh_dir();
+  fs::path knot = shatter::test::mesh_dir() / "knot1.off";
   fs::path manifold_script = SHATTER_SOURCE_DIR "/bench/peers/manifold/fracture.mjs";
   std::string node = "node";
   double manifold_timeout = 300;
@@ -1128,86 +1133,64 @@ void print_tables(std::ostream& out, const std::vector<Row>& rows, const std::ve
   if (verdicts.empty()) out << "| (none of the targets' rows was run) | | | |\n";
 }
 
-std::string csv_field(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (const char c : text) {
-    if (c == '"') quoted += '"';
-    quoted += c;
-  }
-  return quoted + "\"";
-}
-
-std::string csv_number(double value) {
-  if (std::isnan(value) || std::isinf(value)) return "";
-  std::ostringstream out;
-  out.precision(9);
-  out << value;
-  return out.str();
-}
-
 void write_csv(const fs::path& path, const std::vector<Row>& rows, std::uint64_t seed) {
-  std::ostringstream out;
-  out << "row,mesh,input_triangles,plane_faces,kernel,strategy,threads,seed,fragments,leaves,nodes,max_depth,runs,"
-         "seconds,cutting_seconds,hull_seconds,bond_seconds,other_seconds,planes_missed,"
-         "planes_rejected,us_per_split_all_levels,half_fragments,half_runs,half_cutting_seconds,half_internal_nodes,"
-         "us_per_split_last_level,node_triangles,leaf_triangles,ns_per_output_triangle,peak_rss_mb,baseline_rss_mb,"
-         "validated_leaves,invalid_leaves,validate_seconds,manifold_status,manifold_repeat,manifold_seconds,"
-         "manifold_runs,manifold_pieces,manifold_triangles,manifold_bad_pieces,manifold_maxrss_mb,"
-         "manifold_wasm_heap_mb,manifold_over_shatter,leaf_triangles_over_manifold,cgal_status,cgal_seconds,"
-         "cgal_over_shatter,cgal_over_cutting,cgal_nodes_done,cgal_internal_nodes,cgal_pieces,cgal_invalid,"
-         "cgal_missing,failed,note\n";
+  CsvWriter csv(
+      "row,mesh,input_triangles,plane_faces,kernel,strategy,threads,seed,fragments,leaves,nodes,max_depth,runs,"
+      "seconds,cutting_seconds,hull_seconds,bond_seconds,other_seconds,planes_missed,"
+      "planes_rejected,us_per_split_all_levels,half_fragments,half_runs,half_cutting_seconds,half_internal_nodes,"
+      "us_per_split_last_level,node_triangles,leaf_triangles,ns_per_output_triangle,peak_rss_mb,baseline_rss_mb,"
+      "validated_leaves,invalid_leaves,validate_seconds,manifold_status,manifold_repeat,manifold_seconds,"
+      "manifold_runs,manifold_pieces,manifold_triangles,manifold_bad_pieces,manifold_maxrss_mb,"
+      "manifold_wasm_heap_mb,manifold_over_shatter,leaf_triangles_over_manifold,cgal_status,cgal_seconds,"
+      "cgal_over_shatter,cgal_over_cutting,cgal_nodes_done,cgal_internal_nodes,cgal_pieces,cgal_invalid,"
+      "cgal_missing,failed,note");
   for (const Row& r : rows) {
     const BuildRun& f = r.full.first;
     const bool ok = r.full.ok;
-    auto n = [&](double v) { return csv_number(ok ? v : not_measured); };
-    auto u = [&](std::uint64_t v) { return ok ? std::to_string(v) : std::string(); };
-    out << r.id << ',' << csv_field(r.input->name) << ',' << r.input->mesh.triangle_count() << ','
-        << r.input->plane_faces << ",plane,thesis,1," << seed << ',' << r.fragments << ',' << u(f.leaves) << ','
-        << u(f.nodes) << ',' << u(f.max_depth) << ',' << r.full.runs << ',' << n(r.full.seconds) << ','
-        << n(r.full.cutting) << ',' << n(r.full.hull) << ',' << n(r.full.bond) << ','
-        << n(r.full.other()) << ',' << u(f.report.planes_missed) << ',' << u(f.report.planes_rejected) << ','
-        << csv_number(r.us_per_split_all()) << ',';
+    // A build that failed has no figures: its measured columns stay empty.
+    auto n = [&](double v) { return ok ? v : not_measured; };
+    csv.field(r.id).field(r.input->name).field(r.input->mesh.triangle_count()).field(r.input->plane_faces);
+    csv.field("plane").field("thesis").field(1).field(seed).field(r.fragments);
+    csv.field_if(ok, f.leaves).field_if(ok, f.nodes).field_if(ok, f.max_depth).field(r.full.runs);
+    csv.field(n(r.full.seconds)).field(n(r.full.cutting)).field(n(r.full.hull)).field(n(r.full.bond));
+    csv.field(n(r.full.other())).field_if(ok, f.report.planes_missed).field_if(ok, f.report.planes_rejected);
+    csv.field(r.us_per_split_all());
     if (r.half && r.half->ok) {
-      out << r.fragments / 2 << ',' << r.half->runs << ',' << csv_number(r.half->cutting) << ','
-          << r.half->internal_nodes() << ',';
+      csv.field(r.fragments / 2).field(r.half->runs).field(r.half->cutting).field(r.half->internal_nodes());
     } else {
-      out << ",,,,";
+      csv.empty(4);
     }
-    out << csv_number(r.us_per_split_last()) << ',' << u(f.node_triangles) << ',' << u(f.leaf_triangles) << ','
-        << csv_number(r.ns_per_triangle()) << ',' << n(f.peak_mb) << ',' << n(f.baseline_mb) << ','
-        << (ok && f.invalid >= 0 ? std::to_string(f.validated) : "") << ','
-        << (ok && f.invalid >= 0 ? std::to_string(f.invalid) : "") << ',' << n(f.validate_seconds) << ',';
+    csv.field(r.us_per_split_last()).field_if(ok, f.node_triangles).field_if(ok, f.leaf_triangles);
+    csv.field(r.ns_per_triangle()).field(n(f.peak_mb)).field(n(f.baseline_mb));
+    csv.field_if(ok && f.invalid >= 0, f.validated).field_if(ok && f.invalid >= 0, f.invalid);
+    csv.field(n(f.validate_seconds));
     const ManifoldResult& m = r.manifold;
+    // Every repeat's seconds in one field, space-separated.
     std::string runs;
     for (double s : m.runs) {
       if (!runs.empty()) runs += ' ';
       runs += csv_number(s);
     }
-    out << csv_field(m.status_name()) << ',' << (m.repeat ? std::to_string(m.repeat) : "") << ','
-        << csv_number(m.seconds) << ',' << runs << ',' << (m.ok() ? std::to_string(m.pieces) : "") << ','
-        << (m.ok() ? std::to_string(m.triangles) : "") << ',' << (m.ok() ? std::to_string(m.bad_pieces) : "") << ','
-        << csv_number(m.ok() ? m.maxrss_mb : not_measured) << ',' << csv_number(m.wasm_mb) << ','
-        << csv_number(r.manifold_ratio()) << ',' << csv_number(r.leaf_triangles_over_manifold()) << ',';
+    csv.field(m.status_name()).field_if(m.repeat != 0, m.repeat).field(m.seconds).field(runs);
+    csv.field_if(m.ok(), m.pieces).field_if(m.ok(), m.triangles).field_if(m.ok(), m.bad_pieces);
+    csv.field(m.ok() ? m.maxrss_mb : not_measured).field(m.wasm_mb);
+    csv.field(r.manifold_ratio()).field(r.leaf_triangles_over_manifold());
     if (r.cgal()) {
       const PeerResult& p = *r.cgal();
-      out << p.status_name() << ',' << csv_number(p.clip_seconds) << ',' << csv_number(r.cgal_ratio()) << ','
-          << csv_number(r.cgal_ratio_to_cutting()) << ',' << p.nodes_done << ',' << p.internal_nodes << ','
-          << (p.pieces < 0 ? "" : std::to_string(p.pieces)) << ',' << (p.invalid < 0 ? "" : std::to_string(p.invalid))
-          << ',' << p.missing << ',';
+      csv.field(p.status_name()).field(p.clip_seconds).field(r.cgal_ratio()).field(r.cgal_ratio_to_cutting());
+      csv.field(p.nodes_done).field(p.internal_nodes).field_if(p.pieces >= 0, p.pieces);
+      csv.field_if(p.invalid >= 0, p.invalid).field(p.missing);
     } else {
-      out << "not run,,,,,,,,,";
+      csv.field("not run").empty(8);
     }
     std::string note = r.note;
     if (!m.ok() && !m.detail.empty()) note += (note.empty() ? "" : "; ") + ("Manifold: " + m.detail);
     if (m.ok() && !m.detail.empty()) note += (note.empty() ? "" : "; ") + ("Manifold: " + m.detail);
     if (r.cgal() && !r.cgal()->detail.empty()) note += (note.empty() ? "" : "; ") + ("CGAL: " + r.cgal()->detail);
-    out << (r.failed ? 1 : 0) << ',' << csv_field(note) << '\n';
+    csv.field(r.failed).field(note);
+    csv.end_row();
   }
-  std::ofstream file(path, std::ios::binary);
-  if (!file) throw std::runtime_error("cannot open " + path.string() + " for writing");
-  file << out.str();
-  if (!file.flush()) throw std::runtime_error("cannot write " + path.string());
+  csv.save(path);
 }
 
 // ---------------------------------------------------------------------------
@@ -1265,12 +1248,7 @@ int parse(int argc, char** argv, Options& o) {
   app.add_option("--no-repeat-seconds", o.no_repeat_seconds, "A build run longer than this is not repeated")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 1;
-  }
-  return -1;
+  return shatter::bench::parse_command_line(app, argc, argv, 1).value_or(-1);
 }
 
 /// The 1-minute load average (/proc/loadavg), to say how busy the shared machine was.

@@ -51,22 +51,25 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "bench_support.hpp"
+#include "csv.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/tree.hpp"
 #include "shatter/runtime/scenes.hpp"
 #include "shatter/runtime/shapes.hpp"
 #include "shatter/runtime/world.hpp"
-#include "support/generators.hpp"
 
 namespace {
 
 using namespace shatter;
 namespace rt = shatter::runtime;
 using Clock = std::chrono::steady_clock;
+using bench::CsvWriter;
 using bench::fixed;
 using bench::median;
 using bench::with_thousands;
@@ -209,17 +212,17 @@ int main(int argc, char** argv) {
   }
   const std::size_t min_runs = quick ? 2 : 7;
   const double min_seconds = quick ? 0.0 : 0.5;
-  std::ofstream csv;
+  // The table is written at the end; the path is tried now, so a bad one fails before the long run.
+  std::optional<CsvWriter> csv;
   if (!csv_path.empty()) {
-    csv.open(csv_path);
-    if (!csv) {
+    if (!std::ofstream(csv_path)) {
       std::cerr << "error: cannot write " << csv_path << '\n';
       return 4;
     }
-    csv << "table,radius_m,fragments,objects,bonds,load_ms,bonds_broken,bodies_created,incremental_us,incremental_runs,"
-           "accumulating_us,seed_us,seed_runs,seed_over_incremental,resting_median_ms_per_step,breaking_mean_ms_per_"
-           "step,"
-           "breaking_slowest_step_ms,bodies_after_breaking,breaks\n";
+    csv.emplace(
+        "table,radius_m,fragments,objects,bonds,load_ms,bonds_broken,bodies_created,incremental_us,incremental_runs,"
+        "accumulating_us,seed_us,seed_runs,seed_over_incremental,resting_median_ms_per_step,"
+        "breaking_mean_ms_per_step,breaking_slowest_step_ms,bodies_after_breaking,breaks");
   }
   bool ok = true;
 
@@ -262,10 +265,11 @@ int main(int argc, char** argv) {
                 << fixed(ours.seconds * 1e6, 1) << " | " << fixed(accumulating.seconds * 1e6, 1) << " | "
                 << fixed(seed.seconds * 1e6, 1) << " | " << fixed(ratio, 1) << " |\n";
       if (csv) {
-        csv << "impact," << radius << ',' << c.tree->leaf_count() << ",1," << c.tree->bonds.size() << ','
-            << c.load_seconds * 1e3 << ',' << ours.bonds_broken << ',' << ours.bodies_created << ','
-            << ours.seconds * 1e6 << ',' << ours.runs << ',' << accumulating.seconds * 1e6 << ',' << seed.seconds * 1e6
-            << ',' << seed.runs << ',' << ratio << ",,,,,\n";
+        csv->field("impact").field(radius).field(c.tree->leaf_count()).field(1).field(c.tree->bonds.size());
+        csv->field(c.load_seconds * 1e3).field(ours.bonds_broken).field(ours.bodies_created);
+        csv->field(ours.seconds * 1e6).field(ours.runs).field(accumulating.seconds * 1e6).field(seed.seconds * 1e6);
+        csv->field(seed.runs).field(ratio).empty(5);
+        csv->end_row();
       }
     }
     std::cout << '\n';
@@ -287,9 +291,18 @@ int main(int argc, char** argv) {
     std::cout << "| " << m << " | " << ms(resting.median_seconds) << " | " << ms(breaking.mean_seconds) << " | "
               << ms(breaking.slowest_seconds) << " | " << breaking.bodies << " | " << breaking.breaks << " |\n";
     if (csv) {
-      csv << "steps,," << c.tree->leaf_count() << ',' << m << ',' << c.tree->bonds.size() << ",,,,,,,,,,"
-          << resting.median_seconds * 1e3 << ',' << breaking.mean_seconds * 1e3 << ',' << breaking.slowest_seconds * 1e3
-          << ',' << breaking.bodies << ',' << breaking.breaks << '\n';
+      csv->field("steps").empty().field(c.tree->leaf_count()).field(m).field(c.tree->bonds.size()).empty(9);
+      csv->field(resting.median_seconds * 1e3).field(breaking.mean_seconds * 1e3);
+      csv->field(breaking.slowest_seconds * 1e3).field(breaking.bodies).field(breaking.breaks);
+      csv->end_row();
+    }
+  }
+  if (csv) {
+    try {
+      csv->save(csv_path);
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << '\n';
+      return 4;
     }
   }
   return ok ? 0 : 2;

@@ -44,6 +44,8 @@
 // be byte-identical); every peer leaf piece through is_closed, does_self_intersect
 // and volume > 0.
 
+#include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <array>
 #include <cerrno>
@@ -54,12 +56,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <iostream>
-#include <limits>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -67,16 +66,20 @@
 #include <vector>
 
 #include "bench_support.hpp"
+#include "command_line.hpp"
+#include "csv.hpp"
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/stats.hpp"
 #include "shatter/meshtree/tree.hpp"
-#include "support/generators.hpp"
 
 namespace {
 
+using shatter::bench::CsvWriter;
 using shatter::bench::fixed;
 using shatter::bench::not_measured;
 using shatter::bench::PeerResult;
@@ -88,73 +91,11 @@ using shatter::MeshTree;
 using shatter::NodeIndex;
 using shatter::Strategy;
 
-constexpr const char* usage_text =
-    "usage: shatter-bench-tree [--quick] [--csv FILE] [--mesh-dir DIR] [--seed S]\n"
-    "                          [--section all|scaling|meshes] [--max-fragments N]\n"
-    "                          [--exact-max N] [--exact-stop-seconds T] [--fast-stop-seconds T]\n"
-    "                          [--mesh-fragments N] [--dump-invalid DIR]\n"
-    "                          [--peer-max N] [--peer-timeout T] [--peer-memory-mb M]\n"
-    "                          [--no-peer] [--no-validate]\n"
-    "\n"
-    "The seed thesis's chapter 6.2 again: shatter::build_mesh_tree timed against the\n"
-    "fragment count and on the thesis's meshes, with CGAL PMP clip replaying the same\n"
-    "planes as the peer.\n"
-    "\n"
-    "scaling  a 1 x 1 x 1 box (12 triangles) cut into N = 2, 4, ..., --max-fragments\n"
-    "         fragments, strategy thesis: fast kernel on 1 and 2 threads, exact kernel on\n"
-    "         1 thread. Per N: leaves, nodes, seconds (median of >= 3 runs and >= 0.3 s;\n"
-    "         one run if > 2 s), microseconds per cut (per internal node), invalid\n"
-    "         leaves, and whether the 2-thread tree equals the 1-thread tree.\n"
-    "meshes   the box, an 800-triangle torus, the 1,520-triangle hollow egg and\n"
-    "         elephant.off cut into --mesh-fragments fragments with the thesis, balanced\n"
-    "         and axis strategies, fast and exact kernel, 1 thread: seconds, leaves,\n"
-    "         coefficient of variation of the leaf volumes (std dev / mean), smallest\n"
-    "         leaf volume / mean, invalid leaves.\n"
-    "peer     CGAL PMP::clip(clip_volume(true)), Surface_mesh<Epick>, replays the planes\n"
-    "         of the fast 1-thread thesis tree node by node (both sides of each plane,\n"
-    "         connected components matched to shatter's children by nearest centroid),\n"
-    "         in a forked process with a time limit. Its time is the sum of the clip and\n"
-    "         split calls. Reported: seconds, peer/shatter ratio, leaf pieces that are\n"
-    "         not closed, self-intersect or have volume <= 0 (invalid), leaves never\n"
-    "         produced (missing), clips that returned false (failed) or threw, nodes whose\n"
-    "         component count differs from shatter's (mismatch), timeout or crash. The\n"
-    "         exact row shows the same peer run, its ratio taken against the exact time.\n"
-    "\n"
-    "Leaves are validated outside the clock (validate_mesh, with self-intersections).\n"
-    "Exit status: 0 when every build succeeded and every shatter leaf is valid and the\n"
-    "thread counts agree, 2 when not (the peer's failures never count), 1 on errors.\n"
-    "\n"
-    "options:\n"
-    "  --quick                 smoke run (CI): N up to 32, meshes at 8 fragments, peer\n"
-    "                          up to 16, one run per measurement; a few seconds\n"
-    "  --csv FILE              also write one CSV row per measurement to FILE\n"
-    "  --mesh-dir DIR          folder holding elephant.off (default:\n"
-    "                          " SHATTER_MESH_DIR ")\n"
-    "  --seed S                root seed of every build (default 1)\n"
-    "  --section S             all (default), scaling or meshes\n"
-    "  --max-fragments N       largest N of the scaling section (default 65536)\n"
-    "  --exact-max N           largest N built with the exact kernel (default 65536)\n"
-    "  --exact-stop-seconds T  build no larger N with the exact kernel once one exact\n"
-    "                          build took longer than T seconds (default 30)\n"
-    "  --fast-stop-seconds T   end the scaling section once a fast 1-thread build took\n"
-    "                          longer than T seconds (default 300)\n"
-    "  --mesh-fragments N      fragments of the meshes section (default 256)\n"
-    "  --peer-max N            largest N of the scaling section replayed by the peer\n"
-    "                          (default 4096); after a peer timeout or crash no larger\n"
-    "                          N is tried\n"
-    "  --peer-timeout T        wall-clock limit of one peer replay in seconds (default 60)\n"
-    "  --peer-memory-mb M      address space a peer replay may add (default 8192)\n"
-    "  --no-peer               skip the peer\n"
-    "  --no-validate           skip the validity checks (leaves and peer pieces)\n"
-    "  --dump-invalid DIR      write the first invalid leaf of each build, and the\n"
-    "                          node it was cut from, to DIR as OFF files\n"
-    "  -h, --help              show this help\n";
-
 // ---------------------------------------------------------------------------
 // Options.
 
 struct Options {
-  std::filesystem::path mesh_dir = SHATTER_MESH_DIR;
+  std::filesystem::path mesh_dir = shatter::test::mesh_dir();
   std::optional<std::filesystem::path> csv;
   std::uint64_t seed = 1;
   bool quick = false;
@@ -635,156 +576,148 @@ void print_meshes(std::ostream& out, const std::vector<MeshLine>& lines, std::ui
   }
 }
 
-std::string csv_field(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (const char c : text) {
-    if (c == '"') quoted += '"';
-    quoted += c;
-  }
-  return quoted + "\"";
-}
-
-std::string csv_number(double value) {
-  if (std::isnan(value) || std::isinf(value)) return "";
-  std::ostringstream out;
-  out.precision(9);
-  out << value;
-  return out.str();
-}
-
 void write_csv(const std::filesystem::path& path, const std::vector<const Row*>& rows) {
-  std::ostringstream out;
-  out << "section,mesh,triangles,strategy,kernel,threads,fragments_requested,leaves,nodes,runs,seconds,us_per_cut,"
-         "cutting_seconds,hull_seconds,bond_seconds,planes_missed,planes_rejected,"
-         "max_depth,invalid_leaves,volume_cv,smallest_volume_over_mean,tree_fingerprint,peer_status,peer_seconds,peer_ratio,"
-         "peer_nodes_done,peer_internal_nodes,peer_pieces,peer_invalid,peer_missing,peer_failed,peer_threw,"
-         "peer_mismatches,failed,note\n";
+  CsvWriter csv(
+      "section,mesh,triangles,strategy,kernel,threads,fragments_requested,leaves,nodes,runs,seconds,us_per_cut,"
+      "cutting_seconds,hull_seconds,bond_seconds,planes_missed,planes_rejected,max_depth,invalid_leaves,volume_cv,"
+      "smallest_volume_over_mean,tree_fingerprint,peer_status,peer_seconds,peer_ratio,peer_nodes_done,"
+      "peer_internal_nodes,peer_pieces,peer_invalid,peer_missing,peer_failed,peer_threw,peer_mismatches,failed,note");
   for (const Row* r : rows) {
     char fingerprint[17];
     std::snprintf(fingerprint, sizeof fingerprint, "%016llx",
                   static_cast<unsigned long long>(r->leaf_summary.fingerprint));
-    out << r->section << ',' << csv_field(r->mesh) << ',' << r->triangles << ','
-        << shatter::strategy_name(r->strategy) << ',' << shatter::kernel_name(r->kernel) << ',' << r->threads << ','
-        << r->fragments << ',' << r->leaves << ',' << r->nodes << ',' << r->runs << ',' << csv_number(r->seconds)
-        << ',' << csv_number(r->us_per_cut()) << ',' << csv_number(r->built ? r->report.cutting_seconds : not_measured)
-        << ',' << csv_number(r->built ? r->report.hull_seconds : not_measured) << ','
-        << csv_number(r->built ? r->report.bond_seconds : not_measured) << ','
-        << (r->built ? std::to_string(r->report.planes_missed) : "") << ','
-        << (r->built ? std::to_string(r->report.planes_rejected) : "") << ',' << r->leaf_summary.max_depth << ','
-        << (r->leaf_summary.invalid < 0 ? "" : std::to_string(r->leaf_summary.invalid))
-        << ',' << csv_number(r->leaf_summary.volume_cv) << ',' << csv_number(r->leaf_summary.smallest_over_mean)
-        << ',' << (r->built ? fingerprint : "") << ',';
+    csv.field(r->section).field(r->mesh).field(r->triangles).field(shatter::strategy_name(r->strategy));
+    csv.field(shatter::kernel_name(r->kernel)).field(r->threads).field(r->fragments).field(r->leaves);
+    csv.field(r->nodes).field(r->runs).field(r->seconds).field(r->us_per_cut());
+    csv.field(r->built ? r->report.cutting_seconds : not_measured);
+    csv.field(r->built ? r->report.hull_seconds : not_measured);
+    csv.field(r->built ? r->report.bond_seconds : not_measured);
+    csv.field_if(r->built, r->report.planes_missed).field_if(r->built, r->report.planes_rejected);
+    csv.field(r->leaf_summary.max_depth).field_if(r->leaf_summary.invalid >= 0, r->leaf_summary.invalid);
+    csv.field(r->leaf_summary.volume_cv).field(r->leaf_summary.smallest_over_mean);
+    csv.field_if(r->built, std::string_view(fingerprint));
     if (r->peer) {
       const PeerResult& p = *r->peer;
-      out << p.status_name() << ',' << csv_number(p.clip_seconds) << ',' << csv_number(r->peer_ratio()) << ','
-          << p.nodes_done << ',' << p.internal_nodes << ',' << (p.pieces < 0 ? "" : std::to_string(p.pieces)) << ','
-          << (p.invalid < 0 ? "" : std::to_string(p.invalid)) << ',' << p.missing << ',' << p.failed_clips << ','
-          << p.threw << ',' << p.mismatches << ',';
+      csv.field(p.status_name()).field(p.clip_seconds).field(r->peer_ratio()).field(p.nodes_done);
+      csv.field(p.internal_nodes).field_if(p.pieces >= 0, p.pieces).field_if(p.invalid >= 0, p.invalid);
+      csv.field(p.missing).field(p.failed_clips).field(p.threw).field(p.mismatches);
     } else {
-      out << "not run,,,,,,,,,,,";
+      csv.field("not run").empty(10);
     }
     std::string note = r->note;
     if (r->peer && !r->peer->detail.empty()) note += (note.empty() ? "" : "; ") + ("peer: " + r->peer->detail);
-    out << (r->failed ? 1 : 0) << ',' << csv_field(note) << '\n';
+    csv.field(r->failed).field(note);
+    csv.end_row();
   }
-  std::ofstream file(path, std::ios::binary);
-  if (!file) throw std::runtime_error("cannot open " + path.string() + " for writing");
-  file << out.str();
-  if (!file.flush()) throw std::runtime_error("cannot write " + path.string());
+  csv.save(path);
 }
 
 // ---------------------------------------------------------------------------
 // Command line.
 
-std::uint64_t parse_unsigned(const std::string& flag, const std::string& text, std::uint64_t lo, std::uint64_t hi) {
-  std::size_t used = 0;
-  unsigned long long value = 0;
-  try {
-    value = std::stoull(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (text.empty() || text[0] == '-' || used != text.size() || value < lo || value > hi)
-    throw std::runtime_error(flag + " wants an integer " + std::to_string(lo) + ".." + std::to_string(hi) + ", got '" +
-                             text + "'");
-  return value;
-}
-
-double parse_seconds(const std::string& flag, const std::string& text) {
-  std::size_t used = 0;
-  double value = -1;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || !(value > 0) || !std::isfinite(value))
-    throw std::runtime_error(flag + " wants a positive number of seconds, got '" + text + "'");
-  return value;
-}
-
-Options parse(int argc, char** argv) {
-  Options options;
-  constexpr std::uint64_t max_fragments = 1u << 22;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error(arg + " needs a value");
-      return argv[++i];
-    };
-    auto fragments = [&] { return static_cast<std::uint32_t>(parse_unsigned(arg, value(), 1, max_fragments)); };
-    if (arg == "-h" || arg == "--help") {
-      std::cout << usage_text;
-      std::exit(0);
-    } else if (arg == "--quick") {
-      options.quick = true;
-    } else if (arg == "--csv") {
-      options.csv = value();
-    } else if (arg == "--mesh-dir") {
-      options.mesh_dir = value();
-    } else if (arg == "--seed") {
-      options.seed = parse_unsigned(arg, value(), 0, std::numeric_limits<std::uint64_t>::max());
-    } else if (arg == "--section") {
-      const std::string which = value();
-      if (which != "all" && which != "scaling" && which != "meshes")
-        throw std::runtime_error("--section wants all, scaling or meshes, got '" + which + "'");
-      options.scaling = which != "meshes";
-      options.meshes = which != "scaling";
-    } else if (arg == "--max-fragments") {
-      options.max_fragments = fragments();
-    } else if (arg == "--exact-max") {
-      options.exact_max = fragments();
-    } else if (arg == "--exact-stop-seconds") {
-      options.exact_stop_seconds = parse_seconds(arg, value());
-    } else if (arg == "--fast-stop-seconds") {
-      options.fast_stop_seconds = parse_seconds(arg, value());
-    } else if (arg == "--mesh-fragments") {
-      options.mesh_fragments = fragments();
-    } else if (arg == "--peer-max") {
-      options.peer_max = fragments();
-    } else if (arg == "--peer-timeout") {
-      options.peer_timeout = parse_seconds(arg, value());
-    } else if (arg == "--peer-memory-mb") {
-      options.peer_memory_mb = parse_unsigned(arg, value(), 64, 1u << 20);
-    } else if (arg == "--no-peer") {
-      options.peer = false;
-    } else if (arg == "--dump-invalid") {
-      options.dump_invalid = value();
-    } else if (arg == "--no-validate") {
-      options.validate = false;
-    } else {
-      throw std::runtime_error("unknown argument '" + arg + "' (see --help)");
-    }
-  }
-  return options;
+/// Declares the command line: every option, its help and its checks, filling `options`.
+void add_options(CLI::App& app, Options& options) {
+  app.description(
+      "shatter-bench-tree: the seed thesis's chapter 6.2 again: shatter::build_mesh_tree timed against the "
+      "fragment count and on the thesis's meshes, with CGAL PMP clip replaying the same planes as the peer.");
+  app.footer(
+      "Sections:\n"
+      "  scaling  a 1 x 1 x 1 box (12 triangles) cut into N = 2, 4, ..., --max-fragments fragments, strategy\n"
+      "           thesis: fast kernel on 1 and 2 threads, exact kernel on 1 thread. Per N: leaves, nodes,\n"
+      "           seconds (median of >= 3 runs and >= 0.3 s; one run if > 2 s), microseconds per cut (per\n"
+      "           internal node), invalid leaves, and whether the 2-thread tree equals the 1-thread tree.\n"
+      "  meshes   the box, an 800-triangle torus, the 1,520-triangle hollow egg and elephant.off cut into\n"
+      "           --mesh-fragments fragments with the thesis, balanced and axis strategies, fast and exact\n"
+      "           kernel, 1 thread: seconds, leaves, coefficient of variation of the leaf volumes (std dev /\n"
+      "           mean), smallest leaf volume / mean, invalid leaves.\n"
+      "  peer     CGAL PMP::clip(clip_volume(true)), Surface_mesh<Epick>, replays the planes of the fast\n"
+      "           1-thread thesis tree node by node (both sides of each plane, connected components matched to\n"
+      "           shatter's children by nearest centroid), in a forked process with a time limit. Its time is\n"
+      "           the sum of the clip and split calls. Reported: seconds, peer/shatter ratio, leaf pieces that\n"
+      "           are not closed, self-intersect or have volume <= 0 (invalid), leaves never produced\n"
+      "           (missing), clips that returned false (failed) or threw, nodes whose component count differs\n"
+      "           from shatter's (mismatch), timeout or crash. The exact row shows the same peer run, its\n"
+      "           ratio taken against the exact time.\n"
+      "\n"
+      "Leaves are validated outside the clock (validate_mesh, with self-intersections).\n"
+      "Exit status: 0 when every build succeeded and every shatter leaf is valid and the thread counts agree,\n"
+      "2 when not (the peer's failures never count), 1 on a usage error or any other error.");
+  constexpr std::uint32_t most_fragments = 1u << 22;
+  const auto fragments = CLI::Range(1u, most_fragments);
+  // Seconds must be a positive, finite number: "inf" would switch a limit off unseen.
+  const CLI::Validator positive_seconds(
+      [](const std::string& text) {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        return !text.empty() && *end == '\0' && value > 0 && std::isfinite(value)
+                   ? std::string()
+                   : "wants a positive number of seconds, got '" + text + "'";
+      },
+      "SECONDS > 0");
+  // CLI11 reads "-1" into an unsigned as 2^64 - 1; the old parser refused a sign.
+  const CLI::Validator not_negative(
+      [](const std::string& text) {
+        return text.find('-') == std::string::npos ? std::string() : "wants a number >= 0, got '" + text + "'";
+      },
+      "");
+  app.add_flag("--quick", options.quick,
+               "Smoke run (CI): N up to 32, meshes at 8 fragments, peer up to 16, one run per measurement; "
+               "a few seconds");
+  app.add_option("--csv", options.csv, "Also write one CSV row per measurement to this file");
+  app.add_option("--mesh-dir", options.mesh_dir, "Folder holding elephant.off")->capture_default_str();
+  app.add_option("--seed", options.seed, "Root seed of every build")->check(not_negative)->capture_default_str();
+  app.add_option_function<std::string>(
+         "--section",
+         [&options](const std::string& which) {
+           options.scaling = which != "meshes";
+           options.meshes = which != "scaling";
+         },
+         "Which sections to run: all (default), scaling or meshes")
+      ->check(CLI::IsMember({"all", "scaling", "meshes"}));
+  app.add_option("--max-fragments", options.max_fragments,
+                 "Largest N of the scaling section (default 65536; 32 with --quick)")
+      ->check(fragments);
+  app.add_option("--exact-max", options.exact_max,
+                 "Largest N built with the exact kernel (default 65536; 32 with --quick)")
+      ->check(fragments);
+  app.add_option("--exact-stop-seconds", options.exact_stop_seconds,
+                 "Build no larger N with the exact kernel once one exact build took longer than this")
+      ->check(positive_seconds)
+      ->capture_default_str();
+  app.add_option("--fast-stop-seconds", options.fast_stop_seconds,
+                 "End the scaling section once a fast 1-thread build took longer than this")
+      ->check(positive_seconds)
+      ->capture_default_str();
+  app.add_option("--mesh-fragments", options.mesh_fragments,
+                 "Fragments of the meshes section (default 256; 8 with --quick)")
+      ->check(fragments);
+  app.add_option("--peer-max", options.peer_max,
+                 "Largest N of the scaling section replayed by the peer (default 4096; 16 with --quick); after a "
+                 "peer timeout or crash no larger N is tried")
+      ->check(fragments);
+  app.add_option("--peer-timeout", options.peer_timeout,
+                 "Wall-clock limit of one peer replay, seconds (default 60; 30 with --quick)")
+      ->check(positive_seconds);
+  app.add_option("--peer-memory-mb", options.peer_memory_mb, "Address space a peer replay may add, MB")
+      ->check(not_negative & CLI::Range(std::uint64_t{64}, std::uint64_t{1} << 20))
+      ->capture_default_str();
+  app.add_flag_callback("--no-peer", [&options] { options.peer = false; }, "Skip the peer");
+  app.add_flag_callback("--no-validate", [&options] { options.validate = false; },
+                        "Skip the validity checks (leaves and peer pieces)");
+  app.add_option("--dump-invalid", options.dump_invalid,
+                 "Write the first invalid leaf of each build, and the node it was cut from, to this folder as "
+                 "OFF files");
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  Options options;
+  CLI::App app{"", "shatter-bench-tree"};
+  add_options(app, options);
+  if (const auto code = shatter::bench::parse_command_line(app, argc, argv, 1)) return *code;
   try {
-    const Plan plan = make_plan(parse(argc, argv));
+    const Plan plan = make_plan(options);
     std::vector<ScalingLine> scaling;
     std::vector<MeshLine> meshes;
     if (plan.options.scaling) scaling = run_scaling(plan);

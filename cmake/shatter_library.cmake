@@ -2,8 +2,11 @@
 # beside them, warnings on, a namespaced alias (shatter::<name>), and installed
 # with its headers into the shatterTargets export set, under the same name
 # (top-level CMakeLists.txt installs the set and shatterConfig.cmake).
+# INTERNAL: a helper of the tests and benchmarks (shatter::generators), built the
+# same way but neither installed nor exported, so the package promises no API it
+# does not mean to keep.
 function(shatter_library name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "INTERNAL" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
   add_library(shatter_${name} ${ARG_SOURCES})
   add_library(shatter::${name} ALIAS shatter_${name})
   set_target_properties(shatter_${name} PROPERTIES EXPORT_NAME ${name})
@@ -12,6 +15,9 @@ function(shatter_library name)
     $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(shatter_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   shatter_warnings(shatter_${name})
+  if(ARG_INTERNAL)
+    return()
+  endif()
   install(TARGETS shatter_${name} EXPORT shatterTargets
     ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})

@@ -28,9 +28,10 @@
 #include <utility>
 #include <vector>
 
+#include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/validate.hpp"
-#include "support/generators.hpp"
 
 using namespace shatter;
 using namespace shatter::test;

@@ -19,6 +19,8 @@
 #include <string>
 #include <tuple>
 
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/projection.hpp"
 #include "shatter/meshtree/bonds.hpp"
@@ -26,8 +28,6 @@
 #include "shatter/meshtree/cut.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "support/checks.hpp"
-#include "support/corpus.hpp"
-#include "support/generators.hpp"
 
 using namespace shatter;
 using namespace shatter::test;

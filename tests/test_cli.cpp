@@ -16,10 +16,10 @@
 #include <sstream>
 #include <vector>
 
+#include "shatter/generators/corpus.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "support/checks.hpp"
-#include "support/corpus.hpp"
 #include "support/run_shatter.hpp"
 
 using namespace shatter;

@@ -8,10 +8,11 @@
 #include <stdexcept>
 #include <vector>
 
+#include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cover.hpp"
 #include "support/checks.hpp"
-#include "support/generators.hpp"
 
 using namespace shatter;
 using namespace shatter::test;

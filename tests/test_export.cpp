@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mass.hpp"
@@ -26,7 +27,6 @@
 #include "shatter/meshtree/export.hpp"
 #include "shatter/meshtree/stats.hpp"
 #include "support/checks.hpp"
-#include "support/generators.hpp"
 #include "support/gltf.hpp"
 
 #include "shatter/meshtree/tinygltf.hpp"

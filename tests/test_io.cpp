@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
+#include "shatter/generators/corpus.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
-#include "support/corpus.hpp"
 
 using namespace shatter;
 

@@ -19,6 +19,9 @@
 #include <tuple>
 #include <vector>
 
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/io.hpp"
@@ -28,9 +31,7 @@
 #include "shatter/meshtree/plane_input.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "support/checks.hpp"
-#include "support/corpus.hpp"
 #include "support/degenerate.hpp"
-#include "support/generators.hpp"
 
 using namespace shatter;
 using namespace shatter::test;

@@ -7,9 +7,9 @@
 
 #include <cmath>
 
+#include "shatter/generators/random.hpp"
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/predicates.hpp"
-#include "support/generators.hpp"
 
 using namespace shatter;
 using namespace shatter::test;

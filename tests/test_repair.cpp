@@ -21,14 +21,15 @@
 #include <string>
 #include <vector>
 
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/repair.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "support/checks.hpp"
-#include "support/corpus.hpp"
 #include "support/run_shatter.hpp"
-#include "support/generators.hpp"
 
 using namespace shatter;
 using namespace shatter::test;

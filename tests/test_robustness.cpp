@@ -11,11 +11,11 @@
 #include <map>
 
 #include "robustness/robustness.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "support/checks.hpp"
 #include "support/degenerate.hpp"
-#include "support/generators.hpp"
 
 using namespace shatter;
 using namespace shatter::robust;

@@ -28,6 +28,8 @@
 #include <utility>
 #include <vector>
 
+#include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/meshtree/bonds.hpp"
@@ -35,7 +37,6 @@
 #include "shatter/meshtree/file.hpp"
 #include "shatter/version.hpp"
 #include "support/checks.hpp"
-#include "support/generators.hpp"
 
 using namespace shatter;
 

@@ -5,13 +5,14 @@
 
 #include <map>
 
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/meshtree/cut.hpp"
 #include "shatter/slicer/slice.hpp"
 #include "shatter/triangulate/cap.hpp"
 #include "support/checks.hpp"
-#include "support/corpus.hpp"
-#include "support/generators.hpp"
 
 using namespace shatter;
 using namespace shatter::test;

@@ -35,6 +35,9 @@
 #include <tuple>
 #include <vector>
 
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/io.hpp"
@@ -47,8 +50,6 @@
 #include "shatter/meshtree/file.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "support/checks.hpp"
-#include "support/corpus.hpp"
-#include "support/generators.hpp"
 
 using namespace shatter;
 using namespace shatter::test;

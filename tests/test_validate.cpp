@@ -11,10 +11,10 @@
 #include <string_view>
 #include <vector>
 
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/validate.hpp"
-#include "support/corpus.hpp"
-#include "support/generators.hpp"
 
 using namespace shatter;
 

@@ -29,8 +29,9 @@
 #include "shatter/meshtree/file.hpp"
 #include "shatter/meshtree/tree.hpp"
 #include "shatter/meshtree/validate_tree.hpp"
-#include "support/corpus.hpp"
-#include "support/generators.hpp"
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
 #include "support/run_shatter.hpp"
 
 using namespace shatter;

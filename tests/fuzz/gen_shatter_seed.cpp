@@ -17,9 +17,9 @@
 #include <exception>
 #include <string>
 
+#include "shatter/generators/solids.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/file.hpp"
-#include "support/generators.hpp"
 
 /// Builds the cube's tree with a fixed seed and writes its file; exit 0 on success.
 int main(int argc, char** argv) {

@@ -14,6 +14,9 @@
 #include <set>
 #include <sstream>
 
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/implicit.hpp"
@@ -31,9 +34,7 @@
 #include "shatter/triangulate/cap.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "support/checks.hpp"
-#include "support/corpus.hpp"
 #include "support/degenerate.hpp"
-#include "support/generators.hpp"
 
 namespace shatter::robust {
 namespace {

@@ -16,13 +16,14 @@
 #include <string>
 #include <vector>
 
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/union_find.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cover.hpp"
 #include "shatter/runtime/world.hpp"
 #include "support/checks.hpp"
-#include "support/generators.hpp"
 
 namespace shatter::test {
 
@@ -38,7 +39,7 @@ inline Mesh runtime_mesh(const std::string& mesh) {
   if (mesh == "torus") return torus(0.6, 0.2, 16, 10);
   if (mesh == "hollow-egg") return hollow_egg();
   if (mesh == "two-boxes") return two_boxes();
-  if (mesh == "knot1") return read_mesh(std::filesystem::path(SHATTER_TEST_DATA_DIR) / "knot1.off");
+  if (mesh == "knot1") return read_mesh(mesh_dir() / "knot1.off");
   FAIL("no runtime mesh " << mesh);
   return {};
 }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "runtime_cases.hpp"
+#include "shatter/generators/random.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/runtime/mass.hpp"

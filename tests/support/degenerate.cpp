@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/predicates.hpp"
 
 namespace shatter::test {

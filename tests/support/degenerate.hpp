@@ -14,7 +14,6 @@
 #include <vector>
 
 #include "shatter/kernel/mesh.hpp"
-#include "support/generators.hpp"
 
 namespace shatter::test {
 

@@ -16,8 +16,8 @@
 #include "shatter/kernel/io.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/export.hpp"
-#include "support/corpus.hpp"
-#include "support/generators.hpp"
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/solids.hpp"
 #include "support/gltf.hpp"
 
 using namespace shatter;

@@ -16,7 +16,7 @@
 
 #include "shatter/meshtree/export.hpp"
 #include "shatter/meshtree/file.hpp"
-#include "support/corpus.hpp"
+#include "shatter/generators/corpus.hpp"
 #include "support/run_shatter.hpp"
 
 using namespace shatter;

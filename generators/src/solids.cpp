@@ -1,4 +1,4 @@
-#include "support/generators.hpp"
+#include "shatter/generators/solids.hpp"
 
 #include <cmath>
 
@@ -15,13 +15,6 @@ void add_quad(Mesh& m, VertexIndex a, VertexIndex b, VertexIndex c, VertexIndex 
 void finish(Mesh& m) { m.surfaces.assign(m.triangles.size(), original_surface); }
 
 }  // namespace
-
-Vec3 Random::direction() {
-  const double z = uniform(-1, 1);
-  const double phi = uniform(0, 2 * pi);
-  const double r = std::sqrt(std::max(0.0, 1 - z * z));
-  return {r * std::cos(phi), r * std::sin(phi), z};
-}
 
 Mesh mesh_from(std::vector<Vec3> positions, std::vector<Triangle> triangles) {
   Mesh mesh;

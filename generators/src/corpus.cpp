@@ -1,4 +1,4 @@
-#include "support/corpus.hpp"
+#include "shatter/generators/corpus.hpp"
 
 #include <algorithm>
 #include <stdexcept>
