@@ -1045,7 +1045,7 @@ std::string read_bytes(const std::filesystem::path& path) {
 }
 
 /// The committed fuzz corpus of the .shatter reader, next to this file.
-std::filesystem::path shatter_corpus() { return std::filesystem::path(__FILE__).parent_path() / "fuzz" / "corpus" / "fuzz_read_shatter"; }
+std::filesystem::path shatter_corpus() { return std::filesystem::path(__FILE__).parent_path().parent_path() / "fuzz" / "corpus" / "fuzz_read_shatter"; }
 
 /// The index of the first node (from the back, so a leaf) whose solid has a face
 /// on a cut plane and a vertex of kind three_planes.

@@ -1,56 +1,30 @@
-// Property tests of one cut (slice + caps + solid separation) over the shared
-// corpus and generated meshes, with random and degenerate planes, both kernels.
+// Property tests of one cut of a mesh (slicer/slice.hpp: its degeneracy policy,
+// observed through the full cut the CLI and the builder make, meshtree/cut.hpp)
+// over the corpus and generated meshes, with random and degenerate planes, both
+// kernels: valid pieces that partition the volume, planes through vertices, edges
+// and faces, determinism, the two kernels' agreement, cap attributes, and cap
+// corners shared bit for bit. The caps themselves: tests/triangulate; solid
+// separation: tests/meshtree/test_separate.cpp.
 
 #include <catch2/catch.hpp>
 
-#include <map>
+#include <algorithm>
+#include <array>
+#include <cmath>
 
 #include "shatter/generators/corpus.hpp"
 #include "shatter/generators/random.hpp"
 #include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/meshtree/cut.hpp"
-#include "shatter/slicer/slice.hpp"
-#include "shatter/triangulate/cap.hpp"
 #include "support/checks.hpp"
+#include "support/cut_cases.hpp"
+#include "shatter/generators/solids.hpp"
 
 using namespace shatter;
 using namespace shatter::test;
 
 namespace {
-
-Plane plane_through(Vec3 point, Vec3 normal) { return {normal, -dot(normal, point)}; }
-
-// A plane, and whether it may pass within rounding distance of a vertex without
-// containing it exactly: there the fast kernel's rounded crossings may collapse
-// onto the vertex, so only its topology is guaranteed.
-struct TestPlane {
-  Plane plane;
-  bool grazes_vertex = false;
-};
-
-// Planes of every kind for one mesh: random ones through the bounding box, axis
-// planes exactly through a vertex (often along edges and faces too), and one
-// through a vertex with a random normal (rounded, so it grazes the vertex).
-std::vector<TestPlane> planes_for(const Mesh& mesh, std::uint64_t seed, int random_count) {
-  Random random(seed);
-  const Box3 b = bounds(mesh);
-  std::vector<TestPlane> planes;
-  for (int i = 0; i < random_count; ++i) {
-    const Vec3 p{random.uniform(b.lo.x, b.hi.x), random.uniform(b.lo.y, b.hi.y), random.uniform(b.lo.z, b.hi.z)};
-    planes.push_back({plane_through(p, random.direction())});
-  }
-  for (int axis = 0; axis < 3; ++axis) {
-    const Vec3 v = mesh.positions[random.index(mesh.positions.size())];
-    Vec3 normal{};
-    (axis == 0 ? normal.x : axis == 1 ? normal.y : normal.z) = axis == 1 ? -1.0 : 1.0;
-    // Exactly through v; other vertices may lie within an ulp of it (coordinates
-    // computed by sin and cos), so it may graze them.
-    planes.push_back({{normal, -(v[axis] * (axis == 1 ? -1.0 : 1.0))}, true});
-  }
-  planes.push_back({plane_through(mesh.positions[random.index(mesh.positions.size())], random.direction()), true});
-  return planes;
-}
 
 template <class Point>
 std::size_t piece_count(const CutResult<Point>& r) {
@@ -99,12 +73,6 @@ void check_exact_cut(const Mesh& mesh, const TestPlane& test_plane, const std::s
   CHECK(volume == exact_six_volume(mesh));
 }
 
-std::vector<NamedMesh> corpus() {
-  std::vector<NamedMesh> meshes;
-  for (const auto& path : valid_meshes()) meshes.push_back({path.filename().string(), read_mesh(path)});
-  return meshes;
-}
-
 }  // namespace
 
 TEST_CASE("fast cuts of generated meshes are valid solids that partition the volume") {
@@ -127,7 +95,7 @@ TEST_CASE("exact cuts of generated meshes partition the volume exactly") {
 }
 
 TEST_CASE("cuts of every corpus mesh are valid in both kernels") {
-  const auto meshes = corpus();
+  const auto meshes = corpus_meshes();
   REQUIRE(meshes.size() >= 10);
   for (const NamedMesh& m : meshes) {
     for (const TestPlane& plane : planes_for(m.mesh, 7, 3)) check_fast_cut(m.mesh, plane, m.name);
@@ -167,39 +135,6 @@ TEST_CASE("a plane containing a face or missing the mesh returns it whole") {
   // z = 0 holds the bottom face, which faces -z: the cube lies above.
   CHECK(cut_mesh(cube, {{0, 0, 1}, 0.0}).above.size() == 1);
   CHECK(cut_mesh(cube, {{0, 0, 1}, -1.0}).below.size() == 1);
-}
-
-TEST_CASE("each cap's boundary is exactly the border edges") {
-  std::vector<NamedMesh> meshes = generated_meshes();
-  for (const NamedMesh& m : corpus()) meshes.push_back(m);
-  std::size_t caps_checked = 0;
-  for (const NamedMesh& m : meshes) {
-    for (const TestPlane& test_plane : planes_for(m.mesh, 3, 3)) {
-      const Plane& plane = test_plane.plane;
-      const SlicedMesh<Vec3> sliced = slice_mesh(m.mesh, plane);
-      if (sliced.plane_misses()) continue;
-      const Cap<Vec3> cap = triangulate_cap(sliced.positions, sliced.border_edges, plane,
-                                            [&](VertexIndex v) { return exact_position(sliced, plane, v); });
-      // Count directed edges: the cap's boundary (edges without their reverse)
-      // must be the border, edge for edge and direction for direction.
-      std::map<std::pair<VertexIndex, VertexIndex>, int> edges;
-      for (const Triangle& t : cap.triangles) {
-        for (int k = 0; k < 3; ++k) ++edges[{t[k], t[(k + 1) % 3]}];
-      }
-      std::map<std::pair<VertexIndex, VertexIndex>, int> boundary;
-      for (const auto& [e, count] : edges) {
-        CHECK(count == 1);
-        if (!edges.count({e.second, e.first})) boundary[e] = count;
-      }
-      std::map<std::pair<VertexIndex, VertexIndex>, int> border;
-      for (const Edge& e : sliced.border_edges) ++border[{e[0], e[1]}];
-      INFO(m.name);
-      CHECK(boundary == border);
-      CHECK(cap.added_points.empty());
-      ++caps_checked;
-    }
-  }
-  CHECK(caps_checked > 30);
 }
 
 TEST_CASE("the same cut twice gives identical bytes") {
@@ -245,37 +180,6 @@ TEST_CASE("both kernels agree on topology when no vertex lies on the plane") {
     }
   }
   CHECK(compared > 20);
-}
-
-TEST_CASE("a hollow egg cut above its cavity keeps the cavity with the outer shell") {
-  const Mesh egg = hollow_egg();
-  // The cavity reaches z = 1.1; the outer shell z = 1.35.
-  const auto top_off = cut_mesh(egg, {{0, 0, 1}, -1.2});
-  REQUIRE(top_off.above.size() == 1);
-  REQUIRE(top_off.below.size() == 1);
-  CHECK(top_off.below[0].triangles.size() > top_off.above[0].triangles.size());
-  CHECK(solid_problem(top_off.below[0]) == "");
-  // Through the middle: two bowls, each capped by an annulus (two loops).
-  const auto halves = cut_mesh(egg, {{0, 0, 1}, 0.013});
-  CHECK(halves.below.size() == 1);
-  CHECK(halves.above.size() == 1);
-  CHECK(halves.cap_loops == 2);
-  CHECK(halves.cap_method == CapMethod::cdt);
-}
-
-TEST_CASE("nested shells: the island separates from the shell around its cavity") {
-  const Mesh nested = nested_shells_with_island();
-  const auto result = cut_mesh(nested, {{1, 0.01, 0.02}, -2.0});
-  // Each side: the outer shell's half (open cavity now part of its surface) and
-  // the island's half.
-  CHECK(result.below.size() == 2);
-  CHECK(result.above.size() == 2);
-  CHECK(result.cap_loops == 3);  // outer boundary, cavity hole, island
-  // A cut that misses the cavity: the whole inner structure stays in one solid
-  // on one side, with the island as a separate solid inside the cavity.
-  const auto side = cut_mesh(nested, {{1, 0, 0}, -0.5});
-  CHECK(side.below.size() == 1);
-  CHECK(side.above.size() == 2);
 }
 
 TEST_CASE("cap corners carry the plane normal, UVs and tangents") {
@@ -342,18 +246,4 @@ TEST_CASE("exact pieces on both sides of a cut round their shared cap vertices t
     }
   }
   CHECK(shared_checked > 100);
-}
-
-TEST_CASE("the cap check refuses caps whose boundary is not exactly the border") {
-  // A square 0-1-2-3, counter-clockwise: the region lies left of every border edge.
-  const std::vector<Edge> border = {{0, 1}, {1, 2}, {2, 3}, {3, 0}};
-  using Triangles = std::vector<Triangle>;
-  CHECK(cap_boundary_is_border(Triangles{{0, 1, 2}, {0, 2, 3}}, border));
-  CHECK(cap_boundary_is_border(Triangles{{1, 2, 3}, {1, 3, 0}}, border));
-  // Regression: a triangle given twice used to pass, its edges counted once.
-  CHECK_FALSE(cap_boundary_is_border(Triangles{{0, 1, 2}, {0, 1, 2}, {0, 2, 3}}, border));
-  CHECK_FALSE(cap_boundary_is_border(Triangles{{0, 2, 1}, {0, 3, 2}}, border));  // reversed
-  CHECK_FALSE(cap_boundary_is_border(Triangles{{0, 1, 2}}, border));             // half missing
-  CHECK_FALSE(cap_boundary_is_border(Triangles{{0, 1, 2}, {0, 2, 3}, {0, 0, 1}}, border));  // degenerate
-  CHECK_FALSE(cap_boundary_is_border(Triangles{{0, 1, 2}, {0, 2, 3}, {3, 2, 4}}, border));  // sticks out
 }

@@ -1,0 +1,102 @@
+// `shatter validate|slice|fracture --repair` end to end (the library's repair_mesh:
+// tests/kernel/test_repair.cpp): changes printed one line each, repaired meshes
+// written only when valid, what repair cannot fix refused after saying what it did.
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+
+#include "shatter/kernel/io.hpp"
+#include "support/checks.hpp"
+#include "shatter/generators/corpus.hpp"
+#include "support/run_shatter.hpp"
+
+using namespace shatter;
+using namespace shatter::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path scratch(const std::string& name) { return scratch_path("shatter-repair-test", name); }
+Run run_shatter(const std::string& arguments) { return run_shatter_binary("shatter-repair-test", arguments); }
+fs::path bad(const std::string& name) { return mesh_dir() / "bad" / name; }
+std::string last_line(const std::string& text) {
+  const std::size_t end = text.find_last_not_of('\n');
+  const std::size_t start = text.rfind('\n', end);
+  return text.substr(start == std::string::npos ? 0 : start + 1, end - (start == std::string::npos ? 0 : start + 1) + 1);
+}
+
+}  // namespace
+
+TEST_CASE("validate --repair prints the changes and exits 0 on a repaired mesh", "[repair][cli]") {
+  const fs::path out = scratch("cube-closed.off");
+  const Run run = run_shatter("validate " + quoted(bad("cube-ouvert.off")) + " --repair --out " + quoted(out));
+  CHECK(run.exit_code == 0);
+  CHECK(run.err == "repair: filled 1 hole (4 border edges) with 2 new triangles\n");
+  CHECK(run.out.find("valid closed oriented 2-manifold") != std::string::npos);
+  const Mesh written = read_mesh(out);
+  CHECK(solid_problem(written).empty());
+  CHECK(exact_six_volume(written) == 48);
+
+  // Without --repair the same file is refused, and nothing is ever written.
+  const Run plain = run_shatter("validate " + quoted(bad("cube-ouvert.off")));
+  CHECK(plain.exit_code == 3);
+  CHECK(plain.err.find("repair") == std::string::npos);
+}
+
+TEST_CASE("validate --repair refuses what repair cannot fix, after saying what it did", "[repair][cli]") {
+  const fs::path out = scratch("never.off");
+  const Run run = run_shatter("validate " + quoted(bad("degtri_sliding.off")) + " --repair --out " + quoted(out));
+  CHECK(run.exit_code == 3);
+  CHECK(run.err.rfind("repair: ", 0) == 0);
+  CHECK(last_line(run.err).rfind("error: invalid mesh ", 0) == 0);
+  CHECK(last_line(run.err).find("after --repair: degenerate mesh") != std::string::npos);
+  CHECK_FALSE(fs::exists(out));
+}
+
+TEST_CASE("validate --repair on a valid mesh says no change, and --json lists changes", "[repair][cli]") {
+  const Run valid = run_shatter("validate " + quoted(mesh_dir() / "cube.off") + " --repair");
+  CHECK(valid.exit_code == 0);
+  CHECK(valid.err.find("no change") != std::string::npos);
+
+  const Run json_run = run_shatter("validate " + quoted(bad("tetrahedron.off")) + " --repair --json");
+  CHECK(json_run.exit_code == 0);
+  const auto out = nlohmann::json::parse(json_run.out);
+  CHECK(out["valid"] == true);
+  REQUIRE(out["repair"].size() == 1);
+  CHECK(out["repair"][0]["change"] == "reversed_triangles");
+  CHECK(out["repair"][0]["count"] == 4);
+
+  // --out is for the repaired mesh only.
+  const Run usage = run_shatter("validate " + quoted(mesh_dir() / "cube.off") + " --out " + quoted(scratch("x.off")));
+  CHECK(usage.exit_code == 2);
+}
+
+TEST_CASE("slice and fracture --repair proceed with the repaired mesh", "[repair][cli]") {
+  const fs::path pieces = scratch("pieces");
+  const Run refused = run_shatter("slice " + quoted(bad("tet-shuffled.off")) + " --plane 0,0,1,-0.25 --out " +
+                                  quoted(pieces));
+  CHECK(refused.exit_code == 3);
+  const Run slice = run_shatter("slice " + quoted(bad("tet-shuffled.off")) + " --plane 0,0,1,-0.25 --out " +
+                                quoted(pieces) + " --repair");
+  CHECK(slice.exit_code == 0);
+  CHECK(slice.err.find("repair: reversed") != std::string::npos);
+  CHECK(fs::exists(pieces / "below-0.off"));
+  CHECK(fs::exists(pieces / "above-0.off"));
+
+  const fs::path tree = scratch("tree.shatter");
+  const Run fracture = run_shatter("fracture " + quoted(bad("cube-ouvert.off")) + " --fragments 4 --out " +
+                                   quoted(tree) + " --repair --json");
+  CHECK(fracture.exit_code == 0);
+  CHECK(fracture.err.find("repair: filled 1 hole") != std::string::npos);
+  const auto out = nlohmann::json::parse(fracture.out);
+  CHECK(out["repair"][0]["change"] == "filled_holes");
+  CHECK(out["leaves"].get<int>() >= 4);
+
+  const Run open = run_shatter("fracture " + quoted(bad("tetra_intersected_by_triangle.off")) +
+                               " --fragments 2 --out " + quoted(scratch("no.shatter")) + " --repair");
+  CHECK(open.exit_code == 3);
+  CHECK(last_line(open.err).find("(after --repair)") != std::string::npos);
+}

@@ -1,0 +1,223 @@
+// The plane kernel's predicates (kernel/implicit.hpp) against an independent
+// exact evaluation (support/implicit_reference.hpp): the side of every point kind
+// against input and cut planes, exact coordinates and their rounding, order
+// along axes and lines, and orientation within a plane, on random and lattice
+// geometry where zero answers are common.
+
+#include <catch2/catch.hpp>
+
+#include <gmpxx.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "shatter/kernel/implicit.hpp"
+#include "shatter/kernel/solid.hpp"
+#include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
+#include "support/implicit_reference.hpp"
+
+using namespace shatter;
+using namespace shatter::test;
+
+namespace {
+
+// --- a random plane set ----------------------------------------------------------------
+
+// Input points, input planes through triples of them, and cut planes: some
+// random, some through chosen input points (exactly, on small lattices) so that
+// zero answers and near-zero ones are common.
+struct RandomGeometry {
+  InputGeometry input;
+  std::vector<Plane> cuts;
+  PlaneSet set() const { return input.plane_set(cuts); }
+};
+
+RandomGeometry random_geometry(Random& random, bool lattice) {
+  RandomGeometry g;
+  const double scale = lattice ? 1.0 : std::ldexp(1.0, static_cast<int>(random.index(41)) - 20);
+  for (int i = 0; i < 12; ++i) {
+    Vec3 p;
+    if (lattice) {
+      p = {static_cast<double>(random.index(9)) - 4, static_cast<double>(random.index(9)) - 4,
+           static_cast<double>(random.index(9)) - 4};
+    } else {
+      p = Vec3{random.uniform(-1, 1), random.uniform(-1, 1), random.uniform(-1, 1)} * scale;
+    }
+    g.input.points.push_back(p);
+  }
+  for (int i = 0; i < 6; ++i) {
+    std::array<VertexIndex, 3> idx{static_cast<VertexIndex>(random.index(12)), static_cast<VertexIndex>(random.index(12)),
+                                   static_cast<VertexIndex>(random.index(12))};
+    const Vec3 n = cross(g.input.points[idx[1]] - g.input.points[idx[0]], g.input.points[idx[2]] - g.input.points[idx[0]]);
+    if (n.x == 0 && n.y == 0 && n.z == 0) {
+      --i;
+      continue;
+    }
+    g.input.planes.push_back(idx);
+    g.input.plane_approx.push_back(
+        approximate_input_plane(g.input.points[idx[0]], g.input.points[idx[1]], g.input.points[idx[2]]));
+  }
+  for (int i = 0; i < 6; ++i) {
+    Plane p;
+    if (lattice) {
+      p.normal = {static_cast<double>(random.index(5)) - 2, static_cast<double>(random.index(5)) - 2,
+                  static_cast<double>(random.index(5)) - 2};
+      if (p.normal.x == 0 && p.normal.y == 0 && p.normal.z == 0) p.normal = {1, 0, 0};
+      // Through an input point exactly.
+      p.offset = -dot(p.normal, g.input.points[random.index(12)]);
+    } else {
+      p.normal = random.direction();
+      p.offset = -dot(p.normal, g.input.points[random.index(12)]) + (random.index(2) ? 0.0 : random.uniform(-0.1, 0.1) * scale);
+    }
+    g.cuts.push_back(p);
+  }
+  return g;
+}
+
+// A random point definition over g whose construction is sound (w != 0), or none.
+std::optional<PointDef> random_point(const RandomGeometry& g, Random& random) {
+  const PlaneSet set = g.set();
+  auto plane = [&]() {
+    return random.index(2) ? PlaneRef::input(static_cast<std::uint32_t>(random.index(g.input.planes.size())))
+                           : PlaneRef::cut(static_cast<std::uint32_t>(random.index(g.cuts.size())));
+  };
+  PointDef def;
+  switch (random.index(3)) {
+    case 0: def = PointDef::input(static_cast<std::uint32_t>(random.index(12))); break;
+    case 1: {
+      const auto p = static_cast<std::uint32_t>(random.index(12)), q = static_cast<std::uint32_t>(random.index(12));
+      if (p == q) return std::nullopt;
+      def = PointDef::segment_plane(p, q, plane());
+      const Q4 h = reference_plane(set, def.planes[0]);
+      const Q3 a = q3(set.points[p]), b = q3(set.points[q]);
+      if (h.a * (b.x - a.x) + h.b * (b.y - a.y) + h.c * (b.z - a.z) == 0) return std::nullopt;
+      break;
+    }
+    default: {
+      def = PointDef::three_planes(plane(), plane(), plane());
+      Q4 h[3];
+      for (int k = 0; k < 3; ++k) h[k] = reference_plane(set, def.planes[k]);
+      const Q3 n0{h[0].a, h[0].b, h[0].c}, n1{h[1].a, h[1].b, h[1].c}, n2{h[2].a, h[2].b, h[2].c};
+      if (dotq(n0, crossq(n1, n2)) == 0) return std::nullopt;
+    }
+  }
+  return def;
+}
+
+}  // namespace
+
+TEST_CASE("plane kernel predicates agree with an independent exact evaluation", "[plane][predicates]") {
+  std::size_t zeros = 0, queries = 0;
+  for (std::uint64_t seed = 1; seed <= 60; ++seed) {
+    Random random(seed);
+    const bool lattice = seed % 2 == 0;
+    const RandomGeometry g = random_geometry(random, lattice);
+    const PlaneSet set = g.set();
+    std::vector<PointDef> defs;
+    while (defs.size() < 24) {
+      if (auto def = random_point(g, random)) defs.push_back(*def);
+    }
+    std::vector<ApproxPoint> approx;
+    for (const PointDef& def : defs) approx.push_back(approximate(set, def));
+    for (std::size_t i = 0; i < defs.size(); ++i) {
+      // Sides against every plane of the set.
+      for (std::uint32_t k = 0; k < g.input.planes.size() + g.cuts.size(); ++k) {
+        const PlaneRef plane = k < g.input.planes.size() ? PlaneRef::input(k)
+                                                         : PlaneRef::cut(k - static_cast<std::uint32_t>(g.input.planes.size()));
+        const Sign expected = reference_side(set, plane, defs[i]);
+        INFO("seed " << seed << " point " << i << " plane " << k);
+        CHECK(side(set, plane, defs[i], approx[i]) == expected);
+        zeros += expected == Sign::zero ? 1 : 0;
+        ++queries;
+      }
+      // Coordinates: exact, and the rounded position is within the promised
+      // bound of them (correctly rounded when the filter cannot bound it).
+      const Q3 exact = reference_point(set, defs[i]);
+      const std::array<mpq_class, 3> kernel = exact_coordinates(set, defs[i]);
+      CHECK(kernel[0] == exact.x);
+      CHECK(kernel[1] == exact.y);
+      CHECK(kernel[2] == exact.z);
+      const Vec3 rounded = rounded_position(set, defs[i], approx[i]);
+      for (const auto& [r, e] : {std::pair{rounded.x, exact.x}, std::pair{rounded.y, exact.y}, std::pair{rounded.z, exact.z}}) {
+        const mpq_class error = abs(mpq_class(r) - e);
+        CHECK(error <= abs(e) * mpq_class(std::ldexp(1.0, -40)) + mpq_class(std::ldexp(1.0, -1074)));
+      }
+    }
+    // Coordinate order and order along lines, on the same points.
+    for (std::size_t i = 0; i + 1 < defs.size(); ++i) {
+      const Q3 p = reference_point(set, defs[i]), q = reference_point(set, defs[i + 1]);
+      for (int axis = 0; axis < 3; ++axis) {
+        const mpq_class& pa = axis == 0 ? p.x : axis == 1 ? p.y : p.z;
+        const mpq_class& qa = axis == 0 ? q.x : axis == 1 ? q.y : q.z;
+        CHECK(compare_coordinate(set, axis, defs[i], approx[i], defs[i + 1], approx[i + 1]) == sign_of(qa - pa));
+      }
+      const PlaneRef a = PlaneRef::cut(0), b = PlaneRef::cut(1);
+      const Q4 ha = reference_plane(set, a), hb = reference_plane(set, b);
+      const Q3 direction = crossq({ha.a, ha.b, ha.c}, {hb.a, hb.b, hb.c});
+      CHECK(compare_along(set, a, b, defs[i], approx[i], defs[i + 1], approx[i + 1]) ==
+            sign_of(dotq(direction, sub(q, p))));
+    }
+  }
+  INFO(zeros << " of " << queries << " sides were exactly zero");
+  CHECK(zeros > queries / 50);  // the lattice cases exercise the exact path
+}
+
+TEST_CASE("orientation in a plane agrees with an independent exact evaluation", "[plane][predicates]") {
+  // Points defined on one cut plane: the meets of that plane with segments and
+  // with pairs of other planes, as caps have them.
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    Random random(seed * 7919);
+    const RandomGeometry g = random_geometry(random, seed % 2 == 0);
+    const PlaneSet set = g.set();
+    const PlaneRef on = PlaneRef::cut(0);
+    std::vector<PointDef> defs;
+    for (int tries = 0; tries < 400 && defs.size() < 10; ++tries) {
+      PointDef def;
+      if (random.index(2)) {
+        const auto p = static_cast<std::uint32_t>(random.index(12)), q = static_cast<std::uint32_t>(random.index(12));
+        if (p == q) continue;
+        def = PointDef::segment_plane(p, q, on);
+      } else {
+        const auto pick = [&] {
+          return random.index(2) ? PlaneRef::input(static_cast<std::uint32_t>(random.index(g.input.planes.size())))
+                                 : PlaneRef::cut(1 + static_cast<std::uint32_t>(random.index(g.cuts.size() - 1)));
+        };
+        def = PointDef::three_planes(on, pick(), pick());
+      }
+      try {
+        (void)approximate(set, def);
+        (void)reference_point(set, def);
+      } catch (...) {
+        continue;
+      }
+      if (std::find(defs.begin(), defs.end(), def) == defs.end()) defs.push_back(def);
+    }
+    std::vector<ApproxPoint> approx;
+    std::vector<Q3> exact;
+    for (const PointDef& def : defs) {
+      approx.push_back(approximate(set, def));
+      exact.push_back(reference_point(set, def));
+    }
+    const Projection projection = projection_of(set, on);
+    const Q4 h = reference_plane(set, on);
+    const Q3 normal{h.a, h.b, h.c};
+    for (std::size_t i = 0; i < defs.size(); ++i) {
+      for (std::size_t j = 0; j < defs.size(); ++j) {
+        for (std::size_t k = 0; k < defs.size(); ++k) {
+          if (i == j || j == k || k == i) continue;
+          // Seen from +n: the sign of n · ((q - p) x (r - p)).
+          const Sign expected = sign_of(dotq(normal, crossq(sub(exact[j], exact[i]), sub(exact[k], exact[i]))));
+          INFO("seed " << seed << " points " << i << " " << j << " " << k);
+          CHECK(orient_in_plane(set, projection, defs[i], approx[i], defs[j], approx[j], defs[k], approx[k]) ==
+                expected);
+        }
+      }
+    }
+  }
+}
