@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "shatter/kernel/error.hpp"
+#include "shatter/kernel/fp_environment.hpp"
 #include "shatter/kernel/mesh.hpp"
 
 namespace shatter::io_detail {
@@ -65,7 +66,10 @@ inline bool parse_double(std::string_view token, double& value) {
     // from_chars leaves `value` untouched here; glibc's strtod rounds correctly
     // (to infinity, a subnormal or zero). The token is ASCII digits, a point and
     // an exponent, which every locale's strtod reads alike except for the point:
-    // shatter never calls setlocale, so it is the C locale's '.'.
+    // shatter never calls setlocale, so it is the C locale's '.'. Rounding to
+    // infinity signals overflow, as it should: held, so a trapping program
+    // reads "1e999" as every other one does (and refuses it as non-finite).
+    const HeldFloatingPointEnvironment held;
     value = std::strtod(std::string(token).c_str(), nullptr);
     return true;
   }

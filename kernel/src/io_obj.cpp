@@ -169,7 +169,15 @@ Mesh read_obj(std::string_view bytes) {
   config.triangulate = false;  // fanned below, identically to the other formats
   config.vertex_color = false;
   tinyobj::ObjReader reader;
-  if (!reader.ParseFromString(std::string(bytes), std::string(), config)) {
+  bool parsed = false;
+  {
+    // tinyobjloader's number parser scales by ldexp and overflows on exponents
+    // past the double range; its values are discarded (the first pass read them),
+    // so the flag means nothing here and is held.
+    const HeldFloatingPointEnvironment held;
+    parsed = reader.ParseFromString(std::string(bytes), std::string(), config);
+  }
+  if (!parsed) {
     std::string message = reader.Error();
     if (const std::size_t newline = message.find('\n'); newline != std::string::npos) message.resize(newline);
     refuse("OBJ: " + message);

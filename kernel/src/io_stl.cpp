@@ -144,7 +144,17 @@ std::string write_stl(const Mesh& mesh) {
   for (const Triangle& triangle : mesh.triangles) {
     const Vec3 a = mesh.positions[triangle[0]], b = mesh.positions[triangle[1]], c = mesh.positions[triangle[2]];
     out += "facet normal ";
-    append_vec3(out, normalized(cross(b - a, c - a)));
+    Vec3 normal;
+    {
+      // Facet normals are informational (readers, shatter's included, go by the
+      // corners). A triangle with no area, or whose cross product passes the
+      // double range (coordinates near its end), gets the non-finite normal the
+      // arithmetic gives, as it always has: held, so a trapping program writes
+      // the same bytes.
+      const HeldFloatingPointEnvironment held;
+      normal = normalized(cross(b - a, c - a));
+    }
+    append_vec3(out, normal);
     out += "\nouter loop\n";
     for (const Vec3& corner : {a, b, c}) {
       out += "vertex ";

@@ -375,7 +375,7 @@ TEST_CASE("every bad corpus mesh is repaired or refused as recorded", "[repair][
   CHECK(seen == expected.size());
 }
 
-TEST_CASE("self-intersections: left and named by default; the opt-in resolves the camel", "[repair][corpus]") {
+TEST_CASE("self-intersections: left and named by default, and the opt-in resolves the camel", "[repair][corpus]") {
   // By default (and so on the CLI) self-intersections are not resolved: CGAL
   // 5.5's experimental autorefinement gave build-dependent results on the cow
   // (see RepairOptions::resolve_self_intersections).

@@ -348,7 +348,7 @@ TEST_CASE("node selections parse from leaves, all and depth:K, and nothing else"
   }
 }
 
-TEST_CASE("leaves and depth:K partition the leaves; all lists every node") {
+TEST_CASE("leaves and depth:K partition the leaves, and all lists every node") {
   for (const NamedTree& sample : sample_trees()) {
     const MeshTree& tree = sample.tree;
     INFO(sample.name);

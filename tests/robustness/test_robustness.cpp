@@ -75,7 +75,7 @@ TEST_CASE("a reproducer keeps the case: planes bit for bit, mesh, options") {
   CHECK(plane_cases > 0);  // the plane kernel's cases are among them
 }
 
-TEST_CASE("kernels are drawn plane 1/2, fast 1/4, exact 1/4; output formats OFF 3/4, others 1/4") {
+TEST_CASE("kernels are drawn plane 1/2, fast 1/4, exact 1/4, and output formats OFF 3/4, others 1/4") {
   const MeshPool pool = MeshPool::load();
   std::array<int, kernel_count> kernels{};
   std::map<MeshFormat, int> formats;

@@ -102,7 +102,7 @@ TEST_CASE("combine_masses refuses what is not a solid") {
   CHECK_THROWS_AS(rt::combine_masses(std::vector<MassProperties>{part}, 1), std::invalid_argument);
 }
 
-TEST_CASE("a new object is one body per initial cluster; a whole one is the root's hull alone") {
+TEST_CASE("a new object is one body per initial cluster, and a whole one is the root's hull alone") {
   for (const RuntimeCase& c : runtime_cases()) {
     INFO(c.name);
     rt::World world;

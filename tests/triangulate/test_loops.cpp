@@ -211,7 +211,7 @@ TEST_CASE("link_loops of the border edges of real cuts, both kernels", "[loops][
   CHECK(loops_found > cuts / 2);
 }
 
-TEST_CASE("link_loops: no edges, no loops; a million edges in one shuffled loop, in linear time", "[loops]") {
+TEST_CASE("link_loops: no edges, no loops, and a million edges in one shuffled loop in linear time", "[loops]") {
   CHECK(link_loops({}).empty());
   // A quadratic search for each next edge would take minutes here (10^12 probes);
   // the hash map from start vertex to edge takes milliseconds.

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <optional>
 #include <unordered_map>
 
 #include "shatter/kernel/error.hpp"
@@ -42,21 +44,32 @@ bool fan_from(const PlaneSet& set, const SolidFace& face, Projection projection,
 // The fan apex whose thinnest triangle is the least thin (twice the area over the
 // longest edge squared, on the vertices' approximations): a choice among exactly
 // valid fans, made only to keep slivers out of what rounding must preserve.
+//
+// A triangle with no shape to measure is skipped: corners whose approximations
+// coincide (a sliver finer than doubles), or a corner whose approximation is no
+// finite point (w approximated by zero, or x/w past the double range, as on
+// solids an ulp across). Its quality would be NaN, which the minimum ignored
+// before the tests trapped NaNs; skipping it keeps every choice as it was.
 std::size_t roundest_apex(const Solid& solid, std::span<const VertexIndex> corners) {
   const std::size_t k = corners.size();
-  auto point = [&](VertexIndex v) {
+  auto point = [&](VertexIndex v) -> std::optional<Vec3> {
     const ApproxPoint& a = solid.approx[v];
+    const double w = std::fabs(a.w.value), largest = std::numeric_limits<double>::max();
+    for (const double c : {a.x.value, a.y.value, a.z.value}) {
+      if (!(w > 0 && std::fabs(c) / largest <= w)) return std::nullopt;
+    }
     return Vec3{a.x.value / a.w.value, a.y.value / a.w.value, a.z.value / a.w.value};
   };
   std::size_t best = 0;
   double best_quality = -1;
   for (std::size_t apex = 0; apex < k; ++apex) {
-    const Vec3 a = point(corners[apex]);
+    const std::optional<Vec3> a = point(corners[apex]);
     double quality = INFINITY;
-    for (std::size_t i = 1; i + 1 < k; ++i) {
-      const Vec3 b = point(corners[(apex + i) % k]), c = point(corners[(apex + i + 1) % k]);
-      const double longest = std::max({dot(b - a, b - a), dot(c - b, c - b), dot(a - c, a - c)});
-      quality = std::min(quality, norm(cross(b - a, c - a)) / longest);
+    for (std::size_t i = 1; a && i + 1 < k; ++i) {
+      const std::optional<Vec3> b = point(corners[(apex + i) % k]), c = point(corners[(apex + i + 1) % k]);
+      if (!b || !c) continue;
+      const double longest = std::max({dot(*b - *a, *b - *a), dot(*c - *b, *c - *b), dot(*a - *c, *a - *c)});
+      if (longest > 0) quality = std::min(quality, norm(cross(*b - *a, *c - *a)) / longest);
     }
     if (quality > best_quality) best_quality = quality, best = apex;
   }
