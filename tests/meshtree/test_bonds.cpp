@@ -19,6 +19,7 @@
 #include <string>
 #include <tuple>
 
+#include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/projection.hpp"
 #include "shatter/meshtree/bonds.hpp"
@@ -573,14 +574,18 @@ TEST_CASE("bonds of 256 fragments and of the generated catalogue", "[bonds][buil
     }
   }
   SECTION("generated meshes, tiny, huge and far from the origin") {
+    // A build the exact kernel refuses (UnsupportedGeometryError, a known
+    // limitation) is counted against the ceiling below; any other error fails.
+    // (These builds used to be skipped with a warning; none is refused today.)
     std::size_t built = 0;
+    std::vector<std::string> refused;
     for (const NamedMesh& named : generated_meshes()) {
       INFO(named.name);
       MeshTree tree;
       try {
         tree = build(named.mesh, Strategy::thesis, KernelKind::exact, 8);
-      } catch (const std::exception& error) {
-        WARN(named.name << " not built: " << error.what());
+      } catch (const UnsupportedGeometryError& error) {
+        refused.push_back(named.name + ": " + error.what());
         continue;
       }
       ++built;
@@ -588,7 +593,11 @@ TEST_CASE("bonds of 256 fragments and of the generated catalogue", "[bonds][buil
       check_bonds(tree, bonds, true);
       check_box_rule(tree, bonds);
     }
+    std::string list;
+    for (const std::string& what : refused) list += "\n    " + what;
+    INFO(built << " built, " << refused.size() << " refused:" << list);
     CHECK(built > 0);
+    CHECK(refused.size() == 0);  // measured 2026-12-02: every generated mesh builds
   }
 }
 

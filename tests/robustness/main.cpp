@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -92,8 +93,34 @@ void report_failure(const Case& c, const CaseOutcome& outcome, const std::filesy
               failure.c_str(), path.string().c_str(), reproduces ? "reproduces" : "DOES NOT reproduce when replayed");
 }
 
+// Ceilings on the documented refusals of a run (none when unset): a run that
+// refuses more than its ceiling fails like a run with a failing case, so a change
+// that makes the kernels refuse more cannot pass as "refused, not failed". CTest
+// sets them from a measured run of the same seed and case count.
+struct RefusalCeilings {
+  std::optional<std::size_t> cases;        ///< cases refused (UnsupportedGeometryError): fractures, fast and exact slices
+  std::optional<std::size_t> unroundable;  ///< plane pieces round_solid could not write validly
+  std::optional<std::size_t> pinched;      ///< plane cuts refused as pinching a piece
+};
+
+// Prints each refusal count against its ceiling; false when one is passed.
+bool within_ceilings(const RefusalCeilings& ceilings, std::size_t cases, std::size_t unroundable,
+                     std::size_t pinched) {
+  bool within = true;
+  const auto check = [&](const char* what, std::size_t count, const std::optional<std::size_t>& ceiling) {
+    if (!ceiling) return;
+    const bool ok = count <= *ceiling;
+    std::printf("refusal ceiling: %s %zu, ceiling %zu%s\n", what, count, *ceiling, ok ? "" : ": PASSED, a regression");
+    within &= ok;
+  };
+  check("refused cases", cases, ceilings.cases);
+  check("unroundable plane pieces", unroundable, ceilings.unroundable);
+  check("pinching plane cuts", pinched, ceilings.pinched);
+  return within;
+}
+
 int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, const std::vector<std::string>& only,
-              unsigned threads, const std::filesystem::path& reproducer_dir) {
+              unsigned threads, const std::filesystem::path& reproducer_dir, const RefusalCeilings& ceilings) {
   std::array<bool, case_class_count> wanted{};
   for (const std::string& name : only) {
     const auto kind = parse_class(name);
@@ -208,7 +235,8 @@ int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, cons
               (unsigned long long)implicit.orient_calls, rate(implicit.orient_exact, implicit.orient_calls),
               (unsigned long long)implicit.order_calls, rate(implicit.order_exact, implicit.order_calls));
   std::printf("%zu failing case%s\n", failed, failed == 1 ? "" : "s");
-  return failed == 0 ? 0 : 1;
+  const bool within = within_ceilings(ceilings, all.refused, all.plane_unroundable, all.plane_pinched);
+  return failed == 0 && within ? 0 : 1;
 }
 
 int replay(const std::vector<std::string>& files) {
@@ -328,6 +356,13 @@ int main(int argc, char** argv) {
                  "Run the predicate audit with this many queries instead of drawing cases: half of them audit "
                  "side_of_plane, half the plane kernel's predicates");
   app.add_flag("--list-classes", list, "Print the class names and exit");
+  RefusalCeilings ceilings;
+  app.add_option("--max-refused-cases", ceilings.cases,
+                 "Fail the run when more cases than this are refused (UnsupportedGeometryError)");
+  app.add_option("--max-unroundable", ceilings.unroundable,
+                 "Fail the run when round_solid refuses to write more plane pieces than this");
+  app.add_option("--max-pinched", ceilings.pinched,
+                 "Fail the run when cut_solid refuses more plane cuts than this as pinching a piece");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -340,7 +375,7 @@ int main(int argc, char** argv) {
     }
     if (!replays.empty()) return replay(replays);
     if (audit_queries > 0) return audit(audit_queries, seed, threads);
-    return run_cases(cases, seed, first, only, threads, reproducers);
+    return run_cases(cases, seed, first, only, threads, reproducers, ceilings);
   } catch (const CLI::ValidationError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;
