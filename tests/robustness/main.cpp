@@ -243,7 +243,10 @@ int replay(const std::vector<std::string>& files) {
   std::size_t failed = 0;
   for (const std::string& file : files) {
     const Case c = read_reproducer(file);
-    const CaseOutcome outcome = run_case(c);
+    CaseOutcome outcome = run_case(c);
+    if (outcome.failures.empty()) {
+      if (std::string unmet = unmet_expectation(c, outcome); !unmet.empty()) outcome.failures.push_back(std::move(unmet));
+    }
     const std::size_t k = kernel_index(c.kernel);
     std::string result;
     if (!outcome.failures.empty()) {
@@ -251,6 +254,7 @@ int replay(const std::vector<std::string>& files) {
       if (outcome.failures.size() > 1) result += " (and " + std::to_string(outcome.failures.size() - 1) + " more)";
     } else {
       result = outcome.refused ? "refused (unsupported)" : "passes";
+      if (c.expected != Expected::no_failure) result += " as expected (" + std::string(expected_name(c.expected)) + ")";
       result += "; " + std::to_string(outcome.written[k]) + " pieces written as " +
                 std::string(format_name(c.format)) + ", " + std::to_string(outcome.invalid_written[k]) +
                 " invalid as written";
