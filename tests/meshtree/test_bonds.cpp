@@ -616,6 +616,33 @@ TEST_CASE("bonds of corpus meshes", "[bonds][build][corpus][heavy]") {
   CHECK(built > 0);
 }
 
+// The sanitized build (.ci/sanitize) leaves the [heavy] cases above out; this one
+// keeps their properties (every bond against the exact brute force, the box rule)
+// on fewer fragments and meshes, so that find_bonds runs under ASan and UBSan on
+// trees from every strategy and both kernels, far from the origin included.
+TEST_CASE("bonds equal the brute-force contact set: 8 fragments, the sanitizer's matrix", "[bonds][build][property]") {
+  const std::vector<NamedMesh> meshes{{"unit-cube", unit_cube()},
+                                      {"torus", torus(1.0, 0.35, 16, 10)},
+                                      {"hollow-egg", hollow_egg()},
+                                      {"egg-far-from-origin", transformed(hollow_egg(), 1.0, {1e6, -2e6, 3e5})}};
+  std::size_t trees = 0;
+  for (const NamedMesh& named : meshes) {
+    for (const Strategy strategy : all_strategies) {
+      for (const KernelKind kernel : all_kernels) {
+        INFO(named.name << " " << strategy_name(strategy) << " " << kernel_name(kernel));
+        const MeshTree tree = build(named.mesh, strategy, kernel, 8);
+        REQUIRE(tree.leaf_count() >= 8);
+        const std::vector<Bond> bonds = find_bonds(tree);
+        CHECK(bonds.size() >= tree.leaf_count() - 1);  // every solid here is connected
+        check_bonds(tree, bonds, true);
+        check_box_rule(tree, bonds);
+        ++trees;
+      }
+    }
+  }
+  CHECK(trees == 4 * 3 * 2);
+}
+
 // Not run by default: the build alone takes minutes. SHATTER_BONDS_BENCH_TREE may
 // name a .shatter file to read instead (written there when it does not exist).
 TEST_CASE("find_bonds on 65,536 fragments of a cube", "[.][bench]") {

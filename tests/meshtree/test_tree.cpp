@@ -1299,6 +1299,56 @@ TEST_CASE("cubes, renumbered, seeds 1 to 8, every strategy: 65,536 fragments", "
   run_cubes(65536, {1, 2, 3, 4, 5, 6, 7, 8}, Level::cheap);
 }
 
+// --- the sanitizer's matrix ---------------------------------------------------------
+// .ci/sanitize leaves the [heavy] matrices out (hours under ASan+UBSan). These
+// keep their properties, every check of check_tree on every node, on fewer
+// fragments and meshes, so that the builder's heavy paths run sanitized too:
+// recursion several levels deep on two threads, concave solids cut into several
+// children, cavities and separate solids, tiny and far-from-origin coordinates,
+// the plane kernel's certificates and its hulls of non-convex nodes, bonds, the
+// file round trip and the thread-count comparison. They run in every build (about
+// 20 s in Release); none of their builds is refused (2026-12-02), so they declare
+// no KnownRefusals and a refusal fails them.
+
+namespace {
+
+constexpr const char* sanitizer_meshes[] = {"box", "torus-800", "hollow-egg", "nested-shells-island", "two-boxes",
+                                            "torus-tiny-1e-6", "egg-far-from-origin", "torus_quad.off"};
+
+void run_sanitizer_matrix(KernelKind kernel, std::uint32_t fragments) {
+  for (const Strategy strategy : all_strategies) {
+    for (const char* name : sanitizer_meshes) {
+      const std::string mesh = name;
+      run({&test_mesh(mesh), options_for(fragments, strategy, kernel, 7), Level::full, mesh == "nested-shells-island"});
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("the sanitizer's matrix: 16 fragments, fast kernel, every strategy", "[tree][build][property]") {
+  run_sanitizer_matrix(KernelKind::fast, 16);
+}
+
+TEST_CASE("the sanitizer's matrix: 8 fragments, exact kernel, every strategy", "[tree][build][property][exact]") {
+  run_sanitizer_matrix(KernelKind::exact, 8);
+}
+
+TEST_CASE("the sanitizer's matrix: 16 fragments, plane kernel, every strategy", "[tree][build][property][plane]") {
+  run_sanitizer_matrix(KernelKind::plane, 16);
+}
+
+TEST_CASE("the sanitizer's matrix: 128 fragments of the box and the hollow egg, plane kernel",
+          "[tree][build][property][plane]") {
+  // Seven levels deep: the cheap checks of the 2048-fragment cases.
+  for (const char* name : {"box", "hollow-egg"}) {
+    for (const Strategy strategy : all_strategies) {
+      run({&test_mesh(name), options_for(128, strategy, KernelKind::plane, 17), Level::cheap,
+           strategy == Strategy::thesis && std::string(name) == "box"});
+    }
+  }
+}
+
 TEST_CASE("the same options give the same bytes, another seed another tree", "[tree][build]") {
   const TestMesh& m = test_mesh("torus-800");
   for (const Strategy strategy : all_strategies) {
