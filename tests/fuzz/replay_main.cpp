@@ -12,6 +12,7 @@
 // ceiling measured on the committed corpus), so a refusal cannot pass quietly.
 
 #include <algorithm>
+#include <cfenv>
 #include <charconv>
 #include <cstddef>
 #include <cstdint>
@@ -61,6 +62,9 @@ bool read_file(const std::filesystem::path& path, std::string& bytes) {
 /// Replays every input named on the command line; exit 0 only when at least one
 /// ran and every one returned.
 int main(int argc, char** argv) {
+  // As the test main does (tests/support/catch_main.cpp): a NaN or an overflow
+  // the library does not hold on purpose stops the replay where it is made.
+  feenableexcept(FE_INVALID | FE_DIVBYZERO | FE_OVERFLOW);
   int first = 1;
   std::optional<std::size_t> max_refusals;
   constexpr std::string_view flag = "--max-refusals=";
