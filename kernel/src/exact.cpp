@@ -81,10 +81,19 @@ CrossingVec3 crossing_point(const Plane& plane, const Vec3& a, const Vec3& b) {
   const double value_b = dot(plane.normal, b) + plane.offset;
   // Both values are non-zero with opposite signs in exact arithmetic; rounding can
   // push a tiny one to zero or across, so clamp t into [0, 1] (the point then
-  // stays on the segment's bounding box, never outside it).
-  double t = value_a / (value_a - value_b);
-  if (!(t >= 0)) t = 0;
-  if (t > 1) t = 1;
+  // stays on the segment's bounding box, never outside it). The quotient is taken
+  // only where it lies in [-1, 1]: past that it clamps to an end, and dividing
+  // there could overflow, or make a NaN of 0 / 0 (both values rounded to zero).
+  const double denominator = value_a - value_b;
+  double t = 0;
+  if (std::fabs(value_a) <= std::fabs(denominator) && denominator != 0) {
+    t = value_a / denominator;
+    if (!(t >= 0)) t = 0;
+    if (t > 1) t = 1;
+  } else if (value_a != 0) {
+    // The end the quotient clamps to, by its sign (x / +0 is +-infinity by x's).
+    t = (value_a > 0) == !(denominator < 0) ? 1 : 0;
+  }
   return {a + (b - a) * t, t};
 }
 

@@ -239,10 +239,14 @@ TEST_CASE("slice writes nothing that does not validate: fast and exact refuse a 
       CHECK(!fs::exists(out));
       if (k == 0) CHECK(kernel != "plane");
     }
-    INFO(kernel);
+    INFO(kernel << ": " << refused << " of " << planes.size() << " planes refused");
     if (kernel == "plane") CHECK(refused == 0);
-    // The reproducer itself is refused by both rounding kernels.
+    // The reproducer itself is refused by both rounding kernels. More refusals
+    // than measured (2026-12-02: exact 3 and fast 5 of the 12 planes) is a
+    // regression of the rounding kernels to look at.
     if (kernel != "plane") CHECK(refused >= 1);
+    if (kernel == "exact") CHECK(refused <= 3);
+    if (kernel == "fast") CHECK(refused <= 5);
   }
 }
 
@@ -638,11 +642,9 @@ TEST_CASE("every subcommand's --help names every option") {
 }
 
 TEST_CASE("fracture draws a progress bar on a terminal and erases it") {
-  // `script` gives the command a terminal; without it, there is nothing to test.
-  if (std::system("command -v script >/dev/null 2>&1") != 0) {
-    WARN("script(1) not found: progress bar not tested");
-    return;
-  }
+  // `script` (util-linux, in every Debian install) gives the command a terminal.
+  // Without it the bar would go untested, so its absence fails, never skips.
+  REQUIRE(std::system("command -v script >/dev/null 2>&1") == 0);
   const fs::path dir = scratch("progress");
   fs::create_directories(dir);
   // Long enough to pass the bar's quiet first half second on any machine: the

@@ -25,6 +25,11 @@ namespace shatter::fuzz {
 /// time without reaching code a smaller one cannot.
 inline constexpr std::size_t max_triangles = 400;
 
+/// Inputs a target turned away as a documented known limitation
+/// (UnsupportedGeometryError), not as malformed input: counted, so that the
+/// replay of a committed corpus holds them to a ceiling (replay_main.cpp).
+inline std::size_t known_limitation_refusals = 0;
+
 /// Reports a broken property and aborts, so the input is kept as a crash.
 [[noreturn]] inline void fail(const std::string& what) {
   std::fprintf(stderr, "shatter fuzz property violated: %s\n", what.c_str());

@@ -1,24 +1,32 @@
 // Replays inputs through a fuzz target without libFuzzer, so every target also
 // builds with any compiler and its committed corpus runs as an ordinary test.
 //
-//   fuzz_<target> <file or directory>...
+//   fuzz_<target> [--max-refusals=N] <file or directory>...
 //
 // Each file, and each regular file directly inside each directory (in name
 // order, for a reproducible log), is passed once to LLVMFuzzerTestOneInput. A
 // broken property aborts inside the target; this driver fails on its own when a
 // path cannot be read or when no input was found at all, so an empty or missing
-// corpus is an error, never a silent pass.
+// corpus is an error, never a silent pass. With --max-refusals=N it also fails
+// when the target turned away more than N inputs as a known limitation (a
+// ceiling measured on the committed corpus), so a refusal cannot pass quietly.
 
 #include <algorithm>
+#include <cfenv>
+#include <charconv>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <vector>
+
+#include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size);
 
@@ -54,12 +62,29 @@ bool read_file(const std::filesystem::path& path, std::string& bytes) {
 /// Replays every input named on the command line; exit 0 only when at least one
 /// ran and every one returned.
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: %s <file or directory>...\n", argv[0]);
+  // As the test main does (tests/support/catch_main.cpp): a NaN or an overflow
+  // the library does not hold on purpose stops the replay where it is made.
+  feenableexcept(FE_INVALID | FE_DIVBYZERO | FE_OVERFLOW);
+  int first = 1;
+  std::optional<std::size_t> max_refusals;
+  constexpr std::string_view flag = "--max-refusals=";
+  if (argc > 1 && std::string_view(argv[1]).substr(0, flag.size()) == flag) {
+    const std::string_view value = std::string_view(argv[1]).substr(flag.size());
+    std::size_t n = 0;
+    const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), n);
+    if (error != std::errc() || end != value.data() + value.size()) {
+      std::fprintf(stderr, "replay: bad %s\n", argv[1]);
+      return 2;
+    }
+    max_refusals = n;
+    first = 2;
+  }
+  if (argc <= first) {
+    std::fprintf(stderr, "usage: %s [--max-refusals=N] <file or directory>...\n", argv[0]);
     return 2;
   }
   std::size_t replayed = 0;
-  for (int a = 1; a < argc; ++a) {
+  for (int a = first; a < argc; ++a) {
     const std::vector<std::filesystem::path> files = inputs_of(argv[a]);
     if (files.empty()) {
       std::fprintf(stderr, "replay: no input in %s\n", argv[a]);
@@ -76,6 +101,11 @@ int main(int argc, char** argv) {
       ++replayed;
     }
   }
-  std::printf("replayed %zu inputs\n", replayed);
+  const std::size_t refused = shatter::fuzz::known_limitation_refusals;
+  std::printf("replayed %zu inputs, %zu turned away as a known limitation\n", replayed, refused);
+  if (max_refusals && refused > *max_refusals) {
+    std::fprintf(stderr, "replay: %zu refusals, above the ceiling of %zu\n", refused, *max_refusals);
+    return 1;
+  }
   return 0;
 }

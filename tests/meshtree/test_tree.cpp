@@ -160,7 +160,8 @@ struct Built {
 // down, every plane crosses at points that round together; the exact kernel cuts
 // the same boxes (tested below). On the 1e-6 torus both kernels run out of valid
 // planes with this strategy, not yet understood. In these cases the builder may
-// refuse with UnsupportedGeometryError; anything else it does is checked in full.
+// refuse with UnsupportedGeometryError, counted against the ceiling its test case
+// measured (KnownRefusals below); anything else it does is checked in full.
 bool may_run_out_of_planes(const Case& c) {
   if (c.options.strategy != Strategy::axis) return false;
   const std::string& name = c.mesh->name;
@@ -168,6 +169,32 @@ bool may_run_out_of_planes(const Case& c) {
   if (c.options.kernel != KernelKind::fast) return false;
   return name == "box" || name == "two-boxes" || (name == "hollow-egg" && c.options.fragments >= 2048);
 }
+
+// The known limitation's refusals are counted, never waved through: a test case
+// whose builds may meet it declares a KnownRefusals with the ceiling measured for
+// it, and check() fails the case when more builds are refused than that. A
+// refusal where no ceiling is declared fails the build's case outright.
+class KnownRefusals {
+ public:
+  explicit KnownRefusals(std::size_t ceiling) : ceiling_(ceiling) { active_ = this; }
+  ~KnownRefusals() { active_ = nullptr; }
+  KnownRefusals(const KnownRefusals&) = delete;
+  KnownRefusals& operator=(const KnownRefusals&) = delete;
+
+  static KnownRefusals* active() { return active_; }
+  void add(std::string what) { refused_.push_back(std::move(what)); }
+  void check() const {
+    std::string list;
+    for (const std::string& what : refused_) list += "\n    " + what;
+    INFO(refused_.size() << " builds refused (ceiling " << ceiling_ << ")" << list);
+    CHECK(refused_.size() <= ceiling_);
+  }
+
+ private:
+  static inline KnownRefusals* active_ = nullptr;
+  std::size_t ceiling_;
+  std::vector<std::string> refused_;
+};
 
 // Builds a case; a thrown error fails the case (with its description) and
 // returns nothing, so the other cases still run.
@@ -183,8 +210,8 @@ std::optional<Built> try_build(const Case& c) {
     }
     return built;
   } catch (const UnsupportedGeometryError& error) {
-    if (may_run_out_of_planes(c)) {
-      WARN(describe(c) << ": refused, a known limitation: " << error.what());
+    if (may_run_out_of_planes(c) && KnownRefusals::active() != nullptr) {
+      KnownRefusals::active()->add(describe(c) + ": " + error.what());
     } else {
       FAIL_CHECK(describe(c) << ": the build threw: " << error.what());
     }
@@ -1032,6 +1059,8 @@ TEST_CASE("2 and 3 fragments: every mesh, strategy and kernel, full validation",
 }
 
 TEST_CASE("64 fragments, fast kernel: every strategy, full validation", "[tree][build][property][heavy]") {
+  // Measured 2026-12-02: 2 of 39 builds refused (two-boxes and torus-tiny-1e-6, axis).
+  KnownRefusals refusals(2);
   // (sphere.off is left to 2 and 3 fragments: here it costs as much as three
   // other meshes, and the box and the egg cover convex and smooth.)
   const char* meshes[] = {"box", "grid-box-4", "torus-800", "hollow-egg", "nested-shells-island", "two-boxes",
@@ -1044,6 +1073,7 @@ TEST_CASE("64 fragments, fast kernel: every strategy, full validation", "[tree][
            mesh == "torus-800" || mesh == "nested-shells-island"});
     }
   }
+  refusals.check();
 }
 
 TEST_CASE("64 fragments, exact kernel: every strategy, exact volumes", "[tree][build][property][exact][heavy]") {
@@ -1064,6 +1094,8 @@ TEST_CASE("the exact kernel cuts the boxes where the fast kernel's axis planes r
 }
 
 TEST_CASE("256 fragments: every strategy, fast kernel, full validation", "[tree][build][property][heavy]") {
+  // Measured 2026-12-02: 1 of 15 builds refused (box, axis).
+  KnownRefusals refusals(1);
   const char* meshes[] = {"box", "torus-800", "hollow-egg", "nested-shells-island", "egg-far-from-origin"};
   for (const Strategy strategy : all_strategies) {
     for (const char* name : meshes) {
@@ -1072,6 +1104,7 @@ TEST_CASE("256 fragments: every strategy, fast kernel, full validation", "[tree]
            mesh == "nested-shells-island"});
     }
   }
+  refusals.check();
 }
 
 // 2048 fragments: topology, zero-area triangles, orientation, volumes and every
@@ -1079,16 +1112,22 @@ TEST_CASE("256 fragments: every strategy, fast kernel, full validation", "[tree]
 // and containment on the leaves only. The thread-count comparison runs on one
 // strategy (the others are compared at 64 and 256 fragments).
 TEST_CASE("2048 fragments of the box: every strategy, fast kernel", "[tree][build][property][slow][heavy]") {
+  // Measured 2026-12-02: 1 of 3 builds refused (axis).
+  KnownRefusals refusals(1);
   for (const Strategy strategy : all_strategies) {
     run({&test_mesh("box"), options_for(2048, strategy, KernelKind::fast, 17), Level::cheap,
          strategy == Strategy::thesis});
   }
+  refusals.check();
 }
 
 TEST_CASE("2048 fragments of the hollow egg: every strategy, fast kernel", "[tree][build][property][slow][heavy]") {
+  // Measured 2026-12-02: 1 of 3 builds refused (axis).
+  KnownRefusals refusals(1);
   for (const Strategy strategy : all_strategies) {
     run({&test_mesh("hollow-egg"), options_for(2048, strategy, KernelKind::fast, 17), Level::cheap, false});
   }
+  refusals.check();
 }
 
 // --- determinism ---------------------------------------------------------------------
@@ -1197,6 +1236,56 @@ TEST_CASE("cubes, renumbered: 4096 fragments", "[tree][build][property][plane][s
 // The long run (hidden: `test_tree "[long]"`): what CI cannot afford.
 TEST_CASE("cubes, renumbered, seeds 1 to 8, every strategy: 65,536 fragments", "[.][long]") {
   run_cubes(65536, {1, 2, 3, 4, 5, 6, 7, 8}, Level::cheap);
+}
+
+// --- the sanitizer's matrix ---------------------------------------------------------
+// .ci/sanitize leaves the [heavy] matrices out (hours under ASan+UBSan). These
+// keep their properties, every check of check_tree on every node, on fewer
+// fragments and meshes, so that the builder's heavy paths run sanitized too:
+// recursion several levels deep on two threads, concave solids cut into several
+// children, cavities and separate solids, tiny and far-from-origin coordinates,
+// the plane kernel's certificates and its hulls of non-convex nodes, bonds, the
+// file round trip and the thread-count comparison. They run in every build (about
+// 20 s in Release); none of their builds is refused (2026-12-02), so they declare
+// no KnownRefusals and a refusal fails them.
+
+namespace {
+
+constexpr const char* sanitizer_meshes[] = {"box", "torus-800", "hollow-egg", "nested-shells-island", "two-boxes",
+                                            "torus-tiny-1e-6", "egg-far-from-origin", "torus_quad.off"};
+
+void run_sanitizer_matrix(KernelKind kernel, std::uint32_t fragments) {
+  for (const Strategy strategy : all_strategies) {
+    for (const char* name : sanitizer_meshes) {
+      const std::string mesh = name;
+      run({&test_mesh(mesh), options_for(fragments, strategy, kernel, 7), Level::full, mesh == "nested-shells-island"});
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("the sanitizer's matrix: 16 fragments, fast kernel, every strategy", "[tree][build][property]") {
+  run_sanitizer_matrix(KernelKind::fast, 16);
+}
+
+TEST_CASE("the sanitizer's matrix: 8 fragments, exact kernel, every strategy", "[tree][build][property][exact]") {
+  run_sanitizer_matrix(KernelKind::exact, 8);
+}
+
+TEST_CASE("the sanitizer's matrix: 16 fragments, plane kernel, every strategy", "[tree][build][property][plane]") {
+  run_sanitizer_matrix(KernelKind::plane, 16);
+}
+
+TEST_CASE("the sanitizer's matrix: 128 fragments of the box and the hollow egg, plane kernel",
+          "[tree][build][property][plane]") {
+  // Seven levels deep: the cheap checks of the 2048-fragment cases.
+  for (const char* name : {"box", "hollow-egg"}) {
+    for (const Strategy strategy : all_strategies) {
+      run({&test_mesh(name), options_for(128, strategy, KernelKind::plane, 17), Level::cheap,
+           strategy == Strategy::thesis && std::string(name) == "box"});
+    }
+  }
 }
 
 TEST_CASE("the same options give the same bytes, another seed another tree", "[tree][build]") {
@@ -1345,6 +1434,9 @@ TEST_CASE("planes that keep failing end in UnsupportedGeometryError", "[tree][bu
   const Mesh tiny = mesh_from({{base, base, base}, {base + ulp, base, base}, {base, base + ulp, base}, {base, base, base + ulp}},
                               {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}});
   REQUIRE(solid_problem(tiny) == "");
+  // The plane kernel may build or refuse; its refusals are counted against the
+  // ceiling below. The fast and exact kernels must refuse every time.
+  std::size_t plane_built = 0, plane_refused = 0;
   for (const Strategy strategy : all_strategies) {
     for (const KernelKind kernel : all_kernels) {
       for (const std::uint32_t tries : {1u, 3u, 64u}) {
@@ -1356,18 +1448,26 @@ TEST_CASE("planes that keep failing end in UnsupportedGeometryError", "[tree][bu
           if (kernel == KernelKind::plane) {
             const TestMesh named{"tiny tetrahedron", tiny, true};
             check_tree({&named, options, Level::full, false}, Built{tree, {}});
+            ++plane_built;
           } else {
             FAIL_CHECK("no error: a tree of " << tree.nodes.size() << " nodes");
           }
         } catch (const UnsupportedGeometryError& error) {
           // A clear message: it names the number of planes tried.
           CHECK(std::string(error.what()).find(std::to_string(tries)) != std::string::npos);
+          plane_refused += kernel == KernelKind::plane ? 1 : 0;
         } catch (const std::exception& error) {
           FAIL_CHECK("the wrong error: " << error.what());
         }
       }
     }
   }
+  INFO("plane kernel: " << plane_built << " built, " << plane_refused << " refused");
+  CHECK(plane_built + plane_refused == 9);
+  // Measured 2026-12-02: all 9 refused (every rounding of a piece of a solid one
+  // ulp across fails to certify); the ceiling keeps a change that makes the plane
+  // kernel fail where it now succeeds from passing unseen.
+  CHECK(plane_refused <= 9);
   // One fragment needs no cut, so nothing can fail.
   const MeshTree single = build_mesh_tree(tiny, options_for(1, Strategy::axis, KernelKind::fast, 1));
   CHECK(single.nodes.size() == 1);

@@ -1636,6 +1636,22 @@ Case read_reproducer(const std::filesystem::path& path) {
       const auto strategy = parse_strategy(rest());
       if (!strategy) throw InvalidMeshError(path.string() + ": unknown strategy");
       c.build.strategy = *strategy;
+    } else if (key == "expect") {
+      const std::string name = rest();
+      if (name == expected_name(Expected::valid_as_written)) {
+        c.expected = Expected::valid_as_written;
+      } else if (name == expected_name(Expected::refused_as_written)) {
+        c.expected = Expected::refused_as_written;
+      } else {
+        throw InvalidMeshError(path.string() + ": unknown expectation '" + name + "'");
+      }
+    } else if (key == "mesh-corpus") {
+      // The mesh as `shatter` reads it from the test corpus; a name, never a path.
+      const std::string name = rest();
+      if (name.empty() || name.find("..") != std::string::npos) throw InvalidMeshError(path.string() + ": bad mesh-corpus");
+      c.mesh = read_mesh(test::mesh_dir() / name);
+      c.build.kernel = c.kernel;
+      return c;
     } else if (key == "mesh-obj") {
       std::size_t size = 0;
       fields >> size;
@@ -1649,6 +1665,33 @@ Case read_reproducer(const std::filesystem::path& path) {
     }
   }
   throw InvalidMeshError(path.string() + ": no mesh");
+}
+
+std::string_view expected_name(Expected expected) {
+  switch (expected) {
+    case Expected::no_failure: return "no-failure";
+    case Expected::valid_as_written: return "valid-as-written";
+    case Expected::refused_as_written: return "refused-as-written";
+  }
+  return "unknown";
+}
+
+std::string unmet_expectation(const Case& c, const CaseOutcome& outcome) {
+  const std::size_t k = kernel_index(c.kernel);
+  const std::size_t refusals = (outcome.refused ? 1 : 0) + outcome.plane_unroundable + outcome.plane_pinched;
+  const std::string shown = std::to_string(outcome.written[k]) + " pieces written, " +
+                            std::to_string(outcome.invalid_written[k]) + " invalid as written, " +
+                            std::to_string(refusals) + " refusals";
+  switch (c.expected) {
+    case Expected::no_failure: return {};
+    case Expected::valid_as_written:
+      if (outcome.written[k] > 0 && outcome.invalid_written[k] == 0 && refusals == 0) return {};
+      break;
+    case Expected::refused_as_written:
+      if (outcome.invalid_written[k] > 0) return {};
+      break;
+  }
+  return "expected " + std::string(expected_name(c.expected)) + ", the replay shows " + shown;
 }
 
 AuditResult audit_side_of_plane(std::uint64_t queries, std::uint64_t seed, unsigned threads) {

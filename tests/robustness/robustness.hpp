@@ -50,6 +50,16 @@ std::string_view operation_name(Operation op);
 /// Parses a kernel name ("fast", "exact", "plane").
 std::optional<KernelKind> parse_kernel(std::string_view name);
 
+/// What a replayed reproducer must show besides "no failure" (its `expect` line):
+/// a regression checked in with its fix can pin the outcome the fix gave.
+enum class Expected : std::uint8_t {
+  no_failure,          ///< no line: every invariant holds (refusals are allowed)
+  valid_as_written,    ///< `expect valid-as-written`: nothing refused, every piece written, read back and valid
+  refused_as_written,  ///< `expect refused-as-written`: a piece is invalid as written, which `shatter slice`
+                       ///< refuses (exit 3, nothing written)
+};
+std::string_view expected_name(Expected expected);
+
 /// One input: a mesh and what to do with it. `slice` cuts the mesh by planes[0],
 /// then every piece by planes[1], and so on (a chain); `fracture` builds the mesh
 /// tree with `build`. Every output piece (each piece of each cut; a fracture's
@@ -64,6 +74,7 @@ struct Case {
   BuildOptions build;
   MeshFormat format = MeshFormat::off;  ///< the format output pieces are written in
   std::uint64_t seed = 0;  ///< the seed the case was drawn from (reported, replayed)
+  Expected expected = Expected::no_failure;  ///< what a replay must show (reproducers only)
 };
 
 /// Index of a kernel in the per-kernel counters: fast 0, exact 1, plane 2.
@@ -119,7 +130,13 @@ CaseOutcome run_case(const Case& c);
 std::filesystem::path write_reproducer(const std::filesystem::path& dir, const Case& c,
                                        const std::string& failure);
 /// Reads a reproducer back. Throws InvalidMeshError on a malformed file.
+/// Besides what write_reproducer writes, a hand-written reproducer may name a
+/// mesh of the test corpus instead of holding one (`mesh-corpus <file>`, read
+/// from tests/data/corpus as `shatter` reads it) and pin its outcome (`expect`).
 Case read_reproducer(const std::filesystem::path& path);
+
+/// Empty when `outcome` shows what `c.expected` asks for; else what it showed.
+std::string unmet_expectation(const Case& c, const CaseOutcome& outcome);
 
 /// The predicate audit: `queries` side-of-plane queries at points built exactly on
 /// a plane, then moved by k ulps per coordinate, compared with an independent GMP

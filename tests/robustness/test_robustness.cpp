@@ -8,10 +8,15 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <string>
+#include <utility>
 
 #include "robustness/robustness.hpp"
+#include "shatter/generators/corpus.hpp"
 #include "shatter/generators/solids.hpp"
+#include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "support/checks.hpp"
@@ -73,6 +78,38 @@ TEST_CASE("a reproducer keeps the case: planes bit for bit, mesh, options") {
     CHECK(test::canonical_bytes(twice.mesh) == test::canonical_bytes(back.mesh));
   }
   CHECK(plane_cases > 0);  // the plane kernel's cases are among them
+}
+
+TEST_CASE("a reproducer may name a corpus mesh and pin its outcome, and a replay that differs fails") {
+  // tests/regressions' issue-10 files: the elephant, read from the corpus as
+  // `shatter` reads it, and the outcome each kernel must show.
+  const fs::path regressions = test::mesh_dir().parent_path().parent_path() / "regressions";
+  const Mesh elephant = read_mesh(test::mesh_dir() / "elephant.off");
+  std::size_t replayed = 0;
+  for (const char* kernel : {"exact", "fast", "plane"}) {
+    INFO(kernel);
+    const Case c = read_reproducer(regressions / (std::string("issue10-elephant-vertex-plane-slice-") + kernel + ".repro"));
+    CHECK(test::canonical_bytes(c.mesh) == test::canonical_bytes(elephant));
+    REQUIRE(c.planes.size() == 1);
+    CHECK(c.planes[0].offset == -0.062960299999999997);
+    const Expected expected = std::string(kernel) == "plane" ? Expected::valid_as_written : Expected::refused_as_written;
+    CHECK(c.expected == expected);
+    const CaseOutcome outcome = run_case(c);
+    CHECK(outcome.failures.empty());
+    CHECK(unmet_expectation(c, outcome) == "");
+    // The other expectation is not met: the replay would fail.
+    Case other = c;
+    other.expected = expected == Expected::valid_as_written ? Expected::refused_as_written : Expected::valid_as_written;
+    CHECK(unmet_expectation(other, outcome) != "");
+    ++replayed;
+  }
+  CHECK(replayed == 3);
+  // A name, never a path out of the corpus; and unknown expectations are refused.
+  const fs::path dir = scratch("corpus-reproducer");
+  for (const auto& [field, value] : {std::pair{"mesh-corpus", "../regressions/x.repro"}, std::pair{"expect", "passes"}}) {
+    std::ofstream(dir / "bad.repro") << "shatter-reproducer 1\n" << field << " " << value << "\nmesh-corpus cube.off\n";
+    CHECK_THROWS_AS(read_reproducer(dir / "bad.repro"), InvalidMeshError);
+  }
 }
 
 TEST_CASE("kernels are drawn plane 1/2, fast 1/4, exact 1/4, and output formats OFF 3/4, others 1/4") {
