@@ -289,6 +289,23 @@ std::uint64_t current_address_space_bytes() {
 
 }  // namespace
 
+int signal_in_forked_child(const std::function<void()>& body) {
+  // Flush first, or the child's copy of buffered output would be written twice.
+  std::cout.flush();
+  std::cerr.flush();
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) throw std::runtime_error(std::string("fork failed: ") + std::strerror(errno));
+  if (pid == 0) {
+    body();
+    ::_exit(0);  // no destructors or atexit handlers of the parent's state
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFSIGNALED(status) ? WTERMSIG(status) : 0;
+}
+
 PeerResult replay_with_cgal_isolated(const MeshTree& tree, const Mesh& input, const ReplayLimits& limits) {
   int fds[2];
   if (::pipe(fds) != 0) throw std::runtime_error(std::string("pipe failed: ") + std::strerror(errno));

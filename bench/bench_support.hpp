@@ -7,6 +7,7 @@
 #include <CGAL/Surface_mesh.h>
 
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
@@ -71,6 +72,14 @@ struct ReplayLimits {
   /// Check every leaf piece (closed, no self-intersection, volume > 0) after the clock.
   bool check_pieces = true;
 };
+
+/// Runs `body` once in a forked child and returns the signal that ended the child,
+/// or 0 when `body` returned (an exception escaping it ends the child with
+/// SIGABRT). For a peer that can crash on input shatter handles (CGAL clip over
+/// Epick segfaults triangulating some nearly degenerate cap polygons): a benchmark
+/// times in its own process only what survived here. Throws std::runtime_error
+/// when fork fails.
+int signal_in_forked_child(const std::function<void()>& body);
 
 /// Replays `tree` (built from `input`) with CGAL clip in a forked child process
 /// under `limits`, because after a few levels rounded points can make CGAL's
