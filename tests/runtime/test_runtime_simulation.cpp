@@ -59,7 +59,7 @@ RunLog run_checked(rt::World& world, const std::vector<rt::ObjectId>& objects, i
       log.created += event.created.size();
       std::string line = std::to_string(event.step) + " " + std::to_string(event.body) + " " +
                          std::to_string(event.bonds_broken) + ":";
-      for (rt::BodyId b : event.created) line += " " + std::to_string(b);
+      for (rt::BodyId b : event.created) (line += ' ') += std::to_string(b);  // not " " + s: GCC 12's false -Wrestrict
       log.events.push_back(line);
     }
   }
