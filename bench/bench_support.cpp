@@ -268,17 +268,6 @@ void apply_peer_line(const std::string& line, PeerResult& result) {
   }
 }
 
-/// Writes all of `text` to a pipe; the parent may already be gone, then it stops.
-void write_all(int fd, const std::string& text) {
-  std::size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return;
-    done += static_cast<std::size_t>(n);
-  }
-}
-
 /// The address space the process uses now, so the child's limit can be "this much more".
 std::uint64_t current_address_space_bytes() {
   std::ifstream statm("/proc/self/statm");
@@ -289,32 +278,46 @@ std::uint64_t current_address_space_bytes() {
 
 }  // namespace
 
-int signal_in_forked_child(const std::function<void()>& body) {
-  // Flush first, or the child's copy of buffered output would be written twice.
+pid_t fork_flushed() {
   std::cout.flush();
   std::cerr.flush();
   std::fflush(nullptr);
   const pid_t pid = ::fork();
   if (pid < 0) throw std::runtime_error(std::string("fork failed: ") + std::strerror(errno));
+  return pid;
+}
+
+int wait_for_child(pid_t pid) {
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return status;
+}
+
+void write_all(int fd, const std::string& text) {
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return;
+    done += static_cast<std::size_t>(n);
+  }
+}
+
+int signal_in_forked_child(const std::function<void()>& body) {
+  const pid_t pid = fork_flushed();
   if (pid == 0) {
     body();
     ::_exit(0);  // no destructors or atexit handlers of the parent's state
   }
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
+  const int status = wait_for_child(pid);
   return WIFSIGNALED(status) ? WTERMSIG(status) : 0;
 }
 
 PeerResult replay_with_cgal_isolated(const MeshTree& tree, const Mesh& input, const ReplayLimits& limits) {
   int fds[2];
   if (::pipe(fds) != 0) throw std::runtime_error(std::string("pipe failed: ") + std::strerror(errno));
-  // Flush first, or the child's copy of buffered output would be written twice.
-  std::cout.flush();
-  std::cerr.flush();
-  std::fflush(nullptr);
-  const pid_t pid = ::fork();
-  if (pid < 0) throw std::runtime_error(std::string("fork failed: ") + std::strerror(errno));
+  const pid_t pid = fork_flushed();
   if (pid == 0) {
     ::close(fds[0]);
     // Should this process be orphaned while CGAL hangs, it still ends.
@@ -363,9 +366,7 @@ PeerResult replay_with_cgal_isolated(const MeshTree& tree, const Mesh& input, co
   }
   if (timed_out) ::kill(pid, SIGKILL);
   ::close(fds[0]);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
+  const int status = wait_for_child(pid);
 
   const std::string progress = std::to_string(result.nodes_done) + "/" + std::to_string(result.internal_nodes) +
                                " nodes clipped in " + seconds_text(result.clip_seconds) + " s";

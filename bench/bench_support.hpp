@@ -6,6 +6,8 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
 
+#include <sys/types.h>
+
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -72,6 +74,18 @@ struct ReplayLimits {
   /// Check every leaf piece (closed, no self-intersection, volume > 0) after the clock.
   bool check_pieces = true;
 };
+
+/// Flushes every output stream (or the child's copy of buffered output would be
+/// written twice), then forks: 0 in the child, the child's pid in the parent.
+/// Throws std::runtime_error when fork fails.
+pid_t fork_flushed();
+
+/// Waits for the child `pid` to end, retrying when a signal interrupts the wait,
+/// and returns its wait status.
+int wait_for_child(pid_t pid);
+
+/// Writes all of `text` to the pipe `fd`; when the reader is gone, it stops.
+void write_all(int fd, const std::string& text);
 
 /// Runs `body` once in a forked child and returns the signal that ended the child,
 /// or 0 when `body` returned (an exception escaping it ends the child with

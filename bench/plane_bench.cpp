@@ -111,10 +111,13 @@ namespace {
 using shatter::bench::CsvWriter;
 using shatter::bench::csv_number;
 using shatter::bench::fixed;
+using shatter::bench::fork_flushed;
 using shatter::bench::not_measured;
 using shatter::bench::PeerResult;
 using shatter::bench::seconds_text;
+using shatter::bench::wait_for_child;
 using shatter::bench::with_thousands;
+using shatter::bench::write_all;
 using Clock = std::chrono::steady_clock;
 using Json = nlohmann::json;
 namespace fs = std::filesystem;
@@ -181,17 +184,6 @@ std::uint64_t proc_status_kb(const std::string& field) {
     return kb;
   }
   return 0;
-}
-
-/// Writes all of `text` to a pipe; the reader may already be gone, then it stops.
-void write_all(int fd, const std::string& text) {
-  std::size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return;
-    done += static_cast<std::size_t>(n);
-  }
 }
 
 /// Reads `fd` to its end.
@@ -415,11 +407,7 @@ BuildRun run_build(const shatter::Mesh& mesh, const shatter::BuildOptions& optio
   ::malloc_trim(0);
   int fds[2];
   if (::pipe(fds) != 0) throw std::runtime_error(std::string("pipe failed: ") + std::strerror(errno));
-  std::cout.flush();
-  std::cerr.flush();
-  std::fflush(nullptr);
-  const pid_t pid = ::fork();
-  if (pid < 0) throw std::runtime_error(std::string("fork failed: ") + std::strerror(errno));
+  const pid_t pid = fork_flushed();
   if (pid == 0) {
     ::close(fds[0]);
     Json out;
@@ -438,9 +426,7 @@ BuildRun run_build(const shatter::Mesh& mesh, const shatter::BuildOptions& optio
   ::close(fds[1]);
   const std::string text = read_all(fds[0]);
   ::close(fds[0]);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
+  const int status = wait_for_child(pid);
   BuildRun run;
   if (WIFSIGNALED(status)) {
     run.error = "the build's process died: " + signal_text(status);
@@ -604,11 +590,7 @@ ManifoldResult run_manifold(const Options& o, const fs::path& off, std::uint32_t
   int out_pipe[2], err_pipe[2];
   if (::pipe(out_pipe) != 0 || ::pipe(err_pipe) != 0)
     throw std::runtime_error(std::string("pipe failed: ") + std::strerror(errno));
-  std::cout.flush();
-  std::cerr.flush();
-  std::fflush(nullptr);
-  const pid_t pid = ::fork();
-  if (pid < 0) throw std::runtime_error(std::string("fork failed: ") + std::strerror(errno));
+  const pid_t pid = fork_flushed();
   if (pid == 0) {
     ::dup2(out_pipe[1], 1);
     ::dup2(err_pipe[1], 2);

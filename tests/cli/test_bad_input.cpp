@@ -32,6 +32,7 @@
 #include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/validate.hpp"
+#include "support/binary.hpp"
 
 using namespace shatter;
 using namespace shatter::test;
@@ -286,14 +287,6 @@ struct Written {
   std::string bytes;
   std::vector<std::size_t> vertex_line, face_line;
 };
-
-template <class T>
-void append_binary(std::string& out, T value, bool big_endian) {
-  std::array<char, sizeof(T)> raw;
-  std::memcpy(raw.data(), &value, sizeof(T));
-  if (big_endian != (std::endian::native == std::endian::big)) std::reverse(raw.begin(), raw.end());
-  out.append(raw.data(), raw.size());
-}
 
 std::string coordinates_line(const std::array<std::string, 3>& text) { return text[0] + ' ' + text[1] + ' ' + text[2]; }
 

@@ -31,10 +31,6 @@ namespace {
 fs::path scratch(const std::string& name) { return scratch_path("shatter-cli-test", name); }
 Run run_shatter(const std::string& arguments) { return run_shatter_binary("shatter-cli-test", arguments); }
 
-bool is_one_error_line(const std::string& err) {
-  return err.rfind("error: ", 0) == 0 && err.find('\n') == err.size() - 1;
-}
-
 std::size_t files_in(const fs::path& dir) {
   if (!fs::exists(dir)) return 0;
   return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator()));

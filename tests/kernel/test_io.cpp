@@ -22,8 +22,10 @@
 #include "shatter/generators/corpus.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
+#include "support/binary.hpp"
 
 using namespace shatter;
+using shatter::test::append_binary;
 
 namespace {
 
@@ -120,14 +122,6 @@ struct ScratchDirectory {
     return found;
   }
 };
-
-template <class T>
-void append_binary(std::string& out, T value, bool big_endian) {
-  std::array<char, sizeof(T)> raw;
-  std::memcpy(raw.data(), &value, sizeof(T));
-  if (big_endian != (std::endian::native == std::endian::big)) std::reverse(raw.begin(), raw.end());
-  out.append(raw.data(), raw.size());
-}
 
 /// The start of the last non-blank line: cutting a counted text format before it
 /// always loses data the header promised.

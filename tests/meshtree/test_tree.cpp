@@ -347,6 +347,28 @@ CGAL::Mpzf six_volume(const Mesh& mesh) { return six_volume(mesh.positions, mesh
 
 bool lexicographic_less(const Vec3& a, const Vec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); }
 
+// Empty when the closed triangle mesh `hull` is convex at every edge: the far
+// corner of the triangle across each edge is not above the triangle's plane
+// (exact orientation); else the first triangle where it is open or not convex.
+std::string convexity_problem(const Mesh& hull) {
+  std::map<std::pair<VertexIndex, VertexIndex>, VertexIndex> far_corner;
+  for (const Triangle& t : hull.triangles) {
+    for (int c = 0; c < 3; ++c) far_corner[{t[c], t[(c + 1) % 3]}] = t[(c + 2) % 3];
+  }
+  for (std::size_t i = 0; i < hull.triangles.size(); ++i) {
+    const Triangle& t = hull.triangles[i];
+    const EpickPoint a = epick(hull.positions[t[0]]), b = epick(hull.positions[t[1]]), c = epick(hull.positions[t[2]]);
+    for (int k = 0; k < 3; ++k) {
+      const auto across = far_corner.find({t[(k + 1) % 3], t[k]});
+      if (across == far_corner.end()) return "open at triangle " + std::to_string(i);
+      if (CGAL::orientation(a, b, c, epick(hull.positions[across->second])) == CGAL::POSITIVE) {
+        return "not convex at an edge of triangle " + std::to_string(i);
+      }
+    }
+  }
+  return {};
+}
+
 // Empty when `hull` is the convex hull of `mesh`'s vertices as the tree promises
 // it: a valid solid (closed, oriented, positive volume, no zero-area triangle),
 // surface ids 0, no attributes, its vertices among the mesh's; with `complete`,
@@ -366,23 +388,7 @@ std::string hull_problem(const Mesh& mesh, const Mesh& hull, bool complete) {
     }
   }
   if (!complete) return {};
-  // Convex at every edge: the far corner of the triangle across each edge is not
-  // above the triangle's plane.
-  std::map<std::pair<VertexIndex, VertexIndex>, VertexIndex> far_corner;
-  for (const Triangle& t : hull.triangles) {
-    for (int c = 0; c < 3; ++c) far_corner[{t[c], t[(c + 1) % 3]}] = t[(c + 2) % 3];
-  }
-  for (std::size_t i = 0; i < hull.triangles.size(); ++i) {
-    const Triangle& t = hull.triangles[i];
-    const EpickPoint a = epick(hull.positions[t[0]]), b = epick(hull.positions[t[1]]), c = epick(hull.positions[t[2]]);
-    for (int k = 0; k < 3; ++k) {
-      const auto across = far_corner.find({t[(k + 1) % 3], t[k]});
-      if (across == far_corner.end()) return "open at triangle " + std::to_string(i);
-      if (CGAL::orientation(a, b, c, epick(hull.positions[across->second])) == CGAL::POSITIVE) {
-        return "not convex at an edge of triangle " + std::to_string(i);
-      }
-    }
-  }
+  if (const std::string problem = convexity_problem(hull); !problem.empty()) return problem;
   // The same body as CGAL's hull of the mesh's vertices: equal exact volumes
   // (any triangulation of one polytope's boundary has the same exact volume).
   std::vector<EpickPoint> points;
@@ -422,20 +428,10 @@ std::string containing_hull_problem(const Mesh& mesh, const Mesh& hull) {
   if (std::any_of(hull.surfaces.begin(), hull.surfaces.end(), [](SurfaceId s) { return s != 0; })) {
     return "a surface id other than 0";
   }
-  std::map<std::pair<VertexIndex, VertexIndex>, VertexIndex> far_corner;
-  for (const Triangle& t : hull.triangles) {
-    for (int c = 0; c < 3; ++c) far_corner[{t[c], t[(c + 1) % 3]}] = t[(c + 2) % 3];
-  }
+  if (const std::string problem = convexity_problem(hull); !problem.empty()) return problem;
   for (std::size_t i = 0; i < hull.triangles.size(); ++i) {
     const Triangle& t = hull.triangles[i];
     const EpickPoint a = epick(hull.positions[t[0]]), b = epick(hull.positions[t[1]]), c = epick(hull.positions[t[2]]);
-    for (int k = 0; k < 3; ++k) {
-      const auto across = far_corner.find({t[(k + 1) % 3], t[k]});
-      if (across == far_corner.end()) return "open at triangle " + std::to_string(i);
-      if (CGAL::orientation(a, b, c, epick(hull.positions[across->second])) == CGAL::POSITIVE) {
-        return "not convex at an edge of triangle " + std::to_string(i);
-      }
-    }
     for (const Vec3& p : mesh.positions) {
       if (CGAL::orientation(a, b, c, epick(p)) == CGAL::POSITIVE) {
         return "mesh vertex " + vec_text(p) + " lies outside hull triangle " + std::to_string(i);

@@ -522,10 +522,6 @@ namespace fs = std::filesystem;
 
 test::Run run_shatter(const std::string& arguments) { return test::run_shatter_binary("validate-tree", arguments); }
 
-bool is_one_error_line(const std::string& err) {
-  return starts_with(err, "error: ") && err.find('\n') == err.size() - 1;
-}
-
 }  // namespace
 
 TEST_CASE("info --check says valid of built trees, in text and JSON", "[validate_tree][cli]") {
@@ -570,7 +566,7 @@ TEST_CASE("info --check refuses a file whose geometry is broken: exit 3, one lin
       ++runs;
       CHECK(checked.exit_code == 3);
       CHECK(checked.out.empty());
-      CHECK(is_one_error_line(checked.err));
+      CHECK(test::is_one_error_line(checked.err));
       CHECK(starts_with(checked.err, "error: " + file.string() + ": invalid tree: " + where(*place)));
       const test::Run json = run_shatter("info --check --json " + test::quoted(file));
       CHECK(json.exit_code == 3);

@@ -23,10 +23,6 @@ namespace {
 fs::path scratch(const std::string& name) { return scratch_path("shatter-simulate-test", name); }
 Run run_shatter(const std::string& arguments) { return run_shatter_binary("shatter-simulate-test", arguments); }
 
-bool is_one_error_line(const std::string& err) {
-  return err.rfind("error: ", 0) == 0 && err.find('\n') == err.size() - 1;
-}
-
 // A .shatter file of `mesh` in the scratch folder (written by the library, so the
 // test reads only what it made).
 fs::path tree_file(const std::string& mesh, std::uint32_t fragments) {

@@ -51,6 +51,12 @@ inline Run run_shatter_binary(const std::string& tag, const std::string& argumen
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
 }
 
+/// True when `err` is exactly one line starting "error: ", as every refusal of
+/// the command prints it.
+inline bool is_one_error_line(const std::string& err) {
+  return err.rfind("error: ", 0) == 0 && err.find('\n') == err.size() - 1;
+}
+
 /// A path quoted for the shell. Appended piece by piece: GCC 12 warns falsely
 /// (-Wrestrict, its bug 105651) on `"'" + std::string`.
 inline std::string quoted(const std::filesystem::path& p) {
