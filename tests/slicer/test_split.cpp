@@ -207,6 +207,13 @@ void check_cut_chain(const std::string& name, const Mesh& mesh, std::uint64_t se
 
 }  // namespace
 
+// The same property at a size CI runs on every change; the 64-cut chains below are
+// the [heavy] run's (tests/CMakeLists.txt).
+TEST_CASE("chains of 12 cuts: every piece exactly valid, volumes exact, valid as written", "[plane][cut]") {
+  for (const NamedMesh& m : generated_meshes()) check_cut_chain(m.name, m.mesh, 1, 12);
+  for (const char* file : {"cube.off", "knot1.off"}) check_cut_chain(file, read_mesh(mesh_dir() / file), 3, 12);
+}
+
 TEST_CASE("chains of 64 cuts: every piece exactly valid, volumes exact, valid as written", "[plane][cut][heavy]") {
   for (const NamedMesh& m : generated_meshes()) {
     for (const std::uint64_t seed : {1u, 2u}) check_cut_chain(m.name, m.mesh, seed, 64);
