@@ -28,6 +28,23 @@
 
 namespace shatter::bench {
 
+namespace PMP = CGAL::Polygon_mesh_processing;
+
+bool cgal_clip_volume(CgalMesh& mesh, const Epick::Plane_3& plane) {
+  return PMP::clip(mesh, plane, CGAL::parameters::clip_volume(true));
+}
+
+std::size_t cgal_component_count(CgalMesh& mesh) {
+  if (mesh.number_of_faces() == 0) return 0;
+  auto [ids, created] = mesh.add_property_map<CgalMesh::Face_index, std::size_t>("f:bench_component", 0);
+  const std::size_t count = PMP::connected_components(mesh, ids);
+  mesh.remove_property_map(ids);
+  (void)created;
+  return count;
+}
+
+bool cgal_self_intersects(const CgalMesh& mesh) { return PMP::does_self_intersect(mesh); }
+
 CgalMesh to_cgal(const Mesh& mesh) {
   CgalMesh out;
   out.reserve(static_cast<CgalMesh::size_type>(mesh.positions.size()),
@@ -84,8 +101,6 @@ std::string PeerResult::status_name() const {
 // The peer: CGAL clip replaying a tree's planes (moved from tree_bench.cpp).
 
 namespace {
-
-namespace PMP = CGAL::Polygon_mesh_processing;
 using Clock = std::chrono::steady_clock;
 
 double seconds_between(Clock::time_point a, Clock::time_point b) {
@@ -197,7 +212,7 @@ void replay_with_cgal(const MeshTree& tree, const shatter::Mesh& input, bool che
     for (std::size_t s = 0; s < 2; ++s) {
       try {
         const auto t0 = Clock::now();
-        clipped[s] = PMP::clip(side[s], plane[s], CGAL::parameters::clip_volume(true));
+        clipped[s] = cgal_clip_volume(side[s], plane[s]);
         if (clipped[s]) {
           side[s].collect_garbage();  // the default index maps need dense indices
           PMP::split_connected_components(side[s], components[s]);

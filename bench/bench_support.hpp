@@ -27,6 +27,19 @@ using CgalMesh = CGAL::Surface_mesh<Epick::Point_3>;
 /// cannot be added (the mesh is not an oriented 2-manifold).
 CgalMesh to_cgal(const Mesh& mesh);
 
+/// CGAL 5.5 PMP::clip(clip_volume(true)) of `mesh` by `plane`: keeps the part on the
+/// plane's negative side, closed by a cap. Returns what clip returned (false: CGAL
+/// could not clip, the mesh is then unspecified). The one place the benchmarks
+/// instantiate clip, whose templates cost about two minutes of compilation.
+bool cgal_clip_volume(CgalMesh& mesh, const Epick::Plane_3& plane);
+
+/// The number of connected components of `mesh` (0 when it has no face).
+std::size_t cgal_component_count(CgalMesh& mesh);
+
+/// Whether two faces of `mesh` intersect other than along a shared edge or vertex
+/// (PMP::does_self_intersect).
+bool cgal_self_intersects(const CgalMesh& mesh);
+
 /// The median; `empty_value` when there is nothing to take it of.
 double median(std::vector<double> values, double empty_value);
 

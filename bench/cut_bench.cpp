@@ -18,9 +18,6 @@
 // takes more than 60 s is not repeated); the median is reported. Validity checks
 // run outside the clock, on the output of the first run.
 
-#include <CGAL/Polygon_mesh_processing/clip.h>
-#include <CGAL/Polygon_mesh_processing/connected_components.h>
-#include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/boost/graph/helpers.h>
 
@@ -56,8 +53,10 @@
 
 namespace {
 
-namespace PMP = CGAL::Polygon_mesh_processing;
 using shatter::bench::CgalMesh;
+using shatter::bench::cgal_clip_volume;
+using shatter::bench::cgal_component_count;
+using shatter::bench::cgal_self_intersects;
 using shatter::bench::CsvWriter;
 using shatter::bench::Epick;
 using shatter::bench::fixed;
@@ -119,18 +118,6 @@ shatter::Mesh make_icosphere(int subdivisions) {
   }
   mesh.surfaces.assign(mesh.triangles.size(), shatter::original_surface);
   return mesh;
-}
-
-// ---------------------------------------------------------------------------
-// Conversions and checks for CGAL.
-
-std::size_t component_count(CgalMesh& mesh) {
-  if (mesh.number_of_faces() == 0) return 0;
-  auto [ids, created] = mesh.add_property_map<CgalMesh::Face_index, std::size_t>("f:bench_component", 0);
-  const std::size_t count = PMP::connected_components(mesh, ids);
-  mesh.remove_property_map(ids);
-  (void)created;
-  return count;
 }
 
 // ---------------------------------------------------------------------------
@@ -286,8 +273,8 @@ Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatP
   // in a forked child first, and no timing where that child died.
   const int crash = signal_in_forked_child([&] {
     Clipped c{cgal_input, cgal_input};
-    PMP::clip(c.below, below_plane, CGAL::parameters::clip_volume(true));
-    PMP::clip(c.above, above_plane, CGAL::parameters::clip_volume(true));
+    cgal_clip_volume(c.below, below_plane);
+    cgal_clip_volume(c.above, above_plane);
   });
   if (crash != 0) {
     row.cgal.median_ms = not_measured;
@@ -300,8 +287,8 @@ Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatP
       policy, [&] { return Clipped{cgal_input, cgal_input}; },
       [&](Clipped& c) {
         // clip keeps the part on the negative side of the plane.
-        c.ok_below = PMP::clip(c.below, below_plane, CGAL::parameters::clip_volume(true));
-        c.ok_above = PMP::clip(c.above, above_plane, CGAL::parameters::clip_volume(true));
+        c.ok_below = cgal_clip_volume(c.below, below_plane);
+        c.ok_above = cgal_clip_volume(c.above, above_plane);
         return std::move(c);
       },
       [&](Clipped& c) {
@@ -312,11 +299,11 @@ Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatP
         if (validate) row.cgal_closed = row.cgal_self_free = 0;
         for (auto* side : {&c.below, &c.above}) {
           side->collect_garbage();
-          row.cgal_pieces += component_count(*side);
+          row.cgal_pieces += cgal_component_count(*side);
           row.cgal_triangles += side->number_of_faces();
           if (!validate) continue;
           row.cgal_closed += CGAL::is_closed(*side);
-          row.cgal_self_free += !PMP::does_self_intersect(*side);
+          row.cgal_self_free += !cgal_self_intersects(*side);
         }
       });
   std::cerr << " " << row.cgal.median_ms << " ms (" << row.cgal.runs << " runs)\n";
