@@ -14,6 +14,9 @@ function(shatter_library name)
     $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
     $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(shatter_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+  # The headers use C++20 (defaulted comparisons, std::span): a consumer that links
+  # the installed target gets the language level with it, whatever it sets itself.
+  target_compile_features(shatter_${name} PUBLIC cxx_std_20)
   shatter_warnings(shatter_${name})
   if(ARG_INTERNAL)
     return()
