@@ -1,5 +1,7 @@
 #include "shatter/runtime/recording.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -199,8 +201,27 @@ class ModelBuilder {
   tinygltf::Model model_;
 };
 
+// A pose with a non-finite number is no state of a valid simulation; glTF cannot
+// hold it either, so the export stops rather than write a file readers reject.
 std::vector<double> translation_of(const RigidTransform& t) {
+  if (!std::isfinite(t.translation.x) || !std::isfinite(t.translation.y) || !std::isfinite(t.translation.z)) {
+    throw std::runtime_error("recording: a body's position is not finite");
+  }
   return {t.translation.x, t.translation.y, t.translation.z};
+}
+
+// glTF wants unit rotation quaternions with every component in [-1, 1], and the
+// Khronos validator checks both. Bullet's are unit only up to rounding (a w of
+// 1 + 2^-52 was written once, out of range), so each one written is renormalized
+// and clamped. Components in glTF order: x, y, z, w.
+std::array<double, 4> gltf_rotation(const Quaternion& q) {
+  const double length = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+  if (!std::isfinite(length) || !(length > 0)) {
+    throw std::runtime_error("recording: a body's rotation is not a finite non-zero quaternion");
+  }
+  std::array<double, 4> xyzw{q.x / length, q.y / length, q.z / length, q.w / length};
+  for (double& component : xyzw) component = std::clamp(component, -1.0, 1.0);
+  return xyzw;
 }
 
 tinygltf::Value body_extras(const BodyRecord& record, BodyId id, double time_step) {
@@ -315,8 +336,8 @@ std::string Recording::encode_glb(const World& world, double floor_half_size) co
     node.name = (record.kind == BodyKind::cluster ? "cluster " : "sphere ") + std::to_string(b);
     node.extras = body_extras(record, b, dt);
     node.translation = translation_of(keys.front().pose);
-    const Quaternion& q0 = keys.front().pose.rotation;
-    node.rotation = {q0.x, q0.y, q0.z, q0.w};
+    const std::array<double, 4> q0 = gltf_rotation(keys.front().pose.rotation);
+    node.rotation = {q0.begin(), q0.end()};
     node.scale = record.birth_step == 0 ? std::vector<double>{1, 1, 1} : std::vector<double>{0, 0, 0};
     model.nodes.push_back(std::move(node));
     scene.nodes.push_back(node_index);
@@ -347,7 +368,7 @@ std::string Recording::encode_glb(const World& world, double floor_half_size) co
       Quaternion q = key.pose.rotation;
       if (q.w * previous.w + q.x * previous.x + q.y * previous.y + q.z * previous.z < 0) q = {-q.w, -q.x, -q.y, -q.z};
       previous = q;
-      for (double v : {q.x, q.y, q.z, q.w}) rotations.push_back(static_cast<float>(v));
+      for (double v : gltf_rotation(q)) rotations.push_back(static_cast<float>(v));
     }
     const int time_accessor = builder.add_floats(times, TINYGLTF_TYPE_SCALAR, 1, true);
     add_channel(node_index, "translation", time_accessor,
