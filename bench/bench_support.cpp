@@ -45,6 +45,15 @@ std::size_t cgal_component_count(CgalMesh& mesh) {
 
 bool cgal_self_intersects(const CgalMesh& mesh) { return PMP::does_self_intersect(mesh); }
 
+double seconds_between(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+std::string ratio_text(double ratio) {
+  if (std::isnan(ratio) || std::isinf(ratio)) return "–";
+  return fixed(ratio, ratio < 10 ? 2 : 1);
+}
+
 CgalMesh to_cgal(const Mesh& mesh) {
   CgalMesh out;
   out.reserve(static_cast<CgalMesh::size_type>(mesh.positions.size()),
@@ -103,9 +112,6 @@ std::string PeerResult::status_name() const {
 namespace {
 using Clock = std::chrono::steady_clock;
 
-double seconds_between(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double>(b - a).count();
-}
 
 /// Area-weighted centroid of the surface, computed the same way for both sides of
 /// the matching; it needs no closed surface, unlike a volume centroid. Falls back

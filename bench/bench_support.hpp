@@ -8,6 +8,7 @@
 
 #include <sys/types.h>
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -39,6 +40,13 @@ std::size_t cgal_component_count(CgalMesh& mesh);
 /// Whether two faces of `mesh` intersect other than along a shared edge or vertex
 /// (PMP::does_self_intersect).
 bool cgal_self_intersects(const CgalMesh& mesh);
+
+/// Seconds from `a` to `b` on the steady clock (negative when b is earlier).
+double seconds_between(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b);
+
+/// A ratio for the tables: two decimals below 10, one above; "–" where a timing is
+/// missing (the ratio is NaN or infinite).
+std::string ratio_text(double ratio);
 
 /// The median; `empty_value` when there is nothing to take it of.
 double median(std::vector<double> values, double empty_value);

@@ -61,6 +61,7 @@ using shatter::bench::CsvWriter;
 using shatter::bench::Epick;
 using shatter::bench::fixed;
 using shatter::bench::not_measured;
+using shatter::bench::ratio_text;
 using shatter::bench::signal_in_forked_child;
 using shatter::bench::to_cgal;
 using shatter::bench::with_thousands;
@@ -315,8 +316,6 @@ Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatP
 
 std::string ms_text(double ms) { return std::isnan(ms) ? "–" : fixed(ms, ms < 10 ? 3 : ms < 1000 ? 1 : 0); }
 
-/// A ratio of two timings, "–" when one was not taken.
-std::string ratio_text(double ratio) { return std::isnan(ratio) ? "–" : fixed(ratio, 2); }
 
 double ns_per_triangle(double ms, std::size_t triangles) { return ms * 1e6 / static_cast<double>(triangles); }
 

@@ -114,6 +114,8 @@ using shatter::bench::fixed;
 using shatter::bench::fork_flushed;
 using shatter::bench::not_measured;
 using shatter::bench::PeerResult;
+using shatter::bench::ratio_text;
+using shatter::bench::seconds_between;
 using shatter::bench::seconds_text;
 using shatter::bench::wait_for_child;
 using shatter::bench::with_thousands;
@@ -158,15 +160,6 @@ struct Repeat {
 
 // ---------------------------------------------------------------------------
 // Small helpers.
-
-double seconds_between(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double>(b - a).count();
-}
-
-std::string ratio_text(double r) {
-  if (std::isnan(r) || std::isinf(r)) return "–";
-  return fixed(r, r < 10 ? 2 : 1);
-}
 
 std::string number_text(double v, int digits) { return std::isnan(v) ? "–" : fixed(v, digits); }
 

@@ -82,6 +82,8 @@ namespace {
 using shatter::bench::CsvWriter;
 using shatter::bench::fixed;
 using shatter::bench::not_measured;
+using shatter::bench::ratio_text;
+using shatter::bench::seconds_between;
 using shatter::bench::PeerResult;
 using shatter::bench::seconds_text;
 using shatter::bench::with_thousands;
@@ -144,10 +146,6 @@ Plan make_plan(const Options& options) {
 // ---------------------------------------------------------------------------
 // Small helpers.
 
-double seconds_between(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double>(b - a).count();
-}
-
 /// `digits` significant digits, exponent form only for tiny values (a sliver fragment).
 std::string significant(double value, int digits) {
   if (std::isnan(value)) return "–";
@@ -155,8 +153,6 @@ std::string significant(double value, int digits) {
   std::snprintf(buffer, sizeof buffer, "%.*g", digits, value);
   return buffer;
 }
-
-std::string ratio_text(double r) { return std::isnan(r) || std::isinf(r) ? "–" : fixed(r, r < 10 ? 2 : 1); }
 
 /// 64-bit FNV-1a over raw bytes: a fingerprint to compare two trees, not a hash
 /// for tables.
