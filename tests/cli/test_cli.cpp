@@ -28,8 +28,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path scratch(const std::string& name) { return scratch_path("shatter-cli-test", name); }
-Run run_shatter(const std::string& arguments) { return run_shatter_binary("shatter-cli-test", arguments); }
 
 std::size_t files_in(const fs::path& dir) {
   if (!fs::exists(dir)) return 0;

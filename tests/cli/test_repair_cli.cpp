@@ -19,8 +19,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path scratch(const std::string& name) { return scratch_path("shatter-repair-test", name); }
-Run run_shatter(const std::string& arguments) { return run_shatter_binary("shatter-repair-test", arguments); }
 fs::path bad(const std::string& name) { return mesh_dir() / "bad" / name; }
 std::string last_line(const std::string& text) {
   const std::size_t end = text.find_last_not_of('\n');

@@ -520,26 +520,25 @@ namespace {
 
 namespace fs = std::filesystem;
 
-test::Run run_shatter(const std::string& arguments) { return test::run_shatter_binary("validate-tree", arguments); }
 
 }  // namespace
 
 TEST_CASE("info --check says valid of built trees, in text and JSON", "[validate_tree][cli]") {
-  const fs::path dir = test::scratch_path("validate-tree", "valid");
+  const fs::path dir = test::scratch("valid");
   fs::create_directories(dir);
   for (const Sample& sample : samples()) {
     INFO(sample.name);
     const fs::path file = dir / "tree.shatter";
     write_shatter_file(file, sample.tree);
-    const test::Run text = run_shatter("info --check " + test::quoted(file));
+    const test::Run text = test::run_shatter("info --check " + test::quoted(file));
     CHECK(text.exit_code == 0);
     CHECK(text.err.empty());
     CHECK(text.out.find("\n  check: valid (") != std::string::npos);
-    const test::Run json = run_shatter("info --check --json " + test::quoted(file));
+    const test::Run json = test::run_shatter("info --check --json " + test::quoted(file));
     REQUIRE(json.exit_code == 0);
     CHECK(nlohmann::json::parse(json.out)["check"] == "valid");
     // Without --check, nothing is claimed.
-    const test::Run plain = run_shatter("info --json " + test::quoted(file));
+    const test::Run plain = test::run_shatter("info --json " + test::quoted(file));
     REQUIRE(plain.exit_code == 0);
     CHECK(nlohmann::json::parse(plain.out).count("check") == 0);
   }
@@ -547,7 +546,7 @@ TEST_CASE("info --check says valid of built trees, in text and JSON", "[validate
 
 TEST_CASE("info --check refuses a file whose geometry is broken: exit 3, one line naming part and index",
           "[validate_tree][cli]") {
-  const fs::path dir = test::scratch_path("validate-tree", "broken");
+  const fs::path dir = test::scratch("broken");
   fs::create_directories(dir);
   std::size_t runs = 0;
   for (const Injector& injector : injectors()) {
@@ -561,14 +560,14 @@ TEST_CASE("info --check refuses a file whose geometry is broken: exit 3, one lin
       const fs::path file = dir / "tree.shatter";
       write_shatter_file(file, tree);
       // The reader stays cheap: without --check the file reads.
-      CHECK(run_shatter("info " + test::quoted(file)).exit_code == 0);
-      const test::Run checked = run_shatter("info --check " + test::quoted(file));
+      CHECK(test::run_shatter("info " + test::quoted(file)).exit_code == 0);
+      const test::Run checked = test::run_shatter("info --check " + test::quoted(file));
       ++runs;
       CHECK(checked.exit_code == 3);
       CHECK(checked.out.empty());
       CHECK(test::is_one_error_line(checked.err));
       CHECK(starts_with(checked.err, "error: " + file.string() + ": invalid tree: " + where(*place)));
-      const test::Run json = run_shatter("info --check --json " + test::quoted(file));
+      const test::Run json = test::run_shatter("info --check --json " + test::quoted(file));
       CHECK(json.exit_code == 3);
       CHECK(json.out.empty());
       CHECK(json.err == checked.err);

@@ -20,8 +20,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path scratch(const std::string& name) { return scratch_path("shatter-simulate-test", name); }
-Run run_shatter(const std::string& arguments) { return run_shatter_binary("shatter-simulate-test", arguments); }
 
 // A .shatter file of `mesh` in the scratch folder (written by the library, so the
 // test reads only what it made).

@@ -14,6 +14,9 @@
 #ifndef SHATTER_EXE
 #error "define SHATTER_EXE (the shatter binary's path) for this test target"
 #endif
+#ifndef SHATTER_TEST_NAME
+#error "define SHATTER_TEST_NAME (tests/CMakeLists.txt's shatter_test does) for this test target"
+#endif
 
 namespace shatter::test {
 
@@ -50,6 +53,12 @@ inline Run run_shatter_binary(const std::string& tag, const std::string& argumen
   const int status = std::system(command.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
 }
+
+/// scratch_path in this test binary's own folder (tagged with its name).
+inline std::filesystem::path scratch(const std::string& name) { return scratch_path(SHATTER_TEST_NAME, name); }
+
+/// run_shatter_binary with this test binary's own scratch folder.
+inline Run run_shatter(const std::string& arguments) { return run_shatter_binary(SHATTER_TEST_NAME, arguments); }
 
 /// True when `err` is exactly one line starting "error: ", as every refusal of
 /// the command prints it.

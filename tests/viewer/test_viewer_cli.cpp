@@ -26,15 +26,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const std::string tag = "shatter-viewer-cli-test";
-
-Run shatter_run(const std::string& arguments) { return run_shatter_binary(tag, arguments); }
-
 // knot1 in 12 fragments, made once per process.
 const fs::path& knot_tree() {
   static const fs::path path = [] {
-    const fs::path out = scratch_path(tag, "knot.shatter");
-    const Run run = shatter_run("fracture " + quoted(mesh_dir() / "knot1.off") + " --fragments 12 --seed 4 --out " +
+    const fs::path out = scratch("knot.shatter");
+    const Run run = run_shatter("fracture " + quoted(mesh_dir() / "knot1.off") + " --fragments 12 --seed 4 --out " +
                                 quoted(out));
     REQUIRE(run.exit_code == 0);
     return out;
@@ -74,7 +70,7 @@ std::string between(const std::string& text, const std::string& open, const std:
 
 TEST_CASE("info --nodes describes each node as the viewer shows it, bonds crossing its boundary included") {
   const MeshTree tree = read_shatter_file(knot_tree());
-  const Run run = shatter_run("info " + quoted(knot_tree()) + " --json --nodes all");
+  const Run run = run_shatter("info " + quoted(knot_tree()) + " --json --nodes all");
   REQUIRE(run.exit_code == 0);
   const json out = json::parse(run.out);
   CHECK(out["node_selection"] == "all");
@@ -106,30 +102,30 @@ TEST_CASE("info --nodes describes each node as the viewer shows it, bonds crossi
   }
   CHECK(details[0]["bonds"].empty());  // the root has no outside
 
-  const Run leaves = shatter_run("info " + quoted(knot_tree()) + " --json --nodes depth:2");
+  const Run leaves = run_shatter("info " + quoted(knot_tree()) + " --json --nodes depth:2");
   REQUIRE(leaves.exit_code == 0);
   CHECK(json::parse(leaves.out)["node_details"].size() ==
         select_nodes(tree, parse_node_selection("depth:2")).size());
 
-  const Run text = shatter_run("info " + quoted(knot_tree()) + " --nodes leaves");
+  const Run text = run_shatter("info " + quoted(knot_tree()) + " --nodes leaves");
   REQUIRE(text.exit_code == 0);
   CHECK(text.out.find("node " + std::to_string(tree.leaf_nodes[0]) + " (leaf 0), depth ") != std::string::npos);
 
-  const Run bad = shatter_run("info " + quoted(knot_tree()) + " --nodes some");
+  const Run bad = run_shatter("info " + quoted(knot_tree()) + " --nodes some");
   CHECK(bad.exit_code == 2);
   CHECK(bad.err.rfind("error: --nodes: node selection 'some'", 0) == 0);
 }
 
 TEST_CASE("export --format html checks its flags before reading anything") {
-  const fs::path out = scratch_path(tag, "flags");
-  const Run glb_out = shatter_run("export " + quoted(knot_tree()) + " --format html --out " + quoted(out / "t.glb"));
+  const fs::path out = scratch("flags");
+  const Run glb_out = run_shatter("export " + quoted(knot_tree()) + " --format html --out " + quoted(out / "t.glb"));
   CHECK(glb_out.exit_code == 2);
   CHECK(glb_out.err == "error: --out " + (out / "t.glb").string() + " names a .glb file but --format is html\n");
-  const Run mesh_out = shatter_run("export " + quoted(knot_tree()) + " --format off --out " + quoted(out / "t.html"));
+  const Run mesh_out = run_shatter("export " + quoted(knot_tree()) + " --format off --out " + quoted(out / "t.html"));
   CHECK(mesh_out.exit_code == 2);
   CHECK(mesh_out.err.find("names an HTML file but --format is off") != std::string::npos);
   fs::create_directories(out / "folder");
-  const Run folder = shatter_run("export " + quoted(knot_tree()) + " --format html --out " + quoted(out / "folder"));
+  const Run folder = run_shatter("export " + quoted(knot_tree()) + " --format html --out " + quoted(out / "folder"));
   CHECK(folder.exit_code == 2);
   CHECK(!fs::exists(out / "t.glb"));
   CHECK(!fs::exists(out / "t.html"));
@@ -138,9 +134,9 @@ TEST_CASE("export --format html checks its flags before reading anything") {
 #if SHATTER_VIEWER_BUILT
 
 TEST_CASE("export --format html writes one page holding the GLB export writes, and nothing on failure") {
-  const fs::path folder = scratch_path(tag, "html");
+  const fs::path folder = scratch("html");
   const fs::path page_path = folder / "sub" / "tree.html";
-  const Run run = shatter_run("export " + quoted(knot_tree()) + " --out " + quoted(page_path));
+  const Run run = run_shatter("export " + quoted(knot_tree()) + " --out " + quoted(page_path));
   REQUIRE(run.exit_code == 0);
   CHECK(run.out.find("(the viewer with the tree inline)") != std::string::npos);
   const std::string page = slurp(page_path);
@@ -155,7 +151,7 @@ TEST_CASE("export --format html writes one page holding the GLB export writes, a
   const MeshTree tree = read_shatter_file(knot_tree());
   CHECK(glb == encode_glb(tree, select_nodes(tree, parse_node_selection("all"))));
 
-  const Run leaves = shatter_run("export " + quoted(knot_tree()) + " --format html --nodes leaves --out " +
+  const Run leaves = run_shatter("export " + quoted(knot_tree()) + " --format html --nodes leaves --out " +
                                  quoted(folder / "leaves.html"));
   REQUIRE(leaves.exit_code == 0);
   const std::string leaves_glb = decode_base64(between(
@@ -172,13 +168,13 @@ TEST_CASE("export --format html writes one page holding the GLB export writes, a
     std::fwrite(bytes.data(), 1, bytes.size(), f);
     std::fclose(f);
   }
-  const Run refused = shatter_run("export " + quoted(damaged) + " --out " + quoted(folder / "new" / "x.html"));
+  const Run refused = run_shatter("export " + quoted(damaged) + " --out " + quoted(folder / "new" / "x.html"));
   CHECK(refused.exit_code == 3);
   CHECK(!fs::exists(folder / "new"));
 }
 
 TEST_CASE("view --help explains the command") {
-  const Run help = shatter_run("view --help");
+  const Run help = run_shatter("view --help");
   REQUIRE(help.exit_code == 0);
   for (const char* words : {"127.0.0.1", "Ctrl-C", "--port", "editor", "export --format html", ".glb"}) {
     INFO(words);
@@ -189,11 +185,11 @@ TEST_CASE("view --help explains the command") {
 #else
 
 TEST_CASE("a build without the viewer says so, in one line, for both commands that need it") {
-  const Run view = shatter_run("view " + quoted(knot_tree()));
+  const Run view = run_shatter("view " + quoted(knot_tree()));
   CHECK(view.exit_code == 2);
   CHECK(view.err.rfind("error: view: this shatter was built without the viewer", 0) == 0);
-  const fs::path out = scratch_path(tag, "no-viewer") / "tree.html";
-  const Run html = shatter_run("export " + quoted(knot_tree()) + " --out " + quoted(out));
+  const fs::path out = scratch("no-viewer") / "tree.html";
+  const Run html = run_shatter("export " + quoted(knot_tree()) + " --out " + quoted(out));
   CHECK(html.exit_code == 2);
   CHECK(html.err.rfind("error: export --format html: this shatter was built without the viewer", 0) == 0);
   CHECK(!fs::exists(out));
