@@ -6,10 +6,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <charconv>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <initializer_list>
 #include <iostream>
 #include <limits>
 #include <memory>
@@ -39,41 +39,19 @@ namespace fs = std::filesystem;
 using json = nlohmann::ordered_json;
 using Clock = std::chrono::steady_clock;
 
-// The value of an enum whose name (by the library's own naming function) is
-// `name`, so the command accepts exactly the names the library prints.
-template <class Enum>
-std::optional<Enum> enum_named(std::string_view name, std::initializer_list<Enum> values,
-                               std::string_view (*name_of)(Enum)) {
-  for (Enum value : values) {
-    if (name_of(value) == name) return value;
-  }
-  return std::nullopt;
-}
-
 // CLI11 reads "-1" into an unsigned option as its two's complement (a seed of
 // 2^64 - 1), so signs and anything but decimal digits are refused before it does.
 CLI::Validator whole_number() {
   return CLI::Validator(
       [](std::string& text) -> std::string {
-        if (!text.empty() && std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); })) {
-          return {};
-        }
+        if (parse_whole_number(text)) return {};
         return "'" + text + "' is not a whole number (decimal digits only)";
       },
       "", "whole number");
 }
 
 BuildOptions build_options_of(const FractureArgs& args) {
-  BuildOptions options;
-  options.fragments = args.fragments;
-  options.seed = args.seed;
-  const auto strategy =
-      enum_named(args.strategy, {Strategy::thesis, Strategy::balanced, Strategy::axis}, &strategy_name);
-  if (!strategy) throw UsageError("--strategy must be thesis, balanced or axis, got '" + args.strategy + "'");
-  options.strategy = *strategy;
-  const auto kernel = enum_named(args.kernel, {KernelKind::plane, KernelKind::exact, KernelKind::fast}, &kernel_name);
-  if (!kernel) throw UsageError("--kernel must be plane, exact or fast, got '" + args.kernel + "'");
-  options.kernel = *kernel;
+  BuildOptions options = build_options_from(args.fragments, args.seed, args.strategy, args.kernel, "--");
   options.interior_uv_scale = args.interior_uv_scale;
   options.allow_self_intersections = args.allow_self_intersections;
   options.threads = args.threads;
@@ -223,6 +201,36 @@ void print_fracture_text(const FractureArgs& args, const BuildOptions& options, 
 }
 
 }  // namespace
+
+std::optional<std::uint64_t> parse_whole_number(std::string_view text) {
+  std::uint64_t value = 0;
+  if (text.empty() || !std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); })) {
+    return std::nullopt;
+  }
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size()) return std::nullopt;
+  return value;
+}
+
+BuildOptions build_options_from(std::uint64_t fragments, std::uint64_t seed, std::string_view strategy,
+                                std::string_view kernel, std::string_view field_prefix) {
+  const std::string prefix(field_prefix);
+  if (fragments < 1 || fragments > 0xFFFFFFFFu) {
+    throw UsageError(prefix + "fragments must be a whole number from 1 to 4294967295");
+  }
+  const std::optional<Strategy> strategy_value = strategy_named(strategy);
+  if (!strategy_value) {
+    throw UsageError(prefix + "strategy must be thesis, balanced or axis, got '" + std::string(strategy) + "'");
+  }
+  const std::optional<KernelKind> kernel_value = kernel_named(kernel);
+  if (!kernel_value) throw UsageError(prefix + "kernel must be plane, exact or fast, got '" + std::string(kernel) + "'");
+  BuildOptions options;
+  options.fragments = static_cast<std::uint32_t>(fragments);
+  options.seed = seed;
+  options.strategy = *strategy_value;
+  options.kernel = *kernel_value;
+  return options;
+}
 
 Command add_fracture_command(CLI::App& app) {
   auto args = std::make_shared<FractureArgs>();

@@ -8,9 +8,12 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <string_view>
 
 #include "command.hpp"
+#include "shatter/meshtree/build.hpp"
 
 namespace shatter::cli {
 
@@ -33,6 +36,18 @@ struct FractureArgs {
   /// Repair the mesh first (read_valid_solid), printing each change.
   bool repair = false;
 };
+
+/// A whole number in decimal digits only (no sign, no space, at most 2^64 - 1);
+/// nullopt for anything else. The flags and the viewer's fracture requests both
+/// read numbers through it, so "-1" never becomes 2^64 - 1.
+std::optional<std::uint64_t> parse_whole_number(std::string_view text);
+
+/// The tree's recipe from what a user typed (fracture's flags, the viewer's
+/// fracture request), checked alike: fragments from 1 to 2^32 - 1, the strategy
+/// and kernel by the names the library prints. Throws UsageError naming the field
+/// as `field_prefix` + its name ("--" for flags, "" for the page's fields).
+BuildOptions build_options_from(std::uint64_t fragments, std::uint64_t seed, std::string_view strategy,
+                                std::string_view kernel, std::string_view field_prefix);
 
 /// Declares the `fracture` subcommand on `app`.
 Command add_fracture_command(CLI::App& app);

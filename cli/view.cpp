@@ -26,6 +26,7 @@
 #include <string>
 #include <thread>
 
+#include "fracture.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/export.hpp"
@@ -212,11 +213,7 @@ std::optional<std::uint64_t> whole_number(const json& value) {
   if (value.is_number_unsigned()) return value.get<std::uint64_t>();
   if (!value.is_string()) return std::nullopt;
   const std::string& text = value.get_ref<const std::string&>();
-  if (text.empty() || text.size() > 20 || !std::all_of(text.begin(), text.end(), ::isdigit)) return std::nullopt;
-  errno = 0;
-  const unsigned long long parsed = std::strtoull(text.c_str(), nullptr, 10);
-  if (errno == ERANGE) return std::nullopt;
-  return parsed;
+  return parse_whole_number(text);
 }
 
 // The build options a POST /api/fracture asks for, checked as the fracture
@@ -224,27 +221,12 @@ std::optional<std::uint64_t> whole_number(const json& value) {
 BuildOptions requested_options(const std::string& body) {
   const json request = json::parse(body, nullptr, false);
   if (request.is_discarded() || !request.is_object()) throw UsageError("the request is not a JSON object");
-  BuildOptions options;
   const std::optional<std::uint64_t> fragments = whole_number(request.value("fragments", json()));
-  if (!fragments || *fragments < 1 || *fragments > 0xFFFFFFFFu) {
-    throw UsageError("fragments must be a whole number from 1 to 4294967295");
-  }
-  options.fragments = static_cast<std::uint32_t>(*fragments);
+  if (!fragments) throw UsageError("fragments must be a whole number from 1 to 4294967295");
   const std::optional<std::uint64_t> seed = whole_number(request.value("seed", json("1")));
   if (!seed) throw UsageError("seed must be a whole number from 0 to 18446744073709551615");
-  options.seed = *seed;
-  const std::string strategy = request.value("strategy", std::string("thesis"));
-  const std::string kernel = request.value("kernel", std::string("plane"));
-  bool strategy_found = false, kernel_found = false;
-  for (Strategy s : {Strategy::thesis, Strategy::balanced, Strategy::axis}) {
-    if (strategy_name(s) == strategy) options.strategy = s, strategy_found = true;
-  }
-  for (KernelKind k : {KernelKind::plane, KernelKind::exact, KernelKind::fast}) {
-    if (kernel_name(k) == kernel) options.kernel = k, kernel_found = true;
-  }
-  if (!strategy_found) throw UsageError("strategy must be thesis, balanced or axis, got '" + strategy + "'");
-  if (!kernel_found) throw UsageError("kernel must be plane, exact or fast, got '" + kernel + "'");
-  return options;
+  return build_options_from(*fragments, *seed, request.value("strategy", std::string("thesis")),
+                            request.value("kernel", std::string("plane")), "");
 }
 
 void send_json(httplib::Response& response, int status, const json& body) {

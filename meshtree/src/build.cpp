@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "shatter/kernel/enum_names.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
@@ -47,6 +48,14 @@ std::string_view kernel_name(KernelKind kernel) {
     case KernelKind::plane: return "plane";
   }
   return "unknown";
+}
+
+std::optional<Strategy> strategy_named(std::string_view name) {
+  return enum_named(name, {Strategy::thesis, Strategy::balanced, Strategy::axis}, &strategy_name);
+}
+
+std::optional<KernelKind> kernel_named(std::string_view name) {
+  return enum_named(name, {KernelKind::plane, KernelKind::exact, KernelKind::fast}, &kernel_name);
 }
 
 namespace {

@@ -7,6 +7,8 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "shatter/kernel/enum_names.hpp"
+
 namespace shatter::runtime {
 
 std::string_view scene_name(SceneKind kind) {
@@ -22,10 +24,7 @@ std::string_view scene_name(SceneKind kind) {
 }
 
 std::optional<SceneKind> scene_named(std::string_view name) {
-  for (SceneKind kind : {SceneKind::drop, SceneKind::shoot, SceneKind::wall}) {
-    if (scene_name(kind) == name) return kind;
-  }
-  return std::nullopt;
+  return enum_named(name, {SceneKind::drop, SceneKind::shoot, SceneKind::wall}, &scene_name);
 }
 
 namespace {

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "shapes_impl.hpp"
+#include "shatter/kernel/enum_names.hpp"
 #include "shatter/kernel/union_find.hpp"
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/cover.hpp"
@@ -24,27 +25,14 @@ std::string_view break_method_name(BreakMethod method) {
   return method == BreakMethod::incremental ? "incremental" : "seed";
 }
 
-namespace {
-
-template <class Enum>
-std::optional<Enum> named(std::string_view name, std::initializer_list<Enum> values,
-                          std::string_view (*name_of)(Enum)) {
-  for (Enum value : values) {
-    if (name_of(value) == name) return value;
-  }
-  return std::nullopt;
-}
-
-}  // namespace
-
 std::optional<BondMode> bond_mode_named(std::string_view name) {
-  return named(name, {BondMode::discrete, BondMode::accumulating}, &bond_mode_name);
+  return enum_named(name, {BondMode::discrete, BondMode::accumulating}, &bond_mode_name);
 }
 std::optional<ImpulseModel> impulse_model_named(std::string_view name) {
-  return named(name, {ImpulseModel::applied, ImpulseModel::seed_momentum}, &impulse_model_name);
+  return enum_named(name, {ImpulseModel::applied, ImpulseModel::seed_momentum}, &impulse_model_name);
 }
 std::optional<BreakMethod> break_method_named(std::string_view name) {
-  return named(name, {BreakMethod::incremental, BreakMethod::seed_rebuild}, &break_method_name);
+  return enum_named(name, {BreakMethod::incremental, BreakMethod::seed_rebuild}, &break_method_name);
 }
 
 void check_parameters(const BreakableParameters& p) {

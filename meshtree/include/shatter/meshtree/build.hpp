@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string_view>
 
 #include "shatter/kernel/mesh.hpp"
@@ -42,6 +43,10 @@ std::string_view strategy_name(Strategy strategy);
 /// The kernel's name as the CLI spells it ("fast", "exact", "plane"); "unknown"
 /// for a value outside the enum. Never throws.
 std::string_view kernel_name(KernelKind kernel);
+/// The strategy or kernel strategy_name / kernel_name spell `name`; nullopt for
+/// any other text. Never throws.
+std::optional<Strategy> strategy_named(std::string_view name);
+std::optional<KernelKind> kernel_named(std::string_view name);
 
 /// Everything that decides a tree's contents. Two builds with equal options on
 /// equal input give byte-identical trees, whatever `threads` is.
