@@ -19,6 +19,9 @@
 //
 // Environment (set by CTest): SHATTER_EXE, SHATTER_CHROMIUM, SHATTER_NODE_MODULES, SHATTER_MESH,
 // SHATTER_TEST_WORK (scratch), SHATTER_TEST_ARTIFACTS (screenshots kept).
+// Optional, never set by CTest: SHATTER_VIEWER_PAGE, a page built by `node viewer/build.mjs --out-html <file>`, shown
+// instead of the page compiled into SHATTER_EXE (filled with the same data), so a change to viewer/src can be tested
+// without rebuilding the C++.
 
 import assert from 'node:assert/strict';
 import { execFileSync, spawn } from 'node:child_process';
@@ -108,6 +111,38 @@ async function openBrowser() {
   });
 }
 
+// --- SHATTER_VIEWER_PAGE: the page under test, when it is not the one in SHATTER_EXE ---------------
+
+const DATA_MARKER = '<!--shatter:data-->';
+const pageOverride = process.env.SHATTER_VIEWER_PAGE ? readFileSync(process.env.SHATTER_VIEWER_PAGE, 'utf8') : null;
+if (pageOverride !== null && !pageOverride.includes(DATA_MARKER)) {
+  throw new Error(`SHATTER_VIEWER_PAGE=${process.env.SHATTER_VIEWER_PAGE} is no page from viewer/build.mjs (no data marker)`);
+}
+
+/**
+ * Has the browser show SHATTER_VIEWER_PAGE at `url` instead of what SHATTER_EXE made, filled with the same data as
+ * cli/viewer_page.cpp fills it: the served config for `shatter view`'s page (the request is answered in the browser),
+ * the exported file's config and model for a file:// page (a copy of the file, rebuilt around the other page).
+ * Returns the URL to open and a check that the page shown was the override.
+ */
+async function usePageOverride(page, url) {
+  if (url.startsWith('file:')) {
+    const exported = readFileSync(new URL(url), 'utf8');
+    const data = /<script id="shatter-config"[^>]*>[^<]*<\/script>\s*<script id="shatter-model"[^>]*>[^<]*<\/script>/.exec(exported);
+    assert.ok(data, `${url} holds no shatter-config and shatter-model scripts`);
+    const copy = file(`override-${path.basename(new URL(url).pathname)}`);
+    writeFileSync(copy, pageOverride.replace(DATA_MARKER, () => data[0]));
+    return { url: pathToFileURL(copy).href, check: () => {} };
+  }
+  let served = 0;
+  await page.route(url, (route) => {
+    ++served;
+    return route.fulfill({ contentType: 'text/html; charset=utf-8', body: pageOverride.replace(DATA_MARKER,
+      () => '<script id="shatter-config" type="application/json">{"mode":"served"}</script>') });
+  });
+  return { url, check: () => assert.ok(served > 0, `SHATTER_VIEWER_PAGE was not served at ${url}`) };
+}
+
 /** Opens `url` and waits until the viewer has shown its data; collects console errors and page errors. */
 async function openViewer(browser, url) {
   const page = await browser.newPage({ viewport: { width: 1100, height: 720 } });
@@ -115,7 +150,13 @@ async function openViewer(browser, url) {
   page.on('console', (message) => { if (message.type() === 'error') errors.push(message.text()); });
   page.on('pageerror', (error) => errors.push(String(error)));
   const started = Date.now();
-  await page.goto(url);
+  if (pageOverride === null) {
+    await page.goto(url);
+  } else {
+    const override = await usePageOverride(page, url);
+    await page.goto(override.url);
+    override.check();
+  }
   await page.waitForFunction(() => window.shatterViewer && (window.shatterViewer.ready || window.shatterViewer.error),
     null, { timeout: 120000 });
   const loadSeconds = (Date.now() - started) / 1000;
