@@ -10,6 +10,10 @@ export class Replay {
     this.clip = clip;
     this.mixer = new THREE.AnimationMixer(root);
     this.action = this.mixer.clipAction(clip);
+    // Played once and held at its end: three.js's default (LoopRepeat) wraps the clip's last instant back to its
+    // first pose, so the end of the timeline would show the bodies as they started.
+    this.action.setLoop(THREE.LoopOnce, 1);
+    this.action.clampWhenFinished = true;
     this.action.play();
     this.duration = clip.duration;
     this.time = 0;
@@ -22,6 +26,8 @@ export class Replay {
   /** Shows the state at `time` seconds (clamped to the clip). */
   seek(time) {
     this.time = Math.min(Math.max(time, 0), this.duration);
+    // Reaching the end pauses a clamped action; reset() lifts that, so scrubbing back from the end moves the bodies.
+    this.action.reset();
     this.mixer.setTime(this.time);
     this.onTime(this.time);
     this.onChange();

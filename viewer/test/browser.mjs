@@ -12,7 +12,8 @@
 //                                 bond count; the colour and interior switches change the picture; a screenshot is
 //                                 not blank (kept); Ctrl-C stops the server with exit 0
 //   node browser.mjs file-page    the exported page from a file:// URL: the same checks of meshes, depth, click
-//   node browser.mjs replay       `shatter view drop.glb`: scrubbing and playing move the bodies
+//   node browser.mjs replay       `shatter view drop.glb`: scrubbing and playing move the bodies; the end of the
+//                                 timeline shows the last pose
 //   node browser.mjs editor       the editor re-fractures on the server with progress, giving the tree the
 //                                 fracture command gives; bad input and server errors show as messages
 //   node browser.mjs server       the command: 127.0.0.1 only, 404 as JSON, refused files and busy ports, SIGTERM
@@ -399,6 +400,15 @@ const cases = {
       await setInput(page, 'time', 0);
       const back = await state(page);
       assert.ok(!moved(start, back), 'scrubbing back to 0 restores the first pose');
+      // The end of the timeline holds the last pose: which bodies are shown matches an instant before the end.
+      const shownBodies = (s) => s.bodies.map((b) => b.scale[0] > 0);
+      await setInput(page, 'time', start.duration);
+      const end = await state(page);
+      await setInput(page, 'time', start.duration * 0.999);
+      const nearEnd = await state(page);
+      assert.ok(moved(start, end), 'the end of the timeline is not the first pose');
+      assert.deepEqual(shownBodies(end), shownBodies(nearEnd), 'the bodies shown at the end are those shown just before');
+      await setInput(page, 'time', 0);
       await page.locator('#play').click();
       await page.waitForFunction(() => window.shatterViewer.state().time > 0.05, null, { timeout: 30000 });
       const playing = await state(page);
