@@ -26,11 +26,16 @@ export class Replay {
   /** Shows the state at `time` seconds (clamped to the clip). */
   seek(time) {
     this.time = Math.min(Math.max(time, 0), this.duration);
-    // Reaching the end pauses a clamped action; reset() lifts that, so scrubbing back from the end moves the bodies.
-    this.action.reset();
-    this.mixer.setTime(this.time);
+    this.applyPose(this.time);
     this.onTime(this.time);
     this.onChange();
+  }
+
+  /** Poses the bodies as at `time` without moving the clock or telling anyone: for looking ahead (framing.js). */
+  applyPose(time) {
+    // Reaching the end pauses a clamped action; reset() lifts that, so scrubbing back from the end moves the bodies.
+    this.action.reset();
+    this.mixer.setTime(Math.min(Math.max(time, 0), this.duration));
   }
 
   play() {

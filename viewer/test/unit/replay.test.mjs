@@ -7,43 +7,11 @@
 import assert from 'node:assert/strict';
 import { describe, test } from 'node:test';
 
-import { randomSource } from './synthetic.mjs';
+import { makeRecording, randomSource } from './synthetic.mjs';
 import { loadViewerModules } from './viewer-modules.mjs';
 
 const { THREE, Replay } = await loadViewerModules();
 const SEED = 7041;
-
-/**
- * A random recording: {root, clip, bodies: [{object, times, positions (float32, as the track stores them), birth,
- * death}]}. Bodies are born and die at random key times, so some exist for a part of the clip only.
- */
-function makeRecording(random, bodyCount) {
-  const root = new THREE.Group();
-  const tracks = [];
-  const bodies = [];
-  const keyCount = random.int(2, 12);
-  const step = random.int(1, 8) / 64;
-  const times = Array.from({ length: keyCount }, (_, i) => i * step);
-  for (let b = 0; b < bodyCount; ++b) {
-    const object = new THREE.Object3D();
-    object.name = `body ${b}`;
-    object.userData.body = b;
-    object.add(new THREE.Mesh(new THREE.BoxGeometry(1, 1, 1)));
-    root.add(object);
-    const positions = Float32Array.from(times.flatMap(() => [0, 1, 2].map(() => random.int(-400, 400) / 7)));
-    tracks.push(new THREE.VectorKeyframeTrack(`${object.name}.position`, times, positions));
-    const birthKey = random.int(0, keyCount - 2);
-    const deathKey = random.next() < 0.5 ? keyCount : random.int(birthKey + 1, keyCount - 1);
-    const birth = times[birthKey];
-    const death = deathKey < keyCount ? times[deathKey] : Infinity;
-    const scaleTimes = [0, birth, ...(death < Infinity ? [death] : [])].filter((t, i, all) => all.indexOf(t) === i);
-    const scaleValues = scaleTimes.flatMap((t) => (t >= birth && t < death ? [1, 1, 1] : [0, 0, 0]));
-    tracks.push(new THREE.VectorKeyframeTrack(`${object.name}.scale`, scaleTimes, scaleValues, THREE.InterpolateDiscrete));
-    bodies.push({ object, times, positions, birth, death });
-  }
-  const clip = new THREE.AnimationClip('simulation', -1, tracks);
-  return { root, clip, bodies, duration: times.at(-1) };
-}
 
 // Where a body is at `time` by linear interpolation of its keys, computed here independently of three.js.
 function expectedPosition(body, time) {
@@ -57,7 +25,7 @@ function expectedPosition(body, time) {
 const recordings = [];
 {
   const random = randomSource(SEED);
-  for (let i = 0; i < 12; ++i) recordings.push({ ...makeRecording(random, random.int(1, 9)), label: `seed ${SEED}, recording ${i}` });
+  for (let i = 0; i < 12; ++i) recordings.push({ ...makeRecording(THREE, random, { bodies: random.int(1, 9) }), label: `seed ${SEED}, recording ${i}` });
 }
 
 // Random times strictly between keys (at a key a stepped channel may be either side) plus the ends.

@@ -7,6 +7,10 @@
 // tests see the objects the page sees: a one-primitive node is the Mesh itself
 // with its child nodes below it, a two-primitive node a Group.
 //
+// Recordings are built the way GLTFLoader shows a `simulate --record` file
+// (runtime/recording.hpp): a node per body with its mesh, linear translation
+// keys, and a stepped scale channel that shows it from its birth to its death.
+//
 // Everything is drawn from a seeded generator, so a failure names a seed that
 // reproduces it.
 
@@ -282,4 +286,55 @@ export function encodePlainGlb(count) {
 /** Parses GLB bytes with three.js's GLTFLoader, as the page does (Viewer.parse). */
 export function parseGlb(GLTFLoader, glb) {
   return new Promise((resolve, reject) => new GLTFLoader().parse(glb, '', resolve, reject));
+}
+
+// --- recordings ------------------------------------------------------------------------------------
+
+/**
+ * A recording of unit cubes: {root, clip, duration, bodies: [{object, times, positions (float32, as the track stores
+ * them), birth, death}]}. `three` is the three.js the viewer's modules use. `motion`:
+ *   'random'  positions drawn at random per key; bodies born and dying at random key times
+ *   'static'  each body at one place, alive throughout
+ *   'linear'  every body at one velocity (the same for all), alive throughout
+ *   'birth'   body 0 at the origin throughout, the others born at `birthKey`'s time 40 to 60 m away
+ */
+export function makeRecording(three, random, { bodies: bodyCount, motion = 'random', keyCount = random.int(2, 12),
+  step = random.int(1, 8) / 64, birthKey = 1 }) {
+  const root = new three.Group();
+  const tracks = [];
+  const bodies = [];
+  const times = Array.from({ length: keyCount }, (_, i) => i * step);
+  const velocity = [0, 1, 2].map(() => random.int(-80, 80) / 4);
+  for (let b = 0; b < bodyCount; ++b) {
+    const object = new three.Object3D();
+    object.name = `body ${b}`;
+    object.userData.body = b;
+    object.add(new three.Mesh(new three.BoxGeometry(1, 1, 1)));
+    root.add(object);
+    const start = [0, 1, 2].map(() => random.int(-400, 400) / 7);
+    let place;
+    if (motion === 'random') place = () => [0, 1, 2].map(() => random.int(-400, 400) / 7);
+    else if (motion === 'static') place = () => start;
+    else if (motion === 'linear') place = (t) => start.map((v, k) => v + velocity[k] * t);
+    else place = () => (b === 0 ? [0, 0, 0] : [random.int(40, 60), 0, 0]);
+    const far = motion === 'birth' ? place() : null;
+    const positions = Float32Array.from(times.flatMap((t) => far || place(t)));
+    tracks.push(new three.VectorKeyframeTrack(`${object.name}.position`, times, positions));
+    let birth = 0;
+    let death = Infinity;
+    if (motion === 'random') {
+      const bornAt = random.int(0, keyCount - 2);
+      const diesAt = random.next() < 0.5 ? keyCount : random.int(bornAt + 1, keyCount - 1);
+      birth = times[bornAt];
+      death = diesAt < keyCount ? times[diesAt] : Infinity;
+    } else if (motion === 'birth' && b > 0) {
+      birth = times[birthKey];
+    }
+    const scaleTimes = [0, birth, ...(death < Infinity ? [death] : [])].filter((t, i, all) => all.indexOf(t) === i);
+    const scaleValues = scaleTimes.flatMap((t) => (t >= birth && t < death ? [1, 1, 1] : [0, 0, 0]));
+    tracks.push(new three.VectorKeyframeTrack(`${object.name}.scale`, scaleTimes, scaleValues, three.InterpolateDiscrete));
+    bodies.push({ object, times, positions, birth, death });
+  }
+  const clip = new three.AnimationClip('simulation', -1, tracks);
+  return { root, clip, bodies, duration: times.at(-1) };
 }

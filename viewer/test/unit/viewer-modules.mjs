@@ -20,10 +20,11 @@ export * as THREE from 'three';
 export { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 export * from './tree.js';
 export * from './replay.js';
+export * from './framing.js';
 export { fragmentColour } from './viewer.js';
 `;
 
-/** The bundle's exports: THREE, GLTFLoader and what tree.js and replay.js export, and fragmentColour. */
+/** The bundle's exports: THREE, GLTFLoader and what tree.js, replay.js and framing.js export, and fragmentColour. */
 export async function loadViewerModules() {
   const nodeModules = process.env.SHATTER_NODE_MODULES;
   if (!nodeModules) {
