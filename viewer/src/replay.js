@@ -5,6 +5,9 @@
 
 import * as THREE from 'three';
 
+/** The most replay time one frame moves on, s: real time below 10 frames a second, slower than it above. */
+export const MAX_STEP = 0.1;
+
 export class Replay {
   constructor(root, clip) {
     this.clip = clip;
@@ -49,10 +52,14 @@ export class Replay {
     this.onChange();
   }
 
-  /** Moves on by `dt` seconds of real time while playing; stops at the end. */
+  /**
+   * Moves on by `dt` seconds of real time while playing, but by at most MAX_STEP: after a stall (a hidden tab, whose
+   * frames the browser stops, or a frame that took seconds to draw in software) the replay goes on from where it
+   * was instead of jumping past what was never shown, possibly to its end. Stops at the end.
+   */
   advance(dt) {
     if (!this.playing) return;
-    const next = this.time + dt;
+    const next = this.time + Math.min(dt, MAX_STEP);
     if (next >= this.duration) {
       this.seek(this.duration);
       this.playing = false;

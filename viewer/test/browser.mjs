@@ -154,11 +154,14 @@ async function openViewer(browser, url) {
   page.on('console', (message) => { if (message.type() === 'error') errors.push(message.text()); });
   page.on('pageerror', (error) => errors.push(String(error)));
   const started = Date.now();
+  // As long as the wait for the data below: on the shared cores, busy with a build, parsing the 840 KB inline
+  // script alone can pass playwright's default 30 s before the page's load event.
+  const navigation = { timeout: 120000 };
   if (pageOverride === null) {
-    await page.goto(url);
+    await page.goto(url, navigation);
   } else {
     const override = await usePageOverride(page, url);
-    await page.goto(override.url);
+    await page.goto(override.url, navigation);
     override.check();
   }
   await page.waitForFunction(() => window.shatterViewer && (window.shatterViewer.ready || window.shatterViewer.error),

@@ -10,7 +10,7 @@ import { describe, test } from 'node:test';
 import { makeRecording, randomSource } from './synthetic.mjs';
 import { loadViewerModules } from './viewer-modules.mjs';
 
-const { THREE, Replay } = await loadViewerModules();
+const { THREE, Replay, MAX_STEP } = await loadViewerModules();
 const SEED = 7041;
 
 // Where a body is at `time` by linear interpolation of its keys, computed here independently of three.js.
@@ -105,6 +105,20 @@ describe('Replay', () => {
       replay.seek(r.duration + 3);
       assert.equal(replay.time, r.duration, r.label);
       assert.deepEqual(poseOf(r), last, r.label);
+    }
+  });
+
+  test('advance moves the clock by at most MAX_STEP however long a frame took', () => {
+    const random = randomSource(SEED + 4);
+    for (const r of recordings) {
+      const replay = new Replay(r.root, r.clip);
+      replay.play();
+      for (let n = 0; n < 5 && replay.playing; ++n) {
+        const before = replay.time;
+        replay.advance(random.int(1, 100) * MAX_STEP);
+        assert.ok(replay.time - before <= MAX_STEP + 1e-12, `${r.label}: ${before} -> ${replay.time} in one frame`);
+        assert.ok(replay.time === r.duration || Math.abs(replay.time - before - MAX_STEP) < 1e-12, `${r.label}: a full step unless at the end`);
+      }
     }
   });
 
