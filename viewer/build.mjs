@@ -10,20 +10,34 @@ import { createRequire } from 'node:module';
 import { mkdirSync, readFileSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { parseArgs } from 'node:util';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
 
+const USAGE = 'usage: node build.mjs --node-modules <dir> --out-html <file> --out-cpp <file>';
+
+// Every flag takes a value and all three are required; anything else (an unknown flag, a flag without its value, a
+// stray argument) is refused with the usage line rather than guessed at.
 function options(argv) {
-  const out = {};
-  for (let i = 2; i < argv.length; i += 2) {
-    const key = argv[i];
-    if (!key.startsWith('--') || i + 1 >= argv.length) throw new Error(`usage: ${argv[1]} --node-modules <dir> --out-html <file> --out-cpp <file> (bad argument '${key}')`);
-    out[key.slice(2)] = argv[i + 1];
+  let values;
+  try {
+    ({ values } = parseArgs({
+      args: argv.slice(2),
+      options: {
+        'node-modules': { type: 'string' },
+        'out-html': { type: 'string' },
+        'out-cpp': { type: 'string' },
+      },
+      strict: true,
+      allowPositionals: false,
+    }));
+  } catch (error) {
+    throw new Error(`${error.message}\n${USAGE}`);
   }
   for (const required of ['node-modules', 'out-html', 'out-cpp']) {
-    if (!out[required]) throw new Error(`--${required} is required`);
+    if (!values[required]) throw new Error(`--${required} is required\n${USAGE}`);
   }
-  return out;
+  return values;
 }
 
 // The C++ source: the page's bytes as an array, so any byte survives and no

@@ -132,6 +132,7 @@ function wireControls(viewer) {
     else viewer.replay.play();
     $('play').textContent = viewer.replay.playing ? 'Pause' : 'Play';
   });
+  $('follow-bodies').addEventListener('change', (e) => viewer.setFollowBodies(e.target.checked));
   $('time').addEventListener('input', (e) => {
     if (!viewer.replay) return;
     viewer.replay.pause();
@@ -179,6 +180,7 @@ function presentModel(viewer, name) {
       $('time-value').textContent = `${t.toFixed(3)} s`;
       if (!r.playing) $('play').textContent = 'Play';
     };
+    viewer.setFollowBodies($('follow-bodies').checked);
     r.seek(0);
   } else {
     summary = 'glTF file (not a shatter mesh tree or recording).';
@@ -220,7 +222,8 @@ async function main() {
           }
         });
         Object.assign(out, { time: viewer.replay.time, duration: viewer.replay.duration, playing: viewer.replay.playing,
-          bodies });
+          bodies, followBodies: viewer.followBodies,
+          camera: { position: viewer.camera.position.toArray(), target: viewer.controls.target.toArray() } });
       }
       return out;
     },

@@ -5,11 +5,18 @@
 
 import * as THREE from 'three';
 
+/** The most replay time one frame moves on, s: real time below 10 frames a second, slower than it above. */
+export const MAX_STEP = 0.1;
+
 export class Replay {
   constructor(root, clip) {
     this.clip = clip;
     this.mixer = new THREE.AnimationMixer(root);
     this.action = this.mixer.clipAction(clip);
+    // Played once and held at its end: three.js's default (LoopRepeat) wraps the clip's last instant back to its
+    // first pose, so the end of the timeline would show the bodies as they started.
+    this.action.setLoop(THREE.LoopOnce, 1);
+    this.action.clampWhenFinished = true;
     this.action.play();
     this.duration = clip.duration;
     this.time = 0;
@@ -22,9 +29,16 @@ export class Replay {
   /** Shows the state at `time` seconds (clamped to the clip). */
   seek(time) {
     this.time = Math.min(Math.max(time, 0), this.duration);
-    this.mixer.setTime(this.time);
+    this.applyPose(this.time);
     this.onTime(this.time);
     this.onChange();
+  }
+
+  /** Poses the bodies as at `time` without moving the clock or telling anyone: for looking ahead (framing.js). */
+  applyPose(time) {
+    // Reaching the end pauses a clamped action; reset() lifts that, so scrubbing back from the end moves the bodies.
+    this.action.reset();
+    this.mixer.setTime(Math.min(Math.max(time, 0), this.duration));
   }
 
   play() {
@@ -38,10 +52,14 @@ export class Replay {
     this.onChange();
   }
 
-  /** Moves on by `dt` seconds of real time while playing; stops at the end. */
+  /**
+   * Moves on by `dt` seconds of real time while playing, but by at most MAX_STEP: after a stall (a hidden tab, whose
+   * frames the browser stops, or a frame that took seconds to draw in software) the replay goes on from where it
+   * was instead of jumping past what was never shown, possibly to its end. Stops at the end.
+   */
   advance(dt) {
     if (!this.playing) return;
-    const next = this.time + dt;
+    const next = this.time + Math.min(dt, MAX_STEP);
     if (next >= this.duration) {
       this.seek(this.duration);
       this.playing = false;

@@ -10,10 +10,13 @@ import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { bondsOfNode, crossingBonds, drawableDepths, explodeOffset, isMeshTree, nodesAtDepth, readMeshTree }
   from './tree.js';
 import { Replay } from './replay.js';
+import { ReplayFraming, fitDistance } from './framing.js';
 
 const INTERIOR = 'interior';
 const EXTERIOR = 'exterior';
 const BOND_COLOUR = 0x36c3ff;
+// Where the camera looks from when it is first placed: above and to the front right.
+const DEFAULT_VIEW_DIRECTION = new THREE.Vector3(0.9, 0.6, 1.2).normalize();
 
 /** A distinct, stable colour for fragment `i` (golden-ratio hues). */
 export function fragmentColour(i) {
@@ -43,6 +46,8 @@ export class Viewer {
     this.root = null;    // what was loaded, in the scene
     this.tree = null;    // readMeshTree result for a mesh tree
     this.replay = null;
+    this.framing = null;       // ReplayFraming of a recording
+    this.followBodies = true;  // the camera follows a recording's live bodies (the "Follow bodies" switch)
     this.depth = 0;
     this.explode = 0;
     this.showBonds = false;
@@ -100,7 +105,11 @@ export class Viewer {
       this.kind = 'recording';
       this.root = gltf.scene;
       this.replay = new Replay(gltf.scene, gltf.animations[0]);
-      this.replay.onChange = () => this.requestRender();
+      this.framing = new ReplayFraming(this.replay, gltf.scene);
+      this.replay.onChange = () => {
+        this.followReplay();
+        this.requestRender();
+      };
     } else if (isMeshTree(gltf)) {
       this.kind = 'tree';
       this.tree = readMeshTree(gltf);
@@ -133,6 +142,7 @@ export class Viewer {
     this.root = null;
     this.tree = null;
     this.replay = null;
+    this.framing = null;
     this.selected = null;
     this.exteriorMaterial = null;
   }
@@ -314,8 +324,13 @@ export class Viewer {
     if (box.isEmpty()) box.setFromObject(this.root);
     const centre = box.getCenter(new THREE.Vector3());
     const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-6);
-    const distance = radius / Math.sin(THREE.MathUtils.degToRad(this.camera.fov / 2));
-    const direction = new THREE.Vector3(0.9, 0.6, 1.2).normalize();
+    this.placeCamera(centre, radius, DEFAULT_VIEW_DIRECTION);
+  }
+
+  // Looks at the sphere (centre, radius) from `direction` (unit, from the centre towards the camera) so it fills the
+  // view, with the lights placed around it.
+  placeCamera(centre, radius, direction) {
+    const distance = fitDistance(radius, this.camera.fov, this.camera.aspect);
     this.camera.position.copy(centre).addScaledVector(direction, distance);
     this.camera.near = distance / 100;
     this.camera.far = distance * 100;
@@ -326,6 +341,22 @@ export class Viewer {
     this.sun.target.position.copy(centre);
     this.fill.position.copy(centre).add(new THREE.Vector3(-1.5, -0.5, -1).multiplyScalar(radius * 4));
     this.requestRender();
+  }
+
+  /** Turns following a recording's bodies on (the camera goes to them now) or off (the camera stays where it is). */
+  setFollowBodies(on) {
+    this.followBodies = on;
+    this.followReplay();
+  }
+
+  // With following on, frames the bodies alive at the replay's time (framing.js), seen from the direction the user
+  // has orbited to: following sets where the camera looks and how far it is, the user still turns it.
+  followReplay() {
+    if (!this.followBodies || !this.replay || !this.framing || this.framing.empty) return;
+    const { centre, radius } = this.framing.at(this.replay.time);
+    const direction = this.camera.position.clone().sub(this.controls.target);
+    if (direction.lengthSq() === 0) direction.copy(DEFAULT_VIEW_DIRECTION);
+    this.placeCamera(centre, radius, direction.normalize());
   }
 
   /** Where a world point lands on the canvas, in CSS pixels from its top left. */

@@ -3,8 +3,8 @@
 // page written by `shatter export --format html`. CTest runs one case per
 // process (tests/viewer/CMakeLists.txt):
 //
-//   node browser.mjs setup        knot1 fractured into 24 fragments, a drop simulation recorded, the tree written
-//                                 as a page, and `shatter info --json --nodes all` of it
+//   node browser.mjs setup        knot1 fractured into 24 fragments, a drop and a shoot simulation recorded, the
+//                                 tree written as a page, and `shatter info --json --nodes all` of it
 //   node browser.mjs served-tree  `shatter view tree.shatter`: no console error; one mesh per leaf; the explode
 //                                 slider spreads the centroids strictly more at each step; the depth slider shows as
 //                                 many meshes as `info --nodes depth:K` lists, for every K; a click on a fragment
@@ -12,13 +12,20 @@
 //                                 bond count; the colour and interior switches change the picture; a screenshot is
 //                                 not blank (kept); Ctrl-C stops the server with exit 0
 //   node browser.mjs file-page    the exported page from a file:// URL: the same checks of meshes, depth, click
-//   node browser.mjs replay       `shatter view drop.glb`: scrubbing and playing move the bodies
+//   node browser.mjs replay       `shatter view drop.glb`: scrubbing and playing move the bodies; the end of the
+//                                 timeline shows the last pose. For drop.glb and shoot.glb: with "Follow bodies"
+//                                 (on by default) the bodies cover a share of the view above a floor at 0, 25, 50,
+//                                 75 and 100 % of the replay (screenshots kept); turned off, the camera stays put
+//                                 (and the shot object leaves the view)
 //   node browser.mjs editor       the editor re-fractures on the server with progress, giving the tree the
 //                                 fracture command gives; bad input and server errors show as messages
 //   node browser.mjs server       the command: 127.0.0.1 only, 404 as JSON, refused files and busy ports, SIGTERM
 //
 // Environment (set by CTest): SHATTER_EXE, SHATTER_CHROMIUM, SHATTER_NODE_MODULES, SHATTER_MESH,
 // SHATTER_TEST_WORK (scratch), SHATTER_TEST_ARTIFACTS (screenshots kept).
+// Optional, never set by CTest: SHATTER_VIEWER_PAGE, a page built by `node viewer/build.mjs --out-html <file>`, shown
+// instead of the page compiled into SHATTER_EXE (filled with the same data), so a change to viewer/src can be tested
+// without rebuilding the C++.
 
 import assert from 'node:assert/strict';
 import { execFileSync, spawn } from 'node:child_process';
@@ -108,6 +115,38 @@ async function openBrowser() {
   });
 }
 
+// --- SHATTER_VIEWER_PAGE: the page under test, when it is not the one in SHATTER_EXE ---------------
+
+const DATA_MARKER = '<!--shatter:data-->';
+const pageOverride = process.env.SHATTER_VIEWER_PAGE ? readFileSync(process.env.SHATTER_VIEWER_PAGE, 'utf8') : null;
+if (pageOverride !== null && !pageOverride.includes(DATA_MARKER)) {
+  throw new Error(`SHATTER_VIEWER_PAGE=${process.env.SHATTER_VIEWER_PAGE} is no page from viewer/build.mjs (no data marker)`);
+}
+
+/**
+ * Has the browser show SHATTER_VIEWER_PAGE at `url` instead of what SHATTER_EXE made, filled with the same data as
+ * cli/viewer_page.cpp fills it: the served config for `shatter view`'s page (the request is answered in the browser),
+ * the exported file's config and model for a file:// page (a copy of the file, rebuilt around the other page).
+ * Returns the URL to open and a check that the page shown was the override.
+ */
+async function usePageOverride(page, url) {
+  if (url.startsWith('file:')) {
+    const exported = readFileSync(new URL(url), 'utf8');
+    const data = /<script id="shatter-config"[^>]*>[^<]*<\/script>\s*<script id="shatter-model"[^>]*>[^<]*<\/script>/.exec(exported);
+    assert.ok(data, `${url} holds no shatter-config and shatter-model scripts`);
+    const copy = file(`override-${path.basename(new URL(url).pathname)}`);
+    writeFileSync(copy, pageOverride.replace(DATA_MARKER, () => data[0]));
+    return { url: pathToFileURL(copy).href, check: () => {} };
+  }
+  let served = 0;
+  await page.route(url, (route) => {
+    ++served;
+    return route.fulfill({ contentType: 'text/html; charset=utf-8', body: pageOverride.replace(DATA_MARKER,
+      () => '<script id="shatter-config" type="application/json">{"mode":"served"}</script>') });
+  });
+  return { url, check: () => assert.ok(served > 0, `SHATTER_VIEWER_PAGE was not served at ${url}`) };
+}
+
 /** Opens `url` and waits until the viewer has shown its data; collects console errors and page errors. */
 async function openViewer(browser, url) {
   const page = await browser.newPage({ viewport: { width: 1100, height: 720 } });
@@ -115,7 +154,16 @@ async function openViewer(browser, url) {
   page.on('console', (message) => { if (message.type() === 'error') errors.push(message.text()); });
   page.on('pageerror', (error) => errors.push(String(error)));
   const started = Date.now();
-  await page.goto(url);
+  // As long as the wait for the data below: on the shared cores, busy with a build, parsing the 840 KB inline
+  // script alone can pass playwright's default 30 s before the page's load event.
+  const navigation = { timeout: 120000 };
+  if (pageOverride === null) {
+    await page.goto(url, navigation);
+  } else {
+    const override = await usePageOverride(page, url);
+    await page.goto(override.url, navigation);
+    override.check();
+  }
   await page.waitForFunction(() => window.shatterViewer && (window.shatterViewer.ready || window.shatterViewer.error),
     null, { timeout: 120000 });
   const loadSeconds = (Date.now() - started) / 1000;
@@ -198,6 +246,97 @@ function assertNotBlank(shot, what) {
   assert.ok(shot.colours > 20, `${what}: the screenshot has only ${shot.colours} colours`);
 }
 
+/**
+ * The share of the canvas the recording's bodies cover: pixels read back from the WebGL canvas, rendered once with
+ * the floor hidden, that differ from the clear colour. The floor is left out because a camera that lost the bodies
+ * still sees it: what counts is whether the action is in view.
+ */
+function bodiesShare(page) {
+  return page.evaluate(() => {
+    const { viewer } = window.shatterViewer;
+    const floor = viewer.root.getObjectByName('floor');
+    if (floor) floor.visible = false;
+    viewer.renderer.render(viewer.scene, viewer.camera);
+    const canvas = viewer.renderer.domElement;
+    const copy = document.createElement('canvas');
+    copy.width = canvas.width;
+    copy.height = canvas.height;
+    const context = copy.getContext('2d');
+    context.drawImage(canvas, 0, 0);
+    const data = context.getImageData(0, 0, copy.width, copy.height).data;
+    if (floor) floor.visible = true;
+    viewer.requestRender();
+    const background = [0x15, 0x17, 0x1c];
+    let differing = 0;
+    for (let i = 0; i < data.length; i += 4) {
+      if (Math.abs(data[i] - background[0]) + Math.abs(data[i + 1] - background[1])
+        + Math.abs(data[i + 2] - background[2]) > 24) ++differing;
+    }
+    return differing / (data.length / 4);
+  });
+}
+
+// Camera poses {position, target} equal but for rounding: the followed camera keeps the direction it had, renormalised.
+const sameCamera = (a, b) => ['position', 'target'].every((k) => a[k].every((v, i) => Math.abs(v - b[k][i]) <= 1e-9 * (1 + Math.abs(v))));
+
+const REPLAY_FRACTIONS = [0, 0.25, 0.5, 0.75, 1];
+// The least share of the canvas the bodies must cover at every one of REPLAY_FRACTIONS while followed: half the
+// smallest share measured (1100 x 720 window, SwiftShader; at 0, 25, 50, 75, 100 % of the replay): followed,
+// drop.glb 8.3, 7.6, 5.5, 4.9, 4.9 % and shoot.glb 10.0, 4.9, 4.7, 3.1, 3.1 %; with the camera fixed at its time-0
+// place, drop.glb 8.3, 6.6, 3.9, 2.3, 0.8 % and shoot.glb 10.0, 0.0, 0.0, 0.0, 0.0 %.
+const FOLLOWED_SHARE_FLOOR = 0.015;
+
+/**
+ * Plays `recording` (a file in the work folder) in the viewer with following on, then off: returns the shares of
+ * the canvas the bodies cover at each of REPLAY_FRACTIONS, {followed, fixed}; checks that following keeps them
+ * above FOLLOWED_SHARE_FLOOR and that with it off the camera does not move. Screenshots go to the artefacts.
+ */
+async function checkFollowing(browser, recording) {
+  const name = path.basename(recording, '.glb');
+  mkdirSync(artifacts, { recursive: true });
+  const server = await startView(file(recording));
+  try {
+    const { page, errors } = await openViewer(browser, server.url);
+    const follow = page.locator('#follow-bodies');
+    assert.equal(await follow.isVisible(), true, `${name}: the follow switch shows for a recording`);
+    assert.equal(await follow.isChecked(), true, `${name}: following is on by default`);
+    const { duration } = await state(page);
+    const shares = { followed: [], fixed: [] };
+    const cameras = [];
+    for (const fraction of REPLAY_FRACTIONS) {
+      await setInput(page, 'time', fraction * duration);
+      cameras.push((await state(page)).camera);
+      await page.screenshot({ path: path.join(artifacts, `${name}-followed-${100 * fraction}.png`) });
+      shares.followed.push(await bodiesShare(page));
+    }
+    // Off from the start: the camera stays where it was placed at time 0, as before following existed.
+    await setInput(page, 'time', 0);
+    await setCheckbox(page, 'follow-bodies', false);
+    const fixedCamera = (await state(page)).camera;
+    assert.ok(sameCamera(fixedCamera, cameras[0]), `${name}: back at 0 and turned off, the camera is not at 0's framing`);
+    for (const fraction of REPLAY_FRACTIONS) {
+      await setInput(page, 'time', fraction * duration);
+      const s = await state(page);
+      assert.equal(s.followBodies, false);
+      assert.deepEqual(s.camera, fixedCamera, `${name}: following off, the camera moved at ${100 * fraction} %`);
+      await page.screenshot({ path: path.join(artifacts, `${name}-fixed-${100 * fraction}.png`) });
+      shares.fixed.push(await bodiesShare(page));
+    }
+    // On again: the camera goes back to the bodies at once.
+    await setCheckbox(page, 'follow-bodies', true);
+    assert.ok(sameCamera((await state(page)).camera, cameras.at(-1)), `${name}: following on again frames the bodies`);
+    const percent = (list) => list.map((x) => `${(100 * x).toFixed(1)} %`).join(', ');
+    console.log(`${name}: bodies cover ${percent(shares.followed)} of the canvas followed, ${percent(shares.fixed)} fixed `
+      + `(at ${REPLAY_FRACTIONS.map((f) => `${100 * f} %`).join(', ')} of ${duration.toFixed(3)} s)`);
+    shares.followed.forEach((share, i) => assert.ok(share > FOLLOWED_SHARE_FLOOR,
+      `${name}: followed, the bodies cover ${share} of the canvas at ${100 * REPLAY_FRACTIONS[i]} % of the replay`));
+    assert.deepEqual(errors, [], `${name}: console errors`);
+    return shares;
+  } finally {
+    assert.equal((await stopView(server)).code, 0);
+  }
+}
+
 // --- checks shared by the served and the file page ---------------------------------
 
 async function checkLeavesShown(page, infoAll) {
@@ -258,6 +397,8 @@ const cases = {
     mkdirSync(work, { recursive: true });
     run('fracture', env('SHATTER_MESH'), '--fragments', String(LEAVES), '--seed', '3', '--out', file('tree.shatter'));
     run('simulate', file('tree.shatter'), '--scene', 'drop', '--steps', '150', '--record', file('drop.glb'));
+    // The drop barely moves; a shot object slides about 25 m along the floor in 3 s, out of a fixed camera's view.
+    run('simulate', file('tree.shatter'), '--scene', 'shoot', '--steps', '360', '--record', file('shoot.glb'));
     run('export', file('tree.shatter'), '--format', 'html', '--out', file('tree.html'));
     writeFileSync(file('info-all.json'), run('info', file('tree.shatter'), '--json', '--nodes', 'all'));
     const infoAll = JSON.parse(readFileSync(file('info-all.json'), 'utf8'));
@@ -358,22 +499,58 @@ const cases = {
       await setInput(page, 'time', 0);
       const back = await state(page);
       assert.ok(!moved(start, back), 'scrubbing back to 0 restores the first pose');
+      // The end of the timeline holds the last pose: which bodies are shown matches an instant before the end.
+      const shownBodies = (s) => s.bodies.map((b) => b.scale[0] > 0);
+      await setInput(page, 'time', start.duration);
+      const end = await state(page);
+      await setInput(page, 'time', start.duration * 0.999);
+      const nearEnd = await state(page);
+      assert.ok(moved(start, end), 'the end of the timeline is not the first pose');
+      assert.deepEqual(shownBodies(end), shownBodies(nearEnd), 'the bodies shown at the end are those shown just before');
+      await setInput(page, 'time', 0);
       await page.locator('#play').click();
-      await page.waitForFunction(() => window.shatterViewer.state().time > 0.05, null, { timeout: 30000 });
-      const playing = await state(page);
+      // Paused from inside the page in the frame that sees the clock past 0.05 s: on a loaded machine SwiftShader's
+      // frames are slow enough for the 1.25 s replay to end between two round trips from here, and a click on
+      // "Play" at the end starts it again.
+      const [playing, label] = await page.evaluate(() => new Promise((resolve) => {
+        const poll = () => {
+          const s = window.shatterViewer.state();
+          if (s.playing && s.time <= 0.05) {
+            requestAnimationFrame(poll);
+            return;
+          }
+          const text = document.getElementById('play').textContent;
+          if (s.playing) document.getElementById('play').click();
+          resolve([s, text]);
+        };
+        poll();
+      }));
+      assert.ok(playing.playing, `the replay ended (at ${playing.time} s) before a frame saw it playing`);
       assert.ok(moved(start, playing), 'playing moves the bodies');
-      assert.equal(await page.locator('#play').textContent(), 'Pause');
-      await page.locator('#play').click();
-      const paused = (await state(page)).time;
+      assert.equal(label, 'Pause');
+      const paused = await state(page);
+      assert.equal(paused.playing, false, 'the button pauses');
+      assert.equal(await page.locator('#play').textContent(), 'Play');
       await page.waitForTimeout(300);
-      assert.equal((await state(page)).time, paused, 'pause stops the clock');
-      console.log(`replay: ${start.bodies.length} bodies over ${start.duration.toFixed(3)} s; played to ${paused.toFixed(3)} s`);
+      assert.equal((await state(page)).time, paused.time, 'pause stops the clock');
+      console.log(`replay: ${start.bodies.length} bodies over ${start.duration.toFixed(3)} s; played to ${paused.time.toFixed(3)} s`);
       assertNotBlank(await screenshot(page, 'replay'), 'replay');
       assert.deepEqual(errors, [], 'console errors');
     } finally {
       await browser.close();
     }
     assert.equal((await stopView(server)).code, 0);
+
+    const follower = await openBrowser();
+    try {
+      await checkFollowing(follower, 'drop.glb');
+      const shoot = await checkFollowing(follower, 'shoot.glb');
+      // The old behaviour with following off: the shot object slides out of the fixed view.
+      assert.ok(shoot.fixed.at(-1) < FOLLOWED_SHARE_FLOOR,
+        `shoot.glb: with the camera fixed the bodies still cover ${shoot.fixed.at(-1)} of the canvas at the end`);
+    } finally {
+      await follower.close();
+    }
   },
 
   async editor() {
