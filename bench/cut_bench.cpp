@@ -1,9 +1,10 @@
 // shatter-bench-cut: one plane cut through the volume centroid, timed per input
 // triangle for shatter's plane, fast and exact kernels, against CGAL PMP clip with
 // clip_volume(true) run on both sides of the same plane. The plane kernel's time
-// is its whole output: cut_solid, then every piece rounded and certified
-// (round_solid, against the validated input); its input conversion
-// (prepare_plane_input, like the exact kernel's to_exact) is timed apart.
+// is the library's one cut call, whole output included (cut_by_plane: the exact
+// cut, then every piece rounded and certified against the validated input); its
+// input conversion (prepare_plane_input, like the exact kernel's to_exact) is
+// timed apart.
 //
 // Inputs: knot1.off and fandisk.off from the mesh folder, and a subdivided
 // icosahedron projected to the unit sphere (20 * 4^K triangles, K = 8 by default:
@@ -41,9 +42,8 @@
 #include "command_line.hpp"
 #include "csv.hpp"
 #include "shatter/generators/corpus.hpp"
-#include "shatter/meshtree/cut_solid.hpp"
+#include "shatter/meshtree/plane_cut.hpp"
 #include "shatter/meshtree/plane_input.hpp"
-#include "shatter/triangulate/solid_mesh.hpp"
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mass.hpp"
@@ -210,22 +210,14 @@ Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatP
     row.plane = measure(
         policy, [&] { return shatter::prepare_plane_input(mesh); },
         [&](const shatter::PlaneInput& input) {
-          const shatter::PlaneSet set = input.geometry.plane_set(cuts);
-          const shatter::SolidCut cut = shatter::cut_solid(set, input.solid, shatter::PlaneRef::cut(0), 1, input.shells);
-          shatter::SolidMeshOptions meshing;
-          meshing.trusted = &input.mesh;
-          meshing.cut = &plane;
-          std::vector<shatter::RoundedSolid> pieces;
-          for (const auto* side : {&cut.below, &cut.above}) {
-            for (const auto& piece : *side) pieces.push_back(shatter::round_solid(set, piece, meshing));
-          }
-          return pieces;
+          return shatter::cut_by_plane(input, input.geometry.plane_set(cuts), input.solid, &input.mesh,
+                                       shatter::PlaneRef::cut(0));
         },
-        [&](const std::vector<shatter::RoundedSolid>& pieces) {
-          row.plane_pieces = pieces.size();
+        [&](const shatter::PlaneCut& cut) {
+          row.plane_pieces = cut.pieces.size();
           row.plane_valid = 0;
-          for (const auto& piece : pieces) {
-            row.plane_valid += piece.valid && (!validate || shatter::validate_mesh(piece.mesh).valid());
+          for (const auto& piece : cut.pieces) {
+            row.plane_valid += piece.defect.empty() && (!validate || shatter::validate_mesh(piece.mesh).valid());
           }
         });
   }

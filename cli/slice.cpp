@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -17,9 +18,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/cut.hpp"
-#include "shatter/meshtree/cut_solid.hpp"
-#include "shatter/meshtree/plane_input.hpp"
-#include "shatter/triangulate/solid_mesh.hpp"
+#include "shatter/meshtree/plane_cut.hpp"
 #include "errors.hpp"
 #include "input.hpp"
 #include "output_transaction.hpp"
@@ -112,40 +111,29 @@ SliceResult result_of(CutResult<Point>&& cut, const Mesh& mesh) {
 // Exact cut, then every piece rounded once and certified: a piece that cannot
 // be written as a valid mesh fails the command before anything is written.
 SliceResult cut_with_plane_kernel(const Mesh& mesh, const Plane& plane, const SliceArgs& args, SurfaceId cap_surface) {
-  const PlaneInput input = prepare_plane_input(mesh);
-  const std::vector<Plane> cuts{plane};
-  const PlaneSet set = input.geometry.plane_set(cuts);
-  const SolidCut cut = cut_solid(set, input.solid, PlaneRef::cut(0), cap_surface, input.shells);
+  PlaneCutOptions options;
+  options.cap_surface = cap_surface;
+  options.interior_uv_scale = args.interior_uv_scale;
+  options.allow_self_intersections = args.allow_self_intersections;
+  PlaneCut cut = cut_mesh_by_plane(mesh, plane, options);
   SliceResult result;
   result.plane_missed = cut.plane_missed;
   result.cap_method = "polygon";
   result.cap_loops = cut.cap_loops;
-  if (cut.plane_missed) {
-    Sign s = Sign::zero;
-    for (std::size_t v = 0; v < input.solid.defs.size() && s == Sign::zero; ++v) {
-      s = side(set, PlaneRef::cut(0), input.solid.defs[v], input.solid.approx[v]);
+  // Whole: the input as it was read, on the side it lies on.
+  if (cut.plane_missed) result.pieces.push_back({cut.whole_above ? "above" : "below", mesh});
+  std::size_t index[2] = {0, 0};
+  for (CutPiece& piece : cut.pieces) {
+    const std::string side_name = piece.above ? "above" : "below";
+    const std::size_t i = index[piece.above]++;
+    if (!piece.defect.empty()) {
+      throw UnsupportedGeometryError("piece " + side_name + "-" + std::to_string(i) +
+                                     " cannot be rounded to doubles as a valid mesh: " + piece.defect);
     }
-    result.pieces.push_back({s == Sign::positive ? "above" : "below", mesh});
-  }
-  SolidMeshOptions meshing;
-  meshing.attributes = &input.mesh;
-  meshing.interior_uv_scale = args.interior_uv_scale;
-  meshing.allow_self_intersections = args.allow_self_intersections;
-  meshing.trusted = &input.mesh;  // checked on the way in: certification tests only what the cut changed
-  meshing.cut = &plane;
-  for (const auto* side_solids : {&cut.below, &cut.above}) {
-    const std::string side_name = side_solids == &cut.below ? "below" : "above";
-    for (std::size_t i = 0; i < side_solids->size(); ++i) {
-      RoundedSolid rounded = round_solid(set, (*side_solids)[i], meshing);
-      if (!rounded.valid) {
-        throw UnsupportedGeometryError("piece " + side_name + "-" + std::to_string(i) +
-                                       " cannot be rounded to doubles as a valid mesh: " + rounded.defect);
-      }
-      for (SurfaceId surface : rounded.mesh.surfaces) {
-        if (side_solids == &cut.below && surface == cap_surface) ++result.cap_triangles;
-      }
-      result.pieces.push_back({side_name, std::move(rounded.mesh)});
+    if (!piece.above) {
+      result.cap_triangles += std::size_t(std::count(piece.mesh.surfaces.begin(), piece.mesh.surfaces.end(), cap_surface));
     }
+    result.pieces.push_back({side_name, std::move(piece.mesh)});
   }
   return result;
 }

@@ -22,7 +22,7 @@
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/cut.hpp"
-#include "shatter/meshtree/cut_solid.hpp"
+#include "shatter/meshtree/plane_cut.hpp"
 #include "shatter/meshtree/exact_build.hpp"
 #include "shatter/meshtree/hull.hpp"
 #include "shatter/meshtree/plane_input.hpp"
@@ -310,19 +310,18 @@ class Builder {
     for (const BuildNode* a = node.parent; a != nullptr; a = a->parent) path[a->depth] = a->plane;
     const PlaneRef cut = PlaneRef::cut(node.depth);
     const PlaneSet set = plane_input_->geometry.plane_set(path);
-    SolidMeshOptions meshing;
-    meshing.attributes = &plane_input_->mesh;
-    meshing.interior_uv_scale = options_.interior_uv_scale;
-    meshing.allow_self_intersections = options_.allow_self_intersections;
-    meshing.trusted = &node.mesh;  // certified (the root: the validated input)
+    PlaneCutOptions cutting;
+    cutting.cap_surface = node.depth + 1;
+    cutting.interior_uv_scale = options_.interior_uv_scale;
+    cutting.allow_self_intersections = options_.allow_self_intersections;
     std::uint32_t missed = 0, unroundable = 0;
     std::string last_defect;
     for (std::uint32_t attempt = 0; attempt < options_.max_plane_tries; ++attempt) {
       path.back() = draw_plane(options_.strategy, box, node.mass.centroid, random);
-      meshing.cut = &path.back();
-      SolidCut result;
+      PlaneCut result;
       try {
-        result = cut_solid(set, node.solid, cut, node.depth + 1, plane_input_->shells);
+        // node.mesh is certified (the root: the validated input).
+        result = cut_by_plane(*plane_input_, set, node.solid, &node.mesh, cut, cutting);
       } catch (const UnsupportedGeometryError& error) {
         // The plane touches the surface inside the solid (a pinch): exactly
         // degenerate, never met by a random plane but by constructed ones.
@@ -334,33 +333,24 @@ class Builder {
         ++missed;
         continue;
       }
-      std::vector<std::unique_ptr<BuildNode>> children;
-      bool rounded = true;
-      for (auto* solids : {&result.below, &result.above}) {
-        for (Solid& solid : *solids) {
-          RoundedSolid mesh = round_solid(set, solid, meshing);
-          if (!mesh.valid) {
-            rounded = false;
-            last_defect = mesh.defect;
-            break;
-          }
-          auto child = std::make_unique<BuildNode>();
-          child->mesh = std::move(mesh.mesh);
-          child->mass = mass_properties(child->mesh);
-          child->solid = std::move(solid);
-          child->parent = &node;
-          child->above_parent_plane = solids == &result.above;
-          child->depth = node.depth + 1;
-          child->seed = child_seed(node.seed, children.size());
-          children.push_back(std::move(child));
-        }
-        if (!rounded) break;
-      }
-      if (!rounded) {
+      if (!result.certified()) {
         ++unroundable;
+        for (const CutPiece& piece : result.pieces) {
+          if (!piece.defect.empty()) last_defect = piece.defect;
+        }
         continue;
       }
-      node.children = std::move(children);
+      for (CutPiece& piece : result.pieces) {
+        auto child = std::make_unique<BuildNode>();
+        child->mesh = std::move(piece.mesh);
+        child->mass = mass_properties(child->mesh);
+        child->solid = std::move(piece.solid);
+        child->parent = &node;
+        child->above_parent_plane = piece.above;
+        child->depth = node.depth + 1;
+        child->seed = child_seed(node.seed, node.children.size());
+        node.children.push_back(std::move(child));
+      }
       node.plane = path.back();
       planes_missed_ += missed;
       planes_rejected_ += unroundable;

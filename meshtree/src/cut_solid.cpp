@@ -344,6 +344,7 @@ SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, Surfac
   split_solid(set, solid, cut, split);
   if (split.plane_misses) {
     result.plane_missed = true;
+    result.all_below = split.all_below;
     return result;
   }
   make_caps(set, cut, split.defs, split.approx, split.border, solid.convex, cap_surface, below_cap, above_cap);

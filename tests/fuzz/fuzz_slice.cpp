@@ -1,4 +1,5 @@
-// Fuzz target: slice-from-bytes, the whole cut (meshtree/include/shatter/meshtree/cut.hpp).
+// Fuzz target: slice-from-bytes, the whole cut: the plane kernel's one cut call
+// (meshtree/plane_cut.hpp) and the older kernels' cut_mesh (meshtree/cut.hpp).
 //
 // Input layout: bytes 0-31 the plane as four native doubles (normal x, y, z,
 // offset; a non-finite value or a zero normal skips the input), byte 32 the mesh
@@ -6,7 +7,10 @@
 // Meshes the library refuses as solids (require_valid_solid, self-intersections
 // included) and meshes over max_triangles are skipped.
 //
-// Properties, for both kernels: every piece is a closed, consistently oriented
+// Properties, plane kernel: every piece's exact solid is sound (check_solid) with
+// a positive exact volume, the volumes summing to the input's exactly, and its
+// mesh names a defect exactly when validate_mesh refuses it. Fast and exact
+// kernels: every piece is a closed, consistently oriented
 // 2-manifold using every vertex (fast kernel: topology is all it promises); the
 // exact kernel's pieces are moreover valid solids decided on exact coordinates
 // (no zero-area triangle, positive volume) whose volumes sum to the input's exactly.
@@ -22,6 +26,7 @@
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/cut.hpp"
+#include "shatter/meshtree/plane_cut.hpp"
 #include "support/checks.hpp"
 
 namespace {
@@ -77,9 +82,39 @@ void check_exact_cut(const shatter::Mesh& mesh, const shatter::Plane& plane) {
   require(six_volume == shatter::test::exact_six_volume(exact_mesh), "exact cut pieces' volumes do not sum to the input's");
 }
 
+/// The plane kernel's promise: sound exact pieces whose volumes add up exactly,
+/// each mesh certified or its defect named (a pinch is the documented refusal).
+void check_plane_cut(const shatter::Mesh& mesh, const shatter::Plane& plane) {
+  const shatter::PlaneInput input = shatter::prepare_plane_input(mesh);
+  const shatter::Plane cuts[] = {plane};
+  const shatter::PlaneSet set = input.geometry.plane_set(cuts);
+  shatter::PlaneCut cut;
+  try {
+    cut = shatter::cut_by_plane(input, set, input.solid, &input.mesh, shatter::PlaneRef::cut(0));
+  } catch (const shatter::UnsupportedGeometryError&) {
+    ++shatter::fuzz::known_limitation_refusals;
+    return;
+  } catch (const std::exception& error) {
+    fail(std::string("plane cut: unexpected ") + typeid(error).name() + ": " + error.what());
+  }
+  require(cut.plane_missed == cut.pieces.empty(), "plane cut: pieces returned although the plane missed, or none");
+  if (cut.plane_missed) return;
+  mpq_class six_volume = 0;
+  for (const shatter::CutPiece& piece : cut.pieces) {
+    const std::string problem = shatter::check_solid(set, piece.solid);
+    require(problem.empty(), "plane cut piece is not a sound solid: " + problem);
+    const mpq_class six = shatter::test::exact_six_volume(set, piece.solid);
+    require(six > 0, "plane cut piece has no positive volume");
+    six_volume += six;
+    require(piece.defect.empty() == shatter::validate_mesh(piece.mesh).valid(),
+            "plane cut piece: a defect named for a valid mesh, or none for an invalid one");
+  }
+  require(six_volume == shatter::test::exact_six_volume(mesh), "plane cut pieces' volumes do not sum to the input's");
+}
+
 }  // namespace
 
-/// libFuzzer's entry point: one plane and one mesh, cut with both kernels.
+/// libFuzzer's entry point: one plane and one mesh, cut with every kernel.
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < plane_bytes + 1) return 0;
   double values[4];
@@ -103,6 +138,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   } catch (const std::exception& error) {
     fail(std::string("require_valid_solid: unexpected ") + typeid(error).name() + ": " + error.what());
   }
+  check_plane_cut(mesh, plane);
   check_fast_cut(mesh, plane);
   check_exact_cut(mesh, plane);
   return 0;

@@ -26,7 +26,7 @@
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cut.hpp"
-#include "shatter/meshtree/cut_solid.hpp"
+#include "shatter/meshtree/plane_cut.hpp"
 #include "shatter/meshtree/exact_build.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/meshtree/plane_input.hpp"
@@ -427,83 +427,83 @@ struct Checker {
     std::optional<Mesh> rounded;
   };
 
-  // One plane-kernel cut of `parent` by cut plane i of `set`, every promise
-  // checked: cut_solid refuses only a pinch (counted); plane_missed agrees with
-  // the exact sides of the vertices; every piece sound (check_solid) with a
-  // positive exact volume, the volumes summing to the parent's exactly; every
-  // piece rounded (round_solid) and, when it can be, written, read back and
-  // valid; attributes kept. Appends the pieces the chain goes on with.
+  // One plane-kernel cut of `parent` by cut plane i of `set` (the library's one
+  // cut call, cut_by_plane), every promise checked: it refuses only a pinch
+  // (counted); plane_missed agrees with the exact sides of the vertices; every
+  // piece sound (check_solid) with a positive exact volume, the volumes summing to
+  // the parent's exactly; every piece's mesh, when it has no defect, written,
+  // read back and valid, and when it has one, really invalid; attributes kept.
+  // Appends the pieces the chain goes on with.
   void plane_cut(const PlaneInput& input, const PlaneSet& set, const PlanePiece& parent, std::size_t i,
                  const std::set<SurfaceId>& surfaces, const std::string& where, std::vector<PlanePiece>& next) {
     const PlaneRef cut_ref = PlaneRef::cut(static_cast<std::uint32_t>(i));
-    const SurfaceId cap = SurfaceId(i + 1);
-    SolidCut cut;
+    PlaneCutOptions options;
+    options.cap_surface = SurfaceId(i + 1);
+    PlaneCut cut;
     try {
-      cut = cut_solid(set, parent.solid, cut_ref, cap, input.shells);
+      cut = cut_by_plane(input, set, parent.solid, parent.rounded ? &*parent.rounded : nullptr, cut_ref, options);
     } catch (const UnsupportedGeometryError& error) {
       if (std::string(error.what()).find("pinched") != std::string::npos) {
         ++outcome.plane_pinched;  // documented: the piece is not cut, and the chain stops there
       } else {
-        fail(where + ": cut_solid refused a sound solid: " + error.what());
+        fail(where + ": cut_by_plane refused a sound solid: " + error.what());
       }
       return;
     }
     // The sides of the vertices: input points by side_of_plane on their doubles
     // (the audited predicate of the other kernels), defined points by side().
-    const bool one_side_empty = as_checker([&] {
-      bool below = false, above = false;
+    bool any_below = false, any_above = false;
+    as_checker([&] {
       for (std::size_t v = 0; v < parent.solid.defs.size(); ++v) {
         const PointDef& def = parent.solid.defs[v];
         const Sign s = def.kind == PointKind::input ? side_of_plane(c.planes[i], set.points[def.a])
                                                     : side(set, cut_ref, def, parent.solid.approx[v]);
-        below |= s == Sign::negative;
-        above |= s == Sign::positive;
+        any_below |= s == Sign::negative;
+        any_above |= s == Sign::positive;
       }
-      return !(below && above);
+      return true;
     });
-    if (cut.plane_missed != one_side_empty) {
+    if (cut.plane_missed != !(any_below && any_above)) {
       fail(where + ": plane_missed disagrees with the exact sides of the vertices");
     }
     if (cut.plane_missed) {
-      if (!cut.below.empty() || !cut.above.empty()) fail(where + ": plane missed, yet pieces were returned");
+      if (!cut.pieces.empty()) fail(where + ": plane missed, yet pieces were returned");
+      if (cut.whole_above != any_above) fail(where + ": the missed plane names the wrong side");
       next.push_back(parent);  // whole, as `shatter slice` returns it
       return;
     }
-    if (cut.below.empty() || cut.above.empty()) fail(where + ": a cut with vertices on both sides left a side empty");
-    SolidMeshOptions meshing;
-    meshing.attributes = &input.mesh;
-    meshing.trusted = parent.rounded ? &*parent.rounded : nullptr;
+    const auto above = std::count_if(cut.pieces.begin(), cut.pieces.end(), [](const CutPiece& p) { return p.above; });
+    if (above == 0 || std::size_t(above) == cut.pieces.size()) {
+      fail(where + ": a cut with vertices on both sides left a side empty");
+    }
     mpq_class sum = 0;
     std::size_t k = 0;
-    for (const auto* side_solids : {&cut.below, &cut.above}) {
-      for (const Solid& piece : *side_solids) {
-        const std::string name = where + " piece " + std::to_string(k++);
-        ++outcome.plane_pieces;
-        if (std::string p = as_checker([&] { return check_solid(set, piece); }); !p.empty()) {
-          fail(name + ": unsound solid: " + p);
-          continue;
-        }
-        const mpq_class six = test::exact_six_volume(set, piece);
-        if (six <= 0) fail(name + ": exact volume not positive");
-        sum += six;
-        RoundedSolid rounded = round_solid(set, piece, meshing);
-        if (!rounded.valid) {
-          // solid_mesh.hpp: `valid` is true exactly when `mesh` passes
-          // validate_mesh. (Found by this runner: a cap whose corners all rounded
-          // onto the edges around it failed the whole piece, though the mesh
-          // closed up without it; tests/regressions holds the reproducers.)
-          if (!rounded.mesh.triangles.empty() && validate_mesh(rounded.mesh).valid()) {
-            fail(name + ": round_solid refused a mesh that validate_mesh accepts");
-          }
-          ++outcome.plane_unroundable;  // refused, as `shatter slice` refuses it (exit 3)
-          next.push_back({piece, six, std::nullopt});
-          continue;
-        }
-        if (std::string p = channel_problem(rounded.mesh, input.mesh); !p.empty()) fail(name + ": " + p);
-        if (std::string p = surface_problem(rounded.mesh, surfaces); !p.empty()) fail(name + ": " + p);
-        check_written(KernelKind::plane, rounded.mesh, name);
-        next.push_back({piece, six, std::move(rounded.mesh)});
+    for (CutPiece& piece : cut.pieces) {
+      const std::string name = where + " piece " + std::to_string(k++);
+      ++outcome.plane_pieces;
+      if (std::string p = as_checker([&] { return check_solid(set, piece.solid); }); !p.empty()) {
+        fail(name + ": unsound solid: " + p);
+        continue;
       }
+      const mpq_class six = test::exact_six_volume(set, piece.solid);
+      if (six <= 0) fail(name + ": exact volume not positive");
+      sum += six;
+      if (!piece.defect.empty()) {
+        // solid_mesh.hpp: a defect is named exactly when the mesh fails
+        // validate_mesh. (Found by this runner: a cap whose corners all rounded
+        // onto the edges around it failed the whole piece, though the mesh
+        // closed up without it; tests/regressions holds the reproducers.)
+        if (!piece.mesh.triangles.empty() && validate_mesh(piece.mesh).valid()) {
+          fail(name + ": a piece named a defect, yet its mesh passes validate_mesh");
+        }
+        ++outcome.plane_unroundable;  // refused, as `shatter slice` refuses it (exit 3)
+        next.push_back({std::move(piece.solid), six, std::nullopt});
+        continue;
+      }
+      if (std::string p = channel_problem(piece.mesh, input.mesh); !p.empty()) fail(name + ": " + p);
+      if (std::string p = surface_problem(piece.mesh, surfaces); !p.empty()) fail(name + ": " + p);
+      check_written(KernelKind::plane, piece.mesh, name);
+      next.push_back({std::move(piece.solid), six, std::move(piece.mesh)});
     }
     if (sum != parent.six) fail(where + ": exact volumes do not add up to the parent's exactly");
   }

@@ -16,6 +16,7 @@ struct SolidCut {
   /// True when the plane misses or only touches the solid: nothing is cut, and
   /// below and above are empty.
   bool plane_missed = false;
+  bool all_below = false;  ///< with plane_missed: the side the solid lies on
   std::size_t cap_faces = 0;  ///< connected regions of the cap (each an outer loop and its holes)
   std::size_t cap_loops = 0;  ///< loops of the cap, holes included
 };

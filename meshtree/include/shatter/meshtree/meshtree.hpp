@@ -9,6 +9,7 @@
 //   cut
 //     cut.hpp           cut_mesh: one plane cut of a mesh (fast or exact kernel), capped and separated
 //     cut_solid.hpp     cut_solid: one plane cut of a plane-based solid, capped and separated
+//     plane_cut.hpp     cut_by_plane, cut_mesh_by_plane: the plane kernel's one cut call, pieces certified
 //   build
 //     tree_index.hpp    NodeIndex, LeafIndex, no_node: how a tree numbers its nodes and leaves
 //     build.hpp         build_mesh_tree and its options: Strategy, KernelKind, BuildOptions, BuildReport
@@ -39,6 +40,7 @@
 
 #include "shatter/meshtree/cut.hpp"
 #include "shatter/meshtree/cut_solid.hpp"
+#include "shatter/meshtree/plane_cut.hpp"
 
 #include "shatter/meshtree/tree_index.hpp"
 #include "shatter/meshtree/build.hpp"

@@ -1,0 +1,49 @@
+#include "shatter/meshtree/plane_cut.hpp"
+
+#include <algorithm>
+
+#include "shatter/meshtree/cut_solid.hpp"
+#include "shatter/triangulate/solid_mesh.hpp"
+
+namespace shatter {
+
+bool PlaneCut::certified() const {
+  return std::all_of(pieces.begin(), pieces.end(), [](const CutPiece& piece) { return piece.defect.empty(); });
+}
+
+PlaneCut cut_by_plane(const PlaneInput& input, const PlaneSet& set, const Solid& solid, const Mesh* solid_mesh,
+                      PlaneRef cut, const PlaneCutOptions& options) {
+  SolidCut exact = cut_solid(set, solid, cut, options.cap_surface, input.shells);
+  PlaneCut result;
+  result.plane_missed = exact.plane_missed;
+  result.whole_above = exact.plane_missed && !exact.all_below;
+  result.cap_faces = exact.cap_faces;
+  result.cap_loops = exact.cap_loops;
+  SolidMeshOptions meshing;
+  meshing.attributes = &input.mesh;
+  meshing.interior_uv_scale = options.interior_uv_scale;
+  meshing.allow_self_intersections = options.allow_self_intersections;
+  meshing.trusted = solid_mesh;
+  // Against a trusted parent, the triangles to test are the new ones along the
+  // cut: certification looks for what they may cross in a slab around it.
+  if (solid_mesh != nullptr) meshing.cut = &set.cuts[cut.index()];
+  result.pieces.reserve(exact.below.size() + exact.above.size());
+  for (const bool above : {false, true}) {
+    for (Solid& piece : above ? exact.above : exact.below) {
+      RoundedSolid rounded = round_solid(set, piece, meshing);
+      result.pieces.push_back({above, std::move(piece), std::move(rounded.mesh), std::move(rounded.defect)});
+      // round_solid promises a defect text exactly when the mesh is not valid;
+      // a piece is judged by the text, so it must never be empty then.
+      if (!rounded.valid && result.pieces.back().defect.empty()) result.pieces.back().defect = "not a valid mesh";
+    }
+  }
+  return result;
+}
+
+PlaneCut cut_mesh_by_plane(const Mesh& mesh, const Plane& plane, const PlaneCutOptions& options) {
+  const PlaneInput input = prepare_plane_input(mesh);
+  const Plane cuts[] = {plane};
+  return cut_by_plane(input, input.geometry.plane_set(cuts), input.solid, &input.mesh, PlaneRef::cut(0), options);
+}
+
+}  // namespace shatter
