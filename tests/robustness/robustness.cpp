@@ -9,6 +9,7 @@
 #include <array>
 #include <charconv>
 #include <cmath>
+#include <optional>
 #include <fstream>
 #include <limits>
 #include <set>
@@ -1122,6 +1123,20 @@ PointDef segment_def(std::uint32_t a, std::uint32_t b, PlaneRef plane) {
 }
 
 // One scene's queries, until the budget is spent.
+// x / w, or nothing where w is zero or the quotient would overflow: decided on the
+// exponents before dividing, so no floating-point trap fires (the runner traps
+// division by zero and overflow). |x| < 2^ex and |w| >= 2^(ew-1), so
+// |x / w| < 2^(ex-ew+1), which rounds below the largest double when ex - ew <= 1022.
+std::optional<double> quotient(double x, double w) {
+  if (w == 0 || !std::isfinite(x) || !std::isfinite(w)) return std::nullopt;
+  if (x == 0) return 0.0;
+  int ex = 0, ew = 0;
+  std::frexp(x, &ex);
+  std::frexp(w, &ew);
+  if (ex - ew > 1022) return std::nullopt;
+  return x / w;
+}
+
 void audit_scene(PlaneAuditor& auditor, const AuditScene& s, Random& random) {
   const PlaneSet set = s.set();
   auto any_cut = [&] { return PlaneRef::cut(static_cast<std::uint32_t>(random.index(s.cuts.size()))); };
@@ -1270,12 +1285,13 @@ void audit_scene(PlaneAuditor& auditor, const AuditScene& s, Random& random) {
       } else {
         const AuditPoint& r = in_plane[random.index(in_plane.size())];
         const double w = r.approx.w.value;
-        const double coords[3] = {r.approx.x.value / w, r.approx.y.value / w, r.approx.z.value / w};
-        m = {coords[i], coords[j]};
+        const double coords[3] = {r.approx.x.value, r.approx.y.value, r.approx.z.value};
+        // The approximation's x/w can overflow or divide by an underflowed w: m
+        // must be a point, so take the hub's then.
+        const std::optional<double> mx = quotient(coords[i], w), my = quotient(coords[j], w);
+        m = mx && my ? Vec2{*mx, *my} : Vec2{s.points[hub.point][i], s.points[hub.point][j]};
       }
       if (random.index(3) == 0) m = {ulps_away(m.x, int(random.index(5)) - 2), ulps_away(m.y, int(random.index(5)) - 2)};
-      // The approximation's x/w can overflow or divide by an underflowed w: m must
-      // be a point, so take the hub's then.
       if (!std::isfinite(m.x) || !std::isfinite(m.y)) m = {s.points[hub.point][i], s.points[hub.point][j]};
       const mpq_class mi(m.x), mj(m.y);
       int expected = ref_sign((q.exact.x[i] - p.exact.x[i]) * (mj - p.exact.x[j]) -
