@@ -21,6 +21,7 @@
 #include "shatter/kernel/validate.hpp"
 #include "support/checks.hpp"
 #include "support/run_shatter.hpp"
+#include "support/sanitizers.hpp"
 
 using namespace shatter;
 using namespace shatter::test;
@@ -642,10 +643,13 @@ TEST_CASE("fracture draws a progress bar on a terminal and erases it") {
   const fs::path dir = scratch("progress");
   fs::create_directories(dir);
   // Long enough to pass the bar's quiet first half second on any machine: the
-  // exact kernel (the plane kernel is done in a fraction of that).
+  // exact kernel (the plane kernel is done in a fraction of that), 128 fragments
+  // (about 4 s in Release), or 48 under the sanitizers, which run it ten times
+  // slower (sanitizers.hpp).
+  const std::string fragments = std::to_string(sized(128, 48));
   const std::string command = std::string("'") + SHATTER_EXE + "' fracture " + quoted(mesh_dir() / "elephant.off") +
-                              " --fragments 512 --kernel exact --threads 2 --out " + quoted(dir / "t.shatter") + " >" +
-                              quoted(dir / "stdout.txt");
+                              " --fragments " + fragments + " --kernel exact --threads 2 --out " +
+                              quoted(dir / "t.shatter") + " >" + quoted(dir / "stdout.txt");
   const std::string transcript = (dir / "terminal.txt").string();
   const int status = std::system(("script -qec \"" + command + "\" /dev/null >'" + transcript + "' 2>&1").c_str());
   REQUIRE(WIFEXITED(status));

@@ -50,6 +50,7 @@
 #include "shatter/meshtree/file.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "support/checks.hpp"
+#include "support/sanitizers.hpp"
 
 using namespace shatter;
 using namespace shatter::test;
@@ -1288,7 +1289,9 @@ TEST_CASE("the same options give the same bytes, another seed another tree", "[t
   const TestMesh& m = test_mesh("torus-800");
   for (const Strategy strategy : all_strategies) {
     for (const KernelKind kernel : all_kernels) {
-      const BuildOptions options = options_for(kernel == KernelKind::exact ? 8 : 32, strategy, kernel, 5, 2);
+      // Smaller under the sanitizers (sanitizers.hpp): determinism shows at any size.
+      const auto fragments = std::uint32_t(kernel == KernelKind::exact ? test::sized(8, 4) : test::sized(32, 12));
+      const BuildOptions options = options_for(fragments, strategy, kernel, 5, 2);
       INFO(describe({&m, options, Level::full, false}));
       const std::string first = encode_shatter(build_mesh_tree(m.mesh, options));
       CHECK(byte_difference(encode_shatter(build_mesh_tree(m.mesh, options)), first) == "equal");
@@ -1312,7 +1315,8 @@ TEST_CASE("the progress callback reports every leaf once", "[tree][build]") {
     INFO(strategy_name(strategy));
     std::mutex mutex;
     std::vector<std::size_t> reported;
-    const MeshTree tree = build_mesh_tree(test_mesh("torus-800").mesh, options_for(100, strategy, KernelKind::fast, 9, 4),
+    const auto fragments = std::uint32_t(test::sized(100, 30));
+    const MeshTree tree = build_mesh_tree(test_mesh("torus-800").mesh, options_for(fragments, strategy, KernelKind::fast, 9, 4),
                                           [&](std::size_t done) {
                                             const std::lock_guard<std::mutex> lock(mutex);
                                             reported.push_back(done);

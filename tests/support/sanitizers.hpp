@@ -1,0 +1,32 @@
+#pragma once
+// Whether this test binary was built with AddressSanitizer (.ci/sanitize), and
+// the sizes the tests take there. Under ASan and UBSan the code runs several times
+// slower and every run of the shatter binary pays about half a second of start-up
+// and leak check, so the sanitized suite runs each property at a smaller size:
+// what it adds is memory and undefined-behaviour checking of the same code paths,
+// which a smaller sample of the same cases exercises; the Release suite runs the
+// full size.
+
+#include <cstddef>
+
+namespace shatter::test {
+
+#if defined(__SANITIZE_ADDRESS__)  // g++
+inline constexpr bool under_address_sanitizer = true;
+#elif defined(__has_feature)  // clang
+#if __has_feature(address_sanitizer)
+inline constexpr bool under_address_sanitizer = true;
+#else
+inline constexpr bool under_address_sanitizer = false;
+#endif
+#else
+inline constexpr bool under_address_sanitizer = false;
+#endif
+
+/// `release` in an ordinary build, `sanitized` under AddressSanitizer: the size
+/// (cases, seeds, a stride) a test takes in each.
+constexpr std::size_t sized(std::size_t release, std::size_t sanitized) {
+  return under_address_sanitizer ? sanitized : release;
+}
+
+}  // namespace shatter::test
