@@ -130,9 +130,8 @@ SliceResult cut_with_plane_kernel(const Mesh& mesh, const Plane& plane, const Sl
       throw UnsupportedGeometryError("piece " + side_name + "-" + std::to_string(i) +
                                      " cannot be rounded to doubles as a valid mesh: " + piece.defect);
     }
-    if (!piece.above) {
-      result.cap_triangles += std::size_t(std::count(piece.mesh.surfaces.begin(), piece.mesh.surfaces.end(), cap_surface));
-    }
+    const auto& surfaces = piece.mesh.surfaces;
+    if (!piece.above) result.cap_triangles += std::size_t(std::count(surfaces.begin(), surfaces.end(), cap_surface));
     result.pieces.push_back({side_name, std::move(piece.mesh)});
   }
   return result;

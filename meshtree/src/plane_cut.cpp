@@ -30,11 +30,9 @@ PlaneCut cut_by_plane(const PlaneInput& input, const PlaneSet& set, const Solid&
   result.pieces.reserve(exact.below.size() + exact.above.size());
   for (const bool above : {false, true}) {
     for (Solid& piece : above ? exact.above : exact.below) {
+      // round_solid names validate_mesh's defects exactly when the mesh is not valid.
       RoundedSolid rounded = round_solid(set, piece, meshing);
       result.pieces.push_back({above, std::move(piece), std::move(rounded.mesh), std::move(rounded.defect)});
-      // round_solid promises a defect text exactly when the mesh is not valid;
-      // a piece is judged by the text, so it must never be empty then.
-      if (!rounded.valid && result.pieces.back().defect.empty()) result.pieces.back().defect = "not a valid mesh";
     }
   }
   return result;

@@ -50,8 +50,9 @@ TEST_CASE("meshes become sound plane-based solids, coplanar faces merged without
 }
 
 // The one cut call (plane_cut.hpp) over generated solids and the corpus: a plane
-// through the volume centroid always cuts (the centroid lies inside the convex
-// hull, so vertices lie strictly on both sides); the pieces are sound, on the
+// through the volume centroid cuts (the centroid lies inside the convex hull, so
+// vertices lie strictly on both sides; its rounding, a few ulps, does not take it
+// out of any of these solids); the pieces are sound, on the
 // side they name, with exact volumes adding up to the input's; a piece's mesh
 // names a defect exactly when validate_mesh refuses it; each side has cap
 // triangles, with the asked surface id, exactly when the cut has a cap. A plane

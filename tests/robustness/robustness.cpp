@@ -9,9 +9,9 @@
 #include <array>
 #include <charconv>
 #include <cmath>
-#include <optional>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -1122,7 +1122,6 @@ PointDef segment_def(std::uint32_t a, std::uint32_t b, PlaneRef plane) {
   return PointDef::segment_plane(std::min(a, b), std::max(a, b), plane);
 }
 
-// One scene's queries, until the budget is spent.
 // x / w, or nothing where w is zero or the quotient would overflow: decided on the
 // exponents before dividing, so no floating-point trap fires (the runner traps
 // division by zero and overflow). |x| < 2^ex and |w| >= 2^(ew-1), so
@@ -1137,6 +1136,7 @@ std::optional<double> quotient(double x, double w) {
   return x / w;
 }
 
+// One scene's queries, until the budget is spent.
 void audit_scene(PlaneAuditor& auditor, const AuditScene& s, Random& random) {
   const PlaneSet set = s.set();
   auto any_cut = [&] { return PlaneRef::cut(static_cast<std::uint32_t>(random.index(s.cuts.size()))); };
