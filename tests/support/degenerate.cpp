@@ -142,6 +142,20 @@ Mesh nested_islands() {
   });
 }
 
+Mesh box_with_through_hole() {
+  return grid_cell_solid(integers(3), integers(3), integers(1), [](int i, int j, int) { return i != 1 || j != 1; });
+}
+
+Mesh pit_and_bump() {
+  // The pit (2, 2, 1) and the bump (1, 1, 2) share only the vertex (2, 2, 2);
+  // around it both the filled and the empty cells are face-connected, so the
+  // surface stays a 2-manifold there.
+  return grid_cell_solid(integers(4), integers(4), integers(3), [](int i, int j, int k) {
+    if (k < 2) return !(i == 2 && j == 2 && k == 1);
+    return i == 1 && j == 1 && k == 2;
+  });
+}
+
 Mesh with_seams(Mesh mesh) {
   const std::size_t corners = 3 * mesh.triangles.size();
   mesh.corners.normals.resize(corners);

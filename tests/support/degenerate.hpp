@@ -48,6 +48,19 @@ Mesh flat_tetrahedron(double height);
 /// inside a cavity of the first: five nested shells, lattice coordinates.
 Mesh nested_islands();
 
+/// A 3 x 3 x 1 block of unit cells without its middle cell: a box with a square
+/// through-hole (genus 1). A plane across the hole leaves an annulus cap (one
+/// face, an outer loop and a hole); its top and bottom faces are annuli too.
+/// Integer coordinates.
+Mesh box_with_through_hole();
+
+/// A 4 x 4 x 2 slab with a one-cell pit in its top and a one-cell bump on it,
+/// pit and bump meeting at one vertex of the top plane z = 2: the coplanar top
+/// triangles form one edge-connected region whose boundary passes that vertex
+/// twice (a pinched region, which a polygon face with simple loops cannot hold).
+/// Integer coordinates.
+Mesh pit_and_bump();
+
 /// `mesh` with per-corner normals and UVs that differ between corners at one
 /// position (face normals; UVs from a per-triangle chart), so every vertex is a
 /// seam of several corners.
