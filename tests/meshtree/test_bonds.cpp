@@ -4,9 +4,6 @@
 
 #include <catch2/catch.hpp>
 
-#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
-#include <CGAL/intersections.h>
-
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -28,6 +25,7 @@
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cut.hpp"
 #include "shatter/meshtree/file.hpp"
+#include "support/bond_reference.hpp"
 #include "support/checks.hpp"
 
 using namespace shatter;
@@ -67,105 +65,13 @@ double length_scale(const MeshTree& tree) {
   return norm(b.hi - b.lo);
 }
 
-// Which side of ancestor k's plane a leaf is on, by walking parent links (not
-// by leaf ranges, which find_bonds uses). Nullopt when k is not an ancestor.
-std::optional<bool> leaf_above(const MeshTree& tree, LeafIndex leaf, NodeIndex k) {
-  for (NodeIndex n = tree.leaf_nodes[leaf]; tree.nodes[n].parent != no_node; n = tree.nodes[n].parent) {
-    if (tree.nodes[n].parent == k) return tree.nodes[n].above_parent_plane;
-  }
-  return std::nullopt;
-}
-
-// --- the brute force: every cross-side pair of cap triangles of every cut,
-// intersected in exact rational arithmetic (CGAL Epeck), no bounding boxes.
-using K = CGAL::Epeck;
-
-K::FT polygon_area(const std::vector<K::Point_2>& points) {
-  K::FT twice = 0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const K::Point_2& a = points[i];
-    const K::Point_2& b = points[(i + 1) % points.size()];
-    twice += a.x() * b.y() - a.y() * b.x();
-  }
-  return CGAL::abs(twice) / 2;
-}
-
-// Exact projected overlap area of two triangles (0 when they only touch):
-// Sutherland-Hodgman clipping of one by the other's three edge lines, in exact
-// rationals.
-K::FT signed_twice_area(const K::Point_2& a, const K::Point_2& b, const K::Point_2& c) {
-  return (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
-}
-
-K::FT overlap_area(const K::Triangle_2& a, const K::Triangle_2& b) {
-  std::array<K::Point_2, 3> clipper{b[0], b[1], b[2]};
-  if (signed_twice_area(clipper[0], clipper[1], clipper[2]) < 0) std::swap(clipper[1], clipper[2]);
-  std::vector<K::Point_2> polygon{a[0], a[1], a[2]};
-  for (int e = 0; e < 3 && !polygon.empty(); ++e) {
-    const K::Point_2& from = clipper[e];
-    const K::Point_2& to = clipper[(e + 1) % 3];
-    std::vector<K::Point_2> kept;
-    for (std::size_t i = 0; i < polygon.size(); ++i) {
-      const K::Point_2& p = polygon[i];
-      const K::Point_2& q = polygon[(i + 1) % polygon.size()];
-      const K::FT sp = signed_twice_area(from, to, p), sq = signed_twice_area(from, to, q);
-      if (sp >= 0) kept.push_back(p);
-      if ((sp > 0 && sq < 0) || (sp < 0 && sq > 0)) {
-        const K::FT t = sp / (sp - sq);
-        kept.emplace_back(p.x() + t * (q.x() - p.x()), p.y() + t * (q.y() - p.y()));
-      }
-    }
-    polygon = std::move(kept);
-  }
-  return polygon.size() < 3 ? K::FT(0) : polygon_area(polygon);
-}
-
-using BondKey = std::tuple<LeafIndex, LeafIndex, NodeIndex>;
-
-// (first, second, cut) -> overlap area in the plane, for every pair sharing area.
+// (first, second, cut) -> overlap area in the plane, for every pair sharing
+// area: the brute force over every cross-side pair of cap triangles of every
+// cut, intersected in exact rationals (support/bond_reference.hpp, which
+// test_tree shares).
 std::map<BondKey, double> brute_force_bonds(const MeshTree& tree) {
-  struct Cap {
-    LeafIndex leaf;
-    K::Triangle_2 triangle;
-    CGAL::Bbox_2 box;  // closed: a pair whose boxes miss cannot share area
-  };
   std::map<BondKey, double> bonds;
-  for (NodeIndex k = 0; k < tree.nodes.size(); ++k) {
-    const MeshTreeNode& node = tree.nodes[k];
-    if (node.is_leaf()) continue;
-    const PlaneProjection projection = PlaneProjection::of(node.plane);
-    const int dropped = 3 - projection.u_axis - projection.v_axis;
-    const double scale = norm(node.plane.normal) / std::fabs(node.plane.normal[dropped]);
-    std::vector<Cap> below, above;
-    for (LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) {
-      const std::optional<bool> side = leaf_above(tree, leaf, k);
-      if (!side) continue;
-      const Mesh& mesh = tree.leaf(leaf).mesh;
-      for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-        if (mesh.surfaces[t] != cap_surface_of(k)) continue;
-        std::array<K::Point_2, 3> p;
-        CGAL::Bbox_2 box;
-        for (int c = 0; c < 3; ++c) {
-          const Vec2 q = projection(mesh.positions[mesh.triangles[t][c]]);
-          p[c] = K::Point_2(q.x, q.y);
-          box += CGAL::Bbox_2(q.x, q.y, q.x, q.y);
-        }
-        if (CGAL::collinear(p[0], p[1], p[2])) continue;
-        (*side ? above : below).push_back({leaf, K::Triangle_2(p[0], p[1], p[2]), box});
-      }
-    }
-    std::map<std::pair<LeafIndex, LeafIndex>, K::FT> areas;
-    for (const Cap& b : below) {
-      for (const Cap& a : above) {
-        if (!CGAL::do_overlap(b.box, a.box)) continue;
-        const K::FT area = overlap_area(b.triangle, a.triangle);
-        if (area > 0) areas[{std::min(a.leaf, b.leaf), std::max(a.leaf, b.leaf)}] += area;
-      }
-    }
-    // to_double of a lazy number may return the midpoint of a wide interval (the
-    // sums cancel terms of size 1e10 far from the origin): round the exact value.
-    for (const auto& [pair, area] : areas) bonds[{pair.first, pair.second, k}] = CGAL::to_double(CGAL::exact(area)) * scale;
-  }
+  for (const auto& [key, bond] : mesh_reference_bonds(tree).bonds) bonds[key] = bond.area;
   return bonds;
 }
 
