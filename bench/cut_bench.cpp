@@ -1,19 +1,18 @@
 // shatter-bench-cut: one plane cut through the volume centroid, timed per input
-// triangle for shatter's plane, fast and exact kernels, against CGAL PMP clip with
-// clip_volume(true) run on both sides of the same plane. The plane kernel's time
-// is the library's one cut call, whole output included (cut_by_plane: the exact
-// cut, then every piece rounded and certified against the validated input); its
-// input conversion (prepare_plane_input, like the exact kernel's to_exact) is
-// timed apart.
+// triangle for shatter's cut against CGAL PMP clip with clip_volume(true) run on
+// both sides of the same plane. shatter's time is the library's one cut call, whole
+// output included (cut_by_plane: the exact cut, then every piece rounded and
+// certified against the validated input); its input conversion
+// (prepare_plane_input) is timed apart, since a caller cutting on pays it once.
 //
 // Inputs: knot1.off and fandisk.off from the mesh folder, and a subdivided
 // icosahedron projected to the unit sphere (20 * 4^K triangles, K = 8 by default:
-// 1,310,720 triangles). Every method sees the same plane n·x + d = 0 with n the
+// 1,310,720 triangles). Both methods see the same plane n·x + d = 0 with n the
 // normalised (0.3, 0.5, 0.8) and d = -n·c, c the volume centroid.
 //
 // Timing: std::chrono::steady_clock around the cut call only. Everything a method
-// needs beforehand is prepared outside the clock on every run: the exact kernel's
-// to_exact conversion (timed separately and reported), CGAL's two Surface_mesh
+// needs beforehand is prepared outside the clock on every run: shatter's
+// prepare_plane_input (timed separately and reported), CGAL's two Surface_mesh
 // copies. The outputs are destroyed after the clock stops. Each measurement is
 // repeated until it has taken >= 0.3 s in total and at least 3 runs (a run that
 // takes more than 60 s is not repeated); the median is reported. Validity checks
@@ -28,7 +27,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -44,12 +42,10 @@
 #include "shatter/generators/corpus.hpp"
 #include "shatter/meshtree/plane_cut.hpp"
 #include "shatter/meshtree/plane_input.hpp"
-#include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/validate.hpp"
-#include "shatter/meshtree/cut.hpp"
 
 namespace {
 
@@ -163,26 +159,15 @@ Timing measure(const RepeatPolicy& policy, Setup setup, Run run, Inspect inspect
 struct Row {
   std::string name;
   std::size_t triangles = 0;
-  Timing plane, fast, exact, cgal;
-  std::size_t plane_pieces = 0, plane_valid = 0, fast_pieces = 0, exact_pieces = 0, cgal_pieces = 0;
-  std::size_t fast_cap_triangles = 0;
+  Timing plane, cgal;
+  std::size_t plane_pieces = 0, cgal_pieces = 0;
+  std::size_t plane_valid = 0;  ///< plane pieces certified, and passing validate_mesh unless --no-validate
   // Validity (outside timing): -1 = not checked.
-  long fast_valid = -1;        ///< fast pieces passing validate_mesh (with self-intersections)
-  long fast_closed = -1;       ///< fast pieces with no boundary / non-manifold / orientation defect
   long cgal_closed = -1;       ///< CGAL sides (of 2) that are closed
   long cgal_self_free = -1;    ///< CGAL sides (of 2) without self-intersections
-  std::size_t cgal_triangles = 0;  ///< triangles of both CGAL outputs
   bool cgal_ok = true;         ///< every clip call returned true
   std::string note;
 };
-
-bool topologically_closed(const shatter::ValidationReport& report) {
-  using shatter::DefectKind;
-  for (const auto kind : {DefectKind::boundary_edge, DefectKind::non_manifold_edge,
-                          DefectKind::inconsistent_orientation, DefectKind::index_out_of_range})
-    if (report.find(kind)) return false;
-  return true;
-}
 
 Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatPolicy& policy, bool validate) {
   Row row;
@@ -202,8 +187,8 @@ Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatP
   std::cerr << name << ": " << mesh.triangle_count() << " triangles, plane (" << n.x << ", " << n.y << ", " << n.z
             << ", " << plane.offset << ")\n";
 
-  // shatter, plane kernel: the input prepared per run, outside the clock; the
-  // clock covers the cut and the certified rounding of every piece.
+  // shatter: the input prepared per run, outside the clock; the clock covers the
+  // cut and the certified rounding of every piece.
   std::cerr << "  plane ..." << std::flush;
   {
     const std::vector<shatter::Plane> cuts{plane};
@@ -215,6 +200,7 @@ Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatP
         },
         [&](const shatter::PlaneCut& cut) {
           row.plane_pieces = cut.pieces.size();
+          if (cut.plane_missed) row.note += "plane missed; ";
           row.plane_valid = 0;
           for (const auto& piece : cut.pieces) {
             row.plane_valid += piece.defect.empty() && (!validate || shatter::validate_mesh(piece.mesh).valid());
@@ -223,34 +209,6 @@ Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatP
   }
   std::cerr << " " << row.plane.median_ms << " ms (" << row.plane.runs << " runs, prepare_plane_input "
             << row.plane.setup_ms << " ms)\n";
-
-  // shatter, fast kernel.
-  std::cerr << "  fast ..." << std::flush;
-  row.fast = measure(
-      policy, [] { return 0; }, [&](int) { return shatter::cut_mesh(mesh, plane); },
-      [&](const shatter::CutResult<shatter::Vec3>& r) {
-        row.fast_pieces = r.below.size() + r.above.size();
-        row.fast_cap_triangles = r.cap_triangles;
-        if (r.plane_missed) row.note += "plane missed; ";
-        if (!validate) return;
-        row.fast_valid = row.fast_closed = 0;
-        for (const auto* side : {&r.below, &r.above})
-          for (const auto& piece : *side) {
-            const auto report = shatter::validate_mesh(piece);
-            row.fast_valid += report.valid();
-            row.fast_closed += topologically_closed(report);
-          }
-      });
-  std::cerr << " " << row.fast.median_ms << " ms (" << row.fast.runs << " runs)\n";
-
-  // shatter, exact kernel: to_exact per run, outside the clock.
-  std::cerr << "  exact ..." << std::flush;
-  row.exact = measure(
-      policy, [&] { return shatter::to_exact(mesh); },
-      [&](const shatter::ExactMesh& exact) { return shatter::cut_mesh(exact, plane); },
-      [&](const shatter::CutResult<shatter::ExactPoint>& r) { row.exact_pieces = r.below.size() + r.above.size(); });
-  std::cerr << " " << row.exact.median_ms << " ms (" << row.exact.runs << " runs, to_exact " << row.exact.setup_ms
-            << " ms)\n";
 
   // CGAL PMP clip, both sides: two copies made outside the clock.
   std::cerr << "  cgal clip ..." << std::flush;
@@ -288,12 +246,10 @@ Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatP
         row.cgal_ok = c.ok_below && c.ok_above;
         if (!row.cgal_ok) row.note += "CGAL clip returned false; ";
         row.cgal_pieces = 0;
-        row.cgal_triangles = 0;
         if (validate) row.cgal_closed = row.cgal_self_free = 0;
         for (auto* side : {&c.below, &c.above}) {
           side->collect_garbage();
           row.cgal_pieces += cgal_component_count(*side);
-          row.cgal_triangles += side->number_of_faces();
           if (!validate) continue;
           row.cgal_closed += CGAL::is_closed(*side);
           row.cgal_self_free += !cgal_self_intersects(*side);
@@ -308,7 +264,6 @@ Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatP
 
 std::string ms_text(double ms) { return std::isnan(ms) ? "–" : fixed(ms, ms < 10 ? 3 : ms < 1000 ? 1 : 0); }
 
-
 double ns_per_triangle(double ms, std::size_t triangles) { return ms * 1e6 / static_cast<double>(triangles); }
 
 std::string check_text(long ok, std::size_t of) {
@@ -316,49 +271,36 @@ std::string check_text(long ok, std::size_t of) {
 }
 
 void print_markdown(std::ostream& out, const std::vector<Row>& rows) {
-  out << "| mesh | triangles | plane ms | plane ns/triangle | fast ms | fast ns/triangle | exact ms | "
-         "exact ns/triangle | CGAL clip ms | CGAL/plane ratio | CGAL/fast ratio | CGAL/exact ratio |\n"
-      << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  out << "| mesh | triangles | plane ms | plane ns/triangle | prepare_plane_input ms (untimed) | CGAL clip ms | "
+         "CGAL/plane ratio |\n"
+      << "|---|---:|---:|---:|---:|---:|---:|\n";
   for (const auto& r : rows) {
     out << "| " << r.name << " | " << with_thousands(r.triangles) << " | " << ms_text(r.plane.median_ms) << " | "
-        << fixed(ns_per_triangle(r.plane.median_ms, r.triangles), 1) << " | " << ms_text(r.fast.median_ms) << " | "
-        << fixed(ns_per_triangle(r.fast.median_ms, r.triangles), 1) << " | " << ms_text(r.exact.median_ms) << " | "
-        << fixed(ns_per_triangle(r.exact.median_ms, r.triangles), 1) << " | " << ms_text(r.cgal.median_ms) << " | "
-        << ratio_text(r.cgal.median_ms / r.plane.median_ms) << " | " << ratio_text(r.cgal.median_ms / r.fast.median_ms)
-        << " | " << ratio_text(r.cgal.median_ms / r.exact.median_ms) << " |\n";
+        << fixed(ns_per_triangle(r.plane.median_ms, r.triangles), 1) << " | " << ms_text(r.plane.setup_ms) << " | "
+        << ms_text(r.cgal.median_ms) << " | " << ratio_text(r.cgal.median_ms / r.plane.median_ms) << " |\n";
   }
-  out << "\n| mesh | runs plane/fast/exact/CGAL | prepare_plane_input ms (untimed) | to_exact ms (untimed) | "
-         "pieces plane | pieces fast | pieces exact | pieces CGAL | plane pieces certified and valid | "
-         "fast pieces valid | fast pieces closed | CGAL sides closed | CGAL sides w/o self-intersection | note |\n"
-      << "|---|---|---:|---:|---:|---:|---:|---:|---|---|---|---|---|---|\n";
+  out << "\n| mesh | runs plane/CGAL | pieces plane | pieces CGAL | plane pieces certified and valid | "
+         "CGAL sides closed | CGAL sides w/o self-intersection | note |\n"
+      << "|---|---|---:|---:|---|---|---|---|\n";
   for (const auto& r : rows) {
-    out << "| " << r.name << " | " << r.plane.runs << "/" << r.fast.runs << "/" << r.exact.runs << "/" << r.cgal.runs
-        << " | " << ms_text(r.plane.setup_ms) << " | " << ms_text(r.exact.setup_ms) << " | " << r.plane_pieces << " | "
-        << r.fast_pieces << " | " << r.exact_pieces << " | " << r.cgal_pieces << " | " << r.plane_valid << "/"
-        << r.plane_pieces << " | " << check_text(r.fast_valid, r.fast_pieces) << " | "
-        << check_text(r.fast_closed, r.fast_pieces) << " | " << check_text(r.cgal_closed, 2) << " | "
-        << check_text(r.cgal_self_free, 2) << " | " << r.note << " |\n";
+    out << "| " << r.name << " | " << r.plane.runs << "/" << r.cgal.runs << " | " << r.plane_pieces << " | "
+        << r.cgal_pieces << " | " << r.plane_valid << "/" << r.plane_pieces << " | " << check_text(r.cgal_closed, 2)
+        << " | " << check_text(r.cgal_self_free, 2) << " | " << r.note << " |\n";
   }
 }
 
 void write_csv(const std::filesystem::path& path, const std::vector<Row>& rows) {
   CsvWriter csv(
-      "mesh,triangles,plane_ms,plane_ns_per_triangle,fast_ms,fast_ns_per_triangle,exact_ms,exact_ns_per_triangle,"
-      "cgal_clip_ms,cgal_over_fast,cgal_over_exact,runs_fast,runs_exact,runs_cgal,to_exact_ms,pieces_fast,"
-      "pieces_exact,pieces_cgal,fast_pieces_valid,cgal_sides_closed,cgal_sides_without_self_intersection,"
-      "cgal_clip_ok,cgal_over_plane,runs_plane,prepare_plane_input_ms,pieces_plane,plane_pieces_valid");
+      "mesh,triangles,plane_ms,plane_ns_per_triangle,runs_plane,prepare_plane_input_ms,pieces_plane,"
+      "plane_pieces_valid,cgal_clip_ms,cgal_over_plane,runs_cgal,pieces_cgal,cgal_sides_closed,"
+      "cgal_sides_without_self_intersection,cgal_clip_ok");
   for (const auto& r : rows) {
     csv.field(r.name).field(r.triangles);
-    for (const Timing* t : {&r.plane, &r.fast, &r.exact}) {
-      csv.field(t->median_ms).field(ns_per_triangle(t->median_ms, r.triangles));
-    }
-    csv.field(r.cgal.median_ms).field(r.cgal.median_ms / r.fast.median_ms).field(r.cgal.median_ms / r.exact.median_ms);
-    csv.field(r.fast.runs).field(r.exact.runs).field(r.cgal.runs).field(r.exact.setup_ms);
-    csv.field(r.fast_pieces).field(r.exact_pieces).field(r.cgal_pieces);
+    csv.field(r.plane.median_ms).field(ns_per_triangle(r.plane.median_ms, r.triangles)).field(r.plane.runs);
+    csv.field(r.plane.setup_ms).field(r.plane_pieces).field(r.plane_valid);
+    csv.field(r.cgal.median_ms).field(r.cgal.median_ms / r.plane.median_ms).field(r.cgal.runs);
     // -1: not checked (--no-validate).
-    csv.field(r.fast_valid).field(r.cgal_closed).field(r.cgal_self_free).field(r.cgal_ok);
-    csv.field(r.cgal.median_ms / r.plane.median_ms).field(r.plane.runs).field(r.plane.setup_ms);
-    csv.field(r.plane_pieces).field(r.plane_valid);
+    csv.field(r.cgal_pieces).field(r.cgal_closed).field(r.cgal_self_free).field(r.cgal_ok);
     csv.end_row();
   }
   csv.save(path);
@@ -368,12 +310,12 @@ void write_csv(const std::filesystem::path& path, const std::vector<Row>& rows) 
 void add_options(CLI::App& app, Options& options) {
   app.description(
       "shatter-bench-cut: one cut through the volume centroid (normal = normalised (0.3, 0.5, 0.8)) of "
-      "knot1.off, fandisk.off and a subdivided icosahedron sphere (20 * 4^K triangles). Times shatter's plane "
-      "kernel (cut_solid and the certified rounding of every piece; prepare_plane_input timed apart), "
-      "cut_mesh with the fast and the exact kernel (to_exact timed apart), and CGAL PMP "
-      "clip(..., clip_volume(true)) on both sides of the same plane. Prints Markdown tables (median of >= 3 runs "
-      "and >= 0.3 s; 1 run if > 60 s) with each method's pieces and their validity. Exit status: 0 on success, "
-      "1 on a usage error or any failure.");
+      "knot1.off, fandisk.off and a subdivided icosahedron sphere (20 * 4^K triangles). Times shatter's cut "
+      "(cut_by_plane: the exact cut and the certified rounding of every piece; prepare_plane_input timed "
+      "apart) against CGAL PMP clip(..., clip_volume(true)) on both sides of the same plane. Prints Markdown "
+      "tables (median of >= 3 runs and >= 0.3 s; 1 run if > 60 s) with each method's pieces and their "
+      "validity. Exit status: 0 on success, 1 on a usage error, a shatter piece that is not certified and "
+      "valid, or any other failure.");
   app.add_option("--mesh-dir", options.mesh_dir, "Folder holding knot1.off and fandisk.off")->capture_default_str();
   app.add_option("--csv", options.csv, "Also write the results as CSV to this file (one row per mesh)");
   app.add_option("--sphere-subdivisions", options.sphere_subdivisions,
@@ -413,7 +355,16 @@ int main(int argc, char** argv) {
               << std::thread::hardware_concurrency() << " hardware threads.\n\n";
     print_markdown(std::cout, rows);
     if (options.csv) write_csv(*options.csv, rows);
-    return 0;
+
+    // shatter promises every piece valid as written; CGAL's outputs are only reported.
+    bool failed = false;
+    for (const Row& r : rows) {
+      if (r.plane_valid == r.plane_pieces) continue;
+      failed = true;
+      std::cerr << "FAILED: " << r.name << ": " << r.plane_pieces - r.plane_valid << " of " << r.plane_pieces
+                << " pieces not certified or not valid\n";
+    }
+    return failed ? 1 : 0;
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << '\n';
     return 1;

@@ -1,9 +1,11 @@
 // shatter-bench-node: where one node of a deep mesh tree spends its time. A cube is
-// fractured with build_mesh_tree's defaults (plane kernel, thesis strategy, seed 1)
-// on 1 thread to N fragments; then, on every leaf, each step a node costs is timed on
-// its own: the fast kernel's cut (cut_mesh: slice, cap, separate), the validation of
-// a piece with and without the self-intersection test, the convex hull, and the mass
-// properties.
+// fractured with build_mesh_tree's defaults (thesis strategy, seed 1) on 1 thread to
+// N fragments; then, on every leaf, each step a node costs is timed on its own: the
+// cut of the leaf's mesh (cut_mesh_by_plane: the exact cut, then every piece rounded
+// and certified), the part of that cut spent preparing the mesh as an input
+// (prepare_plane_input, which the builder does once for the root and not per node:
+// it cuts each node's exact solid), the validation of a piece with and without the
+// self-intersection test, the convex hull, and the mass properties.
 // Reported: microseconds per leaf, and the leaves' mean triangle count.
 //
 // Timing: std::chrono::steady_clock around a loop over all leaves, each step
@@ -24,8 +26,9 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/build.hpp"
-#include "shatter/meshtree/cut.hpp"
 #include "shatter/meshtree/hull.hpp"
+#include "shatter/meshtree/plane_cut.hpp"
+#include "shatter/meshtree/plane_input.hpp"
 
 namespace {
 
@@ -58,10 +61,11 @@ shatter::Plane plane_through_middle(const shatter::Mesh& mesh) {
 int main(int argc, char** argv) {
   std::vector<std::uint32_t> counts{256, 4096};
   CLI::App app{
-      "shatter-bench-node: fractures a unit cube into N fragments with build_mesh_tree's defaults (plane kernel, "
-      "thesis strategy, seed 1) on 1 thread, and times, per leaf, each step a node costs: the fast kernel's cut "
-      "(cut_mesh: slice, cap, separate), validation with and without the self-intersection test, the convex hull "
-      "and the mass properties (mean microseconds per leaf over >= 0.3 s). Prints one Markdown row per N. "
+      "shatter-bench-node: fractures a unit cube into N fragments with build_mesh_tree's defaults (thesis "
+      "strategy, seed 1) on 1 thread, and times, per leaf, each step a node costs: the cut of the leaf's mesh "
+      "(cut_mesh_by_plane: the exact cut and the certified rounding of every piece), the prepare_plane_input "
+      "part of that cut alone, validation with and without the self-intersection test, the convex hull and "
+      "the mass properties (mean microseconds per leaf over >= 0.3 s). Prints one Markdown row per N. "
       "Exit status: 0, or 2 on a usage error.",
       "shatter-bench-node"};
   app.add_option("N", counts, "Fragment counts, each an integer from 2 to 1048576")
@@ -69,8 +73,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   if (const auto code = shatter::bench::parse_command_line(app, argc, argv, 2)) return *code;
 
-  std::cout << "| N | mean leaf triangles | cut µs | validate µs | validate without self-intersections µs | "
-               "hull µs | mass µs |\n|---:|---:|---:|---:|---:|---:|---:|\n";
+  std::cout << "| N | mean leaf triangles | cut µs | of which prepare_plane_input µs | validate µs | "
+               "validate without self-intersections µs | hull µs | mass µs |\n"
+               "|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const std::uint32_t count : counts) {
     shatter::BuildOptions options;
     options.fragments = count;
@@ -85,7 +90,9 @@ int main(int argc, char** argv) {
     shatter::ValidationOptions without_self_intersections;
     without_self_intersections.check_self_intersections = false;
     const double cut = microseconds_per_leaf(
-        leaves, [](const shatter::Mesh& m) { (void)shatter::cut_mesh(m, plane_through_middle(m)); });
+        leaves, [](const shatter::Mesh& m) { (void)shatter::cut_mesh_by_plane(m, plane_through_middle(m)); });
+    const double prepare =
+        microseconds_per_leaf(leaves, [](const shatter::Mesh& m) { (void)shatter::prepare_plane_input(m); });
     const double validate = microseconds_per_leaf(leaves, [](const shatter::Mesh& m) { (void)shatter::validate_mesh(m); });
     const double validate_topology = microseconds_per_leaf(
         leaves, [&](const shatter::Mesh& m) { (void)shatter::validate_mesh(m, without_self_intersections); });
@@ -93,7 +100,8 @@ int main(int argc, char** argv) {
     const double mass = microseconds_per_leaf(leaves, [](const shatter::Mesh& m) { (void)shatter::mass_properties(m); });
     std::cout << "| " << shatter::bench::with_thousands(count) << " | "
               << shatter::bench::fixed(static_cast<double>(triangles) / static_cast<double>(leaves.size()), 1) << " | "
-              << shatter::bench::fixed(cut, 1) << " | " << shatter::bench::fixed(validate, 1) << " | "
+              << shatter::bench::fixed(cut, 1) << " | " << shatter::bench::fixed(prepare, 1) << " | "
+              << shatter::bench::fixed(validate, 1) << " | "
               << shatter::bench::fixed(validate_topology, 1) << " | " << shatter::bench::fixed(hull, 1) << " | "
               << shatter::bench::fixed(mass, 2) << " |\n";
   }

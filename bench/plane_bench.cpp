@@ -12,7 +12,7 @@
 // kernel cuts fewer input faces than the mesh has triangles, the column "plane
 // faces" says how many (a midpoint that rounds off its edge keeps its triangles apart).
 //
-// shatter: build_mesh_tree with KernelKind::plane, Strategy::thesis, seed 1 (--seed),
+// shatter: build_mesh_tree with Strategy::thesis, seed 1 (--seed),
 // threads = 1. The clock (std::chrono::steady_clock) runs around build_mesh_tree
 // only: validating the input (with self-intersections), the cuts and mass
 // properties, with every piece rounded to a certified valid double mesh as it is
@@ -479,7 +479,6 @@ Timed time_build(const shatter::Mesh& mesh, std::uint32_t fragments, std::uint64
   options.fragments = fragments;
   options.seed = seed;
   options.strategy = shatter::Strategy::thesis;
-  options.kernel = shatter::KernelKind::plane;
   options.threads = 1;
   Timed timed;
   std::vector<double> total, cutting, hull, bond;

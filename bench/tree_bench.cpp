@@ -3,20 +3,18 @@
 //
 // Part 1, time against fragment count (seed 6.2.1 and 6.2.3, where the seed's
 // builder failed at 2,048 fragments): a 1 x 1 x 1 box (12 triangles) cut into
-// N = 2, 4, ..., 65,536 fragments with the thesis strategy, fast kernel on 1 and on
-// 2 threads, exact kernel on 1 thread up to --exact-max and no further once one
-// exact build took longer than --exact-stop-seconds (and, for the whole section,
-// no further once a fast build took longer than --fast-stop-seconds).
+// N = 2, 4, ..., 65,536 fragments with the thesis strategy, on 1 and on 2 threads,
+// no further once a 1-thread build took longer than --stop-seconds.
 //
 // Part 2, the seed's meshes at 256 fragments (6.2.2): the box, an 800-triangle
 // torus, the 1,520-triangle hollow egg shell and elephant.off (standing in for the
 // Stanford bunny: organic, with protrusions), each with the thesis, balanced and
-// axis strategies, fast and exact kernel, 1 thread. The coefficient of variation of
-// the fragment volumes (standard deviation / mean) measures the seed's "clusters of
-// very small fragments".
+// axis strategies, 1 thread. The coefficient of variation of the fragment volumes
+// (standard deviation / mean) measures the seed's "clusters of very small
+// fragments".
 //
 // The peer: CGAL 5.5 PMP::clip(clip_volume(true)) on Surface_mesh<Epick>, replaying
-// the very planes of shatter's fast-kernel, 1-thread, thesis tree. For each internal
+// the very planes of shatter's 1-thread thesis tree. For each internal
 // node in preorder, the peer's piece for that node is clipped on both sides of the
 // node's plane (two copies, clipped by the plane and by its opposite, as
 // shatter-bench-cut does), each side is split into connected components, and those
@@ -30,13 +28,13 @@
 // progress made before it.
 //
 // Timing: std::chrono::steady_clock. Shatter: around build_mesh_tree only, which
-// includes validating the input, the exact conversion (exact kernel), mass
-// properties, convex hulls and bonds, so shatter does more work than the peer; the
-// tree is destroyed after the clock stops. Repeated until >= 3 runs and >= 0.3 s (a
-// run longer than 2 s is not repeated); the median is reported. The peer: the sum
-// of its clip and split_connected_components calls only (copies, matching and
-// checks are outside), a single run. The machine is shared and noisy: read the
-// ratios peer/shatter measured in the same run, not the absolute times.
+// includes validating and preparing the input, rounding and certifying every
+// piece, mass properties, convex hulls and bonds, so shatter does more work than
+// the peer; the tree is destroyed after the clock stops. Repeated until >= 3 runs
+// and >= 0.3 s (a run longer than 2 s is not repeated); the median is reported. The
+// peer: the sum of its clip and split_connected_components calls only (copies,
+// matching and checks are outside), a single run. The machine is shared and noisy:
+// read the ratios peer/shatter measured in the same run, not the absolute times.
 //
 // Checks, outside every clock: every shatter leaf through validate_mesh (closed,
 // oriented, manifold, positive volume, no self-intersection, no zero-area
@@ -88,7 +86,6 @@ using shatter::bench::PeerResult;
 using shatter::bench::seconds_text;
 using shatter::bench::with_thousands;
 using Clock = std::chrono::steady_clock;
-using shatter::KernelKind;
 using shatter::MeshTree;
 using shatter::NodeIndex;
 using shatter::Strategy;
@@ -105,10 +102,9 @@ struct Options {
   bool peer = true;
   bool scaling = true;
   bool meshes = true;
-  std::optional<std::uint32_t> max_fragments, exact_max, mesh_fragments, peer_max;
+  std::optional<std::uint32_t> max_fragments, mesh_fragments, peer_max;
   std::optional<std::filesystem::path> dump_invalid;
-  double exact_stop_seconds = 30;
-  double fast_stop_seconds = 300;
+  double stop_seconds = 300;
   std::optional<double> peer_timeout;
   std::uint64_t peer_memory_mb = 8192;
 };
@@ -117,7 +113,6 @@ struct Options {
 struct Plan {
   Options options;
   std::uint32_t max_fragments = 65536;
-  std::uint32_t exact_max = 65536;
   std::uint32_t mesh_fragments = 256;
   std::uint32_t peer_max = 4096;
   double peer_timeout = 60;
@@ -132,7 +127,6 @@ Plan make_plan(const Options& options) {
   plan.options = options;
   const bool q = options.quick;
   plan.max_fragments = options.max_fragments.value_or(q ? 32 : 65536);
-  plan.exact_max = options.exact_max.value_or(q ? 32 : 65536);
   plan.mesh_fragments = options.mesh_fragments.value_or(q ? 8 : 256);
   plan.peer_max = options.peer_max.value_or(q ? 16 : 4096);
   plan.peer_timeout = options.peer_timeout.value_or(q ? 30 : 60);
@@ -254,7 +248,6 @@ struct Row {
   std::string mesh;
   std::size_t triangles = 0;
   Strategy strategy = Strategy::thesis;
-  KernelKind kernel = KernelKind::fast;
   unsigned threads = 1;
   std::uint32_t fragments = 0;
   bool built = false;
@@ -264,7 +257,7 @@ struct Row {
   /// Where the first run's time went (cutting, hulls, bonds) and its redrawn planes.
   shatter::BuildReport report;
   LeafSummary leaf_summary;
-  /// The peer's replay of the fast 1-thread tree with the same input, strategy and N.
+  /// The peer's replay of this tree (1-thread rows only).
   std::optional<PeerResult> peer;
   bool failed = false;  ///< the build threw, a leaf is invalid, or thread counts disagree
   std::string note;
@@ -295,9 +288,9 @@ void dump_first_invalid(const std::filesystem::path& dir, const Row& row, const 
   const NodeIndex leaf = row.leaf_summary.first_invalid_node;
   if (leaf == shatter::no_node) return;
   std::filesystem::create_directories(dir);
-  const std::string stem = row.mesh + "-" + std::string(shatter::strategy_name(row.strategy)) + "-" +
-                           std::string(shatter::kernel_name(row.kernel)) + "-N" + std::to_string(row.fragments) +
-                           "-seed" + std::to_string(seed) + "-node" + std::to_string(leaf);
+  const std::string stem = row.mesh + "-" + std::string(shatter::strategy_name(row.strategy)) + "-N" +
+                           std::to_string(row.fragments) + "-seed" + std::to_string(seed) + "-node" +
+                           std::to_string(leaf);
   shatter::write_mesh(tree.nodes[leaf].mesh, dir / (stem + ".off"), shatter::MeshFormat::off);
   const NodeIndex parent = tree.nodes[leaf].parent;
   if (parent != shatter::no_node)
@@ -308,15 +301,13 @@ void dump_first_invalid(const std::filesystem::path& dir, const Row& row, const 
 /// Builds repeatedly and times it; checks the first run's tree and, if asked,
 /// replays it with the peer. `one_thread` is the same build on 1 thread, whose tree
 /// this one must equal.
-Row bench_build(const std::string& section, const NamedInput& input, Strategy strategy, KernelKind kernel,
-                unsigned threads, std::uint32_t fragments, const Plan& plan, bool with_peer,
-                const Row* one_thread = nullptr) {
+Row bench_build(const std::string& section, const NamedInput& input, Strategy strategy, unsigned threads,
+                std::uint32_t fragments, const Plan& plan, bool with_peer, const Row* one_thread = nullptr) {
   Row row;
   row.section = section;
   row.mesh = input.name;
   row.triangles = input.mesh.triangle_count();
   row.strategy = strategy;
-  row.kernel = kernel;
   row.threads = threads;
   row.fragments = fragments;
 
@@ -324,11 +315,10 @@ Row bench_build(const std::string& section, const NamedInput& input, Strategy st
   options.fragments = fragments;
   options.seed = plan.options.seed;
   options.strategy = strategy;
-  options.kernel = kernel;
   options.threads = threads;
 
-  std::cerr << section << ": " << input.name << " " << shatter::strategy_name(strategy) << " "
-            << shatter::kernel_name(kernel) << " " << threads << " thread(s) N=" << fragments << " ..." << std::flush;
+  std::cerr << section << ": " << input.name << " " << shatter::strategy_name(strategy) << " " << threads
+            << " thread(s) N=" << fragments << " ..." << std::flush;
   std::vector<double> times;
   try {
     double total = 0;
@@ -403,41 +393,29 @@ shatter::Mesh seed_cube() { return shatter::test::box({-0.5, -0.5, -0.5}, {0.5, 
 
 struct ScalingLine {
   std::uint32_t fragments = 0;
-  Row fast, fast_two_threads;
-  std::optional<Row> exact;
-  std::string exact_skipped, peer_skipped;  ///< why not run, if not
-  std::string stopped_here;                 ///< why no larger N was built, if so
+  Row one_thread, two_threads;
+  std::string peer_skipped;  ///< why the peer did not run, if not
+  std::string stopped_here;  ///< why no larger N was built, if so
 };
 
 std::vector<ScalingLine> run_scaling(const Plan& plan) {
   const NamedInput cube{"cube", seed_cube()};
   std::vector<ScalingLine> lines;
-  std::string exact_stop, peer_stop;
+  std::string peer_stop;
   for (std::uint64_t n = 2; n <= plan.max_fragments; n *= 2) {
     ScalingLine line;
     line.fragments = static_cast<std::uint32_t>(n);
     const bool peer_wanted = plan.options.peer && n <= plan.peer_max;
     line.peer_skipped = !plan.options.peer ? "--no-peer" : !peer_wanted ? "above --peer-max" : peer_stop;
-    line.fast = bench_build("scaling", cube, Strategy::thesis, KernelKind::fast, 1, line.fragments, plan,
-                            peer_wanted && peer_stop.empty());
-    if (line.fast.peer && line.fast.peer->status != PeerResult::Status::ok && peer_stop.empty())
-      peer_stop = "peer " + line.fast.peer->status_name() + " at N=" + std::to_string(n);
-    line.fast_two_threads = bench_build("scaling", cube, Strategy::thesis, KernelKind::fast, 2, line.fragments, plan,
-                                        false, &line.fast);
-    if (n > plan.exact_max) {
-      line.exact_skipped = "above --exact-max";
-    } else if (!exact_stop.empty()) {
-      line.exact_skipped = exact_stop;
-    } else {
-      line.exact = bench_build("scaling", cube, Strategy::thesis, KernelKind::exact, 1, line.fragments, plan, false);
-      line.exact->peer = line.fast.peer;
-      if (line.exact->seconds > plan.options.exact_stop_seconds)
-        exact_stop = "exact took " + seconds_text(line.exact->seconds) + " s at N=" + std::to_string(n);
-    }
-    const bool stop = line.fast.seconds > plan.options.fast_stop_seconds && n * 2 <= plan.max_fragments;
+    line.one_thread =
+        bench_build("scaling", cube, Strategy::thesis, 1, line.fragments, plan, peer_wanted && peer_stop.empty());
+    if (line.one_thread.peer && line.one_thread.peer->status != PeerResult::Status::ok && peer_stop.empty())
+      peer_stop = "peer " + line.one_thread.peer->status_name() + " at N=" + std::to_string(n);
+    line.two_threads = bench_build("scaling", cube, Strategy::thesis, 2, line.fragments, plan, false, &line.one_thread);
+    const bool stop = line.one_thread.seconds > plan.options.stop_seconds && n * 2 <= plan.max_fragments;
     if (stop)
-      line.stopped_here = "no larger N: the fast build took " + seconds_text(line.fast.seconds) +
-                          " s, over --fast-stop-seconds";
+      line.stopped_here = "no larger N: the 1-thread build took " + seconds_text(line.one_thread.seconds) +
+                          " s, over --stop-seconds";
     lines.push_back(std::move(line));
     if (stop) {
       std::cerr << "scaling: " << lines.back().stopped_here << "\n";
@@ -446,13 +424,6 @@ std::vector<ScalingLine> run_scaling(const Plan& plan) {
   }
   return lines;
 }
-
-struct MeshLine {
-  std::string mesh;
-  std::size_t triangles = 0;
-  Strategy strategy = Strategy::thesis;
-  Row fast, exact;
-};
 
 std::vector<NamedInput> seed_meshes(const Plan& plan) {
   std::vector<NamedInput> inputs;
@@ -465,23 +436,16 @@ std::vector<NamedInput> seed_meshes(const Plan& plan) {
   return inputs;
 }
 
-std::vector<MeshLine> run_meshes(const Plan& plan) {
-  std::vector<MeshLine> lines;
+std::vector<Row> run_meshes(const Plan& plan) {
+  std::vector<Row> rows;
   for (const NamedInput& input : seed_meshes(plan)) {
     for (const Strategy strategy : {Strategy::thesis, Strategy::balanced, Strategy::axis}) {
-      MeshLine line;
-      line.mesh = input.name;
-      line.triangles = input.mesh.triangle_count();
-      line.strategy = strategy;
       // One peer run per mesh: it replays planes, and the thesis strategy is the seed's.
-      line.fast = bench_build("meshes", input, strategy, KernelKind::fast, 1, plan.mesh_fragments, plan,
-                              plan.options.peer && strategy == Strategy::thesis);
-      line.exact = bench_build("meshes", input, strategy, KernelKind::exact, 1, plan.mesh_fragments, plan, false);
-      line.exact.peer = line.fast.peer;
-      lines.push_back(std::move(line));
+      rows.push_back(bench_build("meshes", input, strategy, 1, plan.mesh_fragments, plan,
+                                 plan.options.peer && strategy == Strategy::thesis));
     }
   }
-  return lines;
+  return rows;
 }
 
 // ---------------------------------------------------------------------------
@@ -492,83 +456,71 @@ std::string invalid_text(const Row& row) {
   return row.leaf_summary.invalid < 0 ? "n/c" : std::to_string(row.leaf_summary.invalid);
 }
 
-std::string peer_cell_seconds(const PeerResult& p) {
-  if (p.status == PeerResult::Status::ok) return seconds_text(p.clip_seconds);
-  return p.status_name();
-}
-
-std::string peer_counts(const PeerResult& p) {
+/// The peer table's cells of `row`'s replay, from "CGAL s" to "status", joined by " | ".
+std::string peer_cells(const Row& row) {
+  const PeerResult& p = *row.peer;
   const auto checked = [](long v) { return v < 0 ? std::string("n/c") : std::to_string(v); };
-  return checked(p.pieces) + " | " + checked(p.invalid) + " | " + std::to_string(p.missing) + " | " +
-         std::to_string(p.failed_clips) + "/" + std::to_string(p.threw) + " | " + std::to_string(p.mismatches);
+  return (p.status == PeerResult::Status::ok ? seconds_text(p.clip_seconds) : p.status_name()) + " | " +
+         ratio_text(row.peer_ratio()) + " | " + ratio_text(row.peer_ratio_to_cutting()) + " | " +
+         checked(p.pieces) + " | " + checked(p.invalid) + " | " + std::to_string(p.missing) + " | " +
+         std::to_string(p.failed_clips) + "/" + std::to_string(p.threw) + " | " + std::to_string(p.mismatches) +
+         " | " + p.status_name() + (p.detail.empty() ? "" : ": " + p.detail);
 }
 
 void print_scaling(std::ostream& out, const std::vector<ScalingLine>& lines) {
   out << "### Time against fragment count: cube (12 triangles), strategy thesis\n\n"
-      << "| N | leaves | nodes | depth | fast 1 thread s | µs/cut | fast: cut / hulls / bonds s | planes missed/rejected | "
-         "fast 2 threads s | speedup | exact s | exact µs/cut | exact/fast | invalid leaves fast/exact | note |\n"
-      << "|---:|---:|---:|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---|---|\n";
+      << "| N | leaves | nodes | depth | 1 thread s | µs/cut | cut / hulls / bonds s | planes missed/rejected | "
+         "2 threads s | speedup | invalid leaves | note |\n"
+      << "|---:|---:|---:|---:|---:|---:|---|---|---:|---:|---:|---|\n";
   for (const auto& l : lines) {
-    const Row& f = l.fast;
-    const Row& f2 = l.fast_two_threads;
-    std::string note = f.note;
+    const Row& one = l.one_thread;
+    const Row& two = l.two_threads;
+    std::string note = one.note;
     // The 2-thread tree is the 1-thread tree (else its note says so): its note would repeat.
-    if (!f2.note.empty() && f2.note != f.note) note += (note.empty() ? "" : "; ") + ("2 threads: " + f2.note);
-    if (l.exact && !l.exact->note.empty()) note += (note.empty() ? "" : "; ") + ("exact: " + l.exact->note);
-    out << "| " << with_thousands(l.fragments) << " | " << with_thousands(f.leaves) << " | " << with_thousands(f.nodes)
-        << " | " << f.leaf_summary.max_depth << " | " << seconds_text(f.seconds) << " | " << ratio_text(f.us_per_cut()) << " | "
-        << f.phases() << " | " << f.redrawn() << " | " << seconds_text(f2.seconds) << " | " << ratio_text(f.seconds / f2.seconds) << " | "
-        << (l.exact ? seconds_text(l.exact->seconds) : "skipped") << " | "
-        << (l.exact ? ratio_text(l.exact->us_per_cut()) : "–") << " | "
-        << (l.exact ? ratio_text(l.exact->seconds / f.seconds) : "–") << " | " << invalid_text(f) << "/"
-        << (l.exact ? invalid_text(*l.exact) : "–") << " | " << note << " |\n";
+    if (!two.note.empty() && two.note != one.note) note += (note.empty() ? "" : "; ") + ("2 threads: " + two.note);
+    out << "| " << with_thousands(l.fragments) << " | " << with_thousands(one.leaves) << " | "
+        << with_thousands(one.nodes) << " | " << one.leaf_summary.max_depth << " | " << seconds_text(one.seconds)
+        << " | " << ratio_text(one.us_per_cut()) << " | " << one.phases() << " | " << one.redrawn() << " | "
+        << seconds_text(two.seconds) << " | " << ratio_text(one.seconds / two.seconds) << " | " << invalid_text(one)
+        << " | " << note << " |\n";
   }
   if (!lines.empty() && !lines.back().stopped_here.empty()) out << "\n" << lines.back().stopped_here << ".\n";
-  out << "\n### Peer: CGAL PMP clip replaying the same planes (fast 1-thread tree)\n\n"
-      << "| N | CGAL s | CGAL/fast | CGAL/fast cutting | CGAL/exact | pieces | invalid | missing | clips failed/threw | "
+  out << "\n### Peer: CGAL PMP clip replaying the same planes (1-thread tree)\n\n"
+      << "| N | CGAL s | CGAL/shatter | CGAL/shatter cutting | pieces | invalid | missing | clips failed/threw | "
          "component mismatches | status |\n"
-      << "|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---|\n";
+      << "|---:|---:|---:|---:|---:|---:|---:|---|---:|---|\n";
   for (const auto& l : lines) {
-    if (!l.fast.peer) {
+    if (!l.one_thread.peer) {
       if (!l.peer_skipped.empty() && l.peer_skipped != "above --peer-max" && l.peer_skipped != "--no-peer")
-        out << "| " << with_thousands(l.fragments) << " | skipped | | | | | | | | | " << l.peer_skipped << " |\n";
+        out << "| " << with_thousands(l.fragments) << " | skipped | | | | | | | | " << l.peer_skipped << " |\n";
       continue;
     }
-    const PeerResult& p = *l.fast.peer;
-    out << "| " << with_thousands(l.fragments) << " | " << peer_cell_seconds(p) << " | "
-        << ratio_text(l.fast.peer_ratio()) << " | " << ratio_text(l.fast.peer_ratio_to_cutting()) << " | " << (l.exact ? ratio_text(l.exact->peer_ratio()) : "–") << " | "
-        << peer_counts(p) << " | " << p.status_name() << (p.detail.empty() ? "" : ": " + p.detail) << " |\n";
+    out << "| " << with_thousands(l.fragments) << " | " << peer_cells(l.one_thread) << " |\n";
   }
 }
 
-void print_meshes(std::ostream& out, const std::vector<MeshLine>& lines, std::uint32_t fragments) {
+void print_meshes(std::ostream& out, const std::vector<Row>& rows, std::uint32_t fragments) {
   out << "\n### The seed's meshes at " << with_thousands(fragments) << " fragments, 1 thread\n\n"
-      << "| mesh | triangles | strategy | leaves | fast s | fast: cut / hulls / bonds s | planes missed/rejected | "
-         "exact s | exact/fast | volume CV | smallest/mean | invalid leaves fast/exact | note |\n"
-      << "|---|---:|---|---:|---:|---|---|---:|---:|---:|---:|---|---|\n";
-  for (const auto& l : lines) {
-    std::string note = l.fast.note;
-    if (!l.exact.note.empty()) note += (note.empty() ? "" : "; ") + ("exact: " + l.exact.note);
-    out << "| " << l.mesh << " | " << with_thousands(l.triangles) << " | " << shatter::strategy_name(l.strategy)
-        << " | " << with_thousands(l.fast.leaves) << " | " << seconds_text(l.fast.seconds) << " | "
-        << l.fast.phases() << " | " << l.fast.redrawn() << " | " << seconds_text(l.exact.seconds) << " | " << ratio_text(l.exact.seconds / l.fast.seconds) << " | "
-        << (std::isnan(l.fast.leaf_summary.volume_cv) ? "–" : fixed(l.fast.leaf_summary.volume_cv, 3)) << " | "
-        << significant(l.fast.leaf_summary.smallest_over_mean, 3)
-        << " | " << invalid_text(l.fast) << "/" << invalid_text(l.exact) << " | " << note << " |\n";
+      << "| mesh | triangles | strategy | leaves | s | cut / hulls / bonds s | planes missed/rejected | "
+         "volume CV | smallest/mean | invalid leaves | note |\n"
+      << "|---|---:|---|---:|---:|---|---|---:|---:|---:|---|\n";
+  for (const Row& r : rows) {
+    out << "| " << r.mesh << " | " << with_thousands(r.triangles) << " | " << shatter::strategy_name(r.strategy)
+        << " | " << with_thousands(r.leaves) << " | " << seconds_text(r.seconds) << " | " << r.phases() << " | "
+        << r.redrawn() << " | "
+        << (std::isnan(r.leaf_summary.volume_cv) ? "–" : fixed(r.leaf_summary.volume_cv, 3)) << " | "
+        << significant(r.leaf_summary.smallest_over_mean, 3) << " | " << invalid_text(r) << " | " << r.note
+        << " |\n";
   }
   bool any_peer = false;
-  for (const auto& l : lines) any_peer = any_peer || l.fast.peer.has_value();
+  for (const Row& r : rows) any_peer = any_peer || r.peer.has_value();
   if (!any_peer) return;
   out << "\n### Peer on the seed's meshes: CGAL PMP clip replaying the thesis tree's planes\n\n"
-      << "| mesh | CGAL s | CGAL/fast | CGAL/fast cutting | CGAL/exact | pieces | invalid | missing | clips failed/threw | "
+      << "| mesh | CGAL s | CGAL/shatter | CGAL/shatter cutting | pieces | invalid | missing | clips failed/threw | "
          "component mismatches | status |\n"
-      << "|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---|\n";
-  for (const auto& l : lines) {
-    if (!l.fast.peer) continue;
-    const PeerResult& p = *l.fast.peer;
-    out << "| " << l.mesh << " | " << peer_cell_seconds(p) << " | " << ratio_text(l.fast.peer_ratio()) << " | "
-        << ratio_text(l.fast.peer_ratio_to_cutting()) << " | " << ratio_text(l.exact.peer_ratio()) << " | " << peer_counts(p) << " | " << p.status_name()
-        << (p.detail.empty() ? "" : ": " + p.detail) << " |\n";
+      << "|---|---:|---:|---:|---:|---:|---:|---|---:|---|\n";
+  for (const Row& r : rows) {
+    if (r.peer) out << "| " << r.mesh << " | " << peer_cells(r) << " |\n";
   }
 }
 
@@ -583,7 +535,8 @@ void write_csv(const std::filesystem::path& path, const std::vector<const Row*>&
     std::snprintf(fingerprint, sizeof fingerprint, "%016llx",
                   static_cast<unsigned long long>(r->leaf_summary.fingerprint));
     csv.field(r->section).field(r->mesh).field(r->triangles).field(shatter::strategy_name(r->strategy));
-    csv.field(shatter::kernel_name(r->kernel)).field(r->threads).field(r->fragments).field(r->leaves);
+    // The kernel column stays so these rows read apart from the retired kernels' in older CSVs.
+    csv.field("plane").field(r->threads).field(r->fragments).field(r->leaves);
     csv.field(r->nodes).field(r->runs).field(r->seconds).field(r->us_per_cut());
     csv.field(r->built ? r->report.cutting_seconds : not_measured);
     csv.field(r->built ? r->report.hull_seconds : not_measured);
@@ -619,21 +572,20 @@ void add_options(CLI::App& app, Options& options) {
   app.footer(
       "Sections:\n"
       "  scaling  a 1 x 1 x 1 box (12 triangles) cut into N = 2, 4, ..., --max-fragments fragments, strategy\n"
-      "           thesis: fast kernel on 1 and 2 threads, exact kernel on 1 thread. Per N: leaves, nodes,\n"
-      "           seconds (median of >= 3 runs and >= 0.3 s; one run if > 2 s), microseconds per cut (per\n"
-      "           internal node), invalid leaves, and whether the 2-thread tree equals the 1-thread tree.\n"
+      "           thesis, on 1 and 2 threads. Per N: leaves, nodes, seconds (median of >= 3 runs and >= 0.3 s;\n"
+      "           one run if > 2 s), microseconds per cut (per internal node), invalid leaves, and whether the\n"
+      "           2-thread tree equals the 1-thread tree.\n"
       "  meshes   the box, an 800-triangle torus, the 1,520-triangle hollow egg and elephant.off cut into\n"
-      "           --mesh-fragments fragments with the thesis, balanced and axis strategies, fast and exact\n"
-      "           kernel, 1 thread: seconds, leaves, coefficient of variation of the leaf volumes (std dev /\n"
-      "           mean), smallest leaf volume / mean, invalid leaves.\n"
-      "  peer     CGAL PMP::clip(clip_volume(true)), Surface_mesh<Epick>, replays the planes of the fast\n"
+      "           --mesh-fragments fragments with the thesis, balanced and axis strategies, 1 thread: seconds,\n"
+      "           leaves, coefficient of variation of the leaf volumes (std dev / mean), smallest leaf volume /\n"
+      "           mean, invalid leaves.\n"
+      "  peer     CGAL PMP::clip(clip_volume(true)), Surface_mesh<Epick>, replays the planes of the\n"
       "           1-thread thesis tree node by node (both sides of each plane, connected components matched to\n"
       "           shatter's children by nearest centroid), in a forked process with a time limit. Its time is\n"
-      "           the sum of the clip and split calls. Reported: seconds, peer/shatter ratio, leaf pieces that\n"
-      "           are not closed, self-intersect or have volume <= 0 (invalid), leaves never produced\n"
-      "           (missing), clips that returned false (failed) or threw, nodes whose component count differs\n"
-      "           from shatter's (mismatch), timeout or crash. The exact row shows the same peer run, its\n"
-      "           ratio taken against the exact time.\n"
+      "           the sum of the clip and split calls. Reported: seconds, its ratio to shatter's whole build\n"
+      "           and to shatter's cutting phase, leaf pieces that are not closed, self-intersect or have\n"
+      "           volume <= 0 (invalid), leaves never produced (missing), clips that returned false (failed) or\n"
+      "           threw, nodes whose component count differs from shatter's (mismatch), timeout or crash.\n"
       "\n"
       "Leaves are validated outside the clock (validate_mesh, with self-intersections).\n"
       "Exit status: 0 when every build succeeded and every shatter leaf is valid and the thread counts agree,\n"
@@ -673,15 +625,8 @@ void add_options(CLI::App& app, Options& options) {
   app.add_option("--max-fragments", options.max_fragments,
                  "Largest N of the scaling section (default 65536; 32 with --quick)")
       ->check(fragments);
-  app.add_option("--exact-max", options.exact_max,
-                 "Largest N built with the exact kernel (default 65536; 32 with --quick)")
-      ->check(fragments);
-  app.add_option("--exact-stop-seconds", options.exact_stop_seconds,
-                 "Build no larger N with the exact kernel once one exact build took longer than this")
-      ->check(positive_seconds)
-      ->capture_default_str();
-  app.add_option("--fast-stop-seconds", options.fast_stop_seconds,
-                 "End the scaling section once a fast 1-thread build took longer than this")
+  app.add_option("--stop-seconds", options.stop_seconds,
+                 "End the scaling section once a 1-thread build took longer than this")
       ->check(positive_seconds)
       ->capture_default_str();
   app.add_option("--mesh-fragments", options.mesh_fragments,
@@ -715,7 +660,7 @@ int main(int argc, char** argv) {
   try {
     const Plan plan = make_plan(options);
     std::vector<ScalingLine> scaling;
-    std::vector<MeshLine> meshes;
+    std::vector<Row> meshes;
     if (plan.options.scaling) scaling = run_scaling(plan);
     if (plan.options.meshes) meshes = run_meshes(plan);
 
@@ -730,22 +675,18 @@ int main(int argc, char** argv) {
 
     std::vector<const Row*> rows;
     for (const auto& l : scaling) {
-      rows.push_back(&l.fast);
-      rows.push_back(&l.fast_two_threads);
-      if (l.exact) rows.push_back(&*l.exact);
+      rows.push_back(&l.one_thread);
+      rows.push_back(&l.two_threads);
     }
-    for (const auto& l : meshes) {
-      rows.push_back(&l.fast);
-      rows.push_back(&l.exact);
-    }
+    for (const Row& r : meshes) rows.push_back(&r);
     if (plan.options.csv) write_csv(*plan.options.csv, rows);
 
     std::size_t failures = 0;
     for (const Row* r : rows) {
       if (!r->failed) continue;
       ++failures;
-      std::cerr << "FAILED: " << r->mesh << " " << shatter::strategy_name(r->strategy) << " "
-                << shatter::kernel_name(r->kernel) << " " << r->threads << " thread(s) N=" << r->fragments
+      std::cerr << "FAILED: " << r->mesh << " " << shatter::strategy_name(r->strategy) << " " << r->threads
+                << " thread(s) N=" << r->fragments
                 << " seed " << plan.options.seed << ": " << r->note << '\n';
     }
     return failures ? 2 : 0;

@@ -51,7 +51,7 @@ CLI::Validator whole_number() {
 }
 
 BuildOptions build_options_of(const FractureArgs& args) {
-  BuildOptions options = build_options_from(args.fragments, args.seed, args.strategy, args.kernel, "--");
+  BuildOptions options = build_options_from(args.fragments, args.seed, args.strategy, "--");
   options.interior_uv_scale = args.interior_uv_scale;
   options.allow_self_intersections = args.allow_self_intersections;
   options.threads = args.threads;
@@ -184,8 +184,7 @@ void print_fracture_text(const FractureArgs& args, const BuildOptions& options, 
             << stats.node_count << " nodes, depth " << stats.max_depth << ", " << stats.bond_count
             << " bonds (total area " << stats.total_bond_area << "); built in "
             << seconds_text(outcome.build_seconds) << " s\n"
-            << "  strategy " << strategy_name(options.strategy) << ", kernel " << kernel_name(options.kernel)
-            << ", seed " << options.seed << '\n'
+            << "  strategy " << strategy_name(options.strategy) << ", seed " << options.seed << '\n'
             << "  fragment volume: min " << volume.min << ", median " << volume.median << ", max " << volume.max
             << ", coefficient of variation " << volume.coefficient_of_variation << '\n'
             << "  wrote " << args.out << '\n';
@@ -213,7 +212,7 @@ std::optional<std::uint64_t> parse_whole_number(std::string_view text) {
 }
 
 BuildOptions build_options_from(std::uint64_t fragments, std::uint64_t seed, std::string_view strategy,
-                                std::string_view kernel, std::string_view field_prefix) {
+                                std::string_view field_prefix) {
   const std::string prefix(field_prefix);
   if (fragments < 1 || fragments > 0xFFFFFFFFu) {
     throw UsageError(prefix + "fragments must be a whole number from 1 to 4294967295");
@@ -222,13 +221,10 @@ BuildOptions build_options_from(std::uint64_t fragments, std::uint64_t seed, std
   if (!strategy_value) {
     throw UsageError(prefix + "strategy must be thesis, balanced or axis, got '" + std::string(strategy) + "'");
   }
-  const std::optional<KernelKind> kernel_value = kernel_named(kernel);
-  if (!kernel_value) throw UsageError(prefix + "kernel must be plane, exact or fast, got '" + std::string(kernel) + "'");
   BuildOptions options;
   options.fragments = static_cast<std::uint32_t>(fragments);
   options.seed = seed;
   options.strategy = *strategy_value;
-  options.kernel = *kernel_value;
   return options;
 }
 
@@ -256,12 +252,6 @@ Command add_fracture_command(CLI::App& app) {
                       "fragment next (evens out sizes). axis: planes across each piece's longest bounding-box axis "
                       "near the centroid, with jitter, budget shared by volume")
       ->check(CLI::IsMember({"thesis", "balanced", "axis"}))
-      ->capture_default_str();
-  command->add_option("--kernel", args->kernel,
-                      "plane (default): vertices defined as meets of planes, exact at any depth; every node is "
-                      "rounded once and certified valid. exact: CGAL exact rationals, volumes add up exactly; "
-                      "stored rounded once to doubles. fast: rounded intersection points (topology always valid)")
-      ->check(CLI::IsMember({"plane", "exact", "fast"}))
       ->capture_default_str();
   command->add_option("--threads", args->threads,
                       "Worker threads; 0 uses every hardware thread. Changes the speed only, never the output")

@@ -1,6 +1,6 @@
 #pragma once
 // `shatter fracture <mesh> --fragments N --out <file.shatter> [--seed S]
-// [--strategy thesis|balanced|axis] [--kernel plane|exact|fast] [--threads T]
+// [--strategy thesis|balanced|axis] [--threads T]
 // [--interior-uv-scale X] [--allow-self-intersections] [--repair]
 // [--export <folder> [--format off|obj|ply|stl]] [--json]`: the mesh tree of a
 // solid, written as a .shatter file.
@@ -22,7 +22,6 @@ struct FractureArgs {
   std::uint32_t fragments = 0;
   std::uint64_t seed = 1;
   std::string strategy = "thesis";
-  std::string kernel = "plane";
   /// 0: one worker per hardware thread. Never changes the tree.
   unsigned threads = 0;
   double interior_uv_scale = 1.0;
@@ -44,10 +43,10 @@ std::optional<std::uint64_t> parse_whole_number(std::string_view text);
 
 /// The tree's recipe from what a user typed (fracture's flags, the viewer's
 /// fracture request), checked alike: fragments from 1 to 2^32 - 1, the strategy
-/// and kernel by the names the library prints. Throws UsageError naming the field
+/// by the names the library prints. Throws UsageError naming the field
 /// as `field_prefix` + its name ("--" for flags, "" for the page's fields).
 BuildOptions build_options_from(std::uint64_t fragments, std::uint64_t seed, std::string_view strategy,
-                                std::string_view kernel, std::string_view field_prefix);
+                                std::string_view field_prefix);
 
 /// Declares the `fracture` subcommand on `app`.
 Command add_fracture_command(CLI::App& app);

@@ -53,6 +53,7 @@ void print_info_text(const InfoArgs& args, const MeshTree& tree, const TreeStats
   if (!tree.shatter_version.empty()) std::cout << "  built by shatter " << tree.shatter_version << '\n';
   std::cout << "  built with: fragments " << options.fragments << ", seed " << options.seed << ", strategy "
             << strategy_name(options.strategy) << ", kernel " << kernel_name(options.kernel)
+            << (options.kernel == KernelKind::plane ? "" : " (retired: the tree reads, but cannot be re-cut exactly)")
             << ", interior UV scale " << options.interior_uv_scale << ", max plane tries " << options.max_plane_tries
             << (options.allow_self_intersections ? ", self-intersections allowed" : "") << '\n'
             << "  volume: root " << stats.root_volume << ", leaves together " << stats.total_leaf_volume

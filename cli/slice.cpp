@@ -13,11 +13,8 @@
 #include <vector>
 
 #include "shatter/kernel/error.hpp"
-#include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mass.hpp"
-#include "shatter/kernel/validate.hpp"
-#include "shatter/meshtree/cut.hpp"
 #include "shatter/meshtree/plane_cut.hpp"
 #include "errors.hpp"
 #include "input.hpp"
@@ -56,61 +53,20 @@ Plane parse_plane(const std::string& text) {
   return plane;
 }
 
-std::string_view cap_method_name(CapMethod method) {
-  switch (method) {
-    case CapMethod::none: return "none";
-    case CapMethod::fan: return "fan";
-    case CapMethod::cdt: return "cdt";
-    case CapMethod::exact_cdt: return "exact-cdt";
-    case CapMethod::steiner_fan: return "steiner-fan";
-  }
-  return "unknown";
-}
-
 struct Piece {
   std::string side;
   Mesh mesh;
 };
 
-// Output is always doubles: the exact kernel's pieces are rounded once, here.
-Mesh as_output(Mesh& mesh) { return std::move(mesh); }
-Mesh as_output(const ExactMesh& mesh) { return to_fast(mesh); }
-
-template <class Point>
-std::vector<Piece> pieces_of(CutResult<Point>& result) {
-  std::vector<Piece> pieces;
-  for (auto& solid : result.below) pieces.push_back({"below", as_output(solid)});
-  for (auto& solid : result.above) pieces.push_back({"above", as_output(solid)});
-  return pieces;
-}
-
-// What a cut gave, whichever kernel made it.
 struct SliceResult {
   std::vector<Piece> pieces;
   bool plane_missed = false;
-  std::string cap_method;
   std::size_t cap_loops = 0, cap_triangles = 0;
 };
 
-template <class Point>
-SliceResult result_of(CutResult<Point>&& cut, const Mesh& mesh) {
-  SliceResult result;
-  result.plane_missed = cut.plane_missed;
-  result.cap_method = cap_method_name(cut.cap_method);
-  result.cap_loops = cut.cap_loops;
-  result.cap_triangles = cut.cap_triangles;
-  if (cut.plane_missed) {
-    // Whole: the input as it was read, on the side it lies on.
-    result.pieces.push_back({cut.above.empty() ? "below" : "above", mesh});
-  } else {
-    result.pieces = pieces_of(cut);
-  }
-  return result;
-}
-
 // Exact cut, then every piece rounded once and certified: a piece that cannot
 // be written as a valid mesh fails the command before anything is written.
-SliceResult cut_with_plane_kernel(const Mesh& mesh, const Plane& plane, const SliceArgs& args, SurfaceId cap_surface) {
+SliceResult cut(const Mesh& mesh, const Plane& plane, const SliceArgs& args, SurfaceId cap_surface) {
   PlaneCutOptions options;
   options.cap_surface = cap_surface;
   options.interior_uv_scale = args.interior_uv_scale;
@@ -118,7 +74,6 @@ SliceResult cut_with_plane_kernel(const Mesh& mesh, const Plane& plane, const Sl
   PlaneCut cut = cut_mesh_by_plane(mesh, plane, options);
   SliceResult result;
   result.plane_missed = cut.plane_missed;
-  result.cap_method = "polygon";
   result.cap_loops = cut.cap_loops;
   // Whole: the input as it was read, on the side it lies on.
   if (cut.plane_missed) result.pieces.push_back({cut.whole_above ? "above" : "below", mesh});
@@ -167,14 +122,6 @@ Command add_slice_command(CLI::App& app) {
   command->add_option("mesh", args->mesh, "Mesh file (.off, .obj, .ply, .stl)")->required();
   command->add_option("--plane", args->plane, "The plane n.x + d = 0 as nx,ny,nz,d (n need not be unit length)")
       ->required();
-  command->add_option("--kernel", args->kernel,
-                      "plane (default): vertices defined as meets of planes, never constructed; the cut is exact and "
-                      "each piece is rounded once and certified valid (a piece that cannot be written valid fails "
-                      "with exit 3). exact: CGAL exact rationals, rounded once to doubles. fast: rounded intersection "
-                      "points. exact and fast pieces are validated after rounding; if one is not a valid mesh as "
-                      "written, the command fails with exit 3 and writes nothing")
-      ->check(CLI::IsMember({"plane", "exact", "fast"}))
-      ->capture_default_str();
   command->add_flag("--allow-self-intersections", args->allow_self_intersections,
                     "Cut a self-intersecting (or self-touching) mesh instead of refusing it; pieces are closed and "
                     "oriented, their embedding may overlap");
@@ -199,42 +146,13 @@ int run_slice(const SliceArgs& args) {
   const InputMesh input = read_valid_solid(args.mesh, args.repair, args.allow_self_intersections);
   const Mesh& mesh = input.mesh;
 
-  CutOptions options;
-  options.interior_uv_scale = args.interior_uv_scale;
-  for (SurfaceId s : mesh.surfaces) options.cap_surface = std::max(options.cap_surface, s + 1);
-
-  SliceResult result;
-  if (args.kernel == "plane") {
-    result = cut_with_plane_kernel(mesh, plane, args, options.cap_surface);
-  } else if (args.kernel == "fast") {
-    result = result_of(cut_mesh(mesh, plane, options), mesh);
-  } else {
-    result = result_of(cut_mesh(to_exact(mesh), plane, options), mesh);
-  }
+  SurfaceId cap_surface = 1;
+  for (SurfaceId s : mesh.surfaces) cap_surface = std::max(cap_surface, s + 1);
+  // Every piece is certified as it is rounded (cut_mesh_by_plane): what is
+  // written validates when read back, and is not checked again here.
+  const SliceResult result = cut(mesh, plane, args, cap_surface);
   const std::vector<Piece>& pieces = result.pieces;
-
-  // What is written validates when read back, whatever the kernel: the plane
-  // kernel certified its pieces already; fast and exact round after the cut, so
-  // a piece whose rounded mesh is degenerate or self-intersecting fails the
-  // command before anything is written. The check is validate_mesh on the
-  // bytes' own doubles: what `shatter validate` does to the file. With
-  // --allow-self-intersections the promise is closed and oriented: a piece may
-  // overlap itself, and where the input touched itself the file welds the two
-  // sides into one non-manifold vertex.
-  ValidationOptions piece_checks;
-  piece_checks.check_self_intersections = !args.allow_self_intersections;
   const std::vector<std::string> names = piece_names(pieces, *format);
-  for (std::size_t i = 0; i < pieces.size(); ++i) {
-    ValidationReport report = validate_mesh(pieces[i].mesh, piece_checks);
-    if (args.allow_self_intersections) {
-      std::erase_if(report.defects, [](const Defect& d) { return d.kind == DefectKind::non_manifold_vertex; });
-    }
-    if (!report.valid()) {
-      throw UnsupportedGeometryError("piece " + names[i] + " of the " + args.kernel +
-                                     " kernel is not a valid mesh as written (" + report.summary() +
-                                     "); nothing was written. The plane kernel (the default) certifies its pieces");
-    }
-  }
   json pieces_json = json::array();
   double total_volume = 0;
   write_pieces(pieces, names, args.out, *format);
@@ -249,10 +167,9 @@ int run_slice(const SliceArgs& args) {
   }
   if (args.json) {
     json out{{"input", args.mesh},
-             {"kernel", args.kernel},
              {"plane", {plane.normal.x, plane.normal.y, plane.normal.z, plane.offset}},
              {"plane_missed", result.plane_missed},
-             {"cap", {{"method", result.cap_method}, {"loops", result.cap_loops}, {"triangles", result.cap_triangles}}},
+             {"cap", {{"method", "polygon"}, {"loops", result.cap_loops}, {"triangles", result.cap_triangles}}},
              {"input_volume", signed_volume(mesh)},
              {"total_volume", total_volume},
              {"pieces", pieces_json}};

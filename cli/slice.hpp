@@ -1,6 +1,5 @@
 #pragma once
-// `shatter slice <mesh> --plane nx,ny,nz,d --out <folder> [--kernel plane|exact|fast]
-// [--allow-self-intersections] [--format off|obj|ply|stl] [--interior-uv-scale X]
+// `shatter slice <mesh> --plane nx,ny,nz,d --out <folder> [--allow-self-intersections] [--format off|obj|ply|stl] [--interior-uv-scale X]
 // [--repair] [--json]`: one plane cut, one file per resulting solid.
 
 #include <CLI/CLI.hpp>
@@ -14,7 +13,6 @@ namespace shatter::cli {
 struct SliceArgs {
   std::string mesh;
   std::string plane;  ///< "nx,ny,nz,d", parsed by run_slice
-  std::string kernel = "plane";
   bool allow_self_intersections = false;
   std::string out;  ///< the folder of the pieces
   std::string format = "off";
@@ -27,16 +25,15 @@ struct SliceArgs {
 Command add_slice_command(CLI::App& app);
 
 /// Reads the mesh and checks it once (read_valid_solid), cuts it by the plane
-/// with the chosen kernel and writes one file per solid into the --out folder
-/// (created if missing): below-0.off, ..., above-0.off, ..., or the whole mesh
-/// as one piece when the plane misses it. All files or none (OutputTransaction).
-/// Prints the pieces with their triangles and volumes on stdout (JSON with
-/// --json), and a warning on stderr when a fast- or exact-kernel piece's rounded
-/// embedding is not valid. Returns 0.
+/// (cut_mesh_by_plane: exact, each piece rounded once and certified) and writes
+/// one file per solid into the --out folder (created if missing): below-0.off,
+/// ..., above-0.off, ..., or the whole mesh as one piece when the plane misses
+/// it. All files or none (OutputTransaction). Prints the pieces with their
+/// triangles and volumes on stdout (JSON with --json). Returns 0.
 /// Throws UsageError for a --plane that is not four finite numbers with a
 /// non-zero normal, or an unknown --format (before reading); what
-/// read_valid_solid throws; UnsupportedGeometryError when a plane-kernel piece
-/// cannot be rounded to a valid mesh (before writing); IoError from writing.
+/// read_valid_solid throws; UnsupportedGeometryError when a piece cannot be
+/// rounded to a valid mesh (before writing); IoError from writing.
 int run_slice(const SliceArgs& args);
 
 }  // namespace shatter::cli

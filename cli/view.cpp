@@ -225,8 +225,7 @@ BuildOptions requested_options(const std::string& body) {
   if (!fragments) throw UsageError("fragments must be a whole number from 1 to 4294967295");
   const std::optional<std::uint64_t> seed = whole_number(request.value("seed", json("1")));
   if (!seed) throw UsageError("seed must be a whole number from 0 to 18446744073709551615");
-  return build_options_from(*fragments, *seed, request.value("strategy", std::string("thesis")),
-                            request.value("kernel", std::string("plane")), "");
+  return build_options_from(*fragments, *seed, request.value("strategy", std::string("thesis")), "");
 }
 
 void send_json(httplib::Response& response, int status, const json& body) {
@@ -286,8 +285,8 @@ Command add_view_command(CLI::App& app) {
       "Open the viewer: serve it and the file on 127.0.0.1 (this machine only) and print the address to open in a "
       "browser; Ctrl-C stops. The page explodes the fragments, shows the tree level by level, colours fragments, "
       "draws bonds, describes a clicked fragment as `info --nodes` does, and replays `simulate --record` files. For "
-      "a .shatter file it also has an editor that fractures the tree's root solid again with other fragments, seed, "
-      "strategy or kernel (nothing is written to disk). For a page that needs no server, see `export --format html`.");
+      "a .shatter file it also has an editor that fractures the tree's root solid again with other fragments, seed or "
+      "strategy (nothing is written to disk). For a page that needs no server, see `export --format html`.");
   command->add_option("file", args->input,
                       "A mesh tree (.shatter; every level is shown) or a glTF binary (.glb) from `export` or "
                       "`simulate --record`")

@@ -34,7 +34,7 @@ Command add_view_command(CLI::App& app);
 ///   GET  /                   the viewer page
 ///   GET  /model.glb          the tree (or file) shown now
 ///   GET  /api/session        {file, kind ("tree" or "glb"), editable, generation, options}
-///   POST /api/fracture       {fragments, seed, strategy, kernel}: fracture the root solid again
+///   POST /api/fracture       {fragments, seed, strategy}: fracture the root solid again
 ///                            in the background (202), or 400 / 409 {error}
 ///   GET  /api/fracture       {state, leaves_done, fragments, generation, leaves, seconds, error}
 /// Anything else is 404 with {error}. A fracture still running at the stop is

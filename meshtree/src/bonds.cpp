@@ -1,4 +1,5 @@
-// The true-contact bonds of a fast- or exact-kernel tree (find_bonds): the cap
+// The true-contact bonds of a tree without exact solids (find_bonds; trees the
+// retired fast and exact kernels wrote, read from older files): the cap
 // faces of each cut (contact_polygons.hpp) swept in the cut plane, each pair that
 // may touch decided exactly and measured on its rounded overlap. Plane-kernel
 // trees go to find_plane_bonds (plane_bonds.cpp); the seed's box rule is in

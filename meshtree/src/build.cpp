@@ -21,13 +21,10 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/bonds.hpp"
-#include "shatter/meshtree/cut.hpp"
-#include "shatter/meshtree/plane_cut.hpp"
-#include "shatter/meshtree/exact_build.hpp"
 #include "shatter/meshtree/hull.hpp"
+#include "shatter/meshtree/plane_cut.hpp"
 #include "shatter/meshtree/plane_input.hpp"
 #include "shatter/meshtree/tree.hpp"
-#include "shatter/triangulate/solid_mesh.hpp"
 #include "shatter/version.hpp"
 
 namespace shatter {
@@ -52,10 +49,6 @@ std::string_view kernel_name(KernelKind kernel) {
 
 std::optional<Strategy> strategy_named(std::string_view name) {
   return enum_named(name, {Strategy::thesis, Strategy::balanced, Strategy::axis}, &strategy_name);
-}
-
-std::optional<KernelKind> kernel_named(std::string_view name) {
-  return enum_named(name, {KernelKind::plane, KernelKind::exact, KernelKind::fast}, &kernel_name);
 }
 
 namespace {
@@ -127,15 +120,6 @@ BoundingBox bounding_box(const Solid& solid) {
   return box;
 }
 
-BoundingBox bounding_box(const Mesh& mesh) {
-  BoundingBox box{mesh.positions.front(), mesh.positions.front()};
-  for (const Vec3& p : mesh.positions) {
-    box.lo = {std::min(box.lo.x, p.x), std::min(box.lo.y, p.y), std::min(box.lo.z, p.z)};
-    box.hi = {std::max(box.hi.x, p.x), std::max(box.hi.y, p.y), std::max(box.hi.z, p.z)};
-  }
-  return box;
-}
-
 Plane axis_plane(const BoundingBox& box, const Vec3& centroid, NodeRandom& random) {
   const Vec3 extent = box.hi - box.lo;
   const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
@@ -160,28 +144,12 @@ Plane draw_plane(Strategy strategy, const BoundingBox& box, const Vec3& centroid
   return plane_through(random.direction(), centroid);
 }
 
-// A plane passing within rounding of a vertex makes crossing points a few ulps
-// from it: valid, but needles whose two long edges any later plane crosses at
-// points that round together, so the piece can no longer be cut validly. Such a
-// plane is redrawn. This only chooses among random planes; whether a piece is
-// valid is still decided exactly (validate_mesh), never by this bound.
-constexpr double grazing_distance = 1e-8;  // relative to the node's bounding-box diagonal
-
-bool grazes_a_vertex(const Mesh& mesh, const Plane& plane, double diagonal) {
-  const double limit = grazing_distance * diagonal * norm(plane.normal);
-  for (const Vec3& p : mesh.positions) {
-    if (std::fabs(dot(plane.normal, p) + plane.offset) < limit) return true;
-  }
-  return false;
-}
-
 // --- the tree under construction ----------------------------------------------
 
 struct BuildNode {
-  Mesh mesh;
-  ExactMesh exact;  // exact kernel: the solid the rounded mesh stands for
-  Solid solid;      // plane kernel: the exact solid; its vertices refer to the cut
-                    // plane of the ancestor at depth k as PlaneRef::cut(k)
+  Mesh mesh;    // the solid rounded to doubles, certified valid (round_solid)
+  Solid solid;  // the exact solid; its vertices refer to the cut plane of the
+                // ancestor at depth k as PlaneRef::cut(k)
   const BuildNode* parent = nullptr;
   MassProperties mass;
   Plane plane;
@@ -191,117 +159,28 @@ struct BuildNode {
   std::vector<std::unique_ptr<BuildNode>> children;
 };
 
-// A fresh point holding only its exact value. Cut points share lazy-evaluation
-// nodes with the solid they were cut from and with the sibling across the cap;
-// CGAL's lazy numbers are not safe to evaluate from two threads at once, and an
-// evaluation refines the cached approximations (which attribute interpolation
-// reads). Detaching every child's points before its subtree starts makes each
-// subtree touch only its own numbers: safe, and independent of scheduling.
-ExactPoint detached(const ExactPoint& p) {
-  using FT = ExactKernel::FT;
-  return {FT(CGAL::exact(p.x())), FT(CGAL::exact(p.y())), FT(CGAL::exact(p.z()))};
-}
-
-// Everything a node's children need, computed from the node alone.
-std::unique_ptr<BuildNode> make_node(Mesh mesh, ExactMesh exact, const BuildNode& parent, std::size_t index,
-                                     bool above) {
-  auto node = std::make_unique<BuildNode>();
-  node->mesh = std::move(mesh);
-  node->exact = std::move(exact);
-  node->mass = mass_properties(node->mesh);
-  node->above_parent_plane = above;
-  node->depth = parent.depth + 1;
-  node->seed = child_seed(parent.seed, index);
-  return node;
-}
-
 class Builder {
  public:
-  Builder(const BuildOptions& options, bool keep_exact, const LeafProgressFn& progress)
-      : options_(options), keep_exact_(keep_exact), progress_(progress) {}
+  Builder(const BuildOptions& options, const LeafProgressFn& progress) : options_(options), progress_(progress) {}
 
   std::unique_ptr<BuildNode> root(const Mesh& mesh) {
     auto node = std::make_unique<BuildNode>();
-    if (options_.kernel == KernelKind::plane) {
-      plane_input_ = prepare_plane_input(mesh);
-      node->solid = plane_input_->solid;
-      node->mesh = mesh;  // the root is the input as given (validated on the way in)
-      node->mass = mass_properties(node->mesh);
-      node->seed = root_seed(options_.seed);
-      return node;
-    }
-    node->mesh = mesh;
-    if (options_.kernel == KernelKind::exact) node->exact = to_exact(mesh);
+    plane_input_ = prepare_plane_input(mesh);
+    node->solid = plane_input_->solid;
+    node->mesh = mesh;  // the root is the input as given (validated on the way in)
     node->mass = mass_properties(node->mesh);
     node->seed = root_seed(options_.seed);
     return node;
   }
 
-  /// Cuts `node` and attaches its children. A pure function of the node (its mesh,
-  /// seed and depth) and the options: which thread runs it, and when, never shows.
+  /// Cuts `node` and attaches its children. A pure function of the node (its
+  /// solid, seed and depth) and the options: which thread runs it, and when,
+  /// never shows. The cut is exact, so nothing about the solids is checked: each
+  /// child is rounded to doubles at once and certified (cut_by_plane). A plane is
+  /// redrawn when it misses the node, or, exceedingly rarely, when a child cannot
+  /// be written as a valid double mesh (a sliver thinner than the rounding of its
+  /// coordinates: the exact tree would be valid, its rounding would not).
   void cut(BuildNode& node) const {
-    if (options_.kernel == KernelKind::plane) {
-      cut_plane_kernel(node);
-      return;
-    }
-    NodeRandom random(node.seed);
-    CutOptions cut_options;
-    cut_options.cap_surface = node.depth + 1;  // made global once the tree is numbered
-    cut_options.interior_uv_scale = options_.interior_uv_scale;
-    std::uint32_t missed = 0;
-    const BoundingBox box = bounding_box(node.mesh);
-    const double diagonal = norm(box.hi - box.lo);
-    for (std::uint32_t attempt = 0; attempt < options_.max_plane_tries; ++attempt) {
-      const Plane plane = draw_plane(options_.strategy, box, node.mass.centroid, random);
-      bool accepted = false;
-      if (grazes_a_vertex(node.mesh, plane, diagonal)) continue;
-      if (options_.kernel == KernelKind::fast) {
-        CutResult<Vec3> result = cut_mesh(node.mesh, plane, cut_options);
-        missed += result.plane_missed ? 1 : 0;
-        accepted = !result.plane_missed && all_valid(result.below) && all_valid(result.above);
-        if (accepted) {
-          adopt(node, result.below, false);
-          adopt(node, result.above, true);
-        }
-      } else {
-        CutResult<ExactPoint> result = cut_mesh(node.exact, plane, cut_options);
-        missed += result.plane_missed ? 1 : 0;
-        if (!result.plane_missed) accepted = adopt_if_valid(node, result);
-        if (accepted && !keep_exact_) node.exact = {};
-      }
-      if (accepted) {
-        node.plane = plane;
-        planes_missed_ += missed;
-        planes_rejected_ += attempt - missed;
-        return;
-      }
-    }
-    throw UnsupportedGeometryError(
-        "cannot cut a fragment at depth " + std::to_string(node.depth) + " (" +
-        std::to_string(node.mesh.triangles.size()) + " triangles): of " + std::to_string(options_.max_plane_tries) +
-        " planes, " + std::to_string(missed) + " missed it and " +
-        std::to_string(options_.max_plane_tries - missed) +
-        " grazed a vertex or gave a piece whose rounded mesh is not a valid solid (is it flat, or thinner than "
-        "rounding?)");
-  }
-
-  void leaf_finished() {
-    const std::size_t done = ++leaves_done_;
-    if (progress_) progress_(done);
-  }
-
-  const BuildOptions& options() const { return options_; }
-  const PlaneInput& plane_input() const { return *plane_input_; }
-  std::uint64_t planes_missed() const { return planes_missed_; }
-  std::uint64_t planes_rejected() const { return planes_rejected_; }
-
- private:
-  // The plane kernel: the cut is exact, so nothing about the solids is checked.
-  // Each child is rounded to doubles at once and certified (round_solid); a plane
-  // is redrawn when it misses the node, or, exceedingly rarely, when a child
-  // cannot be written as a valid double mesh (a sliver thinner than the rounding
-  // of its coordinates: the exact tree would be valid, its rounding would not).
-  void cut_plane_kernel(BuildNode& node) const {
     NodeRandom random(node.seed);
     const BoundingBox box = bounding_box(node.solid);
     // The ancestors' planes by depth, then this node's (drawn below).
@@ -363,55 +242,19 @@ class Builder {
         (last_defect.empty() ? std::string() : " (" + last_defect + ")"));
   }
 
-  // The promise of the tree is that every stored mesh is a valid solid. The fast
-  // kernel rounds each crossing point, and the exact kernel rounds each node once
-  // for storage; where a plane passes within rounding of a vertex that can fold a
-  // triangle or collapse one to zero area. Such a plane is redrawn, exactly as one
-  // that misses: the check is exact (validate_mesh), nothing is nudged.
-  bool valid(const Mesh& mesh) const {
-    ValidationOptions validation;
-    validation.check_self_intersections = !options_.allow_self_intersections;
-    const ValidationReport report = validate_mesh(mesh, validation);
-    for (const Defect& defect : report.defects) {
-      // A self-intersecting input (allowed) can pinch its pieces at a vertex.
-      if (options_.allow_self_intersections && defect.kind == DefectKind::non_manifold_vertex) continue;
-      return false;
-    }
-    return true;
-  }
-  bool all_valid(const std::vector<Mesh>& solids) const {
-    return std::all_of(solids.begin(), solids.end(), [&](const Mesh& solid) { return valid(solid); });
+  void leaf_finished() {
+    const std::size_t done = ++leaves_done_;
+    if (progress_) progress_(done);
   }
 
-  void adopt(BuildNode& node, std::vector<Mesh>& solids, bool above) const {
-    for (Mesh& solid : solids) {
-      node.children.push_back(make_node(std::move(solid), {}, node, node.children.size(), above));
-    }
-  }
+  const BuildOptions& options() const { return options_; }
+  const PlaneInput& plane_input() const { return *plane_input_; }
+  std::uint64_t planes_missed() const { return planes_missed_; }
+  std::uint64_t planes_rejected() const { return planes_rejected_; }
 
-  // Rounds every exact child; keeps them all only if every rounding is valid.
-  bool adopt_if_valid(BuildNode& node, CutResult<ExactPoint>& result) const {
-    std::vector<Mesh> rounded;
-    for (auto* solids : {&result.below, &result.above}) {
-      for (ExactMesh& solid : *solids) {
-        for (ExactPoint& p : solid.positions) p = detached(p);
-        rounded.push_back(to_fast(solid));
-        if (!valid(rounded.back())) return false;
-      }
-    }
-    std::size_t next = 0;
-    for (auto* solids : {&result.below, &result.above}) {
-      for (ExactMesh& solid : *solids) {
-        node.children.push_back(make_node(std::move(rounded[next++]), std::move(solid), node,
-                                          node.children.size(), solids == &result.above));
-      }
-    }
-    return true;
-  }
-
+ private:
   const BuildOptions& options_;
   std::optional<PlaneInput> plane_input_;
-  bool keep_exact_;
   const LeafProgressFn& progress_;
   std::atomic<std::size_t> leaves_done_{0};
   // Counted from every worker; cut() is const because it is a pure function of
@@ -558,7 +401,7 @@ void grow_balanced(Builder& builder, BuildNode& root, std::uint32_t target, unsi
 
 // --- numbering ------------------------------------------------------------------
 
-void number_tree(BuildNode& root, MeshTree& tree, std::vector<ExactMesh>* exact_meshes) {
+void number_tree(BuildNode& root, MeshTree& tree) {
   struct Pending {
     BuildNode* node;
     NodeIndex parent;
@@ -610,7 +453,6 @@ void number_tree(BuildNode& root, MeshTree& tree, std::vector<ExactMesh>* exact_
       tree.leaf_nodes.push_back(index);
     }
     if (pending.parent != no_node) tree.nodes[pending.parent].children.push_back(index);
-    if (exact_meshes) exact_meshes->push_back(std::move(built.exact));
     tree.nodes.push_back(std::move(node));
     for (auto child = built.children.rbegin(); child != built.children.rend(); ++child) {
       stack.push_back({child->get(), index});
@@ -687,10 +529,16 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-ExactBuild build(const Mesh& mesh, const BuildOptions& options, bool keep_exact, const LeafProgressFn& progress,
-                 BuildReport* report) {
+}  // namespace
+
+MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const LeafProgressFn& progress,
+                         BuildReport* report) {
   if (options.fragments < 1) throw std::invalid_argument("fragments must be at least 1");
   if (options.max_plane_tries < 1) throw std::invalid_argument("max_plane_tries must be at least 1");
+  if (options.kernel != KernelKind::plane) {
+    throw std::invalid_argument("options.kernel must be plane: the " + std::string(kernel_name(options.kernel)) +
+                                " kernel was retired (its trees still read)");
+  }
   for (SurfaceId surface : mesh.surfaces) {
     if (surface != original_surface) {
       throw std::invalid_argument("build_mesh_tree needs every input triangle on surface 0 (caps are numbered by cut)");
@@ -701,7 +549,7 @@ ExactBuild build(const Mesh& mesh, const BuildOptions& options, bool keep_exact,
   const unsigned threads = options.threads == 0 ? static_cast<unsigned>(tbb::info::default_concurrency())
                                                 : options.threads;
   auto phase_start = std::chrono::steady_clock::now();
-  Builder builder(options, keep_exact && options.kernel == KernelKind::exact, progress);
+  Builder builder(options, progress);
   std::unique_ptr<BuildNode> root = builder.root(mesh);
   tbb::task_arena arena(static_cast<int>(threads));
   arena.execute([&] {
@@ -713,46 +561,26 @@ ExactBuild build(const Mesh& mesh, const BuildOptions& options, bool keep_exact,
     }
   });
 
-  ExactBuild result;
-  result.tree.options = options;
-  result.tree.options.threads = 0;  // never changes the output, so not part of it
-  result.tree.options.input_validated = false;  // nor does who checked the input
-  result.tree.shatter_version = std::string(version_string);
-  number_tree(*root, result.tree, keep_exact && options.kernel == KernelKind::exact ? &result.exact_meshes : nullptr);
+  MeshTree tree;
+  tree.options = options;
+  tree.options.threads = 0;  // never changes the output, so not part of it
+  tree.options.input_validated = false;  // nor does who checked the input
+  tree.shatter_version = std::string(version_string);
+  number_tree(*root, tree);
   dismantle(std::move(root));
   BuildReport timing;
   timing.cutting_seconds = seconds_since(phase_start);
   timing.planes_missed = builder.planes_missed();
   timing.planes_rejected = builder.planes_rejected();
-  if (options.kernel == KernelKind::plane) keep_plane_geometry(builder.plane_input(), result.tree);
+  keep_plane_geometry(builder.plane_input(), tree);
   phase_start = std::chrono::steady_clock::now();
-  if (options.kernel == KernelKind::plane) {
-    plane_hulls(arena, result.tree);
-  } else {
-    // Hulls are pure functions of their meshes, so computing them after the
-    // build, in parallel, changes nothing but the time.
-    arena.execute([&] {
-      tbb::parallel_for(std::size_t{0}, result.tree.nodes.size(),
-                        [&](std::size_t i) { result.tree.nodes[i].hull = convex_hull_of(result.tree.nodes[i].mesh); });
-    });
-  }
+  plane_hulls(arena, tree);
   timing.hull_seconds = seconds_since(phase_start);
   phase_start = std::chrono::steady_clock::now();
-  result.tree.bonds = find_bonds(result.tree);
+  tree.bonds = find_bonds(tree);
   timing.bond_seconds = seconds_since(phase_start);
   if (report) *report = timing;
-  return result;
-}
-
-}  // namespace
-
-MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const LeafProgressFn& progress,
-                         BuildReport* report) {
-  return build(mesh, options, false, progress, report).tree;
-}
-
-ExactBuild build_mesh_tree_keeping_exact(const Mesh& mesh, const BuildOptions& options) {
-  return build(mesh, options, true, {}, nullptr);
+  return tree;
 }
 
 }  // namespace shatter

@@ -1,4 +1,4 @@
-// Gathering a fast- or exact-kernel tree's cap faces (contact_polygons.hpp): one
+// Gathering the cap faces of a tree without exact solids (contact_polygons.hpp): one
 // pass over the leaves' triangles, a hull per face, then a counting sort by cut.
 
 #include "contact_polygons.hpp"

@@ -1,8 +1,9 @@
 #pragma once
-// The contact geometry of a fast- or exact-kernel tree, for find_bonds
-// (bonds.cpp): every leaf's cap on every cut gathered into one face, projected
-// into the cut plane, with its convex hull and outline; and the exact 2D
-// predicates that decide whether two such faces overlap. Private to meshtree.
+// The contact geometry of a tree without exact solids (the retired kernels'),
+// for find_bonds (bonds.cpp): every leaf's cap on every cut gathered into one
+// face, projected into the cut plane, with its convex hull and outline; and the
+// exact 2D predicates that decide whether two such faces overlap. Private to
+// meshtree.
 
 #include <algorithm>
 #include <array>

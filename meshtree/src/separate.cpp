@@ -221,7 +221,7 @@ std::vector<BasicMesh<Point>> separate(const BasicMesh<Point>& surface) {
     // A cavity goes with the innermost outward shell containing it: the one that
     // lies inside every other container. A shell that is flat, or that no outward
     // shell contains, can only come from a self-intersecting input or a rounded
-    // (fast kernel) embedding; it stays a solid of its own, so the output is
+    // embedding; it stays a solid of its own, so the output is
     // still closed and oriented, and the caller's validation reports it.
     std::vector<std::size_t> containers;
     if (orientation[i] == Sign::negative) {

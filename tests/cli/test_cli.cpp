@@ -174,35 +174,33 @@ TEST_CASE("self-intersecting meshes are refused unless allowed, then cut into cl
 TEST_CASE("slice writes pieces that read back exactly, the same bytes every run") {
   const fs::path mesh = mesh_dir() / "fandisk.off";
   for (const std::string format : {"off", "obj", "ply", "stl"}) {
-    for (const std::string kernel : {"plane", "fast", "exact"}) {
-      INFO(format << " " << kernel);
-      const fs::path first = scratch("first"), second = scratch("second");
-      const std::string flags = " --plane 0.3,0.5,0.8,-0.2 --kernel " + kernel + " --format " + format + " --json";
-      const Run a = run_shatter("slice " + quoted(mesh) + flags + " --out " + quoted(first));
-      const Run b = run_shatter("slice " + quoted(mesh) + flags + " --out " + quoted(second));
-      REQUIRE(a.exit_code == 0);
-      REQUIRE(b.exit_code == 0);
-      REQUIRE(files_in(first) >= 2);
-      CHECK(files_in(first) == files_in(second));
-      for (const auto& entry : fs::directory_iterator(first)) {
-        CHECK(slurp(entry.path()) == slurp(second / entry.path().filename()));
-        const Mesh piece = read_mesh(entry.path());
-        CHECK(solid_problem(piece) == "");
-        // Text and binary writers round-trip doubles exactly.
-        CHECK(canonical_bytes(read_mesh_from_bytes(write_mesh_to_bytes(piece, *parse_mesh_format(format)),
-                                                   *parse_mesh_format(format))) == canonical_bytes(piece));
-      }
+    INFO(format);
+    const fs::path first = scratch("first"), second = scratch("second");
+    const std::string flags = " --plane 0.3,0.5,0.8,-0.2 --format " + format + " --json";
+    const Run a = run_shatter("slice " + quoted(mesh) + flags + " --out " + quoted(first));
+    const Run b = run_shatter("slice " + quoted(mesh) + flags + " --out " + quoted(second));
+    REQUIRE(a.exit_code == 0);
+    REQUIRE(b.exit_code == 0);
+    REQUIRE(files_in(first) >= 2);
+    CHECK(files_in(first) == files_in(second));
+    for (const auto& entry : fs::directory_iterator(first)) {
+      CHECK(slurp(entry.path()) == slurp(second / entry.path().filename()));
+      const Mesh piece = read_mesh(entry.path());
+      CHECK(solid_problem(piece) == "");
+      // Text and binary writers round-trip doubles exactly.
+      CHECK(canonical_bytes(read_mesh_from_bytes(write_mesh_to_bytes(piece, *parse_mesh_format(format)),
+                                                 *parse_mesh_format(format))) == canonical_bytes(piece));
     }
   }
 }
 
-TEST_CASE("slice writes nothing that does not validate: fast and exact refuse a piece invalid as written") {
+TEST_CASE("slice through vertices of the elephant writes every piece valid as read back") {
   // Issue 10's reproducer: x + y + d = 0 through a vertex of elephant.off, d the
-  // rounded -(x + y). fast and exact round a cut point onto that vertex, which
-  // gave a piece with a zero-area triangle, written with exit 0 and a warning.
-  // Now every run either exits 0 with every piece valid as read back, or exits 3
-  // with one line naming the piece and writes nothing; the plane kernel always
-  // writes, certified. The same construction through 11 more of its vertices.
+  // rounded -(x + y). The retired kernels rounded a cut point onto that vertex,
+  // which gave a piece with a zero-area triangle (written with exit 0 and a
+  // warning; later refused with exit 3 by exact on 3 and fast on 5 of these 12
+  // planes). The plane kernel writes every piece, certified. The same
+  // construction through 11 more of its vertices.
   const fs::path mesh_path = mesh_dir() / "elephant.off";
   const Mesh elephant = read_mesh(mesh_path);
   std::vector<std::string> planes{"1,1,0,-0.062960299999999997"};
@@ -212,36 +210,16 @@ TEST_CASE("slice writes nothing that does not validate: fast and exact refuse a 
     std::snprintf(text, sizeof text, "1,1,0,%.17g", -(p.x + p.y));
     planes.emplace_back(text);
   }
-  for (const std::string kernel : {"plane", "exact", "fast"}) {
-    std::size_t refused = 0;
-    for (std::size_t k = 0; k < planes.size(); ++k) {
-      INFO(kernel << " --plane " << planes[k]);
-      const fs::path out = scratch("vertex-plane");
-      const Run run = run_shatter("slice " + quoted(mesh_path) + " --plane " + planes[k] + " --kernel " + kernel +
-                                  " --out " + quoted(out));
-      if (run.exit_code == 0) {
-        REQUIRE(files_in(out) >= 2);
-        for (const auto& entry : fs::directory_iterator(out)) {
-          INFO(entry.path().filename());
-          CHECK(validate_mesh(read_mesh(entry.path())).summary() == "valid");
-        }
-        continue;
-      }
-      ++refused;
-      CHECK(run.exit_code == 3);
-      CHECK(is_one_error_line(run.err));
-      CHECK(run.err.find("is not a valid mesh as written") != std::string::npos);
-      CHECK(!fs::exists(out));
-      if (k == 0) CHECK(kernel != "plane");
+  for (const std::string& plane : planes) {
+    INFO("--plane " << plane);
+    const fs::path out = scratch("vertex-plane");
+    const Run run = run_shatter("slice " + quoted(mesh_path) + " --plane " + plane + " --out " + quoted(out));
+    REQUIRE(run.exit_code == 0);
+    REQUIRE(files_in(out) >= 2);
+    for (const auto& entry : fs::directory_iterator(out)) {
+      INFO(entry.path().filename());
+      CHECK(validate_mesh(read_mesh(entry.path())).summary() == "valid");
     }
-    INFO(kernel << ": " << refused << " of " << planes.size() << " planes refused");
-    if (kernel == "plane") CHECK(refused == 0);
-    // The reproducer itself is refused by both rounding kernels. More refusals
-    // than measured (2026-12-02: exact 3 and fast 5 of the 12 planes) is a
-    // regression of the rounding kernels to look at.
-    if (kernel != "plane") CHECK(refused >= 1);
-    if (kernel == "exact") CHECK(refused <= 3);
-    if (kernel == "fast") CHECK(refused <= 5);
   }
 }
 
@@ -367,7 +345,7 @@ TEST_CASE("info --compare-bond-rules counts the seed's false box bonds against t
   }
 }
 
-TEST_CASE("fracture --fragments 1 keeps the solid whole, and --kernel exact gives a valid tree too") {
+TEST_CASE("fracture --fragments 1 keeps the solid whole, and --strategy balanced gives a valid tree too") {
   const fs::path dir = scratch("whole");
   for (const fs::path& mesh : fracture_meshes()) {
     INFO(mesh.filename());
@@ -378,13 +356,13 @@ TEST_CASE("fracture --fragments 1 keeps the solid whole, and --kernel exact give
     CHECK(info["nodes"] == 1);
     CHECK(info["bonds"]["count"] == 0);
 
-    const Run exact = run_shatter("fracture " + quoted(mesh) +
-                                  " --fragments 6 --kernel exact --strategy balanced --out " +
-                                  quoted(dir / "exact.shatter"));
-    REQUIRE(fracture_problem(exact, dir / "exact.shatter") == "");
-    const nlohmann::json exact_info = info_of(dir / "exact.shatter");
-    CHECK(exact_info["leaves"].get<std::size_t>() >= 6);
-    CHECK(exact_info["options"]["kernel"] == "exact");
+    const Run balanced = run_shatter("fracture " + quoted(mesh) + " --fragments 6 --strategy balanced --out " +
+                                     quoted(dir / "balanced.shatter"));
+    REQUIRE(fracture_problem(balanced, dir / "balanced.shatter") == "");
+    const nlohmann::json balanced_info = info_of(dir / "balanced.shatter");
+    CHECK(balanced_info["leaves"].get<std::size_t>() >= 6);
+    CHECK(balanced_info["options"]["strategy"] == "balanced");
+    CHECK(balanced_info["options"]["kernel"] == "plane");
   }
 }
 
@@ -468,7 +446,7 @@ TEST_CASE("fracture usage errors exit 2 with one line, before anything is writte
       cube + " --fragments 4 --format obj" + out,                   // --format without --export
       cube + " --fragments 4 --export " + quoted(dir / "e") + " --format glb" + out,
       cube + " --fragments 4 --strategy random" + out,
-      cube + " --fragments 4 --kernel slow" + out,
+      cube + " --fragments 4 --kernel exact" + out,                 // retired: no such option
       cube + " --fragments 4 --threads -1" + out,
       cube + " --fragments 4 --interior-uv-scale 0" + out,
       cube + " --fragments 4 --seed -1" + out,
@@ -613,11 +591,10 @@ TEST_CASE("info and export refuse a damaged .shatter file with exit 3 and one li
 TEST_CASE("every subcommand's --help names every option") {
   const std::map<std::string, std::vector<std::string>> options_of = {
       {"validate", {"mesh", "--json"}},
-      {"slice", {"mesh", "--plane", "--kernel", "--allow-self-intersections", "--out", "--format",
-                 "--interior-uv-scale", "--json"}},
-      {"fracture", {"mesh", "--fragments", "--seed", "--strategy", "thesis", "balanced", "axis", "--kernel", "plane",
-                    "fast", "exact", "--threads", "--interior-uv-scale", "--allow-self-intersections", "--out", "--export",
-                    "--format", "--json"}},
+      {"slice", {"mesh", "--plane", "--allow-self-intersections", "--out", "--format", "--interior-uv-scale",
+                 "--json"}},
+      {"fracture", {"mesh", "--fragments", "--seed", "--strategy", "thesis", "balanced", "axis", "--threads",
+                    "--interior-uv-scale", "--allow-self-intersections", "--out", "--export", "--format", "--json"}},
       {"info", {"tree", "--json"}},
       {"export", {"tree", "--out", "--format", "glb", "--nodes", "leaves", "all", "depth:K"}},
   };
@@ -633,6 +610,7 @@ TEST_CASE("every subcommand's --help names every option") {
       INFO(option);
       CHECK(help.out.find(option) != std::string::npos);
     }
+    CHECK(help.out.find("--kernel") == std::string::npos);  // retired with the fast and exact kernels
   }
 }
 
@@ -642,13 +620,12 @@ TEST_CASE("fracture draws a progress bar on a terminal and erases it") {
   REQUIRE(std::system("command -v script >/dev/null 2>&1") == 0);
   const fs::path dir = scratch("progress");
   fs::create_directories(dir);
-  // Long enough to pass the bar's quiet first half second on any machine: the
-  // exact kernel (the plane kernel is done in a fraction of that), 128 fragments
-  // (about 4 s in Release), or 48 under the sanitizers, which run it ten times
-  // slower (sanitizers.hpp).
-  const std::string fragments = std::to_string(sized(128, 48));
+  // Long enough to pass the bar's quiet first half second on any machine: 2,048
+  // fragments (about 2 s in Release), or 256 under the sanitizers, which run it
+  // ten times slower (sanitizers.hpp).
+  const std::string fragments = std::to_string(sized(2048, 256));
   const std::string command = std::string("'") + SHATTER_EXE + "' fracture " + quoted(mesh_dir() / "elephant.off") +
-                              " --fragments " + fragments + " --kernel exact --threads 2 --out " +
+                              " --fragments " + fragments + " --threads 2 --out " +
                               quoted(dir / "t.shatter") + " >" + quoted(dir / "stdout.txt");
   const std::string transcript = (dir / "terminal.txt").string();
   const int status = std::system(("script -qec \"" + command + "\" /dev/null >'" + transcript + "' 2>&1").c_str());

@@ -1,5 +1,5 @@
 // Cuts the unit cube with the installed library and checks the pieces: a plane
-// cut (slicer, through meshtree's cut_mesh) into two halves of volume 1/2, and a
+// cut (meshtree's cut_mesh_by_plane) into two certified halves of volume 1/2, and a
 // mesh tree of 8 fragments (plane kernel) that validate_tree accepts, geometry
 // included, whose leaves are valid solids adding up to the cube, written to
 // .shatter bytes and read back, then broken in the runtime (one strong impact at
@@ -42,13 +42,13 @@ int main() {
   const shatter::Mesh cube = unit_cube();
   expect(shatter::validate_mesh(cube).valid(), "the unit cube is not valid");
 
-  const auto halves = shatter::cut_mesh(cube, shatter::Plane{{0, 0, 1}, -0.5});
-  expect(halves.below.size() == 1 && halves.above.size() == 1, "z = 1/2 does not cut the cube into two pieces");
-  for (const auto* side : {&halves.below, &halves.above}) {
-    for (const shatter::Mesh& half : *side) {
-      expect(shatter::validate_mesh(half).valid(), "a half is not a valid solid");
-      expect(std::fabs(shatter::signed_volume(half) - 0.5) < 1e-15, "a half's volume is not 1/2");
-    }
+  const shatter::PlaneCut halves = shatter::cut_mesh_by_plane(cube, shatter::Plane{{0, 0, 1}, -0.5});
+  expect(halves.certified(), "a half of the cube is not certified");
+  expect(halves.pieces.size() == 2 && !halves.pieces[0].above && halves.pieces[1].above,
+         "z = 1/2 does not cut the cube into a piece below and one above");
+  for (const shatter::CutPiece& half : halves.pieces) {
+    expect(shatter::validate_mesh(half.mesh).valid(), "a half is not a valid solid");
+    expect(std::fabs(shatter::signed_volume(half.mesh) - 0.5) < 1e-15, "a half's volume is not 1/2");
   }
 
   shatter::BuildOptions options;

@@ -2,15 +2,15 @@
 // N fragments by the library itself, so the seed is a file encode_shatter wrote
 // and the fuzzer starts from every section filled in.
 //
-//   gen_shatter_seed <out.shatter> [fragments (default 4)] [fast|exact|plane (default plane)]
+//   gen_shatter_seed <out.shatter> [fragments (default 4)]
 //
 // It writes the current format (version 2). The committed seeds of version 1
-// (cube-4-fragments.shatter, fast; cube-2-fragments-exact.shatter, exact; and the
-// bad-* and optional-section-* files derived from them) were written by version
-// 1's encoder and are kept as they are: they are what keeps version 1 reading
-// fuzzed. The version 2 seeds are
-//   gen_shatter_seed .../v2-cube-4-fragments-plane.shatter 4 plane
-//   gen_shatter_seed .../v2-cube-2-fragments-fast.shatter 2 fast
+// (cube-4-fragments.shatter, fast kernel; cube-2-fragments-exact.shatter, exact
+// kernel; and the bad-* and optional-section-* files derived from them) were
+// written by version 1's encoder, and v2-cube-2-fragments-fast.shatter by the
+// retired fast kernel; they are kept as they are: they keep version 1 and the
+// retired kernels' trees reading fuzzed. The one seed this writes is
+//   gen_shatter_seed .../v2-cube-4-fragments-plane.shatter 4
 
 #include <cstdio>
 #include <cstdlib>
@@ -23,24 +23,13 @@
 
 /// Builds the cube's tree with a fixed seed and writes its file; exit 0 on success.
 int main(int argc, char** argv) {
-  if (argc < 2 || argc > 4) {
-    std::fprintf(stderr, "usage: %s <out.shatter> [fragments] [fast|exact|plane]\n", argv[0]);
+  if (argc < 2 || argc > 3) {
+    std::fprintf(stderr, "usage: %s <out.shatter> [fragments]\n", argv[0]);
     return 2;
   }
   try {
     shatter::BuildOptions options;
     options.fragments = argc > 2 ? static_cast<std::uint32_t>(std::stoul(argv[2])) : 4;
-    const std::string kernel = argc > 3 ? argv[3] : "plane";
-    if (kernel == "fast") {
-      options.kernel = shatter::KernelKind::fast;
-    } else if (kernel == "exact") {
-      options.kernel = shatter::KernelKind::exact;
-    } else if (kernel == "plane") {
-      options.kernel = shatter::KernelKind::plane;
-    } else {
-      std::fprintf(stderr, "error: unknown kernel '%s' (fast, exact or plane)\n", kernel.c_str());
-      return 2;
-    }
     options.seed = 7;
     options.threads = 1;
     shatter::write_shatter_file(argv[1], shatter::build_mesh_tree(shatter::test::unit_cube(), options));

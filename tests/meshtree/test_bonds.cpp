@@ -1,6 +1,7 @@
 // Bonds between fragments (meshtree/bonds.hpp): hand-cut trees whose bonds
-// geometry dictates, trees from the builder (every strategy, every kernel) checked
-// against an independent brute force in exact rational arithmetic
+// geometry dictates, trees from the builder (every strategy; each read from its
+// exact solids and, as the retired kernels stored trees, from its meshes alone)
+// checked against an independent brute force in exact rational arithmetic
 // (support/bond_reference.hpp), and the seed's bounding-box rule. The plane
 // kernel's find_plane_bonds is judged on its leaves' exact solids, apart from its
 // predicates: builder trees, lattice trees cut by hand (where leaves touch along
@@ -31,10 +32,11 @@
 #include "shatter/kernel/projection.hpp"
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/build.hpp"
-#include "shatter/meshtree/cut.hpp"
 #include "shatter/meshtree/cut_solid.hpp"
 #include "shatter/meshtree/file.hpp"
+#include "shatter/meshtree/hull.hpp"
 #include "shatter/meshtree/plane_input.hpp"
+#include "shatter/oracle/cut.hpp"
 #include "support/bond_reference.hpp"
 #include "support/checks.hpp"
 #include "support/degenerate.hpp"
@@ -142,7 +144,11 @@ void check_bonds(const MeshTree& tree, const std::vector<Bond>& bonds, bool brut
     CHECK(bonded == Approx(cap.below).epsilon(1e-9).margin(1e-12 * scale * scale));
   }
 
-  if (brute_force) {
+  if (brute_force && !tree.cut_planes.empty()) {
+    // A tree with exact solids: the brute force over them (the overlap is exact;
+    // its area is measured on rounded points, hence the tolerance of each bond).
+    CHECK(bond_mismatch(tree, bonds, plane_reference_bonds(tree)) == "");
+  } else if (brute_force) {
     const std::map<BondKey, double> expected = brute_force_bonds(tree);
     std::set<BondKey> found;
     for (const Bond& bond : bonds) found.insert({bond.first, bond.second, bond.cut_node});
@@ -187,22 +193,48 @@ void check_box_rule(const MeshTree& tree, const std::vector<Bond>& bonds) {
         comparison.true_bonds - comparison.missed_true_bonds);
 }
 
-MeshTree build(const Mesh& mesh, Strategy strategy, KernelKind kernel, std::uint32_t fragments,
+// What find_bonds reads of a tree: its exact solids (every tree the builder
+// makes: find_plane_bonds), or its meshes alone (the trees of the retired fast
+// and exact kernels, read from older files: contact polygons of cap triangles).
+enum class Representation { exact, meshes_only };
+constexpr Representation all_representations[] = {Representation::exact, Representation::meshes_only};
+
+const char* representation_name(Representation representation) {
+  return representation == Representation::exact ? "exact solids" : "meshes only";
+}
+
+// A built tree as the retired kernels stored theirs: no input geometry, cut
+// planes or solids, and every node's hull its own (no node marked convex).
+MeshTree meshes_only(MeshTree tree) {
+  tree.geometry = {};
+  tree.cut_planes.clear();
+  for (MeshTreeNode& node : tree.nodes) {
+    node.solid = {};
+    if (node.convex) node.hull = convex_hull_of(node.mesh);
+    node.convex = false;
+  }
+  tree.options.kernel = KernelKind::exact;
+  tree.bonds = find_bonds(tree);
+  return tree;
+}
+
+MeshTree build(const Mesh& mesh, Strategy strategy, Representation representation, std::uint32_t fragments,
                std::uint64_t seed = 11) {
   BuildOptions options;
   options.fragments = fragments;
   options.strategy = strategy;
-  options.kernel = kernel;
   options.seed = seed;
   MeshTree tree = build_mesh_tree(mesh, options);
+  CHECK(tree_problem(tree) == "");
+  if (representation == Representation::exact) return tree;
+  tree = meshes_only(std::move(tree));
   CHECK(tree_problem(tree) == "");
   return tree;
 }
 
 constexpr Strategy all_strategies[] = {Strategy::thesis, Strategy::balanced, Strategy::axis};
-constexpr KernelKind all_kernels[] = {KernelKind::fast, KernelKind::exact};
 
-// --- a tree cut by hand with cut_mesh, independent of the builder ------------
+// --- a tree cut by hand with the oracle's cut_mesh, independent of the builder ---
 
 // Builds a tree in preorder: `plane_for(depth, node mesh)` gives the plane a node
 // is cut by, or nullopt for a leaf.
@@ -223,9 +255,9 @@ MeshTree cut_by_hand(const Mesh& mesh, const std::function<std::optional<Plane>(
       tree.nodes[index].mesh = std::move(node_mesh);
       return index;
     }
-    CutOptions options;
+    oracle::CutOptions options;
     options.cap_surface = cap_surface_of(index);
-    CutResult<Vec3> cut = cut_mesh(node_mesh, *plane, options);
+    oracle::CutResult<Vec3> cut = oracle::cut_mesh(node_mesh, *plane, options);
     REQUIRE_FALSE(cut.plane_missed);
     tree.nodes[index].plane = *plane;
     tree.nodes[index].mesh = std::move(node_mesh);
@@ -327,9 +359,9 @@ TEST_CASE("two fragments of a convex solid: one bond covering the whole cap", "[
                                       {"ellipsoid", ellipsoid({0.5, -1, 2}, {1.0, 0.6, 0.8}, 24, 12)}};
   for (const NamedMesh& named : meshes) {
     for (const Strategy strategy : all_strategies) {
-      for (const KernelKind kernel : all_kernels) {
-        INFO(named.name << " " << strategy_name(strategy) << " " << kernel_name(kernel));
-        const MeshTree tree = build(named.mesh, strategy, kernel, 2);
+      for (const Representation representation : all_representations) {
+        INFO(named.name << " " << strategy_name(strategy) << " " << representation_name(representation));
+        const MeshTree tree = build(named.mesh, strategy, representation, 2);
         REQUIRE(tree.leaf_count() == 2);
         const std::vector<Bond> bonds = find_bonds(tree);
         REQUIRE(bonds.size() == 1);
@@ -349,10 +381,10 @@ TEST_CASE("axis slices of a long box: a chain of bonds, each the slanted cross-s
   // and stay near the middle, so no two planes meet inside it and every cap is a
   // parallelogram of area 1 / |n_x| (n unit).
   const Mesh long_box = box({0, 0, 0}, {16, 1, 1});
-  for (const KernelKind kernel : all_kernels) {
+  for (const Representation representation : all_representations) {
     for (const std::uint32_t fragments : {2u, 3u, 4u}) {
-      INFO(kernel_name(kernel) << " N = " << fragments);
-      const MeshTree tree = build(long_box, Strategy::axis, kernel, fragments, 5);
+      INFO(representation_name(representation) << " N = " << fragments);
+      const MeshTree tree = build(long_box, Strategy::axis, representation, fragments, 5);
       REQUIRE(tree.leaf_count() == fragments);
       const std::vector<Bond> bonds = find_bonds(tree);
       REQUIRE(bonds.size() == fragments - 1);
@@ -448,10 +480,10 @@ TEST_CASE("bonds equal the brute-force contact set", "[bonds][build][property][h
                                       {"torus", torus(1.0, 0.35, 16, 10)},
                                       {"hollow-egg", hollow_egg()}};
   std::size_t trees = 0, brute_forced = 0;
-  const auto check_tree = [&](const NamedMesh& named, Strategy strategy, KernelKind kernel, std::uint32_t fragments,
+  const auto check_tree = [&](const NamedMesh& named, Strategy strategy, Representation representation, std::uint32_t fragments,
                               bool brute_force) {
-    INFO(named.name << " " << strategy_name(strategy) << " " << kernel_name(kernel) << " N = " << fragments);
-    const MeshTree tree = build(named.mesh, strategy, kernel, fragments);
+    INFO(named.name << " " << strategy_name(strategy) << " " << representation_name(representation) << " N = " << fragments);
+    const MeshTree tree = build(named.mesh, strategy, representation, fragments);
     REQUIRE(tree.leaf_count() >= fragments);
     const std::vector<Bond> bonds = find_bonds(tree);
     CHECK(bonds.size() >= tree.leaf_count() - 1);  // every solid here is connected
@@ -462,30 +494,29 @@ TEST_CASE("bonds equal the brute-force contact set", "[bonds][build][property][h
   };
   for (const NamedMesh& named : meshes) {
     for (const Strategy strategy : all_strategies) {
-      for (const KernelKind kernel : all_kernels) check_tree(named, strategy, kernel, 3, true);
+      for (const Representation representation : all_representations) check_tree(named, strategy, representation, 3, true);
     }
   }
   // At 64 fragments the builds and the O(n^2) reference (slow on sliver-rich
   // caps) cost most: every strategy on the cube and the torus, one on the others,
   // and the reference on one tree.
   for (const Strategy strategy : all_strategies) {
-    check_tree(meshes[0], strategy, KernelKind::fast, 64, strategy == Strategy::balanced);
-    check_tree(meshes[2], strategy, KernelKind::fast, 64, false);
+    check_tree(meshes[0], strategy, Representation::meshes_only, 64, strategy == Strategy::balanced);
+    check_tree(meshes[2], strategy, Representation::meshes_only, 64, false);
   }
-  check_tree(meshes[1], Strategy::axis, KernelKind::fast, 64, false);
-  check_tree(meshes[3], Strategy::thesis, KernelKind::fast, 64, false);
-  check_tree(meshes[0], Strategy::balanced, KernelKind::exact, 64, false);
+  check_tree(meshes[1], Strategy::axis, Representation::meshes_only, 64, false);
+  check_tree(meshes[3], Strategy::thesis, Representation::meshes_only, 64, false);
+  check_tree(meshes[0], Strategy::balanced, Representation::exact, 64, false);
   CHECK(trees == 4 * 3 * 2 + 3 * 2 + 3);
   CHECK(brute_forced == 4 * 3 * 2 + 1);
 }
 
 TEST_CASE("bonds of 256 fragments and of the generated catalogue", "[bonds][build][property][heavy]") {
   SECTION("256 fragments") {
-    // The fast kernel only: the exact one is covered at 64 fragments, and its
-    // builds are slow.
+    // Meshes only: find_plane_bonds is covered at 64 fragments.
     for (const Strategy strategy : all_strategies) {
       INFO(strategy_name(strategy));
-      const MeshTree tree = build(unit_cube(), strategy, KernelKind::fast, 256);
+      const MeshTree tree = build(unit_cube(), strategy, Representation::meshes_only, 256);
       REQUIRE(tree.leaf_count() >= 256);
       const std::vector<Bond> bonds = find_bonds(tree);
       check_bonds(tree, bonds, false);
@@ -493,7 +524,7 @@ TEST_CASE("bonds of 256 fragments and of the generated catalogue", "[bonds][buil
     }
   }
   SECTION("generated meshes, tiny, huge and far from the origin") {
-    // A build the exact kernel refuses (UnsupportedGeometryError, a known
+    // A build the builder refuses (UnsupportedGeometryError, a known
     // limitation) is counted against the ceiling below; any other error fails.
     // (These builds used to be skipped with a warning; none is refused today.)
     std::size_t built = 0;
@@ -502,7 +533,7 @@ TEST_CASE("bonds of 256 fragments and of the generated catalogue", "[bonds][buil
       INFO(named.name);
       MeshTree tree;
       try {
-        tree = build(named.mesh, Strategy::thesis, KernelKind::exact, 8);
+        tree = build(named.mesh, Strategy::thesis, Representation::exact, 8);
       } catch (const UnsupportedGeometryError& error) {
         refused.push_back(named.name + ": " + error.what());
         continue;
@@ -526,7 +557,7 @@ TEST_CASE("bonds of corpus meshes", "[bonds][build][corpus][heavy]") {
     const Mesh mesh = read_mesh(path);
     if (mesh.triangle_count() > 1000) continue;  // keep the suite fast: small ones only
     INFO(path.filename().string());
-    const MeshTree tree = build(mesh, Strategy::balanced, KernelKind::fast, 8);
+    const MeshTree tree = build(mesh, Strategy::balanced, Representation::meshes_only, 8);
     const std::vector<Bond> bonds = find_bonds(tree);
     check_bonds(tree, bonds, true);
     check_box_rule(tree, bonds);
@@ -538,7 +569,7 @@ TEST_CASE("bonds of corpus meshes", "[bonds][build][corpus][heavy]") {
 // The sanitized build (.ci/sanitize) leaves the [heavy] cases above out; this one
 // keeps their properties (every bond against the exact brute force, the box rule)
 // on fewer fragments and meshes, so that find_bonds runs under ASan and UBSan on
-// trees from every strategy and both kernels, far from the origin included.
+// trees from every strategy in both representations, far from the origin included.
 TEST_CASE("bonds equal the brute-force contact set: 8 fragments, the sanitizer's matrix", "[bonds][build][property]") {
   const std::vector<NamedMesh> meshes{{"unit-cube", unit_cube()},
                                       {"torus", torus(1.0, 0.35, 16, 10)},
@@ -547,9 +578,9 @@ TEST_CASE("bonds equal the brute-force contact set: 8 fragments, the sanitizer's
   std::size_t trees = 0;
   for (const NamedMesh& named : meshes) {
     for (const Strategy strategy : all_strategies) {
-      for (const KernelKind kernel : all_kernels) {
-        INFO(named.name << " " << strategy_name(strategy) << " " << kernel_name(kernel));
-        const MeshTree tree = build(named.mesh, strategy, kernel, 8);
+      for (const Representation representation : all_representations) {
+        INFO(named.name << " " << strategy_name(strategy) << " " << representation_name(representation));
+        const MeshTree tree = build(named.mesh, strategy, representation, 8);
         REQUIRE(tree.leaf_count() >= 8);
         const std::vector<Bond> bonds = find_bonds(tree);
         CHECK(bonds.size() >= tree.leaf_count() - 1);  // every solid here is connected
@@ -708,7 +739,7 @@ void run_plane_matrix(const std::vector<NamedMesh>& meshes, std::initializer_lis
     for (const Strategy strategy : all_strategies) {
       for (const std::uint64_t seed : seeds) {
         const std::uint32_t fragments = cycle[index++ % cycle.size()];
-        const MeshTree tree = build(m.mesh, strategy, KernelKind::plane, fragments, seed);
+        const MeshTree tree = build(m.mesh, strategy, Representation::exact, fragments, seed);
         CHECK(tree.leaf_count() >= fragments);
         check_plane_bonds(m.name + " " + std::string(strategy_name(strategy)) + " seed " + std::to_string(seed) +
                               " N = " + std::to_string(fragments),
@@ -782,7 +813,7 @@ TEST_CASE("find_plane_bonds on lattice trees: rectangles in closed form, edge an
 }
 
 TEST_CASE("the plane-bond brute force catches planted errors", "[bonds][plane]") {
-  const MeshTree tree = build(torus(1.0, 0.35, 12, 8), Strategy::balanced, KernelKind::plane, 16, 3);
+  const MeshTree tree = build(torus(1.0, 0.35, 12, 8), Strategy::balanced, Representation::exact, 16, 3);
   const Reference reference = plane_reference_bonds(tree);
   const std::vector<Bond>& bonds = tree.bonds;
   REQUIRE(bonds.size() >= 16);

@@ -23,13 +23,14 @@
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/validate.hpp"
-#include "shatter/meshtree/cut.hpp"
+#include "shatter/oracle/cut.hpp"
 #include "shatter/meshtree/separate.hpp"
 #include "support/checks.hpp"
 #include "shatter/generators/random.hpp"
 #include "shatter/generators/solids.hpp"
 
 using namespace shatter;
+using namespace shatter::oracle;
 using namespace shatter::test;
 
 namespace {

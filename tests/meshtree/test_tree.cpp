@@ -1,9 +1,9 @@
 // Property tests of the mesh tree builder (DESIGN.md, "Invariants" and "Mesh tree
 // builder"): shared and generated meshes, N in {1, 2, 3, 64, 256, 2048}, every
-// strategy, both kernels (exact at the smaller N), and every invariant of the
+// strategy, and every invariant of the
 // tree on every node: valid solids, volumes that add up, leaf ranges, surface
 // ids, hulls, mass properties, cover, bonds, the file round trip and thread-count
-// independence. Failures name the case (mesh, N, strategy, kernel, seed) and the
+// independence. Failures name the case (mesh, N, strategy, seed) and the
 // first offending nodes, so a builder defect can be reproduced directly.
 
 #include <catch2/catch.hpp>
@@ -46,7 +46,6 @@
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cover.hpp"
-#include "shatter/meshtree/exact_build.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "support/bond_reference.hpp"
@@ -59,7 +58,6 @@ using namespace shatter::test;
 namespace {
 
 constexpr Strategy all_strategies[] = {Strategy::thesis, Strategy::balanced, Strategy::axis};
-constexpr KernelKind all_kernels[] = {KernelKind::plane, KernelKind::fast, KernelKind::exact};
 
 // A double in full (17 significant digits), for messages.
 std::string num(double x) {
@@ -134,42 +132,31 @@ struct Case {
 std::string describe(const Case& c) {
   std::ostringstream out;
   out << "mesh=" << c.mesh->name << " N=" << c.options.fragments << " strategy=" << strategy_name(c.options.strategy)
-      << " kernel=" << kernel_name(c.options.kernel) << " seed=" << c.options.seed
+      << " seed=" << c.options.seed
       << " threads=" << c.options.threads;
   return out.str();
 }
 
-BuildOptions options_for(std::uint32_t fragments, Strategy strategy, KernelKind kernel, std::uint64_t seed,
-                         unsigned threads = 2) {
+BuildOptions options_for(std::uint32_t fragments, Strategy strategy, std::uint64_t seed, unsigned threads = 2) {
   BuildOptions options;
   options.fragments = fragments;
   options.strategy = strategy;
-  options.kernel = kernel;
   options.seed = seed;
   options.threads = threads;
   return options;
 }
 
-// The tree, and for the exact kernel every node's exact solid.
 struct Built {
   MeshTree tree;
-  std::vector<ExactMesh> exact;
 };
 
-// Known limitation (README, "The mesh tree"): with the axis strategy, whose
-// near-parallel planes keep crossing the flat faces of earlier cuts, the fast
-// kernel's rounded cut points leave needle triangles on boxes that, a few levels
-// down, every plane crosses at points that round together; the exact kernel cuts
-// the same boxes (tested below). On the 1e-6 torus both kernels run out of valid
-// planes with this strategy, not yet understood. In these cases the builder may
-// refuse with UnsupportedGeometryError, counted against the ceiling its test case
-// measured (KnownRefusals below); anything else it does is checked in full.
+// Known limitation (README, "The mesh tree"): with the axis strategy the 1e-6
+// torus may run out of planes whose pieces round validly (the retired fast and
+// exact kernels did; not yet understood). There the builder may refuse with
+// UnsupportedGeometryError, counted against the ceiling its test case measured
+// (KnownRefusals below); anything else it does is checked in full.
 bool may_run_out_of_planes(const Case& c) {
-  if (c.options.strategy != Strategy::axis) return false;
-  const std::string& name = c.mesh->name;
-  if (name == "torus-tiny-1e-6") return true;
-  if (c.options.kernel != KernelKind::fast) return false;
-  return name == "box" || name == "two-boxes" || (name == "hollow-egg" && c.options.fragments >= 2048);
+  return c.options.strategy == Strategy::axis && c.mesh->name == "torus-tiny-1e-6";
 }
 
 // The known limitation's refusals are counted, never waved through: a test case
@@ -202,15 +189,7 @@ class KnownRefusals {
 // returns nothing, so the other cases still run.
 std::optional<Built> try_build(const Case& c) {
   try {
-    Built built;
-    if (c.options.kernel == KernelKind::exact) {
-      ExactBuild result = build_mesh_tree_keeping_exact(c.mesh->mesh, c.options);
-      built.tree = std::move(result.tree);
-      built.exact = std::move(result.exact_meshes);
-    } else {
-      built.tree = build_mesh_tree(c.mesh->mesh, c.options);
-    }
-    return built;
+    return Built{build_mesh_tree(c.mesh->mesh, c.options)};
   } catch (const UnsupportedGeometryError& error) {
     if (may_run_out_of_planes(c) && KnownRefusals::active() != nullptr) {
       KnownRefusals::active()->add(describe(c) + ": " + error.what());
@@ -627,7 +606,7 @@ void check_nodes(const MeshTree& tree, const Mesh& input, Level level) {
       if (!node.hull.positions.empty()) out.add(hull, "a convex node stores a separate hull");
       if (&tree.hull_of(v) != &node.mesh) out.add(hull, "hull_of a convex node is not its mesh");
       if (!solid_is_convex(tree.plane_set(), node.solid)) out.add(hull, "marked convex, but its solid is not");
-    } else if (tree.options.kernel == KernelKind::plane && !node.is_leaf()) {
+    } else if (!node.is_leaf()) {
       if (level == Level::full) {
         if (const std::string h = containing_hull_problem(mesh, node.hull); !h.empty()) out.add(hull, h);
       }
@@ -709,12 +688,12 @@ void check_nodes(const MeshTree& tree, const Mesh& input, Level level) {
   }
 }
 
-// Children's volumes add up to their parent's within 1e-9 relative (the fast
-// kernel's promise; the exact kernel's rounded meshes keep it too), compared as
-// exact sums of the rounded meshes' volumes. Rounding moves a cut point by at
+// Children's rounded volumes add up to their parent's within 1e-9 relative,
+// compared as exact sums of the rounded meshes' volumes (the exact solids' volumes
+// add up exactly: check_plane). Rounding moves a cut point by at
 // most half an ulp of its coordinates; far from the origin that can exceed 1e-9 of
 // a small fragment's volume, so the bound also allows surface area x 2 ulps.
-void check_fast_volumes(const MeshTree& tree) {
+void check_rounded_volumes(const MeshTree& tree) {
   Problems problems(tree, "children's volumes do not sum to the parent's (1e-9 relative, plus area x 2 ulps)");
   std::vector<CGAL::Mpzf> six;
   six.reserve(tree.nodes.size());
@@ -734,84 +713,6 @@ void check_fast_volumes(const MeshTree& tree) {
     }
   }
   expect_none(problems);
-}
-
-// The exact kernel: every node's exact solid is valid, rounds to the node's mesh,
-// lies exactly on its side of its parent's plane with its caps exactly on the
-// planes they came from, and children's exact volumes sum exactly to the parent's.
-void check_exact(const MeshTree& tree, const std::vector<ExactMesh>& exact, const Mesh& input) {
-  REQUIRE(exact.size() == tree.nodes.size());
-  Problems solid(tree, "exact solid invalid (as exact_solid_problem)");
-  Problems rounding(tree, "node mesh is not the exact solid rounded");
-  Problems volumes(tree, "children's exact volumes do not sum exactly to the parent's");
-  Problems planes(tree, "exact vertices vs the cutting planes");
-  std::vector<mpq_class> six;
-  six.reserve(exact.size());
-  for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
-    const MeshTreeNode& node = tree.nodes[v];
-    const ExactMesh& solid_v = exact[v];
-    // exact_solid_problem, sharing its parts with the checks below.
-    six.push_back(exact_six_volume(solid_v));
-    const Mesh rounded = to_fast(solid_v);
-    if (const std::string problem = topology_problem(rounded); !problem.empty()) {
-      solid.add(v, problem);
-    } else if (six.back() <= 0) {
-      solid.add(v, "volume not positive");
-    } else {
-      for (std::size_t t = 0; t < solid_v.triangles.size(); ++t) {
-        const Triangle& tri = solid_v.triangles[t];
-        if (CGAL::collinear(solid_v.positions[tri[0]], solid_v.positions[tri[1]], solid_v.positions[tri[2]])) {
-          solid.add(v, "zero-area triangle " + std::to_string(t));
-          break;
-        }
-      }
-    }
-    if (rounded.positions != node.mesh.positions || rounded.triangles != node.mesh.triangles) {
-      rounding.add(v, "positions or triangles differ");
-      continue;
-    }
-    // Every vertex on the node's side of every ancestor's plane (exactly), and
-    // each cap triangle's corners exactly on the plane of its cut.
-    for (NodeIndex child = v, a = node.parent; a != no_node; child = a, a = tree.nodes[a].parent) {
-      const Plane& plane = tree.nodes[a].plane;
-      const Sign wrong = tree.nodes[child].above_parent_plane ? Sign::negative : Sign::positive;
-      for (std::size_t i = 0; i < solid_v.positions.size(); ++i) {
-        if (side_of_plane(plane, solid_v.positions[i]) == wrong) {
-          planes.add(v, "vertex " + std::to_string(i) + " on the wrong side of ancestor " + std::to_string(a) +
-                            "'s plane");
-          break;
-        }
-      }
-    }
-    for (std::size_t t = 0; t < node.mesh.triangles.size(); ++t) {
-      const SurfaceId surface = node.mesh.surfaces[t];
-      if (surface == original_surface || surface - 1 >= tree.nodes.size()) continue;
-      const Plane& plane = tree.nodes[surface - 1].plane;
-      for (const VertexIndex corner : solid_v.triangles[t]) {
-        if (side_of_plane(plane, solid_v.positions[corner]) != Sign::zero) {
-          planes.add(v, "cap triangle " + std::to_string(t) + " (surface " + std::to_string(surface) +
-                            ") has a corner off its cut's plane");
-          t = node.mesh.triangles.size() - 1;
-          break;
-        }
-      }
-    }
-  }
-  if (six[0] != exact_six_volume(input)) volumes.add(0, "the root's exact volume is not the input's");
-  mpq_class leaves = 0;
-  for (const NodeIndex leaf : tree.leaf_nodes) leaves += six[leaf];
-  if (leaves != six[0]) volumes.add_global("the leaves' exact volumes do not sum to the root's");
-  for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
-    const MeshTreeNode& node = tree.nodes[v];
-    if (node.is_leaf()) continue;
-    mpq_class total = 0;
-    for (const NodeIndex c : node.children) total += six[c];
-    if (total != six[v]) {
-      volumes.add(v, "children " + num(total.get_d() / 6) + " vs parent " + num(six[v].get_d() / 6) + ", off by " +
-                         num(mpq_class(total - six[v]).get_d() / 6));
-    }
-  }
-  for (const Problems* p : {&solid, &rounding, &volumes, &planes}) expect_none(*p);
 }
 
 // The plane kernel: every node's exact solid is sound (check_solid: closed, every
@@ -960,7 +861,7 @@ void check_tree(const Case& c, const Built& built) {
   CHECK(tree.options.fragments == c.options.fragments);
   CHECK(tree.options.seed == c.options.seed);
   CHECK(tree.options.strategy == c.options.strategy);
-  CHECK(tree.options.kernel == c.options.kernel);
+  CHECK(tree.options.kernel == KernelKind::plane);
   CHECK(tree.options.threads == 0);
   PhaseTimer timer;
   if (!check_structure(tree)) return;
@@ -970,10 +871,9 @@ void check_tree(const Case& c, const Built& built) {
   timer.lap("structure");
   check_nodes(tree, input, c.level);
   timer.lap("nodes");
-  check_fast_volumes(tree);
+  check_rounded_volumes(tree);
   timer.lap("volumes");
-  if (c.options.kernel == KernelKind::exact) check_exact(tree, built.exact, input);
-  if (c.options.kernel == KernelKind::plane) check_plane(tree, input, c.level == Level::full);
+  check_plane(tree, input, c.level == Level::full);
   timer.lap("exact");
   check_cover(tree);
   check_bonds(tree);
@@ -1023,24 +923,18 @@ void run(const Case& c) {
 TEST_CASE("one fragment: the root alone, a leaf holding the input", "[tree][build]") {
   for (const TestMesh& m : test_meshes()) {
     for (const Strategy strategy : all_strategies) {
-      for (const KernelKind kernel : all_kernels) {
-        const Case c{&m, options_for(1, strategy, kernel, 3), Level::full, false};
-        INFO(describe(c));
-        const std::optional<Built> built = try_build(c);
-        if (!built) continue;
-        const MeshTree& tree = built->tree;
-        REQUIRE(tree.nodes.size() == 1);
-        CHECK(tree.leaf_nodes == std::vector<NodeIndex>{0});
-        CHECK(tree.nodes[0].is_leaf());
-        CHECK(tree.nodes[0].first_leaf == 0);
-        CHECK(tree.nodes[0].leaf_count == 1);
-        CHECK(tree.bonds.empty());
-        if (kernel == KernelKind::exact) {
-          REQUIRE(built->exact.size() == 1);
-          CHECK(exact_six_volume(built->exact[0]) == exact_six_volume(m.mesh));
-        }
-        check_tree(c, *built);
-      }
+      const Case c{&m, options_for(1, strategy, 3), Level::full, false};
+      INFO(describe(c));
+      const std::optional<Built> built = try_build(c);
+      if (!built) continue;
+      const MeshTree& tree = built->tree;
+      REQUIRE(tree.nodes.size() == 1);
+      CHECK(tree.leaf_nodes == std::vector<NodeIndex>{0});
+      CHECK(tree.nodes[0].is_leaf());
+      CHECK(tree.nodes[0].first_leaf == 0);
+      CHECK(tree.nodes[0].leaf_count == 1);
+      CHECK(tree.bonds.empty());
+      check_tree(c, *built);
     }
   }
 }
@@ -1049,87 +943,12 @@ TEST_CASE("2 and 3 fragments: every mesh, strategy and kernel, full validation",
   for (const TestMesh& m : test_meshes()) {
     for (const std::uint32_t fragments : {2u, 3u}) {
       for (const Strategy strategy : all_strategies) {
-        for (const KernelKind kernel : all_kernels) {
-          for (const std::uint64_t seed : {1u, 2u}) {
-            if (kernel == KernelKind::exact && seed != 1) continue;
-            run({&m, options_for(fragments, strategy, kernel, seed), Level::full, seed == 1 && fragments == 3});
-          }
+        for (const std::uint64_t seed : {1u, 2u}) {
+          run({&m, options_for(fragments, strategy, seed), Level::full, seed == 1 && fragments == 3});
         }
       }
     }
   }
-}
-
-TEST_CASE("64 fragments, fast kernel: every strategy, full validation", "[tree][build][property][heavy]") {
-  // Measured 2026-12-02: 2 of 39 builds refused (two-boxes and torus-tiny-1e-6, axis).
-  KnownRefusals refusals(2);
-  // (sphere.off is left to 2 and 3 fragments: here it costs as much as three
-  // other meshes, and the box and the egg cover convex and smooth.)
-  const char* meshes[] = {"box", "grid-box-4", "torus-800", "hollow-egg", "nested-shells-island", "two-boxes",
-                          "sliver", "torus-tiny-1e-6", "torus-huge-1e6", "egg-far-from-origin", "torus_quad.off",
-                          "double-torus-example.off", "helmet.off"};
-  for (const Strategy strategy : all_strategies) {
-    for (const char* name : meshes) {
-      const std::string mesh = name;
-      run({&test_mesh(mesh), options_for(64, strategy, KernelKind::fast, 7), Level::full,
-           mesh == "torus-800" || mesh == "nested-shells-island"});
-    }
-  }
-  refusals.check();
-}
-
-TEST_CASE("64 fragments, exact kernel: every strategy, exact volumes", "[tree][build][property][exact][heavy]") {
-  const char* meshes[] = {"box", "nested-shells-island", "two-boxes", "torus_quad.off"};
-  for (const Strategy strategy : all_strategies) {
-    for (const char* name : meshes) {
-      const std::string mesh = name;
-      run({&test_mesh(mesh), options_for(64, strategy, KernelKind::exact, 7), Level::full, mesh == "torus_quad.off"});
-    }
-  }
-}
-
-// The remedy for the known limitation above: exact cut points leave no needles.
-TEST_CASE("the exact kernel cuts the boxes where the fast kernel's axis planes run out", "[tree][build][exact][heavy]") {
-  for (const char* name : {"box", "two-boxes"}) {
-    run({&test_mesh(name), options_for(256, Strategy::axis, KernelKind::exact, 13), Level::full, false});
-  }
-}
-
-TEST_CASE("256 fragments: every strategy, fast kernel, full validation", "[tree][build][property][heavy]") {
-  // Measured 2026-12-02: 1 of 15 builds refused (box, axis).
-  KnownRefusals refusals(1);
-  const char* meshes[] = {"box", "torus-800", "hollow-egg", "nested-shells-island", "egg-far-from-origin"};
-  for (const Strategy strategy : all_strategies) {
-    for (const char* name : meshes) {
-      const std::string mesh = name;
-      run({&test_mesh(mesh), options_for(256, strategy, KernelKind::fast, 13), Level::full,
-           mesh == "nested-shells-island"});
-    }
-  }
-  refusals.check();
-}
-
-// 2048 fragments: topology, zero-area triangles, orientation, volumes and every
-// structural invariant, but no self-intersection test, and the hull's convexity
-// and containment on the leaves only. The thread-count comparison runs on one
-// strategy (the others are compared at 64 and 256 fragments).
-TEST_CASE("2048 fragments of the box: every strategy, fast kernel", "[tree][build][property][slow][heavy]") {
-  // Measured 2026-12-02: 1 of 3 builds refused (axis).
-  KnownRefusals refusals(1);
-  for (const Strategy strategy : all_strategies) {
-    run({&test_mesh("box"), options_for(2048, strategy, KernelKind::fast, 17), Level::cheap,
-         strategy == Strategy::thesis});
-  }
-  refusals.check();
-}
-
-TEST_CASE("2048 fragments of the hollow egg: every strategy, fast kernel", "[tree][build][property][slow][heavy]") {
-  // Measured 2026-12-02: 1 of 3 builds refused (axis).
-  KnownRefusals refusals(1);
-  for (const Strategy strategy : all_strategies) {
-    run({&test_mesh("hollow-egg"), options_for(2048, strategy, KernelKind::fast, 17), Level::cheap, false});
-  }
-  refusals.check();
 }
 
 // --- determinism ---------------------------------------------------------------------
@@ -1148,7 +967,7 @@ TEST_CASE("64 fragments, plane kernel: every strategy, every node exact and cert
   for (const Strategy strategy : all_strategies) {
     for (const char* name : meshes) {
       const std::string mesh = name;
-      run({&test_mesh(mesh), options_for(64, strategy, KernelKind::plane, 7), Level::full,
+      run({&test_mesh(mesh), options_for(64, strategy, 7), Level::full,
            mesh == "torus-800" || mesh == "nested-shells-island"});
     }
   }
@@ -1160,7 +979,7 @@ TEST_CASE("256 fragments, plane kernel: every strategy, full validation", "[tree
   for (const Strategy strategy : all_strategies) {
     for (const char* name : meshes) {
       const std::string mesh = name;
-      run({&test_mesh(mesh), options_for(256, strategy, KernelKind::plane, 13), Level::full,
+      run({&test_mesh(mesh), options_for(256, strategy, 13), Level::full,
            mesh == "nested-shells-island"});
     }
   }
@@ -1170,7 +989,7 @@ TEST_CASE("2048 fragments, plane kernel: box, hollow egg and torus, every strate
           "[tree][build][property][plane][slow][heavy]") {
   for (const char* name : {"box", "hollow-egg", "torus-800"}) {
     for (const Strategy strategy : all_strategies) {
-      run({&test_mesh(name), options_for(2048, strategy, KernelKind::plane, 17), Level::cheap,
+      run({&test_mesh(name), options_for(2048, strategy, 17), Level::cheap,
            strategy == Strategy::thesis && std::string(name) == "box"});
     }
   }
@@ -1186,7 +1005,7 @@ TEST_CASE("every corpus mesh, every strategy: the plane kernel reaches N, every 
   REQUIRE(corpus.size() >= 10);
   for (const TestMesh& m : corpus) {
     for (const Strategy strategy : all_strategies) {
-      run({&m, options_for(128, strategy, KernelKind::plane, 5), Level::cheap, false});
+      run({&m, options_for(128, strategy, 5), Level::cheap, false});
     }
   }
 }
@@ -1218,7 +1037,7 @@ void run_cubes(std::uint32_t fragments, std::initializer_list<std::uint64_t> see
       const TestMesh cube{"cube[" + num(lo) + "," + num(hi) + "] renumbered " + std::to_string(seed),
                           renumbered_cube(lo, hi, seed), true};
       for (const Strategy strategy : all_strategies) {
-        run({&cube, options_for(fragments, strategy, KernelKind::plane, seed), level, false});
+        run({&cube, options_for(fragments, strategy, seed), level, false});
       }
     }
   }
@@ -1256,27 +1075,19 @@ namespace {
 constexpr const char* sanitizer_meshes[] = {"box", "torus-800", "hollow-egg", "nested-shells-island", "two-boxes",
                                             "torus-tiny-1e-6", "egg-far-from-origin", "torus_quad.off"};
 
-void run_sanitizer_matrix(KernelKind kernel, std::uint32_t fragments) {
+void run_sanitizer_matrix(std::uint32_t fragments) {
   for (const Strategy strategy : all_strategies) {
     for (const char* name : sanitizer_meshes) {
       const std::string mesh = name;
-      run({&test_mesh(mesh), options_for(fragments, strategy, kernel, 7), Level::full, mesh == "nested-shells-island"});
+      run({&test_mesh(mesh), options_for(fragments, strategy, 7), Level::full, mesh == "nested-shells-island"});
     }
   }
 }
 
 }  // namespace
 
-TEST_CASE("the sanitizer's matrix: 16 fragments, fast kernel, every strategy", "[tree][build][property]") {
-  run_sanitizer_matrix(KernelKind::fast, 16);
-}
-
-TEST_CASE("the sanitizer's matrix: 8 fragments, exact kernel, every strategy", "[tree][build][property][exact]") {
-  run_sanitizer_matrix(KernelKind::exact, 8);
-}
-
 TEST_CASE("the sanitizer's matrix: 16 fragments, plane kernel, every strategy", "[tree][build][property][plane]") {
-  run_sanitizer_matrix(KernelKind::plane, 16);
+  run_sanitizer_matrix(16);
 }
 
 TEST_CASE("the sanitizer's matrix: 128 fragments of the box and the hollow egg, plane kernel",
@@ -1284,7 +1095,7 @@ TEST_CASE("the sanitizer's matrix: 128 fragments of the box and the hollow egg, 
   // Seven levels deep: the cheap checks of the 2048-fragment cases.
   for (const char* name : {"box", "hollow-egg"}) {
     for (const Strategy strategy : all_strategies) {
-      run({&test_mesh(name), options_for(128, strategy, KernelKind::plane, 17), Level::cheap,
+      run({&test_mesh(name), options_for(128, strategy, 17), Level::cheap,
            strategy == Strategy::thesis && std::string(name) == "box"});
     }
   }
@@ -1293,25 +1104,19 @@ TEST_CASE("the sanitizer's matrix: 128 fragments of the box and the hollow egg, 
 TEST_CASE("the same options give the same bytes, another seed another tree", "[tree][build]") {
   const TestMesh& m = test_mesh("torus-800");
   for (const Strategy strategy : all_strategies) {
-    for (const KernelKind kernel : all_kernels) {
-      // Smaller under the sanitizers (sanitizers.hpp): determinism shows at any size.
-      const auto fragments = std::uint32_t(kernel == KernelKind::exact ? test::sized(8, 4) : test::sized(32, 12));
-      const BuildOptions options = options_for(fragments, strategy, kernel, 5, 2);
-      INFO(describe({&m, options, Level::full, false}));
-      const std::string first = encode_shatter(build_mesh_tree(m.mesh, options));
-      CHECK(byte_difference(encode_shatter(build_mesh_tree(m.mesh, options)), first) == "equal");
-      if (kernel == KernelKind::exact) {
-        // Keeping the exact solids changes nothing in the tree.
-        CHECK(byte_difference(encode_shatter(build_mesh_tree_keeping_exact(m.mesh, options).tree), first) == "equal");
-      }
-      BuildOptions other = options;
-      other.seed = 6;
-      CHECK(encode_shatter(build_mesh_tree(m.mesh, other)) != first);
-      // threads = 0 (one per hardware thread) gives the same tree too.
-      other = options;
-      other.threads = 0;
-      CHECK(byte_difference(encode_shatter(build_mesh_tree(m.mesh, other)), first) == "equal");
-    }
+    // Smaller under the sanitizers (sanitizers.hpp): determinism shows at any size.
+    const auto fragments = std::uint32_t(test::sized(32, 12));
+    const BuildOptions options = options_for(fragments, strategy, 5, 2);
+    INFO(describe({&m, options, Level::full, false}));
+    const std::string first = encode_shatter(build_mesh_tree(m.mesh, options));
+    CHECK(byte_difference(encode_shatter(build_mesh_tree(m.mesh, options)), first) == "equal");
+    BuildOptions other = options;
+    other.seed = 6;
+    CHECK(encode_shatter(build_mesh_tree(m.mesh, other)) != first);
+    // threads = 0 (one per hardware thread) gives the same tree too.
+    other = options;
+    other.threads = 0;
+    CHECK(byte_difference(encode_shatter(build_mesh_tree(m.mesh, other)), first) == "equal");
   }
 }
 
@@ -1321,7 +1126,7 @@ TEST_CASE("the progress callback reports every leaf once", "[tree][build]") {
     std::mutex mutex;
     std::vector<std::size_t> reported;
     const auto fragments = std::uint32_t(test::sized(100, 30));
-    const MeshTree tree = build_mesh_tree(test_mesh("torus-800").mesh, options_for(fragments, strategy, KernelKind::fast, 9, 4),
+    const MeshTree tree = build_mesh_tree(test_mesh("torus-800").mesh, options_for(fragments, strategy, 9, 4),
                                           [&](std::size_t done) {
                                             const std::lock_guard<std::mutex> lock(mutex);
                                             reported.push_back(done);
@@ -1342,19 +1147,18 @@ TEST_CASE("an input triangle with a surface id other than 0 is refused", "[tree]
     mesh.surfaces[5] = surface;
     for (const std::uint32_t fragments : {1u, 2u}) {
       INFO("surface " << surface << " N = " << fragments);
-      CHECK_THROWS_AS(build_mesh_tree(mesh, options_for(fragments, Strategy::thesis, KernelKind::fast, 1)),
+      CHECK_THROWS_AS(build_mesh_tree(mesh, options_for(fragments, Strategy::thesis, 1)),
                       std::invalid_argument);
-      CHECK_THROWS_AS(build_mesh_tree_keeping_exact(mesh, options_for(fragments, Strategy::axis, KernelKind::exact, 1)),
-                      std::invalid_argument);
+      CHECK_THROWS_AS(build_mesh_tree(mesh, options_for(fragments, Strategy::axis, 1)), std::invalid_argument);
     }
   }
 }
 
 TEST_CASE("invalid options are refused", "[tree][build][errors]") {
   const Mesh mesh = unit_cube();
-  BuildOptions options = options_for(0, Strategy::thesis, KernelKind::fast, 1);
+  BuildOptions options = options_for(0, Strategy::thesis, 1);
   CHECK_THROWS_AS(build_mesh_tree(mesh, options), std::invalid_argument);
-  options = options_for(4, Strategy::balanced, KernelKind::fast, 1);
+  options = options_for(4, Strategy::balanced, 1);
   options.max_plane_tries = 0;
   CHECK_THROWS_AS(build_mesh_tree(mesh, options), std::invalid_argument);
 }
@@ -1391,12 +1195,10 @@ TEST_CASE("an invalid input mesh is refused with InvalidMeshError", "[tree][buil
   bad.push_back({"empty mesh", Mesh{}});
 
   for (const NamedMesh& named : bad) {
-    for (const KernelKind kernel : all_kernels) {
-      for (const std::uint32_t fragments : {1u, 4u}) {
-        INFO(named.name << " " << kernel_name(kernel) << " N = " << fragments);
-        CHECK_THROWS_AS(build_mesh_tree(named.mesh, options_for(fragments, Strategy::thesis, kernel, 1)),
-                        InvalidMeshError);
-      }
+    for (const std::uint32_t fragments : {1u, 4u}) {
+      INFO(named.name << " N = " << fragments);
+      CHECK_THROWS_AS(build_mesh_tree(named.mesh, options_for(fragments, Strategy::thesis, 1)),
+                      InvalidMeshError);
     }
   }
 }
@@ -1406,11 +1208,11 @@ TEST_CASE("self-intersecting input: refused by default, closed and oriented piec
   for (const std::filesystem::path& path : self_intersecting_meshes()) {
     const Mesh mesh = read_mesh(path);
     INFO(path.filename().string());
-    CHECK_THROWS_AS(build_mesh_tree(mesh, options_for(4, Strategy::thesis, KernelKind::fast, 1)), InvalidMeshError);
+    CHECK_THROWS_AS(build_mesh_tree(mesh, options_for(4, Strategy::thesis, 1)), InvalidMeshError);
   }
   const Mesh elk = read_mesh(mesh_dir() / "self-intersecting" / "elk.off");
   for (const Strategy strategy : all_strategies) {
-    BuildOptions options = options_for(8, strategy, KernelKind::fast, 1);
+    BuildOptions options = options_for(8, strategy, 1);
     options.allow_self_intersections = true;
     INFO("elk.off " << strategy_name(strategy));
     MeshTree tree;
@@ -1430,51 +1232,44 @@ TEST_CASE("planes that keep failing end in UnsupportedGeometryError", "[tree][bu
   // A plane through the centroid always has volume on both sides, so it cannot
   // miss a solid; what keeps failing is a solid thinner than rounding. This
   // tetrahedron is one ulp on a side (2^-32 at 2^20): every crossing point rounds
-  // onto a corner of its ulp grid, so nearly every piece is degenerate in every
-  // kernel (the exact and plane kernels round their pieces for storage). The plane
-  // kernel certifies each rounding and tries other planes; now and then one gives
-  // pieces that round validly (cut points landing on the grid), and then the tree
-  // must pass every check.
+  // onto a corner of its ulp grid, so nearly every piece is degenerate as
+  // rounded for storage. The builder certifies each rounding and tries other
+  // planes; now and then one gives pieces that round validly (cut points landing
+  // on the grid), and then the tree must pass every check.
   const double base = 1048576.0, ulp = 0x1p-32;
   const Mesh tiny = mesh_from({{base, base, base}, {base + ulp, base, base}, {base, base + ulp, base}, {base, base, base + ulp}},
                               {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}});
   REQUIRE(solid_problem(tiny) == "");
-  // The plane kernel may build or refuse; its refusals are counted against the
-  // ceiling below. The fast and exact kernels must refuse every time.
-  std::size_t plane_built = 0, plane_refused = 0;
+  // The builder may build or refuse; its refusals are counted against the
+  // ceiling below.
+  std::size_t built_count = 0, refused_count = 0;
   for (const Strategy strategy : all_strategies) {
-    for (const KernelKind kernel : all_kernels) {
-      for (const std::uint32_t tries : {1u, 3u, 64u}) {
-        BuildOptions options = options_for(2, strategy, kernel, 1);
-        options.max_plane_tries = tries;
-        INFO(strategy_name(strategy) << " " << kernel_name(kernel) << " max_plane_tries " << tries);
-        try {
-          const MeshTree tree = build_mesh_tree(tiny, options);
-          if (kernel == KernelKind::plane) {
-            const TestMesh named{"tiny tetrahedron", tiny, true};
-            check_tree({&named, options, Level::full, false}, Built{tree, {}});
-            ++plane_built;
-          } else {
-            FAIL_CHECK("no error: a tree of " << tree.nodes.size() << " nodes");
-          }
-        } catch (const UnsupportedGeometryError& error) {
-          // A clear message: it names the number of planes tried.
-          CHECK(std::string(error.what()).find(std::to_string(tries)) != std::string::npos);
-          plane_refused += kernel == KernelKind::plane ? 1 : 0;
-        } catch (const std::exception& error) {
-          FAIL_CHECK("the wrong error: " << error.what());
-        }
+    for (const std::uint32_t tries : {1u, 3u, 64u}) {
+      BuildOptions options = options_for(2, strategy, 1);
+      options.max_plane_tries = tries;
+      INFO(strategy_name(strategy) << " max_plane_tries " << tries);
+      try {
+        const MeshTree tree = build_mesh_tree(tiny, options);
+        const TestMesh named{"tiny tetrahedron", tiny, true};
+        check_tree({&named, options, Level::full, false}, Built{tree});
+        ++built_count;
+      } catch (const UnsupportedGeometryError& error) {
+        // A clear message: it names the number of planes tried.
+        CHECK(std::string(error.what()).find(std::to_string(tries)) != std::string::npos);
+        ++refused_count;
+      } catch (const std::exception& error) {
+        FAIL_CHECK("the wrong error: " << error.what());
       }
     }
   }
-  INFO("plane kernel: " << plane_built << " built, " << plane_refused << " refused");
-  CHECK(plane_built + plane_refused == 9);
+  INFO(built_count << " built, " << refused_count << " refused");
+  CHECK(built_count + refused_count == 9);
   // Measured 2026-12-02: all 9 refused (every rounding of a piece of a solid one
   // ulp across fails to certify); the ceiling keeps a change that makes the plane
   // kernel fail where it now succeeds from passing unseen.
-  CHECK(plane_refused <= 9);
+  CHECK(refused_count <= 9);
   // One fragment needs no cut, so nothing can fail.
-  const MeshTree single = build_mesh_tree(tiny, options_for(1, Strategy::axis, KernelKind::fast, 1));
+  const MeshTree single = build_mesh_tree(tiny, options_for(1, Strategy::axis, 1));
   CHECK(single.nodes.size() == 1);
   CHECK(tree_problem(single, true) == "");
 }
@@ -1488,20 +1283,18 @@ TEST_CASE("a plane between separate solids parts them without a cap", "[tree][bu
                            merge({box({-1000, 0, 0}, {-999.999, 0.001, 0.001}), box({999.999, 0, 0}, {1000, 0.001, 0.001})}),
                            false};
   for (const Strategy strategy : all_strategies) {
-    for (const KernelKind kernel : all_kernels) {
-      const Case c{&far_apart, options_for(2, strategy, kernel, 1), Level::full, true};
-      INFO(describe(c));
-      const std::optional<Built> built = try_build(c);
-      if (!built) continue;
-      check_tree(c, *built);
-      REQUIRE(built->tree.leaf_count() == 2);
-      for (const LeafIndex leaf : {0u, 1u}) {
-        const Mesh& mesh = built->tree.leaf(leaf).mesh;
-        CHECK(std::all_of(mesh.surfaces.begin(), mesh.surfaces.end(), [](SurfaceId s) { return s == 0; }));  // no cap
-        CHECK(mesh.triangle_count() == 12);
-      }
-      CHECK(built->tree.bonds.empty());
+    const Case c{&far_apart, options_for(2, strategy, 1), Level::full, true};
+    INFO(describe(c));
+    const std::optional<Built> built = try_build(c);
+    if (!built) continue;
+    check_tree(c, *built);
+    REQUIRE(built->tree.leaf_count() == 2);
+    for (const LeafIndex leaf : {0u, 1u}) {
+      const Mesh& mesh = built->tree.leaf(leaf).mesh;
+      CHECK(std::all_of(mesh.surfaces.begin(), mesh.surfaces.end(), [](SurfaceId s) { return s == 0; }));  // no cap
+      CHECK(mesh.triangle_count() == 12);
     }
+    CHECK(built->tree.bonds.empty());
   }
 }
 
@@ -1520,33 +1313,31 @@ TEST_CASE("corner attributes survive the tree, and caps get the plane normal", "
   }
   const TestMesh m{"torus-with-normals-uvs", mesh, false};
   for (const Strategy strategy : all_strategies) {
-    for (const KernelKind kernel : all_kernels) {
-      const Case c{&m, options_for(kernel == KernelKind::exact ? 8 : 64, strategy, kernel, 21), Level::full, false};
-      INFO(describe(c));
-      const std::optional<Built> built = try_build(c);
-      if (!built) continue;
-      check_tree(c, *built);
-      const MeshTree& tree = built->tree;
-      Problems problems(tree, "cap corner normals are not the plane normal, outward");
-      for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
-        const MeshTreeNode& node = tree.nodes[v];
-        REQUIRE(node.mesh.corners.normals.size() == 3 * node.mesh.triangle_count());
-        REQUIRE(node.mesh.corners.uvs.size() == 3 * node.mesh.triangle_count());
-        if (node.parent == no_node) continue;
-        const Vec3 outward = normalized(tree.nodes[node.parent].plane.normal) * (node.above_parent_plane ? -1.0 : 1.0);
-        for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
-          if (node.mesh.surfaces[t] != cap_surface_of(node.parent)) continue;
-          for (int corner = 0; corner < 3; ++corner) {
-            const Vec3 normal = node.mesh.corners.normals[3 * t + corner];
-            if (dot(normal, outward) < 1 - 1e-12) {
-              problems.add(v, "cap triangle " + std::to_string(t) + " normal " + vec_text(normal));
-              t = node.mesh.triangle_count() - 1;
-              break;
-            }
+    const Case c{&m, options_for(64, strategy, 21), Level::full, false};
+    INFO(describe(c));
+    const std::optional<Built> built = try_build(c);
+    if (!built) continue;
+    check_tree(c, *built);
+    const MeshTree& tree = built->tree;
+    Problems problems(tree, "cap corner normals are not the plane normal, outward");
+    for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
+      const MeshTreeNode& node = tree.nodes[v];
+      REQUIRE(node.mesh.corners.normals.size() == 3 * node.mesh.triangle_count());
+      REQUIRE(node.mesh.corners.uvs.size() == 3 * node.mesh.triangle_count());
+      if (node.parent == no_node) continue;
+      const Vec3 outward = normalized(tree.nodes[node.parent].plane.normal) * (node.above_parent_plane ? -1.0 : 1.0);
+      for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
+        if (node.mesh.surfaces[t] != cap_surface_of(node.parent)) continue;
+        for (int corner = 0; corner < 3; ++corner) {
+          const Vec3 normal = node.mesh.corners.normals[3 * t + corner];
+          if (dot(normal, outward) < 1 - 1e-12) {
+            problems.add(v, "cap triangle " + std::to_string(t) + " normal " + vec_text(normal));
+            t = node.mesh.triangle_count() - 1;
+            break;
           }
         }
       }
-      expect_none(problems);
     }
+    expect_none(problems);
   }
 }

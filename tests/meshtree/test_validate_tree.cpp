@@ -1,12 +1,13 @@
 // Property tests of validate_tree (meshtree/validate_tree.hpp) and of
-// `shatter info --check`, which runs it. Built trees of all three kernels, over
-// generated and corpus meshes, strategies, seeds and a self-intersecting input,
-// hold. Then every kind of defect in the catalogue below is injected into every
-// tree that has a place for it, at places drawn from the tree, and the report
-// must name the part and the index injected, whatever the tree. Defects of the
-// structure are what the reader refuses, so the encoder refuses them too; stale
-// caches only a tree in memory can have; defects of the geometry pass the reader,
-// survive a write and a read, and `info --check` finds them in the file.
+// `shatter info --check`, which runs it. Built trees over generated and corpus
+// meshes, strategies, seeds and a self-intersecting input, and trees the retired
+// fast and exact kernels wrote (tests/data/retired), hold. Then every kind of
+// defect in the catalogue below is injected into every tree that has a place for
+// it, at places drawn from the tree, and the report must name the part and the
+// index injected, whatever the tree. Defects of the structure are what the
+// reader refuses, so the encoder refuses them too; stale caches only a tree in
+// memory can have; defects of the geometry pass the reader, survive a write and
+// a read, and `info --check` finds them in the file.
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -46,35 +47,32 @@ struct Sample {
   MeshTree tree;
 };
 
-MeshTree built(const Mesh& mesh, KernelKind kernel, Strategy strategy, std::uint32_t fragments, std::uint64_t seed,
+MeshTree built(const Mesh& mesh, Strategy strategy, std::uint32_t fragments, std::uint64_t seed,
                bool allow_self_intersections = false) {
   return build_mesh_tree(mesh, {.fragments = fragments,
                                 .seed = seed,
                                 .strategy = strategy,
-                                .kernel = kernel,
                                 .allow_self_intersections = allow_self_intersections});
 }
 
-// Built once: every kernel, a convex and a concave solid with a cavity, a corpus
-// mesh, a self-intersecting input allowed, and a tree that is its root alone.
+// Made once: a convex and a concave solid with a cavity, a corpus mesh, a
+// self-intersecting input allowed, a tree that is its root alone, and the two
+// trees of the retired kernels (no exact representation).
 const std::vector<Sample>& samples() {
   static const std::vector<Sample> all = [] {
     const Mesh knot = read_mesh(test::mesh_dir() / "knot1.off");
     const Mesh elk = read_mesh(test::mesh_dir() / "self-intersecting" / "elk.off");
     std::vector<Sample> trees;
-    trees.push_back(
-        {"cube, plane kernel, thesis, 8", built(test::unit_cube(), KernelKind::plane, Strategy::thesis, 8, 1)});
-    trees.push_back({"knot1, plane kernel, balanced, 10", built(knot, KernelKind::plane, Strategy::balanced, 10, 2)});
-    trees.push_back(
-        {"hollow egg, plane kernel, axis, 6", built(test::hollow_egg(), KernelKind::plane, Strategy::axis, 6, 3)});
-    trees.push_back({"torus, fast kernel, thesis, 8",
-                     built(test::torus(2, 0.6, 16, 10), KernelKind::fast, Strategy::thesis, 8, 4)});
-    trees.push_back({"two boxes, exact kernel, balanced, 5",
-                     built(test::two_boxes(), KernelKind::exact, Strategy::balanced, 5, 5)});
-    trees.push_back({"elk, fast kernel, self-intersections allowed, 4",
-                     built(elk, KernelKind::fast, Strategy::thesis, 4, 6, true)});
-    trees.push_back(
-        {"cube, plane kernel, one fragment", built(test::unit_cube(), KernelKind::plane, Strategy::thesis, 1, 7)});
+    trees.push_back({"cube, thesis, 8", built(test::unit_cube(), Strategy::thesis, 8, 1)});
+    trees.push_back({"knot1, balanced, 10", built(knot, Strategy::balanced, 10, 2)});
+    trees.push_back({"hollow egg, axis, 6", built(test::hollow_egg(), Strategy::axis, 6, 3)});
+    trees.push_back({"two boxes, balanced, 5", built(test::two_boxes(), Strategy::balanced, 5, 5)});
+    trees.push_back({"torus, thesis, 8", built(test::torus(2, 0.6, 16, 10), Strategy::thesis, 8, 4)});
+    trees.push_back({"elk, self-intersections allowed, 4", built(elk, Strategy::thesis, 4, 6, true)});
+    trees.push_back({"cube, one fragment", built(test::unit_cube(), Strategy::thesis, 1, 7)});
+    for (const std::filesystem::path& file : test::retired_kernel_trees()) {
+      trees.push_back({file.filename().string(), read_shatter_file(file)});
+    }
     return trees;
   }();
   return all;
@@ -424,7 +422,9 @@ constexpr std::uint64_t draw_seeds[] = {20261201, 7};
 }  // namespace
 
 TEST_CASE("built trees hold: structure, caches and geometry", "[validate_tree]") {
-  REQUIRE(samples().size() == 7);
+  REQUIRE(samples().size() == 9);
+  CHECK(samples()[7].tree.options.kernel != KernelKind::plane);
+  CHECK(samples()[8].tree.options.kernel != KernelKind::plane);
   for (const Sample& sample : samples()) {
     INFO(sample.name);
     const TreeValidationReport report = validate_tree(sample.tree, {.geometry = true});

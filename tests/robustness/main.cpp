@@ -1,6 +1,6 @@
 // shatter-fuzz: the robustness runner. Draws seeded cases from every degenerate
-// class and every mesh, runs slice chains and fractures in the three kernels
-// (plane, fast, exact), checks every invariant, writes every output piece and
+// class and every mesh, runs slice chains (the one cut call) and fractures (the
+// builder), checks every invariant, writes every output piece and
 // reads it back, prints a per-class table and writes a reproducer for each
 // failure. Also replays reproducers and runs the predicate audit (side_of_plane
 // and the plane kernel's predicates).
@@ -29,44 +29,31 @@ using namespace shatter;
 using namespace shatter::robust;
 
 struct ClassTotals {
-  std::size_t cases = 0, slices = 0, fractures = 0, fast = 0, exact = 0, plane = 0, failures = 0, refused = 0;
-  std::size_t fast_pieces = 0, fast_self_intersecting = 0, fast_degenerate = 0, exact_pieces = 0, plane_pieces = 0;
-  std::array<std::size_t, kernel_count> written{}, invalid_written{}, refused_cases{};
-  std::size_t plane_unroundable = 0, plane_pinched = 0;
+  std::size_t cases = 0, slices = 0, fractures = 0, failures = 0, refused = 0, pieces = 0;
+  std::size_t written = 0, invalid_written = 0, unroundable = 0, pinched = 0;
   double seconds = 0;
 
   void add(const ClassTotals& t) {
-    cases += t.cases, slices += t.slices, fractures += t.fractures, fast += t.fast, exact += t.exact;
-    plane += t.plane, failures += t.failures, refused += t.refused, fast_pieces += t.fast_pieces;
-    fast_self_intersecting += t.fast_self_intersecting, fast_degenerate += t.fast_degenerate;
-    exact_pieces += t.exact_pieces, plane_pieces += t.plane_pieces;
-    for (std::size_t k = 0; k < kernel_count; ++k) {
-      written[k] += t.written[k], invalid_written[k] += t.invalid_written[k], refused_cases[k] += t.refused_cases[k];
-    }
-    plane_unroundable += t.plane_unroundable;
-    plane_pinched += t.plane_pinched, seconds += t.seconds;
+    cases += t.cases, slices += t.slices, fractures += t.fractures, failures += t.failures, refused += t.refused;
+    pieces += t.pieces, written += t.written, invalid_written += t.invalid_written;
+    unroundable += t.unroundable, pinched += t.pinched, seconds += t.seconds;
   }
 };
 
 double percent(std::size_t part, std::size_t whole) { return whole ? 100.0 * double(part) / double(whole) : 0.0; }
 
-// Columns: cases, operations and kernels; failed and refused cases; pieces
-// checked per kernel (fast: with self-intersecting and other degenerate
-// embeddings); output pieces written and read back per kernel (f-, e-, p-) and
-// those invalid as read back; plane pieces round_solid refused to write (p-unrnd)
-// and plane cuts cut_solid refused as pinching (p-pinch).
+// Columns: cases and operations; failed and refused cases; exact solids
+// checked (pieces and tree nodes); output pieces written and read back, and
+// those invalid as read back; pieces round_solid refused to write (unround) and
+// cuts cut_solid refused as pinching (pinch).
 ClassTotals print_table(const std::array<ClassTotals, case_class_count>& totals) {
-  std::printf("%-19s %6s %5s %5s %5s %5s %5s %6s %7s %8s %8s %7s %9s %9s %7s %6s %7s %6s %7s %6s %7s %7s %7s\n", "class",
-              "cases", "slice", "fract", "fast", "exact", "plane", "failed", "refused", "fast-pcs", "self-int", "degener",
-              "exact-pcs", "plane-pcs", "f-writ", "f-inv", "e-writ", "e-inv", "p-writ", "p-inv", "p-unrnd", "p-pinch",
-              "ms/case");
+  std::printf("%-19s %6s %5s %5s %6s %7s %7s %7s %7s %7s %6s %7s\n", "class", "cases", "slice", "fract", "failed",
+              "refused", "solids", "written", "invalid", "unround", "pinch", "ms/case");
   ClassTotals all;
   auto row = [](const char* name, const ClassTotals& t) {
-    std::printf("%-19s %6zu %5zu %5zu %5zu %5zu %5zu %6zu %7zu %8zu %8zu %7zu %9zu %9zu %7zu %6zu %7zu %6zu %7zu %6zu %7zu %7zu %7.2f\n",
-                name, t.cases, t.slices, t.fractures, t.fast, t.exact, t.plane, t.failures, t.refused, t.fast_pieces,
-                t.fast_self_intersecting, t.fast_degenerate, t.exact_pieces, t.plane_pieces, t.written[0],
-                t.invalid_written[0], t.written[1], t.invalid_written[1], t.written[2], t.invalid_written[2],
-                t.plane_unroundable, t.plane_pinched, t.cases ? 1e3 * t.seconds / double(t.cases) : 0.0);
+    std::printf("%-19s %6zu %5zu %5zu %6zu %7zu %7zu %7zu %7zu %7zu %6zu %7.2f\n", name, t.cases, t.slices,
+                t.fractures, t.failures, t.refused, t.pieces, t.written, t.invalid_written, t.unroundable, t.pinched,
+                t.cases ? 1e3 * t.seconds / double(t.cases) : 0.0);
   };
   for (int k = 0; k < case_class_count; ++k) {
     const ClassTotals& t = totals[k];
@@ -89,20 +76,20 @@ void report_failure(const Case& c, const CaseOutcome& outcome, const std::filesy
   }
   const std::filesystem::path path = write_reproducer(dir, smallest, failure);
   const bool reproduces = !run_case(read_reproducer(path)).failures.empty();
-  std::printf("FAIL %s %s %s on %s (seed %llu): %s\n     reproducer %s (%s)\n",
+  std::printf("FAIL %s %s on %s (seed %llu): %s\n     reproducer %s (%s)\n",
               std::string(class_name(c.kind)).c_str(), std::string(operation_name(c.op)).c_str(),
-              std::string(kernel_name(c.kernel)).c_str(), c.mesh_name.c_str(), (unsigned long long)c.seed,
+              c.mesh_name.c_str(), (unsigned long long)c.seed,
               failure.c_str(), path.string().c_str(), reproduces ? "reproduces" : "DOES NOT reproduce when replayed");
 }
 
 // Ceilings on the documented refusals of a run (none when unset): a run that
 // refuses more than its ceiling fails like a run with a failing case, so a change
-// that makes the kernels refuse more cannot pass as "refused, not failed". CTest
+// that makes the library refuse more cannot pass as "refused, not failed". CTest
 // sets them from a measured run of the same seed and case count.
 struct RefusalCeilings {
-  std::optional<std::size_t> cases;        ///< cases refused (UnsupportedGeometryError): fractures, fast and exact slices
-  std::optional<std::size_t> unroundable;  ///< plane pieces round_solid could not write validly
-  std::optional<std::size_t> pinched;      ///< plane cuts refused as pinching a piece
+  std::optional<std::size_t> cases;        ///< cases refused (UnsupportedGeometryError): fractures
+  std::optional<std::size_t> unroundable;  ///< pieces round_solid could not write validly
+  std::optional<std::size_t> pinched;      ///< cuts refused as pinching a piece
 };
 
 // Prints each refusal count against its ceiling; false when one is passed.
@@ -116,8 +103,8 @@ bool within_ceilings(const RefusalCeilings& ceilings, std::size_t cases, std::si
     within &= ok;
   };
   check("refused cases", cases, ceilings.cases);
-  check("unroundable plane pieces", unroundable, ceilings.unroundable);
-  check("pinching plane cuts", pinched, ceilings.pinched);
+  check("unroundable pieces", unroundable, ceilings.unroundable);
+  check("pinching cuts", pinched, ceilings.pinched);
   return within;
 }
 
@@ -186,23 +173,13 @@ int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, cons
     ClassTotals& t = totals[static_cast<std::size_t>(r.c.kind)];
     ++t.cases;
     (r.c.op == Operation::slice ? t.slices : t.fractures) += 1;
-    t.fast += r.c.kernel == KernelKind::fast;
-    t.exact += r.c.kernel == KernelKind::exact;
-    t.plane += r.c.kernel == KernelKind::plane;
     t.failures += !r.outcome.failures.empty();
     t.refused += r.outcome.refused;
-    t.refused_cases[kernel_index(r.c.kernel)] += r.outcome.refused;
-    t.fast_pieces += r.outcome.fast_pieces;
-    t.fast_self_intersecting += r.outcome.fast_self_intersecting;
-    t.fast_degenerate += r.outcome.fast_degenerate;
-    t.exact_pieces += r.outcome.exact_pieces;
-    t.plane_pieces += r.outcome.plane_pieces;
-    for (std::size_t k = 0; k < kernel_count; ++k) {
-      t.written[k] += r.outcome.written[k];
-      t.invalid_written[k] += r.outcome.invalid_written[k];
-    }
-    t.plane_unroundable += r.outcome.plane_unroundable;
-    t.plane_pinched += r.outcome.plane_pinched;
+    t.pieces += r.outcome.plane_pieces;
+    t.written += r.outcome.written;
+    t.invalid_written += r.outcome.invalid_written;
+    t.unroundable += r.outcome.plane_unroundable;
+    t.pinched += r.outcome.plane_pinched;
     t.seconds += r.seconds;
     if (!r.outcome.failures.empty()) {
       ++failed;
@@ -213,16 +190,11 @@ int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, cons
   std::printf("shatter-fuzz: %zu cases from seed %llu (first index %llu), %.1f s wall\n", ran.size(),
               (unsigned long long)seed, (unsigned long long)first, wall);
   const ClassTotals all = print_table(totals);
-  std::printf("share of output pieces invalid as written: fast %.2f%% (%zu of %zu), exact %.2f%% (%zu of %zu), "
-              "plane %.2f%% (%zu of %zu)\n",
-              percent(all.invalid_written[0], all.written[0]), all.invalid_written[0], all.written[0],
-              percent(all.invalid_written[1], all.written[1]), all.invalid_written[1], all.written[1],
-              percent(all.invalid_written[2], all.written[2]), all.invalid_written[2], all.written[2]);
-  std::printf("refused (not failures): fracture cases fast %zu, exact %zu, plane %zu; plane pieces round_solid "
-              "could not write validly %zu; plane cuts refused "
-              "as pinching %zu\n",
-              all.refused_cases[0], all.refused_cases[1], all.refused_cases[2], all.plane_unroundable,
-              all.plane_pinched);
+  std::printf("output pieces invalid as written: %.2f%% (%zu of %zu)\n", percent(all.invalid_written, all.written),
+              all.invalid_written, all.written);
+  std::printf("refused (not failures): fracture cases %zu; pieces round_solid could not write validly %zu; cuts "
+              "refused as pinching %zu\n",
+              all.refused, all.unroundable, all.pinched);
   // Counted on each case's own thread: the cuts and checks, not work a fracture
   // hands to other threads.
   std::printf("side_of_plane: %llu calls, %llu fell back to exact arithmetic (%.3f%%)\n",
@@ -237,7 +209,7 @@ int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, cons
               (unsigned long long)implicit.orient_calls, rate(implicit.orient_exact, implicit.orient_calls),
               (unsigned long long)implicit.order_calls, rate(implicit.order_exact, implicit.order_calls));
   std::printf("%zu failing case%s\n", failed, failed == 1 ? "" : "s");
-  const bool within = within_ceilings(ceilings, all.refused, all.plane_unroundable, all.plane_pinched);
+  const bool within = within_ceilings(ceilings, all.refused, all.unroundable, all.pinched);
   return failed == 0 && within ? 0 : 1;
 }
 
@@ -249,7 +221,6 @@ int replay(const std::vector<std::string>& files) {
     if (outcome.failures.empty()) {
       if (std::string unmet = unmet_expectation(c, outcome); !unmet.empty()) outcome.failures.push_back(std::move(unmet));
     }
-    const std::size_t k = kernel_index(c.kernel);
     std::string result;
     if (!outcome.failures.empty()) {
       result = outcome.failures.front();
@@ -257,25 +228,20 @@ int replay(const std::vector<std::string>& files) {
     } else {
       result = outcome.refused ? "refused (unsupported)" : "passes";
       if (c.expected != Expected::no_failure) result += " as expected (" + std::string(expected_name(c.expected)) + ")";
-      result += "; " + std::to_string(outcome.written[k]) + " pieces written as " +
-                std::string(format_name(c.format)) + ", " + std::to_string(outcome.invalid_written[k]) +
-                " invalid as written";
-      if (c.kernel == KernelKind::plane) {
-        result += ", " + std::to_string(outcome.plane_unroundable) + " not roundable, " +
-                  std::to_string(outcome.plane_pinched) + " pinching cuts refused";
-      }
+      result += "; " + std::to_string(outcome.written) + " pieces written as " + std::string(format_name(c.format)) +
+                ", " + std::to_string(outcome.invalid_written) + " invalid as written, " +
+                std::to_string(outcome.plane_unroundable) + " not roundable, " +
+                std::to_string(outcome.plane_pinched) + " pinching cuts refused";
     }
-    std::printf("%s: %s %s %s on %s: %s\n", file.c_str(), std::string(class_name(c.kind)).c_str(),
-                std::string(operation_name(c.op)).c_str(), std::string(kernel_name(c.kernel)).c_str(),
-                c.mesh_name.c_str(), result.c_str());
+    std::printf("%s: %s %s on %s: %s\n", file.c_str(), std::string(class_name(c.kind)).c_str(),
+                std::string(operation_name(c.op)).c_str(), c.mesh_name.c_str(), result.c_str());
     failed += !outcome.failures.empty();
   }
   return failed == 0 ? 0 : 1;
 }
 
-// --audit-predicates N: half the queries (N / 2) audit side_of_plane, the
-// predicate of the fast and exact kernels; the rest audit the plane kernel's
-// predicates (implicit.hpp).
+// --audit-predicates N: half the queries (N / 2) audit side_of_plane (on input
+// points); the rest audit the plane kernel's predicates (implicit.hpp).
 int audit(std::uint64_t queries, std::uint64_t seed, unsigned threads) {
   const std::uint64_t old_queries = queries / 2, plane_queries = queries - old_queries;
   auto start = std::chrono::steady_clock::now();
@@ -347,7 +313,7 @@ int main(int argc, char** argv) {
       "shatter-fuzz: seeded robustness cases over every degenerate class (planes through vertices, along edges, "
       "holding faces and a few ulps off; grids; coplanar faces; slivers; nested shells; pinches; near-parallel "
       "chains; extreme scales; far from the origin; attribute seams) and every mesh of the test corpus (tests/data/corpus), sliced "
-      "and fractured in the plane, fast and exact kernels, every invariant of DESIGN.md checked and every output "
+      "and fractured, every invariant of DESIGN.md checked and every output "
       "piece written and read back. Exit 0 when every case passes, 1 on "
       "any failure (each writes a reproducer), 2 on usage errors."};
   std::uint64_t cases = 2000, seed = 1, first = 0, audit_queries = 0;
@@ -370,9 +336,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-refused-cases", ceilings.cases,
                  "Fail the run when more cases than this are refused (UnsupportedGeometryError)");
   app.add_option("--max-unroundable", ceilings.unroundable,
-                 "Fail the run when round_solid refuses to write more plane pieces than this");
+                 "Fail the run when round_solid refuses to write more pieces than this");
   app.add_option("--max-pinched", ceilings.pinched,
-                 "Fail the run when cut_solid refuses more plane cuts than this as pinching a piece");
+                 "Fail the run when cut_solid refuses more cuts than this as pinching a piece");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -26,13 +26,9 @@
 #include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/build.hpp"
-#include "shatter/meshtree/cut.hpp"
 #include "shatter/meshtree/plane_cut.hpp"
-#include "shatter/meshtree/exact_build.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/meshtree/plane_input.hpp"
-#include "shatter/slicer/slice.hpp"
-#include "shatter/triangulate/cap.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "support/checks.hpp"
 #include "support/degenerate.hpp"
@@ -48,8 +44,8 @@ constexpr std::array<std::string_view, case_class_count> class_names{
     "nested-shells",  "pinch",         "near-parallel-chain", "extreme-scale",     "far-from-origin",
     "attribute-seams"};
 
-// Meshes above this size take the exact kernel's fracture and far shifts only
-// rarely: they would dominate a run's time without adding new kinds of trouble.
+// Meshes above this size take 16-fragment fractures and far shifts only rarely:
+// they would dominate a run's time without adding new kinds of trouble.
 constexpr std::size_t large_mesh_triangles = 3000;
 
 std::uint64_t mix(std::uint64_t seed, std::uint64_t index) {
@@ -164,42 +160,19 @@ std::string describe(const Plane& p) {
 
 // --- checks ---------------------------------------------------------------
 
-// The fast kernel's volume promise: the pieces' volumes sum to the parent's
+// The rounded meshes' volume promise: the pieces' volumes sum to the parent's
 // within 1e-9 relative, plus what rounding each cut point by half an ulp of the
 // largest coordinate can move across the surface (matters far from the origin).
-bool fast_volumes_add_up(const mpq_class& parent_six, const mpq_class& pieces_six, const Mesh& parent) {
+bool rounded_volumes_add_up(const mpq_class& parent_six, const mpq_class& pieces_six, const Mesh& parent) {
   const double difference = std::fabs(mpq_class(pieces_six - parent_six).get_d());
   const double rounding = 2 * std::numeric_limits<double>::epsilon() * test::largest_coordinate(parent) * test::surface_area(parent);
   return difference <= 1e-9 * std::fabs(parent_six.get_d()) + 6 * rounding;
 }
 
-template <class Point>
-Sign side_of(const Plane& plane, const Point& p) {
-  return side_of_plane(plane, p);
-}
-
-// Whether the plane misses or only touches the solid, decided from its vertices.
-template <class Point>
-bool plane_leaves_one_side_empty(const BasicMesh<Point>& mesh, const Plane& plane) {
-  bool below = false, above = false;
-  for (const Point& p : mesh.positions) {
-    const Sign s = side_of(plane, p);
-    below |= s == Sign::negative;
-    above |= s == Sign::positive;
-  }
-  return !(below && above);
-}
-
-template <class Point>
-std::size_t piece_count(const CutResult<Point>& r) {
-  return r.below.size() + r.above.size();
-}
-
 // Attribute channels survive a cut: present in every piece exactly when present
 // in the input, finite, normals of unit length; surface ids are the input's own
 // or the new cap's.
-template <class Point, class ParentPoint>
-std::string channel_problem(const BasicMesh<Point>& piece, const BasicMesh<ParentPoint>& parent) {
+std::string channel_problem(const Mesh& piece, const Mesh& parent) {
   if (piece.corners.has_normals() != parent.corners.has_normals()) return "normals channel lost or invented";
   if (piece.corners.has_uvs() != parent.corners.has_uvs()) return "uv channel lost or invented";
   if (piece.corners.has_tangents() != parent.corners.has_tangents()) return "tangent channel lost or invented";
@@ -212,20 +185,11 @@ std::string channel_problem(const BasicMesh<Point>& piece, const BasicMesh<Paren
   return {};
 }
 
-template <class Point>
-std::string surface_problem(const BasicMesh<Point>& piece, const std::set<SurfaceId>& allowed) {
+std::string surface_problem(const Mesh& piece, const std::set<SurfaceId>& allowed) {
   for (SurfaceId s : piece.surfaces) {
     if (!allowed.count(s)) return "surface id " + std::to_string(s) + " is neither the input's nor a cap's";
   }
   return {};
-}
-
-template <class Point>
-std::string attribute_problem(const BasicMesh<Point>& piece, const BasicMesh<Point>& parent, SurfaceId cap) {
-  if (std::string p = channel_problem(piece, parent); !p.empty()) return p;
-  std::set<SurfaceId> allowed(parent.surfaces.begin(), parent.surfaces.end());
-  allowed.insert(cap);
-  return surface_problem(piece, allowed);
 }
 
 // What reading a written piece back showed: `mismatch` when the file does not
@@ -267,23 +231,6 @@ ReadBack write_and_read_back(const Mesh& mesh, MeshFormat format) {
   return back;
 }
 
-// Invariant 3, checked apart from cut_mesh: the cap over the slice's border edges
-// has exactly those edges as its boundary and adds no vertex on it.
-template <class Point>
-std::string cap_problem(const BasicMesh<Point>& mesh, const Plane& plane) {
-  const SlicedMesh<Point> sliced = slice_mesh(mesh, plane);
-  if (sliced.plane_misses()) return {};
-  Cap<Point> cap;
-  if constexpr (std::is_same_v<Point, Vec3>) {
-    cap = triangulate_cap(sliced.positions, sliced.border_edges, plane,
-                          [&](VertexIndex v) { return exact_position(sliced, plane, v); });
-  } else {
-    cap = triangulate_cap(sliced.positions, sliced.border_edges, plane);
-  }
-  if (!cap_boundary_is_border(cap.triangles, sliced.border_edges)) return "cap boundary is not the border edges";
-  return {};
-}
-
 struct Checker {
   const Case& c;
   CaseOutcome& outcome;
@@ -306,120 +253,25 @@ struct Checker {
   }
 
   // Writes an output piece in the case's format, reads it back and validates what
-  // was read in full; counts it per kernel. A plane piece invalid as written is a
-  // failure (the kernel promises none); fast and exact ones are counted.
-  void check_written(KernelKind kernel, const Mesh& mesh, const std::string& where) {
-    const std::size_t k = kernel_index(kernel);
-    ++outcome.written[k];
+  // was read in full. A piece invalid as written is a failure: every piece the
+  // library returns without a defect is certified.
+  void check_written(const Mesh& mesh, const std::string& where) {
+    ++outcome.written;
     const ReadBack back = write_and_read_back(mesh, c.format);
     if (!back.mismatch.empty()) {
-      ++outcome.invalid_written[k];
+      ++outcome.invalid_written;
       fail(where + ": " + back.mismatch);
       return;
     }
     if (!back.report.valid()) {
-      ++outcome.invalid_written[k];
-      if (kernel == KernelKind::plane) {
-        fail(where + ": invalid as written (" + std::string(format_name(c.format)) + "): " + back.report.summary());
-      }
+      ++outcome.invalid_written;
+      fail(where + ": invalid as written (" + std::string(format_name(c.format)) + "): " + back.report.summary());
     }
   }
 
-  // One fast cut of `parent`, every promise checked; returns the pieces that
-  // are valid solids (the chain goes on with those only: cut_mesh promises only
-  // topology for a parent whose embedding is degenerate).
-  std::vector<Mesh> fast_cut(const Mesh& parent, const Plane& plane, SurfaceId cap, bool first_cut,
-                             const std::string& where) {
-    CutOptions options;
-    options.cap_surface = cap;
-    const CutResult<Vec3> result = cut_mesh(parent, plane, options);
-    if (result.plane_missed != plane_leaves_one_side_empty(parent, plane)) {
-      fail(where + ": plane_missed disagrees with the exact sides of the vertices");
-    }
-    std::vector<Mesh> valid;
-    mpq_class pieces_six = 0;
-    std::size_t k = 0;
-    for (const auto* side : {&result.below, &result.above}) {
-      for (const Mesh& piece : *side) {
-        const std::string name = where + " piece " + std::to_string(k++);
-        ++outcome.fast_pieces;
-        if (std::string p = test::topology_problem(piece); !p.empty()) fail(name + ": " + p);
-        if (std::string p = attribute_problem(piece, parent, cap); !p.empty()) fail(name + ": " + p);
-        check_written(KernelKind::fast, piece, name);
-        const ValidationReport report = validate_mesh(piece);
-        if (report.find(DefectKind::self_intersection)) {
-          ++outcome.fast_self_intersecting;
-        } else if (!report.valid()) {
-          ++outcome.fast_degenerate;
-        } else {
-          valid.push_back(piece);
-        }
-        pieces_six += test::exact_six_volume(piece);
-      }
-    }
-    if (piece_count(result) == 0) fail(where + ": no pieces");
-    if (!fast_volumes_add_up(test::exact_six_volume(parent), pieces_six, parent)) {
-      fail(where + ": pieces' volumes do not add up to the parent's");
-    }
-    if (first_cut) {
-      if (std::string p = cap_problem(parent, plane); !p.empty()) fail(where + ": " + p);
-      const CutResult<Vec3> again = cut_mesh(parent, plane, options);
-      bool same = piece_count(again) == piece_count(result);
-      for (std::size_t i = 0; same && i < result.below.size(); ++i) {
-        same = test::canonical_bytes(again.below[i]) == test::canonical_bytes(result.below[i]);
-      }
-      for (std::size_t i = 0; same && i < result.above.size(); ++i) {
-        same = test::canonical_bytes(again.above[i]) == test::canonical_bytes(result.above[i]);
-      }
-      if (!same) fail(where + ": the same cut twice gave different bytes");
-    }
-    return valid;
-  }
+  // --- slices ----------------------------------------------------------------
 
-  std::vector<ExactMesh> exact_cut(const ExactMesh& parent, const Plane& plane, SurfaceId cap, bool first_cut,
-                                   const std::string& where) {
-    CutOptions options;
-    options.cap_surface = cap;
-    const CutResult<ExactPoint> result = cut_mesh(parent, plane, options);
-    if (result.plane_missed != plane_leaves_one_side_empty(parent, plane)) {
-      fail(where + ": plane_missed disagrees with the exact sides of the vertices");
-    }
-    std::vector<ExactMesh> pieces;
-    mpq_class pieces_six = 0;
-    std::size_t k = 0;
-    for (const auto* side : {&result.below, &result.above}) {
-      for (const ExactMesh& piece : *side) {
-        const std::string name = where + " piece " + std::to_string(k++);
-        ++outcome.exact_pieces;
-        if (std::string p = test::exact_solid_problem(piece); !p.empty()) fail(name + ": " + p);
-        if (std::string p = attribute_problem(piece, parent, cap); !p.empty()) fail(name + ": " + p);
-        check_written(KernelKind::exact, to_fast(piece), name);  // output is rounded once, as `shatter slice` writes it
-        pieces_six += test::exact_six_volume(piece);
-        pieces.push_back(piece);
-      }
-    }
-    if (pieces.empty()) fail(where + ": no pieces");
-    if (pieces_six != test::exact_six_volume(parent)) fail(where + ": exact volumes do not add up exactly");
-    if (first_cut) {
-      if (std::string p = cap_problem(parent, plane); !p.empty()) fail(where + ": " + p);
-    }
-    return pieces;
-  }
-
-  // Records the cut where the chain first failed as the shrunk case.
-  void remember_smallest(const Mesh& parent, const Plane& plane, std::size_t failures_before) {
-    if (outcome.shrunk || outcome.failures.size() == failures_before || c.planes.size() == 1) return;
-    Case smaller = c;
-    smaller.mesh = parent;
-    smaller.mesh.surfaces.assign(parent.triangles.size(), original_surface);
-    smaller.mesh_name = c.mesh_name + " (one piece of the chain)";
-    smaller.planes = {plane};
-    outcome.shrunk = std::move(smaller);
-  }
-
-  // --- the plane kernel -------------------------------------------------------
-
-  // A piece of a plane-kernel chain: its exact solid, six times its exact volume,
+  // A piece of a chain: its exact solid, six times its exact volume,
   // and its rounded mesh when round_solid could write it (the next cut's
   // certification trusts it, as the builder's does).
   struct PlanePiece {
@@ -428,7 +280,7 @@ struct Checker {
     std::optional<Mesh> rounded;
   };
 
-  // One plane-kernel cut of `parent` by cut plane i of `set` (the library's one
+  // One cut of `parent` by cut plane i of `set` (the library's one
   // cut call, cut_by_plane), every promise checked: it refuses only a pinch
   // (counted); plane_missed agrees with the exact sides of the vertices; every
   // piece sound (check_solid) with a positive exact volume, the volumes summing to
@@ -452,7 +304,7 @@ struct Checker {
       return;
     }
     // The sides of the vertices: input points by side_of_plane on their doubles
-    // (the audited predicate of the other kernels), defined points by side().
+    // (audited below), defined points by side().
     bool any_below = false, any_above = false;
     as_checker([&] {
       for (std::size_t v = 0; v < parent.solid.defs.size(); ++v) {
@@ -503,13 +355,13 @@ struct Checker {
       }
       if (std::string p = channel_problem(piece.mesh, input.mesh); !p.empty()) fail(name + ": " + p);
       if (std::string p = surface_problem(piece.mesh, surfaces); !p.empty()) fail(name + ": " + p);
-      check_written(KernelKind::plane, piece.mesh, name);
+      check_written(piece.mesh, name);
       next.push_back({std::move(piece.solid), six, std::move(piece.mesh)});
     }
     if (sum != parent.six) fail(where + ": exact volumes do not add up to the parent's exactly");
   }
 
-  // A plane chain that failed at cut i is reproduced by the chain's first i + 1
+  // A chain that failed at cut i is reproduced by the chain's first i + 1
   // planes on the same mesh (cut_solid is exact and deterministic: the pieces of
   // the shorter chain are those of the longer one).
   void remember_prefix(std::size_t i, std::size_t failures_before) {
@@ -519,7 +371,7 @@ struct Checker {
     outcome.shrunk = std::move(smaller);
   }
 
-  void plane_chain() {
+  void slice_chain() {
     const PlaneInput input = prepare_plane_input(c.mesh);
     // Every cut plane of the chain in the set at once: cut i is PlaneRef::cut(i).
     const PlaneSet set = input.geometry.plane_set(c.planes);
@@ -544,45 +396,10 @@ struct Checker {
     }
   }
 
-  void slice_chain() {
-    if (c.kernel == KernelKind::plane) {
-      plane_chain();
-    } else if (c.kernel == KernelKind::fast) {
-      std::vector<Mesh> pieces{c.mesh};
-      for (std::size_t i = 0; i < c.planes.size(); ++i) {
-        std::vector<Mesh> next;
-        for (std::size_t p = 0; p < pieces.size(); ++p) {
-          const std::size_t before = outcome.failures.size();
-          const std::string where = "cut " + std::to_string(i) + " of piece " + std::to_string(p);
-          for (Mesh& piece : fast_cut(pieces[p], c.planes[i], SurfaceId(i + 1), i == 0, where)) {
-            next.push_back(std::move(piece));
-          }
-          remember_smallest(pieces[p], c.planes[i], before);
-        }
-        pieces = std::move(next);
-      }
-    } else {
-      std::vector<ExactMesh> pieces{to_exact(c.mesh)};
-      for (std::size_t i = 0; i < c.planes.size(); ++i) {
-        std::vector<ExactMesh> next;
-        for (std::size_t p = 0; p < pieces.size(); ++p) {
-          const std::size_t before = outcome.failures.size();
-          const std::string where = "cut " + std::to_string(i) + " of piece " + std::to_string(p);
-          for (ExactMesh& piece : exact_cut(pieces[p], c.planes[i], SurfaceId(i + 1), i == 0, where)) {
-            next.push_back(std::move(piece));
-          }
-          remember_smallest(to_fast(pieces[p]), c.planes[i], before);
-        }
-        pieces = std::move(next);
-      }
-    }
-  }
-
   void fracture() {
     BuildOptions options = c.build;
     options.threads = 1;
-    ExactBuild built = build_mesh_tree_keeping_exact(c.mesh, options);
-    const MeshTree& tree = built.tree;
+    const MeshTree tree = build_mesh_tree(c.mesh, options);
     if (tree.leaf_count() < options.fragments) fail("fewer leaves than fragments asked for");
     // Links, leaf ranges, meshes' indices, bonds, the exact representation: the
     // rest of this check indexes through them.
@@ -596,50 +413,18 @@ struct Checker {
       if (std::string p = test::solid_problem(mesh); !p.empty()) fail("node " + std::to_string(v) + ": " + p);
       six.push_back(test::exact_six_volume(mesh));
     }
-    if (c.kernel == KernelKind::plane) {
-      plane_fracture(tree);
-    } else {
-      // The builder redraws any plane whose rounded pieces intersect themselves;
-      // the leaves are checked again here, independently.
-      for (NodeIndex leaf : tree.leaf_nodes) {
-        ++outcome.fast_pieces;
-        if (validate_mesh(tree.nodes[leaf].mesh).find(DefectKind::self_intersection)) {
-          ++outcome.fast_self_intersecting;
-          fail("leaf node " + std::to_string(leaf) + ": self-intersecting, though the builder promises none");
-        }
-      }
-    }
+    check_exact_solids(tree);
     for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
       const MeshTreeNode& node = tree.nodes[v];
       if (node.is_leaf()) continue;
       mpq_class total = 0;
       for (NodeIndex child : node.children) total += six[child];
-      if (!fast_volumes_add_up(six[v], total, node.mesh)) fail("node " + std::to_string(v) + ": children's volumes");
-    }
-    if (c.kernel == KernelKind::exact) {
-      if (built.exact_meshes.size() != tree.nodes.size()) {
-        fail("exact build returned " + std::to_string(built.exact_meshes.size()) + " exact solids");
-        return;
-      }
-      std::vector<mpq_class> exact_six;
-      for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
-        ++outcome.exact_pieces;
-        if (std::string p = test::exact_solid_problem(built.exact_meshes[v]); !p.empty()) {
-          fail("exact node " + std::to_string(v) + ": " + p);
-        }
-        exact_six.push_back(test::exact_six_volume(built.exact_meshes[v]));
-      }
-      for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
-        if (tree.nodes[v].is_leaf()) continue;
-        mpq_class total = 0;
-        for (NodeIndex child : tree.nodes[v].children) total += exact_six[child];
-        if (total != exact_six[v]) fail("exact node " + std::to_string(v) + ": children's volumes not exact");
-      }
+      if (!rounded_volumes_add_up(six[v], total, node.mesh)) fail("node " + std::to_string(v) + ": children's volumes");
     }
     // Every leaf written as `shatter fracture --export` writes it, read back and
     // validated.
     for (NodeIndex leaf : tree.leaf_nodes) {
-      check_written(c.kernel, tree.nodes[leaf].mesh, "leaf node " + std::to_string(leaf));
+      check_written(tree.nodes[leaf].mesh, "leaf node " + std::to_string(leaf));
     }
     // Invariant 4 on a quarter of the builds (it doubles their cost).
     if (c.seed % 4 == 0) {
@@ -651,13 +436,12 @@ struct Checker {
     }
   }
 
-  // The plane kernel's tree: every node's exact solid sound over the tree's plane
-  // set, its stored mesh valid with self-intersections checked, and the
-  // children's exact volumes summing to their parent's exactly (the root's being
-  // the input's).
-  void plane_fracture(const MeshTree& tree) {
+  // Every node's exact solid sound over the tree's plane set, its stored mesh
+  // valid with self-intersections checked, and the children's exact volumes
+  // summing to their parent's exactly (the root's being the input's).
+  void check_exact_solids(const MeshTree& tree) {
     if (tree.cut_planes.size() != tree.nodes.size()) {
-      fail("plane tree with " + std::to_string(tree.cut_planes.size()) + " cut planes for " +
+      fail("tree with " + std::to_string(tree.cut_planes.size()) + " cut planes for " +
            std::to_string(tree.nodes.size()) + " nodes");
       return;
     }
@@ -665,7 +449,7 @@ struct Checker {
     std::vector<std::optional<mpq_class>> six(tree.nodes.size());
     for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
       const MeshTreeNode& node = tree.nodes[v];
-      const std::string name = "plane node " + std::to_string(v);
+      const std::string name = "node " + std::to_string(v);
       ++outcome.plane_pieces;
       if (std::string p = as_checker([&] { return check_solid(set, node.solid); }); !p.empty()) {
         fail(name + ": unsound solid: " + p);
@@ -676,7 +460,7 @@ struct Checker {
       const ValidationReport report = validate_mesh(node.mesh);
       if (!report.valid()) fail(name + ": stored mesh invalid: " + report.summary());
     }
-    if (six[0] && *six[0] != test::exact_six_volume(c.mesh)) fail("plane root: exact volume is not the input's");
+    if (six[0] && *six[0] != test::exact_six_volume(c.mesh)) fail("root: exact volume is not the input's");
     for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
       const MeshTreeNode& node = tree.nodes[v];
       if (node.is_leaf() || !six[v]) continue;
@@ -686,7 +470,7 @@ struct Checker {
         if (six[child]) total += *six[child];
         known = known && six[child].has_value();
       }
-      if (known && total != *six[v]) fail("plane node " + std::to_string(v) + ": children's exact volumes");
+      if (known && total != *six[v]) fail("node " + std::to_string(v) + ": children's exact volumes");
     }
   }
 };
@@ -1369,13 +1153,6 @@ std::optional<CaseClass> parse_class(std::string_view name) {
 
 std::string_view operation_name(Operation op) { return op == Operation::slice ? "slice" : "fracture"; }
 
-std::optional<KernelKind> parse_kernel(std::string_view name) {
-  for (KernelKind k : {KernelKind::fast, KernelKind::exact, KernelKind::plane}) {
-    if (kernel_name(k) == name) return k;
-  }
-  return std::nullopt;
-}
-
 MeshPool MeshPool::load() {
   MeshPool pool;
   for (const auto& path : test::valid_meshes()) pool.meshes.emplace_back(path.filename().string(), read_mesh(path));
@@ -1397,11 +1174,6 @@ Case make_case(const MeshPool& pool, std::uint64_t seed, std::uint64_t index) {
   Random random(c.seed);
   c.kind = static_cast<CaseClass>(index % case_class_count);
   c.op = random.index(4) == 0 ? Operation::fracture : Operation::slice;
-  // Kernel shares: plane (the default) 1/2, fast 1/4, exact 1/4 (one draw, as
-  // before the plane kernel, so meshes and planes are those of earlier runs).
-  static constexpr KernelKind kernel_draws[] = {KernelKind::plane, KernelKind::plane, KernelKind::fast,
-                                                KernelKind::exact};
-  c.kernel = kernel_draws[random.index(4)];
 
   auto use = [&](const std::string& name, Mesh mesh) {
     c.mesh_name = name;
@@ -1531,15 +1303,11 @@ Case make_case(const MeshPool& pool, std::uint64_t seed, std::uint64_t index) {
     }
   }
   const bool large = c.mesh.triangles.size() > large_mesh_triangles;
-  // The exact kernel's rationals make large meshes slow: a quarter of their draws.
-  if (large && c.kernel == KernelKind::exact && random.index(4) != 0) c.kernel = KernelKind::fast;
   if (c.op == Operation::fracture) {
-    if (large && c.kernel == KernelKind::exact) c.kernel = KernelKind::fast;
     static constexpr std::uint32_t fragment_choices[] = {2, 3, 4, 8, 16};
-    c.build.fragments = fragment_choices[random.index(large || c.kernel == KernelKind::exact ? 4 : 5)];
+    c.build.fragments = fragment_choices[random.index(large ? 4 : 5)];
     c.build.seed = random.next();
     c.build.strategy = static_cast<Strategy>(random.index(3));
-    c.build.kernel = c.kernel;
   }
   c.mesh = in_first_use_order(std::move(c.mesh));
   // Output pieces are written as OFF, and in a quarter of the cases as OBJ, PLY
@@ -1560,9 +1328,9 @@ CaseOutcome run_case(const Case& c) {
     }
   } catch (const UnsupportedGeometryError& e) {
     // A fracture that runs out of planes is the builder's documented refusal. A
-    // plane slice refuses only pinches and unroundable pieces, both counted where
-    // they happen: anything else escaping it is a failure.
-    if (c.op == Operation::slice && c.kernel == KernelKind::plane) {
+    // slice refuses only pinches and unroundable pieces, both counted where they
+    // happen: anything else escaping it is a failure.
+    if (c.op == Operation::slice) {
       outcome.failures.push_back(std::string("unsupported geometry: ") + e.what());
     } else {
       outcome.refused = true;
@@ -1580,7 +1348,6 @@ std::filesystem::path write_reproducer(const std::filesystem::path& dir, const C
       << "class " << class_name(c.kind) << "\n"
       << "mesh-name " << c.mesh_name << "\n"
       << "operation " << operation_name(c.op) << "\n"
-      << "kernel " << kernel_name(c.kernel) << "\n"
       << "format " << format_name(c.format) << "\n"
       << "seed " << c.seed << "\n"
       << "failure " << failure.substr(0, failure.find('\n')) << "\n";
@@ -1596,8 +1363,8 @@ std::filesystem::path write_reproducer(const std::filesystem::path& dir, const C
   out << "mesh-obj " << mesh.size() << "\n" << mesh;
   std::filesystem::create_directories(dir);
   const std::filesystem::path path =
-      dir / (std::string(class_name(c.kind)) + "-" + std::string(operation_name(c.op)) + "-" +
-             std::string(kernel_name(c.kernel)) + "-" + std::to_string(c.seed) + ".repro");
+      dir / (std::string(class_name(c.kind)) + "-" + std::string(operation_name(c.op)) + "-" + std::to_string(c.seed) +
+             ".repro");
   write_file_atomically(path, out.str());
   return path;
 }
@@ -1629,9 +1396,11 @@ Case read_reproducer(const std::filesystem::path& path) {
     } else if (key == "operation") {
       c.op = rest() == "fracture" ? Operation::fracture : Operation::slice;
     } else if (key == "kernel") {
-      const auto kernel = parse_kernel(rest());
-      if (!kernel) throw InvalidMeshError(path.string() + ": unknown kernel");
-      c.kernel = *kernel;
+      // Reproducers written while there were three kernels name theirs.
+      const std::string kernel = rest();
+      if (kernel != "plane") {
+        throw InvalidMeshError(path.string() + ": a reproducer of the retired " + kernel + " kernel");
+      }
     } else if (key == "format") {
       const auto format = parse_mesh_format(rest());
       if (!format) throw InvalidMeshError(path.string() + ": unknown format");
@@ -1656,8 +1425,6 @@ Case read_reproducer(const std::filesystem::path& path) {
       const std::string name = rest();
       if (name == expected_name(Expected::valid_as_written)) {
         c.expected = Expected::valid_as_written;
-      } else if (name == expected_name(Expected::refused_as_written)) {
-        c.expected = Expected::refused_as_written;
       } else {
         throw InvalidMeshError(path.string() + ": unknown expectation '" + name + "'");
       }
@@ -1666,7 +1433,6 @@ Case read_reproducer(const std::filesystem::path& path) {
       const std::string name = rest();
       if (name.empty() || name.find("..") != std::string::npos) throw InvalidMeshError(path.string() + ": bad mesh-corpus");
       c.mesh = read_mesh(test::mesh_dir() / name);
-      c.build.kernel = c.kernel;
       return c;
     } else if (key == "mesh-obj") {
       std::size_t size = 0;
@@ -1674,7 +1440,6 @@ Case read_reproducer(const std::filesystem::path& path) {
       std::string bytes(size, '\0');
       if (!in.read(bytes.data(), std::streamsize(size))) throw InvalidMeshError(path.string() + ": truncated mesh");
       c.mesh = read_mesh_from_bytes(bytes, MeshFormat::obj);
-      c.build.kernel = c.kernel;
       return c;
     } else {
       throw InvalidMeshError(path.string() + ": unknown field '" + key + "'");
@@ -1687,24 +1452,19 @@ std::string_view expected_name(Expected expected) {
   switch (expected) {
     case Expected::no_failure: return "no-failure";
     case Expected::valid_as_written: return "valid-as-written";
-    case Expected::refused_as_written: return "refused-as-written";
   }
   return "unknown";
 }
 
 std::string unmet_expectation(const Case& c, const CaseOutcome& outcome) {
-  const std::size_t k = kernel_index(c.kernel);
   const std::size_t refusals = (outcome.refused ? 1 : 0) + outcome.plane_unroundable + outcome.plane_pinched;
-  const std::string shown = std::to_string(outcome.written[k]) + " pieces written, " +
-                            std::to_string(outcome.invalid_written[k]) + " invalid as written, " +
+  const std::string shown = std::to_string(outcome.written) + " pieces written, " +
+                            std::to_string(outcome.invalid_written) + " invalid as written, " +
                             std::to_string(refusals) + " refusals";
   switch (c.expected) {
     case Expected::no_failure: return {};
     case Expected::valid_as_written:
-      if (outcome.written[k] > 0 && outcome.invalid_written[k] == 0 && refusals == 0) return {};
-      break;
-    case Expected::refused_as_written:
-      if (outcome.invalid_written[k] > 0) return {};
+      if (outcome.written > 0 && outcome.invalid_written == 0 && refusals == 0) return {};
       break;
   }
   return "expected " + std::string(expected_name(c.expected)) + ", the replay shows " + shown;

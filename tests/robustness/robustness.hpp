@@ -47,16 +47,11 @@ std::optional<CaseClass> parse_class(std::string_view name);
 enum class Operation : std::uint8_t { slice, fracture };
 std::string_view operation_name(Operation op);
 
-/// Parses a kernel name ("fast", "exact", "plane").
-std::optional<KernelKind> parse_kernel(std::string_view name);
-
 /// What a replayed reproducer must show besides "no failure" (its `expect` line):
 /// a regression checked in with its fix can pin the outcome the fix gave.
 enum class Expected : std::uint8_t {
   no_failure,          ///< no line: every invariant holds (refusals are allowed)
   valid_as_written,    ///< `expect valid-as-written`: nothing refused, every piece written, read back and valid
-  refused_as_written,  ///< `expect refused-as-written`: a piece is invalid as written, which `shatter slice`
-                       ///< refuses (exit 3, nothing written)
 };
 std::string_view expected_name(Expected expected);
 
@@ -69,7 +64,6 @@ struct Case {
   std::string mesh_name;
   Mesh mesh;
   Operation op = Operation::slice;
-  KernelKind kernel = KernelKind::fast;
   std::vector<Plane> planes;
   BuildOptions build;
   MeshFormat format = MeshFormat::off;  ///< the format output pieces are written in
@@ -77,35 +71,25 @@ struct Case {
   Expected expected = Expected::no_failure;  ///< what a replay must show (reproducers only)
 };
 
-/// Index of a kernel in the per-kernel counters: fast 0, exact 1, plane 2.
-inline constexpr std::size_t kernel_count = 3;
-inline std::size_t kernel_index(KernelKind kernel) { return static_cast<std::size_t>(kernel); }
-
 /// What one case showed. A failure is a broken promise; a refusal is the
 /// documented UnsupportedGeometryError (counted, not a failure).
 struct CaseOutcome {
   std::vector<std::string> failures;  ///< empty: every invariant held
   bool refused = false;
-  std::size_t fast_pieces = 0;              ///< fast-kernel solids checked
-  std::size_t fast_self_intersecting = 0;   ///< of those, embeddings that intersect themselves
-  std::size_t fast_degenerate = 0;          ///< of those, other embedding defects (zero area, volume <= 0)
-  std::size_t exact_pieces = 0;             ///< exact-kernel solids checked
-  std::size_t plane_pieces = 0;             ///< plane-kernel solids checked (check_solid, exact volume)
+  std::size_t plane_pieces = 0;  ///< exact solids checked (check_solid, exact volume)
   /// Output pieces written (write_mesh_to_bytes in the case's format) and read
-  /// back, per kernel (kernel_index), and of those the ones validate_mesh (with
-  /// self-intersections) finds invalid as read back. A plane piece invalid as
-  /// written is also a failure; fast and exact ones are counted only.
-  std::array<std::size_t, kernel_count> written{}, invalid_written{};
+  /// back, and of those the ones validate_mesh (with self-intersections) finds
+  /// invalid as read back (each also a failure).
+  std::size_t written = 0, invalid_written = 0;
   std::size_t plane_unroundable = 0;  ///< plane pieces round_solid refused to write (not a failure)
   std::size_t plane_pinched = 0;      ///< plane cuts cut_solid refused as pinching a piece (not a failure)
   /// The plane-kernel predicate calls the checks themselves made (check_solid's
   /// corners-on-their-planes tests, whose true answers are zero, and the sides
   /// behind plane_missed), so a report can leave them out of the kernel's own.
   ImplicitCounters checker_predicates;
-  /// The smallest case that still fails: for a fast or exact chain, the one cut
-  /// of the piece where it first failed; for a plane chain, the chain's planes up
-  /// to that cut, on the same mesh (its pieces are defined from the input); unset
-  /// when there is nothing smaller.
+  /// The smallest case that still fails: the chain's planes up to the cut where
+  /// it first failed, on the same mesh (its pieces are defined from the input);
+  /// unset when there is nothing smaller.
   std::optional<Case> shrunk;
 };
 

@@ -42,15 +42,12 @@ bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; 
 TEST_CASE("a reproducer keeps the case: planes bit for bit, mesh, options") {
   const MeshPool pool = MeshPool::load();
   const fs::path dir = scratch("round-trip");
-  std::size_t plane_cases = 0;
   for (std::uint64_t index = 0; index < 4 * case_class_count; ++index) {
     const Case c = make_case(pool, 99, index);
-    plane_cases += c.kernel == KernelKind::plane;
     INFO(class_name(c.kind) << " " << c.mesh_name);
     const Case back = read_reproducer(write_reproducer(dir, c, "a failure\nwith a second line"));
     CHECK(back.kind == c.kind);
     CHECK(back.op == c.op);
-    CHECK(back.kernel == c.kernel);
     CHECK(back.format == c.format);
     CHECK(back.seed == c.seed);
     CHECK(back.mesh_name == c.mesh_name);
@@ -65,7 +62,6 @@ TEST_CASE("a reproducer keeps the case: planes bit for bit, mesh, options") {
       CHECK(back.build.fragments == c.build.fragments);
       CHECK(back.build.seed == c.build.seed);
       CHECK(back.build.strategy == c.build.strategy);
-      CHECK(back.build.kernel == c.kernel);
     }
     // The same mesh, bit for bit: cases number their vertices as readers do, so
     // a replay cuts the very solid (the plane kernel's points name input points by
@@ -77,57 +73,48 @@ TEST_CASE("a reproducer keeps the case: planes bit for bit, mesh, options") {
     const Case twice = read_reproducer(write_reproducer(dir, back, "again"));
     CHECK(test::canonical_bytes(twice.mesh) == test::canonical_bytes(back.mesh));
   }
-  CHECK(plane_cases > 0);  // the plane kernel's cases are among them
 }
 
 TEST_CASE("a reproducer may name a corpus mesh and pin its outcome, and a replay that differs fails") {
-  // tests/regressions' issue-10 files: the elephant, read from the corpus as
-  // `shatter` reads it, and the outcome each kernel must show.
+  // tests/regressions' issue-10 file: the elephant, read from the corpus as
+  // `shatter` reads it, and the outcome it must show.
   const fs::path regressions = test::mesh_dir().parent_path().parent_path() / "regressions";
   const Mesh elephant = read_mesh(test::mesh_dir() / "elephant.off");
-  std::size_t replayed = 0;
-  for (const char* kernel : {"exact", "fast", "plane"}) {
-    INFO(kernel);
-    const Case c = read_reproducer(regressions / (std::string("issue10-elephant-vertex-plane-slice-") + kernel + ".repro"));
-    CHECK(test::canonical_bytes(c.mesh) == test::canonical_bytes(elephant));
-    REQUIRE(c.planes.size() == 1);
-    CHECK(c.planes[0].offset == -0.062960299999999997);
-    const Expected expected = std::string(kernel) == "plane" ? Expected::valid_as_written : Expected::refused_as_written;
-    CHECK(c.expected == expected);
-    const CaseOutcome outcome = run_case(c);
-    CHECK(outcome.failures.empty());
-    CHECK(unmet_expectation(c, outcome) == "");
-    // The other expectation is not met: the replay would fail.
-    Case other = c;
-    other.expected = expected == Expected::valid_as_written ? Expected::refused_as_written : Expected::valid_as_written;
-    CHECK(unmet_expectation(other, outcome) != "");
-    ++replayed;
-  }
-  CHECK(replayed == 3);
-  // A name, never a path out of the corpus; and unknown expectations are refused.
+  const Case c = read_reproducer(regressions / "issue10-elephant-vertex-plane-slice-plane.repro");
+  CHECK(test::canonical_bytes(c.mesh) == test::canonical_bytes(elephant));
+  REQUIRE(c.planes.size() == 1);
+  CHECK(c.planes[0].offset == -0.062960299999999997);
+  CHECK(c.expected == Expected::valid_as_written);
+  const CaseOutcome outcome = run_case(c);
+  CHECK(outcome.failures.empty());
+  CHECK(unmet_expectation(c, outcome) == "");
+  // An outcome other than the one pinned is not met: the replay would fail.
+  CaseOutcome refused = outcome;
+  ++refused.plane_unroundable;
+  CHECK(unmet_expectation(c, refused) != "");
+  // A name, never a path out of the corpus; unknown expectations and reproducers
+  // of the retired kernels are refused.
   const fs::path dir = scratch("corpus-reproducer");
-  for (const auto& [field, value] : {std::pair{"mesh-corpus", "../regressions/x.repro"}, std::pair{"expect", "passes"}}) {
+  for (const auto& [field, value] : {std::pair{"mesh-corpus", "../regressions/x.repro"}, std::pair{"expect", "passes"},
+                                     std::pair{"expect", "refused-as-written"}, std::pair{"kernel", "fast"}}) {
     std::ofstream(dir / "bad.repro") << "shatter-reproducer 1\n" << field << " " << value << "\nmesh-corpus cube.off\n";
     CHECK_THROWS_AS(read_reproducer(dir / "bad.repro"), InvalidMeshError);
   }
 }
 
-TEST_CASE("kernels are drawn plane 1/2, fast 1/4, exact 1/4, and output formats OFF 3/4, others 1/4") {
+TEST_CASE("operations are drawn slice 3/4, fracture 1/4, and output formats OFF 3/4, others 1/4") {
   const MeshPool pool = MeshPool::load();
-  std::array<int, kernel_count> kernels{};
+  std::map<Operation, int> operations;
   std::map<MeshFormat, int> formats;
   constexpr int cases = 400;
   for (std::uint64_t index = 0; index < cases; ++index) {
     const Case c = make_case(pool, 20261129, index);
-    ++kernels[kernel_index(c.kernel)];
+    ++operations[c.op];
     ++formats[c.format];
-    if (c.op == Operation::fracture) CHECK(c.build.kernel == c.kernel);
   }
-  INFO("fast " << kernels[0] << ", exact " << kernels[1] << ", plane " << kernels[2]);
-  // Large meshes trade exact draws for fast ones, so exact runs a little under 1/4.
-  CHECK(kernels[kernel_index(KernelKind::plane)] >= cases * 45 / 100);
-  CHECK(kernels[kernel_index(KernelKind::fast)] >= cases * 20 / 100);
-  CHECK(kernels[kernel_index(KernelKind::exact)] >= cases * 15 / 100);
+  INFO("slices " << operations[Operation::slice] << ", fractures " << operations[Operation::fracture]);
+  CHECK(operations[Operation::fracture] >= cases * 15 / 100);
+  CHECK(operations[Operation::slice] >= cases * 65 / 100);
   CHECK(formats[MeshFormat::off] >= cases * 65 / 100);
   for (MeshFormat f : {MeshFormat::obj, MeshFormat::ply, MeshFormat::stl}) CHECK(formats[f] > 0);
 }
@@ -146,33 +133,8 @@ TEST_CASE("cases are a pure function of (seed, index), and every class is drawn"
   for (int count : per_class) CHECK(count == 2);
 }
 
-TEST_CASE("the runner's checks catch broken promises") {
-  // An inward cube breaks the cut's precondition (positive volume), so its
-  // pieces come out inward. The exact kernel promises positive volume: a failure.
-  // The fast kernel promises topology only, so it counts the pieces as degenerate
-  // embeddings, every one of them.
+TEST_CASE("slice chains and fractures pass, every piece written and read back valid") {
   Case c;
-  c.mesh = test::flipped(test::unit_cube());
-  c.planes = {test::plane_through({0.5, 0.5, 0.5}, {0.3, 0.4, 1})};
-  const CaseOutcome fast = run_case(c);
-  CHECK(fast.fast_pieces == 2);
-  CHECK(fast.fast_degenerate == 2);
-  c.kernel = KernelKind::exact;
-  CHECK(!run_case(c).failures.empty());
-  // A plane that holds a face of the staircase passes: the checks are not
-  // failing everything either.
-  c.kernel = KernelKind::fast;
-  c.mesh = test::staircase(3);
-  c.planes = {test::axis_plane_through({1, 0, 1}, 2)};
-  const CaseOutcome outcome = run_case(c);
-  CHECK(outcome.failures == std::vector<std::string>{});
-  CHECK(outcome.fast_pieces >= 2);
-  CHECK(outcome.written[kernel_index(KernelKind::fast)] == outcome.fast_pieces);
-}
-
-TEST_CASE("plane cases: slice chains and fractures pass, every piece written and read back valid") {
-  Case c;
-  c.kernel = KernelKind::plane;
   c.mesh = test::staircase(3);
   // A tread plane (holding faces), then a plane through vertices up to rounding.
   c.planes = {test::axis_plane_through({1, 0, 1}, 2), test::plane_through({1, 1, 1}, {1, 1, 0.5})};
@@ -181,8 +143,8 @@ TEST_CASE("plane cases: slice chains and fractures pass, every piece written and
     const CaseOutcome outcome = run_case(c);
     CHECK(outcome.failures == std::vector<std::string>{});
     CHECK(outcome.plane_pieces >= 4);
-    CHECK(outcome.written[kernel_index(KernelKind::plane)] + outcome.plane_unroundable == outcome.plane_pieces);
-    CHECK(outcome.invalid_written[kernel_index(KernelKind::plane)] == 0);
+    CHECK(outcome.written + outcome.plane_unroundable == outcome.plane_pieces);
+    CHECK(outcome.invalid_written == 0);
   }
   // With attributes: every triangle its own face, attributes interpolated.
   c.mesh = test::with_seams(test::torus(1, 0.3, 12, 8));
@@ -190,33 +152,29 @@ TEST_CASE("plane cases: slice chains and fractures pass, every piece written and
   CHECK(run_case(c).failures == std::vector<std::string>{});
   c.op = Operation::fracture;
   c.mesh = test::torus(1, 0.3, 12, 8);
-  c.build.kernel = KernelKind::plane;
   c.build.fragments = 4;
   c.build.seed = 4;  // a multiple of 4: the 2-thread rebuild is compared too
   c.seed = 4;
   const CaseOutcome fracture = run_case(c);
   CHECK(fracture.failures == std::vector<std::string>{});
   CHECK(!fracture.refused);
-  CHECK(fracture.written[kernel_index(KernelKind::plane)] >= 4);
-  CHECK(fracture.plane_pieces > fracture.written[kernel_index(KernelKind::plane)]);  // every node, the root too
+  CHECK(fracture.written >= 4);
+  CHECK(fracture.plane_pieces > fracture.written);  // every node, the root too
 }
 
-TEST_CASE("a plane-kernel failure is caught, shrunk to the chain's prefix and reproduced when replayed") {
-  // An inward cube breaks the cut's precondition: the plane kernel's exact volumes
-  // come out negative, a failure at the first cut of a two-cut chain.
+TEST_CASE("a failure is caught, shrunk to the chain's prefix and reproduced when replayed") {
+  // An inward cube breaks the cut's precondition: the exact volumes come out
+  // negative, a failure at the first cut of a two-cut chain.
   Case c;
-  c.kernel = KernelKind::plane;
   c.mesh = test::flipped(test::unit_cube());
   c.planes = {test::plane_through({0.5, 0.5, 0.5}, {0.3, 0.4, 1}), test::axis_plane_through({0.25, 0, 0}, 0)};
   const CaseOutcome outcome = run_case(c);
   REQUIRE(!outcome.failures.empty());
   REQUIRE(outcome.shrunk.has_value());
   CHECK(outcome.shrunk->planes.size() == 1);
-  CHECK(outcome.shrunk->kernel == KernelKind::plane);
   const fs::path dir = scratch("plane-failure");
   const fs::path path = write_reproducer(dir, *outcome.shrunk, outcome.failures.front());
   const Case back = read_reproducer(path);
-  CHECK(back.kernel == KernelKind::plane);
   CHECK(!run_case(back).failures.empty());
 }
 

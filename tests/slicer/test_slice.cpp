@@ -1,10 +1,11 @@
-// Property tests of one cut of a mesh (slicer/slice.hpp: its degeneracy policy,
-// observed through the full cut the CLI and the builder make, meshtree/cut.hpp)
-// over the corpus and generated meshes, with random and degenerate planes, both
-// kernels: valid pieces that partition the volume, planes through vertices, edges
-// and faces, determinism, the two kernels' agreement, cap attributes, and cap
-// corners shared bit for bit. The caps themselves: tests/triangulate; solid
-// separation: tests/meshtree/test_separate.cpp.
+// Property tests of the test oracle's cut of a mesh (tests/oracle: the
+// degeneracy policy of oracle/slice.hpp, observed through the full cut,
+// oracle/cut.hpp) over the corpus and generated meshes, with random and
+// degenerate planes, in both of its number types (rounded cut points, Epeck
+// rationals): valid pieces that partition the volume, planes through vertices,
+// edges and faces, determinism, the two number types' agreement, cap attributes,
+// and cap corners shared bit for bit. The caps themselves: tests/triangulate;
+// solid separation: tests/meshtree/test_separate.cpp.
 
 #include <catch2/catch.hpp>
 
@@ -16,12 +17,13 @@
 #include "shatter/generators/random.hpp"
 #include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
-#include "shatter/meshtree/cut.hpp"
+#include "shatter/oracle/cut.hpp"
 #include "support/checks.hpp"
 #include "support/cut_cases.hpp"
 #include "shatter/generators/solids.hpp"
 
 using namespace shatter;
+using namespace shatter::oracle;
 using namespace shatter::test;
 
 namespace {

@@ -14,13 +14,14 @@
 #include <vector>
 
 #include "shatter/kernel/exact.hpp"
-#include "shatter/slicer/slice.hpp"
+#include "shatter/oracle/slice.hpp"
 #include "shatter/triangulate/cap.hpp"
 #include "support/cut_cases.hpp"
 #include "shatter/generators/random.hpp"
 #include "shatter/generators/solids.hpp"
 
 using namespace shatter;
+using namespace shatter::oracle;
 using namespace shatter::test;
 
 namespace {

@@ -1,8 +1,8 @@
 // The editor panel (the seed's appendix A), shown only when `shatter view`
-// serves a .shatter file: fragments, seed, strategy and kernel go to the
+// serves a .shatter file: fragments, seed and strategy go to the
 // server, which fractures the tree's root solid again while the page polls its
 // progress, then the page loads the new tree. The server's API (cli/view.cpp):
-//   POST api/fracture {fragments, seed, strategy, kernel} -> 202 {state: "running"} or 4xx {error}
+//   POST api/fracture {fragments, seed, strategy} -> 202 {state: "running"} or 4xx {error}
 //   GET  api/fracture -> {state: "idle" | "running" | "done" | "failed", leaves_done, fragments, generation, error}
 //   GET  model.glb?generation=G -> the tree being shown, as a GLB
 
@@ -38,7 +38,6 @@ export class Editor {
     if (options.fragments !== undefined) this.e.fragments.value = options.fragments;
     if (options.seed !== undefined) this.e.seed.value = options.seed;
     if (options.strategy) this.e.strategy.value = options.strategy;
-    if (options.kernel) this.e.kernel.value = options.kernel;
   }
 
   status(text) { this.e.status.textContent = text; }
@@ -65,7 +64,7 @@ export class Editor {
       const response = await fetch('api/fracture', {
         method: 'POST',
         headers: { 'Content-Type': 'application/json' },
-        body: JSON.stringify({ fragments, seed, strategy: this.e.strategy.value, kernel: this.e.kernel.value }),
+        body: JSON.stringify({ fragments, seed, strategy: this.e.strategy.value }),
       });
       if (!response.ok) throw new Error(await errorOf(response));
       const done = await this.poll();

@@ -255,7 +255,7 @@ async function main() {
       if (session.editable) {
         $('editor').hidden = false;
         const editor = new Editor({
-          fragments: $('edit-fragments'), seed: $('edit-seed'), strategy: $('edit-strategy'), kernel: $('edit-kernel'),
+          fragments: $('edit-fragments'), seed: $('edit-seed'), strategy: $('edit-strategy'),
           run: $('edit-run'), progress: $('edit-progress'), status: $('edit-status'),
         }, async (generation) => {
           $('message').hidden = true;

@@ -606,8 +606,8 @@ const cases = {
       // A second job while one runs is refused with 409 and a reason.
       const conflict = await page.evaluate(async () => {
         const post = (body) => fetch('api/fracture', { method: 'POST', body: JSON.stringify(body) });
-        const first = await post({ fragments: '600', seed: '1', strategy: 'thesis', kernel: 'plane' });
-        const second = await post({ fragments: '8', seed: '1', strategy: 'thesis', kernel: 'plane' });
+        const first = await post({ fragments: '600', seed: '1', strategy: 'thesis' });
+        const second = await post({ fragments: '8', seed: '1', strategy: 'thesis' });
         return { first: first.status, second: second.status, error: (await second.json()).error };
       });
       assert.equal(conflict.first, 202);

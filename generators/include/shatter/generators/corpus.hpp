@@ -29,4 +29,9 @@ std::vector<std::filesystem::path> bad_meshes();
 /// std::runtime_error when there is none.
 std::vector<std::filesystem::path> self_intersecting_meshes();
 
+/// Returns the .shatter files the retired fast and exact kernels wrote
+/// (tests/data/retired, beside the corpus; its README says how), sorted by name.
+/// Throws std::runtime_error when there is none.
+std::vector<std::filesystem::path> retired_kernel_trees();
+
 }  // namespace shatter::test

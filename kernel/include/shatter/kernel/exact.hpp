@@ -1,17 +1,11 @@
 #pragma once
-// The exact kernel's point type and the conversions between the two kernels.
-//
-// The fast kernel works on Vec3 (double coordinates, exact predicates, rounded
-// constructions). The exact kernel works on CGAL's Epeck points: lazily evaluated
-// exact rationals with interval filters, so predicates stay cheap and
-// constructions (the points where edges cross a plane) are exact. The slicer,
-// caps and solid separation are written once over both point types, using the
-// overloads below.
-//
-// Where a plane-based representation would plug in: a vertex as the meet of three
-// planes (the input's supporting planes and the cutting planes) keeps predicate
-// bit-length bounded at any recursion depth. It would be a third point type here
-// with the same overloads (side_of_plane, crossing_point, to_vec3, project_to_2d).
+// CGAL's Epeck points (lazily evaluated exact rationals with interval filters)
+// and their conversions to and from doubles. The library triangulates faces and
+// caps on them where rounded positions would not do (triangulate/cap.hpp), and
+// separates shells with their exact volumes; the tests' oracle (tests/oracle)
+// cuts whole meshes with them. Caps and solid separation are written once over
+// Vec3 and ExactPoint, using the overloads below. The kernel's own vertices are
+// plane-based definitions (implicit.hpp), not these.
 
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 
@@ -57,9 +51,9 @@ struct CrossingExact {
 CrossingVec3 crossing_point(const Plane& plane, const Vec3& a, const Vec3& b);
 CrossingExact crossing_point(const Plane& plane, const ExactPoint& a, const ExactPoint& b);
 
-/// The exact rational position a fast-kernel crossing would have had without
-/// rounding; the fast kernel uses it to build a cap exactly when rounding made
-/// the rounded cap invalid.
+/// The exact rational position a rounded crossing stands for; a cap on rounded
+/// crossings (the oracle's rounded cut) is rebuilt on these when rounding made it
+/// invalid.
 ExactPoint exact_crossing_point(const Plane& plane, const Vec3& a, const Vec3& b);
 
 }  // namespace shatter

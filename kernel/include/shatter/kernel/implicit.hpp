@@ -224,7 +224,7 @@ struct OutputPoint {
 OutputPoint output_point(const PlaneSet& set, const PointDef& point, const ApproxPoint& approx);
 
 /// The point's exact coordinates (x/w, y/w, z/w) as GMP rationals (tests, audits,
-/// and the exact kernel's view of a plane-kernel piece).
+/// and exact triangulations of a piece's faces).
 std::array<mpq_class, 3> exact_coordinates(const PlaneSet& set, const PointDef& point);
 
 /// The exact homogeneous coordinates (x̃, ỹ, z̃, w) of the definition, as the

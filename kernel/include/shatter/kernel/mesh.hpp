@@ -38,8 +38,8 @@ struct CornerAttributes {
   bool has_tangents() const { return !tangents.empty(); }
 };
 
-/// A triangle mesh over points of type Point: Vec3 for the fast kernel, an exact
-/// point for the exact kernel. Invariants after reading and after every shatter
+/// A triangle mesh over points of type Point: Vec3 as stored and written, an
+/// exact point (exact.hpp) where caps are triangulated exactly. Invariants after reading and after every shatter
 /// operation: `surfaces` has one entry per triangle; every present attribute
 /// channel has 3 entries per triangle; every index is < positions.size().
 template <class Point>
@@ -53,7 +53,7 @@ struct BasicMesh {
   std::size_t triangle_count() const { return triangles.size(); }
 };
 
-/// The mesh of the fast kernel and of all I/O: double coordinates.
+/// The mesh of every node, piece and file: double coordinates.
 using Mesh = BasicMesh<Vec3>;
 
 }  // namespace shatter

@@ -35,7 +35,7 @@ struct MeshTree;
 /// Preconditions: `tree` is well formed (preorder nodes, contiguous leaf ranges,
 /// parent/children links, above_parent_plane set on every non-root node, a plane
 /// with a non-zero finite normal on every internal node); cap triangles of the cut
-/// at node k carry cap_surface_of(k) and lie (up to the fast kernel's rounding) on
+/// at node k carry cap_surface_of(k) and lie (up to their rounding) on
 /// nodes[k].plane. A triangle whose surface id names no internal ancestor of its
 /// leaf (e.g. an input surface id that is not 0) is ignored.
 ///
@@ -102,8 +102,8 @@ struct BondRuleComparison {
 /// Runs both rules on `tree` and counts where they disagree.
 /// Preconditions: as for find_bonds. Guarantees: true_bonds - missed_true_bonds ==
 /// box_bonds - false_box_bonds (the pairs both rules find). A true bond's caps
-/// overlap inside both leaves, so a miss can only come from the fast kernel's
-/// rounding of cap vertices off the plane.
+/// overlap inside both leaves, so a miss can only come from rounding of cap
+/// vertices off the plane (the retired fast kernel's trees).
 /// Complexity: that of find_bonds plus find_bounding_box_bonds, plus a linear merge.
 BondRuleComparison compare_bond_rules(const MeshTree& tree);
 

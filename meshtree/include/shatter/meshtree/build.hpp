@@ -4,8 +4,6 @@
 // the options that decide what it builds. A tree records those options, so
 // tree.hpp includes this header; the declarations here therefore name MeshTree
 // by a forward declaration, and tree.hpp is included last, for the callers.
-// build_mesh_tree_keeping_exact, which needs the exact kernel's number types, is
-// in exact_build.hpp.
 
 #include <cstddef>
 #include <cstdint>
@@ -31,22 +29,22 @@ enum class Strategy : std::uint8_t {
   axis = 2,
 };
 
-/// Which kernel cuts (DESIGN.md, "Exact arithmetic"). `plane`: plane-based
-/// vertices (kernel/implicit.hpp), exact at any depth and rounded once, certified,
-/// for output; the default. `exact`: CGAL Epeck rationals, the reference.
-/// `fast`: rounded cut points, exact predicates; kept only for comparison.
+/// The kernel that made a tree (DESIGN.md, "Exact arithmetic"). Every tree this
+/// version builds is `plane`: plane-based vertices (kernel/implicit.hpp), exact at
+/// any depth and rounded once, certified. `fast` (rounded cut points) and `exact`
+/// (CGAL Epeck rationals, rounded per node) are retired: the trees they made
+/// still read (.shatter versions 1 and 2), and this says how they were made.
 enum class KernelKind : std::uint8_t { fast = 0, exact = 1, plane = 2 };
 
 /// The strategy's name as the CLI spells it ("thesis", "balanced", "axis");
 /// "unknown" for a value outside the enum. Never throws.
 std::string_view strategy_name(Strategy strategy);
-/// The kernel's name as the CLI spells it ("fast", "exact", "plane"); "unknown"
-/// for a value outside the enum. Never throws.
+/// The kernel's name as `shatter info` prints it ("fast", "exact", "plane");
+/// "unknown" for a value outside the enum. Never throws.
 std::string_view kernel_name(KernelKind kernel);
-/// The strategy or kernel strategy_name / kernel_name spell `name`; nullopt for
-/// any other text. Never throws.
+/// The strategy strategy_name spells `name`; nullopt for any other text. Never
+/// throws.
 std::optional<Strategy> strategy_named(std::string_view name);
-std::optional<KernelKind> kernel_named(std::string_view name);
 
 /// Everything that decides a tree's contents. Two builds with equal options on
 /// equal input give byte-identical trees, whatever `threads` is.
@@ -54,13 +52,13 @@ struct BuildOptions {
   std::uint32_t fragments = 2;  ///< stop at the first leaf count >= this (>= 1)
   std::uint64_t seed = 1;
   Strategy strategy = Strategy::thesis;
+  /// Provenance, not a choice: build_mesh_tree builds only `plane` trees (and
+  /// refuses any other value); a tree read from an older file may say otherwise.
   KernelKind kernel = KernelKind::plane;
   double interior_uv_scale = 1.0;
   /// Planes drawn for one node before the build fails. A plane is redrawn when it
-  /// misses the node. With the fast and exact kernels also when it passes within
-  /// 1e-8 of the node's bounding-box diagonal of a vertex (it would leave needles
-  /// later planes cannot cut), or when a piece's stored (rounded) mesh would not
-  /// be a valid solid; the plane kernel never redraws for numerical reasons.
+  /// misses the node, or when a piece cannot be written as a valid double mesh
+  /// (a sliver thinner than the rounding of its coordinates, or a pinch).
   std::uint32_t max_plane_tries = 64;
   /// Accept a self-intersecting input (only topology is promised then).
   bool allow_self_intersections = false;
@@ -84,21 +82,20 @@ using LeafProgressFn = std::function<void(std::size_t leaves_done)>;
 /// Where a build's time went, and how often a drawn plane was not used. The
 /// counts are part of the deterministic build; the seconds are wall-clock.
 struct BuildReport {
-  /// Cutting, mass properties, and making the stored meshes: validating the
-  /// pieces (fast, exact kernels) or rounding them once, certified (plane kernel).
+  /// Cutting, mass properties, and making the stored meshes: rounding each piece
+  /// once, certified.
   double cutting_seconds = 0;
   double hull_seconds = 0;     ///< convex hulls of every node (in parallel)
   double bond_seconds = 0;     ///< find_bonds
   std::uint64_t planes_missed = 0;    ///< drawn planes that missed their node
-  /// Drawn planes that passed within 1e-8 of the node's size of a vertex, or whose
-  /// rounded pieces were not valid solids (fast, exact kernels); plane kernel:
-  /// planes that left a piece that cannot be written as a valid double mesh.
+  /// Drawn planes that left a piece that cannot be written as a valid double mesh
+  /// (or that pinched the solid).
   std::uint64_t planes_rejected = 0;
 };
 
 /// Builds the mesh tree of `mesh` with `options` (see BuildOptions, Strategy).
-/// Preconditions: options.fragments >= 1 and every triangle of `mesh` on surface 0
-/// (std::invalid_argument otherwise). The mesh is validated first, unless
+/// Preconditions: options.fragments >= 1, options.kernel plane and every triangle
+/// of `mesh` on surface 0 (std::invalid_argument otherwise). The mesh is validated first, unless
 /// options.input_validated says the caller did: a mesh that is not a closed,
 /// oriented 2-manifold with positive volume, or that intersects itself (unless
 /// options.allow_self_intersections), is refused with InvalidMeshError naming its
@@ -106,10 +103,10 @@ struct BuildReport {
 /// Guarantees: at least options.fragments leaves, and no leaf cut that was not
 /// needed to reach that count; every node's stored mesh a valid solid (closed,
 /// oriented, 2-manifold, positive volume, no zero-area triangle, no
-/// self-intersection; with allow_self_intersections only the topology), because a
-/// plane whose rounded pieces are not is redrawn; children partition their parent
-/// (exact kernel: exactly, in the exact solids; fast: up to rounding of the cut
-/// points); leaf ranges contiguous; cap triangles carry cap_surface_of(cut node);
+/// self-intersection; with allow_self_intersections only the topology), certified
+/// as it is rounded; every node's exact solid kept (MeshTreeNode::solid, over
+/// tree.geometry and tree.cut_planes), the children's solids partitioning their
+/// parent's exactly; leaf ranges contiguous; cap triangles carry cap_surface_of(cut node);
 /// mass properties and hulls filled; bonds = find_bonds(tree); shatter_version
 /// this library's version_string (shatter/version.hpp). One version of shatter
 /// gives a result that depends only on the mesh and the options other than

@@ -51,7 +51,8 @@
 //   GEOM  MeshTree::geometry, the plane kernel's input: u32 point count P,
 //         u32 input plane count Q, P x f64 x3 points (x, y, z), Q x u32 x3
 //         input planes (three point indices); 8 + 24P + 12Q bytes. P = 0 means
-//         the tree has no exact representation (fast and exact kernels): then
+//         the tree has no exact representation (the retired fast and exact
+//         kernels' trees): then
 //         Q = 0 too, and the payload is 8 zero bytes.
 //   SOLD  the nodes' exact solids: u32 record count, 0 when P = 0, else n; then
 //         per node in index order (only when there are records):

@@ -7,13 +7,11 @@
 //     separate.hpp      separate_solids: a closed triangle set into solids (shells, cavities placed exactly)
 //     plane_input.hpp   prepare_plane_input: an input mesh as the plane kernel's first solid
 //   cut
-//     cut.hpp           cut_mesh: one plane cut of a mesh (fast or exact kernel), capped and separated
 //     cut_solid.hpp     cut_solid: one plane cut of a plane-based solid, capped and separated
 //     plane_cut.hpp     cut_by_plane, cut_mesh_by_plane: the plane kernel's one cut call, pieces certified
 //   build
 //     tree_index.hpp    NodeIndex, LeafIndex, no_node: how a tree numbers its nodes and leaves
 //     build.hpp         build_mesh_tree and its options: Strategy, KernelKind, BuildOptions, BuildReport
-//     exact_build.hpp   build_mesh_tree_keeping_exact: the exact kernel's build with every exact solid
 //     tree.hpp          MeshTree, MeshTreeNode: the tree's data, every level of the slicing
 //   hulls
 //     hull.hpp          convex_hull_of, convex_hull_of_points: canonical convex hulls, the colliders
@@ -38,13 +36,11 @@
 #include "shatter/meshtree/separate.hpp"
 #include "shatter/meshtree/plane_input.hpp"
 
-#include "shatter/meshtree/cut.hpp"
 #include "shatter/meshtree/cut_solid.hpp"
 #include "shatter/meshtree/plane_cut.hpp"
 
 #include "shatter/meshtree/tree_index.hpp"
 #include "shatter/meshtree/build.hpp"
-#include "shatter/meshtree/exact_build.hpp"
 #include "shatter/meshtree/tree.hpp"
 
 #include "shatter/meshtree/hull.hpp"

@@ -11,8 +11,9 @@
 // 2. cdt: CGAL's constrained Delaunay triangulation of all border edges, with each
 //    vertex's mesh index as info; nesting comes from the parity of constraints
 //    crossed on the way from the infinite face (exact predicates throughout).
-// 3. exact_cdt (fast kernel only): the same on the exact positions the rounded
-//    crossings stand for, when rounding made loops touch or cross in 2D.
+// 3. exact_cdt (rounded positions with an ExactPositionFn only): the same on the
+//    exact positions the rounded crossings stand for, when rounding made loops
+//    touch or cross in 2D.
 // 4. steiner_fan: a last resort for inputs whose loops cross even exactly (a
 //    self-intersecting mesh, allowed on request): one interior vertex per loop and a
 //    fan to it. Closed and oriented, but the embedding may overlap itself.
@@ -42,13 +43,14 @@ struct Cap {
   CapMethod method = CapMethod::none;
 };
 
-/// Gives the exact position of a vertex of the cut (fast kernel fallback).
+/// Gives the exact position of a vertex of the cut (the fall-back when rounding
+/// made the loops touch or cross); may be empty (no fall-back).
 using ExactPositionFn = std::function<ExactPoint(VertexIndex)>;
 
 /// Triangulates the region bounded by `border` in `plane`.
 /// Preconditions: border is a set of directed edges with the region on their left
 /// seen from +n (SlicedMesh::border_edges), every in-degree equal to the out-degree,
-/// and every vertex on the plane (exactly, or after rounding in the fast kernel).
+/// and every vertex on the plane (exactly, or up to the rounding of its position).
 /// Guarantees: the cap's boundary is exactly `border`; no vertex added on it.
 /// Throws UnsupportedGeometryError only if even steiner_fan cannot close it.
 Cap<Vec3> triangulate_cap(std::span<const Vec3> positions, std::span<const Edge> border,

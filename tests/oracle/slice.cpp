@@ -1,11 +1,11 @@
-#include "shatter/slicer/slice.hpp"
+#include "shatter/oracle/slice.hpp"
 
 #include <algorithm>
 
 #include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/projection.hpp"
 
-namespace shatter {
+namespace shatter::oracle {
 namespace {
 
 // Where an output corner's attributes come from: a source corner, or the
@@ -218,4 +218,4 @@ SlicedMesh<ExactPoint> slice_mesh(const ExactMesh& mesh, const Plane& plane) {
   return Slicer<ExactPoint>(mesh, plane).run();
 }
 
-}  // namespace shatter
+}  // namespace shatter::oracle

@@ -1,5 +1,11 @@
 #pragma once
 // One complete cut of a solid: slice, cap both halves, separate the solids.
+//
+// The test oracle (tests/oracle/, never installed): the cut of the retired `exact`
+// kernel, on CGAL Epeck rationals, which the properties compare the plane
+// kernel's pieces against (exact volumes and partition), and the `fast` variant
+// that rounds each crossing point, kept for the tests that show what rounding
+// every cut does. The product cuts with cut_by_plane (meshtree/plane_cut.hpp).
 
 #include <vector>
 
@@ -7,7 +13,7 @@
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/triangulate/cap.hpp"
 
-namespace shatter {
+namespace shatter::oracle {
 
 struct CutOptions {
   /// Surface id of the new cap triangles (ids below it are left as they are).
@@ -41,4 +47,4 @@ struct CutResult {
 CutResult<Vec3> cut_mesh(const Mesh& mesh, const Plane& plane, const CutOptions& options = {});
 CutResult<ExactPoint> cut_mesh(const ExactMesh& mesh, const Plane& plane, const CutOptions& options = {});
 
-}  // namespace shatter
+}  // namespace shatter::oracle

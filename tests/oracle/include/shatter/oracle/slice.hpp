@@ -1,6 +1,7 @@
 #pragma once
 // One plane cut of one closed mesh into two open halves that share their new
-// vertices, plus the border edges the caps must close.
+// vertices, plus the border edges the caps must close. Part of the test oracle
+// (oracle/cut.hpp says why it is there).
 //
 // Degeneracy policy (every case decided by the exact sign of n·p + d):
 // - A vertex on the plane is reused by both halves, never duplicated or moved.
@@ -23,7 +24,7 @@
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/mesh.hpp"
 
-namespace shatter {
+namespace shatter::oracle {
 
 /// The triangles of one side, over the shared vertex array of a SlicedMesh.
 struct OpenHalf {
@@ -68,4 +69,4 @@ ExactPoint exact_position(const SlicedMesh<Vec3>& sliced, const Plane& plane, Ve
 SlicedMesh<Vec3> slice_mesh(const Mesh& mesh, const Plane& plane);
 SlicedMesh<ExactPoint> slice_mesh(const ExactMesh& mesh, const Plane& plane);
 
-}  // namespace shatter
+}  // namespace shatter::oracle

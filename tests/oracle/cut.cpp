@@ -1,10 +1,10 @@
-#include "shatter/meshtree/cut.hpp"
+#include "shatter/oracle/cut.hpp"
 
 #include "shatter/kernel/projection.hpp"
 #include "shatter/meshtree/separate.hpp"
-#include "shatter/slicer/slice.hpp"
+#include "shatter/oracle/slice.hpp"
 
-namespace shatter {
+namespace shatter::oracle {
 namespace {
 
 // Appends one side's copy of the cap: triangles reversed for the above side, whose
@@ -88,4 +88,4 @@ CutResult<ExactPoint> cut_mesh(const ExactMesh& mesh, const Plane& plane, const 
   return cut(mesh, plane, options);
 }
 
-}  // namespace shatter
+}  // namespace shatter::oracle
