@@ -29,7 +29,8 @@ struct CutPiece {
   /// The exact piece, over the cut's plane set: what a further cut starts from.
   Solid solid;
   /// The piece rounded to doubles: a valid closed solid as written exactly when
-  /// `defect` is empty. Surface ids are the input's, and the cap's on the cap;
+  /// `defect` is empty; no triangles at all when rounding collapses the whole
+  /// piece (a sliver thinner than the rounding of its coordinates). Surface ids are the input's, and the cap's on the cap;
   /// per-corner attributes are interpolated from the input triangle each face
   /// came from (the faces' `source`), which is the piece's provenance.
   Mesh mesh;
