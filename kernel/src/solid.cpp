@@ -204,13 +204,18 @@ Solid solid_from_mesh(const Mesh& mesh, bool merge_coplanar, InputGeometry& geom
       continue;
     }
     const Projection projection = projection_of(set, face.plane);
+    // No right turn at any corner: each edge against the one before it, the
+    // first against the last.
+    const auto left_or_straight = [&](VertexIndex a, VertexIndex b, VertexIndex c) {
+      return orient_in_plane(set, projection, solid.defs[a], solid.approx[a], solid.defs[b], solid.approx[b],
+                             solid.defs[c], solid.approx[c]) != Sign::negative;
+    };
+    VertexIndex before = solid.corners[loop.first_corner + loop.corner_count - 1].vertex;
     bool convex = true;
-    for (std::uint32_t i = 0; i < loop.corner_count && convex; ++i) {
-      const VertexIndex a = solid.corners[loop.first_corner + i].vertex;
-      const VertexIndex b = solid.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
-      const VertexIndex c = solid.corners[loop.first_corner + (i + 2) % loop.corner_count].vertex;
-      convex = orient_in_plane(set, projection, solid.defs[a], solid.approx[a], solid.defs[b], solid.approx[b],
-                               solid.defs[c], solid.approx[c]) != Sign::negative;
+    for (const CornerEdge& edge : loop_edges(solid.corners, loop)) {
+      convex = left_or_straight(before, edge.from, edge.to);
+      if (!convex) break;
+      before = edge.from;
     }
     face.convex = convex;
   }
@@ -231,11 +236,8 @@ void map_edges_to_faces(const Solid& solid, IndexMap& face_of_edge) {
   for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
     const SolidFace& face = solid.faces[f];
     for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-      const SolidLoop& loop = solid.loops[l];
-      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
-        const VertexIndex u = solid.corners[loop.first_corner + i].vertex;
-        const VertexIndex v = solid.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
-        face_of_edge.insert(directed_edge_key(u, v), f);
+      for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+        face_of_edge.insert(directed_edge_key(edge.from, edge.to), f);
       }
     }
   }
@@ -250,10 +252,8 @@ bool solid_is_convex(const PlaneSet& set, const Solid& solid) {
   for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
     const SolidFace& face = solid.faces[f];
     for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-      const SolidLoop& loop = solid.loops[l];
-      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
-        const VertexIndex u = solid.corners[loop.first_corner + i].vertex;
-        const VertexIndex v = solid.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
+      for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+        const VertexIndex u = edge.from, v = edge.to;
         const std::uint32_t g = face_of_edge.find(directed_edge_key(v, u));
         if (g == IndexMap::absent) return false;  // not closed: no claim
         shells.unite(f, g);
@@ -292,10 +292,8 @@ std::string check_solid(const PlaneSet& set, const Solid& solid) {
       const SolidLoop& loop = solid.loops[l];
       if (loop.corner_count < 3) return "loop " + std::to_string(l) + " has fewer than 3 corners";
       if (loop.first_corner + loop.corner_count > solid.corners.size()) return "loop " + std::to_string(l) + ": corners out of range";
-      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
-        const SolidCorner& corner = solid.corners[loop.first_corner + i];
-        const VertexIndex u = corner.vertex;
-        const VertexIndex v = solid.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
+      for (const CornerEdge& edge : loop_edges(solid.corners, loop)) {
+        const VertexIndex u = edge.from, v = edge.to;
         if (u >= n) return "corner vertex out of range in face " + std::to_string(f);
         used[u] = true;
         if (u == v) return "repeated vertex " + std::to_string(u) + " in face " + std::to_string(f);
@@ -305,7 +303,7 @@ std::string check_solid(const PlaneSet& set, const Solid& solid) {
         if (side(set, face.plane, solid.defs[u], solid.approx[u]) != Sign::zero) {
           return "vertex " + std::to_string(u) + " is not on the plane of face " + std::to_string(f);
         }
-        const EdgeLine& line = corner.line;
+        const EdgeLine& line = edge.line;
         for (VertexIndex w : {u, v}) {
           if (line.other.bits != no_index && side(set, line.other, solid.defs[w], solid.approx[w]) != Sign::zero) {
             return "vertex " + std::to_string(w) + " of face " + std::to_string(f) + " is not on its edge's plane";
@@ -325,12 +323,10 @@ std::string check_solid(const PlaneSet& set, const Solid& solid) {
   for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
     const SolidFace& face = solid.faces[f];
     for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-      const SolidLoop& loop = solid.loops[l];
-      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
-        const VertexIndex u = solid.corners[loop.first_corner + i].vertex;
-        const VertexIndex v = solid.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
-        if (count_of_edge.find(directed_edge_key(v, u)) == IndexMap::absent) {
-          return "edge (" + std::to_string(u) + ", " + std::to_string(v) + ") has no reverse: the solid is open";
+      for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+        if (count_of_edge.find(directed_edge_key(edge.to, edge.from)) == IndexMap::absent) {
+          return "edge (" + std::to_string(edge.from) + ", " + std::to_string(edge.to) +
+                 ") has no reverse: the solid is open";
         }
       }
     }

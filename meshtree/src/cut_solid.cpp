@@ -113,13 +113,8 @@ bool solid_contains(const PlaneSet& set, const Solid& solid, std::uint32_t point
         std::vector<LoopEdge> loop;
         bool inside = false;
         for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-          const SolidLoop& solid_loop = solid.loops[l];
           loop.clear();
-          for (std::uint32_t i = 0; i < solid_loop.corner_count; ++i) {
-            loop.push_back({solid.corners[solid_loop.first_corner + i].vertex,
-                            solid.corners[solid_loop.first_corner + (i + 1) % solid_loop.corner_count].vertex,
-                            {}});
-          }
+          for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) loop.push_back({edge.from, edge.to, {}});
           if (inside_loop(geometry, hit_index, loop)) inside = !inside;
         }
         if (inside) odd = !odd;
@@ -178,11 +173,8 @@ void separate_side(const PlaneSet& set, std::span<const PointDef> defs, std::spa
   for (std::uint32_t f = 0; f < faces.faces.size(); ++f) {
     const SolidFace& face = faces.faces[f];
     for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-      const SolidLoop& loop = faces.loops[l];
-      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
-        const VertexIndex u = faces.corners[loop.first_corner + i].vertex;
-        const VertexIndex v = faces.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
-        const std::uint32_t other = face_of_edge.insert(undirected_edge_key(u, v), f);
+      for (const CornerEdge& edge : loop_edges(faces.corners, faces.loops[l])) {
+        const std::uint32_t other = face_of_edge.insert(undirected_edge_key(edge.from, edge.to), f);
         if (other != f) components.unite(f, other);
       }
     }
@@ -295,11 +287,9 @@ void refuse_pinches(const PlaneSet& set, PlaneRef cut, const SplitSolid& split, 
       for (const SolidFace& face : below_cap.faces) {
         bool inside = false;
         for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-          const SolidLoop& cap_loop = below_cap.loops[l];
           loop.clear();
-          for (std::uint32_t i = 0; i < cap_loop.corner_count; ++i) {
-            loop.push_back({below_cap.corners[cap_loop.first_corner + i].vertex,
-                            below_cap.corners[cap_loop.first_corner + (i + 1) % cap_loop.corner_count].vertex, {}});
+          for (const CornerEdge& edge : loop_edges(below_cap.corners, below_cap.loops[l])) {
+            loop.push_back({edge.from, edge.to, {}});
           }
           if (inside_loop(geometry, static_cast<VertexIndex>(v), loop)) inside = !inside;
         }
@@ -315,18 +305,17 @@ void refuse_pinches(const PlaneSet& set, PlaneRef cut, const SplitSolid& split, 
   for (const LoopEdge& e : split.border) border_edges.insert(undirected_edge_key(e.from, e.to), 1);
   for (const FaceSet* side_faces : {&split.below, &split.above}) {
     for (const SolidLoop& l : side_faces->loops) {
-      for (std::uint32_t i = 0; i < l.corner_count; ++i) {
-        const VertexIndex u = side_faces->corners[l.first_corner + i].vertex;
-        const VertexIndex v = side_faces->corners[l.first_corner + (i + 1) % l.corner_count].vertex;
+      for (const CornerEdge& edge : loop_edges(side_faces->corners, l)) {
+        const VertexIndex u = edge.from, v = edge.to;
         if (split.sides[u] != Sign::zero || split.sides[v] != Sign::zero) continue;
         if (border_edges.find(undirected_edge_key(u, v)) != IndexMap::absent) continue;
         for (const SolidLoop& c : below_cap.loops) {
-          for (std::uint32_t k = 0; k < c.corner_count; ++k) {
-            const VertexIndex at = below_cap.corners[c.first_corner + k].vertex;
-            if (at != u && at != v) continue;
-            const VertexIndex before = below_cap.corners[c.first_corner + (k + c.corner_count - 1) % c.corner_count].vertex;
-            const VertexIndex after = below_cap.corners[c.first_corner + (k + 1) % c.corner_count].vertex;
-            if (starts_inside(geometry, before, at, after, at == u ? v : u)) pinched();
+          // Each cap corner `at` with the corners before and after it.
+          VertexIndex before = below_cap.corners[c.first_corner + c.corner_count - 1].vertex;
+          for (const CornerEdge& cap_edge : loop_edges(below_cap.corners, c)) {
+            const VertexIndex at = cap_edge.from, after = cap_edge.to;
+            if ((at == u || at == v) && starts_inside(geometry, before, at, after, at == u ? v : u)) pinched();
+            before = at;
           }
         }
       }

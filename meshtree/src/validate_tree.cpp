@@ -419,11 +419,10 @@ std::optional<std::string> solid_defect(const Solid& solid, std::size_t node, co
   scratch.edges.clear();
   scratch.used.assign(vertex_count, 0);
   for (const SolidLoop& loop : solid.loops) {
-    for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
-      const VertexIndex from = solid.corners[loop.first_corner + i].vertex;
-      const VertexIndex to = solid.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
+    for (const CornerEdge& edge : loop_edges(solid.corners, loop)) {
+      const VertexIndex from = edge.from, to = edge.to;
       if (from == to)
-        return "corner " + str(loop.first_corner + i) + " repeats vertex " + str(from) + " of the corner after it";
+        return "corner " + str(edge.corner) + " repeats vertex " + str(from) + " of the corner after it";
       scratch.used[from] = 1;
       scratch.edges.push_back((std::uint64_t{from} << 32) | to);
     }

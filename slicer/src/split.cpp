@@ -79,14 +79,11 @@ class Splitter {
     loop_start_.clear();
     for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
       loop_start_.push_back(static_cast<std::uint32_t>(augmented_.size()));
-      const SolidLoop& loop = solid_.loops[l];
-      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
-        const SolidCorner& corner = solid_.corners[loop.first_corner + i];
-        const VertexIndex next = solid_.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
-        augmented_.push_back({corner.vertex, corner.line});
-        const Sign a = sign_of(corner.vertex), b = sign_of(next);
+      for (const CornerEdge& edge : loop_edges(solid_.corners, solid_.loops[l])) {
+        augmented_.push_back({edge.from, edge.line});
+        const Sign a = sign_of(edge.from), b = sign_of(edge.to);
         if ((a == Sign::negative && b == Sign::positive) || (a == Sign::positive && b == Sign::negative)) {
-          augmented_.push_back({crossing_vertex(corner.vertex, next, face, corner.line), corner.line});
+          augmented_.push_back({crossing_vertex(edge.from, edge.to, face, edge.line), edge.line});
         }
       }
     }
@@ -143,11 +140,9 @@ class Splitter {
     for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
       const SolidLoop& loop = solid_.loops[l];
       side_faces.loops.push_back({static_cast<std::uint32_t>(side_faces.corners.size()), loop.corner_count});
-      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
-        const SolidCorner& corner = solid_.corners[loop.first_corner + i];
-        side_faces.corners.push_back(corner);
-        note_zero_edge(corner.vertex, solid_.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex, face,
-                       corner.line, below);
+      for (const CornerEdge& edge : loop_edges(solid_.corners, loop)) {
+        side_faces.corners.push_back(solid_.corners[edge.corner]);
+        note_zero_edge(edge.from, edge.to, face, edge.line, below);
       }
     }
     side_faces.faces.push_back(copy);

@@ -103,11 +103,8 @@ void triangulate_region(const PlaneSet& set, const SolidFace& face, Projection p
   std::vector<VertexIndex>& vertices = local.vertices;
   std::vector<Edge> border;
   for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-    const SolidLoop& loop = solid.loops[l];
-    for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
-      const VertexIndex u = solid.corners[loop.first_corner + i].vertex;
-      const VertexIndex v = solid.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
-      border.push_back({local(u), local(v)});
+    for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+      border.push_back({local(edge.from), local(edge.to)});
     }
   }
   // The projection's plane, as a normal along the dropped axis with the sign of the
@@ -474,11 +471,8 @@ MassProperties solid_mass_properties(const Solid& solid) {
   for (const SolidFace& face : solid.faces) {
     const VertexIndex centre = solid.corners[solid.loops[face.first_loop].first_corner].vertex;
     for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-      const SolidLoop& loop = solid.loops[l];
-      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
-        const VertexIndex a = solid.corners[loop.first_corner + i].vertex;
-        const VertexIndex b = solid.corners[loop.first_corner + (i + 1) % loop.corner_count].vertex;
-        if (a != centre && b != centre) fans.push_back({centre, a, b});
+      for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+        if (edge.from != centre && edge.to != centre) fans.push_back({centre, edge.from, edge.to});
       }
     }
   }

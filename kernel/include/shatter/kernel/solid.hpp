@@ -17,6 +17,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <vector>
 
 #include "shatter/kernel/implicit.hpp"
@@ -80,6 +81,54 @@ struct LoopEdge {
   VertexIndex from = 0, to = 0;
   EdgeLine line;
 };
+
+/// One edge of a face loop, as loop_edges gives it: from the vertex of corner
+/// `corner` (an index into the corner array) to the next corner's vertex, on the
+/// starting corner's line. The last corner's edge closes the loop.
+struct CornerEdge {
+  std::uint32_t corner = 0;
+  VertexIndex from = 0, to = 0;
+  EdgeLine line;
+};
+
+/// The edges of one loop in order, the one way every loop is walked:
+/// `for (const CornerEdge& edge : loop_edges(solid.corners, loop))`.
+class LoopEdges {
+ public:
+  class Iterator {
+   public:
+    Iterator(const LoopEdges& loop, std::uint32_t corner) : loop_(&loop), corner_(corner) {}
+    CornerEdge operator*() const {
+      const SolidCorner& start = loop_->corners_[corner_];
+      const std::uint32_t next = corner_ + 1 == loop_->end_ ? loop_->first_ : corner_ + 1;
+      return {corner_, start.vertex, loop_->corners_[next].vertex, start.line};
+    }
+    Iterator& operator++() {
+      ++corner_;
+      return *this;
+    }
+    bool operator==(const Iterator& other) const { return corner_ == other.corner_; }
+
+   private:
+    const LoopEdges* loop_;
+    std::uint32_t corner_;
+  };
+
+  LoopEdges(std::span<const SolidCorner> corners, const SolidLoop& loop)
+      : corners_(corners), first_(loop.first_corner), end_(loop.first_corner + loop.corner_count) {}
+  Iterator begin() const { return {*this, first_}; }
+  Iterator end() const { return {*this, end_}; }
+
+ private:
+  std::span<const SolidCorner> corners_;
+  std::uint32_t first_, end_;
+};
+
+/// The edges of `loop`, whose corners are corners[loop.first_corner] onwards.
+/// Precondition: loop.first_corner + loop.corner_count <= corners.size()
+/// (check_solid checks it; code reading unchecked loops checks it first).
+/// Never throws; O(1), the walk O(corners of the loop).
+inline LoopEdges loop_edges(std::span<const SolidCorner> corners, const SolidLoop& loop) { return {corners, loop}; }
 
 /// Faces over a vertex numbering kept elsewhere (a side of a split, a cap).
 struct FaceSet {
