@@ -66,7 +66,7 @@ struct SliceResult {
 
 // Exact cut, then every piece rounded once and certified: a piece that cannot
 // be written as a valid mesh fails the command before anything is written.
-SliceResult cut(const Mesh& mesh, const Plane& plane, const SliceArgs& args, SurfaceId cap_surface) {
+SliceResult cut_into_pieces(const Mesh& mesh, const Plane& plane, const SliceArgs& args, SurfaceId cap_surface) {
   PlaneCutOptions options;
   options.cap_surface = cap_surface;
   options.interior_uv_scale = args.interior_uv_scale;
@@ -150,7 +150,7 @@ int run_slice(const SliceArgs& args) {
   for (SurfaceId s : mesh.surfaces) cap_surface = std::max(cap_surface, s + 1);
   // Every piece is certified as it is rounded (cut_mesh_by_plane): what is
   // written validates when read back, and is not checked again here.
-  const SliceResult result = cut(mesh, plane, args, cap_surface);
+  const SliceResult result = cut_into_pieces(mesh, plane, args, cap_surface);
   const std::vector<Piece>& pieces = result.pieces;
   const std::vector<std::string> names = piece_names(pieces, *format);
   json pieces_json = json::array();
