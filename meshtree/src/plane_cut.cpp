@@ -37,7 +37,7 @@ PlaneCut cut_by_plane(const PlaneInput& input, const PlaneSet& set, const Solid&
                                                           rounded.moved_volume, rounded.moved_volume_bound});
       if (rounded.collapsed) {
         out.vanished = true;
-        out.moved_volume = out.moved_volume_bound = exact_solid_volume(set, out.solid);
+        out.moved_volume = out.moved_volume_bound = mpq_class(exact_six_volume(set, out.solid) / 6).get_d();
       }
     }
   }

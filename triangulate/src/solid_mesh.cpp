@@ -668,25 +668,4 @@ MassProperties solid_mass_properties(const Solid& solid) {
   return mass_properties(points, fans);
 }
 
-double exact_solid_volume(const PlaneSet& set, const Solid& solid) {
-  std::vector<std::array<mpq_class, 3>> points;
-  points.reserve(solid.defs.size());
-  for (const PointDef& def : solid.defs) points.push_back(exact_coordinates(set, def));
-  // The divergence theorem over each face's fan from its first corner.
-  mpq_class six = 0;
-  for (const SolidFace& face : solid.faces) {
-    const auto& c = points[solid.corners[solid.loops[face.first_loop].first_corner].vertex];
-    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-      for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
-        const auto& a = points[edge.from];
-        const auto& b = points[edge.to];
-        six += c[0] * (a[1] * b[2] - a[2] * b[1]) - c[1] * (a[0] * b[2] - a[2] * b[0]) +
-               c[2] * (a[0] * b[1] - a[1] * b[0]);
-      }
-    }
-  }
-  const mpq_class volume = six / 6;
-  return volume.get_d();
-}
-
 }  // namespace shatter

@@ -44,7 +44,7 @@ struct CutPiece {
   /// Rounding collapsed the whole piece: it is thinner than the rounding of its
   /// coordinates, so as written it vanishes into its neighbours across the cut
   /// (whose rounded caps close over it). `mesh` has no triangles, `defect` names
-  /// the collapse, and `moved_volume` is the piece's volume (exact_solid_volume),
+  /// the collapse, and `moved_volume` is the piece's volume (exact_six_volume / 6),
   /// which moves to them.
   bool vanished = false;
 };

@@ -107,9 +107,4 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
 /// (surface area x size / volume), the conditioning of the divergence theorem.
 MassProperties solid_mass_properties(const Solid& solid);
 
-/// The solid's volume computed exactly (rationals over its exact vertices) and
-/// rounded once: for pieces too thin for solid_mass_properties, whose vertex
-/// approximations may coincide. Cost: multi-precision, O(corners); use sparingly.
-double exact_solid_volume(const PlaneSet& set, const Solid& solid);
-
 }  // namespace shatter
