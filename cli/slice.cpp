@@ -55,17 +55,29 @@ Plane parse_plane(const std::string& text) {
 
 struct Piece {
   std::string side;
+  std::string name;  ///< <side>-<index>, the index counted per side in the cut's order
   Mesh mesh;
+  std::size_t separated_vertices = 0;  ///< where the exact piece touched itself (CutPiece)
+  double moved_volume = 0, moved_volume_bound = 0;
+};
+
+/// A piece thinner than the rounding of its coordinates: not written.
+struct VanishedPiece {
+  std::string name;
+  double volume = 0;
 };
 
 struct SliceResult {
   std::vector<Piece> pieces;
+  std::vector<VanishedPiece> vanished;
   bool plane_missed = false;
   std::size_t cap_loops = 0, cap_triangles = 0;
 };
 
 // Exact cut, then every piece rounded once and certified: a piece that cannot
-// be written as a valid mesh fails the command before anything is written.
+// be written as a valid mesh fails the command before anything is written, but
+// for a piece thinner than the rounding of its coordinates, which vanishes (it
+// is named, with its volume, and not written).
 SliceResult cut_into_pieces(const Mesh& mesh, const Plane& plane, const SliceArgs& args, SurfaceId cap_surface) {
   PlaneCutOptions options;
   options.cap_surface = cap_surface;
@@ -76,31 +88,38 @@ SliceResult cut_into_pieces(const Mesh& mesh, const Plane& plane, const SliceArg
   result.plane_missed = cut.plane_missed;
   result.cap_loops = cut.cap_loops;
   // Whole: the input as it was read, on the side it lies on.
-  if (cut.plane_missed) result.pieces.push_back({cut.whole_above ? "above" : "below", mesh});
+  if (cut.plane_missed) {
+    const std::string side_name = cut.whole_above ? "above" : "below";
+    result.pieces.push_back({side_name, side_name + "-0", mesh, 0, 0, 0});
+  }
   std::size_t index[2] = {0, 0};
   for (CutPiece& piece : cut.pieces) {
     const std::string side_name = piece.above ? "above" : "below";
-    const std::size_t i = index[piece.above]++;
+    const std::string name = side_name + "-" + std::to_string(index[piece.above]++);
+    if (piece.vanished) {
+      result.vanished.push_back({name, piece.moved_volume});
+      continue;
+    }
     if (!piece.defect.empty()) {
-      throw UnsupportedGeometryError("piece " + side_name + "-" + std::to_string(i) +
-                                     " cannot be rounded to doubles as a valid mesh: " + piece.defect);
+      throw UnsupportedGeometryError("piece " + name + " cannot be rounded to doubles as a valid mesh: " + piece.defect);
     }
     const auto& surfaces = piece.mesh.surfaces;
     if (!piece.above) result.cap_triangles += std::size_t(std::count(surfaces.begin(), surfaces.end(), cap_surface));
-    result.pieces.push_back({side_name, std::move(piece.mesh)});
+    result.pieces.push_back(
+        {side_name, name, std::move(piece.mesh), piece.separated_vertices, piece.moved_volume, piece.moved_volume_bound});
+  }
+  if (result.pieces.empty()) {
+    throw UnsupportedGeometryError("every piece is thinner than the rounding of its coordinates: nothing to write");
   }
   return result;
 }
 
 // The file name of every piece, in piece order: <side>-<index>.<format>, each
-// side counted from 0.
+// side counted from 0 in the cut's order (a vanished piece keeps its number, so
+// the numbers of the others do not depend on the rounding).
 std::vector<std::string> piece_names(const std::vector<Piece>& pieces, MeshFormat format) {
   std::vector<std::string> names;
-  std::size_t below = 0, above = 0;
-  for (const Piece& piece : pieces) {
-    const std::size_t index = piece.side == "below" ? below++ : above++;
-    names.push_back(piece.side + "-" + std::to_string(index) + "." + std::string(format_name(format)));
-  }
+  for (const Piece& piece : pieces) names.push_back(piece.name + "." + std::string(format_name(format)));
   return names;
 }
 
@@ -163,8 +182,13 @@ int run_slice(const SliceArgs& args) {
                            {"side", pieces[i].side},
                            {"vertices", pieces[i].mesh.vertex_count()},
                            {"triangles", pieces[i].mesh.triangle_count()},
-                           {"volume", volume}});
+                           {"volume", volume},
+                           {"separated_vertices", pieces[i].separated_vertices},
+                           {"moved_volume", pieces[i].moved_volume},
+                           {"moved_volume_bound", pieces[i].moved_volume_bound}});
   }
+  json vanished_json = json::array();
+  for (const VanishedPiece& piece : result.vanished) vanished_json.push_back({{"piece", piece.name}, {"volume", piece.volume}});
   if (args.json) {
     json out{{"input", args.mesh},
              {"plane", {plane.normal.x, plane.normal.y, plane.normal.z, plane.offset}},
@@ -172,7 +196,8 @@ int run_slice(const SliceArgs& args) {
              {"cap", {{"method", "polygon"}, {"loops", result.cap_loops}, {"triangles", result.cap_triangles}}},
              {"input_volume", signed_volume(mesh)},
              {"total_volume", total_volume},
-             {"pieces", pieces_json}};
+             {"pieces", pieces_json},
+             {"vanished", vanished_json}};
     if (input.repair) add_repair_json(out, *input.repair);
     std::cout << out.dump(2) << '\n';
   } else {
@@ -184,7 +209,18 @@ int run_slice(const SliceArgs& args) {
       const json& piece = pieces_json[i];
       const double volume = piece["volume"].get<double>();
       std::cout << "  " << piece["file"].get<std::string>() << ": " << piece["triangles"] << " triangles, volume "
-                << volume << (std::isfinite(volume) ? "" : " (beyond the double range)") << '\n';
+                << volume << (std::isfinite(volume) ? "" : " (beyond the double range)");
+      if (pieces[i].separated_vertices > 0) {
+        // The exact piece touched itself at a point (a saddle vertex or a cavity's
+        // corner on the plane): round_solid moved the copies there apart.
+        std::cout << "; touched itself: " << pieces[i].separated_vertices << " vertex copies moved apart, volume moved "
+                  << pieces[i].moved_volume << " (at most " << pieces[i].moved_volume_bound << ")";
+      }
+      std::cout << '\n';
+    }
+    for (const VanishedPiece& piece : result.vanished) {
+      std::cout << "  " << piece.name << ": vanished, thinner than the rounding of its coordinates (volume "
+                << piece.volume << " moved to its neighbours)\n";
     }
   }
   return static_cast<int>(ExitCode::ok);

@@ -337,4 +337,23 @@ std::string check_solid(const PlaneSet& set, const Solid& solid) {
   return {};
 }
 
+mpq_class exact_six_volume(const PlaneSet& set, const Solid& solid) {
+  std::vector<std::array<mpq_class, 3>> points;
+  points.reserve(solid.defs.size());
+  for (const PointDef& def : solid.defs) points.push_back(exact_coordinates(set, def));
+  mpq_class six = 0;
+  for (const SolidFace& face : solid.faces) {
+    const auto& c = points[solid.corners[solid.loops[face.first_loop].first_corner].vertex];
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+      for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+        const auto& a = points[edge.from];
+        const auto& b = points[edge.to];
+        six += c[0] * (a[1] * b[2] - a[2] * b[1]) - c[1] * (a[0] * b[2] - a[2] * b[0]) +
+               c[2] * (a[0] * b[1] - a[1] * b[0]);
+      }
+    }
+  }
+  return six;
+}
+
 }  // namespace shatter

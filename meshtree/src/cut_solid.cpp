@@ -156,7 +156,7 @@ void absorb(Solid& host, const Solid& part) {
 // around it (an exact ray cast; pieces with a cap face are never nested).
 void separate_side(const PlaneSet& set, std::span<const PointDef> defs, std::span<const ApproxPoint> approx,
                    const FaceSet& faces, std::size_t first_cap_face, bool parent_convex, const InputShells& shells,
-                   std::vector<Solid>& out) {
+                   std::span<const std::uint64_t> chord_keys, std::vector<Solid>& out) {
   thread_local std::vector<VertexIndex> local;
   thread_local std::vector<std::uint32_t> chosen;
   if (parent_convex) {
@@ -170,12 +170,45 @@ void separate_side(const PlaneSet& set, std::span<const PointDef> defs, std::spa
   thread_local IndexMap face_of_edge;
   components.reset(faces.faces.size());
   face_of_edge.reset(faces.corners.size());
+  // A chord has four faces: the two of the surface and the two cap faces on
+  // either side of it. Each face of the surface closes up with the cap face that
+  // runs the chord the other way, the one on its own side of the edge.
+  struct ChordUse {
+    std::uint64_t key;
+    std::uint32_t face;
+    VertexIndex from;
+    bool cap;
+  };
+  thread_local std::vector<ChordUse> chord_uses;
+  chord_uses.clear();
   for (std::uint32_t f = 0; f < faces.faces.size(); ++f) {
     const SolidFace& face = faces.faces[f];
     for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
       for (const CornerEdge& edge : loop_edges(faces.corners, faces.loops[l])) {
-        const std::uint32_t other = face_of_edge.insert(undirected_edge_key(edge.from, edge.to), f);
+        const std::uint64_t key = undirected_edge_key(edge.from, edge.to);
+        if (!chord_keys.empty() && std::find(chord_keys.begin(), chord_keys.end(), key) != chord_keys.end()) {
+          chord_uses.push_back({key, f, edge.from, f >= first_cap_face});
+          continue;
+        }
+        const std::uint32_t other = face_of_edge.insert(key, f);
         if (other != f) components.unite(f, other);
+      }
+    }
+  }
+  for (const ChordUse& surface : chord_uses) {
+    if (surface.cap) continue;
+    for (const ChordUse& cap : chord_uses) {
+      if (cap.cap && cap.key == surface.key && cap.from != surface.from) components.unite(surface.face, cap.face);
+    }
+  }
+  for (const ChordUse& a : chord_uses) {
+    for (const ChordUse& b : chord_uses) {
+      if (!a.cap && !b.cap && a.key == b.key && a.face < b.face && components.find(a.face) == components.find(b.face)) {
+        // The pieces on both sides of the edge are one piece, which would meet
+        // itself along the edge: exactly, no 2-manifold solid.
+        throw UnsupportedGeometryError(
+            "the cut plane holds a concave edge of the surface across the cut whose two sides are one piece: it "
+            "would be pinched along the edge, which no valid mesh represents");
       }
     }
   }
@@ -257,66 +290,58 @@ bool starts_inside(const FaceGeometry& g, VertexIndex a, VertexIndex u, VertexIn
   return !(g.orient(u, v, b) != Sign::negative && g.orient(v, u, a) != Sign::negative);
 }
 
-// The plane touching the surface inside the solid: a vertex on the cut that no
-// border edge reaches lying inside the cap (a cavity's corner on the plane), or
-// an edge on the cut whose two faces went to one side running through the cap
-// (a concave edge of the surface lying in the plane). The piece is then pinched
-// there: exactly, it is not a 2-manifold solid, and no mesh of it is valid.
-// Refused, never approximated.
-void refuse_pinches(const PlaneSet& set, PlaneRef cut, const SplitSolid& split, const FaceSet& below_cap) {
+// The chords of a cut: concave edges of the surface that lie on the cut between
+// two border vertices, both of whose faces went to one side, running through
+// the cap (the in-cone test at an end). The pieces of that side meet along such
+// an edge; split along it, that side's cap gives each of them a face there
+// (make_caps). Each chord comes in both directions, directed and lined as the
+// cap facing +n runs it: opposite to the side's face across, whose plane is the
+// edge's line. `keys`: the chords' undirected edge keys, per side.
+struct Chords {
+  std::vector<LoopEdge> below, above;
+  std::vector<std::uint64_t> below_keys, above_keys;
+  bool empty() const { return below.empty() && above.empty(); }
+};
+
+void find_chords(const PlaneSet& set, PlaneRef cut, const SplitSolid& split, const FaceSet& below_cap,
+                 Chords& chords) {
+  chords = {};
   thread_local std::vector<std::uint8_t> on_border;
   on_border.assign(split.defs.size(), 0);
   for (const LoopEdge& e : split.border) on_border[e.from] = on_border[e.to] = 1;
-  bool any_zero_off_border = false, any_zero_edge = false;
-  for (std::size_t v = 0; v < split.defs.size(); ++v) {
-    if (split.sides[v] != Sign::zero) continue;
-    if (on_border[v]) any_zero_edge = true;  // possibly a chord between border vertices; checked below
-    else any_zero_off_border = true;
+  bool any_zero_border_vertex = false;
+  for (std::size_t v = 0; v < split.defs.size() && !any_zero_border_vertex; ++v) {
+    any_zero_border_vertex = split.sides[v] == Sign::zero && on_border[v];
   }
-  if (!any_zero_off_border && !any_zero_edge) return;
+  if (!any_zero_border_vertex) return;
   const FaceGeometry geometry{set, split.defs, split.approx, projection_of(set, cut), false};
-  const auto pinched = [] {
-    throw UnsupportedGeometryError(
-        "the cut plane touches the surface inside the solid (a cavity's corner or a concave edge lies on it, "
-        "within the cut): a piece would be pinched there, which no valid mesh represents");
-  };
-  std::vector<LoopEdge> loop;
-  if (any_zero_off_border) {
-    for (std::size_t v = 0; v < split.defs.size(); ++v) {
-      if (split.sides[v] != Sign::zero || on_border[v]) continue;
-      for (const SolidFace& face : below_cap.faces) {
-        bool inside = false;
-        for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-          loop.clear();
-          for (const CornerEdge& edge : loop_edges(below_cap.corners, below_cap.loops[l])) {
-            loop.push_back({edge.from, edge.to, {}});
-          }
-          if (inside_loop(geometry, static_cast<VertexIndex>(v), loop)) inside = !inside;
-        }
-        if (inside) pinched();
-      }
-    }
-  }
-  if (!any_zero_edge) return;
-  // Edges on the cut that are not border edges (both faces on one side), each
-  // tested at its ends against the cap corners there.
   thread_local IndexMap border_edges;
   border_edges.reset(split.border.size());
   for (const LoopEdge& e : split.border) border_edges.insert(undirected_edge_key(e.from, e.to), 1);
-  for (const FaceSet* side_faces : {&split.below, &split.above}) {
-    for (const SolidLoop& l : side_faces->loops) {
-      for (const CornerEdge& edge : loop_edges(side_faces->corners, l)) {
-        const VertexIndex u = edge.from, v = edge.to;
-        if (split.sides[u] != Sign::zero || split.sides[v] != Sign::zero) continue;
-        if (border_edges.find(undirected_edge_key(u, v)) != IndexMap::absent) continue;
-        for (const SolidLoop& c : below_cap.loops) {
-          // Each cap corner `at` with the corners before and after it.
-          VertexIndex before = below_cap.corners[c.first_corner + c.corner_count - 1].vertex;
-          for (const CornerEdge& cap_edge : loop_edges(below_cap.corners, c)) {
-            const VertexIndex at = cap_edge.from, after = cap_edge.to;
-            if ((at == u || at == v) && starts_inside(geometry, before, at, after, at == u ? v : u)) pinched();
-            before = at;
+  for (const bool below : {true, false}) {
+    const FaceSet& side_faces = below ? split.below : split.above;
+    for (const SolidFace& face : side_faces.faces) {
+      for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+        for (const CornerEdge& edge : loop_edges(side_faces.corners, side_faces.loops[l])) {
+          const VertexIndex u = edge.from, v = edge.to;
+          if (!on_border[u] || !on_border[v] || split.sides[u] != Sign::zero || split.sides[v] != Sign::zero) continue;
+          if (border_edges.find(undirected_edge_key(u, v)) != IndexMap::absent) continue;
+          bool across = false;
+          for (const SolidLoop& c : below_cap.loops) {
+            // Each cap corner `at` with the corners before and after it.
+            VertexIndex before = below_cap.corners[c.first_corner + c.corner_count - 1].vertex;
+            for (const CornerEdge& cap_edge : loop_edges(below_cap.corners, c)) {
+              const VertexIndex at = cap_edge.from, after = cap_edge.to;
+              across = across || ((at == u || at == v) && starts_inside(geometry, before, at, after, at == u ? v : u));
+              before = at;
+            }
           }
+          if (!across) continue;
+          // The cap runs it opposite to this face; facing +n, the above cap's
+          // direction is reversed once more.
+          const EdgeLine line{face.plane, edge.line.p, edge.line.q};
+          (below ? chords.below : chords.above).push_back(below ? LoopEdge{v, u, line} : LoopEdge{u, v, line});
+          if (u < v) (below ? chords.below_keys : chords.above_keys).push_back(undirected_edge_key(u, v));
         }
       }
     }
@@ -337,16 +362,21 @@ SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, Surfac
     return result;
   }
   make_caps(set, cut, split.defs, split.approx, split.border, solid.convex, cap_surface, below_cap, above_cap);
-  refuse_pinches(set, cut, split, below_cap);
   result.cap_faces = below_cap.faces.size();
   result.cap_loops = below_cap.loops.size();
+  thread_local Chords chords;
+  find_chords(set, cut, split, below_cap, chords);
+  if (!chords.empty()) {
+    make_caps(set, cut, split.defs, split.approx, split.border, solid.convex, cap_surface, below_cap, above_cap,
+              chords.below, chords.above);
+  }
   for (const bool below : {true, false}) {
     side.clear();
     append_faces(below ? split.below : split.above, side);
     const std::size_t first_cap = side.faces.size();
     append_faces(below ? below_cap : above_cap, side);
     separate_side(set, split.defs, split.approx, side, first_cap, solid.convex, shells,
-                  below ? result.below : result.above);
+                  below ? chords.below_keys : chords.above_keys, below ? result.below : result.above);
   }
   return result;
 }

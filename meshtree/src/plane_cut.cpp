@@ -32,7 +32,13 @@ PlaneCut cut_by_plane(const PlaneInput& input, const PlaneSet& set, const Solid&
     for (Solid& piece : above ? exact.above : exact.below) {
       // round_solid names validate_mesh's defects exactly when the mesh is not valid.
       RoundedSolid rounded = round_solid(set, piece, meshing);
-      result.pieces.push_back({above, std::move(piece), std::move(rounded.mesh), std::move(rounded.defect)});
+      CutPiece& out = result.pieces.emplace_back(CutPiece{above, std::move(piece), std::move(rounded.mesh),
+                                                          std::move(rounded.defect), rounded.separated_vertices,
+                                                          rounded.moved_volume, rounded.moved_volume_bound});
+      if (rounded.collapsed) {
+        out.vanished = true;
+        out.moved_volume = out.moved_volume_bound = mpq_class(exact_six_volume(set, out.solid) / 6).get_d();
+      }
     }
   }
   return result;

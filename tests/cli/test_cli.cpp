@@ -223,6 +223,48 @@ TEST_CASE("slice through vertices of the elephant writes every piece valid as re
   }
 }
 
+TEST_CASE("slice through a saddle vertex writes valid pieces and says where a piece touched itself") {
+  // Issue 17: both exited 3 ("cannot be rounded ... non-manifold"): the lobes
+  // below the saddle vertex are one piece, which touches itself there exactly.
+  for (const auto& [file, plane] : {std::pair{"helmet.off", "0,1,0,-0.014781300000000001"},
+                                    std::pair{"torus_quad.off", "1,1,0,-0.25782700000000003"}}) {
+    INFO(file);
+    const fs::path out = scratch("saddle");
+    const Run run = run_shatter("slice " + quoted(mesh_dir() / file) + " --plane " + plane + " --out " + quoted(out));
+    REQUIRE(run.exit_code == 0);
+    CHECK(run.out.find("touched itself: 2 vertex copies moved apart") != std::string::npos);
+    REQUIRE(files_in(out) == 2);
+    for (const auto& entry : fs::directory_iterator(out)) {
+      INFO(entry.path().filename());
+      CHECK(validate_mesh(read_mesh(entry.path())).summary() == "valid");
+    }
+    const Run json = run_shatter("slice " + quoted(mesh_dir() / file) + " --plane " + plane + " --json --out " +
+                                 quoted(scratch("saddle-json")));
+    REQUIRE(json.exit_code == 0);
+    const auto report = nlohmann::json::parse(json.out);
+    CHECK(report["pieces"][0]["separated_vertices"] == 2);
+    CHECK(report["pieces"][0]["moved_volume"].get<double>() <= report["pieces"][0]["moved_volume_bound"].get<double>());
+  }
+}
+
+TEST_CASE("slice names a piece thinner than its rounding as vanished and writes the others") {
+  // A plane through a corner of the cube up to rounding cuts off a tetrahedron far
+  // thinner than an ulp: every one of its vertices rounds onto the corner.
+  const fs::path out = scratch("vanish");
+  const std::string plane = "-0.51784138889905429,0.87762787624213567,-0.40292203608095672,1.7983913012221466";
+  const Run run = run_shatter("slice " + quoted(mesh_dir() / "cube.off") + " --plane " + plane + " --json --out " +
+                              quoted(out));
+  REQUIRE(run.exit_code == 0);
+  const auto report = nlohmann::json::parse(run.out);
+  REQUIRE(report["vanished"].size() == 1);
+  CHECK(report["vanished"][0]["piece"] == "below-0");
+  CHECK(std::fabs(report["vanished"][0]["volume"].get<double>()) < 1e-30);
+  REQUIRE(report["pieces"].size() == 1);
+  CHECK(report["pieces"][0]["file"] == "above-0.off");
+  CHECK(files_in(out) == 1);
+  CHECK(validate_mesh(read_mesh(out / "above-0.off")).summary() == "valid");
+}
+
 TEST_CASE("a plane that misses returns the mesh whole and says so") {
   const fs::path out = scratch("miss");
   const Run run = run_shatter("slice " + quoted(mesh_dir() / "cube.off") + " --plane 0,0,1,10 --out " + quoted(out));

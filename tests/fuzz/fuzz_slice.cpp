@@ -31,7 +31,9 @@ using shatter::fuzz::require;
 constexpr std::size_t plane_bytes = 4 * sizeof(double);
 
 /// The cut's promise: sound exact pieces whose volumes add up exactly,
-/// each mesh certified or its defect named (a pinch is the documented refusal).
+/// each mesh certified or its defect named, a collapsed piece vanished; a
+/// concave edge across the cap with one piece on both sides (pinched along it)
+/// is the documented refusal.
 void check_plane_cut(const shatter::Mesh& mesh, const shatter::Plane& plane) {
   const shatter::PlaneInput input = shatter::prepare_plane_input(mesh);
   const shatter::Plane cuts[] = {plane};
@@ -61,6 +63,9 @@ void check_plane_cut(const shatter::Mesh& mesh, const shatter::Plane& plane) {
     // through a cube's face, leaves above it a sliver 1e-310 thick.)
     const bool collapsed = piece.mesh.triangles.empty();
     require(!collapsed || !piece.defect.empty(), "plane cut piece: no triangles, yet no defect named");
+    require(collapsed == piece.vanished, "plane cut piece: vanished exactly when rounding collapsed it whole");
+    require(piece.moved_volume <= piece.moved_volume_bound * (1 + 1e-12) || piece.vanished,
+            "plane cut piece: the separation moved more volume than its bound");
     require(collapsed || piece.defect.empty() == shatter::validate_mesh(piece.mesh).valid(),
             "plane cut piece: a defect named for a valid mesh, or none for an invalid one");
   }

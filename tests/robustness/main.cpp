@@ -30,13 +30,14 @@ using namespace shatter::robust;
 
 struct ClassTotals {
   std::size_t cases = 0, slices = 0, fractures = 0, failures = 0, refused = 0, pieces = 0;
-  std::size_t written = 0, invalid_written = 0, unroundable = 0, pinched = 0;
+  std::size_t written = 0, invalid_written = 0, unroundable = 0, vanished = 0, pinched = 0, separated = 0;
   double seconds = 0;
 
   void add(const ClassTotals& t) {
     cases += t.cases, slices += t.slices, fractures += t.fractures, failures += t.failures, refused += t.refused;
     pieces += t.pieces, written += t.written, invalid_written += t.invalid_written;
-    unroundable += t.unroundable, pinched += t.pinched, seconds += t.seconds;
+    unroundable += t.unroundable, vanished += t.vanished, pinched += t.pinched, separated += t.separated;
+    seconds += t.seconds;
   }
 };
 
@@ -44,15 +45,17 @@ double percent(std::size_t part, std::size_t whole) { return whole ? 100.0 * dou
 
 // Columns: cases and operations; failed and refused cases; exact solids
 // checked (pieces and tree nodes); output pieces written and read back, and
-// those invalid as read back; pieces round_solid refused to write (unround) and
-// cuts cut_solid refused as pinching (pinch).
+// those invalid as read back; pieces round_solid refused to write (unround),
+// pieces thinner than their rounding that collapsed whole and vanish (vanish),
+// and cuts cut_solid refused as pinching (pinch).
 ClassTotals print_table(const std::array<ClassTotals, case_class_count>& totals) {
-  std::printf("%-19s %6s %5s %5s %6s %7s %7s %7s %7s %7s %6s %7s\n", "class", "cases", "slice", "fract", "failed",
-              "refused", "solids", "written", "invalid", "unround", "pinch", "ms/case");
+  std::printf("%-19s %6s %5s %5s %6s %7s %7s %7s %7s %7s %6s %6s %7s\n", "class", "cases", "slice", "fract", "failed",
+              "refused", "solids", "written", "invalid", "unround", "vanish", "pinch", "ms/case");
   ClassTotals all;
   auto row = [](const char* name, const ClassTotals& t) {
-    std::printf("%-19s %6zu %5zu %5zu %6zu %7zu %7zu %7zu %7zu %7zu %6zu %7.2f\n", name, t.cases, t.slices,
-                t.fractures, t.failures, t.refused, t.pieces, t.written, t.invalid_written, t.unroundable, t.pinched,
+    std::printf("%-19s %6zu %5zu %5zu %6zu %7zu %7zu %7zu %7zu %7zu %6zu %6zu %7.2f\n", name, t.cases, t.slices,
+                t.fractures, t.failures, t.refused, t.pieces, t.written, t.invalid_written, t.unroundable, t.vanished,
+                t.pinched,
                 t.cases ? 1e3 * t.seconds / double(t.cases) : 0.0);
   };
   for (int k = 0; k < case_class_count; ++k) {
@@ -179,6 +182,8 @@ int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, cons
     t.written += r.outcome.written;
     t.invalid_written += r.outcome.invalid_written;
     t.unroundable += r.outcome.plane_unroundable;
+    t.vanished += r.outcome.plane_vanished;
+    t.separated += r.outcome.plane_separated;
     t.pinched += r.outcome.plane_pinched;
     t.seconds += r.seconds;
     if (!r.outcome.failures.empty()) {
@@ -190,11 +195,12 @@ int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, cons
   std::printf("shatter-fuzz: %zu cases from seed %llu (first index %llu), %.1f s wall\n", ran.size(),
               (unsigned long long)seed, (unsigned long long)first, wall);
   const ClassTotals all = print_table(totals);
-  std::printf("output pieces invalid as written: %.2f%% (%zu of %zu)\n", percent(all.invalid_written, all.written),
-              all.invalid_written, all.written);
+  std::printf("output pieces invalid as written: %.2f%% (%zu of %zu); written after separating points where they "
+              "touched themselves: %zu\n",
+              percent(all.invalid_written, all.written), all.invalid_written, all.written, all.separated);
   std::printf("refused (not failures): fracture cases %zu; pieces round_solid could not write validly %zu; cuts "
-              "refused as pinching %zu\n",
-              all.refused, all.unroundable, all.pinched);
+              "refused as pinching %zu; pieces that vanished (thinner than their rounding, not refused) %zu\n",
+              all.refused, all.unroundable, all.pinched, all.vanished);
   // Counted on each case's own thread: the cuts and checks, not work a fracture
   // hands to other threads.
   std::printf("side_of_plane: %llu calls, %llu fell back to exact arithmetic (%.3f%%)\n",
@@ -231,6 +237,7 @@ int replay(const std::vector<std::string>& files) {
       result += "; " + std::to_string(outcome.written) + " pieces written as " + std::string(format_name(c.format)) +
                 ", " + std::to_string(outcome.invalid_written) + " invalid as written, " +
                 std::to_string(outcome.plane_unroundable) + " not roundable, " +
+                std::to_string(outcome.plane_vanished) + " vanished (thinner than their rounding), " +
                 std::to_string(outcome.plane_pinched) + " pinching cuts refused";
     }
     std::printf("%s: %s %s on %s: %s\n", file.c_str(), std::string(class_name(c.kind)).c_str(),

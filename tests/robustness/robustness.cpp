@@ -341,6 +341,34 @@ struct Checker {
       const mpq_class six = test::exact_six_volume(set, piece.solid);
       if (six <= 0) fail(name + ": exact volume not positive");
       sum += six;
+      if (piece.vanished) {
+        // Thinner than the rounding of its coordinates: its mean thickness,
+        // twice its exact volume over its area (a slab's thickness), is a few
+        // ulps of its coordinates, and nothing is written.
+        if (!piece.mesh.triangles.empty()) fail(name + ": a vanished piece kept triangles");
+        std::vector<Vec3> points;
+        double largest = 0;
+        for (const ApproxPoint& a : piece.solid.approx) {
+          points.push_back({a.x.value / a.w.value, a.y.value / a.w.value, a.z.value / a.w.value});
+          largest = std::max({largest, std::fabs(points.back().x), std::fabs(points.back().y), std::fabs(points.back().z)});
+        }
+        double area = 0;
+        for (const SolidFace& face : piece.solid.faces) {
+          const Vec3 centre = points[piece.solid.corners[piece.solid.loops[face.first_loop].first_corner].vertex];
+          for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+            for (const CornerEdge& edge : loop_edges(piece.solid.corners, piece.solid.loops[l])) {
+              area += 0.5 * norm(cross(points[edge.from] - centre, points[edge.to] - centre));
+            }
+          }
+        }
+        const double thickness = area > 0 ? 2 * std::fabs(mpq_class(six / 6).get_d()) / area : 0;
+        if (!(thickness <= std::ldexp(largest, -40))) {
+          fail(name + ": a piece " + std::to_string(thickness) + " thick vanished (more than 2^-40 of its coordinates)");
+        }
+        ++outcome.plane_vanished;
+        next.push_back({std::move(piece.solid), six, std::nullopt});
+        continue;
+      }
       if (!piece.defect.empty()) {
         // solid_mesh.hpp: a defect is named exactly when the mesh fails
         // validate_mesh. (Found by this runner: a cap whose corners all rounded
@@ -356,6 +384,14 @@ struct Checker {
       if (std::string p = channel_problem(piece.mesh, input.mesh); !p.empty()) fail(name + ": " + p);
       if (std::string p = surface_problem(piece.mesh, surfaces); !p.empty()) fail(name + ": " + p);
       check_written(piece.mesh, name);
+      if (piece.separated_vertices > 0) {
+        // Where the exact piece touched itself, the moves stay within their bound.
+        ++outcome.plane_separated;
+        if (!(piece.moved_volume <= piece.moved_volume_bound * (1 + 1e-12))) {
+          fail(name + ": the separation moved volume " + std::to_string(piece.moved_volume) + " beyond its bound " +
+               std::to_string(piece.moved_volume_bound));
+        }
+      }
       next.push_back({std::move(piece.solid), six, std::move(piece.mesh)});
     }
     if (sum != parent.six) fail(where + ": exact volumes do not add up to the parent's exactly");

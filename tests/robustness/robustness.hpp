@@ -82,6 +82,8 @@ struct CaseOutcome {
   /// invalid as read back (each also a failure).
   std::size_t written = 0, invalid_written = 0;
   std::size_t plane_unroundable = 0;  ///< plane pieces round_solid refused to write (not a failure)
+  std::size_t plane_vanished = 0;     ///< plane pieces thinner than their rounding, collapsed whole (not written)
+  std::size_t plane_separated = 0;    ///< plane pieces written after moving apart points where they touched themselves
   std::size_t plane_pinched = 0;      ///< plane cuts cut_solid refused as pinching a piece (not a failure)
   /// The plane-kernel predicate calls the checks themselves made (check_solid's
   /// corners-on-their-planes tests, whose true answers are zero, and the sides

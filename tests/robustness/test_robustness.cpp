@@ -143,7 +143,7 @@ TEST_CASE("slice chains and fractures pass, every piece written and read back va
     const CaseOutcome outcome = run_case(c);
     CHECK(outcome.failures == std::vector<std::string>{});
     CHECK(outcome.plane_pieces >= 4);
-    CHECK(outcome.written + outcome.plane_unroundable == outcome.plane_pieces);
+    CHECK(outcome.written + outcome.plane_unroundable + outcome.plane_vanished == outcome.plane_pieces);
     CHECK(outcome.invalid_written == 0);
   }
   // With attributes: every triangle its own face, attributes interpolated.

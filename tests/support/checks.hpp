@@ -38,9 +38,8 @@ std::string exact_solid_problem(const ExactMesh& mesh);
 mpq_class exact_six_volume(const ExactMesh& mesh);
 mpq_class exact_six_volume(const Mesh& mesh);
 
-/// Six times the volume of a plane-based solid, exactly: the divergence theorem
-/// over fans of its faces, on the vertices' exact rational coordinates.
-mpq_class exact_six_volume(const PlaneSet& set, const Solid& solid);
+/// Six times the volume of a plane-based solid, exactly (the kernel's).
+using shatter::exact_six_volume;
 
 /// The mesh's bytes in a canonical binary form, to compare outputs for identity.
 std::string canonical_bytes(const Mesh& mesh);

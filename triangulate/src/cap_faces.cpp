@@ -37,7 +37,8 @@ void append_region(const Region& region, PlaneRef cut, SurfaceId surface, bool c
 
 void make_caps(const PlaneSet& set, PlaneRef cut, std::span<const PointDef> defs,
                std::span<const ApproxPoint> approx, std::span<const LoopEdge> border, bool convex, SurfaceId surface,
-               FaceSet& below_cap, FaceSet& above_cap) {
+               FaceSet& below_cap, FaceSet& above_cap, std::span<const LoopEdge> below_chords,
+               std::span<const LoopEdge> above_chords) {
   below_cap.clear();
   above_cap.clear();
   if (border.empty()) return;
@@ -62,11 +63,28 @@ void make_caps(const PlaneSet& set, PlaneRef cut, std::span<const PointDef> defs
     return;
   }
   const FaceGeometry geometry{set, defs, approx, projection_of(set, cut), false};
-  group_into_regions(geometry, edges, regions);
-  for (const Region& region : regions) {
-    const bool region_convex = region.loops.size() == 1 && is_convex_loop(geometry, region.loops.front());
-    append_region(region, cut, surface, region_convex, below_cap, above_cap);
+  // One side's cap, split along that side's chords when it has any; a side
+  // without chords takes the regions of the border alone. (Grouping reorders
+  // the edges it is given: each side starts from the border again.)
+  thread_local std::vector<LoopEdge> reversed_border;
+  thread_local FaceSet unused;
+  reversed_border.assign(edges.begin(), edges.end());
+  const auto add_regions = [&](std::span<const LoopEdge> chords, FaceSet* below, FaceSet* above) {
+    edges.assign(reversed_border.begin(), reversed_border.end());
+    edges.insert(edges.end(), chords.begin(), chords.end());
+    group_into_regions(geometry, edges, regions);
+    for (const Region& region : regions) {
+      const bool region_convex = region.loops.size() == 1 && is_convex_loop(geometry, region.loops.front());
+      unused.clear();
+      append_region(region, cut, surface, region_convex, below ? *below : unused, above ? *above : unused);
+    }
+  };
+  if (below_chords.empty() && above_chords.empty()) {
+    add_regions({}, &below_cap, &above_cap);
+    return;
   }
+  add_regions(below_chords, &below_cap, above_chords.empty() ? &above_cap : nullptr);
+  if (!above_chords.empty()) add_regions(above_chords, nullptr, &above_cap);
 }
 
 }  // namespace shatter

@@ -9,8 +9,10 @@
 
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/face_loops.hpp"
 #include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/projection.hpp"
+#include "shatter/kernel/union_find.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/triangulate/cap.hpp"
 
@@ -255,7 +257,7 @@ bool triangulate_merged_face(const PlaneSet& set, const SolidFace& face,
 // Steps 1 and 2 (see solid_mesh.hpp): positions, vertices merged where they
 // rounded onto one point, faces triangulated.
 void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options, std::size_t attempt,
-                 Mesh& mesh, std::size_t& merged) {
+                 Mesh& mesh, std::size_t& merged, std::vector<VertexIndex>* mesh_vertex_of = nullptr) {
   const std::size_t n = solid.defs.size();
   thread_local std::vector<Vec3> positions;
   thread_local std::vector<PointDef> placed;
@@ -364,6 +366,160 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
       }
     }
   }
+  if (mesh_vertex_of != nullptr) {
+    mesh_vertex_of->resize(n);
+    for (VertexIndex v = 0; v < n; ++v) (*mesh_vertex_of)[v] = out_index[representative[v]];
+  }
+}
+
+// --- Where a piece touches itself -----------------------------------------------
+// A cut can leave a piece that touches itself at a point, exactly: the plane
+// passes through a saddle vertex of the surface whose two lobes on one side are
+// one piece (several fans of faces meet at the vertex), or through the corner of
+// a cavity or a dent that reaches the plane inside the cap (the corner touches
+// the cap). No mesh of such a piece is valid, however it is rounded. The part
+// thinner than the rounding, a point, gives way instead: each fan gets its own
+// copy of the vertex, and every copy, and every corner touching a cap, moves a
+// hair into its own fan's cone (along the mean direction to its neighbours).
+// Certification then vouches for the result, as for any other rounding.
+
+// The solid's vertices that lie on the plane of one of its cut faces (a cap)
+// strictly inside that face without being a corner of it. Exact.
+std::vector<VertexIndex> corners_touching_caps(const PlaneSet& set, const Solid& solid) {
+  std::vector<VertexIndex> touching;
+  std::vector<PlaneRef> planes;
+  for (const SolidFace& face : solid.faces) {
+    if (face.plane.is_cut() && std::find(planes.begin(), planes.end(), face.plane) == planes.end()) {
+      planes.push_back(face.plane);
+    }
+  }
+  std::vector<std::uint8_t> corner_of_plane;
+  std::vector<LoopEdge> loop;
+  for (const PlaneRef plane : planes) {
+    corner_of_plane.assign(solid.defs.size(), 0);
+    for (const SolidFace& face : solid.faces) {
+      if (face.plane != plane) continue;
+      for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+        for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) corner_of_plane[edge.from] = 1;
+      }
+    }
+    const FaceGeometry geometry{set, solid.defs, solid.approx, projection_of(set, plane), false};
+    for (VertexIndex v = 0; v < solid.defs.size(); ++v) {
+      if (corner_of_plane[v] || side(set, plane, solid.defs[v], solid.approx[v]) != Sign::zero) continue;
+      for (const SolidFace& face : solid.faces) {
+        if (face.plane != plane) continue;
+        bool inside = false;
+        for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+          loop.clear();
+          for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) loop.push_back({edge.from, edge.to, {}});
+          if (inside_loop(geometry, v, loop)) inside = !inside;
+        }
+        if (inside) {
+          touching.push_back(v);
+          break;
+        }
+      }
+    }
+  }
+  return touching;
+}
+
+// What separate_touching did.
+struct Separation {
+  std::size_t moved = 0;       ///< vertex copies moved (a pinched vertex counts once per fan)
+  double volume_change = 0;    ///< |signed volume after - before|, in doubles
+  double volume_bound = 0;     ///< sum over moved copies of distance moved x area of their triangles
+};
+
+// Splits every vertex of `mesh` where several edge-connected fans of triangles
+// meet into one vertex per fan, then moves each copy, and each vertex of
+// `touching` (one fan, touching a cap), toward its fan's neighbours by `scale`
+// times its nearest neighbour's distance. Returns nothing moved when there is
+// nothing to separate. Preconditions: closed and consistently oriented.
+Separation separate_touching(Mesh& mesh, std::span<const VertexIndex> touching, double scale) {
+  const std::size_t n = mesh.positions.size();
+  // The triangle corners at each vertex (corner = 3 * triangle + c), grouped by vertex.
+  std::vector<std::uint32_t> first(n + 1, 0);
+  for (const Triangle& t : mesh.triangles) {
+    for (const VertexIndex v : t) ++first[v + 1];
+  }
+  for (std::size_t v = 0; v < n; ++v) first[v + 1] += first[v];
+  std::vector<std::uint32_t> slot(first.begin(), first.end() - 1), at(first.back());
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    for (std::uint32_t c = 0; c < 3; ++c) at[slot[mesh.triangles[t][c]]++] = 3 * t + c;
+  }
+  const auto vertex_of = [&](std::uint32_t corner, std::uint32_t step) {
+    return mesh.triangles[corner / 3][(corner % 3 + step) % 3];
+  };
+  // Each vertex's corners fall into fans: the corner leaving v along v -> w and the
+  // corner entering v along w -> v are neighbours around v (closed: one each).
+  std::vector<std::uint8_t> wanted(n, 0);
+  for (const VertexIndex v : touching) wanted[v] = 1;
+  struct Fan {
+    VertexIndex vertex;              ///< the vertex the fan's corners use (a new copy for all but the first)
+    std::vector<std::uint32_t> corners;
+  };
+  std::vector<Fan> to_move;
+  UnionFind fans;
+  for (VertexIndex v = 0; v < n; ++v) {
+    const std::uint32_t begin = first[v], count = first[v + 1] - first[v];
+    if (count == 0) continue;
+    fans.reset(count);
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const VertexIndex next = vertex_of(at[begin + i], 1);
+      for (std::uint32_t j = 0; j < count; ++j) {
+        if (vertex_of(at[begin + j], 2) == next) fans.unite(i, j);
+      }
+    }
+    std::vector<std::uint32_t> fan_of_root(count, no_index);
+    std::vector<Fan> found;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const std::uint32_t root = fans.find(i);
+      if (fan_of_root[root] == no_index) {
+        fan_of_root[root] = static_cast<std::uint32_t>(found.size());
+        found.push_back({v, {}});
+      }
+      found[fan_of_root[root]].corners.push_back(at[begin + i]);
+    }
+    if (found.size() == 1 && !wanted[v]) continue;
+    for (std::size_t f = 1; f < found.size(); ++f) {
+      found[f].vertex = static_cast<VertexIndex>(mesh.positions.size());
+      mesh.positions.push_back(mesh.positions[v]);
+      for (const std::uint32_t corner : found[f].corners) mesh.triangles[corner / 3][corner % 3] = found[f].vertex;
+    }
+    for (Fan& fan : found) to_move.push_back(std::move(fan));
+  }
+  // Moving p to p' changes the volume by dot(p' - p, sum of (b - p) x (c - p))/6
+  // over its fan's triangles (p, b, c): each fan is a closed ring, so this equals
+  // the change of the divergence sum, and it is computed on differences near p,
+  // not on coordinates near the origin. Each triangle's part is a tetrahedron no
+  // thicker than the move over the triangle: at most distance x area / 3.
+  Separation result;
+  double volume_change = 0;
+  for (const Fan& fan : to_move) {
+    const Vec3 p = mesh.positions[fan.vertex];
+    Vec3 direction, normal_sum;
+    double nearest = INFINITY, area = 0;
+    for (const std::uint32_t corner : fan.corners) {
+      const Vec3 b = mesh.positions[vertex_of(corner, 1)] - p, c = mesh.positions[vertex_of(corner, 2)] - p;
+      for (const Vec3& d : {b, c}) {
+        const double length = norm(d);
+        if (length > 0) direction = direction + d * (1 / length), nearest = std::min(nearest, length);
+      }
+      normal_sum = normal_sum + cross(b, c);
+      area += 0.5 * norm(cross(b, c));
+    }
+    const double length = norm(direction);
+    if (!(length > 0) || !std::isfinite(nearest)) continue;
+    const double distance = scale * nearest;
+    const Vec3 move = direction * (distance / length);
+    mesh.positions[fan.vertex] = p + move;
+    volume_change += dot(move, normal_sum) / 6;
+    ++result.moved;
+    result.volume_bound += distance * area;
+  }
+  result.volume_change = std::fabs(volume_change);
+  return result;
 }
 
 }  // namespace
@@ -410,6 +566,8 @@ Mesh triangulate_solid(const PlaneSet& set, const Solid& solid, const SolidMeshO
 RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options) {
   RoundedSolid result;
   ValidationReport first_report;
+  std::optional<std::vector<VertexIndex>> touching_caps;  // solid vertices; found at the first need
+  std::vector<VertexIndex> mesh_vertex_of, touching;
   // Attempt 0 is the cheapest triangulation. A fold that rounding made comes from
   // a sliver triangle (a corner nearly on the line of its neighbours, where two
   // input faces are nearly coplanar); later attempts take the roundest fans and
@@ -419,7 +577,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     Mesh mesh;
     std::size_t merged = 0;
     ValidationReport report;
-    triangulate(set, solid, options, attempt, mesh, merged);
+    triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of);
     if (solid.convex && merged == 0 && certify_star_shaped(mesh, vertex_average(mesh))) {
       // A convex solid's rounding certified in O(T) exact orientations.
       result.mesh = std::move(mesh);
@@ -455,8 +613,39 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       result.valid = true;
       return result;
     }
+    // The piece may touch itself, exactly (see separate_touching): only then is
+    // what is left a pinched vertex or an intersection, on a closed oriented mesh.
+    const bool may_touch = !options.allow_self_intersections &&
+                           std::all_of(report.defects.begin(), report.defects.end(), [](const Defect& d) {
+                             return d.kind == DefectKind::non_manifold_vertex ||
+                                    d.kind == DefectKind::self_intersection;
+                           });
+    if (!may_touch) continue;
+    if (!touching_caps) touching_caps = corners_touching_caps(set, solid);
+    touching.clear();
+    for (const VertexIndex v : *touching_caps) {
+      if (mesh_vertex_of[v] != no_index) touching.push_back(mesh_vertex_of[v]);
+    }
+    // The smallest move that certifies: a few bits below the neighbours' distance
+    // first, then further.
+    for (const int bits : {40, 30, 20}) {
+      Mesh separated = mesh;
+      const Separation separation = separate_touching(separated, touching, std::ldexp(1.0, -bits));
+      if (separation.moved == 0) break;
+      if (validate_mesh_against(separated, options.trusted, options.cut).valid()) {
+        result.mesh = std::move(separated);
+        result.merged_vertices = merged;
+        result.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
+        result.separated_vertices = separation.moved;
+        result.moved_volume = separation.volume_change;
+        result.moved_volume_bound = separation.volume_bound;
+        result.valid = true;
+        return result;
+      }
+    }
   }
   result.defect = first_report.summary();
+  result.collapsed = result.mesh.triangles.empty();
   return result;
 }
 

@@ -38,7 +38,14 @@ struct InputShells {
 /// convex solid are convex (no predicate spent on it), others have `convex`
 /// decided exactly. Their union is the solid and they meet only on the cut
 /// (exactly: no point is rounded). Deterministic: solids in the order of their
-/// first face. Throws UnsupportedGeometryError as split_solid and make_caps.
+/// first face. Where the plane holds a concave edge of the surface across the
+/// cap (a chord: both its faces on one side), the cap of that side is split
+/// along it and the pieces meeting there are separate solids, each with its own
+/// cap face. A solid may touch itself at a point exactly (a saddle vertex of the
+/// surface on the plane, or a cavity's corner on the cap: round_solid separates
+/// such points when it writes the piece). Throws UnsupportedGeometryError as
+/// split_solid and make_caps, and when the two sides of a chord are one piece
+/// (it would meet itself along the edge).
 /// `shells` describes the input shells (InputShells) for the faces' `source`
 /// triangles; it matters only when a cut leaves a whole shell untouched.
 SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, SurfaceId cap_surface,

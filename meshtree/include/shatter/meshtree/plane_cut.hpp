@@ -36,6 +36,17 @@ struct CutPiece {
   Mesh mesh;
   /// Why `mesh` is not valid as written (rounding to doubles broke it), or empty.
   std::string defect;
+  /// Where the exact piece touches itself at a point (round_solid), the vertex
+  /// copies moved apart, and the volume that moved (at most moved_volume_bound).
+  std::size_t separated_vertices = 0;
+  double moved_volume = 0;
+  double moved_volume_bound = 0;
+  /// Rounding collapsed the whole piece: it is thinner than the rounding of its
+  /// coordinates, so as written it vanishes into its neighbours across the cut
+  /// (whose rounded caps close over it). `mesh` has no triangles, `defect` names
+  /// the collapse, and `moved_volume` is the piece's volume (exact_six_volume / 6),
+  /// which moves to them.
+  bool vanished = false;
 };
 
 struct PlaneCut {
@@ -61,8 +72,11 @@ struct PlaneCut {
 /// or moved against it (validate_mesh_against) instead of every pair.
 /// Guarantees: as cut_solid for the solids (closed, exact, meeting only on the
 /// cut, volumes adding up exactly), as round_solid for the meshes (a mesh with
-/// no defect passes validate_mesh); deterministic. Throws
-/// UnsupportedGeometryError when the plane pinches the solid (cut_solid).
+/// no defect passes validate_mesh; a piece that touches itself at a point is
+/// separated there, see round_solid; a piece thinner than its rounding
+/// vanishes, see CutPiece::vanished); deterministic. Throws
+/// UnsupportedGeometryError when the plane holds a concave edge across the cap
+/// whose two sides are one piece (cut_solid).
 PlaneCut cut_by_plane(const PlaneInput& input, const PlaneSet& set, const Solid& solid, const Mesh* solid_mesh,
                       PlaneRef cut, const PlaneCutOptions& options = {});
 

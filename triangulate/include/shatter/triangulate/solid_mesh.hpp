@@ -71,12 +71,31 @@ void triangulate_face(const PlaneSet& set, const Solid& solid, std::uint32_t fac
 struct RoundedSolid {
   Mesh mesh;
   bool valid = false;       ///< the mesh passes validate_mesh with self-intersections
+  /// Rounding collapsed the whole piece onto a few points (it is thinner than the
+  /// rounding of its coordinates): no triangles, and `defect` says so.
+  bool collapsed = false;
   std::size_t merged_vertices = 0;  ///< vertices merged because they rounded onto one point
   std::size_t retriangulated_faces = 0;  ///< faces whose triangulation was changed to undo a fold
+  /// Vertex copies moved where the exact piece touches itself (see round_solid);
+  /// a vertex pinched between k fans counts k times.
+  std::size_t separated_vertices = 0;
+  double moved_volume = 0;        ///< |volume change| the moves made (doubles)
+  double moved_volume_bound = 0;  ///< sum of distance moved x area of the moved copies' triangles
   std::string defect;       ///< when not valid: validate_mesh's summary of what is left
 };
 
-/// Steps 1 to 3. Preconditions: `solid` sound and embedded (check_solid), over `set`.
+/// Steps 1 to 3, and the separation of a piece that touches itself. A cut can
+/// leave a piece touching itself at a point, exactly: where the plane passes
+/// through a saddle vertex whose two lobes on one side are one piece (several fans
+/// meet there), or through the corner of a cavity or a dent that reaches the plane
+/// inside the cap (the corner touches the cap). No mesh of such a piece is valid.
+/// When certification finds only pinched vertices and intersections, each fan of a
+/// pinched vertex gets its own copy, and every copy and every corner touching a
+/// cap moves toward its own neighbours by 2^-40 of the distance to the nearest
+/// (then 2^-30, 2^-20) until certification passes: the point where the piece
+/// touched itself gives way, moving `moved_volume` (at most `moved_volume_bound`).
+/// Preconditions: `solid` sound (check_solid), over `set`; embedded but for such
+/// touching points.
 /// Guarantees: `valid` is true exactly when `mesh` passes validate_mesh (closed,
 /// oriented, 2-manifold, positive volume, no zero-area triangle, no unused vertex,
 /// no self-intersection); deterministic.
