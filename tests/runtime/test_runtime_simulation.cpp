@@ -5,7 +5,9 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -239,4 +241,107 @@ TEST_CASE("the recording has a node per body ever made, moved and shown from its
     CHECK(paths == std::set<std::string>{"rotation", "scale", "translation"});
   }
   CHECK(placed.projectile != rt::no_body);
+}
+
+namespace {
+
+// The tree of `mesh` with every position times `scale` (a power of two, so the
+// scaled coordinates are exact), cut into 8 fragments.
+std::shared_ptr<const MeshTree> scaled_tree(const std::string& mesh, double scale) {
+  Mesh scaled = runtime_mesh(mesh);
+  for (Vec3& p : scaled.positions) p = scale * p;
+  BuildOptions options;
+  options.fragments = 8;
+  options.seed = 3;
+  options.threads = 1;
+  return std::make_shared<const MeshTree>(build_mesh_tree(scaled, options));
+}
+
+}  // namespace
+
+TEST_CASE("unset scene options scale with the object: the projectile with its mass, lengths with its size, speeds with its root") {
+  for (const char* mesh : {"box", "torus", "knot1"}) {
+    const auto unit = scaled_tree(mesh, 1);
+    for (const rt::SceneKind kind : {rt::SceneKind::drop, rt::SceneKind::shoot, rt::SceneKind::wall}) {
+      rt::SceneOptions options;
+      options.kind = kind;
+      const rt::SceneSizes base = rt::scene_sizes(*unit, options);
+      INFO(mesh << ", " << rt::scene_name(kind));
+      REQUIRE(base.object_size > 0);
+      REQUIRE(base.object_mass > 0);
+      // The defaults themselves, as documented.
+      CHECK(base.object_mass == Approx(options.parameters.density * unit->nodes[0].mass.volume).epsilon(1e-12));
+      CHECK(base.projectile_mass == Approx(rt::scene_defaults::mass_in_object_masses * base.object_mass));
+      CHECK(base.projectile_radius == Approx(rt::scene_defaults::radius_in_sizes * base.object_size));
+      CHECK(base.height == Approx(rt::scene_defaults::height_in_sizes * base.object_size));
+      CHECK(base.projectile_speed == Approx(rt::scene_defaults::speed_in_sqrt_g_size *
+                                            std::sqrt(rt::scene_defaults::gravity * base.object_size)));
+      for (const double s : {0.25, 4.0}) {
+        INFO("scaled by " << s);
+        const rt::SceneSizes scaled = rt::scene_sizes(*scaled_tree(mesh, s), options);
+        CHECK(scaled.object_size == Approx(s * base.object_size).epsilon(1e-12));
+        CHECK(scaled.object_mass == Approx(s * s * s * base.object_mass).epsilon(1e-12));
+        CHECK(scaled.projectile_mass == Approx(s * s * s * base.projectile_mass).epsilon(1e-12));
+        CHECK(scaled.projectile_radius == Approx(s * base.projectile_radius).epsilon(1e-12));
+        CHECK(scaled.height == Approx(s * base.height).epsilon(1e-12));
+        CHECK(scaled.projectile_speed == Approx(std::sqrt(s) * base.projectile_speed).epsilon(1e-12));
+      }
+      // A denser object is shot by a heavier sphere, no bigger and no faster.
+      rt::SceneOptions dense = options;
+      dense.parameters.density = 3 * options.parameters.density;
+      const rt::SceneSizes heavier = rt::scene_sizes(*unit, dense);
+      CHECK(heavier.projectile_mass == Approx(3 * base.projectile_mass).epsilon(1e-12));
+      CHECK(heavier.projectile_radius == base.projectile_radius);
+      CHECK(heavier.projectile_speed == base.projectile_speed);
+      CHECK(heavier.height == base.height);
+    }
+  }
+}
+
+TEST_CASE("set scene options are used as given, whatever the object, and placed as resolved") {
+  for (const double s : {0.25, 1.0, 4.0}) {
+    const auto tree = scaled_tree("box", s);
+    const auto shapes = rt::BreakableShapes::create(tree);
+    INFO("box scaled by " << s);
+    rt::SceneOptions options;
+    options.kind = rt::SceneKind::shoot;
+    options.projectile_mass = 7;
+    options.projectile_speed = 0;  // set to 0 is a sphere at rest, not the default
+    options.projectile_radius = 0.05;
+    options.height = 0;
+    const rt::SceneSizes sizes = rt::scene_sizes(*tree, options);
+    CHECK(sizes.projectile_mass == 7);
+    CHECK(sizes.projectile_speed == 0);
+    CHECK(sizes.projectile_radius == 0.05);
+    CHECK(sizes.height == 0);
+
+    for (const bool explicit_options : {true, false}) {
+      INFO((explicit_options ? "set" : "unset"));
+      rt::SceneOptions placed_options = explicit_options ? options : rt::SceneOptions{.kind = rt::SceneKind::shoot};
+      rt::World world;
+      const rt::Scene scene = rt::set_up_scene(world, shapes, placed_options);
+      const rt::SceneSizes expected = rt::scene_sizes(*tree, placed_options);
+      REQUIRE(scene.projectile != rt::no_body);
+      const rt::BodyRecord& sphere = world.bodies()[scene.projectile];
+      CHECK(sphere.mass.mass == Approx(expected.projectile_mass).epsilon(1e-12));
+      CHECK(sphere.radius == expected.projectile_radius);
+      CHECK(world.state(scene.projectile).linear_velocity.x == Approx(expected.projectile_speed).epsilon(1e-12));
+      CHECK(scene.sizes.projectile_mass == expected.projectile_mass);
+    }
+    // A set drop height of 0 stays 0 (the object starts on the floor), not the default.
+    rt::World world;
+    options.kind = rt::SceneKind::drop;
+    const rt::Scene dropped = rt::set_up_scene(world, shapes, options);
+    CHECK(dropped.sizes.height == 0);
+  }
+  // Radius 0 keeps its old meaning, the default; out-of-range values name the option.
+  const auto tree = scaled_tree("box", 1);
+  rt::SceneOptions zero_radius{.kind = rt::SceneKind::shoot, .projectile_radius = 0.0};
+  CHECK(rt::scene_sizes(*tree, zero_radius).projectile_radius ==
+        Approx(rt::scene_defaults::radius_in_sizes * rt::scene_sizes(*tree, {}).object_size));
+  CHECK_THROWS_WITH(rt::scene_sizes(*tree, rt::SceneOptions{.projectile_mass = -1.0}),
+                    Catch::Contains("projectile mass"));
+  CHECK_THROWS_WITH(rt::scene_sizes(*tree, rt::SceneOptions{.projectile_speed = std::nan("")}),
+                    Catch::Contains("projectile speed"));
+  CHECK_THROWS_WITH(rt::scene_sizes(*tree, rt::SceneOptions{.height = -0.5}), Catch::Contains("drop height"));
 }
