@@ -257,6 +257,16 @@ std::shared_ptr<const MeshTree> scaled_tree(const std::string& mesh, double scal
   return std::make_shared<const MeshTree>(build_mesh_tree(scaled, options));
 }
 
+// Shoot options with `change` made (rather than designated initializers, which
+// -Wextra flags for every member left out).
+template <class Change>
+rt::SceneOptions shoot_with(Change change) {
+  rt::SceneOptions options;
+  options.kind = rt::SceneKind::shoot;
+  change(options);
+  return options;
+}
+
 }  // namespace
 
 TEST_CASE("unset scene options scale with the object: the projectile with its mass, lengths with its size, speeds with its root") {
@@ -317,7 +327,8 @@ TEST_CASE("set scene options are used as given, whatever the object, and placed 
 
     for (const bool explicit_options : {true, false}) {
       INFO((explicit_options ? "set" : "unset"));
-      rt::SceneOptions placed_options = explicit_options ? options : rt::SceneOptions{.kind = rt::SceneKind::shoot};
+      rt::SceneOptions placed_options = options;
+      if (!explicit_options) placed_options = shoot_with([](rt::SceneOptions&) {});
       rt::World world;
       const rt::Scene scene = rt::set_up_scene(world, shapes, placed_options);
       const rt::SceneSizes expected = rt::scene_sizes(*tree, placed_options);
@@ -336,12 +347,13 @@ TEST_CASE("set scene options are used as given, whatever the object, and placed 
   }
   // Radius 0 keeps its old meaning, the default; out-of-range values name the option.
   const auto tree = scaled_tree("box", 1);
-  rt::SceneOptions zero_radius{.kind = rt::SceneKind::shoot, .projectile_radius = 0.0};
+  const rt::SceneOptions zero_radius = shoot_with([](rt::SceneOptions& o) { o.projectile_radius = 0.0; });
   CHECK(rt::scene_sizes(*tree, zero_radius).projectile_radius ==
         Approx(rt::scene_defaults::radius_in_sizes * rt::scene_sizes(*tree, {}).object_size));
-  CHECK_THROWS_WITH(rt::scene_sizes(*tree, rt::SceneOptions{.projectile_mass = -1.0}),
+  CHECK_THROWS_WITH(rt::scene_sizes(*tree, shoot_with([](rt::SceneOptions& o) { o.projectile_mass = -1.0; })),
                     Catch::Contains("projectile mass"));
-  CHECK_THROWS_WITH(rt::scene_sizes(*tree, rt::SceneOptions{.projectile_speed = std::nan("")}),
+  CHECK_THROWS_WITH(rt::scene_sizes(*tree, shoot_with([](rt::SceneOptions& o) { o.projectile_speed = std::nan(""); })),
                     Catch::Contains("projectile speed"));
-  CHECK_THROWS_WITH(rt::scene_sizes(*tree, rt::SceneOptions{.height = -0.5}), Catch::Contains("drop height"));
+  CHECK_THROWS_WITH(rt::scene_sizes(*tree, shoot_with([](rt::SceneOptions& o) { o.height = -0.5; })),
+                    Catch::Contains("drop height"));
 }
