@@ -62,7 +62,8 @@ json parameters_json(const rt::BreakableParameters& p, double margin) {
 json scene_json(const rt::SceneOptions& o, const rt::SceneSizes& sizes) {
   json out{{"scene", rt::scene_name(o.kind)},
            {"object_size_m", sizes.object_size},
-           {"object_mass_kg", sizes.object_mass}};
+           {"object_mass_kg", sizes.object_mass},
+           {"frailty_m3_per_N_s", sizes.frailty}};
   if (o.kind == rt::SceneKind::drop) {
     out["height_m"] = sizes.height;
     out["tilt_degrees"] = o.tilt_degrees;
@@ -226,11 +227,11 @@ Command add_simulate_command(CLI::App& app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   command
-      ->add_option("--frailty", args.scene_options.parameters.frailty,
+      ->add_option("--frailty", args.scene_options.frailty,
                    "f in damage = f * p / s^3, m^3/(N s): a bond at distance s from an impact of impulse p takes "
-                   "that much damage")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
+                   "that much damage; default: hit points (0.45 L)^3 / (M sqrt(g L)), L the object's size and M its "
+                   "mass, so the impulse M sqrt(g L) the default shot gives the object breaks bonds within 0.45 L")
+      ->check(CLI::PositiveNumber);
   command
       ->add_option("--impact-speed", args.scene_options.parameters.impact_speed,
                    "An impact is a contact point whose normal impulse in one step exceeds this times the hit "
@@ -372,7 +373,8 @@ int run_simulate(const SimulateArgs& args) {
               << tree->leaf_count() << " fragments and " << tree->bonds.size() << " bonds, " << args.steps
               << " steps of " << number(world_options.time_step) << " s\n";
     const rt::SceneSizes& sizes = scene.sizes;
-    std::cout << "object " << number(sizes.object_size) << " m across, " << number(sizes.object_mass) << " kg; ";
+    std::cout << "object " << number(sizes.object_size) << " m across, " << number(sizes.object_mass)
+              << " kg, frailty " << number(sizes.frailty) << " m^3/(N s); ";
     if (scene_options.kind == rt::SceneKind::drop) {
       std::cout << "dropped from " << number(sizes.height) << " m\n";
     } else {
@@ -411,6 +413,9 @@ int run_simulate(const SimulateArgs& args) {
     mass += world.bodies()[body].mass.mass;
   }
   if (args.json) {
+    // The objects' parameters as run: the frailty resolved for the object.
+    rt::BreakableParameters resolved_parameters = scene_options.parameters;
+    resolved_parameters.frailty = scene.sizes.frailty;
     json out{{"file", args.input},
              {"leaves", tree->leaf_count()},
              {"bonds", tree->bonds.size()},
@@ -419,7 +424,7 @@ int run_simulate(const SimulateArgs& args) {
              {"time_step_s", world_options.time_step},
              {"solver_iterations", world_options.solver_iterations},
              {"sleeping", world_options.sleeping},
-             {"parameters", parameters_json(scene_options.parameters, args.shapes.collision_margin)},
+             {"parameters", parameters_json(resolved_parameters, args.shapes.collision_margin)},
              {"scene", scene_json(scene_options, scene.sizes)},
              {"step_summaries", steps_json},
              {"breaks", breaks_json},

@@ -84,6 +84,8 @@ void check_options(const SceneOptions& o) {
           "the projectile speed must be finite and not negative (m/s)");
   require(!o.projectile_radius || (std::isfinite(*o.projectile_radius) && *o.projectile_radius >= 0),
           "the projectile radius must be finite and not negative (m; 0 or unset picks one)");
+  require(!o.frailty || (std::isfinite(*o.frailty) && *o.frailty > 0),
+          "frailty must be positive and finite (m^3/(N s))");
   require(o.wall_rows >= 1 && o.wall_columns >= 1, "a wall needs at least one row and one column");
 }
 
@@ -109,6 +111,12 @@ SceneSizes scene_sizes(const MeshTree& tree, const SceneOptions& options) {
   sizes.projectile_radius = options.projectile_radius.value_or(0) > 0
                                 ? *options.projectile_radius
                                 : scene_defaults::radius_in_sizes * sizes.object_size;
+  // The impulse the default blow gives the object, about M sqrt(g L), breaks
+  // bonds within break_radius_in_sizes object sizes.
+  const double radius = scene_defaults::break_radius_in_sizes * sizes.object_size;
+  sizes.frailty = options.frailty.value_or(
+      options.parameters.hit_points * radius * radius * radius /
+      (sizes.object_mass * std::sqrt(scene_defaults::gravity * sizes.object_size)));
   // A flat or empty object gives no mass or size to scale by: refuse rather than
   // hand Bullet a massless sphere.
   if (!(sizes.projectile_mass > 0)) {
@@ -116,6 +124,9 @@ SceneSizes scene_sizes(const MeshTree& tree, const SceneOptions& options) {
   }
   if (!(sizes.projectile_radius > 0)) {
     throw std::invalid_argument("the object has no extent, so the projectile radius must be given (m)");
+  }
+  if (!(sizes.frailty > 0 && std::isfinite(sizes.frailty))) {
+    throw std::invalid_argument("the object has no volume or no extent, so the frailty must be given (m^3/(N s))");
   }
   return sizes;
 }
@@ -128,13 +139,15 @@ Scene set_up_scene(World& world, const std::shared_ptr<const BreakableShapes>& s
   const Vec3 centroid = tree.nodes[0].mass.centroid;
   Scene scene;
   scene.sizes = sizes;
+  BreakableParameters parameters = options.parameters;
+  parameters.frailty = sizes.frailty;
 
   if (options.kind == SceneKind::drop) {
     const Quaternion rotation = axis_angle({1, 0, 1}, options.tilt_degrees * std::numbers::pi / 180);
     const Box box = rotated_box(tree, rotation);
     const Vec3 turned = rotate(rotation, centroid);
     const RigidTransform placement{{-turned.x, sizes.height + margin - box.lo.y, -turned.z}, rotation};
-    scene.objects.push_back(world.add_breakable(shapes, placement, options.parameters));
+    scene.objects.push_back(world.add_breakable(shapes, placement, parameters));
     scene.footprint = footprint_of({box.lo + placement.translation, box.hi + placement.translation});
     return scene;
   }
@@ -145,7 +158,7 @@ Scene set_up_scene(World& world, const std::shared_ptr<const BreakableShapes>& s
   if (options.kind == SceneKind::shoot) {
     const Box box = rotated_box(tree, {});
     const RigidTransform placement{{-centroid.x, margin - box.lo.y, -centroid.z}, {}};
-    scene.objects.push_back(world.add_breakable(shapes, placement, options.parameters));
+    scene.objects.push_back(world.add_breakable(shapes, placement, parameters));
     target = apply(placement, centroid);
     front = box.lo.x + placement.translation.x;
     scene.footprint = footprint_of({box.lo + placement.translation, box.hi + placement.translation});
@@ -161,7 +174,7 @@ Scene set_up_scene(World& world, const std::shared_ptr<const BreakableShapes>& s
         const Vec3 corner{-size.x / 2, margin + static_cast<double>(row) * (size.y + gap),
                           -width / 2 + static_cast<double>(column) * (size.z + gap)};
         const RigidTransform placement{corner - box.lo, rotation};
-        scene.objects.push_back(world.add_breakable(shapes, placement, options.parameters));
+        scene.objects.push_back(world.add_breakable(shapes, placement, parameters));
         if (row == target_row && column == target_column) target = apply(placement, centroid);
       }
     }

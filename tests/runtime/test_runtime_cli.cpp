@@ -109,6 +109,9 @@ TEST_CASE("simulate reports the scene as run: relative defaults resolved for the
   CHECK(shoot["projectile_mass_kg"].get<double>() == Approx(480));
   CHECK(shoot["projectile_radius_m"].get<double>() == Approx(0.15));
   CHECK(shoot["projectile_speed_m_s"].get<double>() == Approx(2 * std::sqrt(9.81)));
+  // The frailty at which an impulse of M sqrt(g L) breaks bonds within 0.45 L.
+  CHECK(shoot["frailty_m3_per_N_s"].get<double>() == Approx(0.45 * 0.45 * 0.45 / (480 * std::sqrt(9.81))));
+  CHECK(scene_of("--scene shoot --frailty 3e-4")["frailty_m3_per_N_s"].get<double>() == 3e-4);
   CHECK(scene_of("--scene drop")["height_m"].get<double>() == Approx(2.0));
   CHECK(scene_of("--scene drop --height 0")["height_m"].get<double>() == 0);
   const nlohmann::json given =

@@ -72,7 +72,7 @@ RunLog run_checked(rt::World& world, const std::vector<rt::ObjectId>& objects, i
 rt::SceneOptions scene(rt::SceneKind kind) {
   rt::SceneOptions options;
   options.kind = kind;
-  options.parameters.frailty = 2e-4;
+  options.frailty = 2e-4;
   options.wall_rows = 2;
   options.wall_columns = 2;
   return options;
@@ -286,6 +286,10 @@ TEST_CASE("unset scene options scale with the object: the projectile with its ma
       CHECK(base.height == Approx(rt::scene_defaults::height_in_sizes * base.object_size));
       CHECK(base.projectile_speed == Approx(rt::scene_defaults::speed_in_sqrt_g_size *
                                             std::sqrt(rt::scene_defaults::gravity * base.object_size)));
+      // An impulse of M sqrt(g L) breaks bonds within break_radius_in_sizes object sizes.
+      const double reference_impulse = base.object_mass * std::sqrt(rt::scene_defaults::gravity * base.object_size);
+      CHECK(std::cbrt(base.frailty * reference_impulse / options.parameters.hit_points) ==
+            Approx(rt::scene_defaults::break_radius_in_sizes * base.object_size));
       for (const double s : {0.25, 4.0}) {
         INFO("scaled by " << s);
         const rt::SceneSizes scaled = rt::scene_sizes(*scaled_tree(mesh, s), options);
@@ -295,6 +299,8 @@ TEST_CASE("unset scene options scale with the object: the projectile with its ma
         CHECK(scaled.projectile_radius == Approx(s * base.projectile_radius).epsilon(1e-12));
         CHECK(scaled.height == Approx(s * base.height).epsilon(1e-12));
         CHECK(scaled.projectile_speed == Approx(std::sqrt(s) * base.projectile_speed).epsilon(1e-12));
+        // L^3 / (L^3 sqrt(L)): a larger object of the same shape is less frail, in proportion to its blow.
+        CHECK(scaled.frailty == Approx(base.frailty / std::sqrt(s)).epsilon(1e-12));
       }
       // A denser object is shot by a heavier sphere, no bigger and no faster.
       rt::SceneOptions dense = options;
@@ -304,6 +310,11 @@ TEST_CASE("unset scene options scale with the object: the projectile with its ma
       CHECK(heavier.projectile_radius == base.projectile_radius);
       CHECK(heavier.projectile_speed == base.projectile_speed);
       CHECK(heavier.height == base.height);
+      CHECK(heavier.frailty == Approx(base.frailty / 3).epsilon(1e-12));
+      // Tougher bonds need a frailer material for the same damage radius.
+      rt::SceneOptions tough = options;
+      tough.parameters.hit_points = 5;
+      CHECK(rt::scene_sizes(*unit, tough).frailty == Approx(5 * base.frailty).epsilon(1e-12));
     }
   }
 }
@@ -319,7 +330,9 @@ TEST_CASE("set scene options are used as given, whatever the object, and placed 
     options.projectile_speed = 0;  // set to 0 is a sphere at rest, not the default
     options.projectile_radius = 0.05;
     options.height = 0;
+    options.frailty = 3e-4;
     const rt::SceneSizes sizes = rt::scene_sizes(*tree, options);
+    CHECK(sizes.frailty == 3e-4);
     CHECK(sizes.projectile_mass == 7);
     CHECK(sizes.projectile_speed == 0);
     CHECK(sizes.projectile_radius == 0.05);
@@ -338,6 +351,8 @@ TEST_CASE("set scene options are used as given, whatever the object, and placed 
       CHECK(sphere.radius == expected.projectile_radius);
       CHECK(world.state(scene.projectile).linear_velocity.x == Approx(expected.projectile_speed).epsilon(1e-12));
       CHECK(scene.sizes.projectile_mass == expected.projectile_mass);
+      // The object is made with the resolved frailty, whatever parameters.frailty says.
+      CHECK(world.parameters_of(scene.objects.at(0)).frailty == expected.frailty);
     }
     // A set drop height of 0 stays 0 (the object starts on the floor), not the default.
     rt::World world;
@@ -356,4 +371,6 @@ TEST_CASE("set scene options are used as given, whatever the object, and placed 
                     Catch::Contains("projectile speed"));
   CHECK_THROWS_WITH(rt::scene_sizes(*tree, shoot_with([](rt::SceneOptions& o) { o.height = -0.5; })),
                     Catch::Contains("drop height"));
+  CHECK_THROWS_WITH(rt::scene_sizes(*tree, shoot_with([](rt::SceneOptions& o) { o.frailty = 0.0; })),
+                    Catch::Contains("frailty"));
 }

@@ -33,10 +33,12 @@ std::optional<SceneKind> scene_named(std::string_view name);
 /// object's size L (the largest extent of its bounding box, as it lies in the
 /// tree) and its mass M (density times the root's volume). Lengths scale with L
 /// and speeds with sqrt(g L), as a fall's do, so the pieces slide and roll about
-/// as many object sizes whatever the size. The damage model is absolute
-/// (BreakableParameters::frailty), so a heavier object breaks more under the same
-/// default blow: the blow gives it a speed of about half the sphere's, and a
-/// faster sphere breaks more but throws the pieces farther (README, Runtime).
+/// as many object sizes whatever the size. The frailty scales too: the default
+/// blow gives the object about half the sphere's speed, an impulse of about
+/// M sqrt(g L), and the frailty is the one at which that impulse breaks bonds
+/// within break_radius_in_sizes object sizes of the contact, so a light object
+/// and a heavy one break alike. A faster sphere would break more but throw the
+/// pieces farther (README, Runtime).
 namespace scene_defaults {
 /// Standard gravity, m/s^2, which the speeds are scaled by.
 inline constexpr double gravity = 9.81;
@@ -49,6 +51,10 @@ inline constexpr double mass_in_object_masses = 1;
 /// shoot, wall: the sphere's speed in units of sqrt(g L): 2 is the speed of a
 /// fall from twice the object's size, 6.3 m/s for an object of 1 m.
 inline constexpr double speed_in_sqrt_g_size = 2;
+/// The frailty f = hit_points (c L)^3 / (M sqrt(g L)), c this: the damage radius
+/// (f p / hit_points)^(1/3) of an impulse p = M sqrt(g L) is c L. Chosen so the
+/// default shot breaks a typical object into many pieces (README, Runtime).
+inline constexpr double break_radius_in_sizes = 0.45;
 }  // namespace scene_defaults
 
 /// A scene's geometry; the material and damage model are `parameters`.
@@ -57,7 +63,11 @@ inline constexpr double speed_in_sqrt_g_size = 2;
 /// set is used as it is, whatever the object.
 struct SceneOptions {
   SceneKind kind = SceneKind::drop;
+  /// The material and damage model; its frailty is not used: the objects get the
+  /// resolved `frailty` below.
   BreakableParameters parameters;
+  /// m^3/(N s), > 0; unset: scene_defaults::break_radius_in_sizes's rule.
+  std::optional<double> frailty;
   /// drop: gap between the object's lowest point and the floor, >= 0; unset:
   /// height_in_sizes object sizes.
   std::optional<double> height;
@@ -82,6 +92,7 @@ struct SceneSizes {
   double projectile_mass = 0;
   double projectile_speed = 0;
   double projectile_radius = 0;
+  double frailty = 0;  ///< m^3/(N s), the objects' (BreakableParameters::frailty)
 };
 
 /// The values `options` comes to for an object cut as `tree`: each set option as
