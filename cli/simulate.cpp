@@ -11,6 +11,7 @@
 #include <iostream>
 #include <memory>
 #include <stdexcept>
+#include <vector>
 
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
@@ -56,21 +57,54 @@ json parameters_json(const rt::BreakableParameters& p, double margin) {
               {"collision_margin_m", margin}};
 }
 
-json scene_json(const rt::SceneOptions& o) {
-  json out{{"scene", rt::scene_name(o.kind)}};
+// The scene as run: the options resolved for the object (a relative default as
+// the number it came to), and the object's size and mass they were scaled by.
+json scene_json(const rt::SceneOptions& o, const rt::SceneSizes& sizes) {
+  json out{{"scene", rt::scene_name(o.kind)},
+           {"object_size_m", sizes.object_size},
+           {"object_mass_kg", sizes.object_mass},
+           {"frailty_m3_per_N_s", sizes.frailty}};
   if (o.kind == rt::SceneKind::drop) {
-    out["height_m"] = o.height;
+    out["height_m"] = sizes.height;
     out["tilt_degrees"] = o.tilt_degrees;
     return out;
   }
-  out["projectile_mass_kg"] = o.projectile_mass;
-  out["projectile_speed_m_s"] = o.projectile_speed;
-  out["projectile_radius_m"] = o.projectile_radius;
+  out["projectile_mass_kg"] = sizes.projectile_mass;
+  out["projectile_speed_m_s"] = sizes.projectile_speed;
+  out["projectile_radius_m"] = sizes.projectile_radius;
   if (o.kind == rt::SceneKind::wall) {
     out["wall_rows"] = o.wall_rows;
     out["wall_columns"] = o.wall_columns;
   }
   return out;
+}
+
+// Where each object's centre of mass starts, to tell how far its pieces went.
+std::vector<Vec3> object_centres(const rt::World& world, std::size_t objects) {
+  std::vector<Vec3> weighted(objects);
+  std::vector<double> mass(objects, 0);
+  for (rt::BodyId body : world.live_bodies()) {
+    const rt::BodyRecord& record = world.bodies()[body];
+    if (record.kind != rt::BodyKind::cluster) continue;
+    weighted[record.object] = weighted[record.object] + record.mass.mass * world.state(body).pose.translation;
+    mass[record.object] += record.mass.mass;
+  }
+  for (std::size_t k = 0; k < objects; ++k) {
+    if (mass[k] > 0) weighted[k] = (1 / mass[k]) * weighted[k];
+  }
+  return weighted;
+}
+
+// The largest distance of a live cluster's centre of mass from where its object's
+// centre of mass started, m: how far the pieces spread.
+double farthest_piece(const rt::World& world, const std::vector<Vec3>& starts) {
+  double farthest = 0;
+  for (rt::BodyId body : world.live_bodies()) {
+    const rt::BodyRecord& record = world.bodies()[body];
+    if (record.kind != rt::BodyKind::cluster) continue;
+    farthest = std::max(farthest, norm(world.state(body).pose.translation - starts[record.object]));
+  }
+  return farthest;
 }
 
 // What one step did, for the summary.
@@ -193,11 +227,11 @@ Command add_simulate_command(CLI::App& app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   command
-      ->add_option("--frailty", args.scene_options.parameters.frailty,
+      ->add_option("--frailty", args.scene_options.frailty,
                    "f in damage = f * p / s^3, m^3/(N s): a bond at distance s from an impact of impulse p takes "
-                   "that much damage")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
+                   "that much damage; default: hit points (0.45 L)^3 / (M sqrt(g L)), L the object's size and M its "
+                   "mass, so the impulse M sqrt(g L) the default shot gives the object breaks bonds within 0.45 L")
+      ->check(CLI::PositiveNumber);
   command
       ->add_option("--impact-speed", args.scene_options.parameters.impact_speed,
                    "An impact is a contact point whose normal impulse in one step exceeds this times the hit "
@@ -249,25 +283,27 @@ Command add_simulate_command(CLI::App& app) {
 
   command
       ->add_option("--height", args.scene_options.height,
-                   "drop: gap between the object's lowest point and the floor at the start, m")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
+                   "drop: gap between the object's lowest point and the floor at the start, m; default: twice the "
+                   "object's size (the largest extent of its bounding box)")
+      ->check(CLI::NonNegativeNumber);
   command
       ->add_option("--tilt", args.scene_options.tilt_degrees,
                    "drop: the object is turned this many degrees about the axis (1, 0, 1) so it lands on an edge")
       ->check(CLI::Range(-360.0, 360.0))
       ->capture_default_str();
-  command->add_option("--projectile-mass", args.scene_options.projectile_mass, "shoot, wall: the sphere's mass, kg")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  command->add_option("--projectile-speed", args.scene_options.projectile_speed, "shoot, wall: the sphere's speed, m/s")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
+  command
+      ->add_option("--projectile-mass", args.scene_options.projectile_mass,
+                   "shoot, wall: the sphere's mass, kg; default: the object's mass (one brick's in a wall)")
+      ->check(CLI::PositiveNumber);
+  command
+      ->add_option("--projectile-speed", args.scene_options.projectile_speed,
+                   "shoot, wall: the sphere's speed, m/s; default: 2 sqrt(g L), L the object's size (6.3 m/s for 1 m, the "
+                   "speed of a fall from 2 L)")
+      ->check(CLI::NonNegativeNumber);
   command
       ->add_option("--projectile-radius", args.scene_options.projectile_radius,
-                   "shoot, wall: the sphere's radius, m; 0 picks 15% of the object's largest extent")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
+                   "shoot, wall: the sphere's radius, m; default (or 0): 15% of the object's size")
+      ->check(CLI::NonNegativeNumber);
   command->add_option("--wall-rows", args.scene_options.wall_rows, "wall: bricks high")
       ->check(CLI::Range(1u, 64u))
       ->capture_default_str();
@@ -322,6 +358,7 @@ int run_simulate(const SimulateArgs& args) {
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
+  const std::vector<Vec3> starts = object_centres(world, scene.objects.size());
 
   std::optional<rt::Recording> recording;
   if (!args.record.empty()) {
@@ -335,6 +372,15 @@ int run_simulate(const SimulateArgs& args) {
     std::cout << args.input << ": scene " << args.scene << ", " << scene.objects.size() << " breakable object(s) of "
               << tree->leaf_count() << " fragments and " << tree->bonds.size() << " bonds, " << args.steps
               << " steps of " << number(world_options.time_step) << " s\n";
+    const rt::SceneSizes& sizes = scene.sizes;
+    std::cout << "object " << number(sizes.object_size) << " m across, " << number(sizes.object_mass)
+              << " kg, frailty " << number(sizes.frailty) << " m^3/(N s); ";
+    if (scene_options.kind == rt::SceneKind::drop) {
+      std::cout << "dropped from " << number(sizes.height) << " m\n";
+    } else {
+      std::cout << "a sphere of " << number(sizes.projectile_radius) << " m and " << number(sizes.projectile_mass)
+                << " kg shot at " << number(sizes.projectile_speed) << " m/s\n";
+    }
   }
   for (std::uint64_t i = 0; i < args.steps; ++i) {
     const rt::StepReport report = world.step();
@@ -358,6 +404,7 @@ int run_simulate(const SimulateArgs& args) {
     output.commit();
   }
 
+  const double farthest = farthest_piece(world, starts);
   std::size_t clusters = 0;
   double mass = 0;
   for (rt::BodyId body : world.live_bodies()) {
@@ -366,6 +413,9 @@ int run_simulate(const SimulateArgs& args) {
     mass += world.bodies()[body].mass.mass;
   }
   if (args.json) {
+    // The objects' parameters as run: the frailty resolved for the object.
+    rt::BreakableParameters resolved_parameters = scene_options.parameters;
+    resolved_parameters.frailty = scene.sizes.frailty;
     json out{{"file", args.input},
              {"leaves", tree->leaf_count()},
              {"bonds", tree->bonds.size()},
@@ -374,8 +424,8 @@ int run_simulate(const SimulateArgs& args) {
              {"time_step_s", world_options.time_step},
              {"solver_iterations", world_options.solver_iterations},
              {"sleeping", world_options.sleeping},
-             {"parameters", parameters_json(scene_options.parameters, args.shapes.collision_margin)},
-             {"scene", scene_json(scene_options)},
+             {"parameters", parameters_json(resolved_parameters, args.shapes.collision_margin)},
+             {"scene", scene_json(scene_options, scene.sizes)},
              {"step_summaries", steps_json},
              {"breaks", breaks_json},
              {"final",
@@ -385,6 +435,8 @@ int run_simulate(const SimulateArgs& args) {
                {"bodies_ever", world.bodies().size()},
                {"bonds_broken", bonds_broken},
                {"breakable_mass_kg", mass},
+               {"farthest_piece_m", farthest},
+               {"farthest_piece_object_sizes", farthest / scene.sizes.object_size},
                {"kinetic_energy_J", world.kinetic_energy()}}},
              {"record", args.record.empty() ? json(nullptr) : json(args.record)}};
     std::cout << out.dump(2) << '\n';
@@ -392,7 +444,8 @@ int run_simulate(const SimulateArgs& args) {
   }
   std::cout << "after " << number(world.time()) << " s: " << clusters << " clusters of " << scene.objects.size()
             << " object(s), " << bonds_broken << " bonds broken, " << world.bodies().size()
-            << " bodies made in all, breakable mass " << number(mass) << " kg\n";
+            << " bodies made in all, breakable mass " << number(mass) << " kg, farthest piece " << number(farthest)
+            << " m (" << number(farthest / scene.sizes.object_size) << " object sizes) from where it started\n";
   if (recording) std::cout << "wrote " << args.record << '\n';
   return 0;
 }

@@ -72,15 +72,20 @@ void require(bool ok, const char* what) {
   if (!ok) throw std::invalid_argument(what);
 }
 
+// Checks every option that is set; unset ones are resolved by scene_sizes.
 void check_options(const SceneOptions& o) {
   check_parameters(o.parameters);
-  require(std::isfinite(o.height) && o.height >= 0, "the drop height must be finite and not negative (m)");
+  require(!o.height || (std::isfinite(*o.height) && *o.height >= 0),
+          "the drop height must be finite and not negative (m)");
   require(std::isfinite(o.tilt_degrees), "the tilt must be finite (degrees)");
-  require(std::isfinite(o.projectile_mass) && o.projectile_mass > 0, "the projectile mass must be positive (kg)");
-  require(std::isfinite(o.projectile_speed) && o.projectile_speed >= 0,
+  require(!o.projectile_mass || (std::isfinite(*o.projectile_mass) && *o.projectile_mass > 0),
+          "the projectile mass must be positive (kg)");
+  require(!o.projectile_speed || (std::isfinite(*o.projectile_speed) && *o.projectile_speed >= 0),
           "the projectile speed must be finite and not negative (m/s)");
-  require(std::isfinite(o.projectile_radius) && o.projectile_radius >= 0,
-          "the projectile radius must be finite and not negative (m; 0 picks one)");
+  require(!o.projectile_radius || (std::isfinite(*o.projectile_radius) && *o.projectile_radius >= 0),
+          "the projectile radius must be finite and not negative (m; 0 or unset picks one)");
+  require(!o.frailty || (std::isfinite(*o.frailty) && *o.frailty > 0),
+          "frailty must be positive and finite (m^3/(N s))");
   require(o.wall_rows >= 1 && o.wall_columns >= 1, "a wall needs at least one row and one column");
 }
 
@@ -90,33 +95,70 @@ double footprint_of(const Box& box) {
 
 }  // namespace
 
+SceneSizes scene_sizes(const MeshTree& tree, const SceneOptions& options) {
+  check_options(options);
+  if (tree.nodes.empty()) throw std::invalid_argument("scene_sizes: the tree has no nodes");
+  const Vec3 extent = rotated_box(tree, {}).extent();
+  SceneSizes sizes;
+  sizes.object_size = std::max({extent.x, extent.y, extent.z});
+  sizes.object_mass = options.parameters.density * std::abs(tree.nodes[0].mass.volume);
+  sizes.height = options.height.value_or(scene_defaults::height_in_sizes * sizes.object_size);
+  sizes.projectile_mass =
+      options.projectile_mass.value_or(scene_defaults::mass_in_object_masses * sizes.object_mass);
+  sizes.projectile_speed =
+      options.projectile_speed.value_or(scene_defaults::speed_in_sqrt_g_size *
+                                        std::sqrt(scene_defaults::gravity * sizes.object_size));
+  sizes.projectile_radius = options.projectile_radius.value_or(0) > 0
+                                ? *options.projectile_radius
+                                : scene_defaults::radius_in_sizes * sizes.object_size;
+  // The impulse the default blow gives the object, about M sqrt(g L), breaks
+  // bonds within break_radius_in_sizes object sizes.
+  const double radius = scene_defaults::break_radius_in_sizes * sizes.object_size;
+  sizes.frailty = options.frailty.value_or(
+      options.parameters.hit_points * radius * radius * radius /
+      (sizes.object_mass * std::sqrt(scene_defaults::gravity * sizes.object_size)));
+  // A flat or empty object gives no mass or size to scale by: refuse rather than
+  // hand Bullet a massless sphere.
+  if (!(sizes.projectile_mass > 0)) {
+    throw std::invalid_argument("the object has no volume, so the projectile mass must be given (kg)");
+  }
+  if (!(sizes.projectile_radius > 0)) {
+    throw std::invalid_argument("the object has no extent, so the projectile radius must be given (m)");
+  }
+  if (!(sizes.frailty > 0 && std::isfinite(sizes.frailty))) {
+    throw std::invalid_argument("the object has no volume or no extent, so the frailty must be given (m^3/(N s))");
+  }
+  return sizes;
+}
+
 Scene set_up_scene(World& world, const std::shared_ptr<const BreakableShapes>& shapes, const SceneOptions& options) {
   if (!shapes) throw std::invalid_argument("set_up_scene: no shapes");
-  check_options(options);
   const MeshTree& tree = shapes->tree();
+  const SceneSizes sizes = scene_sizes(tree, options);
   const double margin = shapes->options().collision_margin;
   const Vec3 centroid = tree.nodes[0].mass.centroid;
   Scene scene;
+  scene.sizes = sizes;
+  BreakableParameters parameters = options.parameters;
+  parameters.frailty = sizes.frailty;
 
   if (options.kind == SceneKind::drop) {
     const Quaternion rotation = axis_angle({1, 0, 1}, options.tilt_degrees * std::numbers::pi / 180);
     const Box box = rotated_box(tree, rotation);
     const Vec3 turned = rotate(rotation, centroid);
-    const RigidTransform placement{{-turned.x, options.height + margin - box.lo.y, -turned.z}, rotation};
-    scene.objects.push_back(world.add_breakable(shapes, placement, options.parameters));
+    const RigidTransform placement{{-turned.x, sizes.height + margin - box.lo.y, -turned.z}, rotation};
+    scene.objects.push_back(world.add_breakable(shapes, placement, parameters));
     scene.footprint = footprint_of({box.lo + placement.translation, box.hi + placement.translation});
     return scene;
   }
 
-  const double largest =
-      std::max({rotated_box(tree, {}).extent().x, rotated_box(tree, {}).extent().y, rotated_box(tree, {}).extent().z});
-  const double radius = options.projectile_radius > 0 ? options.projectile_radius : 0.15 * largest;
+  const double radius = sizes.projectile_radius;
   Vec3 target;
   double front = 0;  // the smallest x of the objects
   if (options.kind == SceneKind::shoot) {
     const Box box = rotated_box(tree, {});
     const RigidTransform placement{{-centroid.x, margin - box.lo.y, -centroid.z}, {}};
-    scene.objects.push_back(world.add_breakable(shapes, placement, options.parameters));
+    scene.objects.push_back(world.add_breakable(shapes, placement, parameters));
     target = apply(placement, centroid);
     front = box.lo.x + placement.translation.x;
     scene.footprint = footprint_of({box.lo + placement.translation, box.hi + placement.translation});
@@ -132,7 +174,7 @@ Scene set_up_scene(World& world, const std::shared_ptr<const BreakableShapes>& s
         const Vec3 corner{-size.x / 2, margin + static_cast<double>(row) * (size.y + gap),
                           -width / 2 + static_cast<double>(column) * (size.z + gap)};
         const RigidTransform placement{corner - box.lo, rotation};
-        scene.objects.push_back(world.add_breakable(shapes, placement, options.parameters));
+        scene.objects.push_back(world.add_breakable(shapes, placement, parameters));
         if (row == target_row && column == target_column) target = apply(placement, centroid);
       }
     }
@@ -143,7 +185,7 @@ Scene set_up_scene(World& world, const std::shared_ptr<const BreakableShapes>& s
   // The sphere starts with its surface a diameter in front of the object and
   // flies straight at the target point.
   const Vec3 start{front - 3 * radius, target.y, target.z};
-  scene.projectile = world.add_sphere(radius, options.projectile_mass, start, Vec3{options.projectile_speed, 0, 0});
+  scene.projectile = world.add_sphere(radius, sizes.projectile_mass, start, Vec3{sizes.projectile_speed, 0, 0});
   scene.footprint = std::max(scene.footprint, std::abs(start.x) + radius);
   return scene;
 }

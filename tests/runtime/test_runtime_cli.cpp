@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -95,6 +96,32 @@ TEST_CASE("simulate refuses a damaged .shatter file with exit 3, one line and no
   CHECK(is_one_error_line(missing.err));
 }
 
+TEST_CASE("simulate reports the scene as run: relative defaults resolved for the object, given values as given") {
+  const fs::path tree = tree_file("box", 24);  // 1 m x 0.8 m x 0.6 m
+  const auto scene_of = [&](const std::string& arguments) {
+    const Run run = run_shatter("simulate " + quoted(tree) + " --steps 1 --json " + arguments);
+    REQUIRE(run.exit_code == 0);
+    return nlohmann::json::parse(run.out)["scene"];
+  };
+  const nlohmann::json shoot = scene_of("--scene shoot");
+  CHECK(shoot["object_size_m"].get<double>() == Approx(1.0));
+  CHECK(shoot["object_mass_kg"].get<double>() == Approx(1000 * 0.48));
+  CHECK(shoot["projectile_mass_kg"].get<double>() == Approx(480));
+  CHECK(shoot["projectile_radius_m"].get<double>() == Approx(0.15));
+  CHECK(shoot["projectile_speed_m_s"].get<double>() == Approx(2 * std::sqrt(9.81)));
+  // The frailty at which an impulse of M sqrt(g L) breaks bonds within 0.45 L.
+  CHECK(shoot["frailty_m3_per_N_s"].get<double>() == Approx(0.45 * 0.45 * 0.45 / (480 * std::sqrt(9.81))));
+  CHECK(scene_of("--scene shoot --frailty 3e-4")["frailty_m3_per_N_s"].get<double>() == 3e-4);
+  CHECK(scene_of("--scene drop")["height_m"].get<double>() == Approx(2.0));
+  CHECK(scene_of("--scene drop --height 0")["height_m"].get<double>() == 0);
+  const nlohmann::json given =
+      scene_of("--scene wall --projectile-mass 50 --projectile-speed 40 --projectile-radius 0.1 --density 10");
+  CHECK(given["projectile_mass_kg"].get<double>() == 50);
+  CHECK(given["projectile_speed_m_s"].get<double>() == 40);
+  CHECK(given["projectile_radius_m"].get<double>() == 0.1);
+  CHECK(given["object_mass_kg"].get<double>() == Approx(10 * 0.48));
+}
+
 TEST_CASE("simulate's usage mistakes exit 2 and an unwritable recording exits 4, leaving nothing") {
   const fs::path tree = tree_file("box", 24);
   const fs::path dir = scratch("usage");
@@ -103,7 +130,8 @@ TEST_CASE("simulate's usage mistakes exit 2 and an unwritable recording exits 4,
        {std::string("--scene fall"), std::string("--steps 0"), std::string("--density -1"), std::string("--bonds soft"),
         std::string("--impulse huge"), std::string("--method fast"), std::string("--time-step 0"),
         std::string("--record ") + quoted(dir / "run.txt"), std::string("--record ") + quoted(dir),
-        std::string("--print-every 0"), std::string("--print-every -1"), std::string("--steps -1"), std::string("--no-such-option")}) {
+        std::string("--print-every 0"), std::string("--print-every -1"), std::string("--steps -1"), std::string("--no-such-option"),
+        std::string("--projectile-mass 0"), std::string("--projectile-speed -1"), std::string("--height -1")}) {
     INFO(arguments);
     const Run run = run_shatter("simulate " + quoted(tree) + " " + arguments);
     CHECK(run.exit_code == 2);

@@ -5,7 +5,9 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -70,7 +72,7 @@ RunLog run_checked(rt::World& world, const std::vector<rt::ObjectId>& objects, i
 rt::SceneOptions scene(rt::SceneKind kind) {
   rt::SceneOptions options;
   options.kind = kind;
-  options.parameters.frailty = 2e-4;
+  options.frailty = 2e-4;
   options.wall_rows = 2;
   options.wall_columns = 2;
   return options;
@@ -239,4 +241,136 @@ TEST_CASE("the recording has a node per body ever made, moved and shown from its
     CHECK(paths == std::set<std::string>{"rotation", "scale", "translation"});
   }
   CHECK(placed.projectile != rt::no_body);
+}
+
+namespace {
+
+// The tree of `mesh` with every position times `scale` (a power of two, so the
+// scaled coordinates are exact), cut into 8 fragments.
+std::shared_ptr<const MeshTree> scaled_tree(const std::string& mesh, double scale) {
+  Mesh scaled = runtime_mesh(mesh);
+  for (Vec3& p : scaled.positions) p = scale * p;
+  BuildOptions options;
+  options.fragments = 8;
+  options.seed = 3;
+  options.threads = 1;
+  return std::make_shared<const MeshTree>(build_mesh_tree(scaled, options));
+}
+
+// Shoot options with `change` made (rather than designated initializers, which
+// -Wextra flags for every member left out).
+template <class Change>
+rt::SceneOptions shoot_with(Change change) {
+  rt::SceneOptions options;
+  options.kind = rt::SceneKind::shoot;
+  change(options);
+  return options;
+}
+
+}  // namespace
+
+TEST_CASE("unset scene options scale with the object: the projectile with its mass, lengths with its size, speeds with its root") {
+  for (const char* mesh : {"box", "torus", "knot1"}) {
+    const auto unit = scaled_tree(mesh, 1);
+    for (const rt::SceneKind kind : {rt::SceneKind::drop, rt::SceneKind::shoot, rt::SceneKind::wall}) {
+      rt::SceneOptions options;
+      options.kind = kind;
+      const rt::SceneSizes base = rt::scene_sizes(*unit, options);
+      INFO(mesh << ", " << rt::scene_name(kind));
+      REQUIRE(base.object_size > 0);
+      REQUIRE(base.object_mass > 0);
+      // The defaults themselves, as documented.
+      CHECK(base.object_mass == Approx(options.parameters.density * unit->nodes[0].mass.volume).epsilon(1e-12));
+      CHECK(base.projectile_mass == Approx(rt::scene_defaults::mass_in_object_masses * base.object_mass));
+      CHECK(base.projectile_radius == Approx(rt::scene_defaults::radius_in_sizes * base.object_size));
+      CHECK(base.height == Approx(rt::scene_defaults::height_in_sizes * base.object_size));
+      CHECK(base.projectile_speed == Approx(rt::scene_defaults::speed_in_sqrt_g_size *
+                                            std::sqrt(rt::scene_defaults::gravity * base.object_size)));
+      // An impulse of M sqrt(g L) breaks bonds within break_radius_in_sizes object sizes.
+      const double reference_impulse = base.object_mass * std::sqrt(rt::scene_defaults::gravity * base.object_size);
+      CHECK(std::cbrt(base.frailty * reference_impulse / options.parameters.hit_points) ==
+            Approx(rt::scene_defaults::break_radius_in_sizes * base.object_size));
+      for (const double s : {0.25, 4.0}) {
+        INFO("scaled by " << s);
+        const rt::SceneSizes scaled = rt::scene_sizes(*scaled_tree(mesh, s), options);
+        CHECK(scaled.object_size == Approx(s * base.object_size).epsilon(1e-12));
+        CHECK(scaled.object_mass == Approx(s * s * s * base.object_mass).epsilon(1e-12));
+        CHECK(scaled.projectile_mass == Approx(s * s * s * base.projectile_mass).epsilon(1e-12));
+        CHECK(scaled.projectile_radius == Approx(s * base.projectile_radius).epsilon(1e-12));
+        CHECK(scaled.height == Approx(s * base.height).epsilon(1e-12));
+        CHECK(scaled.projectile_speed == Approx(std::sqrt(s) * base.projectile_speed).epsilon(1e-12));
+        // L^3 / (L^3 sqrt(L)): a larger object of the same shape is less frail, in proportion to its blow.
+        CHECK(scaled.frailty == Approx(base.frailty / std::sqrt(s)).epsilon(1e-12));
+      }
+      // A denser object is shot by a heavier sphere, no bigger and no faster.
+      rt::SceneOptions dense = options;
+      dense.parameters.density = 3 * options.parameters.density;
+      const rt::SceneSizes heavier = rt::scene_sizes(*unit, dense);
+      CHECK(heavier.projectile_mass == Approx(3 * base.projectile_mass).epsilon(1e-12));
+      CHECK(heavier.projectile_radius == base.projectile_radius);
+      CHECK(heavier.projectile_speed == base.projectile_speed);
+      CHECK(heavier.height == base.height);
+      CHECK(heavier.frailty == Approx(base.frailty / 3).epsilon(1e-12));
+      // Tougher bonds need a frailer material for the same damage radius.
+      rt::SceneOptions tough = options;
+      tough.parameters.hit_points = 5;
+      CHECK(rt::scene_sizes(*unit, tough).frailty == Approx(5 * base.frailty).epsilon(1e-12));
+    }
+  }
+}
+
+TEST_CASE("set scene options are used as given, whatever the object, and placed as resolved") {
+  for (const double s : {0.25, 1.0, 4.0}) {
+    const auto tree = scaled_tree("box", s);
+    const auto shapes = rt::BreakableShapes::create(tree);
+    INFO("box scaled by " << s);
+    rt::SceneOptions options;
+    options.kind = rt::SceneKind::shoot;
+    options.projectile_mass = 7;
+    options.projectile_speed = 0;  // set to 0 is a sphere at rest, not the default
+    options.projectile_radius = 0.05;
+    options.height = 0;
+    options.frailty = 3e-4;
+    const rt::SceneSizes sizes = rt::scene_sizes(*tree, options);
+    CHECK(sizes.frailty == 3e-4);
+    CHECK(sizes.projectile_mass == 7);
+    CHECK(sizes.projectile_speed == 0);
+    CHECK(sizes.projectile_radius == 0.05);
+    CHECK(sizes.height == 0);
+
+    for (const bool explicit_options : {true, false}) {
+      INFO((explicit_options ? "set" : "unset"));
+      rt::SceneOptions placed_options = options;
+      if (!explicit_options) placed_options = shoot_with([](rt::SceneOptions&) {});
+      rt::World world;
+      const rt::Scene scene = rt::set_up_scene(world, shapes, placed_options);
+      const rt::SceneSizes expected = rt::scene_sizes(*tree, placed_options);
+      REQUIRE(scene.projectile != rt::no_body);
+      const rt::BodyRecord& sphere = world.bodies()[scene.projectile];
+      CHECK(sphere.mass.mass == Approx(expected.projectile_mass).epsilon(1e-12));
+      CHECK(sphere.radius == expected.projectile_radius);
+      CHECK(world.state(scene.projectile).linear_velocity.x == Approx(expected.projectile_speed).epsilon(1e-12));
+      CHECK(scene.sizes.projectile_mass == expected.projectile_mass);
+      // The object is made with the resolved frailty, whatever parameters.frailty says.
+      CHECK(world.parameters_of(scene.objects.at(0)).frailty == expected.frailty);
+    }
+    // A set drop height of 0 stays 0 (the object starts on the floor), not the default.
+    rt::World world;
+    options.kind = rt::SceneKind::drop;
+    const rt::Scene dropped = rt::set_up_scene(world, shapes, options);
+    CHECK(dropped.sizes.height == 0);
+  }
+  // Radius 0 keeps its old meaning, the default; out-of-range values name the option.
+  const auto tree = scaled_tree("box", 1);
+  const rt::SceneOptions zero_radius = shoot_with([](rt::SceneOptions& o) { o.projectile_radius = 0.0; });
+  CHECK(rt::scene_sizes(*tree, zero_radius).projectile_radius ==
+        Approx(rt::scene_defaults::radius_in_sizes * rt::scene_sizes(*tree, {}).object_size));
+  CHECK_THROWS_WITH(rt::scene_sizes(*tree, shoot_with([](rt::SceneOptions& o) { o.projectile_mass = -1.0; })),
+                    Catch::Contains("projectile mass"));
+  CHECK_THROWS_WITH(rt::scene_sizes(*tree, shoot_with([](rt::SceneOptions& o) { o.projectile_speed = std::nan(""); })),
+                    Catch::Contains("projectile speed"));
+  CHECK_THROWS_WITH(rt::scene_sizes(*tree, shoot_with([](rt::SceneOptions& o) { o.height = -0.5; })),
+                    Catch::Contains("drop height"));
+  CHECK_THROWS_WITH(rt::scene_sizes(*tree, shoot_with([](rt::SceneOptions& o) { o.frailty = 0.0; })),
+                    Catch::Contains("frailty"));
 }

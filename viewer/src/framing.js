@@ -2,9 +2,10 @@
 // bodies may travel far (a shot object slides 25 m along the floor, a wall's
 // bricks spread over 30 m), so a camera fitted once at time 0 ends up looking
 // at an empty floor. The camera instead follows a framing that is a function of
-// the replay time alone: per time sample, the bounding sphere of the bodies
-// alive then (scale not 0), smoothed over a short window of replay time so the
-// view glides rather than jumps when bodies are born or die.
+// the replay time alone: per time sample, the bounding sphere of the pieces
+// alive then (scale not 0; not the projectile, followedBodies), smoothed over a
+// short window of replay time so the view glides rather than jumps when bodies
+// are born or die.
 //
 // Why per time and not one fit to the union over the whole replay: the union
 // of a shot object's path is 25 times its size, which would show the object as
@@ -29,6 +30,17 @@ export function recordingBodies(root) {
     if (o.userData && Number.isInteger(o.userData.body)) bodies.push(o);
   });
   return bodies;
+}
+
+/**
+ * The bodies the camera follows: the breakable objects' pieces (extras kind "cluster", runtime/recording.hpp), when
+ * the recording names any; else every body. The shot's sphere is left out: after the hit it rolls on, metres away
+ * from the pieces, and a camera that kept it in view would show the pieces as specks.
+ */
+export function followedBodies(root) {
+  const bodies = recordingBodies(root);
+  const pieces = bodies.filter((body) => body.userData.kind === 'cluster');
+  return pieces.length > 0 ? pieces : bodies;
 }
 
 const isAlive = (body) => !(body.scale.x === 0 && body.scale.y === 0 && body.scale.z === 0);
@@ -72,11 +84,11 @@ export class ReplayFraming {
    * Samples `replay` (a Replay over `root`) at `samplesPerSecond` and smooths over `window` seconds of replay time
    * either side. The samples are at least 2 and at most `maxSamples`, and fewer for a clip of many tracks (at most
    * `maxTrackSamples` track evaluations in all), so a wall of a thousand bodies still opens in a fraction of a second.
-   * Leaves the replay's bodies posed at time 0; `empty` is true when no body is alive at any sample (then there is
-   * nothing to follow).
+   * The bodies framed are followedBodies(root): the pieces, not the projectile. Leaves the replay's bodies posed at
+   * time 0; `empty` is true when no such body is alive at any sample (then there is nothing to follow).
    */
   constructor(replay, root, { samplesPerSecond = 60, maxSamples = 600, maxTrackSamples = 200000, window = 0.25 } = {}) {
-    const bodies = recordingBodies(root);
+    const bodies = followedBodies(root);
     const localBoxes = bodyLocalBoxes(bodies);
     const affordable = Math.floor(maxTrackSamples / Math.max(1, replay.clip.tracks.length));
     const count = Math.max(2, Math.min(maxSamples, affordable, Math.ceil(replay.duration * samplesPerSecond) + 1));

@@ -217,8 +217,8 @@ async function main() {
         const bodies = [];
         viewer.root.traverse((o) => {
           if (o.userData && Number.isInteger(o.userData.body)) {
-            bodies.push({ body: o.userData.body, position: o.position.toArray(), quaternion: o.quaternion.toArray(),
-              scale: o.scale.toArray() });
+            bodies.push({ body: o.userData.body, kind: o.userData.kind, position: o.position.toArray(),
+              quaternion: o.quaternion.toArray(), scale: o.scale.toArray() });
           }
         });
         Object.assign(out, { time: viewer.replay.time, duration: viewer.replay.duration, playing: viewer.replay.playing,

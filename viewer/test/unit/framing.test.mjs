@@ -1,7 +1,7 @@
 // Properties of viewer/src/framing.js (the camera that keeps a recording's
 // live bodies in view) on synthetic recordings of unit cubes: random motion
-// with births and deaths, bodies standing still, bodies at one velocity, and
-// bodies born far from the rest.
+// with births and deaths, bodies standing still, bodies at one velocity,
+// bodies born far from the rest, and a projectile among the pieces.
 
 import assert from 'node:assert/strict';
 import { describe, test } from 'node:test';
@@ -9,7 +9,8 @@ import { describe, test } from 'node:test';
 import { makeRecording, randomSource } from './synthetic.mjs';
 import { loadViewerModules } from './viewer-modules.mjs';
 
-const { THREE, Replay, ReplayFraming, bodyLocalBoxes, fitDistance, liveBodiesBox, recordingBodies } = await loadViewerModules();
+const { THREE, Replay, ReplayFraming, bodyLocalBoxes, fitDistance, followedBodies, liveBodiesBox, recordingBodies } =
+  await loadViewerModules();
 const SEED = 5150;
 
 function framed(recording, options) {
@@ -143,6 +144,33 @@ describe('ReplayFraming', () => {
     const clip = new THREE.AnimationClip('never', -1, [new THREE.VectorKeyframeTrack('ghost.scale', [0, 1], [0, 0, 0, 0, 0, 0],
       THREE.InterpolateDiscrete)]);
     assert.equal(new ReplayFraming(new Replay(ghosts, clip), ghosts).empty, true);
+  });
+
+  test('frames the pieces (kind "cluster") and not the projectile, as if it were not a body', () => {
+    const random = randomSource(SEED + 7);
+    for (let n = 0; n < 20; ++n) {
+      const count = random.int(2, 8);
+      const spheres = new Set(random.shuffle([...Array(count).keys()]).slice(0, random.int(1, count - 1)));
+      const kind = (b) => (spheres.has(b) ? 'sphere' : 'cluster');
+      const seed = random.int(0, 1 << 30);
+      const recording = makeRecording(THREE, randomSource(seed), { bodies: count, kind });
+      const followed = followedBodies(recording.root);
+      assert.deepEqual(followed, recording.bodies.filter((_, b) => !spheres.has(b)).map((b) => b.object), `recording ${n}`);
+      const { framing } = framed(recording);
+      // The same recording with the spheres' extras naming no body: the framing must not change.
+      const without = makeRecording(THREE, randomSource(seed), { bodies: count, kind });
+      for (const b of spheres) delete without.bodies[b].object.userData.body;
+      const { framing: expected } = framed(without);
+      assert.equal(framing.empty, expected.empty, `recording ${n}`);
+      if (framing.empty) continue;
+      framing.times.forEach((time, i) => {
+        assert.ok(framing.centres[i].equals(expected.centres[i]) && framing.radii[i] === expected.radii[i],
+          `recording ${n} at ${time} s: the projectile changed the framing`);
+      });
+    }
+    // A recording that names no cluster (every body a sphere) still has its bodies followed.
+    const spheresOnly = makeRecording(THREE, random, { bodies: 3, kind: () => 'sphere' });
+    assert.deepEqual(followedBodies(spheresOnly.root), recordingBodies(spheresOnly.root));
   });
 
   test('liveBodiesBox and recordingBodies see the bodies the clip shows', () => {

@@ -297,9 +297,11 @@ export function parseGlb(GLTFLoader, glb) {
  *   'static'  each body at one place, alive throughout
  *   'linear'  every body at one velocity (the same for all), alive throughout
  *   'birth'   body 0 at the origin throughout, the others born at `birthKey`'s time 40 to 60 m away
+ * `kind`, when given, is a function of the body's index giving its extras' kind ("cluster" or "sphere"), as a
+ * `simulate --record` file names them; without it the bodies name no kind.
  */
 export function makeRecording(three, random, { bodies: bodyCount, motion = 'random', keyCount = random.int(2, 12),
-  step = random.int(1, 8) / 64, birthKey = 1 }) {
+  step = random.int(1, 8) / 64, birthKey = 1, kind = null }) {
   const root = new three.Group();
   const tracks = [];
   const bodies = [];
@@ -309,6 +311,7 @@ export function makeRecording(three, random, { bodies: bodyCount, motion = 'rand
     const object = new three.Object3D();
     object.name = `body ${b}`;
     object.userData.body = b;
+    if (kind) object.userData.kind = kind(b);
     object.add(new three.Mesh(new three.BoxGeometry(1, 1, 1)));
     root.add(object);
     const start = [0, 1, 2].map(() => random.int(-400, 400) / 7);
