@@ -16,7 +16,6 @@
 #include <utility>
 #include <vector>
 
-#include "shatter/kernel/enum_names.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
@@ -28,28 +27,6 @@
 #include "shatter/version.hpp"
 
 namespace shatter {
-
-std::string_view strategy_name(Strategy strategy) {
-  switch (strategy) {
-    case Strategy::thesis: return "thesis";
-    case Strategy::balanced: return "balanced";
-    case Strategy::axis: return "axis";
-  }
-  return "unknown";
-}
-
-std::string_view kernel_name(KernelKind kernel) {
-  switch (kernel) {
-    case KernelKind::fast: return "fast";
-    case KernelKind::exact: return "exact";
-    case KernelKind::plane: return "plane";
-  }
-  return "unknown";
-}
-
-std::optional<Strategy> strategy_named(std::string_view name) {
-  return enum_named(name, {Strategy::thesis, Strategy::balanced, Strategy::axis}, &strategy_name);
-}
 
 namespace {
 
@@ -161,7 +138,7 @@ struct BuildNode {
 
 class Builder {
  public:
-  Builder(const BuildOptions& options, const LeafProgressFn& progress) : options_(options), progress_(progress) {}
+  Builder(const TreeRecipe& recipe, const LeafProgressFn& progress) : options_(recipe), progress_(progress) {}
 
   std::unique_ptr<BuildNode> root(const Mesh& mesh) {
     auto node = std::make_unique<BuildNode>();
@@ -247,13 +224,13 @@ class Builder {
     if (progress_) progress_(done);
   }
 
-  const BuildOptions& options() const { return options_; }
+  const TreeRecipe& recipe() const { return options_; }
   const PlaneInput& plane_input() const { return *plane_input_; }
   std::uint64_t planes_missed() const { return planes_missed_; }
   std::uint64_t planes_rejected() const { return planes_rejected_; }
 
  private:
-  const BuildOptions& options_;
+  const TreeRecipe& options_;  // the recipe: what to build
   std::optional<PlaneInput> plane_input_;
   const LeafProgressFn& progress_;
   std::atomic<std::size_t> leaves_done_{0};
@@ -310,7 +287,7 @@ void grow(Builder& builder, BuildNode& node, std::uint32_t budget) {
     return;
   }
   builder.cut(node);
-  const std::vector<std::uint32_t> shares = builder.options().strategy == Strategy::axis
+  const std::vector<std::uint32_t> shares = builder.recipe().strategy == Strategy::axis
                                                 ? share_by_volume(budget, node)
                                                 : share_evenly(budget, node.children.size());
   if (budget < parallel_budget) {
@@ -531,12 +508,11 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 }  // namespace
 
-MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const LeafProgressFn& progress,
-                         BuildReport* report) {
-  if (options.fragments < 1) throw std::invalid_argument("fragments must be at least 1");
-  if (options.max_plane_tries < 1) throw std::invalid_argument("max_plane_tries must be at least 1");
-  if (options.kernel != KernelKind::plane) {
-    throw std::invalid_argument("options.kernel must be plane: the " + std::string(kernel_name(options.kernel)) +
+MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const BuildRunOptions& run) {
+  if (recipe.fragments < 1) throw std::invalid_argument("fragments must be at least 1");
+  if (recipe.max_plane_tries < 1) throw std::invalid_argument("max_plane_tries must be at least 1");
+  if (recipe.kernel != KernelKind::plane) {
+    throw std::invalid_argument("recipe.kernel must be plane: the " + std::string(kernel_name(recipe.kernel)) +
                                 " kernel was retired (its trees still read)");
   }
   for (SurfaceId surface : mesh.surfaces) {
@@ -544,27 +520,24 @@ MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const Le
       throw std::invalid_argument("build_mesh_tree needs every input triangle on surface 0 (caps are numbered by cut)");
     }
   }
-  if (!options.input_validated) require_valid_solid(mesh, "input", options.allow_self_intersections);
+  if (!run.input_validated) require_valid_solid(mesh, "input", recipe.allow_self_intersections);
 
-  const unsigned threads = options.threads == 0 ? static_cast<unsigned>(tbb::info::default_concurrency())
-                                                : options.threads;
+  const unsigned threads = run.threads == 0 ? static_cast<unsigned>(tbb::info::default_concurrency()) : run.threads;
   auto phase_start = std::chrono::steady_clock::now();
-  Builder builder(options, progress);
+  Builder builder(recipe, run.progress);
   std::unique_ptr<BuildNode> root = builder.root(mesh);
   tbb::task_arena arena(static_cast<int>(threads));
   arena.execute([&] {
-    if (options.strategy == Strategy::balanced) {
-      grow_balanced(builder, *root, options.fragments, threads);
+    if (recipe.strategy == Strategy::balanced) {
+      grow_balanced(builder, *root, recipe.fragments, threads);
     } else {
-      grow(builder, *root, options.fragments);
-      undo_surplus_cuts(*root, options.fragments);
+      grow(builder, *root, recipe.fragments);
+      undo_surplus_cuts(*root, recipe.fragments);
     }
   });
 
   MeshTree tree;
-  tree.options = options;
-  tree.options.threads = 0;  // never changes the output, so not part of it
-  tree.options.input_validated = false;  // nor does who checked the input
+  tree.recipe = recipe;
   tree.shatter_version = std::string(version_string);
   number_tree(*root, tree);
   dismantle(std::move(root));
@@ -579,7 +552,7 @@ MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const Le
   phase_start = std::chrono::steady_clock::now();
   tree.bonds = find_bonds(tree);
   timing.bond_seconds = seconds_since(phase_start);
-  if (report) *report = timing;
+  if (run.report) *run.report = timing;
   return tree;
 }
 

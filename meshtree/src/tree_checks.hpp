@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "shatter/kernel/implicit.hpp"
-#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/recipe.hpp"
 #include "shatter/meshtree/tree.hpp"
 #include "shatter/meshtree/validate_tree.hpp"
 

@@ -65,16 +65,16 @@ std::string full_digits(double value) {
 
 // --- the structure ----------------------------------------------------------------
 
-std::optional<TreeDefect> options_defect(const BuildOptions& options) {
-  if (options.fragments == 0) return TreeDefect{TreePart::options, 0, "options.fragments is 0 (must be at least 1)"};
-  if (static_cast<std::uint8_t>(options.strategy) > last_strategy) {
+std::optional<TreeDefect> recipe_defect(const TreeRecipe& recipe) {
+  if (recipe.fragments == 0) return TreeDefect{TreePart::recipe, 0, "recipe.fragments is 0 (must be at least 1)"};
+  if (static_cast<std::uint8_t>(recipe.strategy) > last_strategy) {
     return TreeDefect{
-        TreePart::options, 0,
-        "options.strategy " + str(static_cast<std::uint8_t>(options.strategy)) + " is not a known strategy"};
+        TreePart::recipe, 0,
+        "recipe.strategy " + str(static_cast<std::uint8_t>(recipe.strategy)) + " is not a known strategy"};
   }
-  if (static_cast<std::uint8_t>(options.kernel) > last_kernel) {
-    return TreeDefect{TreePart::options, 0,
-                      "options.kernel " + str(static_cast<std::uint8_t>(options.kernel)) + " is not a known kernel"};
+  if (static_cast<std::uint8_t>(recipe.kernel) > last_kernel) {
+    return TreeDefect{TreePart::recipe, 0,
+                      "recipe.kernel " + str(static_cast<std::uint8_t>(recipe.kernel)) + " is not a known kernel"};
   }
   return std::nullopt;
 }
@@ -550,7 +550,7 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
 /// The first defect of `tree`, or nothing. `caches`: also check that the
 /// exact representation's caches are sized (the encoder's precondition).
 std::optional<TreeDefect> first_defect(const MeshTree& tree, bool caches) {
-  if (auto defect = options_defect(tree.options)) return defect;
+  if (auto defect = recipe_defect(tree.recipe)) return defect;
   if (auto defect = structure_defect(tree.nodes)) return defect;
   if (auto defect = leaf_list_defect(tree)) return defect;
   for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
@@ -618,7 +618,7 @@ std::optional<TreeDefect> caches_defect(const MeshTree& tree, MeshTree* fill) {
 // --- the geometry (TreeValidationOptions::geometry) -------------------------------
 
 // Defects a tree built with allow_self_intersections may have: its pieces are
-// promised closed, oriented and manifold only (BuildOptions).
+// promised closed, oriented and manifold only (TreeRecipe).
 bool embedding_defect(DefectKind kind) {
   return kind == DefectKind::zero_area_triangle || kind == DefectKind::inward_orientation ||
          kind == DefectKind::self_intersection;
@@ -656,7 +656,7 @@ std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k
 
   // validate_mesh finds nothing wrong with no triangles at all.
   if (node.mesh.triangles.empty()) return TreeDefect{TreePart::mesh, k, "the mesh of " + name + " is empty"};
-  const bool topology_only = tree.options.allow_self_intersections;
+  const bool topology_only = tree.recipe.allow_self_intersections;
   ValidationReport mesh_report = validate_mesh(node.mesh, {.check_self_intersections = !topology_only});
   if (topology_only) {
     std::erase_if(mesh_report.defects, [](const Defect& defect) { return embedding_defect(defect.kind); });
@@ -697,8 +697,8 @@ std::optional<TreeDefect> fill_caches(MeshTree& tree) { return caches_defect(tre
 
 std::string_view tree_part_name(TreePart part) {
   switch (part) {
-    case TreePart::options:
-      return "options";
+    case TreePart::recipe:
+      return "recipe";
     case TreePart::node:
       return "node";
     case TreePart::leaf_range:
@@ -726,7 +726,7 @@ std::string_view tree_part_name(TreePart part) {
 std::string TreeValidationReport::summary() const {
   if (!defect) return "valid";
   std::string where(tree_part_name(defect->part));
-  if (defect->part != TreePart::options) where.append(" ").append(detail::str(defect->index));
+  if (defect->part != TreePart::recipe) where.append(" ").append(detail::str(defect->index));
   return where + ": " + defect->message;
 }
 

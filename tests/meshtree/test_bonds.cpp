@@ -213,18 +213,18 @@ MeshTree meshes_only(MeshTree tree) {
     if (node.convex) node.hull = convex_hull_of(node.mesh);
     node.convex = false;
   }
-  tree.options.kernel = KernelKind::exact;
+  tree.recipe.kernel = KernelKind::exact;
   tree.bonds = find_bonds(tree);
   return tree;
 }
 
 MeshTree build(const Mesh& mesh, Strategy strategy, Representation representation, std::uint32_t fragments,
                std::uint64_t seed = 11) {
-  BuildOptions options;
-  options.fragments = fragments;
-  options.strategy = strategy;
-  options.seed = seed;
-  MeshTree tree = build_mesh_tree(mesh, options);
+  TreeRecipe recipe;
+  recipe.fragments = fragments;
+  recipe.strategy = strategy;
+  recipe.seed = seed;
+  MeshTree tree = build_mesh_tree(mesh, recipe);
   CHECK(tree_problem(tree) == "");
   if (representation == Representation::exact) return tree;
   tree = meshes_only(std::move(tree));
@@ -636,7 +636,7 @@ MeshTree plane_tree_by_hand(const Mesh& mesh,
                             const std::function<std::optional<Plane>(std::uint32_t, const Box3&)>& plane_for) {
   const PlaneInput input = prepare_plane_input(mesh);
   MeshTree tree;
-  tree.options.kernel = KernelKind::plane;
+  tree.recipe.kernel = KernelKind::plane;
   tree.geometry = input.geometry;
   const std::function<NodeIndex(Solid, NodeIndex, bool, std::uint32_t)> grow =
       [&](Solid solid, NodeIndex parent, bool above, std::uint32_t depth) -> NodeIndex {
@@ -891,12 +891,12 @@ TEST_CASE("find_bonds on 65,536 fragments of a cube", "[.][bench]") {
   if (cache != nullptr && std::filesystem::exists(cache)) {
     tree = read_shatter_file(cache);
   } else {
-    BuildOptions options;
-    options.fragments = 65536;
-    options.strategy = Strategy::balanced;
-    options.seed = 3;
+    TreeRecipe recipe;
+    recipe.fragments = 65536;
+    recipe.strategy = Strategy::balanced;
+    recipe.seed = 3;
     const auto build_start = std::chrono::steady_clock::now();
-    tree = build_mesh_tree(unit_cube(), options);
+    tree = build_mesh_tree(unit_cube(), recipe);
     CHECK(tree_problem(tree) == "");
     WARN("build " << std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count() << " s");
     if (cache != nullptr) write_shatter_file(cache, tree);

@@ -583,11 +583,11 @@ TEST_CASE("write_glb writes the encoded bytes atomically, creating the folder") 
 TEST_CASE("built trees: partitions, GLBs and statistics agree with the tree") {
   const Mesh torus = test::torus(2, 0.7, 24, 12);
   for (const Strategy strategy : {Strategy::thesis, Strategy::balanced, Strategy::axis}) {
-    BuildOptions options;
-    options.fragments = 9;
-    options.seed = 11;
-    options.strategy = strategy;
-    const MeshTree tree = build_mesh_tree(torus, options);
+    TreeRecipe recipe;
+    recipe.fragments = 9;
+    recipe.seed = 11;
+    recipe.strategy = strategy;
+    const MeshTree tree = build_mesh_tree(torus, recipe);
     INFO(strategy_name(strategy));
     CHECK(test::tree_problem(tree, true) == "");
     const std::uint32_t deepest = max_depth_of(tree);

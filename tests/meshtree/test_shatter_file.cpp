@@ -160,14 +160,13 @@ std::string solid_difference(const Solid& a, const Solid& b) {
   return {};
 }
 
-/// The first field in which the trees differ (options.threads excepted: it is
-/// not stored), or an empty string.
+/// The first field in which the trees differ, or an empty string.
 std::string tree_difference(const MeshTree& a, const MeshTree& b) {
-  const BuildOptions &oa = a.options, &ob = b.options;
+  const TreeRecipe &oa = a.recipe, &ob = b.recipe;
   if (oa.fragments != ob.fragments || oa.seed != ob.seed || oa.strategy != ob.strategy || oa.kernel != ob.kernel ||
       !same(oa.interior_uv_scale, ob.interior_uv_scale) || oa.max_plane_tries != ob.max_plane_tries ||
       oa.allow_self_intersections != ob.allow_self_intersections) {
-    return "options";
+    return "recipe";
   }
   if (a.shatter_version != b.shatter_version) return "shatter_version";
   if (a.nodes.size() != b.nodes.size()) return "node count";
@@ -219,7 +218,6 @@ void check_round_trip(const MeshTree& tree) {
   const std::string bytes = encode_shatter(tree);
   const MeshTree decoded = decode_within_budget(bytes);
   CHECK(tree_difference(tree, decoded).empty());
-  CHECK(decoded.options.threads == 0);
   CHECK(encode_shatter(decoded) == bytes);
 }
 
@@ -249,14 +247,13 @@ MeshTreeNode node_of(Mesh mesh) {
 /// A box [0,2]x[0,1]x[0,1] cut at x = 1 into two leaf boxes, with one bond.
 MeshTree two_leaf_tree() {
   MeshTree tree;
-  tree.options.fragments = 2;
-  tree.options.seed = 0xFEEDFACECAFEBEEFull;
-  tree.options.strategy = Strategy::balanced;
-  tree.options.kernel = KernelKind::exact;
-  tree.options.interior_uv_scale = 0.5;
-  tree.options.max_plane_tries = 7;
-  tree.options.allow_self_intersections = true;
-  tree.options.threads = 3;  // not stored
+  tree.recipe.fragments = 2;
+  tree.recipe.seed = 0xFEEDFACECAFEBEEFull;
+  tree.recipe.strategy = Strategy::balanced;
+  tree.recipe.kernel = KernelKind::exact;
+  tree.recipe.interior_uv_scale = 0.5;
+  tree.recipe.max_plane_tries = 7;
+  tree.recipe.allow_self_intersections = true;
 
   MeshTreeNode root = node_of(test::box({0, 0, 0}, {2, 1, 1}));
   root.plane = {{1, 0, 0}, -1};
@@ -303,12 +300,12 @@ void add_attributes(Mesh& mesh, unsigned which, std::size_t& cursor) {
 /// special doubles in positions, planes, masses and bonds.
 MeshTree deep_tree() {
   MeshTree tree;
-  tree.options.fragments = 4;
-  tree.options.seed = 99;
-  tree.options.strategy = Strategy::axis;
-  tree.options.kernel = KernelKind::fast;
-  tree.options.interior_uv_scale = special_doubles[1];
-  tree.options.max_plane_tries = 0xFFFFFFFFu;
+  tree.recipe.fragments = 4;
+  tree.recipe.seed = 99;
+  tree.recipe.strategy = Strategy::axis;
+  tree.recipe.kernel = KernelKind::fast;
+  tree.recipe.interior_uv_scale = special_doubles[1];
+  tree.recipe.max_plane_tries = 0xFFFFFFFFu;
 
   tree.nodes = {node_of(test::torus(2, 0.5, 12, 8)), node_of(test::ellipsoid({0, 0, 0}, {1, 2, 3}, 8, 6)),
                 node_of(test::box({0, 0, 0}, {1, 1, 1})), node_of(test::box({-1, -1, -1}, {0, 0, 0})),
@@ -347,11 +344,10 @@ MeshTree deep_tree() {
 /// exact representation fills GEOM and SOLD; built once.
 const MeshTree& small_plane_tree() {
   static const MeshTree tree = [] {
-    BuildOptions options;
-    options.fragments = 4;
-    options.seed = 7;
-    options.threads = 1;
-    return build_mesh_tree(test::unit_cube(), options);
+    TreeRecipe recipe;
+    recipe.fragments = 4;
+    recipe.seed = 7;
+    return build_mesh_tree(test::unit_cube(), recipe, {.threads = 1});
   }();
   return tree;
 }
@@ -400,7 +396,7 @@ std::string section(std::string_view tag, std::string_view payload) {
   return Bytes{}.text(tag).u64(payload.size()).u32(reference_crc32(payload)).text(payload).data;
 }
 
-std::string options_payload(const BuildOptions& o) {
+std::string recipe_payload(const TreeRecipe& o) {
   return Bytes{}
       .u32(o.fragments)
       .u64(o.seed)
@@ -501,7 +497,7 @@ struct Payloads {
   std::vector<std::pair<std::string, std::string>> parts;
 
   explicit Payloads(const MeshTree& tree)
-      : parts{{"OPTS", options_payload(tree.options)},      {"NODE", nodes_payload(tree.nodes)},
+      : parts{{"OPTS", recipe_payload(tree.recipe)},      {"NODE", nodes_payload(tree.nodes)},
               {"MESH", meshes_payload(tree.nodes, false)}, {"HULL", meshes_payload(tree.nodes, true)},
               {"BOND", bonds_payload(tree.bonds)},         {"GEOM", geometry_payload(tree.geometry)},
               {"SOLD", solids_payload(tree)}} {
@@ -594,15 +590,9 @@ TEST_CASE("hand-built trees round-trip field by field and bit for bit", "[shatte
     const MeshTree decoded = decode_shatter(encode_shatter(tree));
     // Spot checks that the comparison itself sees the special bit patterns.
     CHECK(bits(decoded.nodes[2].mesh.positions[0].x) == 0x7FF0000000000001u);
-    CHECK(bits(decoded.options.interior_uv_scale) == 0xFFF80000DEADBEEFu);
+    CHECK(bits(decoded.recipe.interior_uv_scale) == 0xFFF80000DEADBEEFu);
     CHECK(bits(decoded.nodes[2].mesh.positions[0].y) == bits(-0.0));
     CHECK(decoded.leaf_nodes == std::vector<NodeIndex>{2, 3, 4, 5});
-  }
-  SECTION("threads is not stored, so it never changes the bytes") {
-    MeshTree a = two_leaf_tree(), b = two_leaf_tree();
-    a.options.threads = 0;
-    b.options.threads = 64;
-    CHECK(encode_shatter(a) == encode_shatter(b));
   }
 }
 
@@ -617,12 +607,12 @@ TEST_CASE("built trees round-trip exactly", "[shatter_file][build]") {
         // Keep the suite fast (building dominates): N = 64 on the box with every
         // strategy, on the other meshes with one.
         if (fragments == 64 && input.name != "box" && strategy != Strategy::axis) continue;
-        BuildOptions options;
-        options.fragments = fragments;
-        options.seed = 7 + fragments;
-        options.strategy = strategy;
+        TreeRecipe recipe;
+        recipe.fragments = fragments;
+        recipe.seed = 7 + fragments;
+        recipe.strategy = strategy;
         INFO(input.name << ", " << strategy_name(strategy) << ", N = " << fragments);
-        const MeshTree tree = build_mesh_tree(input.mesh, options);
+        const MeshTree tree = build_mesh_tree(input.mesh, recipe);
         REQUIRE(tree.leaf_count() >= fragments);
         CHECK(test::tree_problem(tree) == "");
         check_round_trip(tree);
@@ -644,7 +634,7 @@ TEST_CASE("files the retired kernels wrote still read, hold and write back the s
     const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     REQUIRE(!bytes.empty());
     const MeshTree tree = decode_within_budget(bytes);
-    CHECK(tree.options.kernel != KernelKind::plane);
+    CHECK(tree.recipe.kernel != KernelKind::plane);
     CHECK(tree.geometry.points.empty());  // no exact representation
     CHECK(tree.cut_planes.empty());
     CHECK(test::tree_problem(tree) == "");
@@ -686,10 +676,10 @@ TEST_CASE("every single-byte change is refused", "[shatter_file][damage]") {
     for (const auto& [mesh, strategy] : {std::pair{test::torus(2, 0.6, 16, 10), Strategy::thesis},
                                          std::pair{test::hollow_egg(), Strategy::axis},
                                          std::pair{test::box({0, 0, 0}, {1, 2, 3}), Strategy::balanced}}) {
-      BuildOptions options;
-      options.fragments = 8;
-      options.strategy = strategy;
-      files.push_back(encode_shatter(build_mesh_tree(mesh, options)));
+      TreeRecipe recipe;
+      recipe.fragments = 8;
+      recipe.strategy = strategy;
+      files.push_back(encode_shatter(build_mesh_tree(mesh, recipe)));
     }
     test::Random random(2024);
     for (int sample = 0; sample < 2000; ++sample) {
@@ -776,7 +766,7 @@ TEST_CASE("the header is checked: magic, version, with distinct messages", "[sha
 
 TEST_CASE("hostile section tables are refused", "[shatter_file][hostile]") {
   const MeshTree tree = two_leaf_tree();
-  const std::string opts = section("OPTS", options_payload(tree.options)), nodes = section("NODE", nodes_payload(tree.nodes)),
+  const std::string opts = section("OPTS", recipe_payload(tree.recipe)), nodes = section("NODE", nodes_payload(tree.nodes)),
                     meshes = section("MESH", meshes_payload(tree.nodes, false)), hulls = section("HULL", meshes_payload(tree.nodes, true)),
                     bonds = section("BOND", bonds_payload(tree.bonds)), end = section("END ", "");
   // GEOM and SOLD (version 2): what a tree without an exact representation stores.
@@ -890,7 +880,7 @@ TEST_CASE("hostile counts are refused before anything is allocated", "[shatter_f
   check_refused(with_section("NODE", nodes_payload(tree.nodes).substr(0, nodes_payload(tree.nodes).size() - 1)),
                 "node 2: the payload ends inside child count");
   check_refused(with_section("BOND", bonds_payload(tree.bonds) + "!"), "1 unexpected bytes after the last record");
-  check_refused(with_section("OPTS", options_payload(tree.options).substr(0, 24)), "the payload ends inside max_plane_tries");
+  check_refused(with_section("OPTS", recipe_payload(tree.recipe).substr(0, 24)), "the payload ends inside max_plane_tries");
 
   // Attribute channels claiming 3T values with none present.
   Mesh mesh = test::box({0, 0, 0}, {1, 1, 1});
@@ -907,7 +897,7 @@ TEST_CASE("enum and bool bytes out of range are refused", "[shatter_file][hostil
   const std::string good = encode_shatter(tree);
   const std::size_t opts_payload = 12 + 16;
   const auto with_byte = [&](std::size_t at, std::uint8_t value) {
-    std::string payload = options_payload(tree.options);
+    std::string payload = recipe_payload(tree.recipe);
     payload[at] = static_cast<char>(value);
     return good.substr(0, 12) + section("OPTS", payload) + good.substr(opts_payload + 27);
   };
@@ -918,8 +908,8 @@ TEST_CASE("enum and bool bytes out of range are refused", "[shatter_file][hostil
   nodes[4 + 24] = 5;  // above_parent_plane of the root
   check_refused(file_with_nodes_payload(tree, nodes), "node 0: above_parent_plane is 5");
   MeshTree zero_fragments = tree;
-  zero_fragments.options.fragments = 0;
-  check_refused(reference_file(zero_fragments), "options.fragments is 0");
+  zero_fragments.recipe.fragments = 0;
+  check_refused(reference_file(zero_fragments), "recipe.fragments is 0");
 }
 
 TEST_CASE("invalid trees with correct checksums are refused", "[shatter_file][hostile]") {
@@ -996,8 +986,8 @@ TEST_CASE("encode_shatter refuses trees a reader could not trust", "[shatter_fil
   CHECK_THROWS_WITH(encode_shatter(tree), Catch::Contains("has 5 uvs for 12 triangles"));
   CHECK_THROWS_AS(encode_shatter(MeshTree{}), std::invalid_argument);
   tree = two_leaf_tree();
-  tree.options.strategy = static_cast<Strategy>(9);
-  CHECK_THROWS_WITH(encode_shatter(tree), Catch::Contains("options.strategy 9"));
+  tree.recipe.strategy = static_cast<Strategy>(9);
+  CHECK_THROWS_WITH(encode_shatter(tree), Catch::Contains("recipe.strategy 9"));
 }
 
 TEST_CASE("write_shatter_file and read_shatter_file", "[shatter_file][io]") {
@@ -1095,7 +1085,7 @@ TEST_CASE("version 1 files still read, as trees without an exact representation"
       REQUIRE(v1.size() > 12);
       REQUIRE(v1.substr(8, 4) == Bytes{}.u32(1).data);
       const MeshTree decoded = decode_within_budget(v1);
-      CHECK(decoded.options.kernel != KernelKind::plane);
+      CHECK(decoded.recipe.kernel != KernelKind::plane);
       CHECK(decoded.geometry.points.empty());
       CHECK(decoded.leaf_count() >= 2);
       for (const MeshTreeNode& node : decoded.nodes) CHECK((node.solid.defs.empty() && !node.convex && !node.hull.positions.empty()));
@@ -1132,14 +1122,14 @@ TEST_CASE("plane-kernel trees round-trip exactly, exact representation and cache
   for (const test::NamedMesh& input : test::generated_meshes()) {
     for (const Strategy strategy : {Strategy::thesis, Strategy::balanced, Strategy::axis}) {
       for (const std::uint32_t fragments : {1u, 3u, 12u, 48u}) {
-        BuildOptions options;
-        options.fragments = fragments;
-        options.seed = 100 + fragments;
-        options.strategy = strategy;
+        TreeRecipe recipe;
+        recipe.fragments = fragments;
+        recipe.seed = 100 + fragments;
+        recipe.strategy = strategy;
         INFO(input.name << ", " << strategy_name(strategy) << ", N = " << fragments);
-        const MeshTree tree = build_mesh_tree(input.mesh, options);
+        const MeshTree tree = build_mesh_tree(input.mesh, recipe);
         CHECK(test::tree_problem(tree) == "");
-        REQUIRE(tree.options.kernel == KernelKind::plane);
+        REQUIRE(tree.recipe.kernel == KernelKind::plane);
         REQUIRE(tree.leaf_count() >= fragments);
         REQUIRE(!tree.geometry.points.empty());
         REQUIRE(tree.cut_planes.size() == tree.nodes.size());

@@ -48,10 +48,10 @@ Mesh ellipsoid_with_normals() {
 }
 
 MeshTree tree_of(const Mesh& mesh, std::uint32_t fragments) {
-  BuildOptions options;
-  options.fragments = fragments;
-  options.seed = 7;
-  return build_mesh_tree(mesh, options);
+  TreeRecipe recipe;
+  recipe.fragments = fragments;
+  recipe.seed = 7;
+  return build_mesh_tree(mesh, recipe);
 }
 
 // Checks every exported vertex normal of every node against what it must be,

@@ -3,8 +3,9 @@
 // every solid a cut produced as a child of the solid it was cut from, the
 // fragments at the leaves. Nodes are stored in depth-first preorder and leaves are
 // numbered in that order, so every node's leaves form one contiguous range.
-// A tree records the options that built it (build.hpp) and its bonds (bonds.hpp);
-// those headers declare their functions on a forward-declared MeshTree.
+// A tree records the recipe that built it (recipe.hpp) and its bonds (bonds.hpp);
+// bonds.hpp declares its functions on a forward-declared MeshTree, and the
+// builder (build.hpp) includes this header.
 
 #include <cstdint>
 #include <string>
@@ -15,7 +16,7 @@
 #include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/vec.hpp"
 #include "shatter/meshtree/bonds.hpp"
-#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/recipe.hpp"
 #include "shatter/meshtree/tree_index.hpp"
 
 namespace shatter {
@@ -50,7 +51,7 @@ struct MeshTreeNode {
 
 /// What `build_mesh_tree` produces and the .shatter file stores.
 struct MeshTree {
-  BuildOptions options;
+  TreeRecipe recipe;  ///< what decides the tree's contents (how it was built is not kept)
   /// The shatter version that built the tree (shatter::version_string, e.g.
   /// "0.1.0"; build_mesh_tree sets it), kept by the .shatter file. Empty when
   /// unknown: a tree made by hand, or read from a file written before versions

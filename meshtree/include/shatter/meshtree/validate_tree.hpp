@@ -18,7 +18,7 @@ namespace shatter {
 
 /// Where in a tree a defect is. TreeDefect::index says which one of that part.
 enum class TreePart : std::uint8_t {
-  options,      ///< MeshTree::options (index 0)
+  recipe,       ///< MeshTree::recipe (index 0)
   node,         ///< a node's parent, children, depth, plane or mass (index: the node)
   leaf_range,   ///< a node's first_leaf and leaf_count (index: the node)
   leaf_list,    ///< MeshTree::leaf_nodes (index: the leaf)
@@ -32,7 +32,7 @@ enum class TreePart : std::uint8_t {
                 ///< cached approximations, convex flag (index: the node)
 };
 
-/// The part as messages name it: "options", "node", "leaf range", "leaf list",
+/// The part as messages name it: "recipe", "node", "leaf range", "leaf list",
 /// "mesh", "hull", "bond", "input point", "input plane", "cut planes" or "solid";
 /// "unknown" for a value outside the enum.
 std::string_view tree_part_name(TreePart part);
@@ -72,7 +72,7 @@ struct TreeValidationOptions {
 /// The answer of validate_tree.
 struct TreeValidationReport {
   /// The first defect in the order of the checks, empty when the tree holds: the
-  /// structure (options, links and leaf ranges, the leaf list, meshes and hulls,
+  /// structure (recipe, links and leaf ranges, the leaf list, meshes and hulls,
   /// bonds, the exact representation), then the caches, then the geometry (the
   /// lowest node at fault).
   std::optional<TreeDefect> defect;
@@ -88,7 +88,7 @@ struct TreeValidationReport {
 /// Checks `tree` against every invariant of a mesh tree, stopping at the first
 /// defect, since a broken structure makes the later checks meaningless (or
 /// unsafe to index). The structural checks, always made, are those
-/// decode_shatter lists (file.hpp): the options' enums in range and fragments
+/// decode_shatter lists (file.hpp): the recipe's enums in range and fragments
 /// >= 1; the root, parent and children links, depth-first preorder, depths and
 /// child counts; leaf ranges contiguous and consistent with the children, and
 /// leaf_nodes the leaves in node order; every mesh and hull indexing its own
