@@ -190,12 +190,13 @@ struct LeafSummary {
 std::uint64_t tree_fingerprint(const MeshTree& tree) {
   Fingerprint f;
   f.add(tree.nodes.size());
-  for (const auto& node : tree.nodes) {
+  for (NodeIndex k = 0; k < tree.nodes.size(); ++k) {
+    const shatter::MeshTreeNode& node = tree.nodes[k];
     f.add_vector(node.mesh.positions);
     f.add_vector(node.mesh.triangles);
     f.add_vector(node.mesh.surfaces);
     f.add(node.parent);
-    f.add(node.plane);
+    f.add(tree.cut_planes[k]);
   }
   f.add_vector(tree.leaf_nodes);
   f.add(tree.bonds.size());

@@ -125,11 +125,15 @@ Plane draw_plane(Strategy strategy, const BoundingBox& box, const Vec3& centroid
 
 struct BuildNode {
   Mesh mesh;    // the solid rounded to doubles, certified valid (round_solid)
-  Solid solid;  // the exact solid; its vertices refer to the cut plane of the
-                // ancestor at depth k as PlaneRef::cut(k)
+  // The exact solid; its vertices refer to the cut plane of the ancestor at
+  // depth k as PlaneRef::cut(k). A node's index in the tree is its place in
+  // depth-first preorder, unknown until every subtree before it is finished
+  // (they grow in parallel, and cuts may be undone), so the depth names the
+  // plane until number_tree gives the node its index.
+  Solid solid;
   const BuildNode* parent = nullptr;
   MassProperties mass;
-  Plane plane;
+  Plane plane;  // the plane that cut this node; zero while it is a leaf
   bool above_parent_plane = false;
   std::uint32_t depth = 0;
   std::uint64_t seed = 0;
@@ -400,7 +404,8 @@ void number_tree(BuildNode& root, MeshTree& tree) {
     for (SurfaceId& surface : node.mesh.surfaces) {
       if (surface != original_surface) surface = cap_surface_of(path[surface - 1]);
     }
-    // Likewise the plane kernel's cut planes, referred to by depth until now.
+    // Likewise the plane kernel's cut planes, referred to by depth until now
+    // (BuildNode::solid says why); the node's own plane takes its index here.
     node.solid = std::move(built.solid);
     node.convex = node.solid.convex;
     for (SolidFace& face : node.solid.faces) {
@@ -420,7 +425,7 @@ void number_tree(BuildNode& root, MeshTree& tree) {
     }
     node.mass = built.mass;
     node.parent = pending.parent;
-    node.plane = built.plane;
+    tree.cut_planes.push_back(built.plane);
     node.above_parent_plane = built.above_parent_plane;
     node.depth = built.depth;
     node.seed = built.seed;
@@ -492,16 +497,6 @@ void plane_hulls(tbb::task_arena& arena, MeshTree& tree) {
   }
 }
 
-// The plane kernel's tree keeps the input planes and the node planes that the
-// nodes' exact solids are defined over.
-void keep_plane_geometry(const PlaneInput& input, MeshTree& tree) {
-  tree.geometry = input.geometry;
-  tree.cut_planes.resize(tree.nodes.size());
-  for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
-    tree.cut_planes[i] = tree.nodes[i].is_leaf() ? Plane{} : tree.nodes[i].plane;
-  }
-}
-
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -545,7 +540,9 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
   timing.cutting_seconds = seconds_since(phase_start);
   timing.planes_missed = builder.planes_missed();
   timing.planes_rejected = builder.planes_rejected();
-  keep_plane_geometry(builder.plane_input(), tree);
+  // The input points and planes the nodes' exact solids are defined over, beside
+  // the cut planes number_tree stored.
+  tree.geometry = builder.plane_input().geometry;
   phase_start = std::chrono::steady_clock::now();
   plane_hulls(arena, tree);
   timing.hull_seconds = seconds_since(phase_start);

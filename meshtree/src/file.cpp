@@ -34,7 +34,6 @@ namespace shatter {
 
 namespace {
 
-using detail::cut_plane_of;
 using detail::hex;
 using detail::last_kernel;
 using detail::last_point_kind;
@@ -199,18 +198,21 @@ std::string recipe_payload(const TreeRecipe& recipe) {
   return out.take();
 }
 
-std::string nodes_payload(const std::vector<MeshTreeNode>& nodes) {
+/// Each node's record holds its cut plane (MeshTree::cut_planes[k]): the file
+/// has stored it there since version 1, for every kernel.
+std::string nodes_payload(const MeshTree& tree) {
   ByteWriter out;
-  out.count32(nodes.size());
-  for (const MeshTreeNode& node : nodes) {
+  out.count32(tree.nodes.size());
+  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+    const MeshTreeNode& node = tree.nodes[k];
     out.u32(node.parent);
     out.u32(node.depth);
     out.u32(node.first_leaf);
     out.u32(node.leaf_count);
     out.u64(node.seed);
     out.u8(node.above_parent_plane ? 1 : 0);
-    out.vec3(node.plane.normal);
-    out.f64(node.plane.offset);
+    out.vec3(tree.cut_planes[k].normal);
+    out.f64(tree.cut_planes[k].offset);
     out.f64(node.mass.volume);
     out.vec3(node.mass.centroid);
     for (const double entry : node.mass.inertia) out.f64(entry);
@@ -559,13 +561,16 @@ TreeRecipe read_recipe(const Section& section) {
   return recipe;
 }
 
-/// Reads the nodes without their meshes; `record_offsets` gets each record's offset.
-std::vector<MeshTreeNode> read_nodes(const Section& section, std::vector<std::size_t>& record_offsets) {
+/// Reads the nodes without their meshes, and their cut planes into
+/// tree.cut_planes; `record_offsets` gets each record's offset.
+void read_nodes(const Section& section, MeshTree& tree, std::vector<std::size_t>& record_offsets) {
   PayloadReader in(section);
   const std::uint32_t node_count = in.u32("the node count");
   if (node_count == 0) in.fail("node count 0 (a tree has at least its root)");
   in.check_room(node_count, node_record_min_size, "nodes");
-  std::vector<MeshTreeNode> nodes(node_count);
+  std::vector<MeshTreeNode>& nodes = tree.nodes;
+  nodes.resize(node_count);
+  tree.cut_planes.resize(node_count);
   record_offsets.resize(node_count);
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     MeshTreeNode& node = nodes[k];
@@ -577,8 +582,8 @@ std::vector<MeshTreeNode> read_nodes(const Section& section, std::vector<std::si
     node.leaf_count = in.u32("leaf_count");
     node.seed = in.u64("seed");
     node.above_parent_plane = in.boolean("above_parent_plane");
-    node.plane.normal = in.vec3("plane normal");
-    node.plane.offset = in.f64("plane offset");
+    tree.cut_planes[k].normal = in.vec3("plane normal");
+    tree.cut_planes[k].offset = in.f64("plane offset");
     node.mass.volume = in.f64("volume");
     node.mass.centroid = in.vec3("centroid");
     for (double& entry : node.mass.inertia) entry = in.f64("inertia");
@@ -589,7 +594,6 @@ std::vector<MeshTreeNode> read_nodes(const Section& section, std::vector<std::si
   }
   in.set_record("");
   in.expect_end();
-  return nodes;
 }
 
 Mesh read_mesh_record(PayloadReader& in) {
@@ -801,6 +805,7 @@ std::string located(const TreeDefect& defect, const SectionTable& sections, cons
       break;
     case TreePart::node:
     case TreePart::leaf_range:
+    case TreePart::cut_planes:  // each node's record holds its plane
       if (defect.index < offsets.nodes.size()) at = offsets.nodes[defect.index];
       break;
     case TreePart::leaf_list: break;  // recomputed by the reader, so never at fault
@@ -816,11 +821,9 @@ std::string located(const TreeDefect& defect, const SectionTable& sections, cons
       tag = bonds_tag;
       at = sections.bonds->payload_offset + 8 + bond_size * defect.index;
       break;
-    // The exact representation's parts exist only in version 2 files; cut_planes
-    // is recomputed by the reader, so never at fault in a file.
+    // The exact representation's parts exist only in version 2 files.
     case TreePart::input_point:
     case TreePart::input_plane:
-    case TreePart::cut_planes:
       if (sections.geometry) {
         tag = geometry_tag;
         at = sections.geometry->payload_offset;
@@ -871,7 +874,7 @@ std::string encode_shatter(const MeshTree& tree) {
   file.u32(shatter_format_version);
   if (!tree.shatter_version.empty()) append_section(file, version_tag, tree.shatter_version);
   append_section(file, recipe_tag, recipe_payload(tree.recipe));
-  append_section(file, nodes_tag, nodes_payload(tree.nodes));
+  append_section(file, nodes_tag, nodes_payload(tree));
   append_section(file, meshes_tag, meshes_payload(tree.nodes, &MeshTreeNode::mesh));
   append_section(file, hulls_tag, meshes_payload(tree.nodes, &MeshTreeNode::hull));
   append_section(file, bonds_tag, bonds_payload(tree.bonds));
@@ -892,7 +895,7 @@ MeshTree decode_shatter(std::string_view bytes) {
     tree.shatter_version = version->payload;
   }
   tree.recipe = read_recipe(*sections.recipe);
-  tree.nodes = read_nodes(*sections.nodes, offsets.nodes);
+  read_nodes(*sections.nodes, tree, offsets.nodes);
   read_meshes(*sections.meshes, tree.nodes, &MeshTreeNode::mesh, offsets.meshes);
   read_meshes(*sections.hulls, tree.nodes, &MeshTreeNode::hull, offsets.hulls);
   tree.bonds = read_bonds(*sections.bonds);
@@ -902,10 +905,6 @@ MeshTree decode_shatter(std::string_view bytes) {
     read_solids(*sections.solids, tree.nodes, !tree.geometry.points.empty(), offsets.solids);
   }
   tree.leaf_nodes = leaves_in_order(tree.nodes);
-  if (!tree.geometry.points.empty()) {
-    tree.cut_planes.resize(tree.nodes.size());
-    for (std::size_t k = 0; k < tree.nodes.size(); ++k) tree.cut_planes[k] = cut_plane_of(tree.nodes[k]);
-  }
   // The caches are not stored: the structure is checked without them, then they are computed.
   if (const std::optional<TreeDefect> defect = validate_tree(tree, {.caches = false}).defect) {
     refuse(located(*defect, sections, offsets));

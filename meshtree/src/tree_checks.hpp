@@ -28,9 +28,6 @@ std::string hex(std::uint64_t value, int digits);
 /// The leaves of a tree in node order: what MeshTree::leaf_nodes must be.
 std::vector<NodeIndex> leaves_in_order(const std::vector<MeshTreeNode>& nodes);
 
-/// MeshTree::cut_planes[k] as node k defines it: its plane, zero for a leaf.
-Plane cut_plane_of(const MeshTreeNode& node);
-
 /// Computes the caches a .shatter file does not store (see
 /// TreeValidationOptions::caches) and stores them in `tree`.
 /// Precondition: `tree` passed validate_tree without caches.

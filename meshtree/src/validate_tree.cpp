@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -44,8 +43,6 @@ std::vector<NodeIndex> leaves_in_order(const std::vector<MeshTreeNode>& nodes) {
   }
   return leaves;
 }
-
-Plane cut_plane_of(const MeshTreeNode& node) { return node.is_leaf() ? Plane{} : node.plane; }
 
 // The checks, in detail's own unnamed namespace: they see what they share with
 // the reader (tree_checks.hpp) by its plain name.
@@ -169,6 +166,17 @@ std::optional<TreeDefect> structure_defect(const std::vector<MeshTreeNode>& node
   return std::nullopt;
 }
 
+// Any tree, of any kernel: the plane of every node, kept beside the nodes
+// (MeshTree::cut_planes), so a node without one would be indexed past the end.
+std::optional<TreeDefect> cut_planes_defect(const MeshTree& tree) {
+  if (tree.cut_planes.size() != tree.nodes.size()) {
+    return TreeDefect{TreePart::cut_planes, 0,
+                      "cut_planes has " + str(tree.cut_planes.size()) + " planes for " + str(tree.nodes.size()) +
+                          " nodes (one per node)"};
+  }
+  return std::nullopt;
+}
+
 std::optional<TreeDefect> leaf_list_defect(const MeshTree& tree) {
   const std::vector<NodeIndex> expected = leaves_in_order(tree.nodes);
   if (tree.leaf_nodes.size() != expected.size()) {
@@ -260,11 +268,6 @@ std::optional<TreeDefect> bonds_defect(const MeshTree& tree) {
 // --- the exact representation (plane kernel) ---------------------------------
 
 bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
-bool same_bits(const Plane& a, const Plane& b) {
-  return same_bits(a.normal.x, b.normal.x) && same_bits(a.normal.y, b.normal.y) && same_bits(a.normal.z, b.normal.z) &&
-         same_bits(a.offset, b.offset);
-}
 
 bool solid_is_empty(const Solid& solid) {
   return solid.defs.empty() && solid.approx.empty() && solid.faces.empty() && solid.loops.empty() &&
@@ -461,11 +464,6 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
       return TreeDefect{TreePart::input_plane, 0,
                         "geometry has " + str(geometry.planes.size()) + " input planes but no input points"};
     }
-    if (!tree.cut_planes.empty()) {
-      return TreeDefect{TreePart::cut_planes, 0,
-                        "cut_planes has " + str(tree.cut_planes.size()) +
-                            " planes, but the tree has no exact representation (no input points)"};
-    }
     for (std::size_t k = 0; k < node_count; ++k) {
       if (!solid_is_empty(tree.nodes[k].solid)) {
         return TreeDefect{TreePart::solid, k,
@@ -506,19 +504,9 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
       }
     }
   }
-  if (tree.cut_planes.size() != node_count) {
-    return TreeDefect{TreePart::cut_planes, 0,
-                      "cut_planes has " + str(tree.cut_planes.size()) + " planes for " + str(node_count) + " nodes"};
-  }
   for (std::size_t k = 0; k < node_count; ++k) {
-    const MeshTreeNode& node = tree.nodes[k];
-    if (!same_bits(tree.cut_planes[k], cut_plane_of(node))) {
-      return TreeDefect{
-          TreePart::cut_planes, k,
-          "cut_planes[" + str(k) + "] is not " +
-              (node.is_leaf() ? std::string("zero (node ") + str(k) + " is a leaf)" : "node " + str(k) + "'s plane")};
-    }
-    if (!node.is_leaf() && !(finite(node.plane.normal) && std::isfinite(node.plane.offset))) {
+    const Plane& plane = tree.cut_planes[k];
+    if (!tree.nodes[k].is_leaf() && !(finite(plane.normal) && std::isfinite(plane.offset))) {
       return TreeDefect{
           TreePart::node, k,
           "node " + str(k) +
@@ -553,6 +541,7 @@ std::optional<TreeDefect> first_defect(const MeshTree& tree, bool caches) {
   if (auto defect = recipe_defect(tree.recipe)) return defect;
   if (auto defect = structure_defect(tree.nodes)) return defect;
   if (auto defect = leaf_list_defect(tree)) return defect;
+  if (auto defect = cut_planes_defect(tree)) return defect;
   for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
     if (auto problem = mesh_defect(tree.nodes[k].mesh))
       return TreeDefect{TreePart::mesh, k, "the mesh of node " + str(k) + " " + *problem};
@@ -630,7 +619,7 @@ std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k
   const MeshTreeNode& node = tree.nodes[k];
   const std::string name = "node " + str(k);
   if (!node.is_leaf()) {
-    const Plane& plane = node.plane;
+    const Plane& plane = tree.cut_planes[k];
     if (!(finite(plane.normal) && std::isfinite(plane.offset))) {
       return TreeDefect{TreePart::node, k, name + " is cut by a plane with a NaN or infinite coefficient"};
     }

@@ -438,7 +438,8 @@ bool check_structure(const MeshTree& tree) {
   for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
     const MeshTreeNode& node = tree.nodes[v];
     if (node.is_leaf()) continue;
-    if (!is_finite(node.plane.normal) || !std::isfinite(node.plane.offset) || norm(node.plane.normal) == 0) {
+    const Plane& plane = tree.cut_planes[v];
+    if (!is_finite(plane.normal) || !std::isfinite(plane.offset) || norm(plane.normal) == 0) {
       problems.add(v, "an internal node without a finite plane");
     }
     bool below = false, above = false;
@@ -484,7 +485,7 @@ void check_strategy(const MeshTree& tree, Strategy strategy) {
       if (node.is_leaf()) continue;
       const Box3 b = bounds(node.mesh);
       const double tolerance = 1e-9 * norm(b.hi - b.lo) + 1e-12 * norm(node.mass.centroid);
-      const double distance = signed_distance(node.plane, node.mass.centroid);
+      const double distance = signed_distance(tree.cut_planes[v], node.mass.centroid);
       if (std::fabs(distance) > tolerance) {
         problems.add(v, "plane misses the centroid " + vec_text(node.mass.centroid) + " by " + num(distance));
       }
@@ -517,7 +518,7 @@ void check_strategy(const MeshTree& tree, Strategy strategy) {
       if (node.is_leaf()) continue;
       const Box3 b = bounds(node.mesh);
       const Vec3 extent = b.hi - b.lo;
-      const Vec3 n = node.plane.normal;
+      const Vec3 n = tree.cut_planes[v].normal;
       const double components[] = {std::fabs(n.x), std::fabs(n.y), std::fabs(n.z)};
       const int dominant = static_cast<int>(std::max_element(components, components + 3) - components);
       const double longest = std::max({extent.x, extent.y, extent.z});
@@ -632,7 +633,7 @@ void check_nodes(const MeshTree& tree, const Mesh& input, Level level) {
     if (node.parent == no_node) return;
     // Relative to the parent's plane: every vertex on the node's side, and the
     // cap triangles of the parent's cut on the plane (within rounding).
-    const Plane& plane = tree.nodes[node.parent].plane;
+    const Plane& plane = tree.cut_planes[node.parent];
     const double sign = node.above_parent_plane ? 1.0 : -1.0;
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
       const double d = signed_distance(plane, mesh.positions[i]);
@@ -811,7 +812,7 @@ constexpr std::uint32_t brute_force_fragments = 128;
 
 void check_bonds(const MeshTree& tree) {
   if (tree.recipe.fragments <= brute_force_fragments) {
-    const Reference reference = tree.cut_planes.empty() ? mesh_reference_bonds(tree) : plane_reference_bonds(tree);
+    const Reference reference = tree.has_exact_representation() ? plane_reference_bonds(tree) : mesh_reference_bonds(tree);
     CHECK(bond_mismatch(tree, tree.bonds, reference) == "");
   } else {
     CHECK(bond_sum_problem(tree, tree.bonds) == "");
@@ -1320,7 +1321,7 @@ TEST_CASE("corner attributes survive the tree, and caps get the plane normal", "
       REQUIRE(node.mesh.corners.normals.size() == 3 * node.mesh.triangle_count());
       REQUIRE(node.mesh.corners.uvs.size() == 3 * node.mesh.triangle_count());
       if (node.parent == no_node) continue;
-      const Vec3 outward = normalized(tree.nodes[node.parent].plane.normal) * (node.above_parent_plane ? -1.0 : 1.0);
+      const Vec3 outward = normalized(tree.cut_planes[node.parent].normal) * (node.above_parent_plane ? -1.0 : 1.0);
       for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
         if (node.mesh.surfaces[t] != cap_surface_of(node.parent)) continue;
         for (int corner = 0; corner < 3; ++corner) {

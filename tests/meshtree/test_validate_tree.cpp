@@ -270,11 +270,13 @@ std::vector<Injector> injectors() {
     t.geometry.planes[j][1] = static_cast<VertexIndex>(t.geometry.points.size());
     return Place{TreePart::input_plane, j};
   });
-  add("cut planes: not the node's own plane", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
-    if (!exact(t)) return std::nullopt;
-    const auto k = draw_node(t, r, any_node);
-    t.cut_planes[*k].offset += 1;
-    return Place{TreePart::cut_planes, *k};
+  add("cut planes: not one per node", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
+    if (r.index(2) == 0) {
+      t.cut_planes.pop_back();
+    } else {
+      t.cut_planes.emplace_back();
+    }
+    return Place{TreePart::cut_planes, 0};
   });
   add("solid: a corner's vertex out of range", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
     if (!exact(t)) return std::nullopt;
@@ -341,7 +343,7 @@ std::vector<Injector> injectors() {
     if (exact(t)) return std::nullopt;  // there the solids are defined over the plane
     const auto k = draw_node(t, r, internal);
     if (!k) return std::nullopt;
-    t.nodes[*k].plane.normal = {0, 0, 0};
+    t.cut_planes[*k].normal = {0, 0, 0};
     return Place{TreePart::node, *k};
   });
   add("node: every child on one side of the plane", geometry, [](MeshTree& t, R& r) -> std::optional<Place> {

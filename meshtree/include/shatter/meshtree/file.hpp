@@ -34,9 +34,9 @@
 //   NODE  u32 node count n (1 <= n <= 2^32 - 1), then per node in index order:
 //         u32 parent (FFFFFFFF for the root), u32 depth, u32 first_leaf,
 //         u32 leaf_count, u64 seed, u8 above_parent_plane (0 or 1),
-//         f64 x4 plane (normal x, y, z, offset), f64 volume, f64 x3 centroid,
-//         f64 x9 inertia (row-major), u32 child count c, u32 x c children;
-//         165 + 4c bytes.
+//         f64 x4 plane (MeshTree::cut_planes[k]: normal x, y, z, offset),
+//         f64 volume, f64 x3 centroid, f64 x9 inertia (row-major), u32 child
+//         count c, u32 x c children; 165 + 4c bytes.
 //   MESH  u32 n, then per node in index order its mesh:
 //         u32 vertex count V, u32 triangle count T, u8 channels (bit 0 normals,
 //         bit 1 uvs, bit 2 tangents; other bits 0; all 0 when T = 0, since a
@@ -79,8 +79,7 @@
 //         loop counts of faces before it, and likewise for loops' first corners.
 //   END   empty payload; the last section, nothing may follow it.
 // Not stored, recomputed on reading: leaf_nodes (the leaves in node order, checked
-// against every node's first_leaf and leaf_count); MeshTree::cut_planes (empty
-// when P = 0, else every node's plane, zero for leaves); and the floating-point
+// against every node's first_leaf and leaf_count); and the floating-point
 // caches InputGeometry::plane_approx (approximate_input_plane of each input
 // plane's points) and Solid::approx (approximate() of each vertex over
 // MeshTree::plane_set()), which are deterministic functions of what is stored.
