@@ -45,7 +45,9 @@ struct BuildRunOptions {
   /// mesh: on any other mesh the build's guarantees do not hold.
   bool input_validated = false;
   /// Called once per finished leaf (see LeafProgressFn); empty: not called.
-  LeafProgressFn progress;
+  /// (Initialized here, like every field, so a designated initializer may leave
+  /// it out without GCC's -Wmissing-field-initializers.)
+  LeafProgressFn progress = {};
   /// When given, filled in when the build succeeds; left as it was when it throws.
   BuildReport* report = nullptr;
 };
