@@ -210,8 +210,8 @@ void replay_with_cgal(const MeshTree& tree, const shatter::Mesh& input, bool che
     // Two copies, made outside the clock: clip keeps the plane's negative side.
     std::array<CgalMesh, 2> side{*piece[index], std::move(*piece[index])};
     piece[index].reset();
-    const Epick::Plane_3 below_plane(node.plane.normal.x, node.plane.normal.y, node.plane.normal.z,
-                                     node.plane.offset);
+    const shatter::Plane& cut = tree.cut_planes[index];
+    const Epick::Plane_3 below_plane(cut.normal.x, cut.normal.y, cut.normal.z, cut.offset);
     const std::array<Epick::Plane_3, 2> plane{below_plane, below_plane.opposite()};
     std::array<bool, 2> clipped{false, false}, thrown{false, false};
     std::array<std::vector<CgalMesh>, 2> components;

@@ -77,10 +77,9 @@ int main(int argc, char** argv) {
                "validate without self-intersections µs | hull µs | mass µs |\n"
                "|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const std::uint32_t count : counts) {
-    shatter::BuildOptions options;
-    options.fragments = count;
-    options.threads = 1;
-    const shatter::MeshTree tree = shatter::build_mesh_tree(shatter::test::unit_cube(), options);
+    shatter::TreeRecipe recipe;
+    recipe.fragments = count;
+    const shatter::MeshTree tree = shatter::build_mesh_tree(shatter::test::unit_cube(), recipe, {.threads = 1});
     std::vector<const shatter::Mesh*> leaves;
     std::size_t triangles = 0;
     for (const shatter::NodeIndex node : tree.leaf_nodes) {

@@ -329,12 +329,13 @@ PeerResult peer_from_json(const Json& j) {
 }
 
 /// Runs in the child: builds, measures, checks; returns the JSON the parent reads.
-Json build_in_child(const shatter::Mesh& mesh, const shatter::BuildOptions& options, const ChildTasks& tasks) {
+/// Builds on one thread: the benchmark times the builder's own work, not its scaling.
+Json build_in_child(const shatter::Mesh& mesh, const shatter::TreeRecipe& recipe, const ChildTasks& tasks) {
   Json out;
   const std::uint64_t baseline_kb = proc_status_kb("VmRSS");
   shatter::BuildReport report;
   const auto t0 = Clock::now();
-  const shatter::MeshTree tree = shatter::build_mesh_tree(mesh, options, {}, &report);
+  const shatter::MeshTree tree = shatter::build_mesh_tree(mesh, recipe, {.threads = 1, .report = &report});
   const double seconds = seconds_between(t0, Clock::now());
   const std::uint64_t peak_kb = proc_status_kb("VmHWM");
 
@@ -394,7 +395,7 @@ Json build_in_child(const shatter::Mesh& mesh, const shatter::BuildOptions& opti
   return out;
 }
 
-BuildRun run_build(const shatter::Mesh& mesh, const shatter::BuildOptions& options, const ChildTasks& tasks) {
+BuildRun run_build(const shatter::Mesh& mesh, const shatter::TreeRecipe& recipe, const ChildTasks& tasks) {
   // Hand freed heap back first, so the child's inherited resident set (part of
   // its VmHWM) is little more than the inputs.
   ::malloc_trim(0);
@@ -405,7 +406,7 @@ BuildRun run_build(const shatter::Mesh& mesh, const shatter::BuildOptions& optio
     ::close(fds[0]);
     Json out;
     try {
-      out = build_in_child(mesh, options, tasks);
+      out = build_in_child(mesh, recipe, tasks);
       out["ok"] = true;
     } catch (const std::exception& e) {
       out = Json{{"ok", false}, {"error", e.what()}};
@@ -475,16 +476,15 @@ struct Timed {
 
 Timed time_build(const shatter::Mesh& mesh, std::uint32_t fragments, std::uint64_t seed, const Repeat& repeat,
                  const ChildTasks& first_tasks) {
-  shatter::BuildOptions options;
-  options.fragments = fragments;
-  options.seed = seed;
-  options.strategy = shatter::Strategy::thesis;
-  options.threads = 1;
+  shatter::TreeRecipe recipe;
+  recipe.fragments = fragments;
+  recipe.seed = seed;
+  recipe.strategy = shatter::Strategy::thesis;
   Timed timed;
   std::vector<double> total, cutting, hull, bond;
   double sum = 0;
   for (int run = 0; run < repeat.max_runs; ++run) {
-    BuildRun r = run_build(mesh, options, run == 0 ? first_tasks : ChildTasks{});
+    BuildRun r = run_build(mesh, recipe, run == 0 ? first_tasks : ChildTasks{});
     if (!r.ok) {
       timed.error = r.error;
       if (run == 0) return timed;

@@ -84,13 +84,12 @@ struct Cube {
 };
 
 Cube cube(std::uint32_t fragments) {
-  BuildOptions options;
-  options.fragments = fragments;
-  options.seed = 1;
-  options.threads = 2;
+  TreeRecipe recipe;
+  recipe.fragments = fragments;
+  recipe.seed = 1;
   Cube c;
   c.fragments = fragments;
-  c.tree = std::make_shared<const MeshTree>(build_mesh_tree(test::box({-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5}), options));
+  c.tree = std::make_shared<const MeshTree>(build_mesh_tree(test::box({-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5}), recipe, {.threads = 2}));
   const Clock::time_point start = Clock::now();
   c.shapes = rt::BreakableShapes::create(c.tree);
   c.load_seconds = seconds_since(start);

@@ -190,12 +190,13 @@ struct LeafSummary {
 std::uint64_t tree_fingerprint(const MeshTree& tree) {
   Fingerprint f;
   f.add(tree.nodes.size());
-  for (const auto& node : tree.nodes) {
+  for (NodeIndex k = 0; k < tree.nodes.size(); ++k) {
+    const shatter::MeshTreeNode& node = tree.nodes[k];
     f.add_vector(node.mesh.positions);
     f.add_vector(node.mesh.triangles);
     f.add_vector(node.mesh.surfaces);
     f.add(node.parent);
-    f.add(node.plane);
+    f.add(tree.cut_planes[k]);
   }
   f.add_vector(tree.leaf_nodes);
   f.add(tree.bonds.size());
@@ -311,11 +312,10 @@ Row bench_build(const std::string& section, const NamedInput& input, Strategy st
   row.threads = threads;
   row.fragments = fragments;
 
-  shatter::BuildOptions options;
-  options.fragments = fragments;
-  options.seed = plan.options.seed;
-  options.strategy = strategy;
-  options.threads = threads;
+  shatter::TreeRecipe recipe;
+  recipe.fragments = fragments;
+  recipe.seed = plan.options.seed;
+  recipe.strategy = strategy;
 
   std::cerr << section << ": " << input.name << " " << shatter::strategy_name(strategy) << " " << threads
             << " thread(s) N=" << fragments << " ..." << std::flush;
@@ -325,7 +325,7 @@ Row bench_build(const std::string& section, const NamedInput& input, Strategy st
     for (int run = 0; run < plan.max_runs; ++run) {
       const auto t0 = Clock::now();
       shatter::BuildReport report;
-      const MeshTree tree = shatter::build_mesh_tree(input.mesh, options, {}, &report);
+      const MeshTree tree = shatter::build_mesh_tree(input.mesh, recipe, {.threads = threads, .report = &report});
       const double seconds = seconds_between(t0, Clock::now());
       if (run == 0) row.report = report;
       times.push_back(seconds);

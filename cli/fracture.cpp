@@ -50,12 +50,11 @@ CLI::Validator whole_number() {
       "", "whole number");
 }
 
-BuildOptions build_options_of(const FractureArgs& args) {
-  BuildOptions options = build_options_from(args.fragments, args.seed, args.strategy, "--");
-  options.interior_uv_scale = args.interior_uv_scale;
-  options.allow_self_intersections = args.allow_self_intersections;
-  options.threads = args.threads;
-  return options;
+TreeRecipe tree_recipe_of(const FractureArgs& args) {
+  TreeRecipe recipe = tree_recipe_from(args.fragments, args.seed, args.strategy, "--");
+  recipe.interior_uv_scale = args.interior_uv_scale;
+  recipe.allow_self_intersections = args.allow_self_intersections;
+  return recipe;
 }
 
 // The format of the leaf export, nullopt for no export. Checked before the mesh is
@@ -152,11 +151,11 @@ struct FractureOutcome {
   std::optional<RepairReport> repair;  ///< set with --repair
 };
 
-json fracture_json(const FractureArgs& args, const BuildOptions& options, const TreeStats& stats,
+json fracture_json(const FractureArgs& args, const TreeRecipe& recipe, const TreeStats& stats,
                    const FractureOutcome& outcome) {
-  json out{{"input", args.mesh}, {"output", args.out}, {"fragments_requested", options.fragments}};
-  json options_out = options_json(options);
-  options_out["threads"] = options.threads;  // as asked (0: all cores); never changes the tree
+  json out{{"input", args.mesh}, {"output", args.out}, {"fragments_requested", recipe.fragments}};
+  json options_out = recipe_json(recipe);
+  options_out["threads"] = args.threads;  // as asked (0: all cores); never changes the tree
   append_stats_json(out, options_out, stats);
   out["seconds"] = outcome.build_seconds;
   if (outcome.export_format) {
@@ -177,14 +176,14 @@ std::string seconds_text(double seconds) {
   return text;
 }
 
-void print_fracture_text(const FractureArgs& args, const BuildOptions& options, const TreeStats& stats,
+void print_fracture_text(const FractureArgs& args, const TreeRecipe& recipe, const TreeStats& stats,
                          const FractureOutcome& outcome) {
   const VolumeSpread& volume = stats.fragment_volume;
-  std::cout << args.mesh << ": " << stats.leaf_count << " fragments (" << options.fragments << " asked) in a tree of "
+  std::cout << args.mesh << ": " << stats.leaf_count << " fragments (" << recipe.fragments << " asked) in a tree of "
             << stats.node_count << " nodes, depth " << stats.max_depth << ", " << stats.bond_count
             << " bonds (total area " << stats.total_bond_area << "); built in "
             << seconds_text(outcome.build_seconds) << " s\n"
-            << "  strategy " << strategy_name(options.strategy) << ", seed " << options.seed << '\n'
+            << "  strategy " << strategy_name(recipe.strategy) << ", seed " << recipe.seed << '\n'
             << "  fragment volume: min " << volume.min << ", median " << volume.median << ", max " << volume.max
             << ", coefficient of variation " << volume.coefficient_of_variation << '\n'
             << "  wrote " << args.out << '\n';
@@ -211,8 +210,8 @@ std::optional<std::uint64_t> parse_whole_number(std::string_view text) {
   return value;
 }
 
-BuildOptions build_options_from(std::uint64_t fragments, std::uint64_t seed, std::string_view strategy,
-                                std::string_view field_prefix) {
+TreeRecipe tree_recipe_from(std::uint64_t fragments, std::uint64_t seed, std::string_view strategy,
+                            std::string_view field_prefix) {
   const std::string prefix(field_prefix);
   if (fragments < 1 || fragments > 0xFFFFFFFFu) {
     throw UsageError(prefix + "fragments must be a whole number from 1 to 4294967295");
@@ -221,11 +220,11 @@ BuildOptions build_options_from(std::uint64_t fragments, std::uint64_t seed, std
   if (!strategy_value) {
     throw UsageError(prefix + "strategy must be thesis, balanced or axis, got '" + std::string(strategy) + "'");
   }
-  BuildOptions options;
-  options.fragments = static_cast<std::uint32_t>(fragments);
-  options.seed = seed;
-  options.strategy = *strategy_value;
-  return options;
+  TreeRecipe recipe;
+  recipe.fragments = static_cast<std::uint32_t>(fragments);
+  recipe.seed = seed;
+  recipe.strategy = *strategy_value;
+  return recipe;
 }
 
 Command add_fracture_command(CLI::App& app) {
@@ -288,22 +287,25 @@ int run_fracture(const FractureArgs& args) {
   // Every usage check comes before reading the mesh and building.
   FractureOutcome outcome;
   outcome.export_format = leaf_export_format(args);
-  BuildOptions options = build_options_of(args);
-  if (options.fragments < 1) throw UsageError("--fragments must be at least 1");
+  const TreeRecipe recipe = tree_recipe_of(args);
+  if (recipe.fragments < 1) throw UsageError("--fragments must be at least 1");
   if (std::error_code unknown; fs::is_directory(args.out, unknown)) {
     throw UsageError("--out " + args.out + " is a folder; it names the .shatter file to write");
   }
 
   InputMesh input = read_valid_solid(args.mesh, args.repair, args.allow_self_intersections);
   outcome.repair = std::move(input.repair);
-  options.input_validated = true;  // read_valid_solid made the full check: the builder need not repeat it
 
   MeshTree tree;
   const Clock::time_point start = Clock::now();
   {
-    LeafProgressBar progress_bar(options.fragments);
+    LeafProgressBar progress_bar(recipe.fragments);
+    const BuildRunOptions run{.threads = args.threads,
+                              // read_valid_solid made the full check: the builder need not repeat it
+                              .input_validated = true,
+                              .progress = progress_bar.callback()};
     try {
-      tree = build_mesh_tree(input.mesh, options, progress_bar.callback());
+      tree = build_mesh_tree(input.mesh, recipe, run);
     } catch (const UnsupportedGeometryError& e) {
       throw UnsupportedGeometryError("cannot fracture " + args.mesh + ": " + e.what());
     }
@@ -323,9 +325,9 @@ int run_fracture(const FractureArgs& args) {
 
   const TreeStats stats = tree_stats(tree);
   if (args.json) {
-    std::cout << fracture_json(args, options, stats, outcome).dump(2) << '\n';
+    std::cout << fracture_json(args, recipe, stats, outcome).dump(2) << '\n';
   } else {
-    print_fracture_text(args, options, stats, outcome);
+    print_fracture_text(args, recipe, stats, outcome);
   }
   return static_cast<int>(ExitCode::ok);
 }

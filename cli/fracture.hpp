@@ -43,16 +43,17 @@ std::optional<std::uint64_t> parse_whole_number(std::string_view text);
 
 /// The tree's recipe from what a user typed (fracture's flags, the viewer's
 /// fracture request), checked alike: fragments from 1 to 2^32 - 1, the strategy
-/// by the names the library prints. Throws UsageError naming the field
-/// as `field_prefix` + its name ("--" for flags, "" for the page's fields).
-BuildOptions build_options_from(std::uint64_t fragments, std::uint64_t seed, std::string_view strategy,
-                                std::string_view field_prefix);
+/// by the names the library prints; the other fields keep TreeRecipe's
+/// defaults. Throws UsageError naming the field as `field_prefix` + its name
+/// ("--" for flags, "" for the page's fields).
+TreeRecipe tree_recipe_from(std::uint64_t fragments, std::uint64_t seed, std::string_view strategy,
+                            std::string_view field_prefix);
 
 /// Declares the `fracture` subcommand on `app`.
 Command add_fracture_command(CLI::App& app);
 
 /// Reads the mesh and checks it once (read_valid_solid; the builder is told,
-/// BuildOptions::input_validated), builds its mesh tree (build_mesh_tree),
+/// BuildRunOptions::input_validated), builds its mesh tree (build_mesh_tree),
 /// writes the .shatter file and, with --export, one mesh file per leaf
 /// (leaf-0000.off, ..., as `export --nodes leaves` writes them), then prints a
 /// summary on stdout (JSON with --json). While a long build runs and stderr is a

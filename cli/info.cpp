@@ -10,7 +10,7 @@
 
 #include "shatter/kernel/error.hpp"
 #include "shatter/meshtree/bonds.hpp"
-#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/recipe.hpp"
 #include "shatter/meshtree/export.hpp"
 #include "shatter/meshtree/file.hpp"
 #include "shatter/meshtree/stats.hpp"
@@ -33,7 +33,7 @@ json info_json(const InfoArgs& args, const MeshTree& tree, const TreeStats& stat
                const std::optional<BondRuleComparison>& rules) {
   json out{{"file", args.input}};
   out["shatter_version"] = tree.shatter_version.empty() ? json(nullptr) : json(tree.shatter_version);
-  append_stats_json(out, options_json(tree.options), stats);
+  append_stats_json(out, recipe_json(tree.recipe), stats);
   if (args.check) out["check"] = "valid";
   if (rules) {
     out["bounding_box_rule"] = {{"true_bonds", rules->true_bonds},
@@ -45,17 +45,17 @@ json info_json(const InfoArgs& args, const MeshTree& tree, const TreeStats& stat
 }
 
 void print_info_text(const InfoArgs& args, const MeshTree& tree, const TreeStats& stats) {
-  const BuildOptions& options = tree.options;
+  const TreeRecipe& recipe = tree.recipe;
   const VolumeSpread& volume = stats.fragment_volume;
   std::cout << args.input << ": mesh tree of " << stats.node_count << " nodes, " << stats.leaf_count
             << " leaves (fragments), " << stats.internal_count << " internal; leaves at depth " << stats.min_leaf_depth
             << " to " << stats.max_depth << '\n';
   if (!tree.shatter_version.empty()) std::cout << "  built by shatter " << tree.shatter_version << '\n';
-  std::cout << "  built with: fragments " << options.fragments << ", seed " << options.seed << ", strategy "
-            << strategy_name(options.strategy) << ", kernel " << kernel_name(options.kernel)
-            << (options.kernel == KernelKind::plane ? "" : " (retired: the tree reads, but cannot be re-cut exactly)")
-            << ", interior UV scale " << options.interior_uv_scale << ", max plane tries " << options.max_plane_tries
-            << (options.allow_self_intersections ? ", self-intersections allowed" : "") << '\n'
+  std::cout << "  built with: fragments " << recipe.fragments << ", seed " << recipe.seed << ", strategy "
+            << strategy_name(recipe.strategy) << ", kernel " << kernel_name(recipe.kernel)
+            << (recipe.kernel == KernelKind::plane ? "" : " (retired: the tree reads, but cannot be re-cut exactly)")
+            << ", interior UV scale " << recipe.interior_uv_scale << ", max plane tries " << recipe.max_plane_tries
+            << (recipe.allow_self_intersections ? ", self-intersections allowed" : "") << '\n'
             << "  volume: root " << stats.root_volume << ", leaves together " << stats.total_leaf_volume
             << " (relative difference " << leaf_volume_relative_error(stats) << ")\n"
             << "  fragment volume: min " << volume.min << ", median " << volume.median << ", max " << volume.max

@@ -3,7 +3,7 @@
 // asks, and checked once. The check is the full one (validate_mesh, the
 // self-intersection test included) and the most expensive step before the first
 // cut, so after it the command tells the library the mesh is trusted
-// (BuildOptions::input_validated, SolidMeshOptions::trusted) instead of letting it
+// (BuildRunOptions::input_validated, SolidMeshOptions::trusted) instead of letting it
 // check again. Without --repair none of this changes the mesh.
 
 #include <nlohmann/json.hpp>

@@ -6,14 +6,14 @@ namespace shatter::cli {
 
 using json = nlohmann::ordered_json;
 
-json options_json(const BuildOptions& options) {
-  return json{{"fragments", options.fragments},
-              {"seed", options.seed},
-              {"strategy", strategy_name(options.strategy)},
-              {"kernel", kernel_name(options.kernel)},
-              {"interior_uv_scale", options.interior_uv_scale},
-              {"max_plane_tries", options.max_plane_tries},
-              {"allow_self_intersections", options.allow_self_intersections}};
+json recipe_json(const TreeRecipe& recipe) {
+  return json{{"fragments", recipe.fragments},
+              {"seed", recipe.seed},
+              {"strategy", strategy_name(recipe.strategy)},
+              {"kernel", kernel_name(recipe.kernel)},
+              {"interior_uv_scale", recipe.interior_uv_scale},
+              {"max_plane_tries", recipe.max_plane_tries},
+              {"allow_self_intersections", recipe.allow_self_intersections}};
 }
 
 double leaf_volume_relative_error(const TreeStats& stats) {

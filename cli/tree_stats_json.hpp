@@ -4,15 +4,16 @@
 
 #include <nlohmann/json.hpp>
 
-#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/recipe.hpp"
 #include "shatter/meshtree/stats.hpp"
 #include "shatter/meshtree/tree.hpp"
 
 namespace shatter::cli {
 
-/// The build options under the keys both commands print: fragments, seed,
-/// strategy, kernel, interior_uv_scale, max_plane_tries, allow_self_intersections.
-nlohmann::ordered_json options_json(const BuildOptions& options);
+/// The tree's recipe under the keys both commands print (as "options", the name
+/// their JSON has always used): fragments, seed, strategy, kernel,
+/// interior_uv_scale, max_plane_tries, allow_self_intersections.
+nlohmann::ordered_json recipe_json(const TreeRecipe& recipe);
 
 /// (total leaf volume - root volume) / |root volume|, 0 for a root of volume 0:
 /// how far rounding moved the partition from exact.

@@ -85,7 +85,7 @@ class Session {
       : file_(std::move(file)), editable_(tree.has_value()), glb_(std::make_shared<const std::string>(std::move(glb))) {
     if (tree) {
       root_ = std::move(tree->nodes[0].mesh);
-      options_ = tree->options;
+      recipe_ = tree->recipe;
     }
   }
 
@@ -113,8 +113,8 @@ class Session {
     json out{{"file", file_}, {"kind", editable_ ? "tree" : "glb"}, {"editable", editable_},
              {"generation", generation_}};
     if (editable_) {
-      json options = options_json(options_);
-      options["seed"] = std::to_string(options_.seed);  // beyond 2^53 a JavaScript number would round it
+      json options = recipe_json(recipe_);
+      options["seed"] = std::to_string(recipe_.seed);  // beyond 2^53 a JavaScript number would round it
       out["options"] = std::move(options);
     }
     return out;
@@ -126,7 +126,7 @@ class Session {
     const std::lock_guard lock(mutex_);
     json out{{"state", state_name()},
              {"leaves_done", leaves_done_.load(std::memory_order_relaxed)},
-             {"fragments", job_options_.fragments},
+             {"fragments", job_recipe_.fragments},
              {"generation", generation_}};
     if (state_ == State::done) {
       out["leaves"] = leaves_;
@@ -136,17 +136,17 @@ class Session {
     return out;
   }
 
-  /// Starts a fracture of the root solid with `options` in the background.
+  /// Starts a fracture of the root solid by `recipe` in the background.
   /// Returns an error message instead when the file is not a tree or a job runs.
-  std::optional<std::string> start(const BuildOptions& options) {
+  std::optional<std::string> start(const TreeRecipe& recipe) {
     const std::lock_guard lock(mutex_);
     if (!editable_) return "this file is a GLB: only a .shatter file can be fractured again";
     if (state_ == State::running) return "a fracture is already running; wait for it to finish";
     if (job_.joinable()) job_.join();  // finished: nothing to wait for
     state_ = State::running;
-    job_options_ = options;
+    job_recipe_ = recipe;
     leaves_done_.store(0, std::memory_order_relaxed);
-    job_ = std::thread([this, options] { run_job(options); });
+    job_ = std::thread([this, recipe] { run_job(recipe); });
     return std::nullopt;
   }
 
@@ -163,21 +163,22 @@ class Session {
     return "unknown";
   }
 
-  void run_job(const BuildOptions& options) {
+  void run_job(const TreeRecipe& recipe) {
     const Clock::time_point start = Clock::now();
     try {
-      const auto progress = [this](std::size_t done) {
+      BuildRunOptions run;
+      run.progress = [this](std::size_t done) {
         // Reports come from several workers, possibly out of order: keep the largest.
         std::size_t seen = leaves_done_.load(std::memory_order_relaxed);
         while (seen < done && !leaves_done_.compare_exchange_weak(seen, done, std::memory_order_relaxed)) {
         }
       };
-      const MeshTree tree = build_mesh_tree(root_, options, progress);
+      const MeshTree tree = build_mesh_tree(root_, recipe, run);
       const std::vector<NodeIndex> all = select_nodes(tree, NodeSelection{NodeSelectionKind::all});
       auto glb = std::make_shared<const std::string>(encode_glb(tree, all));
       const std::lock_guard lock(mutex_);
       glb_ = std::move(glb);
-      options_ = tree.options;
+      recipe_ = tree.recipe;
       leaves_ = tree.leaf_count();
       seconds_ = std::chrono::duration<double>(Clock::now() - start).count();
       ++generation_;
@@ -196,10 +197,10 @@ class Session {
   Mesh root_;  // the tree's root solid: what the editor fractures again
   mutable std::mutex mutex_;
   std::shared_ptr<const std::string> glb_;  // guarded by mutex_
-  BuildOptions options_;                    // of the tree shown; guarded by mutex_
+  TreeRecipe recipe_;                       // of the tree shown; guarded by mutex_
   std::uint64_t generation_ = 0;            // guarded by mutex_; counts trees shown
   std::atomic<State> state_{State::idle};
-  BuildOptions job_options_;  // guarded by mutex_
+  TreeRecipe job_recipe_;  // guarded by mutex_
   std::atomic<std::size_t> leaves_done_{0};
   std::size_t leaves_ = 0;  // of the last finished job; guarded by mutex_
   double seconds_ = 0;      // guarded by mutex_
@@ -216,16 +217,16 @@ std::optional<std::uint64_t> whole_number(const json& value) {
   return parse_whole_number(text);
 }
 
-// The build options a POST /api/fracture asks for, checked as the fracture
-// command checks its flags. Throws UsageError with the message for the page.
-BuildOptions requested_options(const std::string& body) {
+// The recipe a POST /api/fracture asks for, checked as the fracture command
+// checks its flags. Throws UsageError with the message for the page.
+TreeRecipe requested_recipe(const std::string& body) {
   const json request = json::parse(body, nullptr, false);
   if (request.is_discarded() || !request.is_object()) throw UsageError("the request is not a JSON object");
   const std::optional<std::uint64_t> fragments = whole_number(request.value("fragments", json()));
   if (!fragments) throw UsageError("fragments must be a whole number from 1 to 4294967295");
   const std::optional<std::uint64_t> seed = whole_number(request.value("seed", json("1")));
   if (!seed) throw UsageError("seed must be a whole number from 0 to 18446744073709551615");
-  return build_options_from(*fragments, *seed, request.value("strategy", std::string("thesis")), "");
+  return tree_recipe_from(*fragments, *seed, request.value("strategy", std::string("thesis")), "");
 }
 
 void send_json(httplib::Response& response, int status, const json& body) {
@@ -250,14 +251,14 @@ void add_routes(httplib::Server& server, Session& session, const std::string& pa
     send_json(response, 200, session.job_json());
   });
   server.Post("/api/fracture", [&session](const httplib::Request& request, httplib::Response& response) {
-    BuildOptions options;
+    TreeRecipe recipe;
     try {
-      options = requested_options(request.body);
+      recipe = requested_recipe(request.body);
     } catch (const UsageError& e) {
       send_json(response, 400, {{"error", e.what()}});
       return;
     }
-    if (const std::optional<std::string> refused = session.start(options)) {
+    if (const std::optional<std::string> refused = session.start(recipe)) {
       send_json(response, 409, {{"error", *refused}});
       return;
     }

@@ -211,10 +211,10 @@ class CutBonds {
 }  // namespace
 
 std::vector<Bond> find_bonds(const MeshTree& tree) {
-  if (!tree.cut_planes.empty()) return find_plane_bonds(tree);
+  if (tree.has_exact_representation()) return find_plane_bonds(tree);
   std::vector<PlaneProjection> projections(tree.nodes.size());
   for (NodeIndex k = 0; k < tree.nodes.size(); ++k) {
-    if (!tree.nodes[k].is_leaf()) projections[k] = PlaneProjection::of(tree.nodes[k].plane);
+    if (!tree.nodes[k].is_leaf()) projections[k] = PlaneProjection::of(tree.cut_planes[k]);
   }
   const Faces faces = detail::gather_cap_faces(tree, projections);
 
@@ -224,7 +224,7 @@ std::vector<Bond> find_bonds(const MeshTree& tree) {
     const std::span<const std::uint32_t> cut_faces(faces.order.data() + faces.start[k],
                                                    faces.start[k + 1] - faces.start[k]);
     if (cut_faces.size() < 2) continue;
-    cut_bonds.run(tree, faces, cut_faces, tree.nodes[k].plane, projections[k], bonds);
+    cut_bonds.run(tree, faces, cut_faces, tree.cut_planes[k], projections[k], bonds);
   }
   std::sort(bonds.begin(), bonds.end(), [](const Bond& a, const Bond& b) {
     if (a.first != b.first) return a.first < b.first;

@@ -16,7 +16,6 @@
 #include <utility>
 #include <vector>
 
-#include "shatter/kernel/enum_names.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
@@ -28,28 +27,6 @@
 #include "shatter/version.hpp"
 
 namespace shatter {
-
-std::string_view strategy_name(Strategy strategy) {
-  switch (strategy) {
-    case Strategy::thesis: return "thesis";
-    case Strategy::balanced: return "balanced";
-    case Strategy::axis: return "axis";
-  }
-  return "unknown";
-}
-
-std::string_view kernel_name(KernelKind kernel) {
-  switch (kernel) {
-    case KernelKind::fast: return "fast";
-    case KernelKind::exact: return "exact";
-    case KernelKind::plane: return "plane";
-  }
-  return "unknown";
-}
-
-std::optional<Strategy> strategy_named(std::string_view name) {
-  return enum_named(name, {Strategy::thesis, Strategy::balanced, Strategy::axis}, &strategy_name);
-}
 
 namespace {
 
@@ -148,11 +125,15 @@ Plane draw_plane(Strategy strategy, const BoundingBox& box, const Vec3& centroid
 
 struct BuildNode {
   Mesh mesh;    // the solid rounded to doubles, certified valid (round_solid)
-  Solid solid;  // the exact solid; its vertices refer to the cut plane of the
-                // ancestor at depth k as PlaneRef::cut(k)
+  // The exact solid; its vertices refer to the cut plane of the ancestor at
+  // depth k as PlaneRef::cut(k). A node's index in the tree is its place in
+  // depth-first preorder, unknown until every subtree before it is finished
+  // (they grow in parallel, and cuts may be undone), so the depth names the
+  // plane until number_tree gives the node its index.
+  Solid solid;
   const BuildNode* parent = nullptr;
   MassProperties mass;
-  Plane plane;
+  Plane plane;  // the plane that cut this node; zero while it is a leaf
   bool above_parent_plane = false;
   std::uint32_t depth = 0;
   std::uint64_t seed = 0;
@@ -161,7 +142,7 @@ struct BuildNode {
 
 class Builder {
  public:
-  Builder(const BuildOptions& options, const LeafProgressFn& progress) : options_(options), progress_(progress) {}
+  Builder(const TreeRecipe& recipe, const LeafProgressFn& progress) : options_(recipe), progress_(progress) {}
 
   std::unique_ptr<BuildNode> root(const Mesh& mesh) {
     auto node = std::make_unique<BuildNode>();
@@ -247,13 +228,13 @@ class Builder {
     if (progress_) progress_(done);
   }
 
-  const BuildOptions& options() const { return options_; }
+  const TreeRecipe& recipe() const { return options_; }
   const PlaneInput& plane_input() const { return *plane_input_; }
   std::uint64_t planes_missed() const { return planes_missed_; }
   std::uint64_t planes_rejected() const { return planes_rejected_; }
 
  private:
-  const BuildOptions& options_;
+  const TreeRecipe& options_;  // the recipe: what to build
   std::optional<PlaneInput> plane_input_;
   const LeafProgressFn& progress_;
   std::atomic<std::size_t> leaves_done_{0};
@@ -310,7 +291,7 @@ void grow(Builder& builder, BuildNode& node, std::uint32_t budget) {
     return;
   }
   builder.cut(node);
-  const std::vector<std::uint32_t> shares = builder.options().strategy == Strategy::axis
+  const std::vector<std::uint32_t> shares = builder.recipe().strategy == Strategy::axis
                                                 ? share_by_volume(budget, node)
                                                 : share_evenly(budget, node.children.size());
   if (budget < parallel_budget) {
@@ -423,7 +404,8 @@ void number_tree(BuildNode& root, MeshTree& tree) {
     for (SurfaceId& surface : node.mesh.surfaces) {
       if (surface != original_surface) surface = cap_surface_of(path[surface - 1]);
     }
-    // Likewise the plane kernel's cut planes, referred to by depth until now.
+    // Likewise the plane kernel's cut planes, referred to by depth until now
+    // (BuildNode::solid says why); the node's own plane takes its index here.
     node.solid = std::move(built.solid);
     node.convex = node.solid.convex;
     for (SolidFace& face : node.solid.faces) {
@@ -443,7 +425,7 @@ void number_tree(BuildNode& root, MeshTree& tree) {
     }
     node.mass = built.mass;
     node.parent = pending.parent;
-    node.plane = built.plane;
+    tree.cut_planes.push_back(built.plane);
     node.above_parent_plane = built.above_parent_plane;
     node.depth = built.depth;
     node.seed = built.seed;
@@ -515,28 +497,17 @@ void plane_hulls(tbb::task_arena& arena, MeshTree& tree) {
   }
 }
 
-// The plane kernel's tree keeps the input planes and the node planes that the
-// nodes' exact solids are defined over.
-void keep_plane_geometry(const PlaneInput& input, MeshTree& tree) {
-  tree.geometry = input.geometry;
-  tree.cut_planes.resize(tree.nodes.size());
-  for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
-    tree.cut_planes[i] = tree.nodes[i].is_leaf() ? Plane{} : tree.nodes[i].plane;
-  }
-}
-
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 }  // namespace
 
-MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const LeafProgressFn& progress,
-                         BuildReport* report) {
-  if (options.fragments < 1) throw std::invalid_argument("fragments must be at least 1");
-  if (options.max_plane_tries < 1) throw std::invalid_argument("max_plane_tries must be at least 1");
-  if (options.kernel != KernelKind::plane) {
-    throw std::invalid_argument("options.kernel must be plane: the " + std::string(kernel_name(options.kernel)) +
+MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const BuildRunOptions& run) {
+  if (recipe.fragments < 1) throw std::invalid_argument("fragments must be at least 1");
+  if (recipe.max_plane_tries < 1) throw std::invalid_argument("max_plane_tries must be at least 1");
+  if (recipe.kernel != KernelKind::plane) {
+    throw std::invalid_argument("recipe.kernel must be plane: the " + std::string(kernel_name(recipe.kernel)) +
                                 " kernel was retired (its trees still read)");
   }
   for (SurfaceId surface : mesh.surfaces) {
@@ -544,27 +515,24 @@ MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const Le
       throw std::invalid_argument("build_mesh_tree needs every input triangle on surface 0 (caps are numbered by cut)");
     }
   }
-  if (!options.input_validated) require_valid_solid(mesh, "input", options.allow_self_intersections);
+  if (!run.input_validated) require_valid_solid(mesh, "input", recipe.allow_self_intersections);
 
-  const unsigned threads = options.threads == 0 ? static_cast<unsigned>(tbb::info::default_concurrency())
-                                                : options.threads;
+  const unsigned threads = run.threads == 0 ? static_cast<unsigned>(tbb::info::default_concurrency()) : run.threads;
   auto phase_start = std::chrono::steady_clock::now();
-  Builder builder(options, progress);
+  Builder builder(recipe, run.progress);
   std::unique_ptr<BuildNode> root = builder.root(mesh);
   tbb::task_arena arena(static_cast<int>(threads));
   arena.execute([&] {
-    if (options.strategy == Strategy::balanced) {
-      grow_balanced(builder, *root, options.fragments, threads);
+    if (recipe.strategy == Strategy::balanced) {
+      grow_balanced(builder, *root, recipe.fragments, threads);
     } else {
-      grow(builder, *root, options.fragments);
-      undo_surplus_cuts(*root, options.fragments);
+      grow(builder, *root, recipe.fragments);
+      undo_surplus_cuts(*root, recipe.fragments);
     }
   });
 
   MeshTree tree;
-  tree.options = options;
-  tree.options.threads = 0;  // never changes the output, so not part of it
-  tree.options.input_validated = false;  // nor does who checked the input
+  tree.recipe = recipe;
   tree.shatter_version = std::string(version_string);
   number_tree(*root, tree);
   dismantle(std::move(root));
@@ -572,14 +540,16 @@ MeshTree build_mesh_tree(const Mesh& mesh, const BuildOptions& options, const Le
   timing.cutting_seconds = seconds_since(phase_start);
   timing.planes_missed = builder.planes_missed();
   timing.planes_rejected = builder.planes_rejected();
-  keep_plane_geometry(builder.plane_input(), tree);
+  // The input points and planes the nodes' exact solids are defined over, beside
+  // the cut planes number_tree stored.
+  tree.geometry = builder.plane_input().geometry;
   phase_start = std::chrono::steady_clock::now();
   plane_hulls(arena, tree);
   timing.hull_seconds = seconds_since(phase_start);
   phase_start = std::chrono::steady_clock::now();
   tree.bonds = find_bonds(tree);
   timing.bond_seconds = seconds_since(phase_start);
-  if (report) *report = timing;
+  if (run.report) *run.report = timing;
   return tree;
 }
 

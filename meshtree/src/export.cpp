@@ -225,8 +225,9 @@ Vec3 face_normal(const Mesh& mesh, const Triangle& triangle) {
 // exact. A cap whose cut is not an ancestor, or has no plane (only in a tree
 // made by hand), takes its first triangle's own normal instead.
 Vec3 cap_normal(const MeshTree& tree, NodeIndex node, NodeIndex cut, const Mesh& mesh, const Triangle& triangle) {
-  const Vec3 plane_normal = normalized(tree.nodes[cut].plane.normal);
-  if (!(norm(plane_normal) > 0) || !is_finite(plane_normal)) return face_normal(mesh, triangle);  // no plane stored
+  if (cut >= tree.cut_planes.size()) return face_normal(mesh, triangle);  // no plane stored
+  const Vec3 plane_normal = normalized(tree.cut_planes[cut].normal);
+  if (!(norm(plane_normal) > 0) || !is_finite(plane_normal)) return face_normal(mesh, triangle);  // a zero plane
   NodeIndex child = node;
   while (child < tree.nodes.size() && tree.nodes[child].parent != cut && tree.nodes[child].parent != no_node) {
     child = tree.nodes[child].parent;
@@ -440,7 +441,8 @@ std::size_t cap_triangle_count(const Mesh& mesh) {
       std::count_if(mesh.surfaces.begin(), mesh.surfaces.end(), [](SurfaceId s) { return s != original_surface; }));
 }
 
-tinygltf::Value extras_of(const MeshTreeNode& node, NodeIndex index) {
+tinygltf::Value extras_of(const MeshTree& tree, NodeIndex index) {
+  const MeshTreeNode& node = tree.nodes[index];
   tinygltf::Value::Object extras;
   extras["tree_node"] = count_value(index);
   extras["depth"] = count_value(node.depth);
@@ -452,8 +454,8 @@ tinygltf::Value extras_of(const MeshTreeNode& node, NodeIndex index) {
   extras["cap_triangles"] = count_value(cap_triangle_count(node.mesh));
   if (node.is_leaf()) {
     extras["leaf"] = count_value(node.first_leaf);
-  } else {
-    const Plane& plane = node.plane;
+  } else if (index < tree.cut_planes.size()) {  // a tree made by hand may store none
+    const Plane& plane = tree.cut_planes[index];
     extras["plane"] = number_array({plane.normal.x, plane.normal.y, plane.normal.z, plane.offset});
   }
   return tinygltf::Value(std::move(extras));
@@ -506,7 +508,7 @@ std::string encode_glb(const MeshTree& tree, std::span<const NodeIndex> selectio
     const MeshTreeNode& node = tree.nodes[i];
     tinygltf::Node& gltf_node = model.nodes[i];
     gltf_node.name = gltf_node_name(node, i);
-    gltf_node.extras = extras_of(node, i);
+    gltf_node.extras = extras_of(tree, i);
     for (NodeIndex child : node.children) {
       require_node_index(tree, child);
       gltf_node.children.push_back(static_cast<int>(child));

@@ -26,7 +26,6 @@
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/meshtree/bonds.hpp"
-#include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/tree.hpp"
 #include "shatter/meshtree/validate_tree.hpp"
 #include "tree_checks.hpp"
@@ -35,7 +34,6 @@ namespace shatter {
 
 namespace {
 
-using detail::cut_plane_of;
 using detail::hex;
 using detail::last_kernel;
 using detail::last_point_kind;
@@ -51,7 +49,7 @@ constexpr std::array<unsigned char, 8> magic = {0x89, 'S', 'H', 'T', 0x0D, 0x0A,
 constexpr std::size_t file_header_size = 12;     // magic, u32 version
 constexpr std::size_t section_header_size = 16;  // tag, u64 length, u32 crc
 
-constexpr Tag options_tag = {'O', 'P', 'T', 'S'};
+constexpr Tag recipe_tag = {'O', 'P', 'T', 'S'};
 constexpr Tag nodes_tag = {'N', 'O', 'D', 'E'};
 constexpr Tag meshes_tag = {'M', 'E', 'S', 'H'};
 constexpr Tag hulls_tag = {'H', 'U', 'L', 'L'};
@@ -64,7 +62,7 @@ constexpr Tag version_tag = {'v', 'e', 'r', 's'};
 
 // Bytes on disk, the least each record can take: counts are checked against these
 // before anything is allocated, which bounds memory by a multiple of the input.
-constexpr std::size_t options_size = 27;
+constexpr std::size_t recipe_size = 27;
 constexpr std::size_t node_record_min_size = 165;  // without its children
 constexpr std::size_t child_size = 4;
 constexpr std::size_t mesh_record_min_size = 9;
@@ -188,30 +186,33 @@ class ByteWriter {
   std::string bytes_;
 };
 
-std::string options_payload(const BuildOptions& options) {
+std::string recipe_payload(const TreeRecipe& recipe) {
   ByteWriter out;
-  out.u32(options.fragments);
-  out.u64(options.seed);
-  out.u8(static_cast<std::uint8_t>(options.strategy));
-  out.u8(static_cast<std::uint8_t>(options.kernel));
-  out.f64(options.interior_uv_scale);
-  out.u32(options.max_plane_tries);
-  out.u8(options.allow_self_intersections ? 1 : 0);
+  out.u32(recipe.fragments);
+  out.u64(recipe.seed);
+  out.u8(static_cast<std::uint8_t>(recipe.strategy));
+  out.u8(static_cast<std::uint8_t>(recipe.kernel));
+  out.f64(recipe.interior_uv_scale);
+  out.u32(recipe.max_plane_tries);
+  out.u8(recipe.allow_self_intersections ? 1 : 0);
   return out.take();
 }
 
-std::string nodes_payload(const std::vector<MeshTreeNode>& nodes) {
+/// Each node's record holds its cut plane (MeshTree::cut_planes[k]): the file
+/// has stored it there since version 1, for every kernel.
+std::string nodes_payload(const MeshTree& tree) {
   ByteWriter out;
-  out.count32(nodes.size());
-  for (const MeshTreeNode& node : nodes) {
+  out.count32(tree.nodes.size());
+  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+    const MeshTreeNode& node = tree.nodes[k];
     out.u32(node.parent);
     out.u32(node.depth);
     out.u32(node.first_leaf);
     out.u32(node.leaf_count);
     out.u64(node.seed);
     out.u8(node.above_parent_plane ? 1 : 0);
-    out.vec3(node.plane.normal);
-    out.f64(node.plane.offset);
+    out.vec3(tree.cut_planes[k].normal);
+    out.f64(tree.cut_planes[k].offset);
     out.f64(node.mass.volume);
     out.vec3(node.mass.centroid);
     for (const double entry : node.mass.inertia) out.f64(entry);
@@ -345,7 +346,7 @@ struct Section {
 
 struct SectionTable {
   std::uint32_t version = 0;
-  std::optional<Section> options, nodes, meshes, hulls, bonds;
+  std::optional<Section> recipe, nodes, meshes, hulls, bonds;
   std::optional<Section> geometry, solids;  // version 2
   std::optional<Section> shatter_version;   // optional, in any version
 };
@@ -376,7 +377,7 @@ SectionTable read_section_table(std::string_view bytes) {
   SectionTable table;
   table.version = check_file_header(bytes);
   // Version 1 knows the first five; GEOM and SOLD are unknown tags there.
-  const std::array<std::pair<Tag, std::optional<Section>*>, 7> all_known = {{{options_tag, &table.options},
+  const std::array<std::pair<Tag, std::optional<Section>*>, 7> all_known = {{{recipe_tag, &table.recipe},
                                                                              {nodes_tag, &table.nodes},
                                                                              {meshes_tag, &table.meshes},
                                                                              {hulls_tag, &table.hulls},
@@ -539,35 +540,37 @@ class PayloadReader {
   std::string record_;
 };
 
-BuildOptions read_options(const Section& section) {
+TreeRecipe read_recipe(const Section& section) {
   PayloadReader in(section);
-  BuildOptions options;
-  options.fragments = in.u32("fragments");
-  options.seed = in.u64("seed");
+  TreeRecipe recipe;
+  recipe.fragments = in.u32("fragments");
+  recipe.seed = in.u64("seed");
   const std::size_t strategy_at = in.offset();
   const std::uint8_t strategy = in.u8("strategy");
   if (strategy > last_strategy) in.fail_at(strategy_at, "strategy " + str(strategy) + " is unknown");
-  options.strategy = static_cast<Strategy>(strategy);
+  recipe.strategy = static_cast<Strategy>(strategy);
   const std::size_t kernel_at = in.offset();
   const std::uint8_t kernel = in.u8("kernel");
   if (kernel > last_kernel) in.fail_at(kernel_at, "kernel " + str(kernel) + " is unknown");
-  options.kernel = static_cast<KernelKind>(kernel);
-  options.interior_uv_scale = in.f64("interior_uv_scale");
-  options.max_plane_tries = in.u32("max_plane_tries");
-  options.allow_self_intersections = in.boolean("allow_self_intersections");
-  options.threads = 0;
+  recipe.kernel = static_cast<KernelKind>(kernel);
+  recipe.interior_uv_scale = in.f64("interior_uv_scale");
+  recipe.max_plane_tries = in.u32("max_plane_tries");
+  recipe.allow_self_intersections = in.boolean("allow_self_intersections");
   in.expect_end();
-  static_assert(options_size == 27);
-  return options;
+  static_assert(recipe_size == 27);
+  return recipe;
 }
 
-/// Reads the nodes without their meshes; `record_offsets` gets each record's offset.
-std::vector<MeshTreeNode> read_nodes(const Section& section, std::vector<std::size_t>& record_offsets) {
+/// Reads the nodes without their meshes, and their cut planes into
+/// tree.cut_planes; `record_offsets` gets each record's offset.
+void read_nodes(const Section& section, MeshTree& tree, std::vector<std::size_t>& record_offsets) {
   PayloadReader in(section);
   const std::uint32_t node_count = in.u32("the node count");
   if (node_count == 0) in.fail("node count 0 (a tree has at least its root)");
   in.check_room(node_count, node_record_min_size, "nodes");
-  std::vector<MeshTreeNode> nodes(node_count);
+  std::vector<MeshTreeNode>& nodes = tree.nodes;
+  nodes.resize(node_count);
+  tree.cut_planes.resize(node_count);
   record_offsets.resize(node_count);
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     MeshTreeNode& node = nodes[k];
@@ -579,8 +582,8 @@ std::vector<MeshTreeNode> read_nodes(const Section& section, std::vector<std::si
     node.leaf_count = in.u32("leaf_count");
     node.seed = in.u64("seed");
     node.above_parent_plane = in.boolean("above_parent_plane");
-    node.plane.normal = in.vec3("plane normal");
-    node.plane.offset = in.f64("plane offset");
+    tree.cut_planes[k].normal = in.vec3("plane normal");
+    tree.cut_planes[k].offset = in.f64("plane offset");
     node.mass.volume = in.f64("volume");
     node.mass.centroid = in.vec3("centroid");
     for (double& entry : node.mass.inertia) entry = in.f64("inertia");
@@ -591,7 +594,6 @@ std::vector<MeshTreeNode> read_nodes(const Section& section, std::vector<std::si
   }
   in.set_record("");
   in.expect_end();
-  return nodes;
 }
 
 Mesh read_mesh_record(PayloadReader& in) {
@@ -797,12 +799,13 @@ std::string located(const TreeDefect& defect, const SectionTable& sections, cons
   Tag tag = nodes_tag;
   std::size_t at = sections.nodes->payload_offset;
   switch (defect.part) {
-    case TreePart::options:
-      tag = options_tag;
-      at = sections.options->payload_offset;
+    case TreePart::recipe:
+      tag = recipe_tag;
+      at = sections.recipe->payload_offset;
       break;
     case TreePart::node:
     case TreePart::leaf_range:
+    case TreePart::cut_planes:  // each node's record holds its plane
       if (defect.index < offsets.nodes.size()) at = offsets.nodes[defect.index];
       break;
     case TreePart::leaf_list: break;  // recomputed by the reader, so never at fault
@@ -818,11 +821,9 @@ std::string located(const TreeDefect& defect, const SectionTable& sections, cons
       tag = bonds_tag;
       at = sections.bonds->payload_offset + 8 + bond_size * defect.index;
       break;
-    // The exact representation's parts exist only in version 2 files; cut_planes
-    // is recomputed by the reader, so never at fault in a file.
+    // The exact representation's parts exist only in version 2 files.
     case TreePart::input_point:
     case TreePart::input_plane:
-    case TreePart::cut_planes:
       if (sections.geometry) {
         tag = geometry_tag;
         at = sections.geometry->payload_offset;
@@ -872,8 +873,8 @@ std::string encode_shatter(const MeshTree& tree) {
   for (const unsigned char byte : magic) file.u8(byte);
   file.u32(shatter_format_version);
   if (!tree.shatter_version.empty()) append_section(file, version_tag, tree.shatter_version);
-  append_section(file, options_tag, options_payload(tree.options));
-  append_section(file, nodes_tag, nodes_payload(tree.nodes));
+  append_section(file, recipe_tag, recipe_payload(tree.recipe));
+  append_section(file, nodes_tag, nodes_payload(tree));
   append_section(file, meshes_tag, meshes_payload(tree.nodes, &MeshTreeNode::mesh));
   append_section(file, hulls_tag, meshes_payload(tree.nodes, &MeshTreeNode::hull));
   append_section(file, bonds_tag, bonds_payload(tree.bonds));
@@ -893,8 +894,8 @@ MeshTree decode_shatter(std::string_view bytes) {
     }
     tree.shatter_version = version->payload;
   }
-  tree.options = read_options(*sections.options);
-  tree.nodes = read_nodes(*sections.nodes, offsets.nodes);
+  tree.recipe = read_recipe(*sections.recipe);
+  read_nodes(*sections.nodes, tree, offsets.nodes);
   read_meshes(*sections.meshes, tree.nodes, &MeshTreeNode::mesh, offsets.meshes);
   read_meshes(*sections.hulls, tree.nodes, &MeshTreeNode::hull, offsets.hulls);
   tree.bonds = read_bonds(*sections.bonds);
@@ -904,10 +905,6 @@ MeshTree decode_shatter(std::string_view bytes) {
     read_solids(*sections.solids, tree.nodes, !tree.geometry.points.empty(), offsets.solids);
   }
   tree.leaf_nodes = leaves_in_order(tree.nodes);
-  if (!tree.geometry.points.empty()) {
-    tree.cut_planes.resize(tree.nodes.size());
-    for (std::size_t k = 0; k < tree.nodes.size(); ++k) tree.cut_planes[k] = cut_plane_of(tree.nodes[k]);
-  }
   // The caches are not stored: the structure is checked without them, then they are computed.
   if (const std::optional<TreeDefect> defect = validate_tree(tree, {.caches = false}).defect) {
     refuse(located(*defect, sections, offsets));

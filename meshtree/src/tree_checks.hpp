@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "shatter/kernel/implicit.hpp"
-#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/recipe.hpp"
 #include "shatter/meshtree/tree.hpp"
 #include "shatter/meshtree/validate_tree.hpp"
 
@@ -27,9 +27,6 @@ std::string hex(std::uint64_t value, int digits);
 
 /// The leaves of a tree in node order: what MeshTree::leaf_nodes must be.
 std::vector<NodeIndex> leaves_in_order(const std::vector<MeshTreeNode>& nodes);
-
-/// MeshTree::cut_planes[k] as node k defines it: its plane, zero for a leaf.
-Plane cut_plane_of(const MeshTreeNode& node);
 
 /// Computes the caches a .shatter file does not store (see
 /// TreeValidationOptions::caches) and stores them in `tree`.

@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -45,8 +44,6 @@ std::vector<NodeIndex> leaves_in_order(const std::vector<MeshTreeNode>& nodes) {
   return leaves;
 }
 
-Plane cut_plane_of(const MeshTreeNode& node) { return node.is_leaf() ? Plane{} : node.plane; }
-
 // The checks, in detail's own unnamed namespace: they see what they share with
 // the reader (tree_checks.hpp) by its plain name.
 namespace {
@@ -65,16 +62,16 @@ std::string full_digits(double value) {
 
 // --- the structure ----------------------------------------------------------------
 
-std::optional<TreeDefect> options_defect(const BuildOptions& options) {
-  if (options.fragments == 0) return TreeDefect{TreePart::options, 0, "options.fragments is 0 (must be at least 1)"};
-  if (static_cast<std::uint8_t>(options.strategy) > last_strategy) {
+std::optional<TreeDefect> recipe_defect(const TreeRecipe& recipe) {
+  if (recipe.fragments == 0) return TreeDefect{TreePart::recipe, 0, "recipe.fragments is 0 (must be at least 1)"};
+  if (static_cast<std::uint8_t>(recipe.strategy) > last_strategy) {
     return TreeDefect{
-        TreePart::options, 0,
-        "options.strategy " + str(static_cast<std::uint8_t>(options.strategy)) + " is not a known strategy"};
+        TreePart::recipe, 0,
+        "recipe.strategy " + str(static_cast<std::uint8_t>(recipe.strategy)) + " is not a known strategy"};
   }
-  if (static_cast<std::uint8_t>(options.kernel) > last_kernel) {
-    return TreeDefect{TreePart::options, 0,
-                      "options.kernel " + str(static_cast<std::uint8_t>(options.kernel)) + " is not a known kernel"};
+  if (static_cast<std::uint8_t>(recipe.kernel) > last_kernel) {
+    return TreeDefect{TreePart::recipe, 0,
+                      "recipe.kernel " + str(static_cast<std::uint8_t>(recipe.kernel)) + " is not a known kernel"};
   }
   return std::nullopt;
 }
@@ -165,6 +162,17 @@ std::optional<TreeDefect> structure_defect(const std::vector<MeshTreeNode>& node
                             "), but its subtree holds [" + str(leaves_before) + ", +" + str(leaves_below[k]) + ")"};
     }
     if (node.is_leaf()) ++leaves_before;
+  }
+  return std::nullopt;
+}
+
+// Any tree, of any kernel: the plane of every node, kept beside the nodes
+// (MeshTree::cut_planes), so a node without one would be indexed past the end.
+std::optional<TreeDefect> cut_planes_defect(const MeshTree& tree) {
+  if (tree.cut_planes.size() != tree.nodes.size()) {
+    return TreeDefect{TreePart::cut_planes, 0,
+                      "cut_planes has " + str(tree.cut_planes.size()) + " planes for " + str(tree.nodes.size()) +
+                          " nodes (one per node)"};
   }
   return std::nullopt;
 }
@@ -260,11 +268,6 @@ std::optional<TreeDefect> bonds_defect(const MeshTree& tree) {
 // --- the exact representation (plane kernel) ---------------------------------
 
 bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
-bool same_bits(const Plane& a, const Plane& b) {
-  return same_bits(a.normal.x, b.normal.x) && same_bits(a.normal.y, b.normal.y) && same_bits(a.normal.z, b.normal.z) &&
-         same_bits(a.offset, b.offset);
-}
 
 bool solid_is_empty(const Solid& solid) {
   return solid.defs.empty() && solid.approx.empty() && solid.faces.empty() && solid.loops.empty() &&
@@ -461,11 +464,6 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
       return TreeDefect{TreePart::input_plane, 0,
                         "geometry has " + str(geometry.planes.size()) + " input planes but no input points"};
     }
-    if (!tree.cut_planes.empty()) {
-      return TreeDefect{TreePart::cut_planes, 0,
-                        "cut_planes has " + str(tree.cut_planes.size()) +
-                            " planes, but the tree has no exact representation (no input points)"};
-    }
     for (std::size_t k = 0; k < node_count; ++k) {
       if (!solid_is_empty(tree.nodes[k].solid)) {
         return TreeDefect{TreePart::solid, k,
@@ -506,19 +504,9 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
       }
     }
   }
-  if (tree.cut_planes.size() != node_count) {
-    return TreeDefect{TreePart::cut_planes, 0,
-                      "cut_planes has " + str(tree.cut_planes.size()) + " planes for " + str(node_count) + " nodes"};
-  }
   for (std::size_t k = 0; k < node_count; ++k) {
-    const MeshTreeNode& node = tree.nodes[k];
-    if (!same_bits(tree.cut_planes[k], cut_plane_of(node))) {
-      return TreeDefect{
-          TreePart::cut_planes, k,
-          "cut_planes[" + str(k) + "] is not " +
-              (node.is_leaf() ? std::string("zero (node ") + str(k) + " is a leaf)" : "node " + str(k) + "'s plane")};
-    }
-    if (!node.is_leaf() && !(finite(node.plane.normal) && std::isfinite(node.plane.offset))) {
+    const Plane& plane = tree.cut_planes[k];
+    if (!tree.nodes[k].is_leaf() && !(finite(plane.normal) && std::isfinite(plane.offset))) {
       return TreeDefect{
           TreePart::node, k,
           "node " + str(k) +
@@ -550,9 +538,10 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
 /// The first defect of `tree`, or nothing. `caches`: also check that the
 /// exact representation's caches are sized (the encoder's precondition).
 std::optional<TreeDefect> first_defect(const MeshTree& tree, bool caches) {
-  if (auto defect = options_defect(tree.options)) return defect;
+  if (auto defect = recipe_defect(tree.recipe)) return defect;
   if (auto defect = structure_defect(tree.nodes)) return defect;
   if (auto defect = leaf_list_defect(tree)) return defect;
+  if (auto defect = cut_planes_defect(tree)) return defect;
   for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
     if (auto problem = mesh_defect(tree.nodes[k].mesh))
       return TreeDefect{TreePart::mesh, k, "the mesh of node " + str(k) + " " + *problem};
@@ -618,7 +607,7 @@ std::optional<TreeDefect> caches_defect(const MeshTree& tree, MeshTree* fill) {
 // --- the geometry (TreeValidationOptions::geometry) -------------------------------
 
 // Defects a tree built with allow_self_intersections may have: its pieces are
-// promised closed, oriented and manifold only (BuildOptions).
+// promised closed, oriented and manifold only (TreeRecipe).
 bool embedding_defect(DefectKind kind) {
   return kind == DefectKind::zero_area_triangle || kind == DefectKind::inward_orientation ||
          kind == DefectKind::self_intersection;
@@ -630,7 +619,7 @@ std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k
   const MeshTreeNode& node = tree.nodes[k];
   const std::string name = "node " + str(k);
   if (!node.is_leaf()) {
-    const Plane& plane = node.plane;
+    const Plane& plane = tree.cut_planes[k];
     if (!(finite(plane.normal) && std::isfinite(plane.offset))) {
       return TreeDefect{TreePart::node, k, name + " is cut by a plane with a NaN or infinite coefficient"};
     }
@@ -656,7 +645,7 @@ std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k
 
   // validate_mesh finds nothing wrong with no triangles at all.
   if (node.mesh.triangles.empty()) return TreeDefect{TreePart::mesh, k, "the mesh of " + name + " is empty"};
-  const bool topology_only = tree.options.allow_self_intersections;
+  const bool topology_only = tree.recipe.allow_self_intersections;
   ValidationReport mesh_report = validate_mesh(node.mesh, {.check_self_intersections = !topology_only});
   if (topology_only) {
     std::erase_if(mesh_report.defects, [](const Defect& defect) { return embedding_defect(defect.kind); });
@@ -697,8 +686,8 @@ std::optional<TreeDefect> fill_caches(MeshTree& tree) { return caches_defect(tre
 
 std::string_view tree_part_name(TreePart part) {
   switch (part) {
-    case TreePart::options:
-      return "options";
+    case TreePart::recipe:
+      return "recipe";
     case TreePart::node:
       return "node";
     case TreePart::leaf_range:
@@ -726,7 +715,7 @@ std::string_view tree_part_name(TreePart part) {
 std::string TreeValidationReport::summary() const {
   if (!defect) return "valid";
   std::string where(tree_part_name(defect->part));
-  if (defect->part != TreePart::options) where.append(" ").append(detail::str(defect->index));
+  if (defect->part != TreePart::recipe) where.append(" ").append(detail::str(defect->index));
   return where + ": " + defect->message;
 }
 

@@ -82,6 +82,7 @@ Mesh floor_slab(double h) {
 MeshTree single_node_tree(Mesh mesh) {
   MeshTree tree;
   tree.nodes.resize(1);
+  tree.cut_planes.resize(1);  // a leaf's plane: unused, zero
   tree.nodes[0].mesh = std::move(mesh);
   tree.nodes[0].leaf_count = 1;
   tree.leaf_nodes = {0};

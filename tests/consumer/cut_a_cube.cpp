@@ -51,10 +51,10 @@ int main() {
     expect(std::fabs(shatter::signed_volume(half.mesh) - 0.5) < 1e-15, "a half's volume is not 1/2");
   }
 
-  shatter::BuildOptions options;
-  options.fragments = 8;
-  options.seed = 7;
-  const shatter::MeshTree tree = shatter::build_mesh_tree(cube, options);
+  shatter::TreeRecipe recipe;
+  recipe.fragments = 8;
+  recipe.seed = 7;
+  const shatter::MeshTree tree = shatter::build_mesh_tree(cube, recipe);
   expect(tree.leaf_count() == 8, "the tree has " + std::to_string(tree.leaf_count()) + " leaves, not 8");
   const shatter::TreeValidationReport report = shatter::validate_tree(tree, {.geometry = true});
   expect(report.valid(), "validate_tree: " + report.summary());

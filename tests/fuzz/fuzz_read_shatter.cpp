@@ -115,14 +115,15 @@ std::string converted_from_version_1(std::string_view v1) {
 void check_exact_invariants(const shatter::MeshTree& tree) {
   const shatter::InputGeometry& geometry = tree.geometry;
   require(geometry.plane_approx.size() == geometry.planes.size(), "decoded plane_approx not sized");
+  // Every decoded tree, of any kernel, holds one cut plane per node.
+  require(tree.cut_planes.size() == tree.nodes.size(), "decoded cut_planes not one per node");
   if (geometry.points.empty()) {
-    require(geometry.planes.empty() && tree.cut_planes.empty(), "decoded exact representation without input points");
+    require(geometry.planes.empty(), "decoded exact representation without input points");
     for (const shatter::MeshTreeNode& node : tree.nodes) {
       require(node.solid.defs.empty() && node.solid.faces.empty() && !node.convex, "decoded solid without input points");
     }
     return;
   }
-  require(tree.cut_planes.size() == tree.nodes.size(), "decoded cut_planes not one per node");
   for (const auto& plane : geometry.planes) {
     for (const shatter::VertexIndex p : plane) require(p < geometry.points.size(), "decoded input plane point out of range");
   }

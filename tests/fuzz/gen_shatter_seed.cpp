@@ -28,11 +28,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    shatter::BuildOptions options;
-    options.fragments = argc > 2 ? static_cast<std::uint32_t>(std::stoul(argv[2])) : 4;
-    options.seed = 7;
-    options.threads = 1;
-    shatter::write_shatter_file(argv[1], shatter::build_mesh_tree(shatter::test::unit_cube(), options));
+    shatter::TreeRecipe recipe;
+    recipe.fragments = argc > 2 ? static_cast<std::uint32_t>(std::stoul(argv[2])) : 4;
+    recipe.seed = 7;
+    shatter::write_shatter_file(argv[1], shatter::build_mesh_tree(shatter::test::unit_cube(), recipe, {.threads = 1}));
   } catch (const std::exception& error) {
     std::fprintf(stderr, "error: %s\n", error.what());
     return 1;

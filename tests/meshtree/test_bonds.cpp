@@ -105,8 +105,8 @@ void check_bonds(const MeshTree& tree, const std::vector<Bond>& bonds, bool brut
               std::tie(bond.first, bond.second, bond.cut_node));
     }
     REQUIRE(bond.cut_node < tree.nodes.size());
-    const MeshTreeNode& cut = tree.nodes[bond.cut_node];
-    REQUIRE_FALSE(cut.is_leaf());
+    REQUIRE_FALSE(tree.nodes[bond.cut_node].is_leaf());
+    const Plane& cut_plane = tree.cut_planes[bond.cut_node];
     const std::optional<bool> first_above = leaf_above(tree, bond.first, bond.cut_node);
     const std::optional<bool> second_above = leaf_above(tree, bond.second, bond.cut_node);
     REQUIRE(first_above.has_value());
@@ -117,12 +117,12 @@ void check_bonds(const MeshTree& tree, const std::vector<Bond>& bonds, bool brut
     area_by_cut[bond.cut_node] += bond.area;
     CHECK(std::fabs(norm(bond.normal) - 1) < 1e-12);
     // The normal points from first into second: along +n when first is below.
-    const Vec3 unit = normalized(cut.plane.normal);
+    const Vec3 unit = normalized(cut_plane.normal);
     CHECK(dot(bond.normal, *first_above ? -unit : unit) > 1 - 1e-12);
 
     // The centroid is on the plane and inside both leaves' boxes (checks of a
     // rounded construction, hence tolerances).
-    const double distance = (dot(cut.plane.normal, bond.centroid) + cut.plane.offset) / norm(cut.plane.normal);
+    const double distance = (dot(cut_plane.normal, bond.centroid) + cut_plane.offset) / norm(cut_plane.normal);
     CHECK(std::fabs(distance) <= length_tolerance);
     for (const LeafIndex leaf : {bond.first, bond.second}) {
       const Box3 box = bounds(tree.leaf(leaf).mesh);
@@ -144,7 +144,7 @@ void check_bonds(const MeshTree& tree, const std::vector<Bond>& bonds, bool brut
     CHECK(bonded == Approx(cap.below).epsilon(1e-9).margin(1e-12 * scale * scale));
   }
 
-  if (brute_force && !tree.cut_planes.empty()) {
+  if (brute_force && tree.has_exact_representation()) {
     // A tree with exact solids: the brute force over them (the overlap is exact;
     // its area is measured on rounded points, hence the tolerance of each bond).
     CHECK(bond_mismatch(tree, bonds, plane_reference_bonds(tree)) == "");
@@ -203,28 +203,27 @@ const char* representation_name(Representation representation) {
   return representation == Representation::exact ? "exact solids" : "meshes only";
 }
 
-// A built tree as the retired kernels stored theirs: no input geometry, cut
-// planes or solids, and every node's hull its own (no node marked convex).
+// A built tree as the retired kernels stored theirs: no input geometry or
+// solids, and every node's hull its own (no node marked convex).
 MeshTree meshes_only(MeshTree tree) {
   tree.geometry = {};
-  tree.cut_planes.clear();
   for (MeshTreeNode& node : tree.nodes) {
     node.solid = {};
     if (node.convex) node.hull = convex_hull_of(node.mesh);
     node.convex = false;
   }
-  tree.options.kernel = KernelKind::exact;
+  tree.recipe.kernel = KernelKind::exact;
   tree.bonds = find_bonds(tree);
   return tree;
 }
 
 MeshTree build(const Mesh& mesh, Strategy strategy, Representation representation, std::uint32_t fragments,
                std::uint64_t seed = 11) {
-  BuildOptions options;
-  options.fragments = fragments;
-  options.strategy = strategy;
-  options.seed = seed;
-  MeshTree tree = build_mesh_tree(mesh, options);
+  TreeRecipe recipe;
+  recipe.fragments = fragments;
+  recipe.strategy = strategy;
+  recipe.seed = seed;
+  MeshTree tree = build_mesh_tree(mesh, recipe);
   CHECK(tree_problem(tree) == "");
   if (representation == Representation::exact) return tree;
   tree = meshes_only(std::move(tree));
@@ -244,6 +243,7 @@ MeshTree cut_by_hand(const Mesh& mesh, const std::function<std::optional<Plane>(
       [&](Mesh node_mesh, NodeIndex parent, bool above, std::uint32_t depth) -> NodeIndex {
     const auto index = static_cast<NodeIndex>(tree.nodes.size());
     tree.nodes.emplace_back();
+    tree.cut_planes.emplace_back();
     tree.nodes[index].parent = parent;
     tree.nodes[index].above_parent_plane = above;
     tree.nodes[index].depth = depth;
@@ -259,7 +259,7 @@ MeshTree cut_by_hand(const Mesh& mesh, const std::function<std::optional<Plane>(
     options.cap_surface = cap_surface_of(index);
     oracle::CutResult<Vec3> cut = oracle::cut_mesh(node_mesh, *plane, options);
     REQUIRE_FALSE(cut.plane_missed);
-    tree.nodes[index].plane = *plane;
+    tree.cut_planes[index] = *plane;
     tree.nodes[index].mesh = std::move(node_mesh);
     for (int side = 0; side < 2; ++side) {
       for (Mesh& solid : side == 0 ? cut.below : cut.above) {
@@ -339,6 +339,7 @@ TEST_CASE("bonds of a tilted hand cut far from the origin", "[bonds]") {
 TEST_CASE("a tree without cuts, or without leaves, has no bonds", "[bonds]") {
   MeshTree single;
   single.nodes.emplace_back();
+  single.cut_planes.emplace_back();
   single.nodes[0].mesh = unit_cube();
   single.nodes[0].leaf_count = 1;
   single.leaf_nodes = {0};
@@ -392,7 +393,7 @@ TEST_CASE("axis slices of a long box: a chain of bonds, each the slanted cross-s
       for (const Bond& bond : bonds) {
         ++degree[bond.first];
         ++degree[bond.second];
-        const Vec3 n = tree.nodes[bond.cut_node].plane.normal;
+        const Vec3 n = tree.cut_planes[bond.cut_node].normal;
         CHECK(bond.area == Approx(norm(n) / std::fabs(n.x)).epsilon(1e-9));
         CHECK(std::fabs(bond.normal.x) > 0.9);
       }
@@ -437,8 +438,9 @@ TEST_CASE("a non-convex cap around another's notch: touching is no bond", "[bond
 
   MeshTree tree;
   tree.nodes.resize(5);
+  tree.cut_planes.resize(5);
   tree.nodes[0].children = {1, 2};
-  tree.nodes[0].plane = Plane{{0, 0, 1}, 0};
+  tree.cut_planes[0] = Plane{{0, 0, 1}, 0};
   tree.nodes[0].first_leaf = 0;
   tree.nodes[0].leaf_count = 3;
   tree.nodes[1].parent = 0;
@@ -448,7 +450,7 @@ TEST_CASE("a non-convex cap around another's notch: touching is no bond", "[bond
   tree.nodes[2].parent = 0;
   tree.nodes[2].above_parent_plane = true;
   tree.nodes[2].children = {3, 4};
-  tree.nodes[2].plane = Plane{{1, 0, 0}, -0.75};
+  tree.cut_planes[2] = Plane{{1, 0, 0}, -0.75};
   tree.nodes[2].mesh = merge({b_mesh, c_mesh});
   tree.nodes[2].first_leaf = 1;
   tree.nodes[2].leaf_count = 2;
@@ -606,7 +608,7 @@ struct PlaneTally {
 // brute force on the leaves' exact solids; never one list against the other.
 void check_plane_bonds(const std::string& what, const MeshTree& tree, bool from_builder, PlaneTally& tally) {
   INFO(what << ": " << tree.leaf_count() << " leaves");
-  REQUIRE_FALSE(tree.cut_planes.empty());
+  REQUIRE(tree.has_exact_representation());
   const Reference reference = plane_reference_bonds(tree);
   CHECK(reference.stats.face_problems == 0);
   if (from_builder) CHECK(bond_mismatch(tree, tree.bonds, reference) == "");
@@ -636,7 +638,7 @@ MeshTree plane_tree_by_hand(const Mesh& mesh,
                             const std::function<std::optional<Plane>(std::uint32_t, const Box3&)>& plane_for) {
   const PlaneInput input = prepare_plane_input(mesh);
   MeshTree tree;
-  tree.options.kernel = KernelKind::plane;
+  tree.recipe.kernel = KernelKind::plane;
   tree.geometry = input.geometry;
   const std::function<NodeIndex(Solid, NodeIndex, bool, std::uint32_t)> grow =
       [&](Solid solid, NodeIndex parent, bool above, std::uint32_t depth) -> NodeIndex {
@@ -655,7 +657,6 @@ MeshTree plane_tree_by_hand(const Mesh& mesh,
       tree.leaf_nodes.push_back(index);
       return index;
     }
-    tree.nodes[index].plane = *plane;
     tree.cut_planes[index] = *plane;
     const PlaneSet set = tree.geometry.plane_set(tree.cut_planes);
     SolidCut cut = cut_solid(set, solid, PlaneRef::cut(index), cap_surface_of(index), input.shells);
@@ -707,7 +708,7 @@ std::map<BondKey, double> lattice_tree_bonds(const MeshTree& tree) {
   std::map<BondKey, double> bonds;
   for (NodeIndex k = 0; k < tree.nodes.size(); ++k) {
     if (tree.nodes[k].is_leaf()) continue;
-    const Plane& plane = tree.nodes[k].plane;
+    const Plane& plane = tree.cut_planes[k];
     const int axis = plane.normal.x != 0 ? 0 : plane.normal.y != 0 ? 1 : 2;
     const double at = -plane.offset / plane.normal[axis];
     const auto reaches = [&](const Box3& box) { return box.lo[axis] == at || box.hi[axis] == at; };
@@ -891,12 +892,12 @@ TEST_CASE("find_bonds on 65,536 fragments of a cube", "[.][bench]") {
   if (cache != nullptr && std::filesystem::exists(cache)) {
     tree = read_shatter_file(cache);
   } else {
-    BuildOptions options;
-    options.fragments = 65536;
-    options.strategy = Strategy::balanced;
-    options.seed = 3;
+    TreeRecipe recipe;
+    recipe.fragments = 65536;
+    recipe.strategy = Strategy::balanced;
+    recipe.seed = 3;
     const auto build_start = std::chrono::steady_clock::now();
-    tree = build_mesh_tree(unit_cube(), options);
+    tree = build_mesh_tree(unit_cube(), recipe);
     CHECK(tree_problem(tree) == "");
     WARN("build " << std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count() << " s");
     if (cache != nullptr) write_shatter_file(cache, tree);

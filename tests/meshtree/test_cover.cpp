@@ -256,11 +256,11 @@ TEST_CASE("minimal cover on wide and deep trees uses every radix digit", "[cover
 }
 
 TEST_CASE("minimal cover on a built tree", "[cover][build]") {
-  BuildOptions options;
-  options.fragments = 24;
-  options.strategy = Strategy::thesis;
-  options.seed = 5;
-  const MeshTree tree = build_mesh_tree(unit_cube(), options);
+  TreeRecipe recipe;
+  recipe.fragments = 24;
+  recipe.strategy = Strategy::thesis;
+  recipe.seed = 5;
+  const MeshTree tree = build_mesh_tree(unit_cube(), recipe);
   CHECK(tree_problem(tree, true) == "");
   const std::size_t n = tree.leaf_count();
   REQUIRE(n >= 24);

@@ -88,6 +88,7 @@ struct TreeBuilder {
   NodeIndex add(const Shape& shape, Vec3 lo, Vec3 hi, NodeIndex parent, std::uint32_t depth) {
     const auto index = static_cast<NodeIndex>(tree.nodes.size());
     tree.nodes.emplace_back();
+    tree.cut_planes.emplace_back();
     {
       MeshTreeNode& node = tree.nodes.back();
       node.mesh = test::box(lo, hi);
@@ -121,7 +122,7 @@ struct TreeBuilder {
       if (i == 0) {
         Vec3 normal;
         (axis == 0 ? normal.x : axis == 1 ? normal.y : normal.z) = 1;
-        tree.nodes[index].plane = {normal, -to};
+        tree.cut_planes[index] = {normal, -to};
       }
       const NodeIndex child = add(shape.children[i], child_lo, child_hi, index, depth + 1);
       tree.nodes[child].above_parent_plane = i > 0;
@@ -300,10 +301,11 @@ void require_glb_matches(const MeshTree& tree, const std::vector<NodeIndex>& sel
     } else {
       const tinygltf::Value& plane = extras.Get("plane");
       REQUIRE(plane.ArrayLen() == 4);
-      REQUIRE(plane.Get(0).GetNumberAsDouble() == node.plane.normal.x);
-      REQUIRE(plane.Get(1).GetNumberAsDouble() == node.plane.normal.y);
-      REQUIRE(plane.Get(2).GetNumberAsDouble() == node.plane.normal.z);
-      REQUIRE(plane.Get(3).GetNumberAsDouble() == node.plane.offset);
+      const Plane& cut = tree.cut_planes[i];
+      REQUIRE(plane.Get(0).GetNumberAsDouble() == cut.normal.x);
+      REQUIRE(plane.Get(1).GetNumberAsDouble() == cut.normal.y);
+      REQUIRE(plane.Get(2).GetNumberAsDouble() == cut.normal.z);
+      REQUIRE(plane.Get(3).GetNumberAsDouble() == cut.offset);
     }
 
     if (!selected.count(i)) {
@@ -583,11 +585,11 @@ TEST_CASE("write_glb writes the encoded bytes atomically, creating the folder") 
 TEST_CASE("built trees: partitions, GLBs and statistics agree with the tree") {
   const Mesh torus = test::torus(2, 0.7, 24, 12);
   for (const Strategy strategy : {Strategy::thesis, Strategy::balanced, Strategy::axis}) {
-    BuildOptions options;
-    options.fragments = 9;
-    options.seed = 11;
-    options.strategy = strategy;
-    const MeshTree tree = build_mesh_tree(torus, options);
+    TreeRecipe recipe;
+    recipe.fragments = 9;
+    recipe.seed = 11;
+    recipe.strategy = strategy;
+    const MeshTree tree = build_mesh_tree(torus, recipe);
     INFO(strategy_name(strategy));
     CHECK(test::tree_problem(tree, true) == "");
     const std::uint32_t deepest = max_depth_of(tree);

@@ -124,26 +124,26 @@ enum class Level { full, cheap };
 
 struct Case {
   const TestMesh* mesh = nullptr;
-  BuildOptions options;
+  TreeRecipe recipe;
   Level level = Level::full;
   bool check_threads = false;  // also build with the other thread counts of 1, 2 and 4 and compare bytes
+  unsigned threads = 2;        // the threads the case is built on
 };
 
 std::string describe(const Case& c) {
   std::ostringstream out;
-  out << "mesh=" << c.mesh->name << " N=" << c.options.fragments << " strategy=" << strategy_name(c.options.strategy)
-      << " seed=" << c.options.seed
-      << " threads=" << c.options.threads;
+  out << "mesh=" << c.mesh->name << " N=" << c.recipe.fragments << " strategy=" << strategy_name(c.recipe.strategy)
+      << " seed=" << c.recipe.seed
+      << " threads=" << c.threads;
   return out.str();
 }
 
-BuildOptions options_for(std::uint32_t fragments, Strategy strategy, std::uint64_t seed, unsigned threads = 2) {
-  BuildOptions options;
-  options.fragments = fragments;
-  options.strategy = strategy;
-  options.seed = seed;
-  options.threads = threads;
-  return options;
+TreeRecipe recipe_for(std::uint32_t fragments, Strategy strategy, std::uint64_t seed) {
+  TreeRecipe recipe;
+  recipe.fragments = fragments;
+  recipe.strategy = strategy;
+  recipe.seed = seed;
+  return recipe;
 }
 
 struct Built {
@@ -156,7 +156,7 @@ struct Built {
 // UnsupportedGeometryError, counted against the ceiling its test case measured
 // (KnownRefusals below); anything else it does is checked in full.
 bool may_run_out_of_planes(const Case& c) {
-  return c.options.strategy == Strategy::axis && c.mesh->name == "torus-tiny-1e-6";
+  return c.recipe.strategy == Strategy::axis && c.mesh->name == "torus-tiny-1e-6";
 }
 
 // The known limitation's refusals are counted, never waved through: a test case
@@ -189,7 +189,7 @@ class KnownRefusals {
 // returns nothing, so the other cases still run.
 std::optional<Built> try_build(const Case& c) {
   try {
-    return Built{build_mesh_tree(c.mesh->mesh, c.options)};
+    return Built{build_mesh_tree(c.mesh->mesh, c.recipe, {.threads = c.threads})};
   } catch (const UnsupportedGeometryError& error) {
     if (may_run_out_of_planes(c) && KnownRefusals::active() != nullptr) {
       KnownRefusals::active()->add(describe(c) + ": " + error.what());
@@ -438,7 +438,8 @@ bool check_structure(const MeshTree& tree) {
   for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
     const MeshTreeNode& node = tree.nodes[v];
     if (node.is_leaf()) continue;
-    if (!is_finite(node.plane.normal) || !std::isfinite(node.plane.offset) || norm(node.plane.normal) == 0) {
+    const Plane& plane = tree.cut_planes[v];
+    if (!is_finite(plane.normal) || !std::isfinite(plane.offset) || norm(plane.normal) == 0) {
       problems.add(v, "an internal node without a finite plane");
     }
     bool below = false, above = false;
@@ -484,7 +485,7 @@ void check_strategy(const MeshTree& tree, Strategy strategy) {
       if (node.is_leaf()) continue;
       const Box3 b = bounds(node.mesh);
       const double tolerance = 1e-9 * norm(b.hi - b.lo) + 1e-12 * norm(node.mass.centroid);
-      const double distance = signed_distance(node.plane, node.mass.centroid);
+      const double distance = signed_distance(tree.cut_planes[v], node.mass.centroid);
       if (std::fabs(distance) > tolerance) {
         problems.add(v, "plane misses the centroid " + vec_text(node.mass.centroid) + " by " + num(distance));
       }
@@ -517,7 +518,7 @@ void check_strategy(const MeshTree& tree, Strategy strategy) {
       if (node.is_leaf()) continue;
       const Box3 b = bounds(node.mesh);
       const Vec3 extent = b.hi - b.lo;
-      const Vec3 n = node.plane.normal;
+      const Vec3 n = tree.cut_planes[v].normal;
       const double components[] = {std::fabs(n.x), std::fabs(n.y), std::fabs(n.z)};
       const int dominant = static_cast<int>(std::max_element(components, components + 3) - components);
       const double longest = std::max({extent.x, extent.y, extent.z});
@@ -632,7 +633,7 @@ void check_nodes(const MeshTree& tree, const Mesh& input, Level level) {
     if (node.parent == no_node) return;
     // Relative to the parent's plane: every vertex on the node's side, and the
     // cap triangles of the parent's cut on the plane (within rounding).
-    const Plane& plane = tree.nodes[node.parent].plane;
+    const Plane& plane = tree.cut_planes[node.parent];
     const double sign = node.above_parent_plane ? 1.0 : -1.0;
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
       const double d = signed_distance(plane, mesh.positions[i]);
@@ -810,8 +811,8 @@ void check_cover(const MeshTree& tree) {
 constexpr std::uint32_t brute_force_fragments = 128;
 
 void check_bonds(const MeshTree& tree) {
-  if (tree.options.fragments <= brute_force_fragments) {
-    const Reference reference = tree.cut_planes.empty() ? mesh_reference_bonds(tree) : plane_reference_bonds(tree);
+  if (tree.recipe.fragments <= brute_force_fragments) {
+    const Reference reference = tree.has_exact_representation() ? plane_reference_bonds(tree) : mesh_reference_bonds(tree);
     CHECK(bond_mismatch(tree, tree.bonds, reference) == "");
   } else {
     CHECK(bond_sum_problem(tree, tree.bonds) == "");
@@ -845,7 +846,6 @@ std::string check_round_trip(const MeshTree& tree) {
   REQUIRE_NOTHROW(bytes = encode_shatter(tree));
   MeshTree decoded;
   REQUIRE_NOTHROW(decoded = decode_shatter(bytes));
-  CHECK(decoded.options.threads == 0);
   CHECK(decoded.nodes.size() == tree.nodes.size());
   CHECK(decoded.leaf_nodes == tree.leaf_nodes);
   CHECK(byte_difference(encode_shatter(decoded), bytes) == "equal");
@@ -858,16 +858,15 @@ void check_tree(const Case& c, const Built& built) {
   const Mesh& input = c.mesh->mesh;
   INFO(describe(c) << ": " << tree.nodes.size() << " nodes, " << tree.leaf_count() << " leaves");
 
-  CHECK(tree.options.fragments == c.options.fragments);
-  CHECK(tree.options.seed == c.options.seed);
-  CHECK(tree.options.strategy == c.options.strategy);
-  CHECK(tree.options.kernel == KernelKind::plane);
-  CHECK(tree.options.threads == 0);
+  CHECK(tree.recipe.fragments == c.recipe.fragments);
+  CHECK(tree.recipe.seed == c.recipe.seed);
+  CHECK(tree.recipe.strategy == c.recipe.strategy);
+  CHECK(tree.recipe.kernel == KernelKind::plane);
   PhaseTimer timer;
   if (!check_structure(tree)) return;
-  check_leaf_count(tree, c.options.fragments, c.mesh->convex);
+  check_leaf_count(tree, c.recipe.fragments, c.mesh->convex);
   CHECK(canonical_bytes(tree.nodes[0].mesh) == canonical_bytes(input));
-  check_strategy(tree, c.options.strategy);
+  check_strategy(tree, c.recipe.strategy);
   timer.lap("structure");
   check_nodes(tree, input, c.level);
   timer.lap("nodes");
@@ -882,16 +881,14 @@ void check_tree(const Case& c, const Built& built) {
   timer.lap("file");
 
   if (c.check_threads) {
-    // The tree itself was built with c.options.threads (2 unless a case says
+    // The tree itself was built with c.threads (2 unless a case says
     // otherwise); the other counts of 1, 2 and 4 are rebuilt.
     for (const unsigned threads : {1u, 2u, 4u}) {
-      if (threads == c.options.threads) continue;
-      Case other = c;
-      other.options.threads = threads;
+      if (threads == c.threads) continue;
       INFO("rebuilt with threads = " << threads);
       MeshTree again;
       try {
-        again = build_mesh_tree(input, other.options);
+        again = build_mesh_tree(input, c.recipe, {.threads = threads});
       } catch (const std::exception& error) {
         FAIL_CHECK("the rebuild threw: " << error.what());
         continue;
@@ -923,7 +920,7 @@ void run(const Case& c) {
 TEST_CASE("one fragment: the root alone, a leaf holding the input", "[tree][build]") {
   for (const TestMesh& m : test_meshes()) {
     for (const Strategy strategy : all_strategies) {
-      const Case c{&m, options_for(1, strategy, 3), Level::full, false};
+      const Case c{&m, recipe_for(1, strategy, 3), Level::full, false};
       INFO(describe(c));
       const std::optional<Built> built = try_build(c);
       if (!built) continue;
@@ -944,7 +941,7 @@ TEST_CASE("2 and 3 fragments: every mesh, strategy and kernel, full validation",
     for (const std::uint32_t fragments : {2u, 3u}) {
       for (const Strategy strategy : all_strategies) {
         for (const std::uint64_t seed : {1u, 2u}) {
-          run({&m, options_for(fragments, strategy, seed), Level::full, seed == 1 && fragments == 3});
+          run({&m, recipe_for(fragments, strategy, seed), Level::full, seed == 1 && fragments == 3});
         }
       }
     }
@@ -967,7 +964,7 @@ TEST_CASE("64 fragments, plane kernel: every strategy, every node exact and cert
   for (const Strategy strategy : all_strategies) {
     for (const char* name : meshes) {
       const std::string mesh = name;
-      run({&test_mesh(mesh), options_for(64, strategy, 7), Level::full,
+      run({&test_mesh(mesh), recipe_for(64, strategy, 7), Level::full,
            mesh == "torus-800" || mesh == "nested-shells-island"});
     }
   }
@@ -979,7 +976,7 @@ TEST_CASE("256 fragments, plane kernel: every strategy, full validation", "[tree
   for (const Strategy strategy : all_strategies) {
     for (const char* name : meshes) {
       const std::string mesh = name;
-      run({&test_mesh(mesh), options_for(256, strategy, 13), Level::full,
+      run({&test_mesh(mesh), recipe_for(256, strategy, 13), Level::full,
            mesh == "nested-shells-island"});
     }
   }
@@ -989,7 +986,7 @@ TEST_CASE("2048 fragments, plane kernel: box, hollow egg and torus, every strate
           "[tree][build][property][plane][slow][heavy]") {
   for (const char* name : {"box", "hollow-egg", "torus-800"}) {
     for (const Strategy strategy : all_strategies) {
-      run({&test_mesh(name), options_for(2048, strategy, 17), Level::cheap,
+      run({&test_mesh(name), recipe_for(2048, strategy, 17), Level::cheap,
            strategy == Strategy::thesis && std::string(name) == "box"});
     }
   }
@@ -1005,7 +1002,7 @@ TEST_CASE("every corpus mesh, every strategy: the plane kernel reaches N, every 
   REQUIRE(corpus.size() >= 10);
   for (const TestMesh& m : corpus) {
     for (const Strategy strategy : all_strategies) {
-      run({&m, options_for(128, strategy, 5), Level::cheap, false});
+      run({&m, recipe_for(128, strategy, 5), Level::cheap, false});
     }
   }
 }
@@ -1037,7 +1034,7 @@ void run_cubes(std::uint32_t fragments, std::initializer_list<std::uint64_t> see
       const TestMesh cube{"cube[" + num(lo) + "," + num(hi) + "] renumbered " + std::to_string(seed),
                           renumbered_cube(lo, hi, seed), true};
       for (const Strategy strategy : all_strategies) {
-        run({&cube, options_for(fragments, strategy, seed), level, false});
+        run({&cube, recipe_for(fragments, strategy, seed), level, false});
       }
     }
   }
@@ -1079,7 +1076,7 @@ void run_sanitizer_matrix(std::uint32_t fragments) {
   for (const Strategy strategy : all_strategies) {
     for (const char* name : sanitizer_meshes) {
       const std::string mesh = name;
-      run({&test_mesh(mesh), options_for(fragments, strategy, 7), Level::full, mesh == "nested-shells-island"});
+      run({&test_mesh(mesh), recipe_for(fragments, strategy, 7), Level::full, mesh == "nested-shells-island"});
     }
   }
 }
@@ -1095,28 +1092,26 @@ TEST_CASE("the sanitizer's matrix: 128 fragments of the box and the hollow egg, 
   // Seven levels deep: the cheap checks of the 2048-fragment cases.
   for (const char* name : {"box", "hollow-egg"}) {
     for (const Strategy strategy : all_strategies) {
-      run({&test_mesh(name), options_for(128, strategy, 17), Level::cheap,
+      run({&test_mesh(name), recipe_for(128, strategy, 17), Level::cheap,
            strategy == Strategy::thesis && std::string(name) == "box"});
     }
   }
 }
 
-TEST_CASE("the same options give the same bytes, another seed another tree", "[tree][build]") {
+TEST_CASE("the same recipe gives the same bytes, another seed another tree", "[tree][build]") {
   const TestMesh& m = test_mesh("torus-800");
   for (const Strategy strategy : all_strategies) {
     // Smaller under the sanitizers (sanitizers.hpp): determinism shows at any size.
     const auto fragments = std::uint32_t(test::sized(32, 12));
-    const BuildOptions options = options_for(fragments, strategy, 5, 2);
-    INFO(describe({&m, options, Level::full, false}));
-    const std::string first = encode_shatter(build_mesh_tree(m.mesh, options));
-    CHECK(byte_difference(encode_shatter(build_mesh_tree(m.mesh, options)), first) == "equal");
-    BuildOptions other = options;
+    const TreeRecipe recipe = recipe_for(fragments, strategy, 5);
+    INFO(describe({&m, recipe, Level::full, false}));
+    const std::string first = encode_shatter(build_mesh_tree(m.mesh, recipe, {.threads = 2}));
+    CHECK(byte_difference(encode_shatter(build_mesh_tree(m.mesh, recipe, {.threads = 2})), first) == "equal");
+    TreeRecipe other = recipe;
     other.seed = 6;
-    CHECK(encode_shatter(build_mesh_tree(m.mesh, other)) != first);
+    CHECK(encode_shatter(build_mesh_tree(m.mesh, other, {.threads = 2})) != first);
     // threads = 0 (one per hardware thread) gives the same tree too.
-    other = options;
-    other.threads = 0;
-    CHECK(byte_difference(encode_shatter(build_mesh_tree(m.mesh, other)), first) == "equal");
+    CHECK(byte_difference(encode_shatter(build_mesh_tree(m.mesh, recipe, {.threads = 0})), first) == "equal");
   }
 }
 
@@ -1126,11 +1121,12 @@ TEST_CASE("the progress callback reports every leaf once", "[tree][build]") {
     std::mutex mutex;
     std::vector<std::size_t> reported;
     const auto fragments = std::uint32_t(test::sized(100, 30));
-    const MeshTree tree = build_mesh_tree(test_mesh("torus-800").mesh, options_for(fragments, strategy, 9, 4),
-                                          [&](std::size_t done) {
-                                            const std::lock_guard<std::mutex> lock(mutex);
-                                            reported.push_back(done);
-                                          });
+    BuildRunOptions run{.threads = 4};
+    run.progress = [&](std::size_t done) {
+      const std::lock_guard<std::mutex> lock(mutex);
+      reported.push_back(done);
+    };
+    const MeshTree tree = build_mesh_tree(test_mesh("torus-800").mesh, recipe_for(fragments, strategy, 9), run);
     CHECK(tree_problem(tree) == "");
     std::sort(reported.begin(), reported.end());
     std::vector<std::size_t> expected(tree.leaf_count());
@@ -1147,20 +1143,20 @@ TEST_CASE("an input triangle with a surface id other than 0 is refused", "[tree]
     mesh.surfaces[5] = surface;
     for (const std::uint32_t fragments : {1u, 2u}) {
       INFO("surface " << surface << " N = " << fragments);
-      CHECK_THROWS_AS(build_mesh_tree(mesh, options_for(fragments, Strategy::thesis, 1)),
+      CHECK_THROWS_AS(build_mesh_tree(mesh, recipe_for(fragments, Strategy::thesis, 1)),
                       std::invalid_argument);
-      CHECK_THROWS_AS(build_mesh_tree(mesh, options_for(fragments, Strategy::axis, 1)), std::invalid_argument);
+      CHECK_THROWS_AS(build_mesh_tree(mesh, recipe_for(fragments, Strategy::axis, 1)), std::invalid_argument);
     }
   }
 }
 
-TEST_CASE("invalid options are refused", "[tree][build][errors]") {
+TEST_CASE("invalid recipes are refused", "[tree][build][errors]") {
   const Mesh mesh = unit_cube();
-  BuildOptions options = options_for(0, Strategy::thesis, 1);
-  CHECK_THROWS_AS(build_mesh_tree(mesh, options), std::invalid_argument);
-  options = options_for(4, Strategy::balanced, 1);
-  options.max_plane_tries = 0;
-  CHECK_THROWS_AS(build_mesh_tree(mesh, options), std::invalid_argument);
+  TreeRecipe recipe = recipe_for(0, Strategy::thesis, 1);
+  CHECK_THROWS_AS(build_mesh_tree(mesh, recipe), std::invalid_argument);
+  recipe = recipe_for(4, Strategy::balanced, 1);
+  recipe.max_plane_tries = 0;
+  CHECK_THROWS_AS(build_mesh_tree(mesh, recipe), std::invalid_argument);
 }
 
 TEST_CASE("an invalid input mesh is refused with InvalidMeshError", "[tree][build][errors]") {
@@ -1197,7 +1193,7 @@ TEST_CASE("an invalid input mesh is refused with InvalidMeshError", "[tree][buil
   for (const NamedMesh& named : bad) {
     for (const std::uint32_t fragments : {1u, 4u}) {
       INFO(named.name << " N = " << fragments);
-      CHECK_THROWS_AS(build_mesh_tree(named.mesh, options_for(fragments, Strategy::thesis, 1)),
+      CHECK_THROWS_AS(build_mesh_tree(named.mesh, recipe_for(fragments, Strategy::thesis, 1)),
                       InvalidMeshError);
     }
   }
@@ -1208,15 +1204,15 @@ TEST_CASE("self-intersecting input: refused by default, closed and oriented piec
   for (const std::filesystem::path& path : self_intersecting_meshes()) {
     const Mesh mesh = read_mesh(path);
     INFO(path.filename().string());
-    CHECK_THROWS_AS(build_mesh_tree(mesh, options_for(4, Strategy::thesis, 1)), InvalidMeshError);
+    CHECK_THROWS_AS(build_mesh_tree(mesh, recipe_for(4, Strategy::thesis, 1)), InvalidMeshError);
   }
   const Mesh elk = read_mesh(mesh_dir() / "self-intersecting" / "elk.off");
   for (const Strategy strategy : all_strategies) {
-    BuildOptions options = options_for(8, strategy, 1);
-    options.allow_self_intersections = true;
+    TreeRecipe recipe = recipe_for(8, strategy, 1);
+    recipe.allow_self_intersections = true;
     INFO("elk.off " << strategy_name(strategy));
     MeshTree tree;
-    REQUIRE_NOTHROW(tree = build_mesh_tree(elk, options));
+    REQUIRE_NOTHROW(tree = build_mesh_tree(elk, recipe));
     CHECK(tree.leaf_count() >= 8);
     REQUIRE(check_structure(tree));
     Problems problems(tree, "topology (closed, oriented, manifold)");
@@ -1245,13 +1241,13 @@ TEST_CASE("planes that keep failing end in UnsupportedGeometryError", "[tree][bu
   std::size_t built_count = 0, refused_count = 0;
   for (const Strategy strategy : all_strategies) {
     for (const std::uint32_t tries : {1u, 3u, 64u}) {
-      BuildOptions options = options_for(2, strategy, 1);
-      options.max_plane_tries = tries;
+      TreeRecipe recipe = recipe_for(2, strategy, 1);
+      recipe.max_plane_tries = tries;
       INFO(strategy_name(strategy) << " max_plane_tries " << tries);
       try {
-        const MeshTree tree = build_mesh_tree(tiny, options);
+        const MeshTree tree = build_mesh_tree(tiny, recipe);
         const TestMesh named{"tiny tetrahedron", tiny, true};
-        check_tree({&named, options, Level::full, false}, Built{tree});
+        check_tree({&named, recipe, Level::full, false}, Built{tree});
         ++built_count;
       } catch (const UnsupportedGeometryError& error) {
         // A clear message: it names the number of planes tried.
@@ -1269,7 +1265,7 @@ TEST_CASE("planes that keep failing end in UnsupportedGeometryError", "[tree][bu
   // kernel fail where it now succeeds from passing unseen.
   CHECK(refused_count <= 9);
   // One fragment needs no cut, so nothing can fail.
-  const MeshTree single = build_mesh_tree(tiny, options_for(1, Strategy::axis, 1));
+  const MeshTree single = build_mesh_tree(tiny, recipe_for(1, Strategy::axis, 1));
   CHECK(single.nodes.size() == 1);
   CHECK(tree_problem(single, true) == "");
 }
@@ -1283,7 +1279,7 @@ TEST_CASE("a plane between separate solids parts them without a cap", "[tree][bu
                            merge({box({-1000, 0, 0}, {-999.999, 0.001, 0.001}), box({999.999, 0, 0}, {1000, 0.001, 0.001})}),
                            false};
   for (const Strategy strategy : all_strategies) {
-    const Case c{&far_apart, options_for(2, strategy, 1), Level::full, true};
+    const Case c{&far_apart, recipe_for(2, strategy, 1), Level::full, true};
     INFO(describe(c));
     const std::optional<Built> built = try_build(c);
     if (!built) continue;
@@ -1313,7 +1309,7 @@ TEST_CASE("corner attributes survive the tree, and caps get the plane normal", "
   }
   const TestMesh m{"torus-with-normals-uvs", mesh, false};
   for (const Strategy strategy : all_strategies) {
-    const Case c{&m, options_for(64, strategy, 21), Level::full, false};
+    const Case c{&m, recipe_for(64, strategy, 21), Level::full, false};
     INFO(describe(c));
     const std::optional<Built> built = try_build(c);
     if (!built) continue;
@@ -1325,7 +1321,7 @@ TEST_CASE("corner attributes survive the tree, and caps get the plane normal", "
       REQUIRE(node.mesh.corners.normals.size() == 3 * node.mesh.triangle_count());
       REQUIRE(node.mesh.corners.uvs.size() == 3 * node.mesh.triangle_count());
       if (node.parent == no_node) continue;
-      const Vec3 outward = normalized(tree.nodes[node.parent].plane.normal) * (node.above_parent_plane ? -1.0 : 1.0);
+      const Vec3 outward = normalized(tree.cut_planes[node.parent].normal) * (node.above_parent_plane ? -1.0 : 1.0);
       for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
         if (node.mesh.surfaces[t] != cap_surface_of(node.parent)) continue;
         for (int corner = 0; corner < 3; ++corner) {

@@ -159,13 +159,13 @@ std::vector<Injector> injectors() {
   const FoundBy structure = FoundBy::structure, caches = FoundBy::caches, geometry = FoundBy::geometry;
 
   // --- the structure: what the reader refuses
-  add("options: no fragments", structure, [](MeshTree& t, R&) -> std::optional<Place> {
-    t.options.fragments = 0;
-    return Place{TreePart::options, 0};
+  add("recipe: no fragments", structure, [](MeshTree& t, R&) -> std::optional<Place> {
+    t.recipe.fragments = 0;
+    return Place{TreePart::recipe, 0};
   });
-  add("options: an unknown kernel", structure, [](MeshTree& t, R&) -> std::optional<Place> {
-    t.options.kernel = static_cast<KernelKind>(7);
-    return Place{TreePart::options, 0};
+  add("recipe: an unknown kernel", structure, [](MeshTree& t, R&) -> std::optional<Place> {
+    t.recipe.kernel = static_cast<KernelKind>(7);
+    return Place{TreePart::recipe, 0};
   });
   add("node: a parent link that its parent does not return", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
     const auto k = draw_node(t, r, non_root);
@@ -270,11 +270,13 @@ std::vector<Injector> injectors() {
     t.geometry.planes[j][1] = static_cast<VertexIndex>(t.geometry.points.size());
     return Place{TreePart::input_plane, j};
   });
-  add("cut planes: not the node's own plane", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
-    if (!exact(t)) return std::nullopt;
-    const auto k = draw_node(t, r, any_node);
-    t.cut_planes[*k].offset += 1;
-    return Place{TreePart::cut_planes, *k};
+  add("cut planes: not one per node", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
+    if (r.index(2) == 0) {
+      t.cut_planes.pop_back();
+    } else {
+      t.cut_planes.emplace_back();
+    }
+    return Place{TreePart::cut_planes, 0};
   });
   add("solid: a corner's vertex out of range", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
     if (!exact(t)) return std::nullopt;
@@ -341,7 +343,7 @@ std::vector<Injector> injectors() {
     if (exact(t)) return std::nullopt;  // there the solids are defined over the plane
     const auto k = draw_node(t, r, internal);
     if (!k) return std::nullopt;
-    t.nodes[*k].plane.normal = {0, 0, 0};
+    t.cut_planes[*k].normal = {0, 0, 0};
     return Place{TreePart::node, *k};
   });
   add("node: every child on one side of the plane", geometry, [](MeshTree& t, R& r) -> std::optional<Place> {
@@ -372,7 +374,7 @@ std::vector<Injector> injectors() {
     return Place{TreePart::mesh, *k};
   });
   add("mesh: a second shell through the first", geometry, [](MeshTree& t, R& r) -> std::optional<Place> {
-    if (t.options.allow_self_intersections) return std::nullopt;  // held to its topology only
+    if (t.recipe.allow_self_intersections) return std::nullopt;  // held to its topology only
     const auto k = draw_node(t, r, any_node);
     add_shifted_copy(t.nodes[*k].mesh);
     return Place{TreePart::mesh, *k};
@@ -401,7 +403,7 @@ std::vector<Injector> injectors() {
 // "<part> <index>: ", how the report's summary starts.
 std::string where(const Place& place) {
   std::string text(tree_part_name(place.part));
-  if (place.part != TreePart::options) text.append(" ").append(std::to_string(place.index));
+  if (place.part != TreePart::recipe) text.append(" ").append(std::to_string(place.index));
   return text + ": ";
 }
 
@@ -423,8 +425,8 @@ constexpr std::uint64_t draw_seeds[] = {20261201, 7};
 
 TEST_CASE("built trees hold: structure, caches and geometry", "[validate_tree]") {
   REQUIRE(samples().size() == 9);
-  CHECK(samples()[7].tree.options.kernel != KernelKind::plane);
-  CHECK(samples()[8].tree.options.kernel != KernelKind::plane);
+  CHECK(samples()[7].tree.recipe.kernel != KernelKind::plane);
+  CHECK(samples()[8].tree.recipe.kernel != KernelKind::plane);
   for (const Sample& sample : samples()) {
     INFO(sample.name);
     const TreeValidationReport report = validate_tree(sample.tree, {.geometry = true});
@@ -494,14 +496,14 @@ TEST_CASE("every kind of defect, in every tree that has a place for it, is named
 
 TEST_CASE("a tree built with self-intersections allowed is held to its topology", "[validate_tree]") {
   const Sample& elk = samples()[5];
-  REQUIRE(elk.tree.options.allow_self_intersections);
+  REQUIRE(elk.tree.recipe.allow_self_intersections);
   for (NodeIndex k : {NodeIndex{0}, elk.tree.leaf_nodes.back()}) {
     MeshTree tree = elk.tree;
     add_shifted_copy(tree.nodes[k].mesh);
     INFO("a shell through node " << k << "'s mesh");
     CHECK(validate_tree(tree, {.geometry = true}).valid());
     // Held to everything, the tree fails at its root: the elk itself.
-    tree.options.allow_self_intersections = false;
+    tree.recipe.allow_self_intersections = false;
     const TreeValidationReport strict = validate_tree(tree, {.geometry = true});
     check_names(strict, {TreePart::mesh, 0});
     CHECK(strict.defect->message.find("self-intersecting") != std::string::npos);

@@ -433,10 +433,8 @@ struct Checker {
   }
 
   void fracture() {
-    BuildOptions options = c.build;
-    options.threads = 1;
-    const MeshTree tree = build_mesh_tree(c.mesh, options);
-    if (tree.leaf_count() < options.fragments) fail("fewer leaves than fragments asked for");
+    const MeshTree tree = build_mesh_tree(c.mesh, c.recipe, {.threads = 1});
+    if (tree.leaf_count() < c.recipe.fragments) fail("fewer leaves than fragments asked for");
     // Links, leaf ranges, meshes' indices, bonds, the exact representation: the
     // rest of this check indexes through them.
     if (const std::string problem = test::tree_problem(tree); !problem.empty()) {
@@ -464,9 +462,7 @@ struct Checker {
     }
     // Invariant 4 on a quarter of the builds (it doubles their cost).
     if (c.seed % 4 == 0) {
-      BuildOptions parallel = options;
-      parallel.threads = 2;
-      if (encode_shatter(build_mesh_tree(c.mesh, parallel)) != encode_shatter(tree)) {
+      if (encode_shatter(build_mesh_tree(c.mesh, c.recipe, {.threads = 2})) != encode_shatter(tree)) {
         fail("1 and 2 threads built different bytes");
       }
     }
@@ -1341,9 +1337,9 @@ Case make_case(const MeshPool& pool, std::uint64_t seed, std::uint64_t index) {
   const bool large = c.mesh.triangles.size() > large_mesh_triangles;
   if (c.op == Operation::fracture) {
     static constexpr std::uint32_t fragment_choices[] = {2, 3, 4, 8, 16};
-    c.build.fragments = fragment_choices[random.index(large ? 4 : 5)];
-    c.build.seed = random.next();
-    c.build.strategy = static_cast<Strategy>(random.index(3));
+    c.recipe.fragments = fragment_choices[random.index(large ? 4 : 5)];
+    c.recipe.seed = random.next();
+    c.recipe.strategy = static_cast<Strategy>(random.index(3));
   }
   c.mesh = in_first_use_order(std::move(c.mesh));
   // Output pieces are written as OFF, and in a quarter of the cases as OBJ, PLY
@@ -1392,8 +1388,8 @@ std::filesystem::path write_reproducer(const std::filesystem::path& dir, const C
         << "  # " << describe(p) << "\n";
   }
   if (c.op == Operation::fracture) {
-    out << "fragments " << c.build.fragments << "\nbuild-seed " << c.build.seed << "\nstrategy "
-        << strategy_name(c.build.strategy) << "\n";
+    out << "fragments " << c.recipe.fragments << "\nbuild-seed " << c.recipe.seed << "\nstrategy "
+        << strategy_name(c.recipe.strategy) << "\n";
   }
   const std::string mesh = write_mesh_to_bytes(c.mesh, MeshFormat::obj);
   out << "mesh-obj " << mesh.size() << "\n" << mesh;
@@ -1450,13 +1446,13 @@ Case read_reproducer(const std::filesystem::path& path) {
       for (std::string& w : words) fields >> w;
       c.planes.push_back({{parse_hex(words[0]), parse_hex(words[1]), parse_hex(words[2])}, parse_hex(words[3])});
     } else if (key == "fragments") {
-      fields >> c.build.fragments;
+      fields >> c.recipe.fragments;
     } else if (key == "build-seed") {
-      fields >> c.build.seed;
+      fields >> c.recipe.seed;
     } else if (key == "strategy") {
       const auto strategy = parse_strategy(rest());
       if (!strategy) throw InvalidMeshError(path.string() + ": unknown strategy");
-      c.build.strategy = *strategy;
+      c.recipe.strategy = *strategy;
     } else if (key == "expect") {
       const std::string name = rest();
       if (name == expected_name(Expected::valid_as_written)) {

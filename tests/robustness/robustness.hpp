@@ -57,7 +57,7 @@ std::string_view expected_name(Expected expected);
 
 /// One input: a mesh and what to do with it. `slice` cuts the mesh by planes[0],
 /// then every piece by planes[1], and so on (a chain); `fracture` builds the mesh
-/// tree with `build`. Every output piece (each piece of each cut; a fracture's
+/// tree by `recipe`. Every output piece (each piece of each cut; a fracture's
 /// leaves) is written in `format` and read back.
 struct Case {
   CaseClass kind = CaseClass::random_plane;
@@ -65,7 +65,7 @@ struct Case {
   Mesh mesh;
   Operation op = Operation::slice;
   std::vector<Plane> planes;
-  BuildOptions build;
+  TreeRecipe recipe;
   MeshFormat format = MeshFormat::off;  ///< the format output pieces are written in
   std::uint64_t seed = 0;  ///< the seed the case was drawn from (reported, replayed)
   Expected expected = Expected::no_failure;  ///< what a replay must show (reproducers only)

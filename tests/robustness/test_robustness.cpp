@@ -59,9 +59,9 @@ TEST_CASE("a reproducer keeps the case: planes bit for bit, mesh, options") {
       CHECK(same_bits(back.planes[i].offset, c.planes[i].offset));
     }
     if (c.op == Operation::fracture) {
-      CHECK(back.build.fragments == c.build.fragments);
-      CHECK(back.build.seed == c.build.seed);
-      CHECK(back.build.strategy == c.build.strategy);
+      CHECK(back.recipe.fragments == c.recipe.fragments);
+      CHECK(back.recipe.seed == c.recipe.seed);
+      CHECK(back.recipe.strategy == c.recipe.strategy);
     }
     // The same mesh, bit for bit: cases number their vertices as readers do, so
     // a replay cuts the very solid (the plane kernel's points name input points by
@@ -152,8 +152,8 @@ TEST_CASE("slice chains and fractures pass, every piece written and read back va
   CHECK(run_case(c).failures == std::vector<std::string>{});
   c.op = Operation::fracture;
   c.mesh = test::torus(1, 0.3, 12, 8);
-  c.build.fragments = 4;
-  c.build.seed = 4;  // a multiple of 4: the 2-thread rebuild is compared too
+  c.recipe.fragments = 4;
+  c.recipe.seed = 4;  // a multiple of 4: the 2-thread rebuild is compared too
   c.seed = 4;
   const CaseOutcome fracture = run_case(c);
   CHECK(fracture.failures == std::vector<std::string>{});

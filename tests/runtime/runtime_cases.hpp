@@ -51,11 +51,10 @@ inline RuntimeCase runtime_case(const std::string& mesh, std::uint32_t fragments
   const std::string name = mesh + "/" + std::to_string(fragments) + "/seed " + std::to_string(seed);
   auto found = built.find(name);
   if (found != built.end()) return found->second;
-  BuildOptions options;
-  options.fragments = fragments;
-  options.seed = seed;
-  options.threads = 1;
-  auto tree = std::make_shared<const MeshTree>(build_mesh_tree(runtime_mesh(mesh), options));
+  TreeRecipe recipe;
+  recipe.fragments = fragments;
+  recipe.seed = seed;
+  auto tree = std::make_shared<const MeshTree>(build_mesh_tree(runtime_mesh(mesh), recipe, {.threads = 1}));
   CHECK(test::tree_problem(*tree, true) == "");
   RuntimeCase c{name, tree, runtime::BreakableShapes::create(tree)};
   built.emplace(name, c);

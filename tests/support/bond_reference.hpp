@@ -383,9 +383,10 @@ inline Reference mesh_reference_bonds(const MeshTree& tree) {
   for (NodeIndex k = 0; k < tree.nodes.size(); ++k) {
     const MeshTreeNode& node = tree.nodes[k];
     if (node.is_leaf()) continue;
-    const PlaneProjection projection = PlaneProjection::of(node.plane);
+    const Plane& plane = tree.cut_planes[k];
+    const PlaneProjection projection = PlaneProjection::of(plane);
     const int dropped = 3 - projection.u_axis - projection.v_axis;
-    const double scale = norm(node.plane.normal) / std::fabs(node.plane.normal[dropped]);
+    const double scale = norm(plane.normal) / std::fabs(plane.normal[dropped]);
     std::vector<Cap> below, above;
     for (LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) {
       const std::optional<bool> side = leaf_above(tree, leaf, k);
@@ -495,15 +496,15 @@ inline std::string bond_mismatch(const MeshTree& tree, const std::vector<Bond>& 
            << tolerance << ")";
       problem(text.str());
     }
-    const MeshTreeNode& cut = tree.nodes[bond.cut_node];
+    const Plane& cut_plane = tree.cut_planes[bond.cut_node];
     const std::optional<bool> first_above = leaf_above(tree, bond.first, bond.cut_node);
-    const Vec3 unit = normalized(cut.plane.normal);
+    const Vec3 unit = normalized(cut_plane.normal);
     if (!first_above || !(dot(bond.normal, *first_above ? -unit : unit) > 1 - 1e-12) ||
         !(std::fabs(norm(bond.normal) - 1) < 1e-12)) {
       problem("bond " + name(key) + ": normal not the unit normal from first into second");
     }
     const double pad = 64 * std::numeric_limits<double>::epsilon() * largest;
-    const double distance = (dot(cut.plane.normal, bond.centroid) + cut.plane.offset) / norm(cut.plane.normal);
+    const double distance = (dot(cut_plane.normal, bond.centroid) + cut_plane.offset) / norm(cut_plane.normal);
     bool in_box = std::fabs(distance) <= pad;
     for (int a = 0; a < 3; ++a) in_box = in_box && bond.centroid[a] >= ref.lo[a] - pad && bond.centroid[a] <= ref.hi[a] + pad;
     if (!in_box) problem("bond " + name(key) + ": centroid off the plane or outside the overlap");
@@ -548,7 +549,7 @@ inline std::string bond_sum_problem(const MeshTree& tree, const std::vector<Bond
     double area = 0, perimeter = 0;
     for (const NodeIndex child : tree.nodes[k].children) {
       if (tree.nodes[child].above_parent_plane) continue;
-      if (!tree.cut_planes.empty()) {
+      if (tree.has_exact_representation()) {
         const Solid& solid = tree.nodes[child].solid;
         const auto at = [&](VertexIndex v) {
           const ApproxPoint& p = solid.approx[v];

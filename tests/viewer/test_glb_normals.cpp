@@ -48,10 +48,10 @@ Mesh ellipsoid_with_normals() {
 }
 
 MeshTree tree_of(const Mesh& mesh, std::uint32_t fragments) {
-  BuildOptions options;
-  options.fragments = fragments;
-  options.seed = 7;
-  return build_mesh_tree(mesh, options);
+  TreeRecipe recipe;
+  recipe.fragments = fragments;
+  recipe.seed = 7;
+  return build_mesh_tree(mesh, recipe);
 }
 
 // Checks every exported vertex normal of every node against what it must be,
@@ -84,7 +84,7 @@ std::size_t check_normals(const MeshTree& tree) {
           CHECK(std::abs(norm(n) - 1) < 1e-6);
           if (interior) {
             // Flat: the cut plane's normal, exactly (as floats) ...
-            const Vec3 plane = normalized(tree.nodes[mesh.surfaces[t] - 1].plane.normal);
+            const Vec3 plane = normalized(tree.cut_planes[mesh.surfaces[t] - 1].normal);
             CHECK(std::abs(std::abs(dot(n, plane)) - 1) < 1e-6);
             // ... pointing the way the cap triangle faces: out of the fragment.
             CHECK(dot(n, unit_face_normal(mesh, t)) > 0.999);

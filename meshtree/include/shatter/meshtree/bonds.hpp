@@ -33,10 +33,10 @@ struct MeshTree;
 /// Every true bond of the tree's leaves: one Bond per (leaf pair, cut node).
 ///
 /// Preconditions: `tree` is well formed (preorder nodes, contiguous leaf ranges,
-/// parent/children links, above_parent_plane set on every non-root node, a plane
-/// with a non-zero finite normal on every internal node); cap triangles of the cut
-/// at node k carry cap_surface_of(k) and lie (up to their rounding) on
-/// nodes[k].plane. A triangle whose surface id names no internal ancestor of its
+/// parent/children links, above_parent_plane set on every non-root node, one
+/// cut plane per node with a non-zero finite normal on every internal node); cap
+/// triangles of the cut at node k carry cap_surface_of(k) and lie (up to their
+/// rounding) on cut_planes[k]. A triangle whose surface id names no internal ancestor of its
 /// leaf (e.g. an input surface id that is not 0) is ignored.
 ///
 /// Guarantees: leaves a (below node k's plane) and b (above it) are bonded on k iff
@@ -65,7 +65,8 @@ struct MeshTree;
 /// clearly apart, and O(t^2) only when they touch without overlapping. Single
 /// thread; memory O(T + bonds). On a 65,536-fragment cube (9.5 million cap
 /// triangles, as the builder slices caps) it takes about 3 s on one core.
-/// A plane-kernel tree (one with cut_planes) is handled by find_plane_bonds.
+/// A tree with an exact representation (MeshTree::has_exact_representation) is
+/// handled by find_plane_bonds.
 std::vector<Bond> find_bonds(const MeshTree& tree);
 
 /// The bonds of a plane-kernel tree, decided on the nodes' exact solids: leaves a

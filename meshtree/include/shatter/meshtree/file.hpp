@@ -25,19 +25,18 @@
 //         tree, MeshTree::shatter_version, as text: 1 to 64 bytes of printable
 //         ASCII without spaces (0x21-0x7E), e.g. "0.1.0", no terminator. Written
 //         only when the tree has one (every built tree does).
-//   OPTS  BuildOptions, 27 bytes: u32 fragments, u64 seed, u8 strategy
+//   OPTS  TreeRecipe, 27 bytes: u32 fragments, u64 seed, u8 strategy
 //         (0 thesis, 1 balanced, 2 axis), u8 kernel (0 fast, 1 exact, 2 plane),
 //         f64 interior_uv_scale, u32 max_plane_tries, u8 allow_self_intersections
-//         (0 or 1). `threads` is not stored: it never changes a tree, and leaving
-//         it out keeps files of one build byte-identical on every thread count; a
-//         decoded tree has threads = 0. Nor is input_validated (a promise about
-//         a build's input, false in every tree).
+//         (0 or 1). How the build ran (BuildRunOptions: threads, ...) is no part
+//         of the tree, so files of one recipe are byte-identical on every
+//         thread count.
 //   NODE  u32 node count n (1 <= n <= 2^32 - 1), then per node in index order:
 //         u32 parent (FFFFFFFF for the root), u32 depth, u32 first_leaf,
 //         u32 leaf_count, u64 seed, u8 above_parent_plane (0 or 1),
-//         f64 x4 plane (normal x, y, z, offset), f64 volume, f64 x3 centroid,
-//         f64 x9 inertia (row-major), u32 child count c, u32 x c children;
-//         165 + 4c bytes.
+//         f64 x4 plane (MeshTree::cut_planes[k]: normal x, y, z, offset),
+//         f64 volume, f64 x3 centroid, f64 x9 inertia (row-major), u32 child
+//         count c, u32 x c children; 165 + 4c bytes.
 //   MESH  u32 n, then per node in index order its mesh:
 //         u32 vertex count V, u32 triangle count T, u8 channels (bit 0 normals,
 //         bit 1 uvs, bit 2 tangents; other bits 0; all 0 when T = 0, since a
@@ -80,8 +79,7 @@
 //         loop counts of faces before it, and likewise for loops' first corners.
 //   END   empty payload; the last section, nothing may follow it.
 // Not stored, recomputed on reading: leaf_nodes (the leaves in node order, checked
-// against every node's first_leaf and leaf_count); MeshTree::cut_planes (empty
-// when P = 0, else every node's plane, zero for leaves); and the floating-point
+// against every node's first_leaf and leaf_count); and the floating-point
 // caches InputGeometry::plane_approx (approximate_input_plane of each input
 // plane's points) and Solid::approx (approximate() of each vertex over
 // MeshTree::plane_set()), which are deterministic functions of what is stored.
@@ -138,10 +136,9 @@ inline constexpr std::uint32_t shatter_oldest_format_version = 1;
 /// is ever written that could not be read back.
 /// A non-empty shatter_version must follow the `vers` rule (std::invalid_argument
 /// otherwise); an empty one writes no `vers` section.
-/// Guarantees: deterministic (equal trees give equal bytes; `threads` is
-/// ignored), and decode_shatter returns a tree equal to `tree` field by field,
-/// every double bit for bit, shatter_version included, except options.threads,
-/// which comes back 0.
+/// Guarantees: deterministic (equal trees give equal bytes), and decode_shatter
+/// returns a tree equal to `tree` field by field, every double bit for bit,
+/// shatter_version included.
 std::string encode_shatter(const MeshTree& tree);
 
 /// The tree stored in `bytes` (format version 1 or 2).

@@ -11,8 +11,9 @@
 //     plane_cut.hpp     cut_by_plane, cut_mesh_by_plane: the plane kernel's one cut call, pieces certified
 //   build
 //     tree_index.hpp    NodeIndex, LeafIndex, no_node: how a tree numbers its nodes and leaves
-//     build.hpp         build_mesh_tree and its options: Strategy, KernelKind, BuildOptions, BuildReport
+//     recipe.hpp        TreeRecipe, Strategy, KernelKind: what decides a tree, kept in it
 //     tree.hpp          MeshTree, MeshTreeNode: the tree's data, every level of the slicing
+//     build.hpp         build_mesh_tree and how one build runs: BuildRunOptions, BuildReport
 //   hulls
 //     hull.hpp          convex_hull_of, convex_hull_of_points: canonical convex hulls, the colliders
 //   bonds
@@ -40,8 +41,9 @@
 #include "shatter/meshtree/plane_cut.hpp"
 
 #include "shatter/meshtree/tree_index.hpp"
-#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/recipe.hpp"
 #include "shatter/meshtree/tree.hpp"
+#include "shatter/meshtree/build.hpp"
 
 #include "shatter/meshtree/hull.hpp"
 

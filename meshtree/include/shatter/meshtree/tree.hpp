@@ -3,8 +3,9 @@
 // every solid a cut produced as a child of the solid it was cut from, the
 // fragments at the leaves. Nodes are stored in depth-first preorder and leaves are
 // numbered in that order, so every node's leaves form one contiguous range.
-// A tree records the options that built it (build.hpp) and its bonds (bonds.hpp);
-// those headers declare their functions on a forward-declared MeshTree.
+// A tree records the recipe that built it (recipe.hpp) and its bonds (bonds.hpp);
+// bonds.hpp declares its functions on a forward-declared MeshTree, and the
+// builder (build.hpp) includes this header.
 
 #include <cstdint>
 #include <string>
@@ -15,7 +16,7 @@
 #include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/vec.hpp"
 #include "shatter/meshtree/bonds.hpp"
-#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/recipe.hpp"
 #include "shatter/meshtree/tree_index.hpp"
 
 namespace shatter {
@@ -30,15 +31,16 @@ struct MeshTreeNode {
   /// surface id 0, no attributes), for colliders.
   Mesh hull;
   /// Plane kernel: the node's exact solid, its vertices defined over
-  /// MeshTree::plane_set() (cut plane k is node k's plane). Empty otherwise.
+  /// MeshTree::plane_set() (cut plane k is node k's, MeshTree::cut_planes[k]).
+  /// Empty otherwise.
   Solid solid;
   /// Plane kernel: the solid is convex (decided exactly), so `mesh` is its own
   /// hull and `hull` is left empty. Use MeshTree::hull_of.
   bool convex = false;
   NodeIndex parent = no_node;
   std::vector<NodeIndex> children;  ///< empty for a leaf; otherwise two or more
-  Plane plane;                      ///< the plane that cut this node (internal nodes only)
-  /// Which side of its parent's plane the node lies on (false: n·x + d < 0).
+  /// Which side of its parent's plane (MeshTree::cut_planes[parent]) the node
+  /// lies on (false: n·x + d < 0).
   bool above_parent_plane = false;
   std::uint32_t depth = 0;          ///< root 0
   LeafIndex first_leaf = 0;         ///< this node's leaves are [first_leaf, first_leaf + leaf_count)
@@ -50,7 +52,7 @@ struct MeshTreeNode {
 
 /// What `build_mesh_tree` produces and the .shatter file stores.
 struct MeshTree {
-  BuildOptions options;
+  TreeRecipe recipe;  ///< what decides the tree's contents (how it was built is not kept)
   /// The shatter version that built the tree (shatter::version_string, e.g.
   /// "0.1.0"; build_mesh_tree sets it), kept by the .shatter file. Empty when
   /// unknown: a tree made by hand, or read from a file written before versions
@@ -62,13 +64,20 @@ struct MeshTree {
   /// Plane kernel: the input points and input planes the nodes' solids are
   /// defined over. Empty otherwise.
   InputGeometry geometry;
-  /// Plane kernel: every node's plane in node order (zero for leaves), the cut
-  /// planes of plane_set(). Empty otherwise.
+  /// The plane that cut node k is cut_planes[k]: one per node, in every tree
+  /// (a leaf's is unused; the builder leaves it zero). The only copy of the cut
+  /// planes, kept here rather than in the nodes because the plane kernel's
+  /// predicates view it whole (plane_set(): cut plane k is node k's).
   std::vector<Plane> cut_planes;
 
   std::size_t leaf_count() const { return leaf_nodes.size(); }
   const MeshTreeNode& leaf(LeafIndex i) const { return nodes[leaf_nodes[i]]; }
-  /// The planes the nodes' exact solids are defined over (plane kernel).
+  /// The tree keeps the plane kernel's exact representation (geometry and every
+  /// node's solid): every tree this version builds; not those of the retired
+  /// kernels, read from old files.
+  bool has_exact_representation() const { return !geometry.points.empty(); }
+  /// The planes the nodes' exact solids are defined over (plane kernel); a view
+  /// of `geometry` and `cut_planes`, valid while they are unchanged.
   PlaneSet plane_set() const { return geometry.plane_set(cut_planes); }
   /// A node's convex hull: its own mesh when it is convex, else `hull`.
   const Mesh& hull_of(NodeIndex node) const { return nodes[node].convex ? nodes[node].mesh : nodes[node].hull; }

@@ -18,8 +18,8 @@ namespace shatter {
 
 /// Where in a tree a defect is. TreeDefect::index says which one of that part.
 enum class TreePart : std::uint8_t {
-  options,      ///< MeshTree::options (index 0)
-  node,         ///< a node's parent, children, depth, plane or mass (index: the node)
+  recipe,       ///< MeshTree::recipe (index 0)
+  node,         ///< a node's parent, children, depth, cut plane or mass (index: the node)
   leaf_range,   ///< a node's first_leaf and leaf_count (index: the node)
   leaf_list,    ///< MeshTree::leaf_nodes (index: the leaf)
   mesh,         ///< a node's mesh (index: the node)
@@ -27,12 +27,12 @@ enum class TreePart : std::uint8_t {
   bond,         ///< one of MeshTree::bonds (index: the bond)
   input_point,  ///< a point of MeshTree::geometry, the GEOM section (index: the point)
   input_plane,  ///< an input plane of MeshTree::geometry or its cached approximation (index: the plane)
-  cut_planes,   ///< MeshTree::cut_planes (index: the node; 0 when its size is wrong)
+  cut_planes,   ///< MeshTree::cut_planes not one per node (index 0); a plane's own defects are `node`'s
   solid,        ///< a node's exact solid, the SOLD section: vertex definitions, faces, loops, corners,
                 ///< cached approximations, convex flag (index: the node)
 };
 
-/// The part as messages name it: "options", "node", "leaf range", "leaf list",
+/// The part as messages name it: "recipe", "node", "leaf range", "leaf list",
 /// "mesh", "hull", "bond", "input point", "input plane", "cut planes" or "solid";
 /// "unknown" for a value outside the enum.
 std::string_view tree_part_name(TreePart part);
@@ -72,9 +72,9 @@ struct TreeValidationOptions {
 /// The answer of validate_tree.
 struct TreeValidationReport {
   /// The first defect in the order of the checks, empty when the tree holds: the
-  /// structure (options, links and leaf ranges, the leaf list, meshes and hulls,
-  /// bonds, the exact representation), then the caches, then the geometry (the
-  /// lowest node at fault).
+  /// structure (recipe, links and leaf ranges, the leaf list, the cut planes'
+  /// count, meshes and hulls, bonds, the exact representation), then the
+  /// caches, then the geometry (the lowest node at fault).
   std::optional<TreeDefect> defect;
   /// The geometry was checked: asked for, and the structure allowed it.
   bool geometry_checked = false;
@@ -88,14 +88,14 @@ struct TreeValidationReport {
 /// Checks `tree` against every invariant of a mesh tree, stopping at the first
 /// defect, since a broken structure makes the later checks meaningless (or
 /// unsafe to index). The structural checks, always made, are those
-/// decode_shatter lists (file.hpp): the options' enums in range and fragments
+/// decode_shatter lists (file.hpp): the recipe's enums in range and fragments
 /// >= 1; the root, parent and children links, depth-first preorder, depths and
 /// child counts; leaf ranges contiguous and consistent with the children, and
-/// leaf_nodes the leaves in node order; every mesh and hull indexing its own
+/// leaf_nodes the leaves in node order; one cut plane per node; every mesh and hull indexing its own
 /// vertices with surfaces and attribute channels sized to its triangles; bonds
 /// in range, sorted, each between leaves its cut node's cut separates; and the
-/// exact representation (geometry, cut_planes, convex flags, solids) complete and
-/// consistent as a structure, or wholly absent. `options` adds the caches and the
+/// exact representation (geometry, internal nodes' cut planes finite, convex
+/// flags, solids) complete and consistent as a structure, or wholly absent. `options` adds the caches and the
 /// geometry (TreeValidationOptions).
 /// Preconditions: none; any MeshTree, however malformed, is checked without
 /// reading outside its vectors.
