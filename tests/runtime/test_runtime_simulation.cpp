@@ -250,11 +250,12 @@ namespace {
 std::shared_ptr<const MeshTree> scaled_tree(const std::string& mesh, double scale) {
   Mesh scaled = runtime_mesh(mesh);
   for (Vec3& p : scaled.positions) p = scale * p;
-  BuildOptions options;
-  options.fragments = 8;
-  options.seed = 3;
-  options.threads = 1;
-  return std::make_shared<const MeshTree>(build_mesh_tree(scaled, options));
+  TreeRecipe recipe;
+  recipe.fragments = 8;
+  recipe.seed = 3;
+  BuildRunOptions run;
+  run.threads = 1;
+  return std::make_shared<const MeshTree>(build_mesh_tree(scaled, recipe, run));
 }
 
 // Shoot options with `change` made (rather than designated initializers, which
