@@ -956,6 +956,7 @@ TEST_CASE("invalid trees with correct checksums are refused", "[shatter_file][ho
       [](MeshTree& t) {
         t.nodes[0].children = {1, 2};
         t.nodes.push_back(t.nodes[2]);
+        t.cut_planes.push_back(t.cut_planes[2]);  // one plane per node, as every tree holds them
       },
       "node 3 is not reachable from the root");
   add("wrong depth", deep, [](MeshTree& t) { t.nodes[3].depth = 1; }, "node 3 has depth 1, but its parent's depth is 1");
