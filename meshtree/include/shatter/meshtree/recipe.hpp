@@ -56,7 +56,8 @@ struct TreeRecipe {
   double interior_uv_scale = 1.0;
   /// Planes drawn for one node before the build fails. A plane is redrawn when it
   /// misses the node, or when a piece cannot be written as a valid double mesh
-  /// (a sliver thinner than the rounding of its coordinates, or a pinch). It
+  /// (a sliver that rounding breaks or collapses, or a concave edge across the
+  /// cap that would pinch one piece along it). It
   /// decides whether a build succeeds rather than what it makes, but the file
   /// has always stored it, so it stays with what the tree keeps.
   std::uint32_t max_plane_tries = 64;
