@@ -305,7 +305,11 @@ struct Chords {
 
 void find_chords(const PlaneSet& set, PlaneRef cut, const SplitSolid& split, const FaceSet& below_cap,
                  Chords& chords) {
-  chords = {};
+  // Cleared, not replaced: the caller's chords are thread-local and keep their storage.
+  chords.below.clear();
+  chords.above.clear();
+  chords.below_keys.clear();
+  chords.above_keys.clear();
   thread_local std::vector<std::uint8_t> on_border;
   on_border.assign(split.defs.size(), 0);
   for (const LoopEdge& e : split.border) on_border[e.from] = on_border[e.to] = 1;
