@@ -9,6 +9,7 @@
 #include <charconv>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <limits>
@@ -70,8 +71,23 @@ std::optional<MeshFormat> leaf_export_format(const FractureArgs& args) {
   return format;
 }
 
+// Before this long, no bar: most builds finish sooner, and a flash is noise. The
+// environment variable SHATTER_PROGRESS_DELAY_MS changes it (0: draw from the first
+// leaf), so a test of the bar does not depend on how fast the machine builds.
+std::chrono::milliseconds progress_bar_delay() {
+  constexpr std::chrono::milliseconds default_delay{500};
+  const char* text = std::getenv("SHATTER_PROGRESS_DELAY_MS");
+  if (text == nullptr) return default_delay;
+  const std::optional<std::uint64_t> ms = parse_whole_number(text);
+  if (!ms || *ms > 3'600'000) {
+    throw UsageError(std::string("SHATTER_PROGRESS_DELAY_MS='") + text +
+                     "' is not a whole number of milliseconds up to an hour");
+  }
+  return std::chrono::milliseconds(*ms);
+}
+
 // Draws "fracturing [#####.....] 37/64 leaves, 2.1 s" on stderr while a build runs,
-// when stderr is a terminal and the build has run for a while (a short build, or
+// when stderr is a terminal and the build has run for `delay` (a short build, or
 // output captured to a file, gets nothing). The builder reports finished leaves
 // from its worker threads; a report that finds another thread drawing, or comes
 // within the redraw interval, only records the count, so reports stay cheap and
@@ -79,8 +95,10 @@ std::optional<MeshFormat> leaf_export_format(const FractureArgs& args) {
 // starts on a clean line.
 class LeafProgressBar {
  public:
-  explicit LeafProgressBar(std::uint32_t target_leaves)
-      : enabled_(::isatty(STDERR_FILENO) == 1), target_(std::max<std::uint32_t>(target_leaves, 1)) {}
+  LeafProgressBar(std::uint32_t target_leaves, std::chrono::milliseconds delay)
+      : enabled_(::isatty(STDERR_FILENO) == 1),
+        target_(std::max<std::uint32_t>(target_leaves, 1)),
+        next_draw_(start_ + delay) {}
 
   LeafProgressBar(const LeafProgressBar&) = delete;
   LeafProgressBar& operator=(const LeafProgressBar&) = delete;
@@ -99,8 +117,6 @@ class LeafProgressBar {
   }
 
  private:
-  // Before this long, no bar: most builds finish sooner, and a flash is noise.
-  static constexpr std::chrono::milliseconds quiet_start{500};
   static constexpr std::chrono::milliseconds redraw_interval{100};
   static constexpr int bar_width = 30;
 
@@ -140,8 +156,8 @@ class LeafProgressBar {
   const Clock::time_point start_ = Clock::now();
   std::atomic<std::size_t> most_done_{0};
   std::mutex mutex_;
-  Clock::time_point next_draw_ = start_ + quiet_start;  // guarded by mutex_
-  std::size_t drawn_width_ = 0;                          // guarded by mutex_
+  Clock::time_point next_draw_;  // guarded by mutex_
+  std::size_t drawn_width_ = 0;   // guarded by mutex_
 };
 
 struct FractureOutcome {
@@ -288,6 +304,7 @@ int run_fracture(const FractureArgs& args) {
   FractureOutcome outcome;
   outcome.export_format = leaf_export_format(args);
   const TreeRecipe recipe = tree_recipe_of(args);
+  const std::chrono::milliseconds progress_delay = progress_bar_delay();
   if (recipe.fragments < 1) throw UsageError("--fragments must be at least 1");
   if (std::error_code unknown; fs::is_directory(args.out, unknown)) {
     throw UsageError("--out " + args.out + " is a folder; it names the .shatter file to write");
@@ -299,7 +316,7 @@ int run_fracture(const FractureArgs& args) {
   MeshTree tree;
   const Clock::time_point start = Clock::now();
   {
-    LeafProgressBar progress_bar(recipe.fragments);
+    LeafProgressBar progress_bar(recipe.fragments, progress_delay);
     const BuildRunOptions run{.threads = args.threads,
                               // read_valid_solid made the full check: the builder need not repeat it
                               .input_validated = true,

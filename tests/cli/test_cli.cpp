@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <fstream>
 #include <sstream>
@@ -662,12 +663,11 @@ TEST_CASE("fracture draws a progress bar on a terminal and erases it") {
   REQUIRE(std::system("command -v script >/dev/null 2>&1") == 0);
   const fs::path dir = scratch("progress");
   fs::create_directories(dir);
-  // Long enough to pass the bar's quiet first half second on any machine: 2,048
-  // fragments (about 2 s in Release), or 256 under the sanitizers, which run it
-  // ten times slower (sanitizers.hpp).
-  const std::string fragments = std::to_string(sized(2048, 256));
-  const std::string command = std::string("'") + SHATTER_EXE + "' fracture " + quoted(mesh_dir() / "elephant.off") +
-                              " --fragments " + fragments + " --threads 2 --out " +
+  // SHATTER_PROGRESS_DELAY_MS=0 draws from the first finished leaf: the default
+  // half second of quiet would make the test depend on how fast the machine builds
+  // (CI once built 2,048 fragments of the elephant before the bar was due).
+  const std::string command = "SHATTER_PROGRESS_DELAY_MS=0 '" + std::string(SHATTER_EXE) + "' fracture " +
+                              quoted(mesh_dir() / "elephant.off") + " --fragments 64 --threads 2 --out " +
                               quoted(dir / "t.shatter") + " >" + quoted(dir / "stdout.txt");
   const std::string transcript = (dir / "terminal.txt").string();
   const int status = std::system(("script -qec \"" + command + "\" /dev/null >'" + transcript + "' 2>&1").c_str());
@@ -686,6 +686,20 @@ TEST_CASE("fracture draws a progress bar on a terminal and erases it") {
   CHECK(tail.find_first_not_of(" \r\n") == std::string::npos);
   // The summary went to stdout as usual.
   CHECK(slurp(dir / "stdout.txt").find("fragments") != std::string::npos);
+
+  // A delay that is not a whole number of milliseconds is a usage error, before
+  // anything is read or written.
+  for (const char* bad : {"-1", "0.5", "soon", "99999999999999999999"}) {
+    INFO(bad);
+    const fs::path out = dir / "bad.shatter";
+    REQUIRE(::setenv("SHATTER_PROGRESS_DELAY_MS", bad, 1) == 0);
+    const Run refused =
+        run_shatter("fracture " + quoted(mesh_dir() / "elephant.off") + " --fragments 4 --out " + quoted(out));
+    ::unsetenv("SHATTER_PROGRESS_DELAY_MS");
+    CHECK(refused.exit_code == 2);
+    CHECK(refused.err.find("SHATTER_PROGRESS_DELAY_MS") != std::string::npos);
+    CHECK_FALSE(fs::exists(out));
+  }
 }
 
 // --- the version, the exit-code table, all files or none -------------------------
