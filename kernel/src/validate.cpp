@@ -3,8 +3,6 @@
 #include "shatter/kernel/error.hpp"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Polygon_mesh_processing/self_intersections.h>
-#include <CGAL/Surface_mesh.h>
 
 #include <CGAL/box_intersection_d.h>
 
@@ -30,7 +28,6 @@ namespace shatter {
 namespace {
 
 using CgalPoint = CGAL::Epick::Point_3;
-using CgalMesh = CGAL::Surface_mesh<CgalPoint>;
 
 // Every undirected edge, in the order it is first met scanning triangles in order
 // and each triangle's corners c -> c+1. "First" for edge defects means first in
@@ -72,34 +69,115 @@ void append(ValidationReport& report, DefectKind kind, Tally&& tally) {
   if (tally.count > 0) report.defects.push_back({kind, tally.count, std::move(tally.first)});
 }
 
+bool triangles_intersect(const std::vector<Vec3>& positions, const Triangle& a, const Triangle& b);
+
+using TriangleBox = CGAL::Box_intersection_d::Box_with_handle_d<double, 3, std::size_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
+
+TriangleBox box_of(const std::vector<Vec3>& positions, const Triangle& tri, std::size_t handle) {
+  double lo[3], hi[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    lo[axis] = hi[axis] = positions[tri[0]][axis];
+    for (int c = 1; c < 3; ++c) {
+      lo[axis] = std::min(lo[axis], positions[tri[c]][axis]);
+      hi[axis] = std::max(hi[axis], positions[tri[c]][axis]);
+    }
+  }
+  return TriangleBox(CGAL::Bbox_3(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]), handle);
+}
+
 // Self-intersecting triangle pairs, sorted (smaller index first in each pair, pairs
-// in lexicographic order), or nullopt when CGAL cannot hold the mesh as a
-// Surface_mesh (should not happen for a closed, fan-split mesh, but never guess).
-std::optional<std::vector<std::pair<std::size_t, std::size_t>>> intersecting_pairs(
-    const std::vector<Vec3>& positions, const std::vector<Triangle>& triangles) {
-  CgalMesh surface;
-  surface.reserve(static_cast<CgalMesh::size_type>(positions.size()),
-                  static_cast<CgalMesh::size_type>(3 * triangles.size() / 2),
-                  static_cast<CgalMesh::size_type>(triangles.size()));
-  std::vector<CgalMesh::Vertex_index> vertices;
-  vertices.reserve(positions.size());
-  for (const Vec3& p : positions) vertices.push_back(surface.add_vertex(CgalPoint(p.x, p.y, p.z)));
-  for (const Triangle& t : triangles) {
-    const CgalMesh::Face_index f = surface.add_face(vertices[t[0]], vertices[t[1]], vertices[t[2]]);
-    if (f == CgalMesh::null_face()) return std::nullopt;
-  }
-  // Faces were added in triangle order into a fresh mesh, so face index == triangle index.
-  std::vector<std::pair<CgalMesh::Face_index, CgalMesh::Face_index>> face_pairs;
-  CGAL::Polygon_mesh_processing::self_intersections(surface, std::back_inserter(face_pairs));
+// in lexicographic order): CGAL's box intersection finds the pairs whose bounding
+// boxes meet, and triangles_intersect decides each exactly, with the semantics of
+// CGAL PMP's self_intersections (triangles meeting only in shared corners or a
+// shared edge do not count). On the mesh's own arrays: no halfedge structure is
+// built, which cost more than the test itself on large inputs.
+std::vector<std::pair<std::size_t, std::size_t>> intersecting_pairs(const std::vector<Vec3>& positions,
+                                                                    const std::vector<Triangle>& triangles) {
+  std::vector<TriangleBox> boxes;
+  boxes.reserve(triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) boxes.push_back(box_of(positions, triangles[t], t));
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
-  pairs.reserve(face_pairs.size());
-  for (const auto& [f, g] : face_pairs) {
-    const std::size_t a = f.idx(), b = g.idx();
-    pairs.emplace_back(std::min(a, b), std::max(a, b));
-  }
+  CGAL::box_self_intersection_d(
+      boxes.begin(), boxes.end(),
+      [&](const TriangleBox& a, const TriangleBox& b) {
+        const std::size_t i = a.handle(), j = b.handle();
+        if (triangles_intersect(positions, triangles[i], triangles[j])) pairs.emplace_back(std::min(i, j), std::max(i, j));
+      },
+      std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
   return pairs;
+}
+
+// Whether every index is in range, every vertex used, no triangle repeats an
+// index, every directed edge appears once and its reverse once (closed and
+// consistently oriented, two triangles per edge), and the triangles around each
+// vertex form one fan. Linear time on flat arrays: the out-edges of each vertex
+// are gathered by source (counting sort), so twins and fans are found in short,
+// sorted per-vertex lists. Meant as the fast path: a mesh that passes has none of
+// the topological defects, and one that fails goes to the detailed checks, which
+// name them.
+bool closed_oriented_manifold(const Mesh& mesh) {
+  const std::size_t vertex_count = mesh.positions.size();
+  const std::size_t triangle_count = mesh.triangles.size();
+  if (triangle_count == 0 || 3 * triangle_count > std::numeric_limits<std::uint32_t>::max()) return false;
+  thread_local std::vector<std::uint32_t> first_out;  // CSR offsets by source vertex
+  thread_local std::vector<std::uint64_t> out;        // (target << 32 | half-edge 3t + c), sorted per source
+  first_out.assign(vertex_count + 1, 0);
+  for (const Triangle& tri : mesh.triangles) {
+    for (const VertexIndex v : tri) {
+      if (v >= vertex_count) return false;
+      ++first_out[v + 1];
+    }
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) return false;
+  }
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    if (first_out[v + 1] == 0) return false;  // unused
+    first_out[v + 1] += first_out[v];
+  }
+  out.resize(3 * triangle_count);
+  {
+    thread_local std::vector<std::uint32_t> fill;
+    fill.assign(first_out.begin(), first_out.end() - 1);
+    for (std::uint32_t t = 0; t < triangle_count; ++t) {
+      const Triangle& tri = mesh.triangles[t];
+      for (std::uint32_t c = 0; c < 3; ++c) {
+        out[fill[tri[c]]++] = (std::uint64_t{tri[(c + 1) % 3]} << 32) | (3 * t + c);
+      }
+    }
+  }
+  // The out-edge v -> w, as its index into `out`, or none.
+  constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+  const auto find_out = [&](VertexIndex v, VertexIndex w) {
+    const auto begin = out.begin() + first_out[v], end = out.begin() + first_out[v + 1];
+    const auto it = std::lower_bound(begin, end, std::uint64_t{w} << 32);
+    return it != end && (*it >> 32) == w ? static_cast<std::uint32_t>(it - out.begin()) : none;
+  };
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    const auto begin = out.begin() + first_out[v], end = out.begin() + first_out[v + 1];
+    std::sort(begin, end);
+    for (auto it = begin; it + 1 < end; ++it) {
+      if ((*it >> 32) == (*(it + 1) >> 32)) return false;  // a directed edge twice
+    }
+  }
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    const std::uint32_t degree = first_out[v + 1] - first_out[v];
+    // Around v: the triangle (v, w, x) leads to the one holding v -> x. Each
+    // out-edge has its twin (x -> v is in the triangle before), so the steps are
+    // a permutation of v's out-edges; one fan is one cycle through all of them.
+    std::uint32_t slot = first_out[v], steps = 0;
+    do {
+      const std::uint32_t half_edge = static_cast<std::uint32_t>(out[slot]);
+      const VertexIndex w = static_cast<VertexIndex>(out[slot] >> 32);
+      if (find_out(w, static_cast<VertexIndex>(v)) == none) return false;  // no twin: open
+      const Triangle& tri = mesh.triangles[half_edge / 3];
+      slot = find_out(static_cast<VertexIndex>(v), tri[(half_edge % 3 + 2) % 3]);
+      if (slot == none) return false;
+      ++steps;
+    } while (slot != first_out[v] && steps <= degree);
+    if (steps != degree) return false;
+  }
+  return true;
 }
 
 std::string plural(std::size_t count, const char* singular, const char* plural_form) {
@@ -177,7 +255,65 @@ std::string ValidationReport::summary() const {
   return line;
 }
 
+namespace {
+
+// Whether the corners of triangle t are collinear, decided exactly (Epick's
+// predicates are exact on double input: static and interval filters, then exact
+// arithmetic).
+bool collinear_corners(const Mesh& mesh, std::size_t t) {
+  const Triangle& tri = mesh.triangles[t];
+  const Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
+  return CGAL::collinear(CgalPoint(a.x, a.y, a.z), CgalPoint(b.x, b.y, b.z), CgalPoint(c.x, c.y, c.z));
+}
+
+// The geometric checks of a mesh closed_oriented_manifold has passed (finite
+// coordinates checked by the caller): zero-area triangles (only those `area_mask`
+// marks, or all without it), inward orientation, self-intersections. The report
+// is the one the detailed checks would make: no topological defect can be in it.
+ValidationReport validate_sound_topology(const Mesh& mesh, const ValidationOptions& options,
+                                         const std::vector<std::uint8_t>* area_mask) {
+  ValidationReport report;
+  report.vertex_count = mesh.vertex_count();
+  report.triangle_count = mesh.triangle_count();
+  Tally zero_area;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (area_mask != nullptr && !(*area_mask)[t]) continue;
+    if (collinear_corners(mesh, t)) zero_area.add([&] { return triangle_text(t); });
+  }
+  const bool flat_free = zero_area.count == 0;
+  append(report, DefectKind::zero_area_triangle, std::move(zero_area));
+  if (signed_volume_sign(mesh) == Sign::negative) report.defects.push_back({DefectKind::inward_orientation, 1, "whole mesh"});
+  if (options.check_self_intersections && flat_free) {
+    const auto pairs = intersecting_pairs(mesh.positions, mesh.triangles);
+    report.self_intersections_checked = true;
+    if (!pairs.empty()) {
+      report.defects.push_back({DefectKind::self_intersection, pairs.size(),
+                                "triangles " + std::to_string(pairs.front().first) + " and " +
+                                    std::to_string(pairs.front().second)});
+    }
+  }
+  return report;
+}
+
+// validate_mesh, with the zero-area test limited to the triangles `area_mask`
+// marks when the topology is sound (the others are known not to be flat).
+ValidationReport validate_masked(const Mesh& mesh, const ValidationOptions& options,
+                                 const std::vector<std::uint8_t>* area_mask);
+
+}  // namespace
+
 ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& options) {
+  return validate_masked(mesh, options, nullptr);
+}
+
+namespace {
+
+ValidationReport validate_masked(const Mesh& mesh, const ValidationOptions& options,
+                                 const std::vector<std::uint8_t>* area_mask) {
+  if (std::all_of(mesh.positions.begin(), mesh.positions.end(), [](const Vec3& p) { return is_finite(p); }) &&
+      closed_oriented_manifold(mesh)) {
+    return validate_sound_topology(mesh, options, area_mask);
+  }
   ValidationReport report;
   report.vertex_count = mesh.vertex_count();
   report.triangle_count = mesh.triangle_count();
@@ -224,12 +360,7 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
     const bool repeated = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2];
     in_topology[t] = !repeated;
     bool degenerate = repeated;
-    if (!repeated && finite[tri[0]] && finite[tri[1]] && finite[tri[2]]) {
-      // Epick predicates are exact on double input (static and interval filters,
-      // then exact arithmetic), so this decides collinearity exactly.
-      const Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
-      degenerate = CGAL::collinear(CgalPoint(a.x, a.y, a.z), CgalPoint(b.x, b.y, b.z), CgalPoint(c.x, c.y, c.z));
-    }
+    if (!repeated && finite[tri[0]] && finite[tri[1]] && finite[tri[2]]) degenerate = collinear_corners(mesh, t);
     if (degenerate) zero_area.add([&] { return triangle_text(t); });
   }
 
@@ -355,17 +486,18 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
         }
       }
     }
-    if (const auto pairs = intersecting_pairs(positions, triangles)) {
-      report.self_intersections_checked = true;
-      if (!pairs->empty()) {
-        const auto [a, b] = pairs->front();
-        report.defects.push_back({DefectKind::self_intersection, pairs->size(),
-                                  "triangles " + std::to_string(a) + " and " + std::to_string(b)});
-      }
+    const auto pairs = intersecting_pairs(positions, triangles);
+    report.self_intersections_checked = true;
+    if (!pairs.empty()) {
+      const auto [a, b] = pairs.front();
+      report.defects.push_back({DefectKind::self_intersection, pairs.size(),
+                                "triangles " + std::to_string(a) + " and " + std::to_string(b)});
     }
   }
   return report;
 }
+
+}  // namespace
 
 void require_valid_solid(const Mesh& mesh, std::string_view name, bool allow_self_intersections) {
   // No triangle has no defect either, but it is no solid.
@@ -396,9 +528,9 @@ namespace {
 // no point but their shared corners, whatever their heights. Exact (orient2d on
 // the doubles). Nearly coplanar neighbours, which would send orient3d to exact
 // arithmetic, are settled here.
-bool projections_apart(const Mesh& mesh, const Triangle& a, const Triangle& b, int axis) {
+bool projections_apart(const std::vector<Vec3>& positions, const Triangle& a, const Triangle& b, int axis) {
   const int i = (axis + 1) % 3, j = (axis + 2) % 3;
-  const auto p2 = [&](VertexIndex v) { return Vec2{mesh.positions[v][i], mesh.positions[v][j]}; };
+  const auto p2 = [&](VertexIndex v) { return Vec2{positions[v][i], positions[v][j]}; };
   const Vec2 pa[3] = {p2(a[0]), p2(a[1]), p2(a[2])}, pb[3] = {p2(b[0]), p2(b[1]), p2(b[2])};
   const Sign turn_a = orient2d(pa[0], pa[1], pa[2]), turn_b = orient2d(pb[0], pb[1], pb[2]);
   if (turn_a == Sign::zero || turn_b == Sign::zero) return false;
@@ -445,14 +577,14 @@ int orient3d_if_clear(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d
 // Whether triangle b, but for the corners it shares with a, lies strictly on one
 // side of a's plane (so it meets a at most in their shared corners), as far as
 // floating point certifies: a quick rejection before any exact test.
-bool strictly_beside(const Mesh& mesh, const Triangle& a, const Triangle& b) {
-  const Vec3& p = mesh.positions[a[0]];
-  const Vec3& q = mesh.positions[a[1]];
-  const Vec3& r = mesh.positions[a[2]];
+bool strictly_beside(const std::vector<Vec3>& positions, const Triangle& a, const Triangle& b) {
+  const Vec3& p = positions[a[0]];
+  const Vec3& q = positions[a[1]];
+  const Vec3& r = positions[a[2]];
   int side = 0;
   for (const VertexIndex v : b) {
     if (v == a[0] || v == a[1] || v == a[2]) continue;
-    const int s = orient3d_if_clear(p, q, r, mesh.positions[v]);
+    const int s = orient3d_if_clear(p, q, r, positions[v]);
     if (s == 0 || (side != 0 && s != side)) return false;
     side = s;
   }
@@ -466,17 +598,17 @@ bool strictly_beside(const Mesh& mesh, const Triangle& a, const Triangle& b) {
 // first, cheapest first: one triangle strictly beside the other's plane (filtered
 // orient3d), then their projections apart along the axis of a's largest normal
 // component (exact 2D orientations, which settle nearly coplanar neighbours).
-bool triangles_intersect(const Mesh& mesh, const Triangle& a, const Triangle& b) {
+bool triangles_intersect(const std::vector<Vec3>& positions, const Triangle& a, const Triangle& b) {
   using K = CGAL::Epick;
-  if (strictly_beside(mesh, a, b) || strictly_beside(mesh, b, a)) return false;
+  if (strictly_beside(positions, a, b) || strictly_beside(positions, b, a)) return false;
   {
-    const Vec3 n = cross(mesh.positions[a[1]] - mesh.positions[a[0]], mesh.positions[a[2]] - mesh.positions[a[0]]);
+    const Vec3 n = cross(positions[a[1]] - positions[a[0]], positions[a[2]] - positions[a[0]]);
     const double ax = std::fabs(n.x), ay = std::fabs(n.y), az = std::fabs(n.z);
     const int axis = ax >= ay && ax >= az ? 0 : ay >= az ? 1 : 2;
-    if (projections_apart(mesh, a, b, axis)) return false;
+    if (projections_apart(positions, a, b, axis)) return false;
   }
   const auto point = [&](VertexIndex v) {
-    const Vec3& p = mesh.positions[v];
+    const Vec3& p = positions[v];
     return K::Point_3(p.x, p.y, p.z);
   };
   int shared = 0, shared_a = -1, shared_b = -1;
@@ -545,16 +677,26 @@ struct TriangleKeyEqual {
 }  // namespace
 
 ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near) {
-  ValidationOptions without;
-  without.check_self_intersections = false;
-  ValidationReport report = validate_mesh(mesh, without);
-  if (!report.valid()) return report;
   std::unordered_set<std::array<Vec3, 3>, TriangleKeyHash, TriangleKeyEqual> known;
   if (trusted) {
     known.reserve(trusted->triangles.size());
     for (const Triangle& t : trusted->triangles) known.insert(triangle_key(*trusted, t));
   }
-  using Box = CGAL::Box_intersection_d::Box_with_handle_d<double, 3, std::size_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
+  // A triangle of the trusted mesh is not flat: only the new ones are tested.
+  std::vector<std::uint8_t> is_new(mesh.triangles.size(), 1);
+  if (trusted) {
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const Triangle& tri = mesh.triangles[t];
+      if (tri[0] < mesh.positions.size() && tri[1] < mesh.positions.size() && tri[2] < mesh.positions.size()) {
+        is_new[t] = !known.count(triangle_key(mesh, tri));
+      }
+    }
+  }
+  ValidationOptions without;
+  without.check_self_intersections = false;
+  ValidationReport report = validate_masked(mesh, without, &is_new);
+  if (!report.valid()) return report;
+  using Box = TriangleBox;
   std::vector<Box> all, fresh;
   all.reserve(mesh.triangles.size());
   // With a plane the new triangles lie along, only triangles within the slab the
@@ -580,30 +722,17 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
       range[t] = {lo - slack, hi + slack};
     }
   }
-  const std::size_t fresh_reserve = mesh.triangles.size();
-  fresh.reserve(fresh_reserve);
-  std::vector<std::uint8_t> is_new(mesh.triangles.size(), 0);
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    if (!trusted || !known.count(triangle_key(mesh, mesh.triangles[t]))) {
-      is_new[t] = 1;
-      if (near) {
-        fresh_lo = std::min(fresh_lo, range[t][0]);
-        fresh_hi = std::max(fresh_hi, range[t][1]);
-      }
+  fresh.reserve(mesh.triangles.size());
+  if (near) {
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      if (!is_new[t]) continue;
+      fresh_lo = std::min(fresh_lo, range[t][0]);
+      fresh_hi = std::max(fresh_hi, range[t][1]);
     }
   }
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     if (near && !is_new[t] && (range[t][1] < fresh_lo || range[t][0] > fresh_hi)) continue;
-    const Triangle& tri = mesh.triangles[t];
-    double lo[3], hi[3];
-    for (int axis = 0; axis < 3; ++axis) {
-      lo[axis] = hi[axis] = mesh.positions[tri[0]][axis];
-      for (int c = 1; c < 3; ++c) {
-        lo[axis] = std::min(lo[axis], mesh.positions[tri[c]][axis]);
-        hi[axis] = std::max(hi[axis], mesh.positions[tri[c]][axis]);
-      }
-    }
-    const Box box(CGAL::Bbox_3(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]), t);
+    const Box box = box_of(mesh.positions, mesh.triangles[t], t);
     all.push_back(box);
     if (is_new[t]) fresh.push_back(box);
   }
@@ -617,7 +746,7 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
       [&](const Box& a, const Box& b) {
         const std::size_t i = a.handle(), j = b.handle();
         if (i == j || (is_fresh[j] && j < i)) return;  // each fresh pair once
-        if (triangles_intersect(mesh, mesh.triangles[i], mesh.triangles[j])) pairs.emplace_back(std::min(i, j), std::max(i, j));
+        if (triangles_intersect(mesh.positions, mesh.triangles[i], mesh.triangles[j])) pairs.emplace_back(std::min(i, j), std::max(i, j));
       },
       std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
   if (!pairs.empty()) {

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numeric>
+#include <random>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -449,4 +451,154 @@ TEST_CASE("the star-shaped certificate accepts convex solids around an inner poi
     INFO(named.name);
     if (certify_star_shaped(named.mesh, centre)) CHECK(validate_mesh(named.mesh).valid());
   }
+}
+
+// --- the fast topology path against an independent count ------------------------
+// validate_mesh first checks topology on flat arrays and runs the detailed,
+// defect-naming checks only when that fails. So a bug in the fast path would pass
+// a broken mesh silently. Random edits of closed meshes, each judged by a plain
+// count written here (a map of directed edges, the fans at each vertex), must be
+// reported defective exactly when the count says so.
+
+namespace {
+
+// Topologically sound by a plain count: indices in range and distinct per
+// triangle, every vertex used, every directed edge once with its reverse once,
+// and each vertex's triangles one edge-connected fan.
+bool sound_by_count(const Mesh& mesh) {
+  const std::size_t n = mesh.positions.size();
+  std::map<std::pair<VertexIndex, VertexIndex>, int> directed;
+  std::vector<std::vector<std::size_t>> triangles_at(n);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    for (const VertexIndex v : tri) {
+      if (v >= n) return false;
+    }
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) return false;
+    for (int c = 0; c < 3; ++c) {
+      ++directed[{tri[c], tri[(c + 1) % 3]}];
+      triangles_at[tri[c]].push_back(t);
+    }
+  }
+  for (const auto& [edge, count] : directed) {
+    const auto reverse = directed.find({edge.second, edge.first});
+    if (count != 1 || reverse == directed.end() || reverse->second != 1) return false;
+  }
+  for (VertexIndex v = 0; v < n; ++v) {
+    const std::vector<std::size_t>& around = triangles_at[v];
+    if (around.empty()) return false;
+    // Flood the fan from the first triangle across edges (v, w).
+    std::vector<bool> reached(around.size(), false);
+    std::vector<std::size_t> stack{0};
+    reached[0] = true;
+    while (!stack.empty()) {
+      const Triangle& tri = mesh.triangles[around[stack.back()]];
+      stack.pop_back();
+      for (std::size_t k = 0; k < around.size(); ++k) {
+        if (reached[k]) continue;
+        const Triangle& other = mesh.triangles[around[k]];
+        std::ptrdiff_t shared = 0;
+        for (const VertexIndex a : tri) shared += std::count(other.begin(), other.end(), a);
+        if (shared >= 2) reached[k] = true, stack.push_back(k);
+      }
+    }
+    if (std::count(reached.begin(), reached.end(), false) > 0) return false;
+  }
+  return true;
+}
+
+bool reports_topology_defect(const ValidationReport& report) {
+  return std::any_of(report.defects.begin(), report.defects.end(), [](const Defect& d) {
+    return d.kind != DefectKind::inward_orientation && d.kind != DefectKind::self_intersection &&
+           d.kind != DefectKind::nonfinite_coordinate;
+  });
+}
+
+}  // namespace
+
+TEST_CASE("validate_mesh finds every topological edit an independent count finds, and no other", "[validate]") {
+  // Corners in general position (no three collinear), so a zero-area report can
+  // only come from a repeated index.
+  const std::vector<Mesh> bases = {
+      test::ellipsoid({0.1, 0.2, 0.3}, {1.0, 0.8, 0.6}, 9, 7), test::torus(1.0, 0.35, 10, 7),
+      test::merge({test::ellipsoid({0, 0, 0}, {1, 1, 1}, 6, 5), test::ellipsoid({3, 0.1, 0.2}, {0.7, 1, 0.9}, 5, 4)})};
+  std::mt19937_64 random(20261203);
+  std::size_t sound = 0, broken = 0;
+  for (const Mesh& base : bases) {
+    REQUIRE(validate_mesh(base).valid());
+    for (int trial = 0; trial < 400; ++trial) {
+      Mesh mesh = base;
+      const auto pick = [&](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(random); };
+      const int edits = 1 + static_cast<int>(pick(2));
+      std::string what;
+      for (int e = 0; e < edits; ++e) {
+        const std::size_t t = pick(mesh.triangles.size());
+        switch (pick(9)) {
+          case 0: std::swap(mesh.triangles[t][1], mesh.triangles[t][2]), what += " flip"; break;
+          case 1: mesh.triangles.erase(mesh.triangles.begin() + static_cast<std::ptrdiff_t>(t)), what += " delete"; break;
+          case 2: mesh.triangles.push_back(mesh.triangles[t]), what += " duplicate"; break;
+          case 3: mesh.triangles[t][pick(3)] = static_cast<VertexIndex>(pick(mesh.positions.size())), what += " redirect"; break;
+          case 4: {  // weld vertex w into v, then fill w's slot with the last vertex
+            const auto v = static_cast<VertexIndex>(pick(mesh.positions.size()));
+            const auto w = static_cast<VertexIndex>(pick(mesh.positions.size()));
+            if (v == w) break;
+            const auto last = static_cast<VertexIndex>(mesh.positions.size() - 1);
+            for (Triangle& tri : mesh.triangles) {
+              for (VertexIndex& x : tri) x = x == w ? v : x;
+            }
+            mesh.positions[w] = mesh.positions[last];
+            for (Triangle& tri : mesh.triangles) {
+              for (VertexIndex& x : tri) x = x == last ? w : x;
+            }
+            mesh.positions.pop_back();
+            what += " weld";
+            break;
+          }
+          case 5: mesh.positions.push_back({9, 9, 9}), what += " unused"; break;
+          case 6: {  // a second copy of the whole mesh touching it at one vertex
+            const Mesh copy = test::transformed(base, 1.0, {5, 0, 0});
+            const auto offset = static_cast<VertexIndex>(mesh.positions.size());
+            const auto shared = static_cast<VertexIndex>(pick(base.positions.size()));
+            mesh.positions.insert(mesh.positions.end(), copy.positions.begin(), copy.positions.end());
+            for (Triangle tri : copy.triangles) {
+              for (VertexIndex& x : tri) x = x == shared ? shared : x + offset;
+              mesh.triangles.push_back(tri);
+            }
+            mesh.surfaces.resize(mesh.triangles.size(), 0);
+            what += " pinch";
+            break;
+          }
+          case 7: {  // renumber vertices, rotate corners, reorder triangles: still sound
+            std::vector<VertexIndex> order(mesh.positions.size());
+            std::iota(order.begin(), order.end(), VertexIndex{0});
+            std::shuffle(order.begin(), order.end(), random);
+            std::vector<Vec3> positions(mesh.positions.size());
+            for (std::size_t v = 0; v < order.size(); ++v) positions[order[v]] = mesh.positions[v];
+            mesh.positions = positions;
+            for (Triangle& tri : mesh.triangles) {
+              for (VertexIndex& x : tri) x = x < order.size() ? order[x] : x;
+              std::rotate(tri.begin(), tri.begin() + static_cast<std::ptrdiff_t>(pick(3)), tri.end());
+            }
+            std::shuffle(mesh.triangles.begin(), mesh.triangles.end(), random);
+            what += " renumber";
+            break;
+          }
+          default: {  // an index past the end
+            mesh.triangles[t][pick(3)] = static_cast<VertexIndex>(mesh.positions.size() + pick(3));
+            what += " out-of-range";
+            break;
+          }
+        }
+      }
+      mesh.surfaces.resize(mesh.triangles.size(), 0);
+      const bool expected_sound = sound_by_count(mesh);
+      const ValidationReport report = validate_mesh(mesh, {.check_self_intersections = false});
+      INFO("edits:" << what << "; report: " << report.summary());
+      CHECK(reports_topology_defect(report) == !expected_sound);
+      (expected_sound ? sound : broken) += 1;
+    }
+  }
+  // Both verdicts occur, so neither direction goes untested.
+  CHECK(sound > 50);
+  CHECK(broken > 1000);
 }
