@@ -17,174 +17,192 @@ namespace {
 using EpickPoint = CGAL::Epick::Point_3;
 EpickPoint epick(const Vec3& p) { return {p.x, p.y, p.z}; }
 
-// Exact: do the triangles (u, v, a) and (v, u, b), sharing edge u-v, lie on one
-// plane and continue each other (a and b on opposite sides of the edge)?
-bool flat_continuation(const Vec3& u, const Vec3& v, const Vec3& a, const Vec3& b) {
-  if (CGAL::orientation(epick(u), epick(v), epick(a), epick(b)) != CGAL::COPLANAR) return false;
-  // Coplanar: opposite sides of the line u-v within the plane.
-  return CGAL::coplanar_orientation(epick(u), epick(v), epick(a), epick(b)) == CGAL::NEGATIVE;
-}
-
-VertexIndex third_vertex(const Triangle& t, VertexIndex u, VertexIndex v) {
-  for (VertexIndex w : t) {
-    if (w != u && w != v) return w;
-  }
-  return t[0];
-}
-
 }  // namespace
 
 Solid solid_from_mesh(const Mesh& mesh, bool merge_coplanar, InputGeometry& geometry) {
   const std::size_t triangle_count = mesh.triangles.size();
-  IndexMap triangle_of_edge(triangle_count * 3);
-  for (TriangleIndex t = 0; t < triangle_count; ++t) {
-    const Triangle& tri = mesh.triangles[t];
-    for (int c = 0; c < 3; ++c) {
-      const std::uint64_t key = directed_edge_key(tri[c], tri[(c + 1) % 3]);
-      if (triangle_of_edge.insert(key, t) != t) {
-        throw InvalidMeshError("solid_from_mesh: directed edge used twice (not a consistently oriented manifold)");
-      }
-    }
-  }
-  auto twin_of = [&](VertexIndex u, VertexIndex v) {
-    const std::uint32_t t = triangle_of_edge.find(directed_edge_key(v, u));
-    if (t == IndexMap::absent) throw InvalidMeshError("solid_from_mesh: open mesh (an edge has one triangle)");
-    return t;
-  };
-
-  // Groups of coplanar triangles.
-  UnionFind groups(triangle_count);
-  if (merge_coplanar) {
+  // Half-edge 3t + c runs from corner c of triangle t to corner c + 1. Each one's
+  // twin (the same edge the other way) and the triangle that holds it.
+  std::vector<std::uint32_t> twin(3 * triangle_count);
+  {
+    IndexMap half_edge_of(triangle_count * 3);
     for (TriangleIndex t = 0; t < triangle_count; ++t) {
       const Triangle& tri = mesh.triangles[t];
-      for (int c = 0; c < 3; ++c) {
-        const VertexIndex u = tri[c], v = tri[(c + 1) % 3];
-        const TriangleIndex other = twin_of(u, v);
-        if (other < t) continue;
-        const VertexIndex a = tri[(c + 2) % 3], b = third_vertex(mesh.triangles[other], u, v);
-        if (mesh.surfaces[t] == mesh.surfaces[other] &&
-            flat_continuation(mesh.positions[u], mesh.positions[v], mesh.positions[a], mesh.positions[b])) {
-          groups.unite(t, other);
+      for (std::uint32_t c = 0; c < 3; ++c) {
+        const std::uint32_t h = 3 * t + c;
+        if (half_edge_of.insert(directed_edge_key(tri[c], tri[(c + 1) % 3]), h) != h) {
+          throw InvalidMeshError("solid_from_mesh: directed edge used twice (not a consistently oriented manifold)");
         }
       }
     }
+    for (TriangleIndex t = 0; t < triangle_count; ++t) {
+      const Triangle& tri = mesh.triangles[t];
+      for (std::uint32_t c = 0; c < 3; ++c) {
+        const std::uint32_t h = half_edge_of.find(directed_edge_key(tri[(c + 1) % 3], tri[c]));
+        if (h == IndexMap::absent) throw InvalidMeshError("solid_from_mesh: open mesh (an edge has one triangle)");
+        twin[3 * t + c] = h;
+      }
+    }
   }
 
-  // Each group's boundary edges, linked into loops by vertex index. A group whose
-  // boundary passes a vertex twice (coplanar triangles touching at a point) is
-  // split back into its triangles: a face is a region with simple loops.
+  // Each edge once: are its two triangles on one plane (exact), and is it convex?
+  // The same orientation decides all three: merging, which edges need a second
+  // plane, and whether the solid is convex (every edge convex or flat, one shell).
+  std::vector<std::uint8_t> coplanar_at(3 * triangle_count, 0);  // per half-edge
+  UnionFind groups(triangle_count), shells(triangle_count);
+  std::size_t shell_count = triangle_count;
+  bool reflex_edge = false;
+  for (TriangleIndex t = 0; t < triangle_count; ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    for (std::uint32_t c = 0; c < 3; ++c) {
+      const std::uint32_t h = 3 * t + c, opposite = twin[h];
+      const TriangleIndex other = opposite / 3;
+      if (other < t || (other == t && opposite < h)) continue;
+      const VertexIndex u = tri[c], v = tri[(c + 1) % 3], a = tri[(c + 2) % 3];
+      const VertexIndex b = mesh.triangles[other][(opposite % 3 + 2) % 3];
+      const EpickPoint pu = epick(mesh.positions[u]), pv = epick(mesh.positions[v]), pa = epick(mesh.positions[a]),
+                       pb = epick(mesh.positions[b]);
+      const CGAL::Orientation turn = CGAL::orientation(pu, pv, pa, pb);
+      // Positive: b is on the side triangle (u, v, a) faces, outward.
+      reflex_edge = reflex_edge || turn == CGAL::POSITIVE;
+      if (shells.unite(t, other)) --shell_count;
+      if (turn != CGAL::COPLANAR) continue;
+      coplanar_at[h] = coplanar_at[opposite] = 1;
+      // Coplanar and continuing each other (a and b on opposite sides of the edge).
+      if (merge_coplanar && mesh.surfaces[t] == mesh.surfaces[other] &&
+          CGAL::coplanar_orientation(pu, pv, pa, pb) == CGAL::NEGATIVE) {
+        groups.unite(t, other);
+      }
+    }
+  }
+
+  // Groups numbered in the order of their first triangle.
   std::vector<std::uint32_t> group_of(triangle_count);
-  std::vector<std::vector<TriangleIndex>> members;
+  std::vector<TriangleIndex> front;  // per group: its first triangle (source and plane)
+  std::vector<std::uint32_t> member_start;
   {
     std::vector<std::uint32_t> index_of_root(triangle_count, no_index);
     for (TriangleIndex t = 0; t < triangle_count; ++t) {
       const std::uint32_t root = groups.find(t);
       if (index_of_root[root] == no_index) {
-        index_of_root[root] = static_cast<std::uint32_t>(members.size());
-        members.emplace_back();
+        index_of_root[root] = static_cast<std::uint32_t>(front.size());
+        front.push_back(t);
       }
       group_of[t] = index_of_root[root];
-      members[group_of[t]].push_back(t);
     }
   }
+  // Members of each group in triangle order (a counting sort).
+  std::vector<TriangleIndex> members(triangle_count);
+  {
+    member_start.assign(front.size() + 1, 0);
+    for (TriangleIndex t = 0; t < triangle_count; ++t) ++member_start[group_of[t] + 1];
+    for (std::size_t g = 0; g < front.size(); ++g) member_start[g + 1] += member_start[g];
+    std::vector<std::uint32_t> fill(member_start.begin(), member_start.end() - 1);
+    for (TriangleIndex t = 0; t < triangle_count; ++t) members[fill[group_of[t]]++] = t;
+  }
 
-  struct BoundaryEdge {
-    VertexIndex u, v;
+  // Each group's boundary loops, as half-edges (flat: loop l is
+  // loop_half_edges[loop_start[l] .. loop_start[l + 1])), linked by vertex index.
+  // A group whose boundary passes a vertex twice (coplanar triangles touching at
+  // a point) is split back into its triangles: a face is a region with simple loops.
+  std::vector<std::uint32_t> loop_half_edges, loop_start{0};
+  std::vector<std::uint32_t> group_first_loop(front.size()), group_loop_count(front.size());
+  const auto add_triangle_loop = [&](TriangleIndex t) {
+    for (std::uint32_t c = 0; c < 3; ++c) loop_half_edges.push_back(3 * t + c);
+    loop_start.push_back(static_cast<std::uint32_t>(loop_half_edges.size()));
   };
-  std::vector<std::vector<std::vector<VertexIndex>>> group_loops(members.size());
-  std::vector<BoundaryEdge> boundary;
+  loop_half_edges.reserve(3 * triangle_count);
+  std::vector<std::uint32_t> boundary;  // half-edges
+  std::vector<std::uint8_t> used;
   IndexMap next_of;  // start vertex -> boundary edge
-  for (std::size_t g = 0; g < members.size(); ++g) {
-    if (members[g].size() == 1) {
-      const Triangle& tri = mesh.triangles[members[g][0]];
-      group_loops[g] = {{tri[0], tri[1], tri[2]}};
+  const std::size_t original_groups = front.size();
+  for (std::uint32_t g = 0; g < original_groups; ++g) {
+    group_first_loop[g] = static_cast<std::uint32_t>(loop_start.size() - 1);
+    const std::uint32_t size = member_start[g + 1] - member_start[g];
+    if (size == 1) {
+      add_triangle_loop(front[g]);
+      group_loop_count[g] = 1;
       continue;
     }
     boundary.clear();
-    for (TriangleIndex t : members[g]) {
-      const Triangle& tri = mesh.triangles[t];
-      for (int c = 0; c < 3; ++c) {
-        const VertexIndex u = tri[c], v = tri[(c + 1) % 3];
-        if (group_of[twin_of(u, v)] != g) boundary.push_back({u, v});
+    for (std::uint32_t m = member_start[g]; m < member_start[g + 1]; ++m) {
+      for (std::uint32_t c = 0; c < 3; ++c) {
+        const std::uint32_t h = 3 * members[m] + c;
+        if (group_of[twin[h] / 3] != g) boundary.push_back(h);
       }
     }
+    const auto start_of = [&](std::uint32_t h) { return mesh.triangles[h / 3][h % 3]; };
+    const auto end_of = [&](std::uint32_t h) { return mesh.triangles[h / 3][(h % 3 + 1) % 3]; };
     next_of.reset(boundary.size());
     bool pinched = false;
-    for (std::uint32_t e = 0; e < boundary.size() && !pinched; ++e) {
-      pinched = next_of.insert(boundary[e].u, e) != e;
-    }
+    for (std::uint32_t e = 0; e < boundary.size() && !pinched; ++e) pinched = next_of.insert(start_of(boundary[e]), e) != e;
     if (!pinched) {
-      std::vector<bool> used(boundary.size(), false);
+      used.assign(boundary.size(), 0);
+      std::uint32_t loops = 0;
       for (std::uint32_t e = 0; e < boundary.size(); ++e) {
         if (used[e]) continue;
-        std::vector<VertexIndex> loop;
-        for (std::uint32_t f = e; !used[f]; f = next_of.find(boundary[f].v)) {
-          used[f] = true;
-          loop.push_back(boundary[f].u);
+        for (std::uint32_t f = e; !used[f]; f = next_of.find(end_of(boundary[f]))) {
+          used[f] = 1;
+          loop_half_edges.push_back(boundary[f]);
         }
-        group_loops[g].push_back(std::move(loop));
+        loop_start.push_back(static_cast<std::uint32_t>(loop_half_edges.size()));
+        ++loops;
       }
-    }
-    if (pinched) {
+      group_loop_count[g] = loops;
+    } else {
       // Split the group back into single triangles, appended as new groups.
-      for (std::size_t k = 1; k < members[g].size(); ++k) {
-        const TriangleIndex t = members[g][k];
-        group_of[t] = static_cast<std::uint32_t>(members.size());
-        members.push_back({t});
-        const Triangle& tri = mesh.triangles[t];
-        group_loops.push_back({{tri[0], tri[1], tri[2]}});
+      add_triangle_loop(front[g]);
+      group_loop_count[g] = 1;
+      for (std::uint32_t m = member_start[g] + 1; m < member_start[g + 1]; ++m) {
+        const TriangleIndex t = members[m];
+        group_of[t] = static_cast<std::uint32_t>(front.size());
+        front.push_back(t);
+        group_first_loop.push_back(static_cast<std::uint32_t>(loop_start.size() - 1));
+        group_loop_count.push_back(1);
+        add_triangle_loop(t);
       }
-      members[g].resize(1);
-      const Triangle& tri = mesh.triangles[members[g][0]];
-      group_loops[g] = {{tri[0], tri[1], tri[2]}};
     }
   }
 
   // Planes: one input plane per group, through the points of its first triangle.
   const auto plane_base = static_cast<std::uint32_t>(geometry.planes.size());
-  for (const auto& group : members) {
-    const Triangle& tri = mesh.triangles[group.front()];
+  for (const TriangleIndex t : front) {
+    const Triangle& tri = mesh.triangles[t];
     geometry.planes.push_back({tri[0], tri[1], tri[2]});
     geometry.plane_approx.push_back(approximate_input_plane(mesh.positions[tri[0]], mesh.positions[tri[1]],
                                                             mesh.positions[tri[2]]));
   }
   auto plane_of_group = [&](std::uint32_t g) { return PlaneRef::input(plane_base + g); };
-  // Two groups are coplanar only when merging was off (or undone at a pinch):
-  // then the edge between them has no second plane, only its input segment.
-  auto groups_coplanar = [&](std::uint32_t g, std::uint32_t h) {
-    const Triangle& a = mesh.triangles[members[g].front()];
-    const Triangle& b = mesh.triangles[members[h].front()];
-    for (VertexIndex w : b) {
-      if (CGAL::orientation(epick(mesh.positions[a[0]]), epick(mesh.positions[a[1]]), epick(mesh.positions[a[2]]),
-                            epick(mesh.positions[w])) != CGAL::COPLANAR) {
-        return false;
-      }
-    }
-    return true;
-  };
 
   Solid solid;
+  solid.faces.reserve(front.size());
+  solid.loops.reserve(loop_start.size() - 1);
+  solid.corners.reserve(loop_half_edges.size());
   std::vector<VertexIndex> local(mesh.positions.size(), no_index);
-  for (std::uint32_t g = 0; g < members.size(); ++g) {
+  for (std::uint32_t g = 0; g < front.size(); ++g) {
     SolidFace face;
     face.plane = plane_of_group(g);
-    face.source = members[g].front();
+    face.source = front[g];
     face.surface = mesh.surfaces[face.source];
     face.first_loop = static_cast<std::uint32_t>(solid.loops.size());
-    face.loop_count = static_cast<std::uint32_t>(group_loops[g].size());
-    for (const auto& loop : group_loops[g]) {
-      solid.loops.push_back({static_cast<std::uint32_t>(solid.corners.size()), static_cast<std::uint32_t>(loop.size())});
-      for (std::size_t i = 0; i < loop.size(); ++i) {
-        const VertexIndex u = loop[i], v = loop[(i + 1) % loop.size()];
+    face.loop_count = group_loop_count[g];
+    for (std::uint32_t l = group_first_loop[g]; l < group_first_loop[g] + group_loop_count[g]; ++l) {
+      solid.loops.push_back({static_cast<std::uint32_t>(solid.corners.size()), loop_start[l + 1] - loop_start[l]});
+      for (std::uint32_t k = loop_start[l]; k < loop_start[l + 1]; ++k) {
+        const std::uint32_t h = loop_half_edges[k];
+        const Triangle& tri = mesh.triangles[h / 3];
+        const VertexIndex u = tri[h % 3], v = tri[(h % 3 + 1) % 3];
         if (local[u] == no_index) {
           local[u] = static_cast<VertexIndex>(solid.defs.size());
           solid.defs.push_back(PointDef::input(u));
         }
-        const std::uint32_t across = group_of[twin_of(u, v)];
         EdgeLine line;
         line.p = std::min(u, v);
         line.q = std::max(u, v);
-        if (!groups_coplanar(g, across)) line.other = plane_of_group(across);
+        // The groups on the two sides share a plane exactly when the two triangles
+        // at this edge do (every group lies in one plane): then the edge has no
+        // second plane, only its input segment.
+        if (!coplanar_at[h]) line.other = plane_of_group(group_of[twin[h] / 3]);
         solid.corners.push_back({local[u], line});
       }
     }
@@ -219,7 +237,7 @@ Solid solid_from_mesh(const Mesh& mesh, bool merge_coplanar, InputGeometry& geom
     }
     face.convex = convex;
   }
-  solid.convex = solid_is_convex(set, solid);
+  solid.convex = !reflex_edge && shell_count == 1;
   return solid;
 }
 
