@@ -45,6 +45,20 @@ std::size_t cgal_component_count(CgalMesh& mesh) {
 
 bool cgal_self_intersects(const CgalMesh& mesh) { return PMP::does_self_intersect(mesh); }
 
+std::string allocator_description() {
+  // The bracketed word of e.g. "always [madvise] never".
+  std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
+  std::string modes, mode = "unknown";
+  std::getline(in, modes);
+  const std::size_t open = modes.find('['), close = modes.find(']');
+  if (open != std::string::npos && close != std::string::npos && close > open) mode = modes.substr(open + 1, close - open - 1);
+#if SHATTER_WITH_JEMALLOC
+  return "jemalloc, transparent huge pages asked for (kernel THP mode: " + mode + ")";
+#else
+  return "the C library's malloc (kernel THP mode: " + mode + ")";
+#endif
+}
+
 double seconds_between(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }

@@ -41,6 +41,12 @@ std::size_t cgal_component_count(CgalMesh& mesh);
 /// (PMP::does_self_intersect).
 bool cgal_self_intersects(const CgalMesh& mesh);
 
+/// The allocator the benchmark runs on, for the header of its tables: "jemalloc,
+/// transparent huge pages asked for (kernel THP mode: madvise)" or "the C
+/// library's malloc (...)". The kernel's mode is read from /sys; "unknown" when
+/// that cannot be read.
+std::string allocator_description();
+
 /// Seconds from `a` to `b` on the steady clock (negative when b is earlier).
 double seconds_between(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b);
 

@@ -1295,7 +1295,7 @@ int main(int argc, char** argv) {
               << fixed(o.manifold_timeout, 0) << " s per repeat; CGAL = PMP::clip replaying shatter's planes, limit "
               << fixed(o.peer_timeout, 0) << " s; " << ::sysconf(_SC_NPROCESSORS_ONLN)
               << " hardware threads, shared: 1-minute load average " << load_at_start << " at the start, "
-              << load_average() << " at the end.\n\n";
+              << load_average() << " at the end; allocator: " << shatter::bench::allocator_description() << ".\n\n";
     print_tables(std::cout, rows, inputs, skipped, verdicts);
     if (o.csv) write_csv(*o.csv, rows, o.seed);
 

@@ -43,7 +43,9 @@ struct Defect {
 };
 
 struct ValidationOptions {
-  /// Look for self-intersections (CGAL PMP, O(n log n) on typical meshes). Only
+  /// Look for self-intersections (CGAL's box intersection, then an exact test of
+  /// each pair whose boxes meet, with the semantics of CGAL PMP's
+  /// self_intersections; O(n log n) on typical meshes). Only
   /// run when the mesh is otherwise a closed, consistently oriented manifold with
   /// finite coordinates and no zero-area triangle. Non-manifold vertices do not
   /// prevent it: the test then sees one copy of such a vertex per fan, so the
@@ -69,7 +71,10 @@ struct ValidationReport {
 };
 
 /// Checks every defect in DefectKind order. Never throws on a malformed mesh:
-/// finding what is wrong is its job. Guarantees: the counts are exact.
+/// finding what is wrong is its job. Guarantees: the counts are exact. Cost:
+/// linear for the topology of a sound mesh (a counting sort of its half-edges;
+/// the defect-naming checks run only when that finds something), O(n log n) for
+/// the self-intersection test.
 ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& options = {});
 
 /// validate_mesh, faster on the meshes shatter writes, and faster still for a mesh

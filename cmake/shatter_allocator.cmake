@@ -1,0 +1,22 @@
+# The executables (the `shatter` command and the benchmarks) allocate through
+# jemalloc with transparent huge pages (cli/jemalloc_options.cpp says why). The
+# sanitizers and libFuzzer replace malloc themselves, so there the C library's
+# allocator stays, as it does with -DSHATTER_JEMALLOC=OFF.
+if(SHATTER_SANITIZE OR SHATTER_BUILD_FUZZERS)
+  set(shatter_jemalloc_default OFF)
+else()
+  set(shatter_jemalloc_default ON)
+endif()
+option(SHATTER_JEMALLOC "Link the executables with jemalloc, set to use transparent huge pages"
+       ${shatter_jemalloc_default})
+if(SHATTER_JEMALLOC)
+  pkg_check_modules(jemalloc REQUIRED IMPORTED_TARGET jemalloc)
+endif()
+
+# Gives `target` (an executable) jemalloc and its options, when SHATTER_JEMALLOC is on.
+function(shatter_use_jemalloc target)
+  if(SHATTER_JEMALLOC)
+    target_sources(${target} PRIVATE ${PROJECT_SOURCE_DIR}/cli/jemalloc_options.cpp)
+    target_link_libraries(${target} PRIVATE PkgConfig::jemalloc)
+  endif()
+endfunction()
