@@ -137,6 +137,8 @@ struct Options {
   fs::path knot = shatter::test::mesh_dir() / "knot1.off";
   fs::path manifold_script = SHATTER_SOURCE_DIR "/bench/peers/manifold/fracture.mjs";
   std::string node = "node";
+  fs::path shatter_exe = SHATTER_EXE;  ///< the command timed end to end
+  bool no_end_to_end = false;
   double manifold_timeout = 300;
   std::optional<int> manifold_repeat;
   bool no_manifold = false;
@@ -259,10 +261,15 @@ Input make_subdivided(const std::string& stem, const fs::path& path, std::size_t
     ++levels;
   }
   const int factor = 1 << (2 * levels);
-  in.key = stem + "x" + std::to_string(factor);
-  in.name = path.filename().string() + " ×" + std::to_string(factor);
-  in.origin = path.filename().string() + " (" + with_thousands(original) + " triangles) subdivided " +
-              std::to_string(levels) + "× by edge midpoints";
+  if (levels == 0) {
+    in.name = path.filename().string();
+    in.origin = path.filename().string() + " as it is (test corpus)";
+  } else {
+    in.key = stem + "x" + std::to_string(factor);
+    in.name = path.filename().string() + " ×" + std::to_string(factor);
+    in.origin = path.filename().string() + " (" + with_thousands(original) + " triangles) subdivided " +
+                std::to_string(levels) + "× by edge midpoints";
+  }
   in.mesh = std::move(mesh);
   in.available = true;
   return in;
@@ -691,11 +698,23 @@ struct RowSpec {
   std::uint32_t fragments = 0;
 };
 
+/// `shatter fracture` as a user runs it, timed from outside: read, check, build,
+/// write (one thread), median wall seconds of its runs.
+struct EndToEnd {
+  bool ok = false;
+  std::string why;  ///< why not run, or how it failed
+  double seconds = not_measured;
+  int runs = 0;
+  double peak_mb = not_measured;  ///< largest ru_maxrss over the runs
+  std::uintmax_t file_bytes = 0;
+};
+
 struct Row {
   std::string id;
   const Input* input = nullptr;
   std::uint32_t fragments = 0;
   Timed full;
+  EndToEnd command;
   std::optional<Timed> half;  ///< the build to N/2, for the last level's splits
   ManifoldResult manifold;
   std::string cgal_skipped;   ///< why the CGAL replay was not run, if not
@@ -717,6 +736,9 @@ struct Row {
                                                      : not_measured;
   }
   double manifold_ratio() const { return manifold.ok() && full.ok ? manifold.seconds / full.seconds : not_measured; }
+  double manifold_ratio_end_to_end() const {
+    return manifold.ok() && command.ok ? manifold.seconds / command.seconds : not_measured;
+  }
   double leaf_triangles_over_manifold() const {
     return manifold.ok() && full.ok && manifold.triangles > 0
                ? static_cast<double>(full.first.leaf_triangles) / static_cast<double>(manifold.triangles)
@@ -728,9 +750,10 @@ struct Row {
   }
 };
 
-const std::vector<RowSpec> default_rows = {{"cube", 256},    {"cube", 65536},    {"cube", 1u << 20},
-                                           {"knot1", 256},   {"knot1", 65536},   {"fandisk", 256},
-                                           {"fandisk", 65536}};
+const std::vector<RowSpec> default_rows = {
+    {"cube", 256},       {"cube", 65536},      {"cube", 1u << 20},   {"elephant", 256}, {"elephant", 4096},
+    {"blobby", 256},     {"blobby", 4096},     {"fandisk", 256},     {"fandisk", 4096}, {"fandisk", 65536},
+    {"knot1", 256},      {"knot1", 65536}};
 
 /// The rows --rows selects: comma-separated row ids (cube-65536, knot1x16-256) or
 /// input names (cube, knot1x16, knot1, fandiskx4, fandisk) meaning all their rows.
@@ -741,7 +764,7 @@ std::vector<RowSpec> select_rows(const std::string& list) {
   std::string item;
   // "knot1", "knot1x16" -> "knot1": a prefix, optionally followed by x and digits.
   auto input_of = [](const std::string& name) -> std::optional<std::string> {
-    for (const std::string prefix : {"cube", "knot1", "fandisk"}) {
+    for (const std::string prefix : {"cube", "knot1", "fandisk", "elephant", "blobby"}) {
       if (name == prefix) return prefix;
       if (name.rfind(prefix + "x", 0) == 0 && name.size() > prefix.size() + 1 &&
           name.find_first_not_of("0123456789", prefix.size() + 1) == std::string::npos)
@@ -769,7 +792,7 @@ std::vector<RowSpec> select_rows(const std::string& list) {
     }
     if (!name || n < 1 || n > (1u << 22))
       throw std::runtime_error("--rows: unknown row '" + item +
-                               "' (want cube, knot1x16, fandiskx4, or one of them with -N, e.g. cube-65536)");
+                               "' (want cube, elephant, blobbyx4, fandiskx4, knot1x16, or one of them with -N, e.g. cube-65536)");
     rows.push_back({*name, static_cast<std::uint32_t>(n)});
   }
   return rows;
@@ -801,6 +824,67 @@ class OffFiles {
  private:
   std::map<std::string, fs::path> paths_;
 };
+
+/// Runs `shatter fracture OFF --fragments N --seed S --threads 1 --out TMP` as a
+/// child process until `repeat` is met, timing each run's wall clock around the
+/// whole process; the file it wrote is measured and removed.
+EndToEnd time_fracture_command(const Options& o, const fs::path& off, std::uint32_t fragments,
+                               const Repeat& repeat) {
+  EndToEnd result;
+  if (::access(o.shatter_exe.c_str(), X_OK) != 0) {
+    result.why = o.shatter_exe.string() + " not found";
+    return result;
+  }
+  const fs::path out = fs::temp_directory_path() / ("shatter-bench-plane-" + std::to_string(::getpid()) + ".shatter");
+  std::vector<std::string> args{o.shatter_exe.string(), "fracture",   off.string(),   "--fragments",
+                                std::to_string(fragments), "--seed", std::to_string(o.seed), "--threads",
+                                "1",                        "--out",  out.string()};
+  std::vector<double> times;
+  double total = 0;
+  while (static_cast<int>(times.size()) < repeat.max_runs) {
+    const auto started = Clock::now();
+    const pid_t pid = fork_flushed();
+    if (pid == 0) {
+      const int devnull = ::open("/dev/null", O_RDWR);
+      if (devnull >= 0) {
+        ::dup2(devnull, 0);
+        ::dup2(devnull, 1);
+        ::dup2(devnull, 2);
+      }
+      std::vector<char*> argv;
+      for (std::string& a : args) argv.push_back(a.data());
+      argv.push_back(nullptr);
+      ::execv(argv[0], argv.data());
+      ::_exit(127);
+    }
+    int status = 0;
+    rusage usage{};
+    while (::wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
+    }
+    const double seconds = seconds_between(started, Clock::now());
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+      result.why = "shatter fracture failed (" +
+                   (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
+                                      : "signal " + std::to_string(WTERMSIG(status))) + ")";
+      std::error_code ignored;
+      fs::remove(out, ignored);
+      return result;
+    }
+    result.peak_mb = std::max(std::isnan(result.peak_mb) ? 0.0 : result.peak_mb, static_cast<double>(usage.ru_maxrss) / 1024.0);
+    std::error_code size_error;
+    result.file_bytes = fs::file_size(out, size_error);
+    times.push_back(seconds);
+    total += seconds;
+    if (seconds > repeat.no_repeat_seconds) break;
+    if (static_cast<int>(times.size()) >= repeat.min_runs && total >= repeat.min_total_seconds) break;
+  }
+  std::error_code ignored;
+  fs::remove(out, ignored);
+  result.ok = true;
+  result.runs = static_cast<int>(times.size());
+  result.seconds = median_of(times);
+  return result;
+}
 
 Row run_row(const RowSpec& spec, const Input& input, const Options& o, const Repeat& repeat, OffFiles& files) {
   Row row;
@@ -841,6 +925,17 @@ Row run_row(const RowSpec& spec, const Input& input, const Options& o, const Rep
     std::cerr << "; to N/2" << std::flush;
     row.half = time_build(input.mesh, spec.fragments / 2, o.seed, repeat, ChildTasks{});
     if (!row.half->ok) row.add_note("build to N/2 failed: " + row.half->error);
+  }
+  if (o.no_end_to_end) {
+    row.command.why = "not run (--no-end-to-end)";
+  } else if (row.full.ok) {
+    std::cerr << "; shatter fracture" << std::flush;
+    row.command = time_fracture_command(o, files.get(input), spec.fragments, repeat);
+    std::cerr << " " << (row.command.ok ? seconds_text(row.command.seconds) + " s" : row.command.why) << std::flush;
+    if (!row.command.ok) {
+      row.failed = true;
+      row.add_note(row.command.why);
+    }
   }
   if (o.no_peers || o.no_manifold) {
     row.manifold.status = ManifoldResult::Status::not_run;
@@ -1048,10 +1143,11 @@ void print_tables(std::ostream& out, const std::vector<Row>& rows, const std::ve
          "the build's own forked process, which inherited at most "
       << fixed(baseline, 1) << " MB resident from the bench.\n";
   out << "\n### Peers in the same run\n\n"
-      << "| row | shatter s | Manifold s (WASM) | Manifold runs | Manifold/shatter | Manifold pieces | Manifold triangles | "
-         "shatter leaf / Manifold triangles | Manifold peak RSS MB | CGAL clip s | CGAL/shatter | CGAL/shatter cut | "
-         "CGAL replay |\n"
-      << "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
+      << "| row | shatter build s | shatter fracture s (end to end) | Manifold s (WASM) | Manifold runs | "
+         "Manifold/shatter build | Manifold/shatter end to end | .shatter MB | fracture peak MB | Manifold pieces | "
+         "Manifold triangles | shatter leaf / Manifold triangles | Manifold peak RSS MB | CGAL clip s | CGAL/shatter | "
+         "CGAL/shatter cut | CGAL replay |\n"
+      << "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
   for (const Row& r : rows) {
     const ManifoldResult& m = r.manifold;
     std::string runs;
@@ -1059,9 +1155,13 @@ void print_tables(std::ostream& out, const std::vector<Row>& rows, const std::ve
       if (!runs.empty()) runs += ' ';
       runs += seconds_text(s);
     }
-    out << "| " << r.id << " | " << seconds_text(r.full.seconds) << " | " << manifold_seconds_cell(m)
+    const EndToEnd& c = r.command;
+    out << "| " << r.id << " | " << seconds_text(r.full.seconds) << " | "
+        << (c.ok ? seconds_text(c.seconds) : c.why.empty() ? "–" : c.why) << " | " << manifold_seconds_cell(m)
         << (m.ok() || m.detail.empty() ? "" : ": " + m.detail) << " | " << (runs.empty() ? "–" : runs) << " | "
-        << ratio_text(r.manifold_ratio()) << " | " << (m.ok() ? with_thousands(m.pieces) : "–") << " | "
+        << ratio_text(r.manifold_ratio()) << " | " << ratio_text(r.manifold_ratio_end_to_end()) << " | "
+        << (c.ok ? fixed(static_cast<double>(c.file_bytes) / 1e6, 1) : "–") << " | "
+        << (c.ok ? fixed(c.peak_mb, 0) : "–") << " | " << (m.ok() ? with_thousands(m.pieces) : "–") << " | "
         << (m.ok() ? with_thousands(m.triangles) : "–") << " | " << ratio_text(r.leaf_triangles_over_manifold()) << " | "
         << (m.ok() ? fixed(m.maxrss_mb, 0) : "–") << " | " << cgal_cell(r) << " | " << ratio_text(r.cgal_ratio())
         << " | " << ratio_text(r.cgal_ratio_to_cutting()) << " | " << cgal_status(r) << " |\n";
@@ -1117,7 +1217,8 @@ void write_csv(const fs::path& path, const std::vector<Row>& rows, std::uint64_t
       "manifold_runs,manifold_pieces,manifold_triangles,manifold_bad_pieces,manifold_maxrss_mb,"
       "manifold_wasm_heap_mb,manifold_over_shatter,leaf_triangles_over_manifold,cgal_status,cgal_seconds,"
       "cgal_over_shatter,cgal_over_cutting,cgal_nodes_done,cgal_internal_nodes,cgal_pieces,cgal_invalid,"
-      "cgal_missing,failed,note");
+      "cgal_missing,fracture_seconds,fracture_runs,fracture_peak_rss_mb,shatter_file_bytes,"
+      "manifold_over_fracture,failed,note");
   for (const Row& r : rows) {
     const BuildRun& f = r.full.first;
     const bool ok = r.full.ok;
@@ -1157,6 +1258,9 @@ void write_csv(const fs::path& path, const std::vector<Row>& rows, std::uint64_t
     } else {
       csv.field("not run").empty(8);
     }
+    const EndToEnd& c = r.command;
+    csv.field(c.ok ? c.seconds : not_measured).field_if(c.ok, c.runs).field(c.ok ? c.peak_mb : not_measured);
+    csv.field_if(c.ok, c.file_bytes).field(r.manifold_ratio_end_to_end());
     std::string note = r.note;
     if (!m.ok() && !m.detail.empty()) note += (note.empty() ? "" : "; ") + ("Manifold: " + m.detail);
     if (m.ok() && !m.detail.empty()) note += (note.empty() ? "" : "; ") + ("Manifold: " + m.detail);
@@ -1174,9 +1278,12 @@ int parse(int argc, char** argv, Options& o) {
   CLI::App app{
       "shatter-bench-plane: the project's performance targets (issue item 7) on the plane kernel, 1 thread, "
       "each row with its peers in the same run: Manifold 3.5.4 (npm manifold-3d, WebAssembly under Node, "
-      "bench/peers/manifold/fracture.mjs) and CGAL 5.5 PMP::clip replaying the same planes. Rows: cube -> 256, "
-      "65,536 and 2^20 fragments; knot1.off subdivided to >= 50,000 triangles (102,400) and fandisk.off "
-      "subdivided once (51,784; from the test corpus) -> 256 and 65,536. Prints Markdown tables "
+      "bench/peers/manifold/fracture.mjs) and CGAL 5.5 PMP::clip replaying the same planes. Each row times "
+      "build_mesh_tree in a forked process and the shatter fracture command end to end (read, check, build, "
+      "write). Rows: cube -> 256, 65,536 and 2^20 fragments; curved meshes of the test corpus at about 5.7k, "
+      "18k and 52k triangles: elephant.off (5,558) and blobby.off subdivided once (16,200) -> 256 and 4,096, "
+      "fandisk.off subdivided once (51,784) -> 256, 4,096 and 65,536; knot1.off subdivided twice (102,400) "
+      "-> 256 and 65,536. Prints Markdown tables "
       "(inputs, shatter, peers, targets) on stdout, progress on stderr. Exit status: 0 when every build "
       "succeeded with every checked leaf valid, 2 when not (peers and missed targets never count), 1 on errors.",
       "shatter-bench-plane"};
@@ -1185,9 +1292,10 @@ int parse(int argc, char** argv, Options& o) {
                "and CGAL only when available");
   app.add_option("--csv", o.csv, "Also write one CSV row per table row to this file");
   app.add_option("--rows", o.rows,
-                 "Comma-separated rows: ids (cube-256, cube-65536, cube-1048576, knot1x16-256, "
-                 "knot1x16-65536, fandiskx4-256, fandiskx4-65536; any N works, e.g. cube-4096) or mesh names "
-                 "(cube, knot1x16, fandiskx4) for all of theirs; default all");
+                 "Comma-separated rows: ids (cube-256, cube-65536, cube-1048576, elephant-256, elephant-4096, "
+                 "blobbyx4-256, blobbyx4-4096, fandiskx4-256, fandiskx4-4096, fandiskx4-65536, knot1x16-256, "
+                 "knot1x16-65536; any N works, e.g. cube-4096) or mesh names (cube, elephant, blobbyx4, "
+                 "fandiskx4, knot1x16) for all of theirs; default all");
   app.add_option("--max-fragments", o.max_fragments, "Drop the rows above N fragments")
       ->check(CLI::Range(1u, 1u << 22));
   app.add_option("--seed", o.seed, "Root seed of every build and of Manifold's stream")->capture_default_str();
@@ -1205,6 +1313,9 @@ int parse(int argc, char** argv, Options& o) {
                  "Manifold's --repeat (default 3 up to 65,536 fragments, 1 above; 1 with --quick)")
       ->check(CLI::Range(1, 100));
   app.add_flag("--no-manifold", o.no_manifold, "Skip Manifold");
+  app.add_option("--shatter", o.shatter_exe, "The shatter executable timed end to end (fracture, 1 thread)")
+      ->capture_default_str();
+  app.add_flag("--no-end-to-end", o.no_end_to_end, "Skip timing the shatter fracture command");
   app.add_option("--peer-timeout", o.peer_timeout, "Wall-clock limit of one CGAL replay, seconds")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
@@ -1266,6 +1377,9 @@ int main(int argc, char** argv) {
     };
     if (wanted("knot1")) inputs.push_back(make_subdivided("knot1", o.knot, 50000));
     if (wanted("fandisk")) inputs.push_back(make_subdivided("fandisk", o.mesh_dir / "fandisk.off", 50000));
+    // The issue's sizes for curved meshes: about 5.7k, 18k and 52k triangles.
+    if (wanted("elephant")) inputs.push_back(make_subdivided("elephant", o.mesh_dir / "elephant.off", 0));
+    if (wanted("blobby")) inputs.push_back(make_subdivided("blobby", o.mesh_dir / "blobby.off", 16000));
     for (Input& i : inputs) {
       if (i.available) i.plane_faces = shatter::prepare_plane_input(i.mesh).geometry.planes.size();
     }
