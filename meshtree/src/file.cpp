@@ -151,12 +151,8 @@ std::string str(std::uint64_t value) { return std::to_string(value); }
 class ByteWriter {
  public:
   void u8(std::uint8_t value) { bytes_.push_back(static_cast<char>(value)); }
-  void u32(std::uint32_t value) {
-    for (int k = 0; k < 4; ++k) u8(static_cast<std::uint8_t>(value >> (8 * k)));
-  }
-  void u64(std::uint64_t value) {
-    for (int k = 0; k < 8; ++k) u8(static_cast<std::uint8_t>(value >> (8 * k)));
-  }
+  void u32(std::uint32_t value) { little_endian(value); }
+  void u64(std::uint64_t value) { little_endian(value); }
   /// A count the validator has already checked to fit 32 bits.
   void count32(std::size_t value) { u32(static_cast<std::uint32_t>(value)); }
   void f64(double value) { u64(std::bit_cast<std::uint64_t>(value)); }
@@ -179,10 +175,25 @@ class ByteWriter {
     for (const char c : tag) bytes_.push_back(c);
   }
   void append(std::string_view bytes) { bytes_.append(bytes); }
+  void reserve(std::size_t size) { bytes_.reserve(size); }
 
   std::string take() { return std::move(bytes_); }
 
  private:
+  // The file is little-endian; on a little-endian machine a value's bytes are
+  // copied as they are (one append, not one push_back per byte: the meshes of a
+  // large tree are hundreds of megabytes of these).
+  template <class Unsigned>
+  void little_endian(Unsigned value) {
+    char bytes[sizeof(Unsigned)];
+    if constexpr (std::endian::native == std::endian::little) {
+      std::memcpy(bytes, &value, sizeof bytes);
+    } else {
+      for (std::size_t k = 0; k < sizeof bytes; ++k) bytes[k] = static_cast<char>(value >> (8 * k));
+    }
+    bytes_.append(bytes, sizeof bytes);
+  }
+
   std::string bytes_;
 };
 
@@ -869,18 +880,27 @@ std::string encode_shatter(const MeshTree& tree) {
       throw std::invalid_argument("encode_shatter: invalid tree: shatter_version: " + *problem);
     }
   }
+  // Every payload first, so the file is allocated once at its final size.
+  std::vector<std::pair<Tag, std::string>> sections;
+  if (!tree.shatter_version.empty()) sections.emplace_back(version_tag, tree.shatter_version);
+  sections.emplace_back(recipe_tag, recipe_payload(tree.recipe));
+  sections.emplace_back(nodes_tag, nodes_payload(tree));
+  sections.emplace_back(meshes_tag, meshes_payload(tree.nodes, &MeshTreeNode::mesh));
+  sections.emplace_back(hulls_tag, meshes_payload(tree.nodes, &MeshTreeNode::hull));
+  sections.emplace_back(bonds_tag, bonds_payload(tree.bonds));
+  sections.emplace_back(geometry_tag, geometry_payload(tree.geometry));
+  sections.emplace_back(solids_tag, solids_payload(tree));
+  sections.emplace_back(end_tag, std::string());
+  std::size_t size = file_header_size;
+  for (const auto& [tag, payload] : sections) size += section_header_size + payload.size();
   ByteWriter file;
+  file.reserve(size);
   for (const unsigned char byte : magic) file.u8(byte);
   file.u32(shatter_format_version);
-  if (!tree.shatter_version.empty()) append_section(file, version_tag, tree.shatter_version);
-  append_section(file, recipe_tag, recipe_payload(tree.recipe));
-  append_section(file, nodes_tag, nodes_payload(tree));
-  append_section(file, meshes_tag, meshes_payload(tree.nodes, &MeshTreeNode::mesh));
-  append_section(file, hulls_tag, meshes_payload(tree.nodes, &MeshTreeNode::hull));
-  append_section(file, bonds_tag, bonds_payload(tree.bonds));
-  append_section(file, geometry_tag, geometry_payload(tree.geometry));
-  append_section(file, solids_tag, solids_payload(tree));
-  append_section(file, end_tag, {});
+  for (auto& [tag, payload] : sections) {
+    append_section(file, tag, payload);
+    std::string().swap(payload);  // freed as soon as it is copied
+  }
   return file.take();
 }
 
