@@ -25,11 +25,16 @@ void append_mesh(const Mesh& part, Mesh& whole) {
 
 PlaneInput prepare_plane_input(const Mesh& mesh) {
   PlaneInput input;
-  const std::vector<Mesh> solids = separate_solids(mesh);
+  std::vector<Mesh> solids = separate_solids(mesh);
   std::vector<std::size_t> first_triangle;
-  for (const Mesh& solid : solids) {
-    first_triangle.push_back(input.mesh.triangles.size());
-    append_mesh(solid, input.mesh);
+  if (solids.size() == 1) {
+    first_triangle.push_back(0);
+    input.mesh = std::move(solids.front());  // the common case: nothing to append to
+  } else {
+    for (const Mesh& solid : solids) {
+      first_triangle.push_back(input.mesh.triangles.size());
+      append_mesh(solid, input.mesh);
+    }
   }
   first_triangle.push_back(input.mesh.triangles.size());
 
@@ -66,6 +71,12 @@ PlaneInput prepare_plane_input(const Mesh& mesh) {
       if (members.empty() || members.back() != shell) {
         if (std::find(members.begin(), members.end(), shell) == members.end()) members.push_back(shell);
       }
+    }
+    // A solid of one shell has it as its outer one, whatever its volume's sign
+    // (separate_solids keeps a shell that faces inward with no container alone).
+    if (members.size() == 1) {
+      input.shells.outer_of_shell[members.front()] = members.front();
+      continue;
     }
     for (const std::uint32_t shell : members) {
       Mesh part;
