@@ -142,7 +142,7 @@ struct BuildNode {
 
 class Builder {
  public:
-  Builder(const TreeRecipe& recipe, const LeafProgressFn& progress) : options_(recipe), progress_(progress) {}
+  Builder(const TreeRecipe& recipe, const LeafProgressFn& progress) : recipe_(recipe), progress_(progress) {}
 
   std::unique_ptr<BuildNode> root(const Mesh& mesh) {
     auto node = std::make_unique<BuildNode>();
@@ -150,7 +150,7 @@ class Builder {
     node->solid = plane_input_->solid;
     node->mesh = mesh;  // the root is the input as given (validated on the way in)
     node->mass = mass_properties(node->mesh);
-    node->seed = root_seed(options_.seed);
+    node->seed = root_seed(recipe_.seed);
     return node;
   }
 
@@ -172,12 +172,12 @@ class Builder {
     const PlaneSet set = plane_input_->geometry.plane_set(path);
     PlaneCutOptions cutting;
     cutting.cap_surface = node.depth + 1;
-    cutting.interior_uv_scale = options_.interior_uv_scale;
-    cutting.allow_self_intersections = options_.allow_self_intersections;
+    cutting.interior_uv_scale = recipe_.interior_uv_scale;
+    cutting.allow_self_intersections = recipe_.allow_self_intersections;
     std::uint32_t missed = 0, unroundable = 0;
     std::string last_defect;
-    for (std::uint32_t attempt = 0; attempt < options_.max_plane_tries; ++attempt) {
-      path.back() = draw_plane(options_.strategy, box, node.mass.centroid, random);
+    for (std::uint32_t attempt = 0; attempt < recipe_.max_plane_tries; ++attempt) {
+      path.back() = draw_plane(recipe_.strategy, box, node.mass.centroid, random);
       PlaneCut result;
       try {
         // node.mesh is certified (the root: the validated input).
@@ -218,7 +218,7 @@ class Builder {
     }
     throw UnsupportedGeometryError(
         "cannot cut a fragment at depth " + std::to_string(node.depth) + ": of " +
-        std::to_string(options_.max_plane_tries) + " planes, " + std::to_string(missed) + " missed it and " +
+        std::to_string(recipe_.max_plane_tries) + " planes, " + std::to_string(missed) + " missed it and " +
         std::to_string(unroundable) + " gave a piece that cannot be written as a valid double mesh" +
         (last_defect.empty() ? std::string() : " (" + last_defect + ")"));
   }
@@ -228,13 +228,13 @@ class Builder {
     if (progress_) progress_(done);
   }
 
-  const TreeRecipe& recipe() const { return options_; }
+  const TreeRecipe& recipe() const { return recipe_; }
   const PlaneInput& plane_input() const { return *plane_input_; }
   std::uint64_t planes_missed() const { return planes_missed_; }
   std::uint64_t planes_rejected() const { return planes_rejected_; }
 
  private:
-  const TreeRecipe& options_;  // the recipe: what to build
+  const TreeRecipe& recipe_;  // what to build
   std::optional<PlaneInput> plane_input_;
   const LeafProgressFn& progress_;
   std::atomic<std::size_t> leaves_done_{0};
