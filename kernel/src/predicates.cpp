@@ -83,7 +83,7 @@ bool above_smallest(const Vec3& p) { return above_smallest(p.x) && above_smalles
 // products and the three outer ones add less than 2^-771; the bound uses 8u and
 // 2^-770, which also covers the rounding of the bound itself. Returns the sign of
 // det[a - d, b - d, c - d] (Shewchuk's convention), or 0 when undecided.
-int orient3d_filter(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+int orient3d_filter(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, double& permanent_out) {
   const double adx = a.x - d.x, bdx = b.x - d.x, cdx = c.x - d.x;
   const double ady = a.y - d.y, bdy = b.y - d.y, cdy = c.y - d.y;
   const double adz = a.z - d.z, bdz = b.z - d.z, cdz = c.z - d.z;
@@ -95,6 +95,7 @@ int orient3d_filter(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) 
                            (std::fabs(cdxady) + std::fabs(adxcdy)) * std::fabs(bdz) +
                            (std::fabs(adxbdy) + std::fabs(bdxady)) * std::fabs(cdz);
   const double bound = 8 * unit_roundoff * permanent + 0x1p-770;
+  permanent_out = permanent;
   if (det > bound) return 1;
   if (-det > bound) return -1;
   return 0;
@@ -216,8 +217,10 @@ int minor(const Short& p, const Short& s, const Short& q, const Short& t, double
   return sum_expansions(ps, n_ps, qt, n_qt, h);
 }
 
-// The exact sign of det[a - d, b - d, c - d], within the range above.
-int orient3d_expansion(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+// The exact sign of det[a - d, b - d, c - d], within the range above, from the
+// exact differences (two components each) multiplied out in full: up to 192
+// components. The last resort of orient3d_adaptive.
+int orient3d_exact(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   Short adx, ady, adz, bdx, bdy, bdz, cdx, cdy, cdz;
   adx.n = difference(a.x, d.x, adx.c), ady.n = difference(a.y, d.y, ady.c), adz.n = difference(a.z, d.z, adz.c);
   bdx.n = difference(b.x, d.x, bdx.c), bdy.n = difference(b.y, d.y, bdy.c), bdz.n = difference(b.z, d.z, bdz.c);
@@ -234,6 +237,77 @@ int orient3d_expansion(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
   const int n_det = sum_expansions(ab, n_ab, term_c, n_c, det);
   if (n_det == 0) return 0;
   return det[n_det - 1] > 0 ? 1 : -1;
+}
+
+// Shewchuk's adaptive stages B and C (section 4.3 of the paper), then the full
+// expansion. B: the determinant of the rounded differences, exactly (at most 24
+// components); when no difference was rounded it is the answer, else its
+// rounded sum decides if it clears (3 + 28u)u times the permanent. C: B plus the
+// terms first-order in the differences' rounding errors, in floating point,
+// decides if it clears (26 + 288u)u^2 times the permanent plus (3 + 8u)u times
+// itself. Nearly coplanar points, the hulls' daily fare, mostly stop at B or C;
+// only exact zeros with rounded differences (and even nearer misses) pay for the
+// full expansion. Within the range above no step underflows with loss (every
+// quantity is a multiple of 2^-1056), so the paper's bounds hold as proved.
+int orient3d_adaptive(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, double permanent) {
+  double adx_tail = 0, bdx_tail = 0, cdx_tail = 0, ady_tail = 0, bdy_tail = 0, cdy_tail = 0, adz_tail = 0,
+         bdz_tail = 0, cdz_tail = 0;
+  const double adx = two_sum(a.x, -d.x, adx_tail), bdx = two_sum(b.x, -d.x, bdx_tail), cdx = two_sum(c.x, -d.x, cdx_tail);
+  const double ady = two_sum(a.y, -d.y, ady_tail), bdy = two_sum(b.y, -d.y, bdy_tail), cdy = two_sum(c.y, -d.y, cdy_tail);
+  const double adz = two_sum(a.z, -d.z, adz_tail), bdz = two_sum(b.z, -d.z, bdz_tail), cdz = two_sum(c.z, -d.z, cdz_tail);
+
+  // x1 * y1 - x2 * y2 exactly, at most four components.
+  const auto two_by_two = [](double x1, double y1, double x2, double y2, double* h) {
+    double e1 = 0, e2 = 0;
+    const double p1 = two_product(x1, y1, e1);
+    const double p2 = two_product(x2, y2, e2);
+    const double first[2] = {e1, p1}, second[2] = {-e2, -p2};
+    double terms[4];
+    int n = 0;
+    for (const double t : first) {
+      if (t != 0) terms[n++] = t;
+    }
+    int k = 0;
+    double negated[2];
+    for (const double t : second) {
+      if (t != 0) negated[k++] = t;
+    }
+    return sum_expansions(terms, n, negated, k, h);
+  };
+  double minor[4], term_a[8], term_b[8], term_c[8], ab[16], b_det[24];
+  int n = two_by_two(bdx, cdy, cdx, bdy, minor);
+  const int n_a = scale_expansion(minor, n, adz, term_a);
+  n = two_by_two(cdx, ady, adx, cdy, minor);
+  const int n_b = scale_expansion(minor, n, bdz, term_b);
+  n = two_by_two(adx, bdy, bdx, ady, minor);
+  const int n_c = scale_expansion(minor, n, cdz, term_c);
+  const int n_ab = sum_expansions(term_a, n_a, term_b, n_b, ab);
+  const int n_det = sum_expansions(ab, n_ab, term_c, n_c, b_det);
+
+  if (adx_tail == 0 && bdx_tail == 0 && cdx_tail == 0 && ady_tail == 0 && bdy_tail == 0 && cdy_tail == 0 &&
+      adz_tail == 0 && bdz_tail == 0 && cdz_tail == 0) {
+    return n_det == 0 ? 0 : b_det[n_det - 1] > 0 ? 1 : -1;
+  }
+  double det = 0;
+  for (int i = 0; i < n_det; ++i) det += b_det[i];
+  // Non-strict, as in the paper: a bound of zero means a zero permanent, and then
+  // every monomial of the determinant has an exactly zero factor (a difference
+  // rounds to zero only when it is zero; in the range above no product
+  // underflows), so the estimate's zero is the answer.
+  const auto sign = [](double x) { return x > 0 ? 1 : x < 0 ? -1 : 0; };
+  const double bound_b = (3 + 28 * unit_roundoff) * unit_roundoff * permanent;
+  if (det >= bound_b || -det >= bound_b) return sign(det);
+
+  const double bound_c = (26 + 288 * unit_roundoff) * unit_roundoff * unit_roundoff * permanent +
+                         (3 + 8 * unit_roundoff) * unit_roundoff * std::fabs(det);
+  det += (adz * ((bdx * cdy_tail + cdy * bdx_tail) - (bdy * cdx_tail + cdx * bdy_tail)) +
+          adz_tail * (bdx * cdy - bdy * cdx)) +
+         (bdz * ((cdx * ady_tail + ady * cdx_tail) - (cdy * adx_tail + adx * cdy_tail)) +
+          bdz_tail * (cdx * ady - cdy * adx)) +
+         (cdz * ((adx * bdy_tail + bdy * adx_tail) - (ady * bdx_tail + bdx * ady_tail)) +
+          cdz_tail * (adx * bdy - ady * bdx));
+  if (det >= bound_c || -det >= bound_c) return sign(det);
+  return orient3d_exact(a, b, c, d);
 }
 
 // Outside that range: rationals, exact for any finite double.
@@ -277,11 +351,12 @@ Sign orient3d(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
   ++counters.orient3d_calls;
   int s = 0;
   if (below_largest(a) && below_largest(b) && below_largest(c) && below_largest(d)) {
-    s = orient3d_filter(a, b, c, d);
+    double permanent = 0;
+    s = orient3d_filter(a, b, c, d, permanent);
     if (s == 0) {
       if (above_smallest(a) && above_smallest(b) && above_smallest(c) && above_smallest(d)) {
         ++counters.orient3d_expansion;
-        s = orient3d_expansion(a, b, c, d);
+        s = orient3d_adaptive(a, b, c, d, permanent);
       } else {
         ++counters.orient3d_gmp;
         s = orient3d_rational(a, b, c, d);
