@@ -157,8 +157,9 @@ int scale_expansion(const double* e, int m, double b, double* h) {
   return n;
 }
 
-// h = e + f (Fast-Expansion-Sum with zero elimination: merge by magnitude, then
-// one pass of two-sums). h holds m + k.
+// h = e + f (Fast-Expansion-Sum with zero elimination: the components taken in
+// order of magnitude from both, as a merge would give them, through one pass of
+// two-sums). h holds m + k.
 int sum_expansions(const double* e, int m, const double* f, int k, double* h) {
   if (m == 0) {
     std::copy(f, f + k, h);
@@ -168,15 +169,18 @@ int sum_expansions(const double* e, int m, const double* f, int k, double* h) {
     std::copy(e, e + m, h);
     return m;
   }
-  double merged[192];
-  std::merge(e, e + m, f, f + k, merged, [](double x, double y) { return std::fabs(x) < std::fabs(y); });
-  const int total = m + k;
+  int i = 0, j = 0;
+  const auto next = [&] {
+    if (j == k || (i < m && std::fabs(e[i]) < std::fabs(f[j]))) return e[i++];
+    return f[j++];
+  };
+  const double g0 = next(), g1 = next();
   int n = 0;
   double error = 0;
-  double q = fast_two_sum(merged[1], merged[0], error);
+  double q = fast_two_sum(g1, g0, error);
   if (error != 0) h[n++] = error;
-  for (int i = 2; i < total; ++i) {
-    q = two_sum(q, merged[i], error);
+  for (int t = 2; t < m + k; ++t) {
+    q = two_sum(q, next(), error);
     if (error != 0) h[n++] = error;
   }
   if (q != 0) h[n++] = q;
@@ -307,6 +311,7 @@ int orient3d_adaptive(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d
          (cdz * ((adx * bdy_tail + bdy * adx_tail) - (ady * bdx_tail + bdx * ady_tail)) +
           cdz_tail * (adx * bdy - ady * bdx));
   if (det >= bound_c || -det >= bound_c) return sign(det);
+  ++predicate_counters().orient3d_full;
   return orient3d_exact(a, b, c, d);
 }
 
