@@ -182,11 +182,15 @@ class Quickhull {
     // scaled by a power of two to magnitudes at most 1, so they cannot overflow,
     // whatever the input's magnitude (the tests trap overflow).
     double largest = 0;
-    for (const Vec3& p : points) largest = std::fmax(largest, std::fmax(std::fabs(p.x), std::fmax(std::fabs(p.y), std::fabs(p.z))));
+    for (const Vec3& p : points) {
+      largest = std::fmax(largest, std::fmax(std::fabs(p.x), std::fmax(std::fabs(p.y), std::fabs(p.z))));
+    }
     int exponent = 0;
     std::frexp(largest, &exponent);
     scaled_.reserve(points.size());
-    for (const Vec3& p : points) scaled_.push_back({std::ldexp(p.x, -exponent), std::ldexp(p.y, -exponent), std::ldexp(p.z, -exponent)});
+    for (const Vec3& p : points) {
+      scaled_.push_back({std::ldexp(p.x, -exponent), std::ldexp(p.y, -exponent), std::ldexp(p.z, -exponent)});
+    }
     start();
     while (!pending_.empty()) {
       const std::uint32_t f = pending_.back();
