@@ -1,12 +1,10 @@
 #include "shatter/meshtree/hull.hpp"
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Surface_mesh.h>
-#include <CGAL/convex_hull_3.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <stdexcept>
 #include <vector>
 
 #include "shatter/kernel/index_map.hpp"
@@ -16,16 +14,11 @@
 namespace shatter {
 namespace {
 
-using Epick = CGAL::Epick;
-using EpickPoint = Epick::Point_3;
-
-EpickPoint to_epick(const Vec3& p) { return {p.x, p.y, p.z}; }
-
 // A closed, connected, outward surface that is convex or flat at every edge bounds
 // a convex body, so checking each edge's two triangles, and that the triangles are
 // one edge-connected piece (a node can hold two separate boxes), is enough. Many
 // fragments of convex inputs pass, and skip the hull computation. Orientation is
-// exact (Epick's filtered predicate on the stored doubles).
+// exact (the kernel's orient3d on the stored doubles).
 thread_local IndexMap edge_to_triangle;
 
 bool convex_surface(const Mesh& mesh) {
@@ -39,8 +32,7 @@ bool convex_surface(const Mesh& mesh) {
   std::size_t pieces = mesh.triangles.size();
   for (TriangleIndex t = 0; t < mesh.triangles.size(); ++t) {
     const Triangle& tri = mesh.triangles[t];
-    const EpickPoint a = to_epick(mesh.positions[tri[0]]), b = to_epick(mesh.positions[tri[1]]),
-                     c = to_epick(mesh.positions[tri[2]]);
+    const Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
     for (int k = 0; k < 3; ++k) {
       // The neighbour across edge (u, v) traverses it as (v, u).
       const VertexIndex u = tri[k], v = tri[(k + 1) % 3];
@@ -51,7 +43,7 @@ bool convex_surface(const Mesh& mesh) {
         if (corner != u && corner != v) d = corner;
       }
       // Positive: d lies on the side the triangle's outward normal points to.
-      if (CGAL::orientation(a, b, c, to_epick(mesh.positions[d])) == CGAL::POSITIVE) return false;
+      if (orient3d(a, b, c, mesh.positions[d]) == Sign::positive) return false;
       if (piece_of.unite(t, n)) --pieces;
     }
   }
@@ -59,9 +51,10 @@ bool convex_surface(const Mesh& mesh) {
 }
 
 // --- a canonical hull ---------------------------------------------------------
-// CGAL's hull is right, but the order of its output, and how it triangulates a
-// face with four or more coplanar vertices, follow memory addresses, which differ
-// between runs and threads. So the hull is rebuilt from what is unique: its facets
+// The hull below is right, but the order of its output, and how it triangulates
+// a face with four or more coplanar vertices, follow the order points were added
+// in; a convex mesh passed in as its own hull has its own triangulation. So the
+// hull is rebuilt from what is unique: its facets
 // (maximal groups of exactly coplanar adjacent triangles) and their strictly
 // convex corners, each facet fanned from its least vertex.
 
@@ -132,8 +125,7 @@ Mesh canonical_hull(const std::vector<Vec3>& positions, const std::vector<Triang
       for (VertexIndex v : triangles[n]) {
         if (v != tri[k] && v != tri[(k + 1) % 3]) opposite = v;
       }
-      if (CGAL::orientation(to_epick(positions[tri[0]]), to_epick(positions[tri[1]]), to_epick(positions[tri[2]]),
-                            to_epick(positions[opposite])) == CGAL::COPLANAR) {
+      if (orient3d(positions[tri[0]], positions[tri[1]], positions[tri[2]], positions[opposite]) == Sign::zero) {
         facet_of.unite(t, n);
       }
     }
@@ -173,6 +165,255 @@ Mesh canonical_hull(const std::vector<Vec3>& positions, const std::vector<Triang
   return hull;
 }
 
+// --- quickhull ---------------------------------------------------------------
+// Barber, Dobkin & Huhdanpaa, "The Quickhull Algorithm for Convex Hulls", ACM
+// TOMS 22 (1996), on triangles, with every geometric decision an exact orient3d:
+// a point is outside a triangle only when strictly beyond its plane. So a point
+// on the hull (on a facet, an edge, or a duplicate of a vertex) is never added,
+// no triangle is ever degenerate (its apex was strictly beyond a plane holding
+// its base), and coplanar triangles are left for canonical_hull to merge. Which
+// outside point is taken next (the furthest, in floating point) only steers the
+// speed: any order gives the same hull, and canonical_hull the same mesh.
+class Quickhull {
+ public:
+  // Precondition: points distinct, spanning a volume (checked: std::invalid_argument).
+  explicit Quickhull(std::span<const Vec3> points) : points_(points), horizon_from_(points.size(), none) {
+    // The floating-point choices (which point is furthest) are made on a copy
+    // scaled by a power of two to magnitudes at most 1, so they cannot overflow,
+    // whatever the input's magnitude (the tests trap overflow).
+    double largest = 0;
+    for (const Vec3& p : points) {
+      largest = std::fmax(largest, std::fmax(std::fabs(p.x), std::fmax(std::fabs(p.y), std::fabs(p.z))));
+    }
+    int exponent = 0;
+    std::frexp(largest, &exponent);
+    scaled_.reserve(points.size());
+    for (const Vec3& p : points) {
+      scaled_.push_back({std::ldexp(p.x, -exponent), std::ldexp(p.y, -exponent), std::ldexp(p.z, -exponent)});
+    }
+    start();
+    while (!pending_.empty()) {
+      const std::uint32_t f = pending_.back();
+      pending_.pop_back();
+      if (faces_[f].alive && !faces_[f].outside.empty()) add_furthest_point_of(f);
+    }
+  }
+
+  // The hull's triangles, outward, over the input's indices.
+  std::vector<Triangle> triangles() const {
+    std::vector<Triangle> result;
+    for (const Face& face : faces_) {
+      if (face.alive) result.push_back(face.v);
+    }
+    return result;
+  }
+
+ private:
+  static constexpr std::uint32_t none = 0xffffffffu;
+
+  struct Face {
+    Triangle v{};                      // counter-clockwise seen from outside
+    std::array<std::uint32_t, 3> next{};  // the face across edge (v[i], v[i + 1])
+    Vec3 normal;                       // rounded, of the scaled points: only to pick the furthest point
+    std::vector<std::uint32_t> outside;  // points strictly beyond this face, each in one face only
+    std::uint32_t visible_mark = 0, tested_mark = 0;
+    bool alive = false;
+  };
+
+  Sign side(const Face& face, std::uint32_t p) const {
+    return orient3d(points_[face.v[0]], points_[face.v[1]], points_[face.v[2]], points_[p]);
+  }
+
+  std::uint32_t new_face(VertexIndex a, VertexIndex b, VertexIndex c) {
+    std::uint32_t f;
+    if (!free_.empty()) {
+      f = free_.back();
+      free_.pop_back();
+    } else {
+      f = static_cast<std::uint32_t>(faces_.size());
+      faces_.emplace_back();
+    }
+    Face& face = faces_[f];
+    face.v = {a, b, c};
+    face.normal = cross(scaled_[b] - scaled_[a], scaled_[c] - scaled_[a]);
+    face.outside.clear();
+    face.alive = true;
+    return f;
+  }
+
+  // Puts p in the outside set of the first face of `candidates` it is strictly
+  // beyond; a point beyond none is inside the hull or on it and is dropped.
+  void assign(std::uint32_t p, std::span<const std::uint32_t> candidates) {
+    for (const std::uint32_t f : candidates) {
+      if (side(faces_[f], p) == Sign::positive) {
+        faces_[f].outside.push_back(p);
+        return;
+      }
+    }
+  }
+
+  // A first tetrahedron, from points far apart (found in floating point, checked
+  // exactly), its faces turned outward.
+  void start() {
+    const std::size_t n = points_.size();
+    if (n < 4) throw std::invalid_argument("convex hull: fewer than four distinct points span no volume");
+    // The lexicographically least and greatest points: distinct, as the points are.
+    std::uint32_t a = 0, b = 0;
+    for (std::uint32_t i = 1; i < n; ++i) {
+      if (lexicographically_less(points_[i], points_[a])) a = i;
+      if (lexicographically_less(points_[b], points_[i])) b = i;
+    }
+    const Vec3 ab = scaled_[b] - scaled_[a];
+    const auto by_area = [&](std::uint32_t i) { const Vec3 w = cross(ab, scaled_[i] - scaled_[a]); return dot(w, w); };
+    std::uint32_t c = a;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      if (by_area(i) > by_area(c)) c = i;
+    }
+    if (collinear(a, b, c)) {
+      c = none;
+      for (std::uint32_t i = 0; i < n && c == none; ++i) {
+        if (!collinear(a, b, i)) c = i;
+      }
+      if (c == none) throw std::invalid_argument("convex hull: the points are collinear");
+    }
+    const Vec3 normal = cross(scaled_[b] - scaled_[a], scaled_[c] - scaled_[a]);
+    const auto by_height = [&](std::uint32_t i) { return std::fabs(dot(normal, scaled_[i] - scaled_[a])); };
+    std::uint32_t d = a;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      if (by_height(i) > by_height(d)) d = i;
+    }
+    if (orient3d(points_[a], points_[b], points_[c], points_[d]) == Sign::zero) {
+      d = none;
+      for (std::uint32_t i = 0; i < n && d == none; ++i) {
+        if (orient3d(points_[a], points_[b], points_[c], points_[i]) != Sign::zero) d = i;
+      }
+      if (d == none) throw std::invalid_argument("convex hull: the points are coplanar");
+    }
+    // With d below the plane of (a, b, c), these four faces face outward.
+    if (orient3d(points_[a], points_[b], points_[c], points_[d]) == Sign::positive) std::swap(b, c);
+    const std::array<std::uint32_t, 4> first{new_face(a, b, c), new_face(a, d, b), new_face(b, d, c), new_face(c, d, a)};
+    for (const std::uint32_t f : first) {
+      for (int i = 0; i < 3; ++i) {
+        const VertexIndex u = faces_[f].v[i], w = faces_[f].v[(i + 1) % 3];
+        for (const std::uint32_t g : first) {
+          for (int j = 0; j < 3; ++j) {
+            if (faces_[g].v[j] == w && faces_[g].v[(j + 1) % 3] == u) faces_[f].next[i] = g;
+          }
+        }
+      }
+    }
+    for (std::uint32_t p = 0; p < n; ++p) {
+      if (p != a && p != b && p != c && p != d) assign(p, first);
+    }
+    for (const std::uint32_t f : first) {
+      if (!faces_[f].outside.empty()) pending_.push_back(f);
+    }
+  }
+
+  bool collinear(std::uint32_t a, std::uint32_t b, std::uint32_t c) const {
+    // Three points are collinear exactly when all three axis projections are.
+    const Vec3 p = points_[a], q = points_[b], r = points_[c];
+    return orient2d({p.x, p.y}, {q.x, q.y}, {r.x, r.y}) == Sign::zero &&
+           orient2d({p.y, p.z}, {q.y, q.z}, {r.y, r.z}) == Sign::zero &&
+           orient2d({p.z, p.x}, {q.z, q.x}, {r.z, r.x}) == Sign::zero;
+  }
+
+  void add_furthest_point_of(std::uint32_t f) {
+    // The eye: the outside point furthest from the face in floating point. It is
+    // strictly beyond f (decided exactly when it was assigned), which is all the
+    // steps below rely on.
+    std::vector<std::uint32_t>& candidates = faces_[f].outside;
+    const Vec3 origin = scaled_[faces_[f].v[0]], normal = faces_[f].normal;
+    std::size_t best = 0;
+    double best_height = -1;
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      const double height = dot(normal, scaled_[candidates[i]] - origin);
+      if (height > best_height) best_height = height, best = i;
+    }
+    const std::uint32_t eye = candidates[best];
+    candidates[best] = candidates.back();
+    candidates.pop_back();
+
+    // The faces the eye is strictly beyond: a connected patch, as the hull is
+    // convex, found from f across edges.
+    ++mark_;
+    visible_.clear();
+    visible_.push_back(f);
+    faces_[f].visible_mark = faces_[f].tested_mark = mark_;
+    for (std::size_t k = 0; k < visible_.size(); ++k) {
+      const Face& face = faces_[visible_[k]];
+      for (const std::uint32_t g : face.next) {
+        if (faces_[g].tested_mark == mark_) continue;
+        faces_[g].tested_mark = mark_;
+        if (side(faces_[g], eye) == Sign::positive) {
+          faces_[g].visible_mark = mark_;
+          visible_.push_back(g);
+        }
+      }
+    }
+
+    // The horizon: the patch's boundary edges, oriented as in their visible
+    // face. The patch is a disk, so they form one simple cycle, which each of
+    // its vertices starts exactly one edge of.
+    horizon_.clear();
+    for (const std::uint32_t v : visible_) {
+      const Face& face = faces_[v];
+      for (int i = 0; i < 3; ++i) {
+        const std::uint32_t g = face.next[i];
+        if (faces_[g].visible_mark == mark_) continue;
+        horizon_from_[face.v[i]] = static_cast<std::uint32_t>(horizon_.size());
+        horizon_.push_back({face.v[i], face.v[(i + 1) % 3], g});
+      }
+    }
+
+    // A cone of new faces from the horizon to the eye, in cycle order.
+    cone_.clear();
+    std::uint32_t e = 0;
+    for (std::size_t k = 0; k < horizon_.size(); ++k) {
+      const HorizonEdge& edge = horizon_[e];
+      const std::uint32_t g = new_face(edge.from, edge.to, eye);
+      cone_.push_back(g);
+      faces_[g].next[0] = edge.beyond;
+      Face& outer = faces_[edge.beyond];
+      for (int i = 0; i < 3; ++i) {
+        if (outer.v[i] == edge.to && outer.v[(i + 1) % 3] == edge.from) outer.next[i] = g;
+      }
+      e = horizon_from_[edge.to];
+    }
+    if (e != 0) throw std::logic_error("convex hull: the horizon is not one cycle");
+    for (std::size_t k = 0; k < cone_.size(); ++k) {
+      faces_[cone_[k]].next[1] = cone_[(k + 1) % cone_.size()];                 // edge (to, eye)
+      faces_[cone_[k]].next[2] = cone_[(k + cone_.size() - 1) % cone_.size()];  // edge (eye, from)
+    }
+    for (const HorizonEdge& edge : horizon_) horizon_from_[edge.from] = none;
+
+    // The visible faces go; their outside points move to the cone (every point
+    // still outside the hull is beyond some face of the cone: Barber et al.).
+    for (const std::uint32_t v : visible_) {
+      faces_[v].alive = false;
+      for (const std::uint32_t p : faces_[v].outside) assign(p, cone_);
+      faces_[v].outside.clear();
+      free_.push_back(v);
+    }
+    for (const std::uint32_t g : cone_) {
+      if (!faces_[g].outside.empty()) pending_.push_back(g);
+    }
+  }
+
+  struct HorizonEdge {
+    VertexIndex from, to;
+    std::uint32_t beyond;  // the face across, not visible
+  };
+
+  std::span<const Vec3> points_;
+  std::vector<Vec3> scaled_;  // points_ times a power of two, for the floating-point choices only
+  std::vector<Face> faces_;
+  std::vector<std::uint32_t> free_, pending_, visible_, cone_;
+  std::vector<HorizonEdge> horizon_;
+  std::vector<std::uint32_t> horizon_from_;  // per point: its horizon edge, or none
+  std::uint32_t mark_ = 0;
+};
+
 }  // namespace
 
 Mesh convex_hull_of(const Mesh& mesh) {
@@ -181,27 +422,13 @@ Mesh convex_hull_of(const Mesh& mesh) {
 }
 
 Mesh convex_hull_of_points(std::span<const Vec3> input) {
-  std::vector<EpickPoint> points;
-  points.reserve(input.size());
-  for (const Vec3& p : input) points.push_back(to_epick(p));
-  CGAL::Surface_mesh<EpickPoint> hull_mesh;
-  CGAL::convex_hull_3(points.begin(), points.end(), hull_mesh);
-
-  // convex_hull_3 gives triangles; a polygon face, should one come, is fanned
-  // (hull faces are convex).
-  std::vector<Vec3> positions(hull_mesh.num_vertices());  // indexed by Surface_mesh vertex index
-  for (auto v : hull_mesh.vertices()) {
-    const EpickPoint& p = hull_mesh.point(v);
-    positions[v.idx()] = {p.x(), p.y(), p.z()};
-  }
-  std::vector<Triangle> triangles;
-  std::vector<VertexIndex> face;
-  for (auto f : hull_mesh.faces()) {
-    face.clear();
-    for (auto v : CGAL::vertices_around_face(hull_mesh.halfedge(f), hull_mesh)) face.push_back(static_cast<VertexIndex>(v.idx()));
-    for (std::size_t i = 1; i + 1 < face.size(); ++i) triangles.push_back({face[0], face[i], face[i + 1]});
-  }
-  return canonical_hull(positions, triangles);
+  // Duplicates removed first (a node's points repeat the vertices its children
+  // share); the sort also makes the hull's work independent of the input order.
+  std::vector<Vec3> points(input.begin(), input.end());
+  std::sort(points.begin(), points.end(), lexicographically_less);
+  points.erase(std::unique(points.begin(), points.end()), points.end());
+  const Quickhull hull(points);
+  return canonical_hull(points, hull.triangles());
 }
 
 }  // namespace shatter

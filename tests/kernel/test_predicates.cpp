@@ -87,3 +87,126 @@ TEST_CASE("exact points: side and rounding") {
   const ExactPoint third(ExactKernel::FT(1) / 3, 0, 0);
   CHECK(to_vec3(third).x == 1.0 / 3.0);
 }
+
+// --- orient3d -----------------------------------------------------------------
+
+namespace {
+
+// det[b - a, c - a, d - a] in rationals, exact for any finite double.
+Sign reference_orient3d(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
+  const mpq_class m[3][3] = {{mpq_class(b.x) - a.x, mpq_class(b.y) - a.y, mpq_class(b.z) - a.z},
+                             {mpq_class(c.x) - a.x, mpq_class(c.y) - a.y, mpq_class(c.z) - a.z},
+                             {mpq_class(d.x) - a.x, mpq_class(d.y) - a.y, mpq_class(d.z) - a.z}};
+  const mpq_class det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                        m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                        m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+  return sgn(det) < 0 ? Sign::negative : sgn(det) > 0 ? Sign::positive : Sign::zero;
+}
+
+// orient3d against the reference, and against itself with the points permuted
+// (an odd permutation flips the sign): the filter and the exact stage see the
+// differences taken from another point then.
+void require_orient3d(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
+  const Sign expected = reference_orient3d(a, b, c, d);
+  INFO("a " << a.x << ' ' << a.y << ' ' << a.z << ", b " << b.x << ' ' << b.y << ' ' << b.z << ", c " << c.x << ' '
+            << c.y << ' ' << c.z << ", d " << d.x << ' ' << d.y << ' ' << d.z);
+  REQUIRE(orient3d(a, b, c, d) == expected);
+  REQUIRE(orient3d(b, a, c, d) == flip(expected));
+  REQUIRE(orient3d(d, b, c, a) == flip(expected));
+  REQUIRE(orient3d(b, c, d, a) == flip(expected));
+}
+
+Vec3 ulps_away(Vec3 p, int kx, int ky, int kz) { return {ulps_away(p.x, kx), ulps_away(p.y, ky), ulps_away(p.z, kz)}; }
+
+}  // namespace
+
+TEST_CASE("orient3d agrees with exact rationals on random, nearly coplanar and coplanar points") {
+  predicate_counters() = {};
+  std::size_t queries = 0, coplanar = 0;
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    Random random(seed);
+    for (int i = 0; i < 500; ++i) {
+      // Pieces from 1e-9 to 1e9 across, often far from the origin compared with their size.
+      const double scale = std::pow(10.0, random.uniform(-9, 9));
+      const Vec3 centre = random.direction() * (scale * random.uniform(0, 1e4) * double(random.index(2)));
+      const auto point = [&] { return centre + random.direction() * (scale * random.uniform()); };
+      // Random: almost never coplanar, decided by the filter.
+      require_orient3d(point(), point(), point(), point());
+      // Nearly coplanar: points of a plane, rounded (as cut caps are).
+      const Vec3 o = point(), u = random.direction() * scale, v = random.direction() * scale;
+      const auto on_plane = [&] { return o + u * random.uniform(-1, 1) + v * random.uniform(-1, 1); };
+      const Vec3 a = on_plane(), b = on_plane(), c = on_plane(), d = on_plane();
+      require_orient3d(a, b, c, d);
+      // ... and moved by an ulp or two.
+      require_orient3d(a, b, c, ulps_away(d, int(random.index(5)) - 2, int(random.index(5)) - 2, 1));
+      // Exactly coplanar: z = (p x + q y) / 8 + r with small integers p, q and
+      // dyadic x, y, all exact in double, at every scale.
+      const double p = double(random.index(9)) - 4, q = double(random.index(9)) - 4;
+      const double step = std::ldexp(1.0, int(random.index(80)) - 40), r = std::ldexp(double(random.index(1 << 20)), -12);
+      const auto exact = [&] {
+        const double x = step * double(random.index(1 << 20)), y = step * double(random.index(1 << 20));
+        return Vec3{x, y, (p * x + q * y) / 8 + r * step};
+      };
+      const Vec3 e0 = exact(), e1 = exact(), e2 = exact(), e3 = exact();
+      REQUIRE(reference_orient3d(e0, e1, e2, e3) == Sign::zero);  // the test's own premise
+      require_orient3d(e0, e1, e2, e3);
+      require_orient3d(e0, e1, e2, ulps_away(e3, 0, 0, int(random.index(2)) * 2 - 1));
+      // Collinear and repeated points.
+      require_orient3d(e0, e1, e0 + (e1 - e0) * 2, e2);
+      require_orient3d(e0, e1, e1, e2);
+      queries += 7;
+      coplanar += 4;
+    }
+  }
+  const PredicateCounters& counters = predicate_counters();
+  CHECK(counters.orient3d_calls == 4 * queries);
+  // Every exact zero needs the exact stage; in this range it is never GMP. The
+  // exact zeros here have exactly subtracting coordinates, and the rounded
+  // planes' points are not exactly coplanar, so the adaptive stages settle
+  // nearly all of it without multiplying out the full expansion.
+  CHECK(counters.orient3d_expansion >= 4 * coplanar);
+  CHECK(counters.orient3d_gmp == 0);
+  CHECK(counters.orient3d_full * 100 < counters.orient3d_expansion);
+}
+
+TEST_CASE("orient3d is exact at huge and tiny magnitudes, and says when it needs GMP") {
+  Random random(20261203);
+  // Inside [2^-300, 2^300) (or zero): filter and expansions, no GMP, even where
+  // the filter's products underflow (coordinates near 2^-300 multiply to 2^-900,
+  // and differences of an ulp to below the normal range).
+  predicate_counters() = {};
+  for (const int exponent : {-299, -250, 0, 250, 297}) {
+    for (int i = 0; i < 2000; ++i) {
+      // Coordinates 1 to 4 times 2^exponent, and an ulp off: still in the range.
+      const double s = std::ldexp(1.0, exponent);
+      const auto lattice = [&] {
+        return Vec3{double(1 + random.index(4)), double(1 + random.index(4)), double(1 + random.index(4))} * s;
+      };
+      const Vec3 a = lattice(), b = lattice(), c = lattice(), d = lattice();
+      require_orient3d(a, b, c, d);
+      require_orient3d(a, b, c, ulps_away(d, 1, 0, int(random.index(3)) - 1));
+    }
+  }
+  CHECK(predicate_counters().orient3d_gmp == 0);
+  CHECK(predicate_counters().orient3d_expansion > 0);
+  // Outside it: GMP, still exact. Subnormal coordinates; coordinates whose
+  // differences or products overflow a double.
+  predicate_counters() = {};
+  for (const int exponent : {-1074, -1060, -1000, -500, -301, 300, 400, 1000, 1020}) {
+    for (int i = 0; i < 500; ++i) {
+      const double s = std::ldexp(1.0, exponent);
+      const auto lattice = [&] { return Vec3{double(random.index(4)) - 1.5, double(random.index(4)), double(random.index(4))} * s; };
+      const Vec3 a = lattice(), b = lattice(), c = lattice(), d = lattice();
+      require_orient3d(a, b, c, d);
+      // A point from the safe range among huge or tiny ones.
+      require_orient3d(a, b, c, Vec3{1, 0.5, -0.25});
+    }
+  }
+  CHECK(predicate_counters().orient3d_gmp > 0);
+  // Cancellation the double evaluation gets wrong: 1e200 - 1e200 is fine, but
+  // these products overflow to infinity and their difference is NaN.
+  CHECK(orient3d({0, 0, 0}, {1e300, 0, 0}, {0, 1e300, 0}, {0, 0, 1e300}) == Sign::positive);
+  CHECK(orient3d({0, 0, 0}, {1e300, 1e300, 0}, {-1e300, -1e300, 0}, {0, 0, 1e300}) == Sign::zero);
+  CHECK(orient3d({0, 0, 0}, {1e-320, 0, 0}, {0, 1e-320, 0}, {0, 0, 1e-320}) == Sign::positive);
+  CHECK(orient3d({0, 0, 0}, {1e-320, 0, 0}, {0, 1e-320, 0}, {0, 0, -1e-320}) == Sign::negative);
+}

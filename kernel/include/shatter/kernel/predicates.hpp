@@ -4,7 +4,8 @@
 // Every function here returns the sign of a polynomial in its double inputs as if
 // it were evaluated in real arithmetic. Each first evaluates in floating point and
 // compares the result against a proven error bound; only when the bound cannot
-// certify the sign does it recompute with GMP rationals. Zero is a real answer.
+// certify the sign does it recompute exactly (orient3d on double expansions, the
+// others with GMP rationals). Zero is a real answer.
 
 #include <cstdint>
 
@@ -20,12 +21,30 @@ Sign side_of_plane(const Plane& plane, Vec3 p);
 /// triangle turns counter-clockwise. Preconditions: finite inputs. Exact.
 Sign orient2d(Vec2 a, Vec2 b, Vec2 c);
 
+/// Sign of the orientation of the tetrahedron (a, b, c, d): positive when d lies
+/// on the side of the plane through a, b, c that (b - a) x (c - a) points to, zero
+/// when the four points are coplanar (CGAL's orientation(a, b, c, d); the opposite
+/// of the sign Shewchuk's orient3d returns).
+/// Preconditions: finite inputs.
+/// Guarantees: the exact sign of det[b - a, c - a, d - a] over the reals, for every
+/// finite input. A floating-point filter decides most queries; where it cannot
+/// (nearly or exactly coplanar points), the determinant is evaluated exactly in
+/// double-expansion arithmetic, with no allocation. Only inputs outside the range
+/// where that arithmetic is exact (some coordinate of magnitude 2^300 or more, or
+/// nonzero and below 2^-300) go to GMP rationals; the counters below say how often.
+/// Failure: none (NaN or infinite input is outside the precondition).
+Sign orient3d(Vec3 a, Vec3 b, Vec3 c, Vec3 d);
+
 /// Counters of how often the floating-point filters had to fall back to exact
 /// arithmetic; per thread, so readers need no locking. Used by the predicate
 /// audit and the benchmarks.
 struct PredicateCounters {
   std::uint64_t side_of_plane_calls = 0;
   std::uint64_t side_of_plane_exact = 0;
+  std::uint64_t orient3d_calls = 0;
+  std::uint64_t orient3d_expansion = 0;  ///< the filter deferred to expansion arithmetic
+  std::uint64_t orient3d_full = 0;       ///< of those, the adaptive stages did not decide either
+  std::uint64_t orient3d_gmp = 0;        ///< outside the expansions' exact range: GMP
 };
 PredicateCounters& predicate_counters();
 
