@@ -549,46 +549,23 @@ bool projections_apart(const std::vector<Vec3>& positions, const Triangle& a, co
   return separates(pa, a, turn_a, pb, b) || separates(pb, b, turn_b, pa, a);
 }
 
-// The sign of orient3d(a, b, c, d) when floating point certifies it, else zero
-// (unknown). Shewchuk's static bound for orient3d ("Adaptive Precision
-// Floating-Point Arithmetic and Fast Robust Geometric Predicates", 1997, errbound
-// A = (7 + 56 eps) eps with eps = 2^-53) on the permanent of the differences;
-// underflow and overflow fail the comparison or are excluded by the magnitude
-// check, and then the caller decides exactly.
-int orient3d_if_clear(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  const double adx = a.x - d.x, bdx = b.x - d.x, cdx = c.x - d.x;
-  const double ady = a.y - d.y, bdy = b.y - d.y, cdy = c.y - d.y;
-  const double adz = a.z - d.z, bdz = b.z - d.z, cdz = c.z - d.z;
-  const double bdxcdy = bdx * cdy, cdxbdy = cdx * bdy;
-  const double cdxady = cdx * ady, adxcdy = adx * cdy;
-  const double adxbdy = adx * bdy, bdxady = bdx * ady;
-  const double det = adz * (bdxcdy - cdxbdy) + bdz * (cdxady - adxcdy) + cdz * (adxbdy - bdxady);
-  const double permanent = (std::fabs(bdxcdy) + std::fabs(cdxbdy)) * std::fabs(adz) +
-                           (std::fabs(cdxady) + std::fabs(adxcdy)) * std::fabs(bdz) +
-                           (std::fabs(adxbdy) + std::fabs(bdxady)) * std::fabs(cdz);
-  constexpr double eps = 0x1p-53;
-  const double bound = (7.0 + 56.0 * eps) * eps * permanent;
-  if (!(permanent > 0x1p-900) || !(permanent < 0x1p900)) return 0;
-  if (det > bound) return 1;
-  if (-det > bound) return -1;
-  return 0;
-}
-
 // Whether triangle b, but for the corners it shares with a, lies strictly on one
-// side of a's plane (so it meets a at most in their shared corners), as far as
-// floating point certifies: a quick rejection before any exact test.
+// side of a's plane (so it meets a at most in their shared corners): a quick
+// rejection before the costlier tests, exact (the kernel's orient3d, whose filter
+// decides almost every such query; nearly coplanar neighbours go to its
+// double-expansion stages).
 bool strictly_beside(const std::vector<Vec3>& positions, const Triangle& a, const Triangle& b) {
   const Vec3& p = positions[a[0]];
   const Vec3& q = positions[a[1]];
   const Vec3& r = positions[a[2]];
-  int side = 0;
+  Sign side = Sign::zero;
   for (const VertexIndex v : b) {
     if (v == a[0] || v == a[1] || v == a[2]) continue;
-    const int s = orient3d_if_clear(p, q, r, positions[v]);
-    if (s == 0 || (side != 0 && s != side)) return false;
+    const Sign s = orient3d(p, q, r, positions[v]);
+    if (s == Sign::zero || (side != Sign::zero && s != side)) return false;
     side = s;
   }
-  return side != 0;
+  return side != Sign::zero;
 }
 
 // Whether two triangles of a mesh meet beyond the vertices and edge they share,
