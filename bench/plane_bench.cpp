@@ -476,9 +476,12 @@ struct Timed {
   int runs = 0;
   double seconds = not_measured, cutting = not_measured, hull = not_measured,
          bond = not_measured;
+  // The median of each run's rest (total less the three phases): the phases'
+  // medians come from different runs, so subtracting them could go below zero.
+  double other_seconds = not_measured;
 
   std::size_t internal_nodes() const { return first.nodes - first.leaves; }
-  double other() const { return seconds - cutting - hull - bond; }
+  double other() const { return other_seconds; }
 };
 
 Timed time_build(const shatter::Mesh& mesh, std::uint32_t fragments, std::uint64_t seed, const Repeat& repeat,
@@ -488,7 +491,7 @@ Timed time_build(const shatter::Mesh& mesh, std::uint32_t fragments, std::uint64
   recipe.seed = seed;
   recipe.strategy = shatter::Strategy::thesis;
   Timed timed;
-  std::vector<double> total, cutting, hull, bond;
+  std::vector<double> total, cutting, hull, bond, other;
   double sum = 0;
   for (int run = 0; run < repeat.max_runs; ++run) {
     BuildRun r = run_build(mesh, recipe, run == 0 ? first_tasks : ChildTasks{});
@@ -501,6 +504,7 @@ Timed time_build(const shatter::Mesh& mesh, std::uint32_t fragments, std::uint64
     cutting.push_back(r.report.cutting_seconds);
     hull.push_back(r.report.hull_seconds);
     bond.push_back(r.report.bond_seconds);
+    other.push_back(r.seconds - r.report.cutting_seconds - r.report.hull_seconds - r.report.bond_seconds);
     sum += r.seconds;
     if (run == 0) timed.first = std::move(r);
     if (run < 3) std::cerr << " " << seconds_text(total.back()) << std::flush;
@@ -514,6 +518,7 @@ Timed time_build(const shatter::Mesh& mesh, std::uint32_t fragments, std::uint64
   timed.cutting = median_of(cutting);
   timed.hull = median_of(hull);
   timed.bond = median_of(bond);
+  timed.other_seconds = median_of(other);
   return timed;
 }
 
