@@ -845,7 +845,7 @@ EndToEnd time_fracture_command(const Options& o, const fs::path& off, std::uint3
                                 std::to_string(fragments), "--seed", std::to_string(o.seed), "--threads",
                                 "1",                        "--out",  out.string()};
   std::vector<double> times;
-  double total = 0;
+  double total = 0, peak_mb = 0;
   while (static_cast<int>(times.size()) < repeat.max_runs) {
     const auto started = Clock::now();
     const pid_t pid = fork_flushed();
@@ -875,7 +875,7 @@ EndToEnd time_fracture_command(const Options& o, const fs::path& off, std::uint3
       fs::remove(out, ignored);
       return result;
     }
-    result.peak_mb = std::max(std::isnan(result.peak_mb) ? 0.0 : result.peak_mb, static_cast<double>(usage.ru_maxrss) / 1024.0);
+    peak_mb = std::max(peak_mb, static_cast<double>(usage.ru_maxrss) / 1024.0);
     std::error_code size_error;
     result.file_bytes = fs::file_size(out, size_error);
     times.push_back(seconds);
@@ -886,6 +886,7 @@ EndToEnd time_fracture_command(const Options& o, const fs::path& off, std::uint3
   std::error_code ignored;
   fs::remove(out, ignored);
   result.ok = true;
+  result.peak_mb = peak_mb;
   result.runs = static_cast<int>(times.size());
   result.seconds = median_of(times);
   return result;

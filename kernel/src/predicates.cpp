@@ -375,6 +375,14 @@ Sign orient3d(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
   return s > 0 ? Sign::negative : s < 0 ? Sign::positive : Sign::zero;
 }
 
+std::optional<Sign> orient3d_if_clear(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
+  if (!(below_largest(a) && below_largest(b) && below_largest(c) && below_largest(d))) return std::nullopt;
+  double permanent = 0;
+  const int s = orient3d_filter(a, b, c, d, permanent);
+  if (s == 0) return std::nullopt;
+  return s > 0 ? Sign::negative : Sign::positive;  // Shewchuk's sign, flipped as in orient3d
+}
+
 Sign orient2d(Vec2 a, Vec2 b, Vec2 c) {
   using Point = CGAL::Epick::Point_2;
   // CGAL's Epick orientation is exact for double input (static filter, then

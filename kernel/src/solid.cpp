@@ -60,17 +60,16 @@ Solid solid_from_mesh(const Mesh& mesh, bool merge_coplanar, InputGeometry& geom
       if (other < t || (other == t && opposite < h)) continue;
       const VertexIndex u = tri[c], v = tri[(c + 1) % 3], a = tri[(c + 2) % 3];
       const VertexIndex b = mesh.triangles[other][(opposite % 3 + 2) % 3];
-      const EpickPoint pu = epick(mesh.positions[u]), pv = epick(mesh.positions[v]), pa = epick(mesh.positions[a]),
-                       pb = epick(mesh.positions[b]);
-      const CGAL::Orientation turn = CGAL::orientation(pu, pv, pa, pb);
+      const Sign turn = orient3d(mesh.positions[u], mesh.positions[v], mesh.positions[a], mesh.positions[b]);
       // Positive: b is on the side triangle (u, v, a) faces, outward.
-      reflex_edge = reflex_edge || turn == CGAL::POSITIVE;
+      reflex_edge = reflex_edge || turn == Sign::positive;
       if (shells.unite(t, other)) --shell_count;
-      if (turn != CGAL::COPLANAR) continue;
+      if (turn != Sign::zero) continue;
       coplanar_at[h] = coplanar_at[opposite] = 1;
       // Coplanar and continuing each other (a and b on opposite sides of the edge).
       if (merge_coplanar && mesh.surfaces[t] == mesh.surfaces[other] &&
-          CGAL::coplanar_orientation(pu, pv, pa, pb) == CGAL::NEGATIVE) {
+          CGAL::coplanar_orientation(epick(mesh.positions[u]), epick(mesh.positions[v]), epick(mesh.positions[a]),
+                                     epick(mesh.positions[b])) == CGAL::NEGATIVE) {
         groups.unite(t, other);
       }
     }

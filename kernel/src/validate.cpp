@@ -71,6 +71,14 @@ void append(ValidationReport& report, DefectKind kind, Tally&& tally) {
 
 bool triangles_intersect(const std::vector<Vec3>& positions, const Triangle& a, const Triangle& b);
 
+// The self-intersection defect for `pairs` (sorted), none when there is no pair.
+void append_self_intersections(ValidationReport& report, const std::vector<std::pair<std::size_t, std::size_t>>& pairs) {
+  if (pairs.empty()) return;
+  report.defects.push_back({DefectKind::self_intersection, pairs.size(),
+                            "triangles " + std::to_string(pairs.front().first) + " and " +
+                                std::to_string(pairs.front().second)});
+}
+
 using TriangleBox = CGAL::Box_intersection_d::Box_with_handle_d<double, 3, std::size_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
 
 TriangleBox box_of(const std::vector<Vec3>& positions, const Triangle& tri, std::size_t handle) {
@@ -284,13 +292,8 @@ ValidationReport validate_sound_topology(const Mesh& mesh, const ValidationOptio
   append(report, DefectKind::zero_area_triangle, std::move(zero_area));
   if (signed_volume_sign(mesh) == Sign::negative) report.defects.push_back({DefectKind::inward_orientation, 1, "whole mesh"});
   if (options.check_self_intersections && flat_free) {
-    const auto pairs = intersecting_pairs(mesh.positions, mesh.triangles);
+    append_self_intersections(report, intersecting_pairs(mesh.positions, mesh.triangles));
     report.self_intersections_checked = true;
-    if (!pairs.empty()) {
-      report.defects.push_back({DefectKind::self_intersection, pairs.size(),
-                                "triangles " + std::to_string(pairs.front().first) + " and " +
-                                    std::to_string(pairs.front().second)});
-    }
   }
   return report;
 }
@@ -486,13 +489,8 @@ ValidationReport validate_masked(const Mesh& mesh, const ValidationOptions& opti
         }
       }
     }
-    const auto pairs = intersecting_pairs(positions, triangles);
+    append_self_intersections(report, intersecting_pairs(positions, triangles));
     report.self_intersections_checked = true;
-    if (!pairs.empty()) {
-      const auto [a, b] = pairs.front();
-      report.defects.push_back({DefectKind::self_intersection, pairs.size(),
-                                "triangles " + std::to_string(a) + " and " + std::to_string(b)});
-    }
   }
   return report;
 }
@@ -550,10 +548,11 @@ bool projections_apart(const std::vector<Vec3>& positions, const Triangle& a, co
 }
 
 // Whether triangle b, but for the corners it shares with a, lies strictly on one
-// side of a's plane (so it meets a at most in their shared corners): a quick
-// rejection before the costlier tests, exact (the kernel's orient3d, whose filter
-// decides almost every such query; nearly coplanar neighbours go to its
-// double-expansion stages).
+// side of a's plane (so it meets a at most in their shared corners), as far as
+// orient3d's filter certifies: a quick rejection. Undecided queries (mostly
+// exactly coplanar neighbours of one face) go on to projections_apart, which
+// settles them more cheaply than orient3d's expansion stages would (asking
+// orient3d here made fandisk x4 -> 256's cutting 40 % slower).
 bool strictly_beside(const std::vector<Vec3>& positions, const Triangle& a, const Triangle& b) {
   const Vec3& p = positions[a[0]];
   const Vec3& q = positions[a[1]];
@@ -561,9 +560,9 @@ bool strictly_beside(const std::vector<Vec3>& positions, const Triangle& a, cons
   Sign side = Sign::zero;
   for (const VertexIndex v : b) {
     if (v == a[0] || v == a[1] || v == a[2]) continue;
-    const Sign s = orient3d(p, q, r, positions[v]);
-    if (s == Sign::zero || (side != Sign::zero && s != side)) return false;
-    side = s;
+    const std::optional<Sign> s = orient3d_if_clear(p, q, r, positions[v]);
+    if (!s || (side != Sign::zero && *s != side)) return false;
+    side = *s;
   }
   return side != Sign::zero;
 }
@@ -572,8 +571,8 @@ bool strictly_beside(const std::vector<Vec3>& positions, const Triangle& a, cons
 // exactly (the test of CGAL's self_intersections, on a triangle soup): sharing an
 // edge, only when coplanar and on one side of it; sharing a vertex, when the edge
 // of either opposite the vertex meets the other; otherwise, when they meet. Tried
-// first, cheapest first: one triangle strictly beside the other's plane (filtered
-// orient3d), then their projections apart along the axis of a's largest normal
+// first, cheapest first: one triangle strictly beside the other's plane (the
+// filter of the kernel's orient3d), then their projections apart along the axis of a's largest normal
 // component (exact 2D orientations, which settle nearly coplanar neighbours).
 bool triangles_intersect(const std::vector<Vec3>& positions, const Triangle& a, const Triangle& b) {
   using K = CGAL::Epick;
@@ -673,8 +672,7 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
   without.check_self_intersections = false;
   ValidationReport report = validate_masked(mesh, without, &is_new);
   if (!report.valid()) return report;
-  using Box = TriangleBox;
-  std::vector<Box> all, fresh;
+  std::vector<TriangleBox> all, fresh;
   all.reserve(mesh.triangles.size());
   // With a plane the new triangles lie along, only triangles within the slab the
   // new ones span can meet them: each triangle's range of n·p + d, in doubles
@@ -709,29 +707,23 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
   }
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     if (near && !is_new[t] && (range[t][1] < fresh_lo || range[t][0] > fresh_hi)) continue;
-    const Box box = box_of(mesh.positions, mesh.triangles[t], t);
+    const TriangleBox box = box_of(mesh.positions, mesh.triangles[t], t);
     all.push_back(box);
     if (is_new[t]) fresh.push_back(box);
   }
   report.self_intersections_checked = true;
   if (fresh.empty()) return report;
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
-  std::vector<std::uint8_t> is_fresh(mesh.triangles.size(), 0);
-  for (const Box& b : fresh) is_fresh[b.handle()] = 1;
   CGAL::box_intersection_d(
       fresh.begin(), fresh.end(), all.begin(), all.end(),
-      [&](const Box& a, const Box& b) {
+      [&](const TriangleBox& a, const TriangleBox& b) {
         const std::size_t i = a.handle(), j = b.handle();
-        if (i == j || (is_fresh[j] && j < i)) return;  // each fresh pair once
+        if (i == j || (is_new[j] && j < i)) return;  // each pair of new triangles once
         if (triangles_intersect(mesh.positions, mesh.triangles[i], mesh.triangles[j])) pairs.emplace_back(std::min(i, j), std::max(i, j));
       },
       std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
-  if (!pairs.empty()) {
-    std::sort(pairs.begin(), pairs.end());
-    report.defects.push_back({DefectKind::self_intersection, pairs.size(),
-                              "triangles " + std::to_string(pairs.front().first) + " and " +
-                                  std::to_string(pairs.front().second)});
-  }
+  std::sort(pairs.begin(), pairs.end());
+  append_self_intersections(report, pairs);
   return report;
 }
 

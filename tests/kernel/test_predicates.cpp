@@ -6,6 +6,7 @@
 #include <gmpxx.h>
 
 #include <cmath>
+#include <optional>
 
 #include "shatter/generators/random.hpp"
 #include "shatter/kernel/exact.hpp"
@@ -114,6 +115,10 @@ void require_orient3d(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
   REQUIRE(orient3d(b, a, c, d) == flip(expected));
   REQUIRE(orient3d(d, b, c, a) == flip(expected));
   REQUIRE(orient3d(b, c, d, a) == flip(expected));
+  // The filter alone: right whenever it answers, and silent on coplanar points.
+  const std::optional<Sign> quick = orient3d_if_clear(a, b, c, d);
+  if (quick) REQUIRE(*quick == expected);
+  if (expected == Sign::zero) REQUIRE_FALSE(quick.has_value());
 }
 
 Vec3 ulps_away(Vec3 p, int kx, int ky, int kz) { return {ulps_away(p.x, kx), ulps_away(p.y, ky), ulps_away(p.z, kz)}; }
@@ -167,6 +172,26 @@ TEST_CASE("orient3d agrees with exact rationals on random, nearly coplanar and c
   CHECK(counters.orient3d_expansion >= 4 * coplanar);
   CHECK(counters.orient3d_gmp == 0);
   CHECK(counters.orient3d_full * 100 < counters.orient3d_expansion);
+}
+
+TEST_CASE("orient3d_if_clear answers points in general position, and only what the filter proves") {
+  std::size_t answered = 0, queries = 0;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    Random random(seed);
+    for (int i = 0; i < 500; ++i) {
+      const auto point = [&] { return random.direction() * random.uniform(0.1, 10); };
+      const Vec3 a = point(), b = point(), c = point(), d = point();
+      ++queries;
+      if (const std::optional<Sign> quick = orient3d_if_clear(a, b, c, d)) {
+        ++answered;
+        REQUIRE(*quick == reference_orient3d(a, b, c, d));
+      }
+    }
+  }
+  CHECK(answered * 100 >= queries * 99);
+  // Beyond its range (2^300) it never answers: orient3d takes GMP there.
+  const double huge = std::ldexp(1.0, 400);
+  CHECK_FALSE(orient3d_if_clear({huge, 0, 0}, {0, huge, 0}, {0, 0, huge}, {0, 0, 0}).has_value());
 }
 
 TEST_CASE("orient3d is exact at huge and tiny magnitudes, and says when it needs GMP") {

@@ -8,6 +8,7 @@
 // others with GMP rationals). Zero is a real answer.
 
 #include <cstdint>
+#include <optional>
 
 #include "shatter/kernel/vec.hpp"
 
@@ -34,6 +35,13 @@ Sign orient2d(Vec2 a, Vec2 b, Vec2 c);
 /// nonzero and below 2^-300) go to GMP rationals; the counters below say how often.
 /// Failure: none (NaN or infinite input is outside the precondition).
 Sign orient3d(Vec3 a, Vec3 b, Vec3 c, Vec3 d);
+
+/// orient3d's floating-point filter alone: its sign when the filter certifies it,
+/// nullopt when it cannot (nearly or exactly coplanar points, or coordinates of
+/// magnitude 2^300 or more). For a quick rejection that has a cheaper exact test
+/// behind it than orient3d's expansion stages (exactly coplanar neighbours in a
+/// self-intersection test). Preconditions: finite inputs. Failure: none.
+std::optional<Sign> orient3d_if_clear(Vec3 a, Vec3 b, Vec3 c, Vec3 d);
 
 /// Counters of how often the floating-point filters had to fall back to exact
 /// arithmetic; per thread, so readers need no locking. Used by the predicate
