@@ -9,12 +9,15 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <initializer_list>
 #include <memory>
 #include <string>
 #include <system_error>
+#include <utility>
 
 #include "io_internal.hpp"
+#include "shatter/kernel/atomic_file.hpp"
 #include "shatter/kernel/error.hpp"
 
 namespace shatter {
@@ -66,27 +69,48 @@ std::string read_file(const std::filesystem::path& path) {
   return bytes;
 }
 
-/// Writes all of `bytes` to a new file; returns 0, or the errno of the failure
-/// after removing whatever it created. O_EXCL makes sure the name is ours, so
-/// the removal can never delete someone else's file.
-int write_new_file(const std::filesystem::path& path, std::string_view bytes) {
-  const int descriptor = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-  if (descriptor < 0) return errno;
-  int error = 0;
-  while (!bytes.empty()) {
-    const ssize_t written = ::write(descriptor, bytes.data(), bytes.size());
-    if (written < 0 && errno == EINTR) continue;
-    if (written < 0) {
-      error = errno;
-      break;
-    }
-    bytes.remove_prefix(static_cast<std::size_t>(written));
+/// A new file open for writing, closed (and, unless released, removed) on
+/// destruction.
+class NewFile {
+ public:
+  /// Creates `path`, which must not exist; `error` gets errno on failure.
+  NewFile(std::filesystem::path path, int& error)
+      : path_(std::move(path)), descriptor_(::open(path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666)) {
+    error = descriptor_ < 0 ? errno : 0;
   }
-  // close() can report a deferred write failure (NFS, full disk).
-  if (::close(descriptor) != 0 && error == 0) error = errno;
-  if (error != 0) ::unlink(path.c_str());
-  return error;
-}
+  ~NewFile() {
+    if (descriptor_ >= 0) ::close(descriptor_);
+    if (!kept_ && created_) ::unlink(path_.c_str());
+  }
+  NewFile(const NewFile&) = delete;
+  NewFile& operator=(const NewFile&) = delete;
+
+  /// Appends all of `bytes`; returns 0 or errno.
+  int write(std::string_view bytes) {
+    while (!bytes.empty()) {
+      const ssize_t written = ::write(descriptor_, bytes.data(), bytes.size());
+      if (written < 0 && errno == EINTR) continue;
+      if (written < 0) return errno;
+      bytes.remove_prefix(static_cast<std::size_t>(written));
+    }
+    return 0;
+  }
+  /// Closes the file; returns 0 or errno (close() can report a deferred write
+  /// failure: NFS, a full disk).
+  int close() {
+    const int result = ::close(descriptor_);
+    descriptor_ = -1;
+    return result == 0 ? 0 : errno;
+  }
+  /// The file stays when this is destroyed.
+  void keep() { kept_ = true; }
+
+ private:
+  std::filesystem::path path_;
+  int descriptor_;
+  bool created_ = descriptor_ >= 0;
+  bool kept_ = false;
+};
 
 }  // namespace
 
@@ -164,22 +188,27 @@ void write_mesh(const Mesh& mesh, const std::filesystem::path& path, MeshFormat 
 }
 
 void write_file_atomically(const std::filesystem::path& path, std::string_view bytes) {
+  write_file_atomically_in_pieces(path, [&](const ByteSink& sink) { sink(bytes); });
+}
+
+void write_file_atomically_in_pieces(const std::filesystem::path& path, const std::function<void(const ByteSink&)>& produce) {
   // The temporary sits beside the target so the rename stays on one file system
   // (and so is atomic); pid and counter keep concurrent writers apart.
   static std::atomic<unsigned long> counter{0};
   std::filesystem::path temporary = path;
   temporary += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
 
-  if (const int error = write_new_file(temporary, bytes); error != 0) {
-    throw IoError(describe_errno(path, "write", error));
-  }
+  int error = 0;
+  NewFile file(temporary, error);
+  if (error != 0) throw IoError(describe_errno(path, "write", error));
+  produce([&](std::string_view piece) {
+    if (const int write_error = file.write(piece); write_error != 0) throw IoError(describe_errno(path, "write", write_error));
+  });
+  if (const int close_error = file.close(); close_error != 0) throw IoError(describe_errno(path, "write", close_error));
   std::error_code rename_error;
   std::filesystem::rename(temporary, path, rename_error);
-  if (rename_error) {
-    std::error_code ignored;
-    std::filesystem::remove(temporary, ignored);
-    throw IoError("cannot write " + path.string() + ": " + rename_error.message());
-  }
+  if (rename_error) throw IoError("cannot write " + path.string() + ": " + rename_error.message());
+  file.keep();
 }
 
 }  // namespace shatter

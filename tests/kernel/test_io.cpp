@@ -15,11 +15,13 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "shatter/generators/corpus.hpp"
+#include "shatter/kernel/atomic_file.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "support/binary.hpp"
@@ -605,6 +607,44 @@ TEST_CASE("files are written atomically and failures leave nothing behind", "[io
   REQUIRE_THROWS_AS(write_mesh(cube, occupied, MeshFormat::off), IoError);
   REQUIRE(scratch.entries().size() == all_formats.size() + 1);
   for (const auto& entry : scratch.entries()) REQUIRE(entry.filename().string().find(".tmp-") == std::string::npos);
+}
+
+TEST_CASE("a file written in pieces is their concatenation, or nothing", "[io][files]") {
+  const ScratchDirectory scratch;
+  const auto path = scratch.path / "pieces.bin";
+  const auto bytes_of = [](const std::filesystem::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  // Pieces of every size, empty ones and one larger than a write() may take at once.
+  std::vector<std::string> pieces = {"", "a", std::string(3, '\0'), std::string(1 << 22, 'x'), "", "end"};
+  std::string whole;
+  for (const std::string& piece : pieces) whole += piece;
+  write_file_atomically_in_pieces(path, [&](const ByteSink& sink) {
+    for (const std::string& piece : pieces) sink(piece);
+  });
+  CHECK(bytes_of(path) == whole);
+
+  // A producer that fails part-way leaves the old file as it was, and no temporary.
+  struct Interrupted {};
+  CHECK_THROWS_AS(write_file_atomically_in_pieces(path,
+                                                  [](const ByteSink& sink) {
+                                                    sink("half of a new file");
+                                                    throw Interrupted{};
+                                                  }),
+                  Interrupted);
+  CHECK(bytes_of(path) == whole);
+  // So does a rename that fails after every piece was written.
+  const auto occupied = scratch.path / "occupied";
+  std::filesystem::create_directories(occupied / "inside");
+  CHECK_THROWS_AS(write_file_atomically_in_pieces(occupied, [](const ByteSink& sink) { sink("x"); }), IoError);
+  CHECK(scratch.entries().size() == 2);
+  for (const auto& entry : scratch.entries()) CHECK(entry.filename().string().find(".tmp-") == std::string::npos);
+  // And a folder that is not there fails before any piece is asked for.
+  bool asked = false;
+  CHECK_THROWS_WITH(write_file_atomically_in_pieces(scratch.path / "missing" / "f", [&](const ByteSink&) { asked = true; }),
+                    Catch::Contains("cannot write " + (scratch.path / "missing" / "f").string()));
+  CHECK(!asked);
 }
 
 TEST_CASE("reading names the file on failure", "[io][files]") {
