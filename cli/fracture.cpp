@@ -337,7 +337,7 @@ int run_fracture(const FractureArgs& args) {
                                              *outcome.export_format, file_naming_for(leaves));
   }
   if (const fs::path folder = fs::path(args.out).parent_path(); !folder.empty()) output.create_folder(folder);
-  output.write_file(args.out, encode_shatter(tree));
+  output.write_file_in_pieces(args.out, [&](const ByteSink& sink) { write_shatter(tree, sink); });
   output.commit();
 
   const TreeStats stats = tree_stats(tree);

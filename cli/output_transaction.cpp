@@ -38,6 +38,11 @@ void OutputTransaction::write_file(const fs::path& path, std::string_view bytes)
   files_.push_back(path);
 }
 
+void OutputTransaction::write_file_in_pieces(const fs::path& path, const std::function<void(const ByteSink&)>& produce) {
+  write_file_atomically_in_pieces(path, produce);
+  files_.push_back(path);
+}
+
 void OutputTransaction::write_mesh(const fs::path& path, const Mesh& mesh, MeshFormat format) {
   write_file(path, write_mesh_to_bytes(mesh, format));
 }

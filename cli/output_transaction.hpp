@@ -2,9 +2,11 @@
 // "All files or none": the one way every shatter command writes its outputs.
 
 #include <filesystem>
+#include <functional>
 #include <string_view>
 #include <vector>
 
+#include "shatter/kernel/atomic_file.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mesh.hpp"
 
@@ -41,6 +43,12 @@ class OutputTransaction {
   /// Writes `bytes` to `path` atomically and remembers it. The folder must
   /// exist. Throws IoError naming `path` (which is then as it was).
   void write_file(const std::filesystem::path& path, std::string_view bytes);
+
+  /// Writes to `path` atomically what `produce` hands its sink, piece by piece
+  /// (write_file_atomically_in_pieces: a large file is never held whole), and
+  /// remembers it. Throws IoError naming `path`, or what `produce` throws; either
+  /// way `path` is as it was.
+  void write_file_in_pieces(const std::filesystem::path& path, const std::function<void(const ByteSink&)>& produce);
 
   /// write_file of write_mesh_to_bytes(mesh, format): the bytes write_mesh writes.
   void write_mesh(const std::filesystem::path& path, const Mesh& mesh, MeshFormat format);

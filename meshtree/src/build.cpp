@@ -36,18 +36,11 @@ namespace {
 // threads drew. Only +, *, / and sqrt touch the draws (all correctly rounded in
 // IEEE arithmetic), never a library transcendental, so every machine agrees.
 
-std::uint64_t splitmix(std::uint64_t& state) {
-  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
 class NodeRandom {
  public:
   explicit NodeRandom(std::uint64_t seed) : state_(seed) {}
   /// Uniform in [-1, 1).
-  double symmetric() { return static_cast<double>(splitmix(state_) >> 11) * 0x1p-52 - 1.0; }
+  double symmetric() { return static_cast<double>(splitmix64(state_) >> 11) * 0x1p-52 - 1.0; }
   /// A unit direction uniform on the sphere (rejection from the cube).
   Vec3 direction() {
     for (;;) {
@@ -60,16 +53,6 @@ class NodeRandom {
  private:
   std::uint64_t state_;
 };
-
-std::uint64_t root_seed(std::uint64_t seed) {
-  std::uint64_t state = seed;
-  return splitmix(state);
-}
-
-std::uint64_t child_seed(std::uint64_t parent_seed, std::size_t child) {
-  std::uint64_t state = parent_seed ^ (0xD1B54A32D192ED03ull * (child + 1));
-  return splitmix(state);
-}
 
 // --- planes -------------------------------------------------------------------
 
@@ -150,7 +133,7 @@ class Builder {
     node->solid = plane_input_->solid;
     node->mesh = mesh;  // the root is the input as given (validated on the way in)
     node->mass = mass_properties(node->mesh);
-    node->seed = root_seed(recipe_.seed);
+    node->seed = root_node_seed(recipe_.seed);
     return node;
   }
 
@@ -208,7 +191,7 @@ class Builder {
         child->parent = &node;
         child->above_parent_plane = piece.above;
         child->depth = node.depth + 1;
-        child->seed = child_seed(node.seed, node.children.size());
+        child->seed = child_node_seed(node.seed, node.children.size());
         node.children.push_back(std::move(child));
       }
       node.plane = path.back();

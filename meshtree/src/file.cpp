@@ -21,6 +21,7 @@
 #include <utility>
 #include <vector>
 
+#include "shatter/kernel/atomic_file.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/io.hpp"
@@ -28,6 +29,7 @@
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/tree.hpp"
 #include "shatter/meshtree/validate_tree.hpp"
+#include "file_layout.hpp"
 #include "tree_checks.hpp"
 
 namespace shatter {
@@ -39,328 +41,11 @@ using detail::last_kernel;
 using detail::last_point_kind;
 using detail::last_strategy;
 using detail::leaves_in_order;
+using namespace file_layout;
 
-// ---------------------------------------------------------------------------
-// Constants of the layout
-
-using Tag = std::array<char, 4>;
-
-constexpr std::array<unsigned char, 8> magic = {0x89, 'S', 'H', 'T', 0x0D, 0x0A, 0x1A, 0x0A};
-constexpr std::size_t file_header_size = 12;     // magic, u32 version
-constexpr std::size_t section_header_size = 16;  // tag, u64 length, u32 crc
-
-constexpr Tag recipe_tag = {'O', 'P', 'T', 'S'};
-constexpr Tag nodes_tag = {'N', 'O', 'D', 'E'};
-constexpr Tag meshes_tag = {'M', 'E', 'S', 'H'};
-constexpr Tag hulls_tag = {'H', 'U', 'L', 'L'};
-constexpr Tag bonds_tag = {'B', 'O', 'N', 'D'};
-constexpr Tag geometry_tag = {'G', 'E', 'O', 'M'};  // version 2
-constexpr Tag solids_tag = {'S', 'O', 'L', 'D'};    // version 2
-constexpr Tag end_tag = {'E', 'N', 'D', ' '};
-// Optional by the tag rule (lower-case first letter): readers that predate it skip it.
-constexpr Tag version_tag = {'v', 'e', 'r', 's'};
-
-// Bytes on disk, the least each record can take: counts are checked against these
-// before anything is allocated, which bounds memory by a multiple of the input.
-constexpr std::size_t recipe_size = 27;
-constexpr std::size_t node_record_min_size = 165;  // without its children
-constexpr std::size_t child_size = 4;
-constexpr std::size_t mesh_record_min_size = 9;
-constexpr std::size_t vertex_size = 24;
-constexpr std::size_t triangle_size = 16;  // three indices and the surface id
-constexpr std::size_t normal_size = 24;
-constexpr std::size_t uv_size = 16;
-constexpr std::size_t tangent_size = 32;
-constexpr std::size_t bond_size = 68;
-constexpr std::size_t geometry_header_size = 8;  // point count, input plane count
-constexpr std::size_t point_size = 24;
-constexpr std::size_t input_plane_size = 12;
-constexpr std::size_t solid_record_min_size = 17;  // flags and four counts
-constexpr std::size_t point_def_size = 13;
-constexpr std::size_t face_size = 17;
-constexpr std::size_t loop_size = 4;
-constexpr std::size_t corner_min_size = 9;  // without its segment
-constexpr std::size_t segment_size = 8;
-constexpr std::size_t max_version_text_size = 64;
-
-// SOLD flag bits: per node, and per face.
-constexpr std::uint8_t node_convex_bit = 1;
-constexpr std::uint8_t solid_convex_bit = 2;
-constexpr std::uint8_t face_reversed_bit = 1;
-constexpr std::uint8_t face_convex_bit = 2;
-
-constexpr std::uint8_t normals_bit = 1;
-constexpr std::uint8_t uvs_bit = 2;
-constexpr std::uint8_t tangents_bit = 4;
-constexpr std::uint8_t known_channel_bits = normals_bit | uvs_bit | tangents_bit;
-
-// ---------------------------------------------------------------------------
-// Small helpers
-
-std::uint32_t crc_of(std::string_view bytes) {
-  uLong crc = crc32(0L, Z_NULL, 0);
-  // zlib takes a 32-bit length; feed larger payloads in pieces.
-  constexpr std::size_t piece = std::size_t{1} << 30;
-  while (!bytes.empty()) {
-    const std::size_t length = std::min(bytes.size(), piece);
-    crc = crc32(crc, reinterpret_cast<const Bytef*>(bytes.data()), static_cast<uInt>(length));
-    bytes.remove_prefix(length);
-  }
-  return static_cast<std::uint32_t>(crc);
-}
-
-/// What is wrong with a `vers` payload (file.hpp: 1 to 64 bytes of printable
-/// ASCII, no space), or nullopt. Kept that narrow so it prints as one clean word.
-std::optional<std::string> version_text_problem(std::string_view text) {
-  if (text.empty()) return "the version is empty";
-  if (text.size() > max_version_text_size) {
-    return "the version is " + std::to_string(text.size()) + " bytes long (at most " + std::to_string(max_version_text_size) + ")";
-  }
-  for (std::size_t k = 0; k < text.size(); ++k) {
-    const auto c = static_cast<unsigned char>(text[k]);
-    if (c < 0x21 || c > 0x7E) return "byte " + std::to_string(k) + " of the version is " + hex(c, 2) + " (printable ASCII without spaces only)";
-  }
-  return std::nullopt;
-}
-
-/// A tag as it can be printed in a one-line message: printable ASCII as is,
-/// anything else (damage, usually) as \xNN.
-std::string tag_text(Tag tag) {
-  std::string text;
-  for (const char c : tag) {
-    const auto byte = static_cast<unsigned char>(c);
-    if (byte >= 0x20 && byte < 0x7F && byte != '\\') {
-      text += c;
-    } else {
-      text += "\\x" + hex(byte, 2).substr(2);
-    }
-  }
-  return text;
-}
-
-/// The name of a section in messages: "END" rather than "END ".
-std::string section_name(Tag tag) { return tag == end_tag ? std::string("END") : tag_text(tag); }
-
-std::string str(std::uint64_t value) { return std::to_string(value); }
-
-[[noreturn]] void refuse(const std::string& message) { throw CorruptFileError(message); }
-
-// ---------------------------------------------------------------------------
-// Encoding
-
-class ByteWriter {
- public:
-  void u8(std::uint8_t value) { bytes_.push_back(static_cast<char>(value)); }
-  void u32(std::uint32_t value) { little_endian(value); }
-  void u64(std::uint64_t value) { little_endian(value); }
-  /// A count the validator has already checked to fit 32 bits.
-  void count32(std::size_t value) { u32(static_cast<std::uint32_t>(value)); }
-  void f64(double value) { u64(std::bit_cast<std::uint64_t>(value)); }
-  void vec2(Vec2 v) {
-    f64(v.x);
-    f64(v.y);
-  }
-  void vec3(Vec3 v) {
-    f64(v.x);
-    f64(v.y);
-    f64(v.z);
-  }
-  void vec4(Vec4 v) {
-    f64(v.x);
-    f64(v.y);
-    f64(v.z);
-    f64(v.w);
-  }
-  void tag(Tag tag) {
-    for (const char c : tag) bytes_.push_back(c);
-  }
-  void append(std::string_view bytes) { bytes_.append(bytes); }
-  void reserve(std::size_t size) { bytes_.reserve(size); }
-
-  std::string take() { return std::move(bytes_); }
-
- private:
-  // The file is little-endian; on a little-endian machine a value's bytes are
-  // copied as they are (one append, not one push_back per byte: the meshes of a
-  // large tree are hundreds of megabytes of these).
-  template <class Unsigned>
-  void little_endian(Unsigned value) {
-    char bytes[sizeof(Unsigned)];
-    if constexpr (std::endian::native == std::endian::little) {
-      std::memcpy(bytes, &value, sizeof bytes);
-    } else {
-      for (std::size_t k = 0; k < sizeof bytes; ++k) bytes[k] = static_cast<char>(value >> (8 * k));
-    }
-    bytes_.append(bytes, sizeof bytes);
-  }
-
-  std::string bytes_;
-};
-
-std::string recipe_payload(const TreeRecipe& recipe) {
-  ByteWriter out;
-  out.u32(recipe.fragments);
-  out.u64(recipe.seed);
-  out.u8(static_cast<std::uint8_t>(recipe.strategy));
-  out.u8(static_cast<std::uint8_t>(recipe.kernel));
-  out.f64(recipe.interior_uv_scale);
-  out.u32(recipe.max_plane_tries);
-  out.u8(recipe.allow_self_intersections ? 1 : 0);
-  return out.take();
-}
-
-/// Each node's record holds its cut plane (MeshTree::cut_planes[k]): the file
-/// has stored it there since version 1, for every kernel.
-std::string nodes_payload(const MeshTree& tree) {
-  ByteWriter out;
-  out.count32(tree.nodes.size());
-  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
-    const MeshTreeNode& node = tree.nodes[k];
-    out.u32(node.parent);
-    out.u32(node.depth);
-    out.u32(node.first_leaf);
-    out.u32(node.leaf_count);
-    out.u64(node.seed);
-    out.u8(node.above_parent_plane ? 1 : 0);
-    out.vec3(tree.cut_planes[k].normal);
-    out.f64(tree.cut_planes[k].offset);
-    out.f64(node.mass.volume);
-    out.vec3(node.mass.centroid);
-    for (const double entry : node.mass.inertia) out.f64(entry);
-    out.count32(node.children.size());
-    for (const NodeIndex child : node.children) out.u32(child);
-  }
-  return out.take();
-}
-
-void write_mesh_record(ByteWriter& out, const Mesh& mesh) {
-  out.count32(mesh.positions.size());
-  out.count32(mesh.triangles.size());
-  out.u8(static_cast<std::uint8_t>((mesh.corners.has_normals() ? normals_bit : 0) | (mesh.corners.has_uvs() ? uvs_bit : 0) |
-                                   (mesh.corners.has_tangents() ? tangents_bit : 0)));
-  for (const Vec3& position : mesh.positions) out.vec3(position);
-  for (const Triangle& triangle : mesh.triangles) {
-    for (const VertexIndex vertex : triangle) out.u32(vertex);
-  }
-  for (const SurfaceId surface : mesh.surfaces) out.u32(surface);
-  for (const Vec3& normal : mesh.corners.normals) out.vec3(normal);
-  for (const Vec2& uv : mesh.corners.uvs) out.vec2(uv);
-  for (const Vec4& tangent : mesh.corners.tangents) out.vec4(tangent);
-}
-
-std::string meshes_payload(const std::vector<MeshTreeNode>& nodes, Mesh MeshTreeNode::*which) {
-  ByteWriter out;
-  out.count32(nodes.size());
-  for (const MeshTreeNode& node : nodes) write_mesh_record(out, node.*which);
-  return out.take();
-}
-
-std::string bonds_payload(const std::vector<Bond>& bonds) {
-  ByteWriter out;
-  out.u64(bonds.size());
-  for (const Bond& bond : bonds) {
-    out.u32(bond.first);
-    out.u32(bond.second);
-    out.u32(bond.cut_node);
-    out.f64(bond.area);
-    out.vec3(bond.centroid);
-    out.vec3(bond.normal);
-  }
-  return out.take();
-}
-
-std::string geometry_payload(const InputGeometry& geometry) {
-  ByteWriter out;
-  out.count32(geometry.points.size());
-  out.count32(geometry.planes.size());
-  for (const Vec3& point : geometry.points) out.vec3(point);
-  for (const auto& plane : geometry.planes) {
-    for (const VertexIndex point : plane) out.u32(point);
-  }
-  return out.take();
-}
-
-/// One record per node when the tree has an exact representation, else none.
-std::string solids_payload(const MeshTree& tree) {
-  ByteWriter out;
-  const bool exact = !tree.geometry.points.empty();
-  out.count32(exact ? tree.nodes.size() : 0);
-  if (!exact) return out.take();
-  for (const MeshTreeNode& node : tree.nodes) {
-    const Solid& solid = node.solid;
-    out.u8(static_cast<std::uint8_t>((node.convex ? node_convex_bit : 0) | (solid.convex ? solid_convex_bit : 0)));
-    out.count32(solid.defs.size());
-    out.count32(solid.faces.size());
-    out.count32(solid.loops.size());
-    out.count32(solid.corners.size());
-    for (const PointDef& def : solid.defs) {
-      out.u8(static_cast<std::uint8_t>(def.kind));
-      // The validator has checked that the fields a kind does not use are zero.
-      if (def.kind == PointKind::three_planes) {
-        for (const PlaneRef plane : def.planes) out.u32(plane.bits);
-      } else {
-        out.u32(def.a);
-        out.u32(def.b);
-        out.u32(def.planes[0].bits);
-      }
-    }
-    for (const SolidFace& face : solid.faces) {
-      out.u32(face.plane.bits);
-      out.u8(static_cast<std::uint8_t>((face.reversed ? face_reversed_bit : 0) | (face.convex ? face_convex_bit : 0)));
-      out.u32(face.surface);
-      out.u32(face.source);
-      out.u32(face.loop_count);
-    }
-    for (const SolidLoop& loop : solid.loops) out.u32(loop.corner_count);
-    for (const SolidCorner& corner : solid.corners) {
-      out.u32(corner.vertex);
-      out.u32(corner.line.other.bits);
-      // The validator has checked that p and q are both none or both points.
-      out.u8(corner.line.is_segment() ? 1 : 0);
-      if (corner.line.is_segment()) {
-        out.u32(corner.line.p);
-        out.u32(corner.line.q);
-      }
-    }
-  }
-  return out.take();
-}
-
-void append_section(ByteWriter& file, Tag tag, std::string_view payload) {
-  file.tag(tag);
-  file.u64(payload.size());
-  file.u32(crc_of(payload));
-  file.append(payload);
-}
 
 // ---------------------------------------------------------------------------
 // Decoding: the section table
-
-std::uint32_t load_u32(std::string_view bytes, std::size_t at) {
-  std::uint32_t value = 0;
-  for (std::size_t k = 0; k < 4; ++k) value |= std::uint32_t{static_cast<unsigned char>(bytes[at + k])} << (8 * k);
-  return value;
-}
-
-std::uint64_t load_u64(std::string_view bytes, std::size_t at) {
-  std::uint64_t value = 0;
-  for (std::size_t k = 0; k < 8; ++k) value |= std::uint64_t{static_cast<unsigned char>(bytes[at + k])} << (8 * k);
-  return value;
-}
-
-struct Section {
-  Tag tag{};
-  std::size_t offset = 0;          ///< of the section header in the file
-  std::size_t payload_offset = 0;  ///< of the payload in the file
-  std::string_view payload;
-};
-
-struct SectionTable {
-  std::uint32_t version = 0;
-  std::optional<Section> recipe, nodes, meshes, hulls, bonds;
-  std::optional<Section> geometry, solids;  // version 2
-  std::optional<Section> shatter_version;   // optional, in any version
-};
 
 /// Checks the magic and returns the version, one this reader knows.
 std::uint32_t check_file_header(std::string_view bytes) {
@@ -456,100 +141,6 @@ SectionTable read_section_table(std::string_view bytes) {
   return table;
 }
 
-// ---------------------------------------------------------------------------
-// Decoding: payloads
-
-/// Reads one section's payload front to back. Every read is bounds-checked, and
-/// every count is checked against the bytes left before anything is sized by it.
-/// Failures name the section, the file offset and the record being read.
-class PayloadReader {
- public:
-  explicit PayloadReader(const Section& section) : payload_(section.payload), payload_offset_(section.payload_offset), tag_(section.tag) {}
-
-  /// The file offset of the next byte.
-  std::size_t offset() const { return payload_offset_ + position_; }
-  std::size_t remaining() const { return payload_.size() - position_; }
-
-  /// Names the record being read in failure messages ("node 3", ...).
-  void set_record(std::string record) { record_ = std::move(record); }
-
-  std::uint8_t u8(const char* field) {
-    need(1, field);
-    return static_cast<std::uint8_t>(payload_[position_++]);
-  }
-  std::uint32_t u32(const char* field) {
-    need(4, field);
-    const std::uint32_t value = load_u32(payload_, position_);
-    position_ += 4;
-    return value;
-  }
-  std::uint64_t u64(const char* field) {
-    need(8, field);
-    const std::uint64_t value = load_u64(payload_, position_);
-    position_ += 8;
-    return value;
-  }
-  double f64(const char* field) { return std::bit_cast<double>(u64(field)); }
-  Vec2 vec2(const char* field) {
-    need(16, field);
-    Vec2 v;
-    v.x = f64(field);
-    v.y = f64(field);
-    return v;
-  }
-  Vec3 vec3(const char* field) {
-    need(24, field);
-    Vec3 v;
-    v.x = f64(field);
-    v.y = f64(field);
-    v.z = f64(field);
-    return v;
-  }
-  Vec4 vec4(const char* field) {
-    need(32, field);
-    Vec4 v;
-    v.x = f64(field);
-    v.y = f64(field);
-    v.z = f64(field);
-    v.w = f64(field);
-    return v;
-  }
-  bool boolean(const char* field) {
-    const std::size_t at = offset();
-    const std::uint8_t value = u8(field);
-    if (value > 1) fail_at(at, std::string(field) + " is " + str(value) + " (must be 0 or 1)");
-    return value == 1;
-  }
-
-  /// Refuses a field of `size` bytes if the payload ends before it.
-  void need(std::size_t size, const char* field) const {
-    if (remaining() < size) fail("the payload ends inside " + std::string(field));
-  }
-
-  /// Refuses `count` records of at least `record_size` bytes each if they
-  /// cannot fit in what is left, before the caller allocates for them.
-  void check_room(std::uint64_t count, std::size_t record_size, const char* what) const {
-    if (count > remaining() / record_size) {
-      fail(str(count) + " " + what + " need at least " + str(record_size) + " bytes each, but only " + str(remaining()) + " bytes remain");
-    }
-  }
-
-  void expect_end() const {
-    if (remaining() != 0) fail(str(remaining()) + " unexpected bytes after the last record");
-  }
-
-  [[noreturn]] void fail(const std::string& problem) const { fail_at(offset(), problem); }
-  [[noreturn]] void fail_at(std::size_t at, const std::string& problem) const {
-    refuse("damaged .shatter file: " + section_name(tag_) + " section, byte " + str(at) + (record_.empty() ? "" : ", " + record_) + ": " + problem);
-  }
-
- private:
-  std::string_view payload_;
-  std::size_t payload_offset_;
-  std::size_t position_ = 0;
-  Tag tag_;
-  std::string record_;
-};
 
 TreeRecipe read_recipe(const Section& section) {
   PayloadReader in(section);
@@ -800,11 +391,6 @@ void read_solids(const Section& section, std::vector<MeshTreeNode>& nodes, bool 
   in.expect_end();
 }
 
-/// Where each record of a decoded tree came from, to place a defect in the file.
-struct RecordOffsets {
-  std::vector<std::size_t> nodes, meshes, hulls, solids;
-  std::size_t point_count = 0;
-};
 
 std::string located(const TreeDefect& defect, const SectionTable& sections, const RecordOffsets& offsets) {
   Tag tag = nodes_tag;
@@ -830,7 +416,8 @@ std::string located(const TreeDefect& defect, const SectionTable& sections, cons
       break;
     case TreePart::bond:
       tag = bonds_tag;
-      at = sections.bonds->payload_offset + 8 + bond_size * defect.index;
+      at = defect.index < offsets.bonds.size() ? offsets.bonds[defect.index]
+                                               : sections.bonds->payload_offset + 8 + bond_size * defect.index;
       break;
     // The exact representation's parts exist only in version 2 files.
     case TreePart::input_point:
@@ -871,7 +458,7 @@ std::string read_whole_file(const std::filesystem::path& path) {
 
 }  // namespace
 
-std::string encode_shatter(const MeshTree& tree) {
+void write_shatter(const MeshTree& tree, const ByteSink& sink) {
   if (const TreeValidationReport report = validate_tree(tree); !report.valid()) {
     throw std::invalid_argument("encode_shatter: invalid tree: " + report.defect->message);
   }
@@ -880,28 +467,24 @@ std::string encode_shatter(const MeshTree& tree) {
       throw std::invalid_argument("encode_shatter: invalid tree: shatter_version: " + *problem);
     }
   }
-  // Every payload first, so the file is allocated once at its final size.
-  std::vector<std::pair<Tag, std::string>> sections;
-  if (!tree.shatter_version.empty()) sections.emplace_back(version_tag, tree.shatter_version);
-  sections.emplace_back(recipe_tag, recipe_payload(tree.recipe));
-  sections.emplace_back(nodes_tag, nodes_payload(tree));
-  sections.emplace_back(meshes_tag, meshes_payload(tree.nodes, &MeshTreeNode::mesh));
-  sections.emplace_back(hulls_tag, meshes_payload(tree.nodes, &MeshTreeNode::hull));
-  sections.emplace_back(bonds_tag, bonds_payload(tree.bonds));
-  sections.emplace_back(geometry_tag, geometry_payload(tree.geometry));
-  sections.emplace_back(solids_tag, solids_payload(tree));
-  sections.emplace_back(end_tag, std::string());
-  std::size_t size = file_header_size;
-  for (const auto& [tag, payload] : sections) size += section_header_size + payload.size();
-  ByteWriter file;
-  file.reserve(size);
-  for (const unsigned char byte : magic) file.u8(byte);
-  file.u32(shatter_format_version);
-  for (auto& [tag, payload] : sections) {
-    append_section(file, tag, payload);
-    std::string().swap(payload);  // freed as soon as it is copied
-  }
-  return file.take();
+  ByteWriter header;
+  for (const unsigned char byte : magic) header.u8(byte);
+  header.u32(shatter_format_version);
+  sink(header.take());
+  write_version3_sections(tree, [&](Tag tag, std::string_view payload) {
+    ByteWriter section_header;
+    section_header.tag(tag);
+    section_header.u64(payload.size());
+    section_header.u32(crc_of(payload));
+    sink(section_header.take());
+    sink(payload);
+  });
+}
+
+std::string encode_shatter(const MeshTree& tree) {
+  std::string bytes;
+  write_shatter(tree, [&](std::string_view piece) { bytes.append(piece); });
+  return bytes;
 }
 
 MeshTree decode_shatter(std::string_view bytes) {
@@ -915,25 +498,40 @@ MeshTree decode_shatter(std::string_view bytes) {
     tree.shatter_version = version->payload;
   }
   tree.recipe = read_recipe(*sections.recipe);
-  read_nodes(*sections.nodes, tree, offsets.nodes);
-  read_meshes(*sections.meshes, tree.nodes, &MeshTreeNode::mesh, offsets.meshes);
-  read_meshes(*sections.hulls, tree.nodes, &MeshTreeNode::hull, offsets.hulls);
-  tree.bonds = read_bonds(*sections.bonds);
-  if (sections.version >= 2) {
+  Version3Pending pending;
+  if (sections.version >= 3) {
+    read_version3_nodes(*sections.nodes, tree, pending, offsets);
     tree.geometry = read_geometry(*sections.geometry);
     offsets.point_count = tree.geometry.points.size();
-    read_solids(*sections.solids, tree.nodes, !tree.geometry.points.empty(), offsets.solids);
+    read_version3_solids(*sections.solids, tree, offsets);
+    read_version3_meshes(*sections.meshes, tree, false, pending, offsets);
+    read_version3_meshes(*sections.hulls, tree, true, pending, offsets);
+    tree.leaf_nodes = leaves_in_order(tree.nodes);
+    read_version3_bonds(*sections.bonds, tree, offsets);
+  } else {
+    read_nodes(*sections.nodes, tree, offsets.nodes);
+    read_meshes(*sections.meshes, tree.nodes, &MeshTreeNode::mesh, offsets.meshes);
+    read_meshes(*sections.hulls, tree.nodes, &MeshTreeNode::hull, offsets.hulls);
+    tree.bonds = read_bonds(*sections.bonds);
+    if (sections.version >= 2) {
+      tree.geometry = read_geometry(*sections.geometry);
+      offsets.point_count = tree.geometry.points.size();
+      read_solids(*sections.solids, tree.nodes, !tree.geometry.points.empty(), offsets.solids);
+    }
+    tree.leaf_nodes = leaves_in_order(tree.nodes);
   }
-  tree.leaf_nodes = leaves_in_order(tree.nodes);
   // The caches are not stored: the structure is checked without them, then they are computed.
   if (const std::optional<TreeDefect> defect = validate_tree(tree, {.caches = false}).defect) {
     refuse(located(*defect, sections, offsets));
   }
   if (const std::optional<TreeDefect> defect = detail::fill_caches(tree)) refuse(located(*defect, sections, offsets));
+  if (sections.version >= 3) finish_version3(tree, pending);
   return tree;
 }
 
-void write_shatter_file(const std::filesystem::path& path, const MeshTree& tree) { write_file_atomically(path, encode_shatter(tree)); }
+void write_shatter_file(const std::filesystem::path& path, const MeshTree& tree) {
+  write_file_atomically_in_pieces(path, [&](const ByteSink& sink) { write_shatter(tree, sink); });
+}
 
 MeshTree read_shatter_file(const std::filesystem::path& path) {
   const std::string bytes = read_whole_file(path);

@@ -248,7 +248,7 @@ class PlaneBonds {
         bond.second = std::max(below, above);
         bond.cut_node = k;
         bond.area = total.area * area_scale_;
-        bond.centroid = lift(u, v);
+        bond.centroid = point_on_plane_over(plane_, axis_, u, v);
         bond.normal = bond.first == below ? unit : -unit;  // from below into above is +n
         bonds.push_back(bond);
       }
@@ -339,17 +339,6 @@ class PlaneBonds {
       if (all_outside) return true;
     }
     return false;
-  }
-
-  // The point of the cut plane over (u, v) of its projection.
-  Vec3 lift(double u, double v) const {
-    const int i = (axis_ + 1) % 3, j = (axis_ + 2) % 3;
-    const double n[3] = {plane_.normal.x, plane_.normal.y, plane_.normal.z};
-    std::array<double, 3> xyz{};
-    xyz[static_cast<std::size_t>(i)] = u;
-    xyz[static_cast<std::size_t>(j)] = v;
-    xyz[static_cast<std::size_t>(axis_)] = -(plane_.offset + n[i] * u + n[j] * v) / n[axis_];
-    return {xyz[0], xyz[1], xyz[2]};
   }
 
   const MeshTree& tree_;

@@ -26,4 +26,21 @@ std::optional<Strategy> strategy_named(std::string_view name) {
   return enum_named(name, {Strategy::thesis, Strategy::balanced, Strategy::axis}, &strategy_name);
 }
 
+std::uint64_t splitmix64(std::uint64_t& state) {
+  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+std::uint64_t root_node_seed(std::uint64_t recipe_seed) {
+  std::uint64_t state = recipe_seed;
+  return splitmix64(state);
+}
+
+std::uint64_t child_node_seed(std::uint64_t parent_seed, std::size_t index) {
+  std::uint64_t state = parent_seed ^ (0xD1B54A32D192ED03ull * (index + 1));
+  return splitmix64(state);
+}
+
 }  // namespace shatter

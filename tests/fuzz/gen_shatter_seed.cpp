@@ -4,13 +4,15 @@
 //
 //   gen_shatter_seed <out.shatter> [fragments (default 4)]
 //
-// It writes the current format (version 2). The committed seeds of version 1
+// It writes the current format (version 3). The committed seeds of version 1
 // (cube-4-fragments.shatter, fast kernel; cube-2-fragments-exact.shatter, exact
 // kernel; and the bad-* and optional-section-* files derived from them) were
 // written by version 1's encoder, and v2-cube-2-fragments-fast.shatter by the
 // retired fast kernel; they are kept as they are: they keep version 1 and the
-// retired kernels' trees reading fuzzed. The one seed this writes is
-//   gen_shatter_seed .../v2-cube-4-fragments-plane.shatter 4
+// retired kernels' trees reading fuzzed, and v2-cube-4-fragments-plane.shatter,
+// the plane kernel's version 2 file, keeps version 2's exact representation
+// fuzzed. The one seed this writes is
+//   gen_shatter_seed .../v3-cube-4-fragments-plane.shatter 4
 
 #include <cstdio>
 #include <cstdlib>

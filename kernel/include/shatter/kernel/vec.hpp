@@ -55,4 +55,21 @@ struct Plane {
   double offset = 0;
 };
 
+/// The point of `plane` over (u, v) in the plane's projection along `axis`
+/// (0, 1, 2 for x, y, z): coordinate (axis + 1) % 3 is u, (axis + 2) % 3 is v,
+/// and coordinate `axis` is -(d + n_i u + n_j v) / n_axis, evaluated in doubles in
+/// that order, so every caller gets the same bits (the bonds' centroids are made
+/// by it, and the .shatter file stores only their u and v).
+/// Precondition: axis in 0..2; a zero or non-finite n_axis gives a non-finite
+/// coordinate, nothing else.
+inline Vec3 point_on_plane_over(const Plane& plane, int axis, double u, double v) {
+  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+  const double n[3] = {plane.normal.x, plane.normal.y, plane.normal.z};
+  double xyz[3] = {0, 0, 0};
+  xyz[i] = u;
+  xyz[j] = v;
+  xyz[axis] = -(plane.offset + n[i] * u + n[j] * v) / n[axis];
+  return {xyz[0], xyz[1], xyz[2]};
+}
+
 }  // namespace shatter

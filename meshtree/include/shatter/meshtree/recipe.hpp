@@ -5,6 +5,7 @@
 // tree.hpp includes it, and build.hpp adds how one build runs (threads,
 // progress, report), which is no part of the tree.
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string_view>
@@ -64,5 +65,19 @@ struct TreeRecipe {
   /// Accept a self-intersecting input (only topology is promised then).
   bool allow_self_intersections = false;
 };
+
+/// One step of splitmix64 (Steele, Lea & Flood 2014): advances `state` and
+/// returns the next 64-bit value. The stream every node's seed and planes come
+/// from: integer arithmetic only, so every machine draws the same tree.
+std::uint64_t splitmix64(std::uint64_t& state);
+
+/// The root node's seed (MeshTreeNode::seed) of a tree built with
+/// TreeRecipe::seed `recipe_seed`. Deterministic.
+std::uint64_t root_node_seed(std::uint64_t recipe_seed);
+
+/// The seed of child `index` (0 for the first) of a node whose seed is
+/// `parent_seed`: a node's seed depends on its path from the root alone, so a
+/// subtree never depends on what other threads drew. Deterministic.
+std::uint64_t child_node_seed(std::uint64_t parent_seed, std::size_t index);
 
 }  // namespace shatter

@@ -1,0 +1,377 @@
+#pragma once
+// The .shatter file's building blocks, shared by the container (file.cpp: the
+// header, the section table, the version 1 and 2 payloads) and the version 3
+// payloads (file_v3.cpp): tags, sizes, the byte writer and the bounds-checked
+// payload reader. Internal to the library; the layout is documented in
+// shatter/meshtree/file.hpp.
+
+#include <zlib.h>
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/vec.hpp"
+#include "shatter/meshtree/tree.hpp"
+#include "tree_checks.hpp"
+
+namespace shatter::file_layout {
+
+using detail::hex;
+
+// ---------------------------------------------------------------------------
+// Constants of the layout
+
+using Tag = std::array<char, 4>;
+
+inline constexpr std::array<unsigned char, 8> magic = {0x89, 'S', 'H', 'T', 0x0D, 0x0A, 0x1A, 0x0A};
+inline constexpr std::size_t file_header_size = 12;     // magic, u32 version
+inline constexpr std::size_t section_header_size = 16;  // tag, u64 length, u32 crc
+
+inline constexpr Tag recipe_tag = {'O', 'P', 'T', 'S'};
+inline constexpr Tag nodes_tag = {'N', 'O', 'D', 'E'};
+inline constexpr Tag meshes_tag = {'M', 'E', 'S', 'H'};
+inline constexpr Tag hulls_tag = {'H', 'U', 'L', 'L'};
+inline constexpr Tag bonds_tag = {'B', 'O', 'N', 'D'};
+inline constexpr Tag geometry_tag = {'G', 'E', 'O', 'M'};  // version 2
+inline constexpr Tag solids_tag = {'S', 'O', 'L', 'D'};    // version 2
+inline constexpr Tag end_tag = {'E', 'N', 'D', ' '};
+// Optional by the tag rule (lower-case first letter): readers that predate it skip it.
+inline constexpr Tag version_tag = {'v', 'e', 'r', 's'};
+
+// Bytes on disk, the least each record can take: counts are checked against these
+// before anything is allocated, which bounds memory by a multiple of the input.
+inline constexpr std::size_t recipe_size = 27;
+inline constexpr std::size_t node_record_min_size = 165;  // without its children
+inline constexpr std::size_t child_size = 4;
+inline constexpr std::size_t mesh_record_min_size = 9;
+inline constexpr std::size_t vertex_size = 24;
+inline constexpr std::size_t triangle_size = 16;  // three indices and the surface id
+inline constexpr std::size_t normal_size = 24;
+inline constexpr std::size_t uv_size = 16;
+inline constexpr std::size_t tangent_size = 32;
+inline constexpr std::size_t bond_size = 68;
+inline constexpr std::size_t geometry_header_size = 8;  // point count, input plane count
+inline constexpr std::size_t point_size = 24;
+inline constexpr std::size_t input_plane_size = 12;
+inline constexpr std::size_t solid_record_min_size = 17;  // flags and four counts
+inline constexpr std::size_t point_def_size = 13;
+inline constexpr std::size_t face_size = 17;
+inline constexpr std::size_t loop_size = 4;
+inline constexpr std::size_t corner_min_size = 9;  // without its segment
+inline constexpr std::size_t segment_size = 8;
+inline constexpr std::size_t max_version_text_size = 64;
+
+// SOLD flag bits: per node, and per face.
+inline constexpr std::uint8_t node_convex_bit = 1;
+inline constexpr std::uint8_t solid_convex_bit = 2;
+inline constexpr std::uint8_t face_reversed_bit = 1;
+inline constexpr std::uint8_t face_convex_bit = 2;
+
+inline constexpr std::uint8_t normals_bit = 1;
+inline constexpr std::uint8_t uvs_bit = 2;
+inline constexpr std::uint8_t tangents_bit = 4;
+inline constexpr std::uint8_t known_channel_bits = normals_bit | uvs_bit | tangents_bit;
+
+// ---------------------------------------------------------------------------
+// Small helpers
+
+inline std::uint32_t crc_of(std::string_view bytes) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  // zlib takes a 32-bit length; feed larger payloads in pieces.
+  constexpr std::size_t piece = std::size_t{1} << 30;
+  while (!bytes.empty()) {
+    const std::size_t length = std::min(bytes.size(), piece);
+    crc = crc32(crc, reinterpret_cast<const Bytef*>(bytes.data()), static_cast<uInt>(length));
+    bytes.remove_prefix(length);
+  }
+  return static_cast<std::uint32_t>(crc);
+}
+
+/// What is wrong with a `vers` payload (file.hpp: 1 to 64 bytes of printable
+/// ASCII, no space), or nullopt. Kept that narrow so it prints as one clean word.
+inline std::optional<std::string> version_text_problem(std::string_view text) {
+  if (text.empty()) return "the version is empty";
+  if (text.size() > max_version_text_size) {
+    return "the version is " + std::to_string(text.size()) + " bytes long (at most " + std::to_string(max_version_text_size) + ")";
+  }
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    const auto c = static_cast<unsigned char>(text[k]);
+    if (c < 0x21 || c > 0x7E) return "byte " + std::to_string(k) + " of the version is " + hex(c, 2) + " (printable ASCII without spaces only)";
+  }
+  return std::nullopt;
+}
+
+/// A tag as it can be printed in a one-line message: printable ASCII as is,
+/// anything else (damage, usually) as \xNN.
+inline std::string tag_text(Tag tag) {
+  std::string text;
+  for (const char c : tag) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte >= 0x20 && byte < 0x7F && byte != '\\') {
+      text += c;
+    } else {
+      text += "\\x" + hex(byte, 2).substr(2);
+    }
+  }
+  return text;
+}
+
+/// The name of a section in messages: "END" rather than "END ".
+inline std::string section_name(Tag tag) { return tag == end_tag ? std::string("END") : tag_text(tag); }
+
+inline std::string str(std::uint64_t value) { return std::to_string(value); }
+
+[[noreturn]] inline void refuse(const std::string& message) { throw CorruptFileError(message); }
+
+// ---------------------------------------------------------------------------
+// Encoding
+
+class ByteWriter {
+ public:
+  void u8(std::uint8_t value) { bytes_.push_back(static_cast<char>(value)); }
+  void u32(std::uint32_t value) { little_endian(value); }
+  void u64(std::uint64_t value) { little_endian(value); }
+  /// A count the validator has already checked to fit 32 bits.
+  void count32(std::size_t value) { u32(static_cast<std::uint32_t>(value)); }
+  void f64(double value) { u64(std::bit_cast<std::uint64_t>(value)); }
+  void vec2(Vec2 v) {
+    f64(v.x);
+    f64(v.y);
+  }
+  void vec3(Vec3 v) {
+    f64(v.x);
+    f64(v.y);
+    f64(v.z);
+  }
+  void vec4(Vec4 v) {
+    f64(v.x);
+    f64(v.y);
+    f64(v.z);
+    f64(v.w);
+  }
+  /// An unsigned LEB128 varint (file.hpp, version 3): seven bits a byte, the
+  /// low group first, the high bit set on every byte but the last; the shortest
+  /// form.
+  void varint(std::uint64_t value) {
+    while (value >= 0x80) {
+      bytes_.push_back(static_cast<char>((value & 0x7F) | 0x80));
+      value >>= 7;
+    }
+    bytes_.push_back(static_cast<char>(value));
+  }
+  void tag(Tag tag) {
+    for (const char c : tag) bytes_.push_back(c);
+  }
+  std::size_t size() const { return bytes_.size(); }
+  void append(std::string_view bytes) { bytes_.append(bytes); }
+  void reserve(std::size_t size) { bytes_.reserve(size); }
+
+  std::string take() { return std::move(bytes_); }
+
+ private:
+  // The file is little-endian; on a little-endian machine a value's bytes are
+  // copied as they are (one append, not one push_back per byte: the meshes of a
+  // large tree are hundreds of megabytes of these).
+  template <class Unsigned>
+  void little_endian(Unsigned value) {
+    char bytes[sizeof(Unsigned)];
+    if constexpr (std::endian::native == std::endian::little) {
+      std::memcpy(bytes, &value, sizeof bytes);
+    } else {
+      for (std::size_t k = 0; k < sizeof bytes; ++k) bytes[k] = static_cast<char>(value >> (8 * k));
+    }
+    bytes_.append(bytes, sizeof bytes);
+  }
+
+  std::string bytes_;
+};
+
+// ---------------------------------------------------------------------------
+// Decoding
+
+inline std::uint32_t load_u32(std::string_view bytes, std::size_t at) {
+  std::uint32_t value = 0;
+  for (std::size_t k = 0; k < 4; ++k) value |= std::uint32_t{static_cast<unsigned char>(bytes[at + k])} << (8 * k);
+  return value;
+}
+
+inline std::uint64_t load_u64(std::string_view bytes, std::size_t at) {
+  std::uint64_t value = 0;
+  for (std::size_t k = 0; k < 8; ++k) value |= std::uint64_t{static_cast<unsigned char>(bytes[at + k])} << (8 * k);
+  return value;
+}
+
+struct Section {
+  Tag tag{};
+  std::size_t offset = 0;          ///< of the section header in the file
+  std::size_t payload_offset = 0;  ///< of the payload in the file
+  std::string_view payload;
+};
+
+struct SectionTable {
+  std::uint32_t version = 0;
+  std::optional<Section> recipe, nodes, meshes, hulls, bonds;
+  std::optional<Section> geometry, solids;  // version 2
+  std::optional<Section> shatter_version;   // optional, in any version
+};
+
+// ---------------------------------------------------------------------------
+// Decoding: payloads
+
+/// Reads one section's payload front to back. Every read is bounds-checked, and
+/// every count is checked against the bytes left before anything is sized by it.
+/// Failures name the section, the file offset and the record being read.
+class PayloadReader {
+ public:
+  explicit PayloadReader(const Section& section) : payload_(section.payload), payload_offset_(section.payload_offset), tag_(section.tag) {}
+
+  /// The file offset of the next byte.
+  std::size_t offset() const { return payload_offset_ + position_; }
+  std::size_t remaining() const { return payload_.size() - position_; }
+
+  /// Names the record being read in failure messages ("node 3", ...).
+  void set_record(std::string record) { record_ = std::move(record); }
+
+  std::uint8_t u8(const char* field) {
+    need(1, field);
+    return static_cast<std::uint8_t>(payload_[position_++]);
+  }
+  std::uint32_t u32(const char* field) {
+    need(4, field);
+    const std::uint32_t value = load_u32(payload_, position_);
+    position_ += 4;
+    return value;
+  }
+  std::uint64_t u64(const char* field) {
+    need(8, field);
+    const std::uint64_t value = load_u64(payload_, position_);
+    position_ += 8;
+    return value;
+  }
+  double f64(const char* field) { return std::bit_cast<double>(u64(field)); }
+  Vec2 vec2(const char* field) {
+    need(16, field);
+    Vec2 v;
+    v.x = f64(field);
+    v.y = f64(field);
+    return v;
+  }
+  Vec3 vec3(const char* field) {
+    need(24, field);
+    Vec3 v;
+    v.x = f64(field);
+    v.y = f64(field);
+    v.z = f64(field);
+    return v;
+  }
+  Vec4 vec4(const char* field) {
+    need(32, field);
+    Vec4 v;
+    v.x = f64(field);
+    v.y = f64(field);
+    v.z = f64(field);
+    v.w = f64(field);
+    return v;
+  }
+  /// An unsigned LEB128 varint of at most `bits` bits (32 or 64); a value that
+  /// does not fit is refused. Longer forms than needed are read as written.
+  std::uint64_t varint(const char* field, int bits = 32) {
+    const std::size_t at = offset();
+    std::uint64_t value = 0;
+    for (int shift = 0;; shift += 7) {
+      const std::uint8_t byte = u8(field);
+      const std::uint64_t group = byte & 0x7Fu;
+      // Refused when this group would set a bit at or above `bits`.
+      if (shift >= bits || (bits - shift < 7 && (group >> (bits - shift)) != 0)) {
+        fail_at(at, std::string(field) + " does not fit in " + str(bits) + " bits");
+      }
+      value |= group << shift;
+      if ((byte & 0x80u) == 0) return value;
+    }
+  }
+  std::uint32_t varint32(const char* field) { return static_cast<std::uint32_t>(varint(field, 32)); }
+  bool boolean(const char* field) {
+    const std::size_t at = offset();
+    const std::uint8_t value = u8(field);
+    if (value > 1) fail_at(at, std::string(field) + " is " + str(value) + " (must be 0 or 1)");
+    return value == 1;
+  }
+
+  /// Refuses a field of `size` bytes if the payload ends before it.
+  void need(std::size_t size, const char* field) const {
+    if (remaining() < size) fail("the payload ends inside " + std::string(field));
+  }
+
+  /// Refuses `count` records of at least `record_size` bytes each if they
+  /// cannot fit in what is left, before the caller allocates for them.
+  void check_room(std::uint64_t count, std::size_t record_size, const char* what) const {
+    if (count > remaining() / record_size) {
+      fail(str(count) + " " + what + " need at least " + str(record_size) + " bytes each, but only " + str(remaining()) + " bytes remain");
+    }
+  }
+
+  void expect_end() const {
+    if (remaining() != 0) fail(str(remaining()) + " unexpected bytes after the last record");
+  }
+
+  [[noreturn]] void fail(const std::string& problem) const { fail_at(offset(), problem); }
+  [[noreturn]] void fail_at(std::size_t at, const std::string& problem) const {
+    refuse("damaged .shatter file: " + section_name(tag_) + " section, byte " + str(at) + (record_.empty() ? "" : ", " + record_) + ": " + problem);
+  }
+
+ private:
+  std::string_view payload_;
+  std::size_t payload_offset_;
+  std::size_t position_ = 0;
+  Tag tag_;
+  std::string record_;
+};
+
+/// Where each record of a decoded tree came from, to place a defect in the file.
+struct RecordOffsets {
+  std::vector<std::size_t> nodes, meshes, hulls, solids;
+  std::vector<std::size_t> bonds;  ///< version 3 (bonds of varying size); earlier versions compute them
+  std::size_t point_count = 0;
+};
+
+// ---------------------------------------------------------------------------
+// Version 3 payloads (file_v3.cpp)
+
+/// Hands `emit` the version 3 sections of `tree` one at a time, in the order
+/// encode_shatter writes them, END last; each payload is made just before its
+/// call and freed after it. Precondition: `tree` passes validate_tree with its
+/// caches.
+void write_version3_sections(const MeshTree& tree, const std::function<void(Tag, std::string_view)>& emit);
+
+/// What a version 3 file leaves to compute once the tree's structure has passed
+/// validate_tree and its caches are filled: per node, per mesh (hull) vertex,
+/// the solid vertex (mesh vertex) whose position it takes, no_index where the
+/// position was stored; and whether the masses are the meshes' own.
+struct Version3Pending {
+  std::vector<std::vector<std::uint32_t>> mesh_sources, hull_sources;
+  bool masses_derived = true;
+};
+
+// The version 3 readers, in the order decode_shatter calls them: NODE (after
+// OPTS: seeds derive from the recipe), then GEOM, SOLD, MESH, HULL, and BOND
+// (once tree.leaf_nodes is filled). Each refuses with CorruptFileError what it
+// cannot decode, and leaves the rest to validate_tree; the structure they build
+// from child counts is a tree by construction.
+void read_version3_nodes(const Section& section, MeshTree& tree, Version3Pending& pending, RecordOffsets& offsets);
+void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets& offsets);
+void read_version3_meshes(const Section& section, MeshTree& tree, bool hulls, Version3Pending& pending, RecordOffsets& offsets);
+void read_version3_bonds(const Section& section, MeshTree& tree, RecordOffsets& offsets);
+/// Fills the derived positions and masses. Precondition: the tree passed
+/// validate_tree without caches and its caches are filled.
+void finish_version3(MeshTree& tree, const Version3Pending& pending);
+
+}  // namespace shatter::file_layout

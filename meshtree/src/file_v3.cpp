@@ -1,0 +1,837 @@
+// Version 3 of the .shatter file (layout in file.hpp): the tree's structure as
+// child counts in preorder, the exact solids with their planes named relative
+// to the node, varints for every index, and no value that follows from what is
+// stored: seeds, masses, the meshes' rounded positions, the hulls' positions,
+// the bonds' cut nodes and normals and one coordinate of their centroids are
+// left out wherever they equal their derivation bit for bit. The encoder checks
+// each equality and stores the value where one fails, so every tree that
+// validates round-trips exactly, hand-made ones included.
+
+#include <algorithm>
+#include <bit>
+#include <cfenv>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "file_layout.hpp"
+#include "shatter/kernel/implicit.hpp"
+#include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/solid.hpp"
+#include "shatter/meshtree/recipe.hpp"
+#include "shatter/meshtree/tree.hpp"
+
+namespace shatter::file_layout {
+
+namespace {
+
+// NODE flags: which derivable values are stored anyway.
+constexpr std::uint8_t seeds_stored_bit = 1;
+constexpr std::uint8_t masses_stored_bit = 2;
+constexpr std::uint8_t leaf_planes_stored_bit = 4;
+constexpr std::uint8_t known_node_flags = seeds_stored_bit | masses_stored_bit | leaf_planes_stored_bit;
+// BOND flags.
+constexpr std::uint8_t bond_normals_stored_bit = 1;
+// A bond centroid's axis code: 0-2 the coordinate solved from the cut plane, 3 none.
+constexpr std::uint64_t centroid_stored = 3;
+// A corner's line, in the low two bits of its code.
+constexpr std::uint64_t line_across = 0;   // the plane of the face across the edge, no segment
+constexpr std::uint64_t line_stored = 1;   // a plane code follows, no segment
+constexpr std::uint64_t line_segment = 2;  // a plane code and the segment's points follow
+// A position code: 0 stored, else 1 + zigzag(source - vertex).
+constexpr std::uint64_t position_stored = 0;
+
+std::uint64_t zigzag(std::int64_t value) {
+  return (static_cast<std::uint64_t>(value) << 1) ^ static_cast<std::uint64_t>(value >> 63);
+}
+std::int64_t unzigzag(std::uint64_t code) { return static_cast<std::int64_t>(code >> 1) ^ -static_cast<std::int64_t>(code & 1); }
+
+std::uint64_t bits(double value) { return std::bit_cast<std::uint64_t>(value); }
+bool same_bits(Vec3 a, Vec3 b) { return bits(a.x) == bits(b.x) && bits(a.y) == bits(b.y) && bits(a.z) == bits(b.z); }
+bool same_bits(const MassProperties& a, const MassProperties& b) {
+  if (bits(a.volume) != bits(b.volume) || !same_bits(a.centroid, b.centroid)) return false;
+  for (std::size_t k = 0; k < a.inertia.size(); ++k) {
+    if (bits(a.inertia[k]) != bits(b.inertia[k])) return false;
+  }
+  return true;
+}
+bool all_zero_bits(const Plane& plane) {
+  return bits(plane.normal.x) == 0 && bits(plane.normal.y) == 0 && bits(plane.normal.z) == 0 && bits(plane.offset) == 0;
+}
+/// Floating-point exceptions held for its lifetime, and the caller's
+/// environment (flags and traps) restored after: deriving a value is an attempt
+/// whose result is compared bit for bit or was so compared by the writer, and a
+/// hand-made tree's infinities and NaNs must neither trap there nor leave flags
+/// behind.
+class HeldFloatingPointExceptions {
+ public:
+  HeldFloatingPointExceptions() { std::feholdexcept(&saved_); }
+  ~HeldFloatingPointExceptions() { std::fesetenv(&saved_); }
+  HeldFloatingPointExceptions(const HeldFloatingPointExceptions&) = delete;
+  HeldFloatingPointExceptions& operator=(const HeldFloatingPointExceptions&) = delete;
+
+ private:
+  std::fenv_t saved_;
+};
+
+double coordinate(Vec3 v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
+
+/// The nodes from the root to the node being written or read (preorder visits a
+/// node's ancestors first), so a plane or surface names an ancestor by how far
+/// up it is.
+class AncestorPath {
+ public:
+  void enter(NodeIndex node, std::uint32_t depth) {
+    path_.resize(std::size_t{depth} + 1);
+    path_[depth] = node;
+  }
+  std::uint32_t depth() const { return static_cast<std::uint32_t>(path_.size() - 1); }
+  /// The ancestor `up` levels above; 1 <= up <= depth().
+  NodeIndex above(std::uint64_t up) const { return path_[path_.size() - 1 - up]; }
+  /// How far above the node `node` is, or 0 if it is not a strict ancestor.
+  std::uint32_t distance_to(NodeIndex node, std::uint32_t node_depth) const {
+    return node_depth < depth() && path_[node_depth] == node ? depth() - node_depth : 0;
+  }
+
+ private:
+  std::vector<NodeIndex> path_;
+};
+
+// ---------------------------------------------------------------------------
+// Encoding
+
+/// A plane as the node whose solid uses it names it: 0 none, 2i + 1 input plane
+/// i, 2d the cut plane of the ancestor d levels up (the validator has checked
+/// that every cut plane a solid uses is a strict ancestor's).
+std::uint64_t plane_code(PlaneRef plane, const AncestorPath& path, const std::vector<MeshTreeNode>& nodes) {
+  if (plane.bits == no_index) return 0;
+  if (!plane.is_cut()) return 2 * std::uint64_t{plane.index()} + 1;
+  return 2 * std::uint64_t{path.distance_to(plane.index(), nodes[plane.index()].depth)};
+}
+
+/// A surface id as a node names it: 0 the input's surface, 1..depth the cap of
+/// the ancestor that many levels up, depth + s any other id s.
+std::uint64_t surface_code(SurfaceId surface, const AncestorPath& path, const std::vector<MeshTreeNode>& nodes) {
+  if (surface == original_surface) return 0;
+  const std::uint64_t cutter = surface - 1;  // the node whose cut made it, if any
+  if (cutter < nodes.size()) {
+    if (const std::uint32_t up = path.distance_to(static_cast<NodeIndex>(cutter), nodes[cutter].depth); up != 0) return up;
+  }
+  return std::uint64_t{path.depth()} + surface;
+}
+
+/// Finds each position among `sources` bit for bit: first where the previous
+/// vertex's offset points, then the same index, then by a sorted search.
+class PositionFinder {
+ public:
+  explicit PositionFinder(std::span<const Vec3> sources) : sources_(sources) {}
+
+  /// The position code of vertex `vertex` at `position`.
+  std::uint64_t code(std::size_t vertex, Vec3 position) {
+    const auto matches = [&](std::int64_t source) {
+      return source >= 0 && static_cast<std::size_t>(source) < sources_.size() && same_bits(sources_[static_cast<std::size_t>(source)], position);
+    };
+    const auto at = static_cast<std::int64_t>(vertex);
+    std::int64_t source = -1;
+    if (matches(at + offset_)) {
+      source = at + offset_;
+    } else if (matches(at)) {
+      source = at;
+    } else {
+      source = search(position);
+    }
+    if (source < 0) return position_stored;
+    offset_ = source - at;
+    return 1 + zigzag(offset_);
+  }
+
+ private:
+  using Key = std::array<std::uint64_t, 3>;
+  static Key key_of(Vec3 p) { return {bits(p.x), bits(p.y), bits(p.z)}; }
+
+  std::int64_t search(Vec3 position) {
+    if (sorted_.empty() && !sources_.empty()) {
+      sorted_.reserve(sources_.size());
+      for (std::size_t s = 0; s < sources_.size(); ++s) sorted_.emplace_back(key_of(sources_[s]), static_cast<std::uint32_t>(s));
+      std::sort(sorted_.begin(), sorted_.end());
+    }
+    const Key key = key_of(position);
+    const auto found = std::lower_bound(sorted_.begin(), sorted_.end(), std::pair<Key, std::uint32_t>(key, 0));
+    return found != sorted_.end() && found->first == key ? static_cast<std::int64_t>(found->second) : -1;
+  }
+
+  std::span<const Vec3> sources_;
+  std::int64_t offset_ = 0;
+  std::vector<std::pair<Key, std::uint32_t>> sorted_;
+};
+
+void write_mesh(ByteWriter& out, const Mesh& mesh, std::span<const Vec3> sources, const AncestorPath& path,
+                const std::vector<MeshTreeNode>& nodes) {
+  out.varint(mesh.positions.size());
+  out.varint(mesh.triangles.size());
+  out.u8(static_cast<std::uint8_t>((mesh.corners.has_normals() ? normals_bit : 0) | (mesh.corners.has_uvs() ? uvs_bit : 0) |
+                                   (mesh.corners.has_tangents() ? tangents_bit : 0)));
+  PositionFinder finder(sources);
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    const std::uint64_t code = finder.code(v, mesh.positions[v]);
+    out.varint(code);
+    if (code == position_stored) out.vec3(mesh.positions[v]);
+  }
+  const std::size_t width = mesh.positions.size() <= 0x100 ? 1 : mesh.positions.size() <= 0x10000 ? 2 : 4;
+  for (const Triangle& triangle : mesh.triangles) {
+    for (const VertexIndex vertex : triangle) {
+      if (width == 1) out.u8(static_cast<std::uint8_t>(vertex));
+      if (width == 2) {
+        out.u8(static_cast<std::uint8_t>(vertex));
+        out.u8(static_cast<std::uint8_t>(vertex >> 8));
+      }
+      if (width == 4) out.u32(vertex);
+    }
+  }
+  // Surfaces in runs: a face's triangles are consecutive.
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> runs;
+  for (const SurfaceId surface : mesh.surfaces) {
+    const std::uint64_t code = surface_code(surface, path, nodes);
+    if (!runs.empty() && runs.back().first == code) {
+      ++runs.back().second;
+    } else {
+      runs.emplace_back(code, 1);
+    }
+  }
+  out.varint(runs.size());
+  for (const auto& [code, length] : runs) {
+    out.varint(code);
+    out.varint(length);
+  }
+  for (const Vec3& normal : mesh.corners.normals) out.vec3(normal);
+  for (const Vec2& uv : mesh.corners.uvs) out.vec2(uv);
+  for (const Vec4& tangent : mesh.corners.tangents) out.vec4(tangent);
+}
+
+std::string nodes_payload(const MeshTree& tree) {
+  const std::vector<MeshTreeNode>& nodes = tree.nodes;
+  std::uint8_t flags = 0;
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    const MeshTreeNode& node = nodes[k];
+    const std::uint64_t derived_seed =
+        k == 0 ? root_node_seed(tree.recipe.seed)
+               : child_node_seed(nodes[node.parent].seed, static_cast<std::size_t>(
+                                                              std::find(nodes[node.parent].children.begin(), nodes[node.parent].children.end(), k) -
+                                                              nodes[node.parent].children.begin()));
+    if (node.seed != derived_seed) flags |= seeds_stored_bit;
+    if (!same_bits(node.mass, mass_properties(node.mesh))) flags |= masses_stored_bit;
+    if (node.is_leaf() && !all_zero_bits(tree.cut_planes[k])) flags |= leaf_planes_stored_bit;
+  }
+  ByteWriter out;
+  out.count32(nodes.size());
+  out.u8(flags);
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    const MeshTreeNode& node = nodes[k];
+    out.varint((std::uint64_t{node.children.size()} << 1) | (node.above_parent_plane ? 1 : 0));
+    if (!node.is_leaf() || (flags & leaf_planes_stored_bit) != 0) {
+      out.vec3(tree.cut_planes[k].normal);
+      out.f64(tree.cut_planes[k].offset);
+    }
+    if ((flags & seeds_stored_bit) != 0) out.u64(node.seed);
+    if ((flags & masses_stored_bit) != 0) {
+      out.f64(node.mass.volume);
+      out.vec3(node.mass.centroid);
+      for (const double entry : node.mass.inertia) out.f64(entry);
+    }
+  }
+  return out.take();
+}
+
+std::string solids_payload(const MeshTree& tree) {
+  ByteWriter out;
+  const bool exact = tree.has_exact_representation();
+  out.count32(exact ? tree.nodes.size() : 0);
+  if (!exact) return out.take();
+  const std::vector<MeshTreeNode>& nodes = tree.nodes;
+  AncestorPath path;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> face_of_edge;  // (from, to) -> face, sorted
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    const MeshTreeNode& node = nodes[k];
+    const Solid& solid = node.solid;
+    path.enter(static_cast<NodeIndex>(k), node.depth);
+    const auto plane = [&](PlaneRef ref) { out.varint(plane_code(ref, path, nodes)); };
+    out.u8(static_cast<std::uint8_t>((node.convex ? node_convex_bit : 0) | (solid.convex ? solid_convex_bit : 0)));
+    out.varint(solid.defs.size());
+    out.varint(solid.faces.size());
+    out.varint(solid.loops.size());
+    out.varint(solid.corners.size());
+    for (const PointDef& def : solid.defs) {
+      out.u8(static_cast<std::uint8_t>(def.kind));
+      switch (def.kind) {
+        case PointKind::input: out.varint(def.a); break;
+        case PointKind::segment_plane:
+          out.varint(def.a);
+          out.varint(def.b);
+          plane(def.planes[0]);
+          break;
+        case PointKind::three_planes:
+          for (const PlaneRef p : def.planes) plane(p);
+          break;
+      }
+    }
+    for (const SolidFace& face : solid.faces) {
+      plane(face.plane);
+      out.u8(static_cast<std::uint8_t>((face.reversed ? face_reversed_bit : 0) | (face.convex ? face_convex_bit : 0)));
+      out.varint(surface_code(face.surface, path, nodes));
+      out.varint(face.source);
+      out.varint(face.loop_count);
+    }
+    for (const SolidLoop& loop : solid.loops) out.varint(loop.corner_count);
+
+    const std::uint64_t vertex_count = solid.defs.size();
+    face_of_edge.clear();
+    for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+      for (const SolidLoop& loop : std::span(solid.loops).subspan(solid.faces[f].first_loop, solid.faces[f].loop_count)) {
+        for (const CornerEdge& edge : loop_edges(solid.corners, loop)) face_of_edge.emplace_back(edge.from * vertex_count + edge.to, f);
+      }
+    }
+    std::sort(face_of_edge.begin(), face_of_edge.end());
+    // The validator has checked that the loops cover the corners in order.
+    for (const SolidLoop& loop : solid.loops) {
+      for (const CornerEdge& edge : loop_edges(solid.corners, loop)) {
+        std::uint64_t mode = edge.line.is_segment() ? line_segment : line_stored;
+        if (!edge.line.is_segment()) {
+          const std::uint64_t reverse = edge.to * vertex_count + edge.from;
+          const auto across = std::lower_bound(face_of_edge.begin(), face_of_edge.end(), std::pair<std::uint64_t, std::uint32_t>(reverse, 0));
+          if (across != face_of_edge.end() && across->first == reverse && solid.faces[across->second].plane == edge.line.other) {
+            mode = line_across;
+          }
+        }
+        out.varint((std::uint64_t{edge.from} << 2) | mode);
+        if (mode != line_across) plane(edge.line.other);
+        if (mode == line_segment) {
+          out.varint(edge.line.p);
+          out.varint(edge.line.q);
+        }
+      }
+    }
+  }
+  return out.take();
+}
+
+/// Each mesh's positions coded against its solid's output positions (MESH) or
+/// each hull's against its node's mesh (HULL).
+std::string meshes_payload(const MeshTree& tree, bool hulls) {
+  const std::vector<MeshTreeNode>& nodes = tree.nodes;
+  const PlaneSet set = tree.plane_set();
+  ByteWriter out;
+  out.count32(nodes.size());
+  AncestorPath path;
+  std::vector<Vec3> solid_positions;
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    const MeshTreeNode& node = nodes[k];
+    path.enter(static_cast<NodeIndex>(k), node.depth);
+    if (hulls) {
+      write_mesh(out, node.hull, node.mesh.positions, path, nodes);
+      continue;
+    }
+    solid_positions.resize(node.solid.defs.size());
+    for (std::size_t v = 0; v < solid_positions.size(); ++v) {
+      solid_positions[v] = output_position(set, node.solid.defs[v], node.solid.approx[v]);
+    }
+    write_mesh(out, node.mesh, solid_positions, path, nodes);
+  }
+  return out.take();
+}
+
+/// The child of `ancestor` on the way down to `node` (a strict descendant).
+NodeIndex child_toward(const std::vector<MeshTreeNode>& nodes, NodeIndex ancestor, NodeIndex node) {
+  while (nodes[node].parent != ancestor) node = nodes[node].parent;
+  return node;
+}
+
+/// The bond normal a built tree has: the cut plane's unit normal, pointing from
+/// `first` into `second`.
+Vec3 derived_normal(const MeshTree& tree, const Bond& bond) {
+  const NodeIndex side = child_toward(tree.nodes, bond.cut_node, tree.leaf_nodes[bond.first]);
+  const Vec3 unit = normalized(tree.cut_planes[bond.cut_node].normal);
+  return tree.nodes[side].above_parent_plane ? -unit : unit;
+}
+
+std::string bonds_payload(const MeshTree& tree) {
+  std::uint8_t flags = 0;
+  for (const Bond& bond : tree.bonds) {
+    if (!same_bits(bond.normal, derived_normal(tree, bond))) {
+      flags |= bond_normals_stored_bit;
+      break;
+    }
+  }
+  ByteWriter out;
+  out.u64(tree.bonds.size());
+  out.u8(flags);
+  LeafIndex previous_first = 0;
+  for (const Bond& bond : tree.bonds) {
+    const Plane& plane = tree.cut_planes[bond.cut_node];
+    // The largest normal component first: the projection the bonds were measured in.
+    std::array<int, 3> axes = {0, 1, 2};
+    std::stable_sort(axes.begin(), axes.end(),
+                     [&](int a, int b) { return std::fabs(coordinate(plane.normal, a)) > std::fabs(coordinate(plane.normal, b)); });
+    std::uint64_t axis_code = centroid_stored;
+    for (const int axis : axes) {
+      const Vec3 solved = point_on_plane_over(plane, axis, coordinate(bond.centroid, (axis + 1) % 3), coordinate(bond.centroid, (axis + 2) % 3));
+      if (same_bits(solved, bond.centroid)) {
+        axis_code = static_cast<std::uint64_t>(axis);
+        break;
+      }
+    }
+    out.varint(bond.first - previous_first);
+    out.varint((std::uint64_t{bond.second - bond.first - 1} << 2) | axis_code);
+    previous_first = bond.first;
+    out.f64(bond.area);
+    if (axis_code == centroid_stored) {
+      out.vec3(bond.centroid);
+    } else {
+      const int axis = static_cast<int>(axis_code);
+      out.f64(coordinate(bond.centroid, (axis + 1) % 3));
+      out.f64(coordinate(bond.centroid, (axis + 2) % 3));
+    }
+    if ((flags & bond_normals_stored_bit) != 0) out.vec3(bond.normal);
+  }
+  return out.take();
+}
+
+std::string geometry_payload(const InputGeometry& geometry) {
+  ByteWriter out;
+  out.count32(geometry.points.size());
+  out.count32(geometry.planes.size());
+  for (const Vec3& point : geometry.points) out.vec3(point);
+  for (const auto& plane : geometry.planes) {
+    for (const VertexIndex point : plane) out.u32(point);
+  }
+  return out.take();
+}
+
+std::string recipe_payload(const TreeRecipe& recipe) {
+  ByteWriter out;
+  out.u32(recipe.fragments);
+  out.u64(recipe.seed);
+  out.u8(static_cast<std::uint8_t>(recipe.strategy));
+  out.u8(static_cast<std::uint8_t>(recipe.kernel));
+  out.f64(recipe.interior_uv_scale);
+  out.u32(recipe.max_plane_tries);
+  out.u8(recipe.allow_self_intersections ? 1 : 0);
+  return out.take();
+}
+
+// ---------------------------------------------------------------------------
+// Decoding
+
+/// Reads a plane code of the node at the end of `path`.
+PlaneRef read_plane(PayloadReader& in, const AncestorPath& path, const char* field) {
+  const std::size_t at = in.offset();
+  const std::uint64_t code = in.varint(field, 64);
+  if (code == 0) return PlaneRef{no_index};
+  if ((code & 1) != 0) {
+    const std::uint64_t input = code >> 1;
+    if (input >= PlaneRef::cut_bit) in.fail_at(at, std::string(field) + " names input plane " + str(input) + ", beyond any index");
+    return PlaneRef::input(static_cast<std::uint32_t>(input));
+  }
+  const std::uint64_t up = code >> 1;
+  if (up > path.depth()) {
+    in.fail_at(at, std::string(field) + " names the cut plane of the node " + str(up) + " levels up, but the node has depth " + str(path.depth()));
+  }
+  return PlaneRef::cut(path.above(up));
+}
+
+SurfaceId read_surface(PayloadReader& in, const AncestorPath& path, const char* field) {
+  const std::size_t at = in.offset();
+  const std::uint64_t code = in.varint(field, 64);
+  if (code == 0) return original_surface;
+  if (code <= path.depth()) return cap_surface_of(path.above(code));
+  const std::uint64_t surface = code - path.depth();
+  if (surface > 0xFFFFFFFFull) in.fail_at(at, std::string(field) + " is beyond 32 bits");
+  return static_cast<SurfaceId>(surface);
+}
+
+/// Reads one mesh record; `sources` gets, per vertex, the index of the source its
+/// position comes from (no_index when stored), `source_count` the sources there are.
+Mesh read_mesh(PayloadReader& in, std::size_t source_count, std::vector<std::uint32_t>& sources, const AncestorPath& path) {
+  Mesh mesh;
+  const std::uint32_t vertex_count = in.varint32("vertex count");
+  const std::uint32_t triangle_count = in.varint32("triangle count");
+  const std::size_t channels_at = in.offset();
+  const std::uint8_t channels = in.u8("channel flags");
+  if ((channels & ~known_channel_bits) != 0) in.fail_at(channels_at, "unknown attribute channel bits " + hex(channels, 2));
+  if (triangle_count == 0 && channels != 0) {
+    in.fail_at(channels_at, "attribute channel bits " + hex(channels, 2) + " for a mesh without triangles (must be 0)");
+  }
+  in.check_room(vertex_count, 1, "vertices");
+  mesh.positions.resize(vertex_count);
+  sources.assign(vertex_count, no_index);
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    const std::size_t at = in.offset();
+    const std::uint64_t code = in.varint("position code", 64);
+    if (code == position_stored) {
+      mesh.positions[v] = in.vec3("position");
+      continue;
+    }
+    const std::int64_t source = static_cast<std::int64_t>(v) + unzigzag(code - 1);
+    if (source < 0 || static_cast<std::uint64_t>(source) >= source_count) {
+      in.fail_at(at, "vertex " + str(v) + " takes the position of source vertex " + std::to_string(source) + ", of " + str(source_count));
+    }
+    sources[v] = static_cast<std::uint32_t>(source);
+  }
+  const std::size_t width = vertex_count <= 0x100 ? 1 : vertex_count <= 0x10000 ? 2 : 4;
+  in.check_room(triangle_count, 3 * width, "triangles");
+  mesh.triangles.resize(triangle_count);
+  for (Triangle& triangle : mesh.triangles) {
+    for (VertexIndex& vertex : triangle) {
+      if (width == 1) vertex = in.u8("triangle");
+      if (width == 2) {
+        vertex = in.u8("triangle");
+        vertex |= VertexIndex{in.u8("triangle")} << 8;
+      }
+      if (width == 4) vertex = in.u32("triangle");
+    }
+  }
+  const std::uint32_t run_count = in.varint32("surface run count");
+  in.check_room(run_count, 2, "surface runs");
+  mesh.surfaces.reserve(triangle_count);
+  for (std::uint32_t r = 0; r < run_count; ++r) {
+    const SurfaceId surface = read_surface(in, path, "surface");
+    const std::size_t at = in.offset();
+    const std::uint32_t length = in.varint32("surface run length");
+    if (length == 0 || length > triangle_count - mesh.surfaces.size()) {
+      in.fail_at(at, "surface run " + str(r) + " of " + str(length) + " triangles, with " + str(triangle_count - mesh.surfaces.size()) + " left");
+    }
+    mesh.surfaces.insert(mesh.surfaces.end(), length, surface);
+  }
+  if (mesh.surfaces.size() != triangle_count) in.fail("the surface runs cover " + str(mesh.surfaces.size()) + " of " + str(triangle_count) + " triangles");
+
+  const std::uint64_t corner_count = 3 * std::uint64_t{triangle_count};
+  if ((channels & normals_bit) != 0) {
+    in.check_room(corner_count, normal_size, "corner normals");
+    mesh.corners.normals.resize(static_cast<std::size_t>(corner_count));
+    for (Vec3& normal : mesh.corners.normals) normal = in.vec3("normal");
+  }
+  if ((channels & uvs_bit) != 0) {
+    in.check_room(corner_count, uv_size, "corner uvs");
+    mesh.corners.uvs.resize(static_cast<std::size_t>(corner_count));
+    for (Vec2& uv : mesh.corners.uvs) uv = in.vec2("uv");
+  }
+  if ((channels & tangents_bit) != 0) {
+    in.check_room(corner_count, tangent_size, "corner tangents");
+    mesh.corners.tangents.resize(static_cast<std::size_t>(corner_count));
+    for (Vec4& tangent : mesh.corners.tangents) tangent = in.vec4("tangent");
+  }
+  return mesh;
+}
+
+}  // namespace
+
+void write_version3_sections(const MeshTree& tree, const std::function<void(Tag, std::string_view)>& emit) {
+  const HeldFloatingPointExceptions held;
+  if (!tree.shatter_version.empty()) emit(version_tag, tree.shatter_version);
+  emit(recipe_tag, recipe_payload(tree.recipe));
+  emit(nodes_tag, nodes_payload(tree));
+  emit(geometry_tag, geometry_payload(tree.geometry));
+  emit(solids_tag, solids_payload(tree));
+  emit(meshes_tag, meshes_payload(tree, false));
+  emit(hulls_tag, meshes_payload(tree, true));
+  emit(bonds_tag, bonds_payload(tree));
+  emit(end_tag, std::string_view());
+}
+
+void read_version3_nodes(const Section& section, MeshTree& tree, Version3Pending& pending, RecordOffsets& offsets) {
+  PayloadReader in(section);
+  const std::uint32_t node_count = in.u32("the node count");
+  if (node_count == 0) in.fail("node count 0 (a tree has at least its root)");
+  const std::size_t flags_at = in.offset();
+  const std::uint8_t flags = in.u8("node flags");
+  if ((flags & ~known_node_flags) != 0) in.fail_at(flags_at, "unknown node flag bits " + hex(flags, 2));
+  pending.masses_derived = (flags & masses_stored_bit) == 0;
+  in.check_room(node_count, 1, "nodes");
+  std::vector<MeshTreeNode>& nodes = tree.nodes;
+  nodes.resize(node_count);
+  tree.cut_planes.resize(node_count);
+  offsets.nodes.resize(node_count);
+  // The nodes still owed children, innermost last: preorder hands each node to
+  // the innermost one.
+  std::vector<std::pair<NodeIndex, std::uint32_t>> open;  // node, children it still lacks
+  for (std::size_t k = 0; k < node_count; ++k) {
+    MeshTreeNode& node = nodes[k];
+    offsets.nodes[k] = in.offset();
+    in.set_record("node " + str(k));
+    const std::uint64_t code = in.varint("child count", 64);
+    const std::uint64_t child_count = code >> 1;
+    node.above_parent_plane = (code & 1) != 0;
+    if (k > 0) {
+      if (open.empty()) in.fail_at(offsets.nodes[k], "the child counts before it describe a whole tree of " + str(k) + " nodes");
+      node.parent = open.back().first;
+      node.depth = nodes[node.parent].depth + 1;
+      nodes[node.parent].children.push_back(static_cast<NodeIndex>(k));
+      if (--open.back().second == 0) open.pop_back();
+    }
+    if (child_count > node_count - 1 - k) {
+      in.fail_at(offsets.nodes[k], "node " + str(k) + " claims " + str(child_count) + " children, but only " + str(node_count - 1 - k) + " nodes follow");
+    }
+    if (child_count > 0) {
+      open.emplace_back(static_cast<NodeIndex>(k), static_cast<std::uint32_t>(child_count));
+      nodes[k].children.reserve(static_cast<std::size_t>(child_count));
+    }
+    if (child_count > 0 || (flags & leaf_planes_stored_bit) != 0) {
+      tree.cut_planes[k].normal = in.vec3("plane normal");
+      tree.cut_planes[k].offset = in.f64("plane offset");
+    }
+    if ((flags & seeds_stored_bit) != 0) {
+      node.seed = in.u64("seed");
+    } else {
+      const MeshTreeNode* parent = k == 0 ? nullptr : &nodes[node.parent];
+      node.seed = parent == nullptr ? root_node_seed(tree.recipe.seed) : child_node_seed(parent->seed, parent->children.size() - 1);
+    }
+    if ((flags & masses_stored_bit) != 0) {
+      node.mass.volume = in.f64("volume");
+      node.mass.centroid = in.vec3("centroid");
+      for (double& entry : node.mass.inertia) entry = in.f64("inertia");
+    }
+  }
+  in.set_record("");
+  if (!open.empty()) in.fail("node " + str(open.back().first) + " lacks " + str(open.back().second) + " of its children: the node count ends the tree early");
+  in.expect_end();
+  // Leaves are numbered in preorder, and every node's leaves follow it.
+  LeafIndex next_leaf = 0;
+  for (MeshTreeNode& node : nodes) {
+    node.first_leaf = next_leaf;
+    if (node.is_leaf()) ++next_leaf;
+  }
+  for (std::size_t k = node_count; k-- > 0;) {
+    MeshTreeNode& node = nodes[k];
+    node.leaf_count = node.is_leaf() ? 1 : 0;
+    for (const NodeIndex child : node.children) node.leaf_count += nodes[child].leaf_count;
+  }
+}
+
+void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets& offsets) {
+  PayloadReader in(section);
+  std::vector<MeshTreeNode>& nodes = tree.nodes;
+  const bool exact = tree.has_exact_representation();
+  const std::uint32_t record_count = in.u32("the solid count");
+  if (!exact && record_count != 0) {
+    in.fail(str(record_count) + " solids, but GEOM holds no input points (a tree without an exact representation stores none)");
+  }
+  if (exact && record_count != nodes.size()) in.fail(str(record_count) + " solids for " + str(nodes.size()) + " nodes");
+  offsets.solids.resize(record_count);
+  AncestorPath path;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> face_of_edge;
+  std::vector<std::uint32_t> across;  // corners whose line is the plane across their edge
+  for (std::size_t k = 0; k < record_count; ++k) {
+    offsets.solids[k] = in.offset();
+    in.set_record("node " + str(k));
+    MeshTreeNode& node = nodes[k];
+    path.enter(static_cast<NodeIndex>(k), node.depth);
+    Solid& solid = node.solid;
+    const std::size_t flags_at = in.offset();
+    const std::uint8_t flags = in.u8("solid flags");
+    if ((flags & ~(node_convex_bit | solid_convex_bit)) != 0) in.fail_at(flags_at, "unknown solid flag bits " + hex(flags, 2));
+    node.convex = (flags & node_convex_bit) != 0;
+    solid.convex = (flags & solid_convex_bit) != 0;
+    const std::uint32_t vertex_count = in.varint32("vertex count");
+    const std::uint32_t face_count = in.varint32("face count");
+    const std::uint32_t loop_count = in.varint32("loop count");
+    const std::uint32_t corner_count = in.varint32("corner count");
+
+    in.check_room(vertex_count, 2, "vertex definitions");
+    solid.defs.resize(vertex_count);
+    for (std::size_t v = 0; v < vertex_count; ++v) {
+      PointDef& def = solid.defs[v];
+      const std::size_t kind_at = in.offset();
+      const std::uint8_t kind = in.u8("vertex kind");
+      if (kind > detail::last_point_kind) in.fail_at(kind_at, "vertex " + str(v) + " has unknown kind " + str(kind));
+      def.kind = static_cast<PointKind>(kind);
+      switch (def.kind) {
+        case PointKind::input: def.a = in.varint32("vertex point"); break;
+        case PointKind::segment_plane:
+          def.a = in.varint32("vertex point");
+          def.b = in.varint32("vertex point");
+          def.planes[0] = read_plane(in, path, "vertex plane");
+          break;
+        case PointKind::three_planes:
+          for (PlaneRef& plane : def.planes) plane = read_plane(in, path, "vertex plane");
+          break;
+      }
+    }
+
+    in.check_room(face_count, 5, "faces");
+    solid.faces.resize(face_count);
+    std::uint64_t next_loop = 0;
+    for (SolidFace& face : solid.faces) {
+      face.plane = read_plane(in, path, "face plane");
+      const std::size_t face_flags_at = in.offset();
+      const std::uint8_t face_flags = in.u8("face flags");
+      if ((face_flags & ~(face_reversed_bit | face_convex_bit)) != 0) in.fail_at(face_flags_at, "unknown face flag bits " + hex(face_flags, 2));
+      face.reversed = (face_flags & face_reversed_bit) != 0;
+      face.convex = (face_flags & face_convex_bit) != 0;
+      face.surface = read_surface(in, path, "face surface");
+      face.source = in.varint32("face source");
+      const std::size_t count_at = in.offset();
+      face.loop_count = in.varint32("face loop count");
+      face.first_loop = static_cast<std::uint32_t>(next_loop);
+      next_loop += face.loop_count;
+      if (next_loop > loop_count) in.fail_at(count_at, "the faces claim " + str(next_loop) + " loops or more, of " + str(loop_count));
+    }
+
+    in.check_room(loop_count, 1, "loops");
+    solid.loops.resize(loop_count);
+    std::uint64_t next_corner = 0;
+    for (SolidLoop& loop : solid.loops) {
+      const std::size_t count_at = in.offset();
+      loop.corner_count = in.varint32("loop corner count");
+      loop.first_corner = static_cast<std::uint32_t>(next_corner);
+      next_corner += loop.corner_count;
+      if (next_corner > corner_count) in.fail_at(count_at, "the loops claim " + str(next_corner) + " corners or more, of " + str(corner_count));
+    }
+    // Corners not in any loop are refused by the validator; they still need a line.
+    in.check_room(corner_count, 1, "corners");
+    solid.corners.resize(corner_count);
+    across.clear();
+    for (std::size_t c = 0; c < corner_count; ++c) {
+      SolidCorner& corner = solid.corners[c];
+      const std::size_t at = in.offset();
+      const std::uint64_t code = in.varint("corner", 64);
+      const std::uint64_t mode = code & 3;
+      const std::uint64_t vertex = code >> 2;
+      if (vertex >= vertex_count) in.fail_at(at, "corner " + str(c) + " has vertex " + str(vertex) + ", of " + str(vertex_count));
+      corner.vertex = static_cast<VertexIndex>(vertex);
+      if (mode == line_across) {
+        across.push_back(static_cast<std::uint32_t>(c));
+        continue;
+      }
+      if (mode != line_stored && mode != line_segment) in.fail_at(at, "corner " + str(c) + " has line mode 3 (unknown)");
+      corner.line.other = read_plane(in, path, "corner line plane");
+      if (mode == line_segment) {
+        corner.line.p = in.varint32("corner segment");
+        corner.line.q = in.varint32("corner segment");
+        // A segment of two "none" points would come back as no segment.
+        if (corner.line.p == no_index) in.fail_at(at, "corner " + str(c) + " has a segment, but its segment is none");
+      }
+    }
+    if (across.empty()) continue;
+    // The line across an edge is the plane of the face that runs it the other way.
+    const std::uint64_t vertices = vertex_count;
+    face_of_edge.clear();
+    std::vector<std::uint32_t> next_vertex(corner_count, no_index);
+    for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+      const SolidFace& face = solid.faces[f];
+      for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+        for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+          next_vertex[edge.corner] = edge.to;
+          face_of_edge.emplace_back(edge.from * vertices + edge.to, f);
+        }
+      }
+    }
+    std::sort(face_of_edge.begin(), face_of_edge.end());
+    for (const std::uint32_t c : across) {
+      const std::uint64_t reverse = next_vertex[c] == no_index ? ~std::uint64_t{0} : next_vertex[c] * vertices + solid.corners[c].vertex;
+      const auto found = std::lower_bound(face_of_edge.begin(), face_of_edge.end(), std::pair<std::uint64_t, std::uint32_t>(reverse, 0));
+      if (found == face_of_edge.end() || found->first != reverse) {
+        in.fail_at(offsets.solids[k], "corner " + str(c) + " takes the plane of the face across its edge, but no face runs that edge the other way");
+      }
+      solid.corners[c].line.other = solid.faces[found->second].plane;
+    }
+  }
+  in.set_record("");
+  in.expect_end();
+}
+
+void read_version3_meshes(const Section& section, MeshTree& tree, bool hulls, Version3Pending& pending, RecordOffsets& offsets) {
+  PayloadReader in(section);
+  std::vector<MeshTreeNode>& nodes = tree.nodes;
+  const std::uint32_t mesh_count = in.u32("the mesh count");
+  if (mesh_count != nodes.size()) in.fail(str(mesh_count) + " meshes for " + str(nodes.size()) + " nodes");
+  std::vector<std::size_t>& record_offsets = hulls ? offsets.hulls : offsets.meshes;
+  std::vector<std::vector<std::uint32_t>>& sources = hulls ? pending.hull_sources : pending.mesh_sources;
+  record_offsets.resize(mesh_count);
+  sources.resize(mesh_count);
+  AncestorPath path;
+  for (std::size_t k = 0; k < mesh_count; ++k) {
+    record_offsets[k] = in.offset();
+    in.set_record("node " + str(k));
+    path.enter(static_cast<NodeIndex>(k), nodes[k].depth);
+    const std::size_t source_count = hulls ? nodes[k].mesh.positions.size() : nodes[k].solid.defs.size();
+    (hulls ? nodes[k].hull : nodes[k].mesh) = read_mesh(in, source_count, sources[k], path);
+  }
+  in.set_record("");
+  in.expect_end();
+}
+
+void read_version3_bonds(const Section& section, MeshTree& tree, RecordOffsets& offsets) {
+  const HeldFloatingPointExceptions held;
+  PayloadReader in(section);
+  const std::vector<MeshTreeNode>& nodes = tree.nodes;
+  const std::uint64_t bond_count = in.u64("the bond count");
+  const std::size_t flags_at = in.offset();
+  const std::uint8_t flags = in.u8("bond flags");
+  if ((flags & ~bond_normals_stored_bit) != 0) in.fail_at(flags_at, "unknown bond flag bits " + hex(flags, 2));
+  in.check_room(bond_count, 2 + 3 * 8, "bonds");
+  tree.bonds.resize(static_cast<std::size_t>(bond_count));
+  offsets.bonds.resize(tree.bonds.size());
+  const std::uint64_t leaf_count = tree.leaf_nodes.size();
+  std::uint64_t first = 0;
+  for (std::size_t i = 0; i < tree.bonds.size(); ++i) {
+    Bond& bond = tree.bonds[i];
+    offsets.bonds[i] = in.offset();
+    in.set_record("bond " + str(i));
+    first += in.varint("first", 64);
+    const std::uint64_t code = in.varint("second", 64);
+    const std::uint64_t second = first + 1 + (code >> 2);
+    if (first >= leaf_count || second >= leaf_count || second <= first) {
+      in.fail_at(offsets.bonds[i], "bond " + str(i) + " joins leaves " + str(first) + " and " + str(second) + ", of " + str(leaf_count));
+    }
+    bond.first = static_cast<LeafIndex>(first);
+    bond.second = static_cast<LeafIndex>(second);
+    // The cut node is where the two leaves' paths meet; `side` the child on first's side.
+    NodeIndex side = tree.leaf_nodes[bond.first];
+    NodeIndex cut = nodes[side].parent;
+    while (!(nodes[cut].first_leaf <= bond.second && bond.second < nodes[cut].first_leaf + nodes[cut].leaf_count)) {
+      side = cut;
+      cut = nodes[cut].parent;
+    }
+    bond.cut_node = cut;
+    const Plane& plane = tree.cut_planes[cut];
+    bond.area = in.f64("area");
+    const std::uint64_t axis_code = code & 3;
+    if (axis_code == centroid_stored) {
+      bond.centroid = in.vec3("centroid");
+    } else {
+      const int axis = static_cast<int>(axis_code);
+      const double u = in.f64("centroid");
+      const double v = in.f64("centroid");
+      bond.centroid = point_on_plane_over(plane, axis, u, v);
+    }
+    if ((flags & bond_normals_stored_bit) != 0) {
+      bond.normal = in.vec3("normal");
+    } else {
+      const Vec3 unit = normalized(plane.normal);
+      bond.normal = nodes[side].above_parent_plane ? -unit : unit;
+    }
+  }
+  in.set_record("");
+  in.expect_end();
+}
+
+void finish_version3(MeshTree& tree, const Version3Pending& pending) {
+  const HeldFloatingPointExceptions held;
+  const PlaneSet set = tree.plane_set();
+  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+    MeshTreeNode& node = tree.nodes[k];
+    const std::vector<std::uint32_t>& mesh_sources = pending.mesh_sources[k];
+    for (std::size_t v = 0; v < mesh_sources.size(); ++v) {
+      if (const std::uint32_t s = mesh_sources[v]; s != no_index) node.mesh.positions[v] = output_position(set, node.solid.defs[s], node.solid.approx[s]);
+    }
+    const std::vector<std::uint32_t>& hull_sources = pending.hull_sources[k];
+    for (std::size_t v = 0; v < hull_sources.size(); ++v) {
+      if (const std::uint32_t s = hull_sources[v]; s != no_index) node.hull.positions[v] = node.mesh.positions[s];
+    }
+    if (pending.masses_derived) node.mass = mass_properties(node.mesh);
+  }
+}
+
+}  // namespace shatter::file_layout
