@@ -365,11 +365,28 @@ void grow_balanced(Builder& builder, BuildNode& root, std::uint32_t target, unsi
 
 // --- numbering ------------------------------------------------------------------
 
+std::size_t count_nodes(const BuildNode& root) {
+  std::size_t count = 0;
+  std::vector<const BuildNode*> stack{&root};
+  while (!stack.empty()) {
+    const BuildNode* node = stack.back();
+    stack.pop_back();
+    ++count;
+    for (const auto& child : node->children) stack.push_back(child.get());
+  }
+  return count;
+}
+
 void number_tree(BuildNode& root, MeshTree& tree) {
   struct Pending {
     BuildNode* node;
     NodeIndex parent;
   };
+  // Sized once: a tree of a million fragments has two million nodes of some
+  // 600 bytes each, and growing by doubling would hold the old and new arrays.
+  const std::size_t node_count = count_nodes(root);
+  tree.nodes.reserve(node_count);
+  tree.cut_planes.reserve(node_count);
   std::vector<Pending> stack{{&root, no_node}};
   std::vector<NodeIndex> path;  // path[d]: the node at depth d above the current one
   while (!stack.empty()) {

@@ -65,6 +65,9 @@ class PlaneBonds {
       if (a.second != b.second) return a.second < b.second;
       return a.cut_node < b.cut_node;
     });
+    // Grown by doubling, the array may be twice its size: the tree keeps it (a
+    // million fragments have some ten million bonds of 72 bytes).
+    bonds.shrink_to_fit();
     return bonds;
   }
 
