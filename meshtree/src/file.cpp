@@ -202,14 +202,7 @@ Mesh read_mesh_record(PayloadReader& in) {
   Mesh mesh;
   const std::uint32_t vertex_count = in.u32("vertex count");
   const std::uint32_t triangle_count = in.u32("triangle count");
-  const std::size_t channels_at = in.offset();
-  const std::uint8_t channels = in.u8("channel flags");
-  if ((channels & ~known_channel_bits) != 0) in.fail_at(channels_at, "unknown attribute channel bits " + hex(channels, 2));
-  // A channel is present when it holds values, so a mesh without triangles has
-  // none; accepting bits here would decode to a mesh that encodes differently.
-  if (triangle_count == 0 && channels != 0) {
-    in.fail_at(channels_at, "attribute channel bits " + hex(channels, 2) + " for a mesh without triangles (must be 0)");
-  }
+  const std::uint8_t channels = read_channel_flags(in, triangle_count);
 
   in.check_room(vertex_count, vertex_size, "vertices");
   mesh.positions.resize(vertex_count);
@@ -223,22 +216,7 @@ Mesh read_mesh_record(PayloadReader& in) {
   mesh.surfaces.resize(triangle_count);
   for (SurfaceId& surface : mesh.surfaces) surface = in.u32("surface id");
 
-  const std::uint64_t corner_count = 3 * std::uint64_t{triangle_count};
-  if ((channels & normals_bit) != 0) {
-    in.check_room(corner_count, normal_size, "corner normals");
-    mesh.corners.normals.resize(static_cast<std::size_t>(corner_count));
-    for (Vec3& normal : mesh.corners.normals) normal = in.vec3("normal");
-  }
-  if ((channels & uvs_bit) != 0) {
-    in.check_room(corner_count, uv_size, "corner uvs");
-    mesh.corners.uvs.resize(static_cast<std::size_t>(corner_count));
-    for (Vec2& uv : mesh.corners.uvs) uv = in.vec2("uv");
-  }
-  if ((channels & tangents_bit) != 0) {
-    in.check_room(corner_count, tangent_size, "corner tangents");
-    mesh.corners.tangents.resize(static_cast<std::size_t>(corner_count));
-    for (Vec4& tangent : mesh.corners.tangents) tangent = in.vec4("tangent");
-  }
+  read_corner_channels(in, channels, triangle_count, mesh);
   return mesh;
 }
 
@@ -312,11 +290,7 @@ void read_solids(const Section& section, std::vector<MeshTreeNode>& nodes, bool 
     in.set_record("node " + str(k));
     MeshTreeNode& node = nodes[k];
     Solid& solid = node.solid;
-    const std::size_t flags_at = in.offset();
-    const std::uint8_t flags = in.u8("solid flags");
-    if ((flags & ~(node_convex_bit | solid_convex_bit)) != 0) in.fail_at(flags_at, "unknown solid flag bits " + hex(flags, 2));
-    node.convex = (flags & node_convex_bit) != 0;
-    solid.convex = (flags & solid_convex_bit) != 0;
+    read_solid_flags(in, node);
     const std::uint32_t vertex_count = in.u32("vertex count");
     const std::uint32_t face_count = in.u32("face count");
     const std::uint32_t loop_count = in.u32("loop count");
@@ -326,10 +300,7 @@ void read_solids(const Section& section, std::vector<MeshTreeNode>& nodes, bool 
     solid.defs.resize(vertex_count);
     for (std::size_t v = 0; v < vertex_count; ++v) {
       PointDef& def = solid.defs[v];
-      const std::size_t kind_at = in.offset();
-      const std::uint8_t kind = in.u8("vertex kind");
-      if (kind > last_point_kind) in.fail_at(kind_at, "vertex " + str(v) + " has unknown kind " + str(kind));
-      def.kind = static_cast<PointKind>(kind);
+      def.kind = read_point_kind(in, v);
       // Fields a kind does not use land where the validator refuses non-zero ones.
       if (def.kind == PointKind::three_planes) {
         for (PlaneRef& plane : def.planes) plane.bits = in.u32("vertex plane");
@@ -345,18 +316,12 @@ void read_solids(const Section& section, std::vector<MeshTreeNode>& nodes, bool 
     std::uint64_t next_loop = 0;
     for (SolidFace& face : solid.faces) {
       face.plane.bits = in.u32("face plane");
-      const std::size_t face_flags_at = in.offset();
-      const std::uint8_t face_flags = in.u8("face flags");
-      if ((face_flags & ~(face_reversed_bit | face_convex_bit)) != 0) in.fail_at(face_flags_at, "unknown face flag bits " + hex(face_flags, 2));
-      face.reversed = (face_flags & face_reversed_bit) != 0;
-      face.convex = (face_flags & face_convex_bit) != 0;
+      read_face_flags(in, face);
       face.surface = in.u32("face surface");
       face.source = in.u32("face source");
       const std::size_t count_at = in.offset();
       face.loop_count = in.u32("face loop count");
-      face.first_loop = static_cast<std::uint32_t>(next_loop);
-      next_loop += face.loop_count;
-      if (next_loop > loop_count) in.fail_at(count_at, "the faces claim " + str(next_loop) + " loops or more, of " + str(loop_count));
+      face.first_loop = next_range(in, count_at, face.loop_count, next_loop, loop_count, "faces", "loops");
     }
 
     in.check_room(loop_count, loop_size, "loops");
@@ -365,9 +330,7 @@ void read_solids(const Section& section, std::vector<MeshTreeNode>& nodes, bool 
     for (SolidLoop& loop : solid.loops) {
       const std::size_t count_at = in.offset();
       loop.corner_count = in.u32("loop corner count");
-      loop.first_corner = static_cast<std::uint32_t>(next_corner);
-      next_corner += loop.corner_count;
-      if (next_corner > corner_count) in.fail_at(count_at, "the loops claim " + str(next_corner) + " corners or more, of " + str(corner_count));
+      loop.first_corner = next_range(in, count_at, loop.corner_count, next_corner, corner_count, "loops", "corners");
     }
 
     in.check_room(corner_count, corner_min_size, "corners");

@@ -336,6 +336,99 @@ class PayloadReader {
   std::string record_;
 };
 
+// ---------------------------------------------------------------------------
+// Mesh records' attribute channels, alike in every version
+
+/// The channel flags byte of a mesh record: bit 0 normals, 1 uvs, 2 tangents.
+inline std::uint8_t channel_flags(const Mesh& mesh) {
+  return static_cast<std::uint8_t>((mesh.corners.has_normals() ? normals_bit : 0) | (mesh.corners.has_uvs() ? uvs_bit : 0) |
+                                   (mesh.corners.has_tangents() ? tangents_bit : 0));
+}
+
+/// Reads a channel flags byte, refusing unknown bits, and any channel on a mesh
+/// without triangles (a channel is present when it holds values, so accepting
+/// bits there would decode to a mesh that encodes differently).
+inline std::uint8_t read_channel_flags(PayloadReader& in, std::uint64_t triangle_count) {
+  const std::size_t at = in.offset();
+  const std::uint8_t channels = in.u8("channel flags");
+  if ((channels & ~known_channel_bits) != 0) in.fail_at(at, "unknown attribute channel bits " + hex(channels, 2));
+  if (triangle_count == 0 && channels != 0) {
+    in.fail_at(at, "attribute channel bits " + hex(channels, 2) + " for a mesh without triangles (must be 0)");
+  }
+  return channels;
+}
+
+/// Writes the mesh's present channels, 3T values each (corner c of triangle t
+/// at 3t + c): normals f64 x3, uvs f64 x2, tangents f64 x4.
+inline void write_corner_channels(ByteWriter& out, const Mesh& mesh) {
+  for (const Vec3& normal : mesh.corners.normals) out.vec3(normal);
+  for (const Vec2& uv : mesh.corners.uvs) out.vec2(uv);
+  for (const Vec4& tangent : mesh.corners.tangents) out.vec4(tangent);
+}
+
+/// Reads the channels `channels` names into `mesh`, laid out as
+/// write_corner_channels writes them, checking the room before sizing each.
+inline void read_corner_channels(PayloadReader& in, std::uint8_t channels, std::uint64_t triangle_count, Mesh& mesh) {
+  const std::uint64_t corner_count = 3 * triangle_count;
+  if ((channels & normals_bit) != 0) {
+    in.check_room(corner_count, normal_size, "corner normals");
+    mesh.corners.normals.resize(static_cast<std::size_t>(corner_count));
+    for (Vec3& normal : mesh.corners.normals) normal = in.vec3("normal");
+  }
+  if ((channels & uvs_bit) != 0) {
+    in.check_room(corner_count, uv_size, "corner uvs");
+    mesh.corners.uvs.resize(static_cast<std::size_t>(corner_count));
+    for (Vec2& uv : mesh.corners.uvs) uv = in.vec2("uv");
+  }
+  if ((channels & tangents_bit) != 0) {
+    in.check_room(corner_count, tangent_size, "corner tangents");
+    mesh.corners.tangents.resize(static_cast<std::size_t>(corner_count));
+    for (Vec4& tangent : mesh.corners.tangents) tangent = in.vec4("tangent");
+  }
+}
+
+// ---------------------------------------------------------------------------
+// SOLD records' bytes that every version lays out alike
+
+/// Reads a SOLD record's flags byte into the node's and its solid's convex flags.
+inline void read_solid_flags(PayloadReader& in, MeshTreeNode& node) {
+  const std::size_t at = in.offset();
+  const std::uint8_t flags = in.u8("solid flags");
+  if ((flags & ~(node_convex_bit | solid_convex_bit)) != 0) in.fail_at(at, "unknown solid flag bits " + hex(flags, 2));
+  node.convex = (flags & node_convex_bit) != 0;
+  node.solid.convex = (flags & solid_convex_bit) != 0;
+}
+
+/// Reads vertex `vertex`'s kind byte, refusing an unknown kind.
+inline PointKind read_point_kind(PayloadReader& in, std::size_t vertex) {
+  const std::size_t at = in.offset();
+  const std::uint8_t kind = in.u8("vertex kind");
+  if (kind > detail::last_point_kind) in.fail_at(at, "vertex " + str(vertex) + " has unknown kind " + str(kind));
+  return static_cast<PointKind>(kind);
+}
+
+/// Reads a face's flags byte into its reversed and convex flags.
+inline void read_face_flags(PayloadReader& in, SolidFace& face) {
+  const std::size_t at = in.offset();
+  const std::uint8_t flags = in.u8("face flags");
+  if ((flags & ~(face_reversed_bit | face_convex_bit)) != 0) in.fail_at(at, "unknown face flag bits " + hex(flags, 2));
+  face.reversed = (flags & face_reversed_bit) != 0;
+  face.convex = (flags & face_convex_bit) != 0;
+}
+
+/// Faces take their loops, and loops their corners, in order: gives the next
+/// range of `count` items its `first` (the running sum `next`), refusing a sum
+/// beyond the record's `total`. `count_at`: where the count was read.
+inline std::uint32_t next_range(PayloadReader& in, std::size_t count_at, std::uint32_t count, std::uint64_t& next,
+                                std::uint32_t total, const char* owners, const char* items) {
+  const auto first = static_cast<std::uint32_t>(next);
+  next += count;
+  if (next > total) {
+    in.fail_at(count_at, std::string("the ") + owners + " claim " + str(next) + " " + items + " or more, of " + str(total));
+  }
+  return first;
+}
+
 /// Where each record of a decoded tree came from, to place a defect in the file.
 struct RecordOffsets {
   std::vector<std::size_t> nodes, meshes, hulls, solids;

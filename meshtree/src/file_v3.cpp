@@ -172,8 +172,7 @@ void write_mesh(ByteWriter& out, const Mesh& mesh, std::span<const Vec3> sources
                 const std::vector<MeshTreeNode>& nodes) {
   out.varint(mesh.positions.size());
   out.varint(mesh.triangles.size());
-  out.u8(static_cast<std::uint8_t>((mesh.corners.has_normals() ? normals_bit : 0) | (mesh.corners.has_uvs() ? uvs_bit : 0) |
-                                   (mesh.corners.has_tangents() ? tangents_bit : 0)));
+  out.u8(channel_flags(mesh));
   PositionFinder finder(sources);
   for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
     const std::uint64_t code = finder.code(v, mesh.positions[v]);
@@ -206,9 +205,7 @@ void write_mesh(ByteWriter& out, const Mesh& mesh, std::span<const Vec3> sources
     out.varint(code);
     out.varint(length);
   }
-  for (const Vec3& normal : mesh.corners.normals) out.vec3(normal);
-  for (const Vec2& uv : mesh.corners.uvs) out.vec2(uv);
-  for (const Vec4& tangent : mesh.corners.tangents) out.vec4(tangent);
+  write_corner_channels(out, mesh);
 }
 
 std::string nodes_payload(const MeshTree& tree) {
@@ -457,12 +454,7 @@ Mesh read_mesh(PayloadReader& in, std::size_t source_count, std::vector<std::uin
   Mesh mesh;
   const std::uint32_t vertex_count = in.varint32("vertex count");
   const std::uint32_t triangle_count = in.varint32("triangle count");
-  const std::size_t channels_at = in.offset();
-  const std::uint8_t channels = in.u8("channel flags");
-  if ((channels & ~known_channel_bits) != 0) in.fail_at(channels_at, "unknown attribute channel bits " + hex(channels, 2));
-  if (triangle_count == 0 && channels != 0) {
-    in.fail_at(channels_at, "attribute channel bits " + hex(channels, 2) + " for a mesh without triangles (must be 0)");
-  }
+  const std::uint8_t channels = read_channel_flags(in, triangle_count);
   in.check_room(vertex_count, 1, "vertices");
   mesh.positions.resize(vertex_count);
   sources.assign(vertex_count, no_index);
@@ -506,22 +498,7 @@ Mesh read_mesh(PayloadReader& in, std::size_t source_count, std::vector<std::uin
   }
   if (mesh.surfaces.size() != triangle_count) in.fail("the surface runs cover " + str(mesh.surfaces.size()) + " of " + str(triangle_count) + " triangles");
 
-  const std::uint64_t corner_count = 3 * std::uint64_t{triangle_count};
-  if ((channels & normals_bit) != 0) {
-    in.check_room(corner_count, normal_size, "corner normals");
-    mesh.corners.normals.resize(static_cast<std::size_t>(corner_count));
-    for (Vec3& normal : mesh.corners.normals) normal = in.vec3("normal");
-  }
-  if ((channels & uvs_bit) != 0) {
-    in.check_room(corner_count, uv_size, "corner uvs");
-    mesh.corners.uvs.resize(static_cast<std::size_t>(corner_count));
-    for (Vec2& uv : mesh.corners.uvs) uv = in.vec2("uv");
-  }
-  if ((channels & tangents_bit) != 0) {
-    in.check_room(corner_count, tangent_size, "corner tangents");
-    mesh.corners.tangents.resize(static_cast<std::size_t>(corner_count));
-    for (Vec4& tangent : mesh.corners.tangents) tangent = in.vec4("tangent");
-  }
+  read_corner_channels(in, channels, triangle_count, mesh);
   return mesh;
 }
 
@@ -628,11 +605,7 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
     MeshTreeNode& node = nodes[k];
     path.enter(static_cast<NodeIndex>(k), node.depth);
     Solid& solid = node.solid;
-    const std::size_t flags_at = in.offset();
-    const std::uint8_t flags = in.u8("solid flags");
-    if ((flags & ~(node_convex_bit | solid_convex_bit)) != 0) in.fail_at(flags_at, "unknown solid flag bits " + hex(flags, 2));
-    node.convex = (flags & node_convex_bit) != 0;
-    solid.convex = (flags & solid_convex_bit) != 0;
+    read_solid_flags(in, node);
     const std::uint32_t vertex_count = in.varint32("vertex count");
     const std::uint32_t face_count = in.varint32("face count");
     const std::uint32_t loop_count = in.varint32("loop count");
@@ -642,10 +615,7 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
     solid.defs.resize(vertex_count);
     for (std::size_t v = 0; v < vertex_count; ++v) {
       PointDef& def = solid.defs[v];
-      const std::size_t kind_at = in.offset();
-      const std::uint8_t kind = in.u8("vertex kind");
-      if (kind > detail::last_point_kind) in.fail_at(kind_at, "vertex " + str(v) + " has unknown kind " + str(kind));
-      def.kind = static_cast<PointKind>(kind);
+      def.kind = read_point_kind(in, v);
       switch (def.kind) {
         case PointKind::input: def.a = in.varint32("vertex point"); break;
         case PointKind::segment_plane:
@@ -664,18 +634,12 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
     std::uint64_t next_loop = 0;
     for (SolidFace& face : solid.faces) {
       face.plane = read_plane(in, path, "face plane");
-      const std::size_t face_flags_at = in.offset();
-      const std::uint8_t face_flags = in.u8("face flags");
-      if ((face_flags & ~(face_reversed_bit | face_convex_bit)) != 0) in.fail_at(face_flags_at, "unknown face flag bits " + hex(face_flags, 2));
-      face.reversed = (face_flags & face_reversed_bit) != 0;
-      face.convex = (face_flags & face_convex_bit) != 0;
+      read_face_flags(in, face);
       face.surface = read_surface(in, path, "face surface");
       face.source = in.varint32("face source");
       const std::size_t count_at = in.offset();
       face.loop_count = in.varint32("face loop count");
-      face.first_loop = static_cast<std::uint32_t>(next_loop);
-      next_loop += face.loop_count;
-      if (next_loop > loop_count) in.fail_at(count_at, "the faces claim " + str(next_loop) + " loops or more, of " + str(loop_count));
+      face.first_loop = next_range(in, count_at, face.loop_count, next_loop, loop_count, "faces", "loops");
     }
 
     in.check_room(loop_count, 1, "loops");
@@ -684,9 +648,7 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
     for (SolidLoop& loop : solid.loops) {
       const std::size_t count_at = in.offset();
       loop.corner_count = in.varint32("loop corner count");
-      loop.first_corner = static_cast<std::uint32_t>(next_corner);
-      next_corner += loop.corner_count;
-      if (next_corner > corner_count) in.fail_at(count_at, "the loops claim " + str(next_corner) + " corners or more, of " + str(corner_count));
+      loop.first_corner = next_range(in, count_at, loop.corner_count, next_corner, corner_count, "loops", "corners");
     }
     // Corners not in any loop are refused by the validator; they still need a line.
     in.check_room(corner_count, 1, "corners");
