@@ -51,7 +51,7 @@
 //         (0 or 1). How the build ran (threads, ...) is no part of the tree.
 //   NODE  u32 node count n (>= 1), u8 flags (bit 0 seeds stored, bit 1 masses
 //         stored, bit 2 leaves' planes stored; other bits 0), then per node in
-//         preorder: vu (c << 1 | above_parent_plane), c its child count; f64 x4
+//         preorder: vu (c << 1 | above_parent_plane), 64 bits, c its child count; f64 x4
 //         its cut plane (normal x, y, z, offset) when c > 0 or bit 2; u64 seed
 //         when bit 0; f64 volume, f64 x3 centroid, f64 x9 inertia (row-major)
 //         when bit 1. A node's children are the next c subtrees in preorder, which
@@ -88,7 +88,7 @@
 //         convex node has an empty hull.
 //   BOND  u64 bond count B, u8 flags (bit 0 normals stored; other bits 0), per
 //         bond in order: vu (first - the previous bond's first; the first bond's
-//         first), vu ((second - first - 1) << 2 | a), 64 bits, f64 area, then the
+//         first), 64 bits, vu ((second - first - 1) << 2 | a), 64 bits, f64 area, then the
 //         centroid: a = 3: f64 x3; else f64 u, f64 v, the coordinates (a + 1) % 3
 //         and (a + 2) % 3, and coordinate a solved from the cut plane by
 //         point_on_plane_over (kernel/vec.hpp); then f64 x3 normal when bit 0.
