@@ -119,20 +119,22 @@ Mesh read_off(std::string_view bytes) {
     if (!lines.next(tokens)) {
       refuse("OFF file ends after " + std::to_string(face) + " of " + std::to_string(face_count) + " faces");
     }
-    const std::string where = "face " + std::to_string(face) + at_line(lines.line_number());
+    // Made only for a message: formatting it for every face cost as much as parsing the face.
+    const std::size_t line = lines.line_number();
+    const auto where = [&] { return "face " + std::to_string(face) + at_line(line); };
     std::int64_t corner_count = 0;
-    if (!parse_integer(tokens[0], corner_count)) refuse(where + ": vertex count '" + std::string(tokens[0].substr(0, 40)) + "' is not an integer");
-    if (corner_count < 3) refuse(where + " has " + std::to_string(corner_count) + " vertices, at least 3 needed");
+    if (!parse_integer(tokens[0], corner_count)) refuse(where() + ": vertex count '" + std::string(tokens[0].substr(0, 40)) + "' is not an integer");
+    if (corner_count < 3) refuse(where() + " has " + std::to_string(corner_count) + " vertices, at least 3 needed");
     // Values past the indices are the optional face colour.
     if (static_cast<std::uint64_t>(corner_count) > tokens.size() - 1) {
-      refuse(where + " lists " + std::to_string(tokens.size() - 1) + " of its " + std::to_string(corner_count) + " vertex indices");
+      refuse(where() + " lists " + std::to_string(tokens.size() - 1) + " of its " + std::to_string(corner_count) + " vertex indices");
     }
     polygon.clear();
     for (std::size_t k = 1; k <= static_cast<std::size_t>(corner_count); ++k) {
       std::int64_t index = 0;
-      if (!parse_integer(tokens[k], index)) refuse(where + ": vertex index '" + std::string(tokens[k].substr(0, 40)) + "' is not an integer");
+      if (!parse_integer(tokens[k], index)) refuse(where() + ": vertex index '" + std::string(tokens[k].substr(0, 40)) + "' is not an integer");
       if (index < 0 || static_cast<std::uint64_t>(index) >= vertex_count) {
-        refuse(where + ": vertex index " + std::to_string(index) + " out of range [0, " + std::to_string(vertex_count) + ")");
+        refuse(where() + ": vertex index " + std::to_string(index) + " out of range [0, " + std::to_string(vertex_count) + ")");
       }
       polygon.push_back(static_cast<std::size_t>(index));
     }

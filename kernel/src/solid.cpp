@@ -19,31 +19,22 @@ EpickPoint epick(const Vec3& p) { return {p.x, p.y, p.z}; }
 
 }  // namespace
 
-Solid solid_from_mesh(const Mesh& mesh, bool merge_coplanar, InputGeometry& geometry) {
+Solid solid_from_mesh(const Mesh& mesh, bool merge_coplanar, InputGeometry& geometry, const HalfEdgeTwins* twins) {
   const std::size_t triangle_count = mesh.triangles.size();
   // Half-edge 3t + c runs from corner c of triangle t to corner c + 1. Each one's
   // twin (the same edge the other way) and the triangle that holds it.
-  std::vector<std::uint32_t> twin(3 * triangle_count);
-  {
-    IndexMap half_edge_of(triangle_count * 3);
-    for (TriangleIndex t = 0; t < triangle_count; ++t) {
-      const Triangle& tri = mesh.triangles[t];
-      for (std::uint32_t c = 0; c < 3; ++c) {
-        const std::uint32_t h = 3 * t + c;
-        if (half_edge_of.insert(directed_edge_key(tri[c], tri[(c + 1) % 3]), h) != h) {
-          throw InvalidMeshError("solid_from_mesh: directed edge used twice (not a consistently oriented manifold)");
-        }
-      }
-    }
-    for (TriangleIndex t = 0; t < triangle_count; ++t) {
-      const Triangle& tri = mesh.triangles[t];
-      for (std::uint32_t c = 0; c < 3; ++c) {
-        const std::uint32_t h = half_edge_of.find(directed_edge_key(tri[(c + 1) % 3], tri[c]));
-        if (h == IndexMap::absent) throw InvalidMeshError("solid_from_mesh: open mesh (an edge has one triangle)");
-        twin[3 * t + c] = h;
-      }
-    }
+  HalfEdgeTwins computed;
+  if (twins == nullptr) {
+    computed = half_edge_twins(mesh.triangles, mesh.positions.size());
+    twins = &computed;
   }
+  if (twins->repeated) {
+    throw InvalidMeshError("solid_from_mesh: directed edge used twice (not a consistently oriented manifold)");
+  }
+  if (twins->first_unmatched != HalfEdgeTwins::none) {
+    throw InvalidMeshError("solid_from_mesh: open mesh (an edge has one triangle)");
+  }
+  const std::vector<std::uint32_t>& twin = twins->twin;
 
   // Each edge once: are its two triangles on one plane (exact), and is it convex?
   // The same orientation decides all three: merging, which edges need a second
@@ -165,6 +156,10 @@ Solid solid_from_mesh(const Mesh& mesh, bool merge_coplanar, InputGeometry& geom
 
   // Planes: one input plane per group, through the points of its first triangle.
   const auto plane_base = static_cast<std::uint32_t>(geometry.planes.size());
+  // Reserved: growing these (64-byte elements, one per face) by doubling copied
+  // more than was written on a large mesh.
+  geometry.planes.reserve(plane_base + front.size());
+  geometry.plane_approx.reserve(plane_base + front.size());
   for (const TriangleIndex t : front) {
     const Triangle& tri = mesh.triangles[t];
     geometry.planes.push_back({tri[0], tri[1], tri[2]});
@@ -177,6 +172,7 @@ Solid solid_from_mesh(const Mesh& mesh, bool merge_coplanar, InputGeometry& geom
   solid.faces.reserve(front.size());
   solid.loops.reserve(loop_start.size() - 1);
   solid.corners.reserve(loop_half_edges.size());
+  solid.defs.reserve(mesh.positions.size());
   std::vector<VertexIndex> local(mesh.positions.size(), no_index);
   for (std::uint32_t g = 0; g < front.size(); ++g) {
     SolidFace face;

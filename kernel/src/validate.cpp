@@ -22,6 +22,7 @@
 #include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/predicates.hpp"
+#include "shatter/kernel/self_intersections.hpp"
 #include "shatter/kernel/union_find.hpp"
 
 namespace shatter {
@@ -69,8 +70,6 @@ void append(ValidationReport& report, DefectKind kind, Tally&& tally) {
   if (tally.count > 0) report.defects.push_back({kind, tally.count, std::move(tally.first)});
 }
 
-bool triangles_intersect(const std::vector<Vec3>& positions, const Triangle& a, const Triangle& b);
-
 // The self-intersection defect for `pairs` (sorted), none when there is no pair.
 void append_self_intersections(ValidationReport& report, const std::vector<std::pair<std::size_t, std::size_t>>& pairs) {
   if (pairs.empty()) return;
@@ -91,30 +90,6 @@ TriangleBox box_of(const std::vector<Vec3>& positions, const Triangle& tri, std:
     }
   }
   return TriangleBox(CGAL::Bbox_3(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]), handle);
-}
-
-// Self-intersecting triangle pairs, sorted (smaller index first in each pair, pairs
-// in lexicographic order): CGAL's box intersection finds the pairs whose bounding
-// boxes meet, and triangles_intersect decides each exactly, with the semantics of
-// CGAL PMP's self_intersections (triangles meeting only in shared corners or a
-// shared edge do not count). On the mesh's own arrays: no halfedge structure is
-// built, which cost more than the test itself on large inputs.
-std::vector<std::pair<std::size_t, std::size_t>> intersecting_pairs(const std::vector<Vec3>& positions,
-                                                                    const std::vector<Triangle>& triangles) {
-  std::vector<TriangleBox> boxes;
-  boxes.reserve(triangles.size());
-  for (std::size_t t = 0; t < triangles.size(); ++t) boxes.push_back(box_of(positions, triangles[t], t));
-  std::vector<std::pair<std::size_t, std::size_t>> pairs;
-  CGAL::box_self_intersection_d(
-      boxes.begin(), boxes.end(),
-      [&](const TriangleBox& a, const TriangleBox& b) {
-        const std::size_t i = a.handle(), j = b.handle();
-        if (triangles_intersect(positions, triangles[i], triangles[j])) pairs.emplace_back(std::min(i, j), std::max(i, j));
-      },
-      std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-  return pairs;
 }
 
 // Whether every index is in range, every vertex used, no triangle repeats an
@@ -292,7 +267,7 @@ ValidationReport validate_sound_topology(const Mesh& mesh, const ValidationOptio
   append(report, DefectKind::zero_area_triangle, std::move(zero_area));
   if (signed_volume_sign(mesh) == Sign::negative) report.defects.push_back({DefectKind::inward_orientation, 1, "whole mesh"});
   if (options.check_self_intersections && flat_free) {
-    append_self_intersections(report, intersecting_pairs(mesh.positions, mesh.triangles));
+    append_self_intersections(report, self_intersecting_pairs(mesh.positions, mesh.triangles));
     report.self_intersections_checked = true;
   }
   return report;
@@ -489,7 +464,7 @@ ValidationReport validate_masked(const Mesh& mesh, const ValidationOptions& opti
         }
       }
     }
-    append_self_intersections(report, intersecting_pairs(positions, triangles));
+    append_self_intersections(report, self_intersecting_pairs(positions, triangles));
     report.self_intersections_checked = true;
   }
   return report;
@@ -518,102 +493,6 @@ void require_valid_solid(const Mesh& mesh, std::string_view name, bool allow_sel
 }
 
 namespace {
-
-// Whether the projections of two triangles, dropping `axis`, are both proper
-// triangles and apart except at shared corners: some edge line of one has every
-// corner of the other strictly outside it (corners they share excepted). Then
-// each triangle meets every line along `axis` at most once, so the two can share
-// no point but their shared corners, whatever their heights. Exact (orient2d on
-// the doubles). Nearly coplanar neighbours, which would send orient3d to exact
-// arithmetic, are settled here.
-bool projections_apart(const std::vector<Vec3>& positions, const Triangle& a, const Triangle& b, int axis) {
-  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
-  const auto p2 = [&](VertexIndex v) { return Vec2{positions[v][i], positions[v][j]}; };
-  const Vec2 pa[3] = {p2(a[0]), p2(a[1]), p2(a[2])}, pb[3] = {p2(b[0]), p2(b[1]), p2(b[2])};
-  const Sign turn_a = orient2d(pa[0], pa[1], pa[2]), turn_b = orient2d(pb[0], pb[1], pb[2]);
-  if (turn_a == Sign::zero || turn_b == Sign::zero) return false;
-  const auto separates = [&](const Vec2* p, const Triangle& t, Sign turn, const Vec2* q, const Triangle& u) {
-    for (int e = 0; e < 3; ++e) {
-      bool outside = true;
-      for (int k = 0; k < 3 && outside; ++k) {
-        if (u[k] == t[e] || u[k] == t[(e + 1) % 3]) continue;  // a shared corner
-        const Sign s = orient2d(p[e], p[(e + 1) % 3], q[k]);
-        outside = s != Sign::zero && s != turn;
-      }
-      if (outside) return true;
-    }
-    return false;
-  };
-  return separates(pa, a, turn_a, pb, b) || separates(pb, b, turn_b, pa, a);
-}
-
-// Whether triangle b, but for the corners it shares with a, lies strictly on one
-// side of a's plane (so it meets a at most in their shared corners), as far as
-// orient3d's filter certifies: a quick rejection. Undecided queries (mostly
-// exactly coplanar neighbours of one face) go on to projections_apart, which
-// settles them more cheaply than orient3d's expansion stages would (asking
-// orient3d here made fandisk x4 -> 256's cutting 40 % slower).
-bool strictly_beside(const std::vector<Vec3>& positions, const Triangle& a, const Triangle& b) {
-  const Vec3& p = positions[a[0]];
-  const Vec3& q = positions[a[1]];
-  const Vec3& r = positions[a[2]];
-  Sign side = Sign::zero;
-  for (const VertexIndex v : b) {
-    if (v == a[0] || v == a[1] || v == a[2]) continue;
-    const std::optional<Sign> s = orient3d_if_clear(p, q, r, positions[v]);
-    if (!s || (side != Sign::zero && *s != side)) return false;
-    side = *s;
-  }
-  return side != Sign::zero;
-}
-
-// Whether two triangles of a mesh meet beyond the vertices and edge they share,
-// exactly (the test of CGAL's self_intersections, on a triangle soup): sharing an
-// edge, only when coplanar and on one side of it; sharing a vertex, when the edge
-// of either opposite the vertex meets the other; otherwise, when they meet. Tried
-// first, cheapest first: one triangle strictly beside the other's plane (the
-// filter of the kernel's orient3d), then their projections apart along the axis of a's largest normal
-// component (exact 2D orientations, which settle nearly coplanar neighbours).
-bool triangles_intersect(const std::vector<Vec3>& positions, const Triangle& a, const Triangle& b) {
-  using K = CGAL::Epick;
-  if (strictly_beside(positions, a, b) || strictly_beside(positions, b, a)) return false;
-  {
-    const Vec3 n = cross(positions[a[1]] - positions[a[0]], positions[a[2]] - positions[a[0]]);
-    const double ax = std::fabs(n.x), ay = std::fabs(n.y), az = std::fabs(n.z);
-    const int axis = ax >= ay && ax >= az ? 0 : ay >= az ? 1 : 2;
-    if (projections_apart(positions, a, b, axis)) return false;
-  }
-  const auto point = [&](VertexIndex v) {
-    const Vec3& p = positions[v];
-    return K::Point_3(p.x, p.y, p.z);
-  };
-  int shared = 0, shared_a = -1, shared_b = -1;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) {
-      if (a[i] != b[j]) continue;
-      ++shared;
-      if (shared_a < 0) shared_a = i, shared_b = j;
-    }
-  }
-  if (shared >= 3) return true;  // the same triangle twice
-  if (shared == 2) {
-    // The vertex of each not on the shared edge.
-    int ia = 0, ib = 0;
-    for (int i = 0; i < 3; ++i) {
-      if (a[i] != b[0] && a[i] != b[1] && a[i] != b[2]) ia = i;
-      if (b[i] != a[0] && b[i] != a[1] && b[i] != a[2]) ib = i;
-    }
-    const K::Point_3 u = point(a[(ia + 1) % 3]), v = point(a[(ia + 2) % 3]), p = point(a[ia]), q = point(b[ib]);
-    return CGAL::coplanar(u, v, p, q) && CGAL::coplanar_orientation(u, v, p, q) == CGAL::POSITIVE;
-  }
-  const K::Triangle_3 ta(point(a[0]), point(a[1]), point(a[2])), tb(point(b[0]), point(b[1]), point(b[2]));
-  if (shared == 1) {
-    const K::Segment_3 sa(point(a[(shared_a + 1) % 3]), point(a[(shared_a + 2) % 3]));
-    const K::Segment_3 sb(point(b[(shared_b + 1) % 3]), point(b[(shared_b + 2) % 3]));
-    return CGAL::do_intersect(ta, sb) || CGAL::do_intersect(tb, sa);
-  }
-  return CGAL::do_intersect(ta, tb);
-}
 
 // A triangle's corner positions, rotated to start at the lexicographically least,
 // so the same triangle gives the same key whatever its first corner.

@@ -1,9 +1,11 @@
 // Welding: one topological vertex per distinct position (DESIGN.md, "Data model").
 
+#include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <limits>
 #include <string>
-#include <unordered_map>
+#include <vector>
 
 #include "io_internal.hpp"
 #include "position_key.hpp"
@@ -14,6 +16,56 @@ using kernel_detail::key_of;
 using kernel_detail::PositionKey;
 using kernel_detail::PositionKeyHash;
 
+namespace {
+
+// Open addressing over vertex indices: a slot holds the index of the welded
+// vertex whose position hashed there (or `empty`), and the position itself is
+// read back from the mesh to compare keys. No node per vertex (std::unordered_map
+// allocated one per distinct position, and its buckets cost a cache miss each):
+// welding a million-triangle file went from most of the read to a small part.
+class VertexTable {
+ public:
+  static constexpr VertexIndex empty = std::numeric_limits<VertexIndex>::max();
+
+  explicit VertexTable(std::size_t expected) { resize(std::bit_ceil(std::max<std::size_t>(16, 2 * expected))); }
+
+  /// The vertex at `key`'s position, or `fresh` after recording `fresh` there.
+  VertexIndex find_or_insert(const PositionKey& key, VertexIndex fresh, const std::vector<Vec3>& positions) {
+    if (2 * (size_ + 1) > slots_.size()) grow(positions);
+    for (std::size_t i = slot_of(key);; i = (i + 1) & mask_) {
+      const VertexIndex v = slots_[i];
+      if (v == empty) {
+        slots_[i] = fresh;
+        ++size_;
+        return fresh;
+      }
+      if (key_of(positions[v]) == key) return v;
+    }
+  }
+
+ private:
+  std::size_t slot_of(const PositionKey& key) const { return PositionKeyHash{}(key) & mask_; }
+  void resize(std::size_t capacity) {
+    slots_.assign(capacity, empty);
+    mask_ = capacity - 1;
+  }
+  void grow(const std::vector<Vec3>& positions) {
+    std::vector<VertexIndex> old = std::move(slots_);
+    resize(2 * old.size());
+    for (const VertexIndex v : old) {
+      if (v == empty) continue;
+      std::size_t i = slot_of(key_of(positions[v]));
+      while (slots_[i] != empty) i = (i + 1) & mask_;
+      slots_[i] = v;
+    }
+  }
+
+  std::vector<VertexIndex> slots_;
+  std::size_t mask_ = 0, size_ = 0;
+};
+
+}  // namespace
+
 Mesh weld(TriangleSoup soup) {
   if (soup.corner_positions.empty()) refuse("the file holds no faces");
   Mesh mesh;
@@ -21,19 +73,21 @@ Mesh weld(TriangleSoup soup) {
   mesh.triangles.resize(soup.triangle_count());
   mesh.surfaces.assign(soup.triangle_count(), original_surface);
 
-  std::unordered_map<PositionKey, VertexIndex, PositionKeyHash> vertex_of;
-  vertex_of.reserve(corner_count);
+  // A closed mesh has about one vertex per six corners; the table grows past that.
+  VertexTable vertex_of(corner_count / 4);
+  mesh.positions.reserve(corner_count / 4);
   for (std::size_t corner = 0; corner < corner_count; ++corner) {
     const Vec3 position = soup.corner_positions[corner];
-    const auto [entry, inserted] = vertex_of.try_emplace(key_of(position), static_cast<VertexIndex>(mesh.positions.size()));
-    if (inserted) {
+    const auto fresh = static_cast<VertexIndex>(mesh.positions.size());
+    const VertexIndex vertex = vertex_of.find_or_insert(key_of(position), fresh, mesh.positions);
+    if (vertex == fresh) {
       if (mesh.positions.size() == std::numeric_limits<VertexIndex>::max()) {
         refuse("mesh has more than " + std::to_string(std::numeric_limits<VertexIndex>::max()) + " vertices");
       }
       // The first corner's own bits are kept: a vertex first written as -0.0 stays -0.0.
       mesh.positions.push_back(position);
     }
-    mesh.triangles[corner / 3][corner % 3] = entry->second;
+    mesh.triangles[corner / 3][corner % 3] = vertex;
   }
   mesh.corners = std::move(soup.corners);
   return mesh;

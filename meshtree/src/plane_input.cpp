@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "shatter/kernel/index_map.hpp"
+#include "shatter/kernel/half_edges.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/union_find.hpp"
 #include "shatter/meshtree/separate.hpp"
@@ -25,7 +25,22 @@ void append_mesh(const Mesh& part, Mesh& whole) {
 
 PlaneInput prepare_plane_input(const Mesh& mesh) {
   PlaneInput input;
-  std::vector<Mesh> solids = separate_solids(mesh);
+  // One topology pass serves separation, shells and the solid. A mesh of one
+  // shell (the common case) comes out of separate_solids with its triangles in
+  // order, so its half-edges keep their twins; several shells are regrouped by
+  // solid, and their twins found again.
+  HalfEdgeTwins twins = half_edge_twins(mesh.triangles, mesh.positions.size());
+  const auto shells_of = [](const HalfEdgeTwins& of, std::size_t triangle_count) {
+    UnionFind sets(triangle_count);
+    for (std::uint32_t h = 0; h < 3 * triangle_count; ++h) {
+      if (of.twin[h] != HalfEdgeTwins::none) sets.unite(h / 3, of.twin[h] / 3);
+    }
+    return sets;
+  };
+  UnionFind shell_sets = shells_of(twins, mesh.triangles.size());
+  bool one_shell = true;
+  for (std::uint32_t t = 0; t < mesh.triangles.size() && one_shell; ++t) one_shell = shell_sets.find(t) == 0;
+  std::vector<Mesh> solids = separate_solids(mesh, twins);
   std::vector<std::size_t> first_triangle;
   if (solids.size() == 1) {
     first_triangle.push_back(0);
@@ -37,18 +52,13 @@ PlaneInput prepare_plane_input(const Mesh& mesh) {
     }
   }
   first_triangle.push_back(input.mesh.triangles.size());
+  if (!one_shell) {
+    twins = half_edge_twins(input.mesh.triangles, input.mesh.positions.size());
+    shell_sets = shells_of(twins, input.mesh.triangles.size());
+  }
 
   // Shells: edge-connected triangles; in each solid the outward one is the outer.
   const std::size_t triangle_count = input.mesh.triangles.size();
-  UnionFind shell_sets(triangle_count);
-  IndexMap triangle_of_edge(3 * triangle_count);
-  for (std::uint32_t t = 0; t < triangle_count; ++t) {
-    const Triangle& tri = input.mesh.triangles[t];
-    for (int c = 0; c < 3; ++c) {
-      const std::uint32_t other = triangle_of_edge.insert(undirected_edge_key(tri[c], tri[(c + 1) % 3]), t);
-      if (other != t) shell_sets.unite(t, other);
-    }
-  }
   std::vector<std::uint32_t> shell_of_root(triangle_count, no_index);
   input.shells.shell_of_triangle.resize(triangle_count);
   std::vector<std::vector<TriangleIndex>> shell_triangles;
@@ -90,7 +100,7 @@ PlaneInput prepare_plane_input(const Mesh& mesh) {
   const bool has_attributes =
       input.mesh.corners.has_normals() || input.mesh.corners.has_uvs() || input.mesh.corners.has_tangents();
   input.geometry.points = input.mesh.positions;
-  input.solid = solid_from_mesh(input.mesh, !has_attributes, input.geometry);
+  input.solid = solid_from_mesh(input.mesh, !has_attributes, input.geometry, &twins);
   return input;
 }
 

@@ -136,33 +136,28 @@ void append_shell(BasicMesh<Point>& solid, const BasicMesh<Point>& shell) {
 }
 
 template <class Point>
-std::vector<BasicMesh<Point>> split_into_shells(const BasicMesh<Point>& surface) {
+std::vector<BasicMesh<Point>> split_into_shells(const BasicMesh<Point>& surface, const HalfEdgeTwins& twins) {
   const auto& tris = surface.triangles;
   const std::size_t corner_count = 3 * tris.size();
-  // corner_of_edge: directed edge (u -> w) -> the corner at u of the triangle that
-  // traverses it. Each directed edge may appear once: twice is a non-manifold edge.
-  IndexMap corner_of_edge(corner_count);
-  for (std::uint32_t c = 0; c < corner_count; ++c) {
-    const Triangle& t = tris[c / 3];
-    const VertexIndex u = t[c % 3], w = t[(c + 1) % 3];
-    if (corner_of_edge.insert(directed_edge_key(u, w), c) != c) {
-      throw UnsupportedGeometryError("the cut makes a non-manifold edge (" + std::to_string(u) + ", " +
-                                     std::to_string(w) + "): a face of the mesh meets the plane along a cap chord");
-    }
+  // Corner c of triangle t is also the half-edge leaving it. Each directed edge
+  // may appear once: twice is a non-manifold edge.
+  if (twins.repeated) {
+    throw UnsupportedGeometryError("the cut makes a non-manifold edge (" + std::to_string((*twins.repeated)[0]) + ", " +
+                                   std::to_string((*twins.repeated)[1]) +
+                                   "): a face of the mesh meets the plane along a cap chord");
+  }
+  if (twins.first_unmatched != HalfEdgeTwins::none) {
+    const std::uint32_t c = twins.first_unmatched;
+    throw std::logic_error("separate_solids: open surface at edge (" + std::to_string(tris[c / 3][c % 3]) + ", " +
+                           std::to_string(tris[c / 3][(c + 1) % 3]) + ")");
   }
   // Corners around one vertex that are joined across an edge belong to one fan: a
   // fan becomes one output vertex. Triangles joined across an edge share a shell.
   UnionFind fans(corner_count);
   UnionFind shells(tris.size());
   for (std::uint32_t c = 0; c < corner_count; ++c) {
-    const Triangle& t = tris[c / 3];
-    const VertexIndex u = t[c % 3], w = t[(c + 1) % 3];
-    const std::uint32_t twin = corner_of_edge.find(directed_edge_key(w, u));
-    if (twin == IndexMap::absent) {
-      throw std::logic_error("separate_solids: open surface at edge (" + std::to_string(u) + ", " +
-                             std::to_string(w) + ")");
-    }
-    // The twin corner sits at w; the corner after it in its triangle sits at u.
+    const std::uint32_t twin = twins.twin[c];
+    // Corner c sits at u and leaves for w; the twin corner sits at w; the corner after it in its triangle sits at u.
     const std::uint32_t twin_at_u = (twin / 3) * 3 + (twin % 3 + 1) % 3;
     fans.unite(c, twin_at_u);
     shells.unite(c / 3, twin / 3);
@@ -199,8 +194,8 @@ std::vector<BasicMesh<Point>> split_into_shells(const BasicMesh<Point>& surface)
 }
 
 template <class Point>
-std::vector<BasicMesh<Point>> separate(const BasicMesh<Point>& surface) {
-  std::vector<BasicMesh<Point>> shells = split_into_shells(surface);
+std::vector<BasicMesh<Point>> separate(const BasicMesh<Point>& surface, const HalfEdgeTwins& twins) {
+  std::vector<BasicMesh<Point>> shells = split_into_shells(surface, twins);
   if (shells.size() <= 1) return shells;  // a lone closed shell of a valid cut faces outward
   std::vector<Sign> orientation;
   for (const auto& shell : shells) orientation.push_back(volume_sign(shell));
@@ -252,7 +247,12 @@ std::vector<BasicMesh<Point>> separate(const BasicMesh<Point>& surface) {
 
 }  // namespace
 
-std::vector<Mesh> separate_solids(const Mesh& surface) { return separate(surface); }
-std::vector<ExactMesh> separate_solids(const ExactMesh& surface) { return separate(surface); }
+std::vector<Mesh> separate_solids(const Mesh& surface) {
+  return separate(surface, half_edge_twins(surface.triangles, surface.positions.size()));
+}
+std::vector<Mesh> separate_solids(const Mesh& surface, const HalfEdgeTwins& twins) { return separate(surface, twins); }
+std::vector<ExactMesh> separate_solids(const ExactMesh& surface) {
+  return separate(surface, half_edge_twins(surface.triangles, surface.positions.size()));
+}
 
 }  // namespace shatter

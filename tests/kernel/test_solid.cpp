@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <map>
 #include <numeric>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -480,4 +481,57 @@ TEST_CASE("solid_from_mesh refuses an open mesh and an edge used twice in one di
     }
   }
   CHECK(refused >= 100);
+}
+
+TEST_CASE("half_edge_twins pairs exactly what a map of directed edges pairs, on sound and broken meshes",
+          "[plane][solid][property]") {
+  // The reference: each directed edge's first half-edge, from a std::map; a
+  // half-edge's twin is the first half-edge of its reverse, when both are firsts.
+  const auto reference = [](const Mesh& mesh) {
+    std::map<std::pair<VertexIndex, VertexIndex>, std::uint32_t> first;
+    HalfEdgeTwins expected;
+    expected.twin.assign(3 * mesh.triangles.size(), HalfEdgeTwins::none);
+    for (std::uint32_t h = 0; h < 3 * mesh.triangles.size(); ++h) {
+      const Triangle& t = mesh.triangles[h / 3];
+      const auto [it, inserted] = first.try_emplace({t[h % 3], t[(h % 3 + 1) % 3]}, h);
+      if (!inserted && !expected.repeated) expected.repeated = Edge{t[h % 3], t[(h % 3 + 1) % 3]};
+    }
+    for (std::uint32_t h = 0; h < 3 * mesh.triangles.size(); ++h) {
+      const Triangle& t = mesh.triangles[h / 3];
+      const VertexIndex u = t[h % 3], w = t[(h % 3 + 1) % 3];
+      if (first.at({u, w}) != h) continue;
+      if (const auto back = first.find({w, u}); back != first.end()) expected.twin[h] = back->second;
+    }
+    for (std::uint32_t h = 0; h < expected.twin.size(); ++h) {
+      if (expected.twin[h] == HalfEdgeTwins::none) {
+        expected.first_unmatched = h;
+        break;
+      }
+    }
+    return expected;
+  };
+  std::mt19937_64 random(1203);
+  std::size_t broken = 0;
+  for (const auto& named : test::generated_meshes()) {
+    for (int trial = 0; trial < 20; ++trial) {
+      Mesh mesh = named.mesh;
+      // Some trials break the mesh: a triangle flipped (a directed edge twice),
+      // removed (open edges) or duplicated.
+      const std::size_t t = random() % mesh.triangles.size();
+      switch (trial % 4) {
+        case 1: std::swap(mesh.triangles[t][1], mesh.triangles[t][2]); break;
+        case 2: mesh.triangles.erase(mesh.triangles.begin() + static_cast<std::ptrdiff_t>(t)); break;
+        case 3: mesh.triangles.push_back(mesh.triangles[t]); break;
+        default: std::shuffle(mesh.triangles.begin(), mesh.triangles.end(), random); break;
+      }
+      INFO(named.name << ", trial " << trial);
+      const HalfEdgeTwins expected = reference(mesh);
+      const HalfEdgeTwins found = half_edge_twins(mesh.triangles, mesh.positions.size());
+      CHECK(found.twin == expected.twin);
+      CHECK(found.repeated == expected.repeated);
+      CHECK(found.first_unmatched == expected.first_unmatched);
+      broken += expected.repeated || expected.first_unmatched != HalfEdgeTwins::none;
+    }
+  }
+  CHECK(broken > 20);
 }

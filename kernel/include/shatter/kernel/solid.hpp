@@ -20,6 +20,7 @@
 #include <span>
 #include <vector>
 
+#include "shatter/kernel/half_edges.hpp"
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/mesh.hpp"
 
@@ -164,7 +165,10 @@ struct InputGeometry {
 /// triangle), every triangle is its own face. A face's `source` is one of its
 /// triangles, its surface id theirs. Decides convexity exactly. Throws InvalidMeshError if the mesh is
 /// not closed and oriented.
-Solid solid_from_mesh(const Mesh& mesh, bool merge_coplanar, InputGeometry& geometry);
+/// `twins`: the mesh's half-edge twins (half_edge_twins) when the caller has them
+/// already; computed here otherwise. The result does not depend on which.
+Solid solid_from_mesh(const Mesh& mesh, bool merge_coplanar, InputGeometry& geometry,
+                      const HalfEdgeTwins* twins = nullptr);
 
 /// Whether the solid is convex, decided exactly: its faces form one edge-connected
 /// shell and at every edge some vertex of the face across lies strictly inside the

@@ -43,9 +43,10 @@ struct Defect {
 };
 
 struct ValidationOptions {
-  /// Look for self-intersections (CGAL's box intersection, then an exact test of
-  /// each pair whose boxes meet, with the semantics of CGAL PMP's
-  /// self_intersections; O(n log n) on typical meshes). Only
+  /// Look for self-intersections (self_intersecting_pairs: a uniform grid over the
+  /// triangles' boxes, then an exact test of each pair whose boxes meet, with the
+  /// semantics of CGAL PMP's self_intersections; linear after bucketing on meshes
+  /// of similar triangles, see self_intersections.hpp). Only
   /// run when the mesh is otherwise a closed, consistently oriented manifold with
   /// finite coordinates and no zero-area triangle. Non-manifold vertices do not
   /// prevent it: the test then sees one copy of such a vertex per fan, so the
@@ -73,8 +74,8 @@ struct ValidationReport {
 /// Checks every defect in DefectKind order. Never throws on a malformed mesh:
 /// finding what is wrong is its job. Guarantees: the counts are exact. Cost:
 /// linear for the topology of a sound mesh (a counting sort of its half-edges;
-/// the defect-naming checks run only when that finds something), O(n log n) for
-/// the self-intersection test.
+/// the defect-naming checks run only when that finds something), about linear
+/// for the self-intersection test (self_intersecting_pairs).
 ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& options = {});
 
 /// validate_mesh, faster on the meshes shatter writes, and faster still for a mesh

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/half_edges.hpp"
 #include "shatter/kernel/mesh.hpp"
 
 namespace shatter {
@@ -25,5 +26,8 @@ namespace shatter {
 /// twice); std::logic_error on an open surface (a bug upstream).
 std::vector<Mesh> separate_solids(const Mesh& surface);
 std::vector<ExactMesh> separate_solids(const ExactMesh& surface);
+/// separate_solids, with the surface's half-edge twins (half_edge_twins) already
+/// found by the caller. Same result.
+std::vector<Mesh> separate_solids(const Mesh& surface, const HalfEdgeTwins& twins);
 
 }  // namespace shatter

@@ -1,0 +1,56 @@
+#pragma once
+// Self-intersections of a triangle mesh: which pairs of its triangles meet beyond
+// the vertices and edge they share, decided exactly.
+//
+// Two finders give the same pairs. self_intersecting_pairs is the fast one, a
+// uniform grid over the triangles' bounding boxes; the box-tree finder (CGAL's
+// box_self_intersection_d) is kept as the reference the tests compare it with.
+// Both decide every candidate pair with triangles_intersect, so they differ only
+// in how they find the candidates, and both find every pair whose closed boxes
+// meet: a pair that intersects is never missed by either.
+
+#include <cstddef>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "shatter/kernel/mesh.hpp"
+
+namespace shatter {
+
+/// Two triangle indices, the smaller first.
+using TrianglePair = std::pair<std::size_t, std::size_t>;
+
+/// Whether triangles a and b of a mesh meet beyond the vertices and the edge they
+/// share (by index), exactly: the semantics of CGAL PMP's self_intersections on a
+/// triangle soup. Sharing an edge, they intersect only when coplanar and on one
+/// side of it; sharing a vertex, when the edge of either opposite the vertex meets
+/// the other; sharing nothing, when they meet at all; sharing three indices, always.
+/// Preconditions: indices in range, finite coordinates, neither triangle has
+/// collinear corners (CGAL would call a degenerate triangle intersecting itself).
+/// Cost: usually one or two floating-point filters (one triangle strictly beside
+/// the other's plane, or their projections apart); exact arithmetic only for
+/// nearly coplanar neighbours. Failure: none.
+bool triangles_intersect(std::span<const Vec3> positions, const Triangle& a, const Triangle& b);
+
+/// Every pair of triangles that intersect (triangles_intersect), sorted: the
+/// smaller index first in each pair, pairs in lexicographic order.
+/// Candidates come from a uniform grid over the triangles' bounding boxes (cells
+/// about the size of the mean box; a pair is tested in the one cell holding the
+/// low corner of the overlap of their boxes, so once): for a mesh of triangles of
+/// similar size, linear time after the O(T) bucketing. Triangles whose boxes span
+/// many cells are tested against the others with CGAL's box intersection instead,
+/// so a few long triangles cost O(T log T), not a crowded grid.
+/// Preconditions: as triangles_intersect, for every triangle.
+/// Guarantees: the same pairs as self_intersecting_pairs_by_box_tree; deterministic.
+/// Failure: none (std::bad_alloc aside).
+std::vector<TrianglePair> self_intersecting_pairs(std::span<const Vec3> positions, std::span<const Triangle> triangles);
+
+/// The reference finder: CGAL's box_self_intersection_d over closed bounding boxes,
+/// each pair whose boxes meet decided by triangles_intersect. Same preconditions,
+/// guarantees and result as self_intersecting_pairs; O(T log T) with a larger
+/// constant. For tests and benchmarks.
+std::vector<TrianglePair> self_intersecting_pairs_by_box_tree(std::span<const Vec3> positions,
+                                                              std::span<const Triangle> triangles);
+
+}  // namespace shatter

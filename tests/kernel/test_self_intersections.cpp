@@ -1,0 +1,190 @@
+// The grid self-intersection finder against the box-tree finder it replaced and,
+// on small inputs, against every pair decided by CGAL alone (no filter): the same
+// pairs on seeded solids, intersecting pairs of solids, pinched copies, lattice
+// soups full of coplanar, touching and shared-vertex triangles, and meshes with a
+// few long triangles (the finder's box-tree side path).
+
+#include <catch2/catch.hpp>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/solids.hpp"
+#include "shatter/kernel/io.hpp"
+#include "shatter/kernel/self_intersections.hpp"
+
+using namespace shatter;
+
+namespace {
+
+using K = CGAL::Epick;
+
+K::Point_3 point(const Vec3& p) { return {p.x, p.y, p.z}; }
+
+// CGAL PMP's pair semantics with CGAL's exact predicates alone: the oracle for
+// triangles_intersect's filters.
+bool reference_intersect(const std::vector<Vec3>& positions, const Triangle& a, const Triangle& b) {
+  int shared = 0, shared_a = -1, shared_b = -1;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      if (a[i] != b[j]) continue;
+      ++shared;
+      if (shared_a < 0) shared_a = i, shared_b = j;
+    }
+  }
+  const auto p = [&](VertexIndex v) { return point(positions[v]); };
+  if (shared >= 3) return true;
+  if (shared == 2) {
+    int ia = 0, ib = 0;
+    for (int i = 0; i < 3; ++i) {
+      if (a[i] != b[0] && a[i] != b[1] && a[i] != b[2]) ia = i;
+      if (b[i] != a[0] && b[i] != a[1] && b[i] != a[2]) ib = i;
+    }
+    const K::Point_3 u = p(a[(ia + 1) % 3]), v = p(a[(ia + 2) % 3]), x = p(a[ia]), y = p(b[ib]);
+    return CGAL::coplanar(u, v, x, y) && CGAL::coplanar_orientation(u, v, x, y) == CGAL::POSITIVE;
+  }
+  const K::Triangle_3 ta(p(a[0]), p(a[1]), p(a[2])), tb(p(b[0]), p(b[1]), p(b[2]));
+  if (shared == 1) {
+    const K::Segment_3 sa(p(a[(shared_a + 1) % 3]), p(a[(shared_a + 2) % 3]));
+    const K::Segment_3 sb(p(b[(shared_b + 1) % 3]), p(b[(shared_b + 2) % 3]));
+    return CGAL::do_intersect(ta, sb) || CGAL::do_intersect(tb, sa);
+  }
+  return CGAL::do_intersect(ta, tb);
+}
+
+std::vector<TrianglePair> brute_force_pairs(const Mesh& mesh) {
+  std::vector<TrianglePair> pairs;
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    for (std::size_t j = i + 1; j < mesh.triangles.size(); ++j) {
+      if (reference_intersect(mesh.positions, mesh.triangles[i], mesh.triangles[j])) pairs.emplace_back(i, j);
+    }
+  }
+  return pairs;
+}
+
+bool has_collinear_triangle(const Mesh& mesh) {
+  for (const Triangle& t : mesh.triangles) {
+    if (CGAL::collinear(point(mesh.positions[t[0]]), point(mesh.positions[t[1]]), point(mesh.positions[t[2]]))) {
+      return true;
+    }
+  }
+  return false;
+}
+
+// A soup of triangles over a small pool of lattice points: coplanar overlaps,
+// touching corners and edges, shared vertices and edges, and repeated
+// triangles, all decided exactly. Collinear triangles are redrawn.
+Mesh lattice_soup(std::mt19937_64& random, int points, int triangles, int lattice, double spacing) {
+  std::uniform_int_distribution<int> coordinate(0, lattice);
+  Mesh mesh;
+  for (int i = 0; i < points; ++i) {
+    mesh.positions.push_back({coordinate(random) * spacing, coordinate(random) * spacing, coordinate(random) * spacing});
+  }
+  std::uniform_int_distribution<VertexIndex> index(0, static_cast<VertexIndex>(points - 1));
+  while (static_cast<int>(mesh.triangles.size()) < triangles) {
+    const Triangle t{index(random), index(random), index(random)};
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+    if (CGAL::collinear(point(mesh.positions[t[0]]), point(mesh.positions[t[1]]), point(mesh.positions[t[2]]))) continue;
+    mesh.triangles.push_back(t);
+  }
+  mesh.surfaces.assign(mesh.triangles.size(), 0);
+  return mesh;
+}
+
+// Every vertex moved to the nearest multiple of `step`: faces of a smooth solid
+// become nearly or exactly coplanar with their neighbours.
+Mesh snapped(Mesh mesh, double step) {
+  for (Vec3& p : mesh.positions) p = {std::round(p.x / step) * step, std::round(p.y / step) * step, std::round(p.z / step) * step};
+  return mesh;
+}
+
+void check_same_pairs(const std::string& name, const Mesh& mesh, bool brute_force) {
+  INFO(name << ": " << mesh.triangles.size() << " triangles");
+  const std::vector<TrianglePair> grid = self_intersecting_pairs(mesh.positions, mesh.triangles);
+  const std::vector<TrianglePair> tree = self_intersecting_pairs_by_box_tree(mesh.positions, mesh.triangles);
+  CHECK(grid == tree);
+  if (brute_force) CHECK(grid == brute_force_pairs(mesh));
+}
+
+}  // namespace
+
+TEST_CASE("the grid finder finds the box tree's pairs, and every pair CGAL alone finds, on seeded meshes",
+          "[validate][self-intersection]") {
+  std::mt19937_64 random(20261203);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  std::size_t meshes_with_pairs = 0, pairs_found = 0;
+  const auto run = [&](const std::string& name, const Mesh& mesh, bool brute_force) {
+    if (has_collinear_triangle(mesh)) return;  // outside the precondition
+    check_same_pairs(name, mesh, brute_force);
+    const std::size_t found = self_intersecting_pairs(mesh.positions, mesh.triangles).size();
+    pairs_found += found;
+    meshes_with_pairs += found > 0;
+  };
+  for (int seed = 0; seed < 40; ++seed) {
+    const std::string tag = " #" + std::to_string(seed);
+    // Two solids placed to overlap, touch or miss.
+    const Mesh a = test::ellipsoid({0, 0, 0}, {1, 0.8 + 0.2 * unit(random), 0.7}, 8 + seed % 5, 6 + seed % 3);
+    const Mesh b = test::torus(0.9, 0.3 + 0.1 * unit(random), 9 + seed % 4, 6);
+    const Vec3 shift{unit(random), unit(random), unit(random)};
+    run("ellipsoid and torus" + tag, test::merge({a, test::transformed(b, 1.0, shift)}), true);
+    // Boxes sharing face planes: coplanar overlapping and touching faces.
+    const double s = 0.5 + 0.5 * (seed % 3);
+    run("boxes on shared planes" + tag,
+        test::merge({test::grid_box({0, 0, 0}, {1, 1, 1}, 1 + seed % 3), test::box({s, 0, 0}, {s + 1, 1, 1}),
+                     test::box({0.25, 0.25, 1}, {0.75, 0.75, 1.5})}),
+        true);
+    // A solid snapped to a coarse lattice: nearly and exactly coplanar neighbours.
+    run("snapped ellipsoid" + tag, snapped(test::ellipsoid({0.1, 0, 0}, {1, 1, 1}, 12, 9), 1.0 / (4 + seed % 8)), true);
+    // A solid touching a copy of itself at one shared vertex (a pinch, by index).
+    {
+      Mesh pinch = test::ellipsoid({0, 0, 0}, {1, 1, 1}, 7, 5);
+      const Mesh copy = test::transformed(pinch, 1.0, {2, 0, 0});
+      const VertexIndex shared = static_cast<VertexIndex>(random() % pinch.positions.size());
+      const auto offset = static_cast<VertexIndex>(pinch.positions.size());
+      pinch.positions.insert(pinch.positions.end(), copy.positions.begin(), copy.positions.end());
+      for (Triangle t : copy.triangles) {
+        for (VertexIndex& v : t) v = v == shared ? shared : v + offset;
+        pinch.triangles.push_back(t);
+      }
+      pinch.surfaces.resize(pinch.triangles.size(), 0);
+      run("pinched copies" + tag, pinch, true);
+    }
+    // Lattice soups: every degenerate contact a small lattice allows.
+    run("lattice soup" + tag, lattice_soup(random, 12 + seed, 40 + 5 * seed, 3, 1.0), true);
+    run("fine lattice soup" + tag, lattice_soup(random, 60, 150, 6 + seed % 5, 0.125), true);
+    // A fine solid crossed by a few long triangles: the side path for boxes
+    // spanning many cells.
+    {
+      Mesh crossed = test::ellipsoid({0, 0, 0}, {1, 1, 1}, 30, 20);
+      const auto base = static_cast<VertexIndex>(crossed.positions.size());
+      for (int k = 0; k < 3; ++k) {
+        for (int c = 0; c < 3; ++c) crossed.positions.push_back({2 * unit(random), 2 * unit(random), 2 * unit(random)});
+        crossed.triangles.push_back({base + 3 * k, base + 3 * k + 1, base + 3 * k + 2});
+      }
+      crossed.triangles.push_back({0, base, base + 4});  // long, and sharing a vertex with the solid
+      crossed.surfaces.resize(crossed.triangles.size(), 0);
+      run("long triangles" + tag, crossed, seed % 8 == 0);
+    }
+  }
+  // The properties were exercised on real intersections, not only on clean meshes.
+  CHECK(meshes_with_pairs > 100);
+  CHECK(pairs_found > 1000);
+}
+
+TEST_CASE("the grid finder agrees with the box tree on the corpus", "[validate][self-intersection][corpus]") {
+  std::size_t meshes = 0;
+  for (const auto& list : {test::valid_meshes(), test::self_intersecting_meshes()}) {
+    for (const auto& path : list) {
+      const Mesh mesh = read_mesh(path);
+      if (has_collinear_triangle(mesh)) continue;
+      check_same_pairs(path.filename().string(), mesh, false);
+      ++meshes;
+    }
+  }
+  CHECK(meshes >= 10);
+}
