@@ -35,10 +35,10 @@ bool triangles_intersect(std::span<const Vec3> positions, const Triangle& a, con
 
 /// Every pair of triangles that intersect (triangles_intersect), sorted: the
 /// smaller index first in each pair, pairs in lexicographic order.
-/// Candidates come from a uniform grid over the triangles' bounding boxes (cells
-/// about the size of the mean box; a pair is tested in the one cell holding the
-/// low corner of the overlap of their boxes, so once): for a mesh of triangles of
-/// similar size, linear time after the O(T) bucketing. Triangles whose boxes span
+/// Candidates come from a hashed uniform grid over the triangles' bounding boxes
+/// (in floats rounded outward; cells three times the mean box size; a pair is
+/// tested in the one cell holding the low corner of the overlap of their boxes,
+/// so once): for a mesh of triangles of similar size, linear time. Triangles whose boxes span
 /// many cells are tested against the others with CGAL's box intersection instead,
 /// so a few long triangles cost O(T log T), not a crowded grid.
 /// Preconditions: as triangles_intersect, for every triangle.
