@@ -35,10 +35,9 @@ PlaneCut cut_by_plane(const PlaneInput& input, const PlaneSet& set, const Solid&
       CutPiece& out = result.pieces.emplace_back(CutPiece{above, std::move(piece), std::move(rounded.mesh),
                                                           std::move(rounded.defect), rounded.separated_vertices,
                                                           rounded.moved_volume, rounded.moved_volume_bound});
-      if (rounded.collapsed) {
-        out.vanished = true;
-        out.moved_volume = out.moved_volume_bound = mpq_class(exact_six_volume(set, out.solid) / 6).get_d();
-      }
+      // A collapsed piece's moved volume is its own (round_solid measured it
+      // exactly against the bound its rounding can move).
+      out.vanished = rounded.collapsed;
     }
   }
   return result;

@@ -112,7 +112,8 @@ bool within_ceilings(const RefusalCeilings& ceilings, std::size_t cases, std::si
 }
 
 int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, const std::vector<std::string>& only,
-              unsigned threads, const std::filesystem::path& reproducer_dir, const RefusalCeilings& ceilings) {
+              unsigned threads, const std::filesystem::path& reproducer_dir, const RefusalCeilings& ceilings,
+              const std::filesystem::path& refusal_dir) {
   std::array<bool, case_class_count> wanted{};
   for (const std::string& name : only) {
     const auto kind = parse_class(name);
@@ -190,6 +191,20 @@ int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, cons
       ++failed;
       report_failure(r.c, r.outcome, reproducer_dir);
     }
+    // Refusals are not failures; named on request, each case's with a
+    // reproducer of its chain up to the first refused cut.
+    if (!refusal_dir.empty() && !r.outcome.refusals.empty()) {
+      std::string where;
+      if (r.outcome.refused_prefix) {
+        where = write_reproducer(refusal_dir, *r.outcome.refused_prefix, r.outcome.refusals.front()).string();
+      }
+      for (const std::string& refusal : r.outcome.refusals) {
+        std::printf("REFUSED %s %s on %s (seed %llu): %s%s%s\n", std::string(class_name(r.c.kind)).c_str(),
+                    std::string(operation_name(r.c.op)).c_str(), r.c.mesh_name.c_str(), (unsigned long long)r.c.seed,
+                    refusal.c_str(), where.empty() ? "" : "\n     reproducer ", where.c_str());
+        where.clear();
+      }
+    }
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("shatter-fuzz: %zu cases from seed %llu (first index %llu), %.1f s wall\n", ran.size(),
@@ -242,6 +257,7 @@ int replay(const std::vector<std::string>& files) {
     }
     std::printf("%s: %s %s on %s: %s\n", file.c_str(), std::string(class_name(c.kind)).c_str(),
                 std::string(operation_name(c.op)).c_str(), c.mesh_name.c_str(), result.c_str());
+    for (const std::string& refusal : outcome.refusals) std::printf("  refused: %s\n", refusal.c_str());
     failed += !outcome.failures.empty();
   }
   return failed == 0 ? 0 : 1;
@@ -326,7 +342,7 @@ int main(int argc, char** argv) {
   std::uint64_t cases = 2000, seed = 1, first = 0, audit_queries = 0;
   unsigned threads = 0;
   std::vector<std::string> only, replays;
-  std::string reproducers = "shatter-fuzz-reproducers";
+  std::string reproducers = "shatter-fuzz-reproducers", refusal_reproducers;
   bool list = false;
   app.add_option("--cases", cases, "How many cases to run (default 2000)");
   app.add_option("--seed", seed, "Seed of the run; case i is drawn from (seed, i) alone (default 1)");
@@ -334,6 +350,9 @@ int main(int argc, char** argv) {
   app.add_option("--class", only, "Run only these classes (repeatable; see --list-classes)");
   app.add_option("--threads", threads, "Worker threads, 0 for all (default 0); results do not depend on it");
   app.add_option("--reproducers", reproducers, "Folder for reproducer files (default shatter-fuzz-reproducers)");
+  app.add_option("--refusal-reproducers", refusal_reproducers,
+                 "Name every refusal (an unroundable piece with its defect, a pinching cut) and write a reproducer of "
+                 "each refusing case's chain up to its first refused cut into this folder (default: neither)");
   app.add_option("--replay", replays, "Replay reproducer files instead of drawing cases")->check(CLI::ExistingFile);
   app.add_option("--audit-predicates", audit_queries,
                  "Run the predicate audit with this many queries instead of drawing cases: half of them audit "
@@ -358,7 +377,7 @@ int main(int argc, char** argv) {
     }
     if (!replays.empty()) return replay(replays);
     if (audit_queries > 0) return audit(audit_queries, seed, threads);
-    return run_cases(cases, seed, first, only, threads, reproducers, ceilings);
+    return run_cases(cases, seed, first, only, threads, reproducers, ceilings, refusal_reproducers);
   } catch (const CLI::ValidationError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;

@@ -271,6 +271,41 @@ struct Checker {
 
   // --- slices ----------------------------------------------------------------
 
+  // A piece's size on its vertices' approximations: the area, summed perimeter
+  // and count of its faces' fan triangles, and its largest coordinate.
+  struct Extent {
+    double area = 0, perimeter = 0, triangles = 0, largest = 0;
+    /// The most volume moving every point by at most delta can sweep (Steiner's
+    /// bound over the fan triangles, as round_solid's with pi taken as 4).
+    double sweep(double delta) const { return delta * (2 * area + delta * (4 * perimeter + 5 * delta * triangles)); }
+    /// Twice the volume over the area: a slab's thickness.
+    double thickness(const mpq_class& six) const { return area > 0 ? 2 * std::fabs(mpq_class(six / 6).get_d()) / area : 0; }
+  };
+  static Extent extent(const Solid& solid) {
+    std::vector<Vec3> points;
+    Extent e;
+    for (const ApproxPoint& a : solid.approx) {
+      // A corner whose approximation is no finite point (w near zero) counts at the origin.
+      const double w = std::fabs(a.w.value), most = std::numeric_limits<double>::max();
+      const bool finite = w > 0 && std::fabs(a.x.value) / most <= w && std::fabs(a.y.value) / most <= w &&
+                          std::fabs(a.z.value) / most <= w;
+      points.push_back(finite ? Vec3{a.x.value / a.w.value, a.y.value / a.w.value, a.z.value / a.w.value} : Vec3{});
+      e.largest = std::max({e.largest, std::fabs(points.back().x), std::fabs(points.back().y), std::fabs(points.back().z)});
+    }
+    for (const SolidFace& face : solid.faces) {
+      const Vec3 centre = points[solid.corners[solid.loops[face.first_loop].first_corner].vertex];
+      for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+        for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+          const Vec3 b = points[edge.from], c = points[edge.to];
+          e.area += 0.5 * norm(cross(b - centre, c - centre));
+          e.perimeter += norm(b - centre) + norm(c - b) + norm(centre - c);
+          e.triangles += 1;
+        }
+      }
+    }
+    return e;
+  }
+
   // A piece of a chain: its exact solid, six times its exact volume,
   // and its rounded mesh when round_solid could write it (the next cut's
   // certification trusts it, as the builder's does).
@@ -298,6 +333,7 @@ struct Checker {
     } catch (const UnsupportedGeometryError& error) {
       if (std::string(error.what()).find("pinched") != std::string::npos) {
         ++outcome.plane_pinched;  // documented: the piece is not cut, and the chain stops there
+        remember_refusal(i, where + ": pinched: " + error.what());
       } else {
         fail(where + ": cut_by_plane refused a sound solid: " + error.what());
       }
@@ -342,28 +378,25 @@ struct Checker {
       if (six <= 0) fail(name + ": exact volume not positive");
       sum += six;
       if (piece.vanished) {
-        // Thinner than the rounding of its coordinates: its mean thickness,
-        // twice its exact volume over its area (a slab's thickness), is a few
-        // ulps of its coordinates, and nothing is written.
+        // Thinner than the rounding of its coordinates: its exact volume, which
+        // is what moves, is within the bound round_solid reports, and within
+        // what moving its points by 2^-40 of its largest coordinate can sweep
+        // (measured here on its own); nothing is written.
         if (!piece.mesh.triangles.empty()) fail(name + ": a vanished piece kept triangles");
-        std::vector<Vec3> points;
-        double largest = 0;
-        for (const ApproxPoint& a : piece.solid.approx) {
-          points.push_back({a.x.value / a.w.value, a.y.value / a.w.value, a.z.value / a.w.value});
-          largest = std::max({largest, std::fabs(points.back().x), std::fabs(points.back().y), std::fabs(points.back().z)});
+        const double volume = mpq_class(six / 6).get_d();
+        if (!(std::fabs(piece.moved_volume - volume) <= 1e-12 * volume)) {
+          fail(name + ": a vanished piece reports another moved volume than its own");
         }
-        double area = 0;
-        for (const SolidFace& face : piece.solid.faces) {
-          const Vec3 centre = points[piece.solid.corners[piece.solid.loops[face.first_loop].first_corner].vertex];
-          for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-            for (const CornerEdge& edge : loop_edges(piece.solid.corners, piece.solid.loops[l])) {
-              area += 0.5 * norm(cross(points[edge.from] - centre, points[edge.to] - centre));
-            }
-          }
+        if (!(volume <= piece.moved_volume_bound * (1 + 1e-12))) {
+          fail(name + ": a vanished piece's volume is beyond the bound reported for it");
         }
-        const double thickness = area > 0 ? 2 * std::fabs(mpq_class(six / 6).get_d()) / area : 0;
-        if (!(thickness <= std::ldexp(largest, -40))) {
-          fail(name + ": a piece " + std::to_string(thickness) + " thick vanished (more than 2^-40 of its coordinates)");
+        const Extent e = extent(piece.solid);
+        if (!(volume <= e.sweep(std::ldexp(e.largest, -40)))) {
+          char measured[160];
+          std::snprintf(measured, sizeof measured, "volume %a, area %a, largest coordinate %a", volume, e.area,
+                        e.largest);
+          fail(name + ": a piece vanished that moving its points by 2^-40 of its coordinates cannot sweep (" +
+               measured + ")");
         }
         ++outcome.plane_vanished;
         next.push_back({std::move(piece.solid), six, std::nullopt});
@@ -378,6 +411,13 @@ struct Checker {
           fail(name + ": a piece named a defect, yet its mesh passes validate_mesh");
         }
         ++outcome.plane_unroundable;  // refused, as `shatter slice` refuses it (exit 3)
+        const Extent e = extent(piece.solid);
+        const double thickness = e.thickness(six);
+        const std::string relative = thickness > 0 && e.largest > 0
+                                         ? "2^" + std::to_string(std::ilogb(thickness) - std::ilogb(e.largest))
+                                         : "0";
+        remember_refusal(i, name + ": unroundable (" + std::to_string(piece.solid.faces.size()) +
+                                " faces, mean thickness " + relative + " of its largest coordinate): " + piece.defect);
         next.push_back({std::move(piece.solid), six, std::nullopt});
         continue;
       }
@@ -395,6 +435,15 @@ struct Checker {
       next.push_back({std::move(piece.solid), six, std::move(piece.mesh)});
     }
     if (sum != parent.six) fail(where + ": exact volumes do not add up to the parent's exactly");
+  }
+
+  // A refusal at cut i: named, and the chain's first i + 1 planes kept once (the
+  // first refusal's; the same argument as remember_prefix).
+  void remember_refusal(std::size_t i, std::string what) {
+    outcome.refusals.push_back(std::move(what));
+    if (outcome.refused_prefix) return;
+    outcome.refused_prefix = c;
+    outcome.refused_prefix->planes.resize(std::min(i + 1, c.planes.size()));
   }
 
   // A chain that failed at cut i is reproduced by the chain's first i + 1

@@ -85,6 +85,11 @@ struct CaseOutcome {
   std::size_t plane_vanished = 0;     ///< plane pieces thinner than their rounding, collapsed whole (not written)
   std::size_t plane_separated = 0;    ///< plane pieces written after moving apart points where they touched themselves
   std::size_t plane_pinched = 0;      ///< plane cuts cut_solid refused as pinching a piece (not a failure)
+  /// One line per refusal of a slice (an unroundable piece, with round_solid's
+  /// defect, or a pinching cut), in the order met, and the chain's planes up to
+  /// the first refused cut (a case that refuses the same, see remember_prefix).
+  std::vector<std::string> refusals;
+  std::optional<Case> refused_prefix;
   /// The plane-kernel predicate calls the checks themselves made (check_solid's
   /// corners-on-their-planes tests, whose true answers are zero, and the sides
   /// behind plane_missed), so a report can leave them out of the kernel's own.

@@ -14,10 +14,17 @@ namespace shatter::test {
 
 /// Empty when `piece` rounds (round_solid), writes as OFF and reads back as its
 /// rounded mesh, and what is read is a valid solid (self-intersections
-/// included); else what went wrong, starting "cannot be rounded" when
-/// round_solid refuses the piece.
+/// included), or when it vanishes as thinner than its rounding (collapsed, its
+/// exact volume within the bound reported for it); else what went wrong,
+/// starting "cannot be rounded" when round_solid refuses the piece.
 inline std::string written_problem(const PlaneSet& set, const Solid& piece) {
   const RoundedSolid rounded = round_solid(set, piece);
+  if (rounded.collapsed) {
+    if (!rounded.mesh.triangles.empty()) return "vanished with triangles left";
+    const double volume = mpq_class(exact_six_volume(set, piece) / 6).get_d();
+    return volume <= rounded.moved_volume_bound * (1 + 1e-12) ? std::string()
+                                                              : "vanished beyond the bound of its rounding";
+  }
   if (!rounded.valid) return "cannot be rounded: " + rounded.defect;
   const Mesh read = read_mesh_from_bytes(write_mesh_to_bytes(rounded.mesh, MeshFormat::off), MeshFormat::off);
   // The reader numbers vertices by first use: compare triangle by triangle.

@@ -8,6 +8,9 @@
 // counter-clockwise seen from outside (none flat), their areas summing to the
 // face's, their edges the face's boundary once and inner edges in both
 // directions, k - 2 + 2 h of them; and the faces' fans give the solid's volume.
+// Pieces rounding breaks (slivers between near-parallel cuts, planes ulps off a
+// face, a pinched saddle) are repaired or vanish whole, each within the volume
+// bound round_solid reports, over 96 seeds.
 
 #include <catch2/catch.hpp>
 
@@ -23,8 +26,10 @@
 
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/solid.hpp"
+#include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/cut_solid.hpp"
 #include "shatter/meshtree/plane_input.hpp"
+#include "shatter/triangulate/solid_mesh.hpp"
 #include "shatter/generators/corpus.hpp"
 #include "shatter/generators/random.hpp"
 #include "shatter/generators/solids.hpp"
@@ -249,4 +254,161 @@ TEST_CASE("triangulate_face: every face of input solids and cut pieces, every at
 TEST_CASE("triangulate_face, the larger matrix: corpus meshes to 2,000 triangles, deeper pieces, seeds 5 to 8",
           "[plane][triangulate][property][heavy]") {
   run_triangulation_matrix(2000, {5, 6, 7, 8}, 6, 10);
+}
+
+namespace {
+
+// What round_solid did to the pieces of a family of cuts, counted by outcome.
+struct RoundingTally {
+  std::size_t pieces = 0, plain = 0, collapsed = 0, flattened_parts = 0, separated = 0, refused = 0;
+};
+
+// Six times the volume of a mesh of doubles, exactly.
+mpq_class six_volume_of(const Mesh& mesh) {
+  mpq_class six = 0;
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
+    const mpq_class ax(a.x), ay(a.y), az(a.z), bx(b.x), by(b.y), bz(b.z), cx(c.x), cy(c.y), cz(c.z);
+    six += ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx);
+  }
+  return six;
+}
+
+// Every promise of round_solid on one piece: valid exactly when the mesh passes
+// validate_mesh; a collapsed piece has no triangles and reports its own exact
+// volume as moved, within the bound of what its rounding can move; a piece
+// written after parts of it rounded flat (or after separation) moved what its
+// mesh and the exact piece disagree on, within the bound.
+void check_rounding(const PlaneSet& set, const Solid& piece, RoundingTally& tally) {
+  const RoundedSolid rounded = round_solid(set, piece);
+  ++tally.pieces;
+  const mpq_class six = exact_six_volume(set, piece);
+  REQUIRE(six > 0);
+  const double volume = mpq_class(six / 6).get_d();
+  if (rounded.collapsed) {
+    ++tally.collapsed;
+    CHECK_FALSE(rounded.valid);
+    CHECK(rounded.mesh.triangles.empty());
+    CHECK_FALSE(rounded.defect.empty());
+    CHECK(std::fabs(rounded.moved_volume - volume) <= 1e-12 * volume);
+    CHECK(volume <= rounded.moved_volume_bound * (1 + 1e-12));
+    return;
+  }
+  if (!rounded.valid) {
+    ++tally.refused;
+    CHECK_FALSE(rounded.defect.empty());
+    CHECK((rounded.mesh.triangles.empty() || !validate_mesh(rounded.mesh).valid()));
+    return;
+  }
+  INFO("defect " << rounded.defect);
+  CHECK(rounded.defect.empty());
+  CHECK(validate_mesh(rounded.mesh).valid());
+  if (rounded.vanished_triangles > 0) {
+    ++tally.flattened_parts;
+    CHECK(rounded.vanished_triangles % 2 == 0);
+  }
+  if (rounded.separated_vertices > 0) ++tally.separated;
+  if (rounded.vanished_triangles > 0 || rounded.separated_vertices > 0) {
+    const double moved = mpq_class(abs(six_volume_of(rounded.mesh) - six) / 6).get_d();
+    if (rounded.vanished_triangles > 0) CHECK(std::fabs(rounded.moved_volume - moved) <= 1e-12 * moved + 1e-300);
+    CHECK(rounded.moved_volume <= rounded.moved_volume_bound * (1 + 1e-12));
+  } else {
+    ++tally.plain;
+  }
+}
+
+}  // namespace
+
+TEST_CASE("round_solid: parts rounding breaks are repaired, or the piece vanishes within its bound, over 96 seeds",
+          "[plane][round]") {
+  // Chains of near-parallel planes through a mesh edge (the slivers between them
+  // are thinner than their rounding near the edge), planes a few ulps off faces
+  // and through the saddle of a pinched solid: the cuts whose pieces rounding
+  // flattens, folds or pinches. Every piece is checked (check_rounding), and
+  // every way of writing a broken piece has to be met.
+  std::vector<NamedMesh> meshes;
+  for (NamedMesh& m : part_test_meshes(0)) {
+    if (m.mesh.triangles.size() <= 1000) meshes.push_back(std::move(m));
+  }
+  REQUIRE(meshes.size() >= 8);
+  // By family: near-parallel chains, planes ulps off a face, the pinched saddle.
+  RoundingTally families[3];
+  for (std::uint64_t seed = 0; seed < 96; ++seed) {
+    RoundingTally& tally = families[seed % 3];
+    Random random(seed * 7919 + 17);
+    const NamedMesh& m = meshes[seed % meshes.size()];
+    std::vector<Plane> planes;
+    const Triangle& t = m.mesh.triangles[random.index(m.mesh.triangles.size())];
+    switch (seed % 3) {
+      case 0: {
+        const double start = std::pow(10.0, -random.uniform(1, 8));
+        const double ratio = std::pow(10.0, -random.uniform(0.5, 3));
+        planes = near_parallel_fan(m.mesh.positions[t[0]], m.mesh.positions[t[1]], random.direction(),
+                                   2 + int(random.index(2)), start, ratio);
+        break;
+      }
+      case 1: {
+        const Plane face = plane_through_points(m.mesh.positions[t[0]], m.mesh.positions[t[1]], m.mesh.positions[t[2]]);
+        planes.push_back(offset_by_ulps(face, int(random.index(9)) - 4));
+        break;
+      }
+      default: {
+        // Through the saddle of pinch_saddle, tilted, a few ulps off.
+        const Mesh saddle = pinch_saddle();
+        Plane plane = plane_through({1, 1, 0}, {double(random.index(3)) - 1, double(random.index(3)) - 1, 4});
+        plane = offset_by_ulps(plane, int(random.index(9)) - 4);
+        const PlaneInput input = prepare_plane_input(saddle);
+        const std::vector<Plane> cuts{plane};
+        const PlaneSet set = input.geometry.plane_set(cuts);
+        const SolidCut cut = cut_solid(set, input.solid, PlaneRef::cut(0), 1, input.shells);
+        for (const auto* side : {&cut.below, &cut.above}) {
+          for (const Solid& piece : *side) check_rounding(set, piece, tally);
+        }
+        continue;
+      }
+    }
+    INFO(m.name << ", seed " << seed);
+    const PlaneInput input = prepare_plane_input(m.mesh);
+    const PlaneSet set = input.geometry.plane_set(planes);
+    std::vector<Solid> pieces{input.solid};
+    for (std::size_t i = 0; i < planes.size(); ++i) {
+      std::vector<Solid> next;
+      for (const Solid& solid : pieces) {
+        const SolidCut cut = cut_solid(set, solid, PlaneRef::cut(static_cast<std::uint32_t>(i)), SurfaceId(i + 1),
+                                       input.shells);
+        if (cut.plane_missed) {
+          next.push_back(solid);
+          continue;
+        }
+        for (const auto* side : {&cut.below, &cut.above}) {
+          for (const Solid& piece : *side) {
+            check_rounding(set, piece, tally);
+            next.push_back(piece);
+          }
+        }
+      }
+      pieces = std::move(next);
+    }
+  }
+  RoundingTally tally;
+  for (const RoundingTally& f : families) {
+    INFO("family: pieces " << f.pieces << ", written as rounded " << f.plain << ", vanished " << f.collapsed
+                           << ", written after parts rounded flat " << f.flattened_parts << ", separated "
+                           << f.separated << ", refused " << f.refused);
+    CHECK(f.pieces > 0);
+    tally.pieces += f.pieces, tally.plain += f.plain, tally.collapsed += f.collapsed;
+    tally.flattened_parts += f.flattened_parts, tally.separated += f.separated, tally.refused += f.refused;
+  }
+  INFO("pieces " << tally.pieces << ", written as rounded " << tally.plain << ", vanished " << tally.collapsed
+                 << ", written after parts rounded flat " << tally.flattened_parts << ", separated "
+                 << tally.separated << ", refused " << tally.refused);
+  CHECK(tally.pieces > 300);
+  // The repairs this family meets, each at least once, so the test cannot pass
+  // by testing nothing (parts rounded flat inside a written piece are met by the
+  // regression reproducers of tests/regressions, not here).
+  CHECK(tally.collapsed > 0);
+  CHECK(tally.separated > 0);
+  // What is left unrepaired: folds of thick pieces against a nearly coplanar
+  // face, a ceiling measured 2026-12-03.
+  CHECK(tally.refused <= 20);
 }

@@ -11,6 +11,7 @@
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/face_loops.hpp"
 #include "shatter/kernel/index_map.hpp"
+#include "shatter/kernel/predicates.hpp"
 #include "shatter/kernel/projection.hpp"
 #include "shatter/kernel/union_find.hpp"
 #include "shatter/kernel/validate.hpp"
@@ -234,30 +235,176 @@ struct PositionEqual {
 // nothing, when the placed corners bound no polygon the triangulation can cover
 // without new points (a face rounded onto the edges around it, or whose loops
 // now coincide).
+// `also_other_axes`: when the face's own projection fails, try the others (see
+// below; round_solid's repairs ask for it).
 bool triangulate_merged_face(const PlaneSet& set, const SolidFace& face,
                              std::span<const std::vector<VertexIndex>> loops, std::span<const PointDef> placed,
-                             Projection projection, std::vector<Triangle>& out) {
+                             Projection projection, std::vector<Triangle>& out, bool also_other_axes = false) {
   LocalVertices local;
   std::vector<VertexIndex>& vertices = local.vertices;
   std::vector<Edge> border;
   for (const auto& loop : loops) {
     for (std::size_t i = 0; i < loop.size(); ++i) border.push_back({local(loop[i]), local(loop[(i + 1) % loop.size()])});
   }
-  Plane plane;
-  const double sign = (projection.flipped != face.reversed) ? -1.0 : 1.0;
-  (projection.axis == 0 ? plane.normal.x : projection.axis == 1 ? plane.normal.y : plane.normal.z) = sign;
   std::vector<ExactPoint> points;
   for (VertexIndex v : vertices) points.push_back(exact_point(set, placed[v]));
-  const Cap<ExactPoint> cap = triangulate_cap(std::span<const ExactPoint>(points), border, plane, false);
-  if (!cap.added_points.empty() || cap.triangles.empty()) return false;
-  for (const Triangle& t : cap.triangles) out.push_back({vertices[t[0]], vertices[t[1]], vertices[t[2]]});
-  return true;
+  // The face's own projection first. Snapped corners lie off the face's plane,
+  // and two of them can project onto one point along its dominant axis (an edge
+  // nearly along that axis, made by the snap): then along each other axis the
+  // face's normal has a component of certified sign (any such projection maps
+  // the plane one to one, keeping or reversing orientation by that sign).
+  std::vector<Projection> projections{projection};
+  if (also_other_axes) {
+    const ApproxPlane a = set.approx(face.plane);
+    const Estimate components[3] = {a.a, a.b, a.c};
+    for (int axis = 0; axis < 3; ++axis) {
+      const Estimate& c = components[axis];
+      if (axis != projection.axis && std::fabs(c.value) > 2 * c.error) projections.push_back({axis, c.value < 0});
+    }
+  }
+  for (const Projection& along : projections) {
+    Plane plane;
+    const double sign = (along.flipped != face.reversed) ? -1.0 : 1.0;
+    (along.axis == 0 ? plane.normal.x : along.axis == 1 ? plane.normal.y : plane.normal.z) = sign;
+    const Cap<ExactPoint> cap = triangulate_cap(std::span<const ExactPoint>(points), border, plane, false);
+    if (!cap.added_points.empty() || cap.triangles.empty()) continue;
+    for (const Triangle& t : cap.triangles) out.push_back({vertices[t[0]], vertices[t[1]], vertices[t[2]]});
+    return true;
+  }
+  return false;
+}
+
+// --- Loops over merged vertices ---------------------------------------------------
+// When vertices merge (rounded onto one point), the faces' loops over the
+// representatives can stop being simple polygons, as in snap rounding in the
+// plane (Hobby 1999; Halperin & Packer 2002's iterated form), and they are
+// repaired the way snap rounding repairs segments, all decided on the rounded
+// doubles by exact predicates:
+// 1. A vertex lying exactly inside an edge (collinear and strictly between its
+//    ends) is inserted into the edge, in every loop that has the edge: the edge
+//    passes through that "hot pixel". A face that rounded onto the edges around
+//    it then runs forth and back along them, and its neighbours on both sides
+//    share vertices again.
+// 2. Spikes x -> y -> x (an edge run forth and back) are removed, repeatedly:
+//    they enclose nothing. A loop left with fewer than 3 corners vanishes.
+// 3. A loop through one vertex twice (two parts that rounding made touch) is
+//    split there into simple loops, each triangulated on its own; the vertex is
+//    then pinched, which the separation below handles.
+// Each step only removes corners, or inserts a vertex into an edge that passes
+// through it, so it ends; it changes no position.
+
+bool strictly_inside_segment(const Vec3& a, const Vec3& b, const Vec3& v) {
+  // Collinear: every coordinate projection of the three points is.
+  if (orient2d({a.x, a.y}, {b.x, b.y}, {v.x, v.y}) != Sign::zero ||
+      orient2d({a.y, a.z}, {b.y, b.z}, {v.y, v.z}) != Sign::zero ||
+      orient2d({a.z, a.x}, {b.z, b.x}, {v.z, v.x}) != Sign::zero) {
+    return false;
+  }
+  // Strictly between: along the first coordinate where the ends differ (on a
+  // line through two distinct points every such coordinate orders the points
+  // alike). Comparing the doubles themselves is exact.
+  for (const auto get : {&Vec3::x, &Vec3::y, &Vec3::z}) {
+    const double lo = std::min(a.*get, b.*get), hi = std::max(a.*get, b.*get);
+    if (lo < hi) return lo < v.*get && v.*get < hi;
+  }
+  return false;  // a == b
+}
+
+// Steps 1 to 3 on every face's loops (over representatives, consecutive repeats
+// removed). `loops[f]`: face f's loops; `candidates`: the vertices that may lie
+// inside an edge (the merged representatives, and the corners of loops that
+// changed), tested against every edge with a bounding-box filter (exact: the
+// positions are doubles).
+void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vector<std::vector<VertexIndex>>>& loops,
+                         std::span<const VertexIndex> candidates) {
+  // 1. Vertices inside edges.
+  for (auto& face : loops) {
+    for (auto& loop : face) {
+      std::vector<VertexIndex> out;
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const VertexIndex a = loop[i], b = loop[(i + 1) % loop.size()];
+        out.push_back(a);
+        const Vec3 &pa = positions[a], &pb = positions[b];
+        const Vec3 lo{std::min(pa.x, pb.x), std::min(pa.y, pb.y), std::min(pa.z, pb.z)};
+        const Vec3 hi{std::max(pa.x, pb.x), std::max(pa.y, pb.y), std::max(pa.z, pb.z)};
+        std::vector<VertexIndex> inside;
+        for (const VertexIndex v : candidates) {
+          const Vec3& p = positions[v];
+          if (v == a || v == b || p.x < lo.x || p.x > hi.x || p.y < lo.y || p.y > hi.y || p.z < lo.z || p.z > hi.z) {
+            continue;
+          }
+          if (strictly_inside_segment(pa, pb, p)) inside.push_back(v);
+        }
+        // In order from a to b, along the first coordinate where they differ
+        // (exact comparisons of the doubles themselves).
+        const auto get = pa.x != pb.x ? &Vec3::x : pa.y != pb.y ? &Vec3::y : &Vec3::z;
+        const bool rising = pa.*get < pb.*get;
+        std::sort(inside.begin(), inside.end(), [&](VertexIndex u, VertexIndex w) {
+          return rising ? positions[u].*get < positions[w].*get : positions[u].*get > positions[w].*get;
+        });
+        inside.erase(std::unique(inside.begin(), inside.end()), inside.end());
+        out.insert(out.end(), inside.begin(), inside.end());
+      }
+      loop = std::move(out);
+    }
+  }
+  // 2. Spikes, and 3. loops through a vertex twice.
+  for (auto& face : loops) {
+    std::vector<std::vector<VertexIndex>> simple;
+    for (auto& loop : face) {
+      bool changed = true;
+      while (changed && loop.size() >= 3) {
+        changed = false;
+        for (std::size_t i = 0; i < loop.size() && loop.size() >= 3; ++i) {
+          const std::size_t k = loop.size();
+          if (loop[i] == loop[(i + 2) % k]) {
+            // x y x: drop y and the second x.
+            const std::size_t y = (i + 1) % k, x2 = (i + 2) % k;
+            loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(std::max(y, x2)));
+            loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(std::min(y, x2)));
+            changed = true;
+          } else if (loop[i] == loop[(i + 1) % k]) {
+            loop.erase(loop.begin() + static_cast<std::ptrdiff_t>((i + 1) % k));
+            changed = true;
+          }
+        }
+      }
+      if (loop.size() < 3) continue;
+      // Split at the first repeated vertex until none is left.
+      std::vector<std::vector<VertexIndex>> pending{std::move(loop)};
+      while (!pending.empty()) {
+        std::vector<VertexIndex> current = std::move(pending.back());
+        pending.pop_back();
+        bool split = false;
+        for (std::size_t i = 0; i < current.size() && !split; ++i) {
+          for (std::size_t j = i + 1; j < current.size(); ++j) {
+            if (current[i] != current[j]) continue;
+            std::vector<VertexIndex> inner(current.begin() + static_cast<std::ptrdiff_t>(i),
+                                           current.begin() + static_cast<std::ptrdiff_t>(j));
+            current.erase(current.begin() + static_cast<std::ptrdiff_t>(i),
+                          current.begin() + static_cast<std::ptrdiff_t>(j));
+            if (inner.size() >= 3) pending.push_back(std::move(inner));
+            if (current.size() >= 3) pending.push_back(std::move(current));
+            split = true;
+            break;
+          }
+        }
+        if (!split && current.size() >= 3) simple.push_back(std::move(current));
+      }
+    }
+    face = std::move(simple);
+  }
 }
 
 // Steps 1 and 2 (see solid_mesh.hpp): positions, vertices merged where they
 // rounded onto one point, faces triangulated.
+// `repair_loops`: repair the loops of faces over merged vertices
+// (repair_merged_loops) before triangulating them; round_solid asks for it once
+// the plain merge has failed certification, so that a piece valid without it is
+// written as before.
 void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options, std::size_t attempt,
-                 Mesh& mesh, std::size_t& merged, std::vector<VertexIndex>* mesh_vertex_of = nullptr) {
+                 Mesh& mesh, std::size_t& merged, std::vector<VertexIndex>* mesh_vertex_of = nullptr,
+                 bool repair_loops = false) {
   const std::size_t n = solid.defs.size();
   thread_local std::vector<Vec3> positions;
   thread_local std::vector<PointDef> placed;
@@ -302,11 +449,61 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
   mesh.positions.reserve(n);
   mesh.triangles.reserve(solid.corners.size());
   mesh.surfaces.reserve(solid.corners.size());
+  // The repair of loops over merged vertices (repair_merged_loops), when asked
+  // for: every face's loops at once, since an edge of one face may pass through a
+  // vertex of another.
+  thread_local std::vector<std::vector<std::vector<VertexIndex>>> repaired;
+  thread_local std::vector<std::uint8_t> repaired_changed;
+  const bool repairing = repair_loops && merged > 0;
+  if (repairing) {
+    repaired.assign(solid.faces.size(), {});
+    repaired_changed.assign(solid.faces.size(), 0);
+    std::vector<std::uint8_t> candidate(n, 0);
+    for (VertexIndex v = 0; v < n; ++v) {
+      if (representative[v] != v) candidate[representative[v]] = 1;
+    }
+    for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+      const SolidFace& face = solid.faces[f];
+      for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+        const SolidLoop& loop = solid.loops[l];
+        std::vector<VertexIndex> corners;
+        for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
+          const VertexIndex v = representative[solid.corners[loop.first_corner + i].vertex];
+          // A corner snapped onto an input point lies off the face's plane: the
+          // face is triangulated over the placed points too, whose collinear
+          // runs (a snapped corner on the line of an edge) it keeps out of its
+          // triangles.
+          const VertexIndex own = solid.corners[loop.first_corner + i].vertex;
+          repaired_changed[f] |= v != own || !(placed[own] == solid.defs[own]);
+          if (corners.empty() || corners.back() != v) corners.push_back(v);
+        }
+        while (corners.size() > 1 && corners.back() == corners.front()) corners.pop_back();
+        repaired[f].push_back(std::move(corners));
+      }
+      if (repaired_changed[f]) {
+        for (const auto& loop : repaired[f]) {
+          for (const VertexIndex v : loop) candidate[v] = 1;
+        }
+      }
+    }
+    std::vector<VertexIndex> candidates;
+    for (VertexIndex v = 0; v < n; ++v) {
+      if (candidate[v] && representative[v] == v) candidates.push_back(v);
+    }
+    // Only loops through a candidate, or along an edge it may lie in, can
+    // change; a loop that changes marks its face.
+    const auto before = repaired;
+    repair_merged_loops(positions, repaired, candidates);
+    for (std::uint32_t f = 0; f < solid.faces.size(); ++f) repaired_changed[f] |= repaired[f] != before[f];
+  }
   for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
     const SolidFace& face = solid.faces[f];
     face_triangles.clear();
     bool changed = false;
-    if (merged > 0) {
+    if (repairing) {
+      changed = repaired_changed[f];
+      loops = repaired[f];
+    } else if (merged > 0) {
       loops.clear();
       for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
         const SolidLoop& loop = solid.loops[l];
@@ -328,7 +525,43 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
       // loops snapped onto the same ridge of vertices) the rest closes up without
       // it; if not, certification finds the mesh open and refuses it.
       face_triangles.clear();
-      triangulate_merged_face(set, face, loops, placed, projection_of(set, face.plane), face_triangles);
+      const Projection projection = projection_of(set, face.plane);
+      // Folded in every projection (a snapped corner went past its neighbour's
+      // edge): a fan over the rounded corners, from the apex the attempt names,
+      // skipping apexes with a triangle collinear in 3D (decided exactly).
+      // Certification vouches for the result or refuses it.
+      const auto fan_over_rounded = [&](const std::vector<VertexIndex>& corners) {
+        const std::size_t k = corners.size();
+        for (std::size_t step = 0; step < k; ++step) {
+          const std::size_t apex = (attempt - 1 + step) % k;
+          bool flat = false;
+          for (std::size_t i = 1; i + 1 < k && !flat; ++i) {
+            const Vec3 &a = positions[corners[apex]], &b = positions[corners[(apex + i) % k]],
+                       &c = positions[corners[(apex + i + 1) % k]];
+            // Distinct representatives have distinct positions: three of them
+            // are collinear exactly when one lies strictly between the others.
+            flat = strictly_inside_segment(a, b, c) || strictly_inside_segment(b, c, a) ||
+                   strictly_inside_segment(c, a, b);
+          }
+          if (flat) continue;
+          for (std::size_t i = 1; i + 1 < k; ++i) {
+            face_triangles.push_back({corners[apex], corners[(apex + i) % k], corners[(apex + i + 1) % k]});
+          }
+          return;
+        }
+      };
+      if (!triangulate_merged_face(set, face, loops, placed, projection, face_triangles, repairing) && repairing) {
+        // Loops split where they touched lie side by side: each on its own.
+        for (const auto& loop : loops) {
+          if (loops.size() > 1 &&
+              triangulate_merged_face(set, face, std::span<const std::vector<VertexIndex>>(&loop, 1), placed,
+                                      projection, face_triangles, true)) {
+            continue;
+          }
+          // A face with holes is left out rather than fanned over its outer loop.
+          if (face.loop_count == 1) fan_over_rounded(loop);
+        }
+      }
     }
     const bool cap = face.surface != original_surface;
     PlaneBasis basis(Plane{});
@@ -370,6 +603,132 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
     mesh_vertex_of->resize(n);
     for (VertexIndex v = 0; v < n; ++v) (*mesh_vertex_of)[v] = out_index[representative[v]];
   }
+}
+
+
+// --- Parts thinner than the rounding --------------------------------------------
+// Rounding can flatten a part of a piece that is thinner than the rounding of its
+// coordinates: its two sides round onto the same vertices, and the mesh holds the
+// same triangle twice, once each way (a two-sided sheet: non-manifold edges where
+// it meets the rest, or the whole piece). Such a pair bounds no volume and removing
+// it keeps every directed edge matched by its reverse, so the part vanishes into
+// its neighbour (the piece across the cut, or the rest of the piece) and what is
+// left is certified like any rounding. This is the collapse step of iterated snap
+// rounding (Halperin & Packer 2002; in 3D, Lazard & Valque 2025, behind CGAL 6's
+// autorefine_triangle_soup): elements that rounding made degenerate are
+// eliminated, by index, not by distance.
+
+// Removes every pair of triangles over the same three vertices turning opposite
+// ways (matched by index; the first unmatched one in mesh order pairs with the
+// first of its reverse), with their surfaces and corner attributes, then the
+// vertices no triangle uses any more. Returns how many triangles went.
+// `renumbered`: each old vertex's new index (no_index when it went).
+std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumbered) {
+  const std::size_t count = mesh.triangles.size();
+  // Key: the triangle rotated to start at its smallest index; its reverse is then
+  // (a, c, b) for (a, b, c).
+  auto rotated = [](Triangle t) {
+    const auto smallest = std::min_element(t.begin(), t.end());
+    std::rotate(t.begin(), smallest, t.end());
+    return t;
+  };
+  std::vector<std::uint32_t> order(count);
+  for (std::uint32_t t = 0; t < count; ++t) order[t] = t;
+  std::vector<Triangle> keys(count);
+  for (std::size_t t = 0; t < count; ++t) keys[t] = rotated(mesh.triangles[t]);
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return keys[a] != keys[b] ? keys[a] < keys[b] : a < b;
+  });
+  auto find = [&](const Triangle& key) {
+    return std::lower_bound(order.begin(), order.end(), key,
+                            [&](std::uint32_t t, const Triangle& k) { return keys[t] < k; });
+  };
+  std::vector<std::uint8_t> removed(count, 0);
+  std::size_t gone = 0;
+  for (std::uint32_t t = 0; t < count; ++t) {
+    if (removed[t]) continue;
+    const Triangle& key = keys[t];
+    const Triangle reverse{key[0], key[2], key[1]};
+    if (reverse == key) continue;  // a repeated index: not a sheet
+    for (auto it = find(reverse); it != order.end() && keys[*it] == reverse; ++it) {
+      if (!removed[*it]) {
+        removed[t] = removed[*it] = 1;
+        gone += 2;
+        break;
+      }
+    }
+  }
+  if (gone == 0) return 0;
+  Mesh kept;
+  std::vector<VertexIndex> index(mesh.positions.size(), no_index);
+  for (std::uint32_t t = 0; t < count; ++t) {
+    if (removed[t]) continue;
+    Triangle out;
+    for (int c = 0; c < 3; ++c) {
+      VertexIndex& v = index[mesh.triangles[t][c]];
+      if (v == no_index) {
+        v = static_cast<VertexIndex>(kept.positions.size());
+        kept.positions.push_back(mesh.positions[mesh.triangles[t][c]]);
+      }
+      out[c] = v;
+    }
+    kept.triangles.push_back(out);
+    kept.surfaces.push_back(mesh.surfaces[t]);
+    for (int c = 0; c < 3; ++c) {
+      if (mesh.corners.has_normals()) kept.corners.normals.push_back(mesh.corners.normals[3 * t + c]);
+      if (mesh.corners.has_uvs()) kept.corners.uvs.push_back(mesh.corners.uvs[3 * t + c]);
+      if (mesh.corners.has_tangents()) kept.corners.tangents.push_back(mesh.corners.tangents[3 * t + c]);
+    }
+  }
+  mesh = std::move(kept);
+  renumbered = std::move(index);
+  return gone;
+}
+
+// How much volume rounding the solid's vertices to their output positions can
+// move, exactly (rationals), as a bound: every point of a fan triangle of a face
+// moves no further than the furthest of its corners, delta, so the region swept
+// between the exact triangle and its rounded image lies within delta of the
+// exact triangle, whose volume is at most 2 delta A + pi delta^2 P + 4/3 pi
+// delta^3 (Steiner's formula for a convex plane set: area A, perimeter P). Here
+// A, P and delta are taken in the L1 norm (upper bounds of the Euclidean
+// ones), pi as 4 and 4/3 pi as 5. The written volume of the piece then differs
+// from the exact one by at most the sum over the fan triangles; a piece whose
+// rounding leaves no volume at all (it collapsed onto sheets or points) has
+// its whole volume within it.
+mpq_class rounding_sweep_bound(const PlaneSet& set, const Solid& solid) {
+  const std::size_t n = solid.defs.size();
+  std::vector<std::array<mpq_class, 3>> exact(n);
+  std::vector<mpq_class> moved(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    exact[v] = exact_coordinates(set, solid.defs[v]);
+    const Vec3 p = output_position(set, solid.defs[v], solid.approx[v]);
+    const double coordinates[3] = {p.x, p.y, p.z};
+    for (int k = 0; k < 3; ++k) moved[v] += abs(mpq_class(coordinates[k]) - exact[v][k]);
+  }
+  auto length1 = [&](VertexIndex a, VertexIndex b) {
+    return mpq_class(abs(exact[a][0] - exact[b][0]) + abs(exact[a][1] - exact[b][1]) + abs(exact[a][2] - exact[b][2]));
+  };
+  mpq_class bound = 0;
+  for (const SolidFace& face : solid.faces) {
+    const VertexIndex centre = solid.corners[solid.loops[face.first_loop].first_corner].vertex;
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+      for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+        if (edge.from == centre || edge.to == centre) continue;
+        const auto& a = exact[centre];
+        const auto& b = exact[edge.from];
+        const auto& c = exact[edge.to];
+        const mpq_class u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+        const mpq_class w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        const mpq_class area = (abs(u[1] * w[2] - u[2] * w[1]) + abs(u[2] * w[0] - u[0] * w[2]) +
+                                abs(u[0] * w[1] - u[1] * w[0])) / 2;
+        const mpq_class perimeter = length1(centre, edge.from) + length1(edge.from, edge.to) + length1(edge.to, centre);
+        const mpq_class delta = std::max({moved[centre], moved[edge.from], moved[edge.to]});
+        bound += delta * (2 * area + delta * (4 * perimeter + 5 * delta));
+      }
+    }
+  }
+  return bound;
 }
 
 // --- Where a piece touches itself -----------------------------------------------
@@ -563,9 +922,31 @@ Mesh triangulate_solid(const PlaneSet& set, const Solid& solid, const SolidMeshO
   return mesh;
 }
 
+namespace {
+
+// The volume a repair moved: the written mesh's volume against the exact piece's
+// (both sides exact: the mesh's doubles and the solid's rationals), and the bound
+// rounding_sweep_bound puts on it (the mesh's triangles are the exact piece's,
+// moved by the rounding, less sheets of no volume).
+void report_moved_volume(const PlaneSet& set, const Solid& solid, RoundedSolid& result) {
+  mpq_class mesh_six = 0;
+  for (const Triangle& t : result.mesh.triangles) {
+    const Vec3 &a = result.mesh.positions[t[0]], &b = result.mesh.positions[t[1]], &c = result.mesh.positions[t[2]];
+    const mpq_class ax(a.x), ay(a.y), az(a.z), bx(b.x), by(b.y), bz(b.z), cx(c.x), cy(c.y), cz(c.z);
+    mesh_six += ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx);
+  }
+  const mpq_class change = abs(mesh_six - exact_six_volume(set, solid)) / 6;
+  result.moved_volume = change.get_d();
+  result.moved_volume_bound = rounding_sweep_bound(set, solid).get_d();
+}
+
+}  // namespace
+
 RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options) {
   RoundedSolid result;
   ValidationReport first_report;
+  bool flattened_whole = false;    // every triangle was in a two-sided sheet
+  std::size_t sheets_cancelled = 0;  // triangles of two-sided sheets removed at this attempt
   std::optional<std::vector<VertexIndex>> touching_caps;  // solid vertices; found at the first need
   std::vector<VertexIndex> mesh_vertex_of, touching;
   // Attempt 0 is the cheapest triangulation. A fold that rounding made comes from
@@ -577,7 +958,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     Mesh mesh;
     std::size_t merged = 0;
     ValidationReport report;
-    triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of);
+    triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of, attempt > 0);
     if (solid.convex && merged == 0 && certify_star_shaped(mesh, vertex_average(mesh))) {
       // A convex solid's rounding certified in O(T) exact orientations.
       result.mesh = std::move(mesh);
@@ -606,10 +987,39 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       result.mesh = mesh;
       result.merged_vertices = merged;
     }
+    // Parts that rounded flat (two-sided sheets) vanish; if that is all of the
+    // piece, the piece vanishes (below). The report is then the sheetless mesh's.
+    if (!report.valid() && !mesh.triangles.empty()) {
+      Mesh sheetless = mesh;
+      std::vector<VertexIndex> renumbered;
+      if (const std::size_t gone = cancel_two_sided_sheets(sheetless, renumbered); gone > 0) {
+        if (sheetless.triangles.empty()) {
+          flattened_whole = true;
+          break;
+        }
+        sheets_cancelled = gone;
+        mesh = std::move(sheetless);
+        // The separation below names vertices by their new numbers.
+        for (VertexIndex& v : mesh_vertex_of) {
+          if (v != no_index) v = renumbered[v];
+        }
+        ValidationOptions validation;
+        validation.check_self_intersections = !options.allow_self_intersections;
+        report = validation.check_self_intersections ? validate_mesh_against(mesh, options.trusted, options.cut)
+                                                     : validate_mesh(mesh, validation);
+        if (options.allow_self_intersections) {
+          std::erase_if(report.defects, [](const Defect& d) { return d.kind == DefectKind::non_manifold_vertex; });
+        }
+      } else {
+        sheets_cancelled = 0;
+      }
+    }
     if (report.valid()) {
       result.mesh = std::move(mesh);
       result.merged_vertices = merged;
       result.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
+      result.vanished_triangles = sheets_cancelled;
+      if (sheets_cancelled > 0) report_moved_volume(set, solid, result);
       result.valid = true;
       return result;
     }
@@ -639,13 +1049,43 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         result.separated_vertices = separation.moved;
         result.moved_volume = separation.volume_change;
         result.moved_volume_bound = separation.volume_bound;
+        result.vanished_triangles = sheets_cancelled;
+        if (sheets_cancelled > 0) {
+          // The sheets' volume as well: measured against the exact piece.
+          const double separated_bound = result.moved_volume_bound;
+          report_moved_volume(set, solid, result);
+          result.moved_volume_bound += separated_bound;
+        }
         result.valid = true;
         return result;
       }
     }
   }
+  // A piece that cannot be certified and whose whole volume is within what the
+  // rounding of its vertices can move (rounding_sweep_bound) is thinner than the
+  // rounding of its coordinates: it vanishes whole, its volume moving to its
+  // neighbours across the cut. A piece that rounded onto two-sided sheets or onto
+  // a few points has no volume left, so it always qualifies, by the bound's
+  // argument; the test is made all the same, exactly.
+  const mpq_class six = exact_six_volume(set, solid);
+  const mpq_class sweep = rounding_sweep_bound(set, solid);
+  if (six <= 6 * sweep) {
+    const bool was_empty = result.mesh.triangles.empty();
+    result.mesh = Mesh{};
+    result.collapsed = true;
+    result.moved_volume = mpq_class(six / 6).get_d();
+    result.moved_volume_bound = sweep.get_d();
+    // The first attempt's defect, or the collapse itself when no triangle was left to
+    // have one.
+    result.defect = flattened_whole ? "the whole piece (it rounds onto two-sided sheets: it is thinner than the "
+                                      "rounding of its coordinates)"
+                    : was_empty ? first_report.summary()
+                                : "the whole piece (its volume is within what the rounding of its coordinates "
+                                  "moves): " + first_report.summary();
+    return result;
+  }
   result.defect = first_report.summary();
-  result.collapsed = result.mesh.triangles.empty();
+  result.collapsed = false;
   return result;
 }
 

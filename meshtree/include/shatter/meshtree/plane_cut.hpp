@@ -37,7 +37,9 @@ struct CutPiece {
   /// Why `mesh` is not valid as written (rounding to doubles broke it), or empty.
   std::string defect;
   /// Where the exact piece touches itself at a point (round_solid), the vertex
-  /// copies moved apart, and the volume that moved (at most moved_volume_bound).
+  /// copies moved apart; and the volume that rounding's repairs moved (the
+  /// separation, parts flattened into sheets that vanished, or the whole of a
+  /// vanished piece), at most moved_volume_bound.
   std::size_t separated_vertices = 0;
   double moved_volume = 0;
   double moved_volume_bound = 0;
@@ -45,7 +47,8 @@ struct CutPiece {
   /// coordinates, so as written it vanishes into its neighbours across the cut
   /// (whose rounded caps close over it). `mesh` has no triangles, `defect` names
   /// the collapse, and `moved_volume` is the piece's volume (exact_six_volume / 6),
-  /// which moves to them.
+  /// which moves to them; it is at most `moved_volume_bound`, the volume rounding
+  /// the piece's vertices can move (see round_solid).
   bool vanished = false;
 };
 

@@ -13,10 +13,17 @@
 //    points. A face with k corners gets k - 2 triangles plus 2 per hole.
 // 3. Certify the rounded mesh exactly (validate_mesh, self-intersections
 //    included) and repair what rounding broke, as iterated snap rounding does
-//    (Hobby 1999; Halperin & Packer 2002): vertices that rounded onto one point are
-//    merged and the triangles they flatten removed; a fold is retried with another
-//    triangulation of the faces involved; the result is checked again. What cannot
-//    be repaired is reported, never written as valid.
+//    (Hobby 1999; Halperin & Packer 2002; in 3D, Lazard & Valque 2025, behind
+//    CGAL 6's autorefine_triangle_soup): vertices that rounded onto one point are
+//    merged and the triangles they flatten removed; on a retry, the faces' loops
+//    over merged vertices are repaired as snap rounding repairs segments (a vertex
+//    lying exactly inside an edge is inserted into it, spikes removed, a loop
+//    through one point twice split there) and a fold is retried with another
+//    triangulation of the faces involved; triangles that rounding laid over each
+//    other once each way (a part thinner than the rounding, flattened into a
+//    two-sided sheet) vanish; the result is checked again. A piece that still
+//    fails and whose volume is within what rounding its vertices can move
+//    vanishes whole. What cannot be repaired is reported, never written as valid.
 
 #include <string>
 
@@ -79,8 +86,18 @@ struct RoundedSolid {
   /// Vertex copies moved where the exact piece touches itself (see round_solid);
   /// a vertex pinched between k fans counts k times.
   std::size_t separated_vertices = 0;
-  double moved_volume = 0;        ///< |volume change| the moves made (doubles)
-  double moved_volume_bound = 0;  ///< sum of distance moved x area of the moved copies' triangles
+  /// Triangles removed because rounding laid them over each other, once each way
+  /// (a part thinner than the rounding, flattened into a two-sided sheet).
+  std::size_t vanished_triangles = 0;
+  /// |volume change| the repairs made: the separation's moves, the written mesh
+  /// against the exact piece when parts of it vanished as sheets, the whole
+  /// exact volume when the piece collapsed (doubles, from exact values).
+  double moved_volume = 0;
+  /// A bound on moved_volume: the separation's (sum of distance moved x area of
+  /// the moved copies' triangles), plus, when parts or the whole vanished, the
+  /// most that rounding the piece's vertices can move (Steiner's bound over its
+  /// faces' fan triangles, see round_solid).
+  double moved_volume_bound = 0;
   std::string defect;       ///< when not valid: validate_mesh's summary of what is left
 };
 
@@ -94,11 +111,25 @@ struct RoundedSolid {
 /// cap moves toward its own neighbours by 2^-40 of the distance to the nearest
 /// (then 2^-30, 2^-20) until certification passes: the point where the piece
 /// touched itself gives way, moving `moved_volume` (at most `moved_volume_bound`).
+/// A part thinner than the rounding that rounds flat (its triangles laid over each
+/// other once each way) vanishes into its neighbour (`vanished_triangles`); a piece
+/// that rounds flat whole, or that cannot be certified while its exact volume is
+/// at most what moving its vertices to their rounded positions can sweep
+/// (2 d A + 4 d^2 P + 5 d^3 over its faces' fan triangles, d the furthest corner's
+/// move, A and P the area and perimeter, all exact upper bounds in the L1 norm:
+/// Steiner's formula for the region within d of a triangle), is thinner than the
+/// rounding of its coordinates: it is `collapsed`, with no triangles, its exact
+/// volume as `moved_volume` and that sweep as `moved_volume_bound`.
 /// Preconditions: `solid` sound (check_solid), over `set`; embedded but for such
 /// touching points.
 /// Guarantees: `valid` is true exactly when `mesh` passes validate_mesh (closed,
 /// oriented, 2-manifold, positive volume, no zero-area triangle, no unused vertex,
-/// no self-intersection); deterministic.
+/// no self-intersection); a piece whose first rounding certifies is written as
+/// before any repair existed; every repair is a finite pass (merges and removals
+/// only shrink the mesh, insertions put a vertex into an edge that passes exactly
+/// through it, over a fixed set of four attempts); deterministic. Failure: neither
+/// valid nor collapsed, `defect` names what the first rounding broke (folds of
+/// thick pieces against a nearly coplanar face are the kind left).
 RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options = {});
 
 /// The solid's mass properties (unit density), integrated over its faces' fans on
