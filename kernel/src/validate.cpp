@@ -24,6 +24,7 @@
 #include "shatter/kernel/predicates.hpp"
 #include "shatter/kernel/self_intersections.hpp"
 #include "shatter/kernel/union_find.hpp"
+#include "triangle_boxes.hpp"
 
 namespace shatter {
 namespace {
@@ -78,19 +79,8 @@ void append_self_intersections(ValidationReport& report, const std::vector<std::
                                 std::to_string(pairs.front().second)});
 }
 
-using TriangleBox = CGAL::Box_intersection_d::Box_with_handle_d<double, 3, std::size_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
-
-TriangleBox box_of(const std::vector<Vec3>& positions, const Triangle& tri, std::size_t handle) {
-  double lo[3], hi[3];
-  for (int axis = 0; axis < 3; ++axis) {
-    lo[axis] = hi[axis] = positions[tri[0]][axis];
-    for (int c = 1; c < 3; ++c) {
-      lo[axis] = std::min(lo[axis], positions[tri[c]][axis]);
-      hi[axis] = std::max(hi[axis], positions[tri[c]][axis]);
-    }
-  }
-  return TriangleBox(CGAL::Bbox_3(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]), handle);
-}
+using detail::box_of;
+using detail::TriangleBox;
 
 // Whether every index is in range, every vertex used, no triangle repeats an
 // index, every directed edge appears once and its reverse once (closed and

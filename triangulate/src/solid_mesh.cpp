@@ -940,6 +940,19 @@ void report_moved_volume(const PlaneSet& set, const Solid& solid, RoundedSolid& 
   result.moved_volume_bound = rounding_sweep_bound(set, solid).get_d();
 }
 
+// Certifies a rounded mesh as round_solid promises: validate_mesh_against its
+// trusted parent, or the topology alone (with vertices where the surface touches
+// itself allowed) for a solid accepted with self-intersections.
+ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& options) {
+  if (!options.allow_self_intersections) return validate_mesh_against(mesh, options.trusted, options.cut);
+  ValidationOptions topology_only;
+  topology_only.check_self_intersections = false;
+  ValidationReport report = validate_mesh(mesh, topology_only);
+  // A surface allowed to cross itself may touch itself at a vertex.
+  std::erase_if(report.defects, [](const Defect& d) { return d.kind == DefectKind::non_manifold_vertex; });
+  return report;
+}
+
 }  // namespace
 
 RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options) {
@@ -967,14 +980,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       result.valid = true;
       return result;
     } else {
-      ValidationOptions validation;
-      validation.check_self_intersections = !options.allow_self_intersections;
-      report = validation.check_self_intersections ? validate_mesh_against(mesh, options.trusted, options.cut)
-                                                   : validate_mesh(mesh, validation);
-      if (options.allow_self_intersections) {
-        // A surface allowed to cross itself may touch itself at a vertex.
-        std::erase_if(report.defects, [](const Defect& d) { return d.kind == DefectKind::non_manifold_vertex; });
-      }
+      report = certify_rounded(mesh, options);
       if (mesh.triangles.empty()) {
         // Every vertex rounded onto a few points and the whole piece flattened
         // away: no defect is left to name, but nothing is left either.
@@ -1003,13 +1009,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         for (VertexIndex& v : mesh_vertex_of) {
           if (v != no_index) v = renumbered[v];
         }
-        ValidationOptions validation;
-        validation.check_self_intersections = !options.allow_self_intersections;
-        report = validation.check_self_intersections ? validate_mesh_against(mesh, options.trusted, options.cut)
-                                                     : validate_mesh(mesh, validation);
-        if (options.allow_self_intersections) {
-          std::erase_if(report.defects, [](const Defect& d) { return d.kind == DefectKind::non_manifold_vertex; });
-        }
+        report = certify_rounded(mesh, options);
       } else {
         sheets_cancelled = 0;
       }
