@@ -102,7 +102,7 @@
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/build.hpp"
-#include "shatter/meshtree/plane_input.hpp"
+#include "shatter/cut/plane_input.hpp"
 #include "shatter/meshtree/stats.hpp"
 #include "shatter/meshtree/tree.hpp"
 

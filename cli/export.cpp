@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string_view>
 
-#include "shatter/meshtree/file.hpp"
+#include "shatter/formats/file.hpp"
 #include "errors.hpp"
 #include "viewer_page.hpp"
 

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "shatter/kernel/io.hpp"
-#include "shatter/meshtree/export.hpp"
+#include "shatter/formats/export.hpp"
 #include "shatter/meshtree/tree.hpp"
 #include "command.hpp"
 #include "output_transaction.hpp"

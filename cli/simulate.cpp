@@ -15,7 +15,7 @@
 
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
-#include "shatter/meshtree/file.hpp"
+#include "shatter/formats/file.hpp"
 #include "shatter/runtime/recording.hpp"
 #include "errors.hpp"
 #include "output_transaction.hpp"

@@ -15,7 +15,7 @@
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mass.hpp"
-#include "shatter/meshtree/plane_cut.hpp"
+#include "shatter/cut/plane_cut.hpp"
 #include "errors.hpp"
 #include "input.hpp"
 #include "output_transaction.hpp"

@@ -20,9 +20,9 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/bonds.hpp"
-#include "shatter/meshtree/hull.hpp"
-#include "shatter/meshtree/plane_cut.hpp"
-#include "shatter/meshtree/plane_input.hpp"
+#include "shatter/cut/hull.hpp"
+#include "shatter/cut/plane_cut.hpp"
+#include "shatter/cut/plane_input.hpp"
 #include "shatter/meshtree/tree.hpp"
 #include "shatter/version.hpp"
 

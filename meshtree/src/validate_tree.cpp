@@ -23,18 +23,8 @@
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/validate.hpp"
-#include "tree_checks.hpp"
 
 namespace shatter {
-
-namespace detail {
-
-std::string hex(std::uint64_t value, int digits) {
-  static constexpr char digit_chars[] = "0123456789ABCDEF";
-  std::string text = "0x";
-  for (int k = digits - 1; k >= 0; --k) text += digit_chars[(value >> (4 * k)) & 0xF];
-  return text;
-}
 
 std::vector<NodeIndex> leaves_in_order(const std::vector<MeshTreeNode>& nodes) {
   std::vector<NodeIndex> leaves;
@@ -44,8 +34,17 @@ std::vector<NodeIndex> leaves_in_order(const std::vector<MeshTreeNode>& nodes) {
   return leaves;
 }
 
-// The checks, in detail's own unnamed namespace: they see what they share with
-// the reader (tree_checks.hpp) by its plain name.
+namespace detail {
+
+// `value` as "0x" and `digits` upper-case hexadecimal digits (the low ones).
+std::string hex(std::uint64_t value, int digits) {
+  static constexpr char digit_chars[] = "0123456789ABCDEF";
+  std::string text = "0x";
+  for (int k = digits - 1; k >= 0; --k) text += digit_chars[(value >> (4 * k)) & 0xF];
+  return text;
+}
+
+// The checks, in detail's own unnamed namespace.
 namespace {
 
 constexpr std::uint64_t max_u32 = std::numeric_limits<std::uint32_t>::max();
@@ -64,12 +63,12 @@ std::string full_digits(double value) {
 
 std::optional<TreeDefect> recipe_defect(const TreeRecipe& recipe) {
   if (recipe.fragments == 0) return TreeDefect{TreePart::recipe, 0, "recipe.fragments is 0 (must be at least 1)"};
-  if (static_cast<std::uint8_t>(recipe.strategy) > last_strategy) {
+  if (recipe.strategy > last_strategy) {
     return TreeDefect{
         TreePart::recipe, 0,
         "recipe.strategy " + str(static_cast<std::uint8_t>(recipe.strategy)) + " is not a known strategy"};
   }
-  if (static_cast<std::uint8_t>(recipe.kernel) > last_kernel) {
+  if (recipe.kernel > last_kernel) {
     return TreeDefect{TreePart::recipe, 0,
                       "recipe.kernel " + str(static_cast<std::uint8_t>(recipe.kernel)) + " is not a known kernel"};
   }
@@ -341,7 +340,7 @@ std::optional<std::string> solid_defect(const Solid& solid, std::size_t node, co
   for (std::size_t v = 0; v < vertex_count; ++v) {
     const PointDef& def = solid.defs[v];
     const auto kind = static_cast<std::uint8_t>(def.kind);
-    if (kind > last_point_kind) return "vertex " + str(v) + " has unknown kind " + str(kind);
+    if (kind > static_cast<std::uint8_t>(last_point_kind)) return "vertex " + str(v) + " has unknown kind " + str(kind);
     const auto name = [&] { return "vertex " + str(v) + " (" + point_kind_name(def.kind) + ") "; };
     // How many of a, b and planes[] the kind uses; the rest must be zero.
     const int points_used = def.kind == PointKind::input ? 1 : def.kind == PointKind::segment_plane ? 2 : 0;
@@ -680,9 +679,9 @@ std::optional<TreeDefect> geometry_defect(const MeshTree& tree) {
 
 }  // namespace
 
-std::optional<TreeDefect> fill_caches(MeshTree& tree) { return caches_defect(tree, &tree); }
-
 }  // namespace detail
+
+std::optional<TreeDefect> fill_tree_caches(MeshTree& tree) { return detail::caches_defect(tree, &tree); }
 
 std::string_view tree_part_name(TreePart part) {
   switch (part) {

@@ -9,9 +9,9 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "shatter/meshtree/export.hpp"
+#include "shatter/formats/export.hpp"
 
-#include "shatter/meshtree/tinygltf.hpp"
+#include "shatter/formats/tinygltf.hpp"
 
 namespace shatter::runtime {
 

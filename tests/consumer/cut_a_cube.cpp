@@ -1,5 +1,5 @@
 // Cuts the unit cube with the installed library and checks the pieces: a plane
-// cut (meshtree's cut_mesh_by_plane) into two certified halves of volume 1/2, and a
+// cut (cut_mesh_by_plane) into two certified halves of volume 1/2, and a
 // mesh tree of 8 fragments (plane kernel) that validate_tree accepts, geometry
 // included, whose leaves are valid solids adding up to the cube, written to
 // .shatter bytes and read back, then broken in the runtime (one strong impact at
@@ -13,7 +13,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/validate.hpp"
-#include "shatter/meshtree/meshtree.hpp"  // the whole API, as an installed user would include it
+#include "shatter/formats/formats.hpp"  // the whole API up to the file, as an installed user would include it
 #include "shatter/runtime/shapes.hpp"
 #include "shatter/runtime/world.hpp"
 

@@ -1,4 +1,4 @@
-// Fuzz target: the .shatter reader (meshtree/include/shatter/meshtree/file.hpp).
+// Fuzz target: the .shatter reader (meshtree/include/shatter/formats/file.hpp).
 // Properties: hostile bytes are refused with CorruptFileError only; a decoded tree
 // keeps the invariants decode_shatter promises (the exact representation's
 // cross-references and caches included), encodes without complaint, and
@@ -17,7 +17,7 @@
 
 #include "fuzz_support.hpp"
 #include "shatter/meshtree/bonds.hpp"
-#include "shatter/meshtree/file.hpp"
+#include "shatter/formats/file.hpp"
 
 namespace {
 

@@ -20,7 +20,7 @@
 
 #include "fuzz_support.hpp"
 #include "shatter/kernel/validate.hpp"
-#include "shatter/meshtree/plane_cut.hpp"
+#include "shatter/cut/plane_cut.hpp"
 #include "support/checks.hpp"
 
 namespace {

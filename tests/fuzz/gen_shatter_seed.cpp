@@ -21,7 +21,7 @@
 
 #include "shatter/generators/solids.hpp"
 #include "shatter/meshtree/build.hpp"
-#include "shatter/meshtree/file.hpp"
+#include "shatter/formats/file.hpp"
 
 /// Builds the cube's tree with a fixed seed and writes its file; exit 0 on success.
 int main(int argc, char** argv) {

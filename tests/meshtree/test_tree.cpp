@@ -46,7 +46,7 @@
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cover.hpp"
-#include "shatter/meshtree/file.hpp"
+#include "shatter/formats/file.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "support/bond_reference.hpp"
 #include "support/checks.hpp"

@@ -27,7 +27,7 @@
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/meshtree/build.hpp"
-#include "shatter/meshtree/file.hpp"
+#include "shatter/formats/file.hpp"
 #include "shatter/meshtree/tree.hpp"
 #include "shatter/meshtree/validate_tree.hpp"
 #include "shatter/generators/corpus.hpp"

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "runtime_cases.hpp"
-#include "shatter/meshtree/file.hpp"
+#include "shatter/formats/file.hpp"
 #include "support/run_shatter.hpp"
 
 using namespace shatter;

@@ -17,7 +17,7 @@
 #include "shatter/runtime/scenes.hpp"
 #include "shatter/runtime/world.hpp"
 
-#include "shatter/meshtree/tinygltf.hpp"
+#include "shatter/formats/tinygltf.hpp"
 
 using namespace shatter;
 using namespace shatter::test;

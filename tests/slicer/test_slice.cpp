@@ -5,7 +5,7 @@
 // rationals): valid pieces that partition the volume, planes through vertices,
 // edges and faces, determinism, the two number types' agreement, cap attributes,
 // and cap corners shared bit for bit. The caps themselves: tests/triangulate;
-// solid separation: tests/meshtree/test_separate.cpp.
+// solid separation: tests/cut/test_separate.cpp.
 
 #include <catch2/catch.hpp>
 

@@ -3,14 +3,14 @@
 // tinygltf and copy an accessor's elements out. Header-only, and without a test
 // framework like the rest of support/: failures throw std::runtime_error, which
 // Catch reports with the message. Link shatter::meshtree, which compiles
-// tinygltf (shatter/meshtree/tinygltf.hpp).
+// tinygltf (shatter/formats/tinygltf.hpp).
 
 #include <cstring>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "shatter/meshtree/tinygltf.hpp"
+#include "shatter/formats/tinygltf.hpp"
 
 namespace shatter::test {
 

@@ -19,8 +19,8 @@
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/solid.hpp"
-#include "shatter/meshtree/cut_solid.hpp"
-#include "shatter/meshtree/plane_input.hpp"
+#include "shatter/cut/cut_solid.hpp"
+#include "shatter/cut/plane_input.hpp"
 #include "support/degenerate.hpp"
 
 namespace shatter::test {

@@ -15,7 +15,7 @@
 
 #include "shatter/kernel/io.hpp"
 #include "shatter/meshtree/build.hpp"
-#include "shatter/meshtree/export.hpp"
+#include "shatter/formats/export.hpp"
 #include "shatter/generators/corpus.hpp"
 #include "shatter/generators/solids.hpp"
 #include "support/gltf.hpp"

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "shatter/meshtree/export.hpp"
-#include "shatter/meshtree/file.hpp"
+#include "shatter/formats/export.hpp"
+#include "shatter/formats/file.hpp"
 #include "shatter/generators/corpus.hpp"
 #include "support/run_shatter.hpp"
 

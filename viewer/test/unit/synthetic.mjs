@@ -1,5 +1,5 @@
 // Synthetic mesh trees for the unit tests, written as the GLB `shatter export`
-// writes (meshtree/src/export.cpp): glTF node i is tree node i with its extras
+// writes (formats/src/export.cpp): glTF node i is tree node i with its extras
 // (tree_node, depth, first_leaf, leaf_count, leaf, volume, centroid, triangles,
 // cap_triangles), children nested as in the tree, a mesh only on the selected
 // nodes (one primitive, or an "exterior" and an "interior" one), and the bonds

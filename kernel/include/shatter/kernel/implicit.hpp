@@ -78,6 +78,8 @@ struct PlaneRef {
 
 /// How a vertex is defined (see the file comment).
 enum class PointKind : std::uint8_t { input = 0, segment_plane = 1, three_planes = 2 };
+/// The largest PointKind this version knows: readers refuse a stored kind above it.
+inline constexpr PointKind last_point_kind = PointKind::three_planes;
 
 /// A vertex, by definition. input: `a` is the input point. segment_plane: the
 /// line through input points `a` and `b` met by plane `planes[0]`. three_planes:

@@ -33,6 +33,12 @@ enum class Strategy : std::uint8_t {
 /// still read (.shatter versions 1 and 2), and this says how they were made.
 enum class KernelKind : std::uint8_t { fast = 0, exact = 1, plane = 2 };
 
+/// The largest Strategy and KernelKind this version knows: a reader refuses a
+/// stored value above them. A new enumerator must be added here, and to the
+/// layout comment of formats/file.hpp, to be stored.
+inline constexpr Strategy last_strategy = Strategy::axis;
+inline constexpr KernelKind last_kernel = KernelKind::plane;
+
 /// The strategy's name as the CLI spells it ("thesis", "balanced", "axis");
 /// "unknown" for a value outside the enum. Never throws.
 std::string_view strategy_name(Strategy strategy);

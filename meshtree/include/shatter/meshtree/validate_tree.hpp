@@ -11,6 +11,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "shatter/meshtree/tree.hpp"
 
@@ -111,5 +112,18 @@ struct TreeValidationReport {
 /// solid) memory; the caches one approximate() per solid vertex; the geometry as
 /// TreeValidationOptions::geometry says.
 TreeValidationReport validate_tree(const MeshTree& tree, const TreeValidationOptions& options = {});
+
+/// The leaves among `nodes` in node order: what MeshTree::leaf_nodes must be.
+/// Never throws but std::bad_alloc.
+std::vector<NodeIndex> leaves_in_order(const std::vector<MeshTreeNode>& nodes);
+
+/// Computes the floating-point caches a tree may come without (every
+/// InputGeometry::plane_approx and Solid::approx, as TreeValidationOptions::caches
+/// describes them) and stores them in `tree`: what a reader of a stored tree calls.
+/// Precondition: `tree` passed validate_tree with caches off.
+/// Returns the first vertex whose definition is degenerate (its planes meet in no
+/// single point) as a TreePart::solid defect; the caches are then incomplete.
+/// Never throws but std::bad_alloc.
+std::optional<TreeDefect> fill_tree_caches(MeshTree& tree);
 
 }  // namespace shatter

@@ -24,12 +24,12 @@
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/meshtree/build.hpp"
-#include "shatter/meshtree/export.hpp"
+#include "shatter/formats/export.hpp"
 #include "shatter/meshtree/stats.hpp"
 #include "support/checks.hpp"
 #include "support/gltf.hpp"
 
-#include "shatter/meshtree/tinygltf.hpp"
+#include "shatter/formats/tinygltf.hpp"
 
 using namespace shatter;
 namespace fs = std::filesystem;

@@ -1,4 +1,4 @@
-#include "shatter/meshtree/separate.hpp"
+#include "shatter/cut/separate.hpp"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 

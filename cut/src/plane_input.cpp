@@ -1,11 +1,11 @@
-#include "shatter/meshtree/plane_input.hpp"
+#include "shatter/cut/plane_input.hpp"
 
 #include <algorithm>
 
 #include "shatter/kernel/half_edges.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/union_find.hpp"
-#include "shatter/meshtree/separate.hpp"
+#include "shatter/cut/separate.hpp"
 
 namespace shatter {
 namespace {

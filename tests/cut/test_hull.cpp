@@ -27,7 +27,7 @@
 #include "shatter/kernel/union_find.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/build.hpp"
-#include "shatter/meshtree/hull.hpp"
+#include "shatter/cut/hull.hpp"
 
 using namespace shatter;
 using namespace shatter::test;

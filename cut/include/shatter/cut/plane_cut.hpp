@@ -9,7 +9,7 @@
 
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/solid.hpp"
-#include "shatter/meshtree/plane_input.hpp"
+#include "shatter/cut/plane_input.hpp"
 
 namespace shatter {
 

@@ -1,6 +1,6 @@
 // Node selection, mesh-file export and GLB export of a mesh tree.
 
-#include "shatter/meshtree/export.hpp"
+#include "shatter/formats/export.hpp"
 
 #include <algorithm>
 #include <array>
@@ -20,7 +20,7 @@
 // tinygltf is header-only: its implementation is compiled here, once (see
 // tinygltf.hpp, which every other user of tinygltf includes).
 #define TINYGLTF_IMPLEMENTATION
-#include "shatter/meshtree/tinygltf.hpp"
+#include "shatter/formats/tinygltf.hpp"
 
 namespace shatter {
 

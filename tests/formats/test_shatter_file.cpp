@@ -37,7 +37,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/build.hpp"
-#include "shatter/meshtree/file.hpp"
+#include "shatter/formats/file.hpp"
 #include "shatter/meshtree/recipe.hpp"
 #include "shatter/version.hpp"
 #include "support/checks.hpp"

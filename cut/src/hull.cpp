@@ -1,4 +1,4 @@
-#include "shatter/meshtree/hull.hpp"
+#include "shatter/cut/hull.hpp"
 
 #include <algorithm>
 #include <array>

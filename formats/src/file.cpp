@@ -4,7 +4,7 @@
 // encoder accepts the decoder accepts, and a decoded tree keeps every MeshTree
 // invariant.
 
-#include "shatter/meshtree/file.hpp"
+#include "shatter/formats/file.hpp"
 
 #include <zlib.h>
 
@@ -30,17 +30,11 @@
 #include "shatter/meshtree/tree.hpp"
 #include "shatter/meshtree/validate_tree.hpp"
 #include "file_layout.hpp"
-#include "tree_checks.hpp"
 
 namespace shatter {
 
 namespace {
 
-using detail::hex;
-using detail::last_kernel;
-using detail::last_point_kind;
-using detail::last_strategy;
-using detail::leaves_in_order;
 using namespace file_layout;
 
 
@@ -149,11 +143,11 @@ TreeRecipe read_recipe(const Section& section) {
   recipe.seed = in.u64("seed");
   const std::size_t strategy_at = in.offset();
   const std::uint8_t strategy = in.u8("strategy");
-  if (strategy > last_strategy) in.fail_at(strategy_at, "strategy " + str(strategy) + " is unknown");
+  if (strategy > static_cast<std::uint8_t>(last_strategy)) in.fail_at(strategy_at, "strategy " + str(strategy) + " is unknown");
   recipe.strategy = static_cast<Strategy>(strategy);
   const std::size_t kernel_at = in.offset();
   const std::uint8_t kernel = in.u8("kernel");
-  if (kernel > last_kernel) in.fail_at(kernel_at, "kernel " + str(kernel) + " is unknown");
+  if (kernel > static_cast<std::uint8_t>(last_kernel)) in.fail_at(kernel_at, "kernel " + str(kernel) + " is unknown");
   recipe.kernel = static_cast<KernelKind>(kernel);
   recipe.interior_uv_scale = in.f64("interior_uv_scale");
   recipe.max_plane_tries = in.u32("max_plane_tries");
@@ -487,7 +481,7 @@ MeshTree decode_shatter(std::string_view bytes) {
   if (const std::optional<TreeDefect> defect = validate_tree(tree, {.caches = false}).defect) {
     refuse(located(*defect, sections, offsets));
   }
-  if (const std::optional<TreeDefect> defect = detail::fill_caches(tree)) refuse(located(*defect, sections, offsets));
+  if (const std::optional<TreeDefect> defect = fill_tree_caches(tree)) refuse(located(*defect, sections, offsets));
   if (sections.version >= 3) finish_version3(tree, pending);
   return tree;
 }

@@ -1,8 +1,8 @@
-#include "shatter/meshtree/plane_cut.hpp"
+#include "shatter/cut/plane_cut.hpp"
 
 #include <algorithm>
 
-#include "shatter/meshtree/cut_solid.hpp"
+#include "shatter/cut/cut_solid.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 
 namespace shatter {

@@ -21,7 +21,7 @@
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
-#include "shatter/meshtree/plane_cut.hpp"
+#include "shatter/cut/plane_cut.hpp"
 #include "shatter/generators/corpus.hpp"
 #include "shatter/generators/random.hpp"
 #include "shatter/generators/solids.hpp"

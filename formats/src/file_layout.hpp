@@ -3,7 +3,7 @@
 // header, the section table, the version 1 and 2 payloads) and the version 3
 // payloads (file_v3.cpp): tags, sizes, the byte writer and the bounds-checked
 // payload reader. Internal to the library; the layout is documented in
-// shatter/meshtree/file.hpp.
+// shatter/formats/file.hpp.
 
 #include <zlib.h>
 
@@ -21,11 +21,18 @@
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/vec.hpp"
 #include "shatter/meshtree/tree.hpp"
-#include "tree_checks.hpp"
+#include "shatter/meshtree/validate_tree.hpp"
 
 namespace shatter::file_layout {
 
-using detail::hex;
+/// `value` as "0x" and `digits` upper-case hexadecimal digits (the low ones), as
+/// messages name flag bytes and checksums.
+inline std::string hex(std::uint64_t value, int digits) {
+  std::string text(static_cast<std::size_t>(digits) + 2, '0');
+  text[1] = 'x';
+  for (std::size_t k = text.size(); k-- > 2; value >>= 4) text[k] = "0123456789ABCDEF"[value & 0xF];
+  return text;
+}
 
 // ---------------------------------------------------------------------------
 // Constants of the layout
@@ -403,7 +410,7 @@ inline void read_solid_flags(PayloadReader& in, MeshTreeNode& node) {
 inline PointKind read_point_kind(PayloadReader& in, std::size_t vertex) {
   const std::size_t at = in.offset();
   const std::uint8_t kind = in.u8("vertex kind");
-  if (kind > detail::last_point_kind) in.fail_at(at, "vertex " + str(vertex) + " has unknown kind " + str(kind));
+  if (kind > static_cast<std::uint8_t>(last_point_kind)) in.fail_at(at, "vertex " + str(vertex) + " has unknown kind " + str(kind));
   return static_cast<PointKind>(kind);
 }
 

@@ -1,9 +1,9 @@
 #pragma once
-// tinygltf as meshtree compiles it: its implementation is built once, in
+// tinygltf as formats compiles it: its implementation is built once, in
 // src/export.cpp (which defines TINYGLTF_IMPLEMENTATION before including this),
 // without image support, since shatter's GLBs hold no textures. Code that reads
 // or writes glTF with tinygltf includes this header, never <tiny_gltf.h> itself,
-// and links shatter::meshtree: the class's default members depend on these
+// and links shatter::formats: the class's default members depend on these
 // macros, and tinygltf's own warnings stay out of shatter's -Wall builds.
 
 #ifndef TINYGLTF_NO_STB_IMAGE

@@ -1,4 +1,4 @@
-#include "shatter/meshtree/cut_solid.hpp"
+#include "shatter/cut/cut_solid.hpp"
 
 #include <algorithm>
 #include <numeric>

@@ -4,7 +4,7 @@
 
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/solid.hpp"
-#include "shatter/meshtree/cut_solid.hpp"
+#include "shatter/cut/cut_solid.hpp"
 
 namespace shatter {
 
