@@ -36,6 +36,15 @@ RepairReport repair_and_print(Mesh& mesh, const std::string& name) {
   return report;
 }
 
+// Reads `path`, printing each of the reader's warnings on stderr (in every mode,
+// JSON included, as the repair lines are).
+InputMesh read_input(const std::string& path) {
+  InputMesh input;
+  input.mesh = read_mesh(path, &input.read_warnings);
+  for (const std::string& warning : input.read_warnings) std::cerr << "warning: " << path << ": " << warning << '\n';
+  return input;
+}
+
 }  // namespace
 
 std::string repair_flag_help(const std::string& then) {
@@ -49,7 +58,7 @@ std::string repair_flag_help(const std::string& then) {
 }
 
 InputMesh read_valid_solid(const std::string& path, bool repair, bool allow_self_intersections) {
-  InputMesh input{read_mesh(path), std::nullopt};
+  InputMesh input = read_input(path);
   if (!repair) {
     require_valid_solid(input.mesh, path, allow_self_intersections);
     return input;
@@ -64,7 +73,7 @@ InputMesh read_valid_solid(const std::string& path, bool repair, bool allow_self
 }
 
 ValidatedMesh read_and_validate(const std::string& path, bool repair) {
-  InputMesh input{read_mesh(path), std::nullopt};
+  InputMesh input = read_input(path);
   if (repair) input.repair = repair_and_print(input.mesh, path);
   const ValidationReport report = validate_mesh(input.mesh);
   return {std::move(input), report};

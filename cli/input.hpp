@@ -10,6 +10,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/repair.hpp"
@@ -25,9 +26,13 @@ std::string repair_flag_help(const std::string& then);
 struct InputMesh {
   Mesh mesh;                           ///< as read, or as repaired with --repair
   std::optional<RepairReport> repair;  ///< with --repair: what repair_mesh changed and could not do
+  /// What the reader accepted that the format's letter does not (read_mesh's
+  /// warnings), one line each; also printed on stderr as "warning: <path>: ...".
+  std::vector<std::string> read_warnings;
 };
 
-/// The input of slice and fracture: reads `path`; with `repair`, repairs it
+/// The input of slice and fracture: reads `path` (printing the reader's warnings
+/// on stderr); with `repair`, repairs it
 /// (repair_mesh with the default options), printing one "repair: ..." line per
 /// change and per step not done on stderr; then refuses it unless it is a valid
 /// solid, as require_valid_solid(mesh, path, allow_self_intersections) decides.

@@ -36,6 +36,7 @@ void print_json(const ValidateArgs& args, const ValidatedMesh& checked) {
            {"valid", report.valid()},
            {"self_intersections_checked", report.self_intersections_checked},
            {"defects", defects_json(report)}};
+  out["read_warnings"] = checked.input.read_warnings;
   if (checked.input.repair) add_repair_json(out, *checked.input.repair);
   if (report.valid()) {
     const MassProperties mass = mass_properties(checked.input.mesh);

@@ -148,32 +148,41 @@ std::string_view format_name(MeshFormat format) {
   return "unknown";
 }
 
-Mesh read_mesh(const std::filesystem::path& path) {
+Mesh read_mesh(const std::filesystem::path& path, std::vector<std::string>* warnings) {
   const std::optional<MeshFormat> format = format_from_extension(path);
   if (!format) {
     throw InvalidMeshError("unknown mesh format of " + path.string() + " (expected .off, .obj, .ply or .stl)");
   }
   const std::string bytes = read_file(path);
   try {
-    return read_mesh_from_bytes(bytes, *format);
+    return read_mesh_from_bytes(bytes, *format, warnings);
   } catch (const InvalidMeshError& error) {
     throw InvalidMeshError(path.string() + ": " + error.what());
   }
 }
 
-Mesh read_mesh_from_bytes(std::string_view bytes, MeshFormat format) {
+Mesh read_mesh_from_bytes(std::string_view bytes, MeshFormat format, std::vector<std::string>* warnings) {
   // Said once here, an empty file is refused as empty: each reader alone would
   // complain about its missing first keyword, a different message per format.
   if (bytes.empty()) throw InvalidMeshError("empty file (0 bytes)");
   if (bytes.find_first_not_of(" \t\r\n\v\f") == std::string_view::npos) {
     throw InvalidMeshError("blank file: " + std::to_string(bytes.size()) + " bytes of whitespace and nothing else");
   }
+  // The warnings reach the caller only with the mesh: a refused file has no
+  // liberties taken to report.
+  std::vector<std::string> taken;
+  const auto with_warnings = [&](Mesh mesh) {
+    if (warnings) {
+      for (std::string& line : taken) warnings->push_back(printable(line));
+    }
+    return mesh;
+  };
   try {
     switch (format) {
-      case MeshFormat::off: return io_detail::read_off(bytes);
-      case MeshFormat::obj: return io_detail::read_obj(bytes);
-      case MeshFormat::ply: return io_detail::read_ply(bytes);
-      case MeshFormat::stl: return io_detail::read_stl(bytes);
+      case MeshFormat::off: return with_warnings(io_detail::read_off(bytes));
+      case MeshFormat::obj: return with_warnings(io_detail::read_obj(bytes, taken));
+      case MeshFormat::ply: return with_warnings(io_detail::read_ply(bytes, taken));
+      case MeshFormat::stl: return with_warnings(io_detail::read_stl(bytes, taken));
     }
   } catch (const InvalidMeshError& error) {
     // Messages quote tokens from the file, which may be binary garbage; the

@@ -10,9 +10,11 @@
 // (exact, so written files read back bit for bit); tinyobjloader's own
 // coordinate values are never used.
 //
-// Attributes are all or nothing per channel: if any face corner has a texture
-// coordinate (or a normal), every corner must, and the first face without one
-// is refused; the mesh then carries that channel per corner.
+// Attributes are all or nothing per channel: when every face corner has a
+// texture coordinate (or a normal), the mesh carries that channel per corner;
+// when only some do, the channel is dropped with a warning naming the first
+// face without one (a mesh has a channel on all its corners or on none, and
+// inventing values for the rest would be a guess).
 
 #include <tiny_obj_loader.h>
 
@@ -147,22 +149,32 @@ void check_range(int index, std::size_t count, const char* what, const ObjConten
 }
 
 /// Whether any corner has the attribute; then every corner must have it.
-bool channel_present(const std::vector<bool>& corner_has, const ObjContent& content, const char* what) {
-  if (std::find(corner_has.begin(), corner_has.end(), true) == corner_has.end()) return false;
+// Whether the mesh keeps a channel: every corner has a value. When only some
+// corners do, the channel is dropped and `warnings` says so.
+bool channel_present(const std::vector<bool>& corner_has, const ObjContent& content, const char* what,
+                     std::vector<std::string>& warnings) {
+  const std::size_t with = static_cast<std::size_t>(std::count(corner_has.begin(), corner_has.end(), true));
+  if (with == 0) return false;
+  if (with == corner_has.size()) return true;
   std::size_t corner = 0;
-  for (std::size_t face_number = 0; face_number < content.faces.size(); ++face_number) {
+  std::string first_without;
+  for (std::size_t face_number = 0; face_number < content.faces.size() && first_without.empty(); ++face_number) {
     for (std::size_t k = 0; k < content.faces[face_number].corner_count; ++k, ++corner) {
       if (!corner_has[corner]) {
-        refuse(face_name(content, face_number) + " has a corner without a " + what + " while other corners have one");
+        first_without = face_name(content, face_number);
+        break;
       }
     }
   }
-  return true;
+  warnings.push_back("OBJ: " + std::to_string(corner_has.size() - with) + " of " + std::to_string(corner_has.size()) +
+                     " face corners have no " + what + " (the first: " + first_without + "): every " + what +
+                     " dropped");
+  return false;
 }
 
 }  // namespace
 
-Mesh read_obj(std::string_view bytes) {
+Mesh read_obj(std::string_view bytes, std::vector<std::string>& warnings) {
   const ObjContent content = scan_lines(bytes);
 
   tinyobj::ObjReaderConfig config;
@@ -193,20 +205,26 @@ Mesh read_obj(std::string_view bytes) {
     refuse("OBJ: tinyobjloader and the line scan disagree on the file's faces");
   }
 
-  const bool wants_uvs = channel_present(content.corner_has_uv, content, "texture coordinate");
-  const bool wants_normals = channel_present(content.corner_has_normal, content, "normal");
+  const bool wants_uvs = channel_present(content.corner_has_uv, content, "texture coordinate", warnings);
+  const bool wants_normals = channel_present(content.corner_has_normal, content, "normal", warnings);
 
   TriangleSoup soup;
   std::size_t first_corner = 0;
   for (std::size_t face_number = 0; face_number < content.faces.size(); ++face_number) {
     const ObjContent::Face& face = content.faces[face_number];
     const tinyobj::index_t* corners = references.data() + first_corner;
-    first_corner += face.corner_count;
     for (std::size_t k = 0; k < face.corner_count; ++k) {
+      // A reference is checked even in a channel that is dropped: a file that
+      // names a texture coordinate it lacks is broken, not merely incomplete.
       check_range(corners[k].vertex_index, content.positions.size(), "vertex", content, face_number);
-      if (wants_uvs) check_range(corners[k].texcoord_index, content.uvs.size(), "texture coordinate", content, face_number);
-      if (wants_normals) check_range(corners[k].normal_index, content.normals.size(), "normal", content, face_number);
+      if (content.corner_has_uv[first_corner + k]) {
+        check_range(corners[k].texcoord_index, content.uvs.size(), "texture coordinate", content, face_number);
+      }
+      if (content.corner_has_normal[first_corner + k]) {
+        check_range(corners[k].normal_index, content.normals.size(), "normal", content, face_number);
+      }
     }
+    first_corner += face.corner_count;
     fan_triangulate(face.corner_count, [&](std::size_t k) {
       soup.corner_positions.push_back(content.positions[static_cast<std::size_t>(corners[k].vertex_index)]);
       if (wants_uvs) soup.corners.uvs.push_back(content.uvs[static_cast<std::size_t>(corners[k].texcoord_index)]);

@@ -3,7 +3,8 @@
 // (u, v), (s, t) or (texture_u, texture_v); from the "face" element: the list
 // "vertex_indices" (or "vertex_index") with any count and index types. Other
 // properties and elements are read past. PLY attributes are per vertex; each
-// corner takes its vertex's value.
+// corner takes its vertex's value. A header line that starts with no keyword is
+// skipped with a warning (io.hpp).
 //
 // The writer emits binary little-endian positions (double) and triangles only:
 // PLY cannot hold shatter's per-corner attributes without splitting vertices,
@@ -85,7 +86,7 @@ struct Header {
 
 std::string at_line(std::size_t line) { return " at line " + std::to_string(line); }
 
-Header parse_header(std::string_view bytes) {
+Header parse_header(std::string_view bytes, std::vector<std::string>& warnings) {
   LineCursor lines(bytes);
   std::string_view line;
   std::vector<std::string_view> tokens;
@@ -140,7 +141,14 @@ Header parse_header(std::string_view bytes) {
       property.name = tokens[is_list ? 4 : 2];
       header.elements.back().properties.push_back(std::move(property));
     } else {
-      refuse("unknown PLY header keyword '" + std::string(keyword.substr(0, 40)) + "'" + at_line(line_number));
+      // Not a keyword: a remark some exporter wrote without "comment" (old
+      // Blender exporters wrote "Created by Blender3D 247 - www.blender.org, ...").
+      // It declares nothing, so skipping it cannot change what the body means; a
+      // mistyped keyword shows up as the element or property it failed to declare.
+      std::string quoted(line.substr(0, 60));
+      if (!quoted.empty() && quoted.back() == '\r') quoted.pop_back();
+      warnings.push_back("PLY: header line " + std::to_string(line_number) + " starts with no PLY keyword, skipped: '" +
+                         quoted + (line.size() > 60 ? "...'" : "'"));
     }
   }
   if (!has_format) refuse("PLY header has no format line");
@@ -286,8 +294,8 @@ struct FaceLists {
 
 }  // namespace
 
-Mesh read_ply(std::string_view bytes) {
-  const Header header = parse_header(bytes);
+Mesh read_ply(std::string_view bytes, std::vector<std::string>& warnings) {
+  const Header header = parse_header(bytes, warnings);
   const Element* vertex_element = nullptr;
   const Element* face_element = nullptr;
   for (const Element& element : header.elements) {

@@ -1,7 +1,8 @@
 // STL, binary and ascii. A file is binary exactly when its size is 84 + 50 n for
 // the facet count n stored at byte 80: binary headers often begin with "solid"
 // too, so that prefix decides nothing. Facet normals in the file are ignored;
-// the geometry defines orientation. STL holds no attributes.
+// the geometry defines orientation. STL holds no attributes. An ascii file may
+// hold several solids (one mesh of all of them, with a warning).
 //
 // The writer emits ascii, whose shortest round-trip decimals keep every double
 // (binary STL would round positions to float).
@@ -91,7 +92,7 @@ class AsciiStl {
   TokenCursor tokens_;
 };
 
-Mesh read_ascii(std::string_view bytes) {
+Mesh read_ascii(std::string_view bytes, std::vector<std::string>& warnings) {
   // Ascii STL is text: a NUL byte means a binary file of the wrong size (or
   // garbage), and would cut a token quoted in a message short.
   if (bytes.find('\0') != std::string_view::npos) {
@@ -102,41 +103,54 @@ Mesh read_ascii(std::string_view bytes) {
     refuse("not an STL file: its size is not 84 + 50 n (binary) and it does not start with 'solid' (ascii), found " +
            describe(first));
   }
-  stl.skip_rest_of_line();  // the solid's name
+  // Exporters that write one block per part or per material (and files
+  // concatenated with cat) hold several solids: the mesh is all of them, and
+  // facets are numbered across the blocks in messages.
   TriangleSoup soup;
-  for (std::size_t facet = 0;; ++facet) {
-    const std::string_view keyword = stl.next();
-    if (keyword == "endsolid") break;
-    if (keyword != "facet") {
-      refuse("STL: expected 'facet' or 'endsolid', found " + describe(keyword) + stl.at_line());
+  std::size_t facet = 0, solids = 0;
+  while (true) {
+    stl.skip_rest_of_line();  // the solid's name
+    ++solids;
+    for (;; ++facet) {
+      const std::string_view keyword = stl.next();
+      if (keyword == "endsolid") break;
+      if (keyword != "facet") {
+        refuse("STL: expected 'facet' or 'endsolid', found " + describe(keyword) + stl.at_line());
+      }
+      stl.expect("normal");
+      for (int k = 0; k < 3; ++k) stl.number();
+      stl.expect("outer");
+      stl.expect("loop");
+      std::array<Vec3, 3> corners;
+      for (Vec3& corner : corners) {
+        stl.expect("vertex");
+        const std::string element = " facet " + std::to_string(facet);
+        corner.x = stl.number(element);
+        corner.y = stl.number(element);
+        corner.z = stl.number(element);
+        if (!is_finite(corner)) refuse("non-finite coordinate at STL facet " + std::to_string(facet) + stl.at_line());
+      }
+      stl.expect("endloop");
+      stl.expect("endfacet");
+      soup.corner_positions.insert(soup.corner_positions.end(), corners.begin(), corners.end());
     }
-    stl.expect("normal");
-    for (int k = 0; k < 3; ++k) stl.number();
-    stl.expect("outer");
-    stl.expect("loop");
-    std::array<Vec3, 3> corners;
-    for (Vec3& corner : corners) {
-      stl.expect("vertex");
-      const std::string element = " facet " + std::to_string(facet);
-      corner.x = stl.number(element);
-      corner.y = stl.number(element);
-      corner.z = stl.number(element);
-      if (!is_finite(corner)) refuse("non-finite coordinate at STL facet " + std::to_string(facet) + stl.at_line());
+    stl.skip_rest_of_line();  // the solid's name again
+    if (stl.at_end()) break;
+    if (const std::string_view next = stl.next(); next != "solid") {
+      refuse("STL: expected 'solid' or the end of the file after 'endsolid', found " + describe(next) + stl.at_line());
     }
-    stl.expect("endloop");
-    stl.expect("endfacet");
-    soup.corner_positions.insert(soup.corner_positions.end(), corners.begin(), corners.end());
   }
-  stl.skip_rest_of_line();  // the solid's name again
-  if (!stl.at_end()) refuse("STL: unexpected content after 'endsolid'" + stl.at_line());
+  if (solids > 1) {
+    warnings.push_back("STL: " + std::to_string(solids) + " solids ('solid ... endsolid' blocks) read as one mesh");
+  }
   return weld(std::move(soup));
 }
 
 }  // namespace
 
-Mesh read_stl(std::string_view bytes) {
+Mesh read_stl(std::string_view bytes, std::vector<std::string>& warnings) {
   if (is_binary_stl(bytes)) return read_binary(bytes);
-  return read_ascii(bytes);
+  return read_ascii(bytes, warnings);
 }
 
 std::string write_stl(const Mesh& mesh) {

@@ -143,6 +143,39 @@ TEST_CASE("every bad mesh is refused with exit 3 and a line naming its defect") 
   }
 }
 
+TEST_CASE("files other tools wrote are read with a warning line each, and fracture") {
+  const fs::path wild = mesh_dir().parent_path() / "wild";
+  const fs::path obj = wild / "tinyobjloader-issue-161-inconsistent-f.obj";
+  const Run validate = run_shatter("validate " + quoted(obj));
+  CHECK(validate.exit_code == 0);
+  CHECK(validate.err == "warning: " + obj.string() +
+                            ": OBJ: 3 of 36 face corners have no texture coordinate (the first: face 12 at line 37): "
+                            "every texture coordinate dropped\n");
+  const Run json = run_shatter("validate " + quoted(obj) + " --json");
+  REQUIRE(json.exit_code == 0);
+  const nlohmann::json report = nlohmann::json::parse(json.out);
+  CHECK(report["valid"] == true);
+  REQUIRE(report["read_warnings"].size() == 1);
+  CHECK(report["read_warnings"][0].get<std::string>().find("OBJ: 3 of 36") == 0);
+  // A clean file's report has the field, empty.
+  const Run clean = run_shatter("validate " + quoted(mesh_dir() / "cube.off") + " --json");
+  CHECK(nlohmann::json::parse(clean.out)["read_warnings"].empty());
+  CHECK(clean.err.empty());
+
+  const fs::path ply = wild / "blender-247-header-cube.ply";
+  const fs::path out = scratch("wild-fracture");
+  const Run fracture = run_shatter("fracture " + quoted(ply) + " --fragments 8 --out " + quoted(out / "cube.shatter"));
+  CHECK(fracture.exit_code == 0);
+  CHECK(fracture.err.find("warning: " + ply.string() + ": PLY: header line 3 starts with no PLY keyword") == 0);
+  CHECK(fs::exists(out / "cube.shatter"));
+
+  // An open multi-solid file is read whole and then refused for what it is.
+  const Run open = run_shatter("validate " + quoted(wild / "assimp-triangle_with_two_solids.stl"));
+  CHECK(open.exit_code == 3);
+  CHECK(open.err.find("STL: 2 solids") != std::string::npos);
+  CHECK(open.err.find("boundary edges") != std::string::npos);
+}
+
 TEST_CASE("self-intersecting meshes are refused unless allowed, then cut into closed oriented pieces") {
   const auto meshes = self_intersecting_meshes();
   REQUIRE(meshes.size() == 3);

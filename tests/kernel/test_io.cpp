@@ -21,9 +21,11 @@
 #include <vector>
 
 #include "shatter/generators/corpus.hpp"
+#include "shatter/generators/random.hpp"
 #include "shatter/kernel/atomic_file.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
+#include "shatter/kernel/validate.hpp"
 #include "support/binary.hpp"
 
 using namespace shatter;
@@ -362,9 +364,181 @@ TEST_CASE("OBJ refuses what tinyobjloader would quietly accept", "[io][obj]") {
   CHECK_THAT(refusal_message(square + "f 1 2 99999999999\n", MeshFormat::obj), Catch::Contains("not a vertex reference"));
   CHECK_THAT(refusal_message("v 0 0 zero\n", MeshFormat::obj), Catch::Contains("line 1"));
   CHECK_THAT(refusal_message("v 0 0\n", MeshFormat::obj), Catch::Contains("vertex 1 at line 1"));
-  CHECK_THAT(refusal_message(square + "vt 0 0\nf 1/1 2/1 3/1\nf 1 2 3\n", MeshFormat::obj),
-             Catch::Contains("face 2 at line 6"));
-  CHECK_THAT(refusal_message(square + "vn 0 0 1\nf 1//1 2 3//1\n", MeshFormat::obj), Catch::Contains("without a normal"));
+  // A texture coordinate or normal named but missing is broken, even in a
+  // channel that is dropped because some corners lack it.
+  CHECK_THAT(refusal_message(square + "v 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\nf 1 3 4/2\n", MeshFormat::obj),
+             Catch::Contains("texture coordinate index out of range"));
+}
+
+// The corpus meshes small enough to rewrite often in a property.
+std::vector<Mesh> small_corpus_meshes() {
+  std::vector<Mesh> meshes;
+  for (const auto& path : test::valid_meshes()) {
+    Mesh mesh = read_mesh(path);
+    if (mesh.triangle_count() <= 20000) meshes.push_back(std::move(mesh));
+  }
+  REQUIRE(meshes.size() >= 5);
+  return meshes;
+}
+
+std::vector<std::string> warnings_of(std::string_view bytes, MeshFormat format, Mesh& mesh) {
+  std::vector<std::string> warnings;
+  mesh = read_mesh_from_bytes(bytes, format, &warnings);
+  return warnings;
+}
+
+TEST_CASE("OBJ drops a channel that only some corners have, and says so", "[io][obj]") {
+  test::Random random(20261203);
+  for (const Mesh& mesh : small_corpus_meshes()) {
+    // One texture coordinate per vertex, one normal per triangle; every corner
+    // written with both, except those of `without` faces.
+    const std::size_t without = random.index(4);  // 0: the channels are kept
+    std::vector<bool> bare(mesh.triangle_count(), false);
+    for (std::size_t k = 0; k < without; ++k) bare[random.index(mesh.triangle_count())] = true;
+    const std::size_t bare_faces = static_cast<std::size_t>(std::count(bare.begin(), bare.end(), true));
+    // Positions as the OBJ writer prints them (shortest round trip), so the
+    // vertices weld and number exactly as the corpus mesh's.
+    const std::string written = write_mesh_to_bytes(mesh, MeshFormat::obj);
+    std::string text = written.substr(0, written.find("\nf ") + 1);
+    for (std::size_t v = 0; v < mesh.vertex_count(); ++v) text.append("vt ").append(std::to_string(v % 7)).append(" 0.5\n");
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) text.append("vn 0 0 ").append(std::to_string(t % 5 + 1)).append("\n");
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+      text += 'f';
+      for (const VertexIndex v : mesh.triangles[t]) {
+        text.append(" ").append(std::to_string(v + 1));
+        if (!bare[t]) text.append("/").append(std::to_string(v + 1)).append("/").append(std::to_string(t + 1));
+      }
+      text += '\n';
+    }
+    Mesh read;
+    const std::vector<std::string> warnings = warnings_of(text, MeshFormat::obj, read);
+    INFO("faces without attributes: " << bare_faces);
+    check_invariants(read);
+    REQUIRE(read.triangles == mesh.triangles);  // the vertices are numbered by first use, as the corpus mesh's are
+    if (bare_faces == 0) {
+      REQUIRE(warnings.empty());
+      REQUIRE(read.corners.has_uvs());
+      REQUIRE(read.corners.has_normals());
+      continue;
+    }
+    REQUIRE_FALSE(read.corners.has_uvs());
+    REQUIRE_FALSE(read.corners.has_normals());
+    REQUIRE(warnings.size() == 2);
+    const std::string count = std::to_string(3 * bare_faces) + " of " + std::to_string(3 * mesh.triangle_count());
+    CHECK_THAT(warnings[0], Catch::StartsWith("OBJ: " + count + " face corners have no texture coordinate"));
+    CHECK_THAT(warnings[1], Catch::StartsWith("OBJ: " + count + " face corners have no normal"));
+  }
+}
+
+TEST_CASE("PLY skips header lines that start with no keyword, one warning each", "[io][ply]") {
+  test::Random random(7);
+  const std::vector<std::string> remarks = {"Created by Blender3D 247 - www.blender.org, source file: a.blend",
+                                            "Exported by some tool 1.0", "TextureFile skin.png", "  indented remark"};
+  for (const std::string encoding : {"ascii", "binary_little_endian", "binary_big_endian"}) {
+    const std::string plain = pyramid_ply(encoding);
+    const Mesh expected = read_text(plain, MeshFormat::ply);
+    for (int trial = 0; trial < 20; ++trial) {
+      // Remarks after the format line, between any two header lines before end_header.
+      std::vector<std::string> header_lines;
+      const std::size_t end = plain.find("end_header\n");
+      std::size_t at = 0;
+      for (std::size_t next; (next = plain.find('\n', at)) < end; at = next + 1) header_lines.push_back(plain.substr(at, next - at));
+      const std::size_t inserted = 1 + random.index(3);
+      std::vector<std::size_t> expected_lines;
+      for (std::size_t k = 0; k < inserted; ++k) {
+        const std::size_t position = 2 + random.index(header_lines.size() - 1);
+        header_lines.insert(header_lines.begin() + static_cast<std::ptrdiff_t>(position), remarks[random.index(remarks.size())]);
+      }
+      std::string text;
+      for (std::size_t line = 0; line < header_lines.size(); ++line) {
+        text += header_lines[line] + "\n";
+        if (header_lines[line].find("element") != 0 && header_lines[line].find("property") != 0 &&
+            header_lines[line].find("format") != 0 && header_lines[line] != "ply" && header_lines[line].find("comment") != 0) {
+          expected_lines.push_back(line + 1);
+        }
+      }
+      text += plain.substr(end);
+      Mesh read;
+      const std::vector<std::string> warnings = warnings_of(text, MeshFormat::ply, read);
+      INFO(encoding << "\n" << text.substr(0, text.find("end_header")));
+      require_same_mesh(read, expected);
+      REQUIRE(warnings.size() == inserted);
+      REQUIRE(expected_lines.size() == inserted);
+      for (std::size_t k = 0; k < inserted; ++k) {
+        CHECK_THAT(warnings[k], Catch::StartsWith("PLY: header line " + std::to_string(expected_lines[k]) + " starts with no PLY keyword"));
+      }
+    }
+  }
+}
+
+TEST_CASE("an ascii STL of several solids is one mesh of all of them", "[io][stl]") {
+  test::Random random(11);
+  for (const Mesh& mesh : small_corpus_meshes()) {
+    const std::string whole = write_mesh_to_bytes(mesh, MeshFormat::stl);
+    const Mesh expected = read_text(whole, MeshFormat::stl);
+    // The same facets cut into `blocks` solids at random facet boundaries.
+    const std::size_t blocks = 1 + random.index(4);
+    std::vector<std::size_t> facet_starts;
+    for (std::size_t at = whole.find("facet normal"); at != std::string::npos; at = whole.find("facet normal", at + 1)) {
+      facet_starts.push_back(at);
+    }
+    std::vector<std::size_t> cuts;
+    for (std::size_t k = 1; k < blocks; ++k) cuts.push_back(facet_starts[1 + random.index(facet_starts.size() - 1)]);
+    std::sort(cuts.begin(), cuts.end());
+    cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
+    std::string text;
+    std::size_t from = 0;
+    for (std::size_t k = 0; k < cuts.size(); ++k) {
+      text += whole.substr(from, cuts[k] - from) + "endsolid part" + std::to_string(k) + "\nsolid part" + std::to_string(k + 1) + "\n";
+      from = cuts[k];
+    }
+    text += whole.substr(from);
+    Mesh read;
+    const std::vector<std::string> warnings = warnings_of(text, MeshFormat::stl, read);
+    require_same_mesh(read, expected);
+    if (cuts.empty()) {
+      REQUIRE(warnings.empty());
+    } else {
+      REQUIRE(warnings.size() == 1);
+      CHECK(warnings[0] == "STL: " + std::to_string(cuts.size() + 1) + " solids ('solid ... endsolid' blocks) read as one mesh");
+    }
+  }
+  const std::string one = "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid a\n";
+  CHECK_THAT(refusal_message(one + "facet normal 0 0 1\n", MeshFormat::stl),
+             Catch::Contains("expected 'solid' or the end of the file after 'endsolid', found 'facet' at line 10"));
+  CHECK_THAT(refusal_message(one + "solid b\n", MeshFormat::stl), Catch::Contains("found end of file"));
+}
+
+TEST_CASE("files other tools wrote read, with their warnings", "[io][wild]") {
+  const std::filesystem::path wild = test::mesh_dir().parent_path() / "wild";
+  std::vector<std::string> warnings;
+
+  // A user's cube whose last face has no texture coordinates.
+  const Mesh cube = read_mesh(wild / "tinyobjloader-issue-161-inconsistent-f.obj", &warnings);
+  REQUIRE(warnings.size() == 1);
+  CHECK(warnings[0] == "OBJ: 3 of 36 face corners have no texture coordinate (the first: face 12 at line 37): every "
+                       "texture coordinate dropped");
+  CHECK(validate_mesh(cube).valid());
+  CHECK(cube.triangle_count() == 12);
+  CHECK_FALSE(cube.corners.has_uvs());
+
+  warnings.clear();
+  const Mesh triangles = read_mesh(wild / "assimp-triangle_with_two_solids.stl", &warnings);
+  REQUIRE(warnings.size() == 1);
+  CHECK(warnings[0] == "STL: 2 solids ('solid ... endsolid' blocks) read as one mesh");
+  CHECK(triangles.triangle_count() == 2);
+  CHECK(triangles.vertex_count() == 6);
+
+  warnings.clear();
+  const Mesh blender = read_mesh(wild / "blender-247-header-cube.ply", &warnings);
+  REQUIRE(warnings.size() == 1);
+  CHECK_THAT(warnings[0], Catch::StartsWith("PLY: header line 3 starts with no PLY keyword, skipped: 'Created by Blender3D 247"));
+  CHECK(validate_mesh(blender).valid());
+  CHECK(blender.triangle_count() == 12);
+  CHECK(blender.corners.has_normals());
+
+  // Without a vector to take them, the same files read the same way.
+  require_same_mesh(read_mesh(wild / "tinyobjloader-issue-161-inconsistent-f.obj"), cube);
 }
 
 TEST_CASE("PLY ascii, binary little-endian and binary big-endian give the same mesh", "[io][ply]") {

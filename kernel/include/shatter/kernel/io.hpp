@@ -14,19 +14,30 @@
 // - OFF: plain OFF, and COFF/NOFF/CNOFF/ST* (extra vertex values ignored); face
 //   colours ignored; 4OFF, nOFF and binary OFF refused. Writes no attributes.
 // - OBJ: v/vt/vn/f with negative indices; a channel (uv or normal) present on
-//   some corners must be on all of them, else the file is refused. Writes uvs and
+//   some corners but not on all of them is dropped, with a warning (other tools
+//   write such files: a face added without texture coordinates). Writes uvs and
 //   normals (each distinct value once); tangents are not written.
 // - PLY: ascii and both binary byte orders; per-vertex nx/ny/nz and u,v (or s,t,
-//   texture_u,texture_v) become per-corner attributes. Writes binary little-endian
+//   texture_u,texture_v) become per-corner attributes. A header line that starts
+//   with no PLY keyword (old Blender exporters wrote "Created by Blender3D ..."
+//   without "comment") is skipped with a warning. Writes binary little-endian
 //   positions and triangles only: per-corner attributes do not fit PLY's
 //   per-vertex layout without splitting the welded vertices.
-// - STL: ascii and binary (binary exactly when the size is 84 + 50 n). Written as
-//   ascii, which keeps doubles; holds no attributes.
+// - STL: ascii and binary (binary exactly when the size is 84 + 50 n); an ascii
+//   file of several `solid ... endsolid` blocks is one mesh of all of them (with
+//   a warning). Written as ascii, which keeps doubles; holds no attributes.
+//
+// Warnings: what a reader accepted that the format's letter does not allow, one
+// line each ("PLY: header line 3 starts with no PLY keyword, skipped: ..."),
+// appended to `warnings` when the caller passes a vector. Nothing is accepted
+// that changes the geometry: a warning only ever drops an attribute channel or
+// skips text that holds none.
 
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "shatter/kernel/mesh.hpp"
 
@@ -41,16 +52,18 @@ std::optional<MeshFormat> parse_mesh_format(std::string_view name);
 /// The lower-case name and file extension (without dot) of a format.
 std::string_view format_name(MeshFormat format);
 
-/// Reads a mesh from `path`, choosing the format by its extension.
+/// Reads a mesh from `path`, choosing the format by its extension. `warnings`
+/// (nullptr: not wanted) gets one line per liberty taken (see above), in file order.
 /// Throws IoError when the file cannot be opened or read, InvalidMeshError when
 /// its content is malformed (the message names the line or element at fault),
 /// including an unknown extension. Guarantees the BasicMesh invariants.
-Mesh read_mesh(const std::filesystem::path& path);
+Mesh read_mesh(const std::filesystem::path& path, std::vector<std::string>* warnings = nullptr);
 
-/// Reads a mesh held in memory; the entry point of the fuzz targets.
+/// Reads a mesh held in memory; the entry point of the fuzz targets. `warnings`
+/// as read_mesh.
 /// Throws InvalidMeshError on malformed content; never allocates more than a
 /// small multiple of `bytes.size()` whatever the header claims.
-Mesh read_mesh_from_bytes(std::string_view bytes, MeshFormat format);
+Mesh read_mesh_from_bytes(std::string_view bytes, MeshFormat format, std::vector<std::string>* warnings = nullptr);
 
 /// Serialises a mesh. Deterministic: the same mesh gives the same bytes.
 std::string write_mesh_to_bytes(const Mesh& mesh, MeshFormat format);
