@@ -15,9 +15,11 @@
 #include <cstdio>
 #include <iostream>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "robustness/corpus_export.hpp"
 #include "robustness/robustness.hpp"
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/predicates.hpp"
@@ -111,9 +113,9 @@ bool within_ceilings(const RefusalCeilings& ceilings, std::size_t cases, std::si
   return within;
 }
 
-int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, const std::vector<std::string>& only,
-              unsigned threads, const std::filesystem::path& reproducer_dir, const RefusalCeilings& ceilings,
-              const std::filesystem::path& refusal_dir) {
+// The indices of the `cases` cases a run draws from `first` on, of the classes
+// named in `only` (every class when empty).
+std::vector<std::uint64_t> selected_indices(std::uint64_t cases, std::uint64_t first, const std::vector<std::string>& only) {
   std::array<bool, case_class_count> wanted{};
   for (const std::string& name : only) {
     const auto kind = parse_class(name);
@@ -125,6 +127,22 @@ int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, cons
   for (std::uint64_t i = first; indices.size() < cases; ++i) {
     if (wanted[i % case_class_count]) indices.push_back(i);
   }
+  return indices;
+}
+
+int export_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, const std::vector<std::string>& only,
+                 const std::filesystem::path& dir) {
+  const std::vector<std::uint64_t> indices = selected_indices(cases, first, only);
+  const ExportSummary summary = export_corpus(MeshPool::load(), seed, indices, dir);
+  std::printf("exported %zu cases (%zu mesh files, %.1f MB) to %s\n", summary.cases, summary.mesh_files,
+              double(summary.bytes) / 1e6, dir.string().c_str());
+  return 0;
+}
+
+int run_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, const std::vector<std::string>& only,
+              unsigned threads, const std::filesystem::path& reproducer_dir, const RefusalCeilings& ceilings,
+              const std::filesystem::path& refusal_dir) {
+  const std::vector<std::uint64_t> indices = selected_indices(cases, first, only);
 
   const auto start = std::chrono::steady_clock::now();
   const MeshPool pool = MeshPool::load();
@@ -358,6 +376,11 @@ int main(int argc, char** argv) {
                  "Run the predicate audit with this many queries instead of drawing cases: half of them audit "
                  "side_of_plane, half the plane kernel's predicates");
   app.add_flag("--list-classes", list, "Print the class names and exit");
+  std::string export_dir;
+  app.add_option("--export-corpus", export_dir,
+                 "Write the cases (as --cases, --seed, --first and --class select them) into this new folder instead of "
+                 "running them: each mesh as an OBJ file and every case's planes or recipe in manifest.json, with a "
+                 "README.md saying how to read them, for fuzzing other geometry code with the same cases");
   RefusalCeilings ceilings;
   app.add_option("--max-refused-cases", ceilings.cases,
                  "Fail the run when more cases than this are refused (UnsupportedGeometryError)");
@@ -377,8 +400,12 @@ int main(int argc, char** argv) {
     }
     if (!replays.empty()) return replay(replays);
     if (audit_queries > 0) return audit(audit_queries, seed, threads);
+    if (!export_dir.empty()) return export_cases(cases, seed, first, only, export_dir);
     return run_cases(cases, seed, first, only, threads, reproducers, ceilings, refusal_reproducers);
   } catch (const CLI::ValidationError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;
   } catch (const std::exception& e) {
