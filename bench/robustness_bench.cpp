@@ -4,8 +4,9 @@
 // can fetch and feed to their own code (issue 20 items 3 and 4).
 //
 // Every tool does the same to each slice case: cut the mesh by the first plane
-// into its connected pieces on both sides, then every piece by the next plane,
-// and so on; each tool cuts its own output, as written in doubles. A tool's case
+// into its pieces on both sides (shatter: one solid per piece, cavities with the
+// solid around them; clip: each side as one mesh), then every piece by the next
+// plane, and so on; each tool cuts its own output, as written in doubles. A tool's case
 // ends as one of
 //   ok       every piece it wrote is a valid solid (shatter::validate_mesh:
 //            closed, oriented, 2-manifold, no zero-area triangle, no
@@ -26,7 +27,6 @@
 
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/clip.h>
-#include <CGAL/Polygon_mesh_processing/connected_components.h>
 #include <CGAL/Surface_mesh.h>
 
 #include <poll.h>
@@ -146,10 +146,10 @@ std::vector<Mesh> cut_with_cgal(const Mesh& mesh, const Plane& plane) {
       throw std::runtime_error("PMP::clip returned false");
     }
     side.collect_garbage();
-    if (side.number_of_faces() == 0) continue;
-    std::vector<SurfaceMesh<Kernel>> components;
-    PMP::split_connected_components(side, components);
-    for (const auto& component : components) pieces.push_back(to_written_mesh<Kernel>(component));
+    // The side whole, not split into connected components: a solid with a
+    // cavity would split into its outer shell and an inward-facing inner one,
+    // which is no fault of clip's. Several solids in one mesh validate as one.
+    if (side.number_of_faces() > 0) pieces.push_back(to_written_mesh<Kernel>(side));
   }
   return pieces;
 }
