@@ -26,6 +26,7 @@
 #include "shatter/generators/solids.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
+#include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "support/checks.hpp"
 #include "support/degenerate.hpp"

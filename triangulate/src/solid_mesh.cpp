@@ -13,6 +13,7 @@
 #include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/predicates.hpp"
 #include "shatter/kernel/projection.hpp"
+#include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/union_find.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/triangulate/cap.hpp"

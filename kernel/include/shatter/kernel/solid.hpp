@@ -15,9 +15,11 @@
 // (rounded meshes, mass properties). Topology is carried by index: every
 // undirected edge is used by exactly two corners, in opposite directions.
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "shatter/kernel/half_edges.hpp"
@@ -179,12 +181,6 @@ bool solid_is_convex(const PlaneSet& set, const Solid& solid);
 /// The outward side of a face's plane at a point: side() of the plane, negated when
 /// the face is reversed, so negative means inside the face's half-space.
 Sign outward_side(const PlaneSet& set, const SolidFace& face, const PointDef& point, const ApproxPoint& approx);
-
-/// Six times the solid's volume, exactly: the divergence theorem over fans of its
-/// faces, on the vertices' exact rational coordinates. Precondition: closed
-/// (check_solid). For tests and audits, and for pieces too thin for doubles,
-/// whose vertex approximations may coincide. Cost: multi-precision, O(corners).
-mpq_class exact_six_volume(const PlaneSet& set, const Solid& solid);
 
 /// Checks a solid's structure: every corner's vertex in range, every loop of at
 /// least 3 corners, every undirected edge used by exactly two corners in opposite
