@@ -1,4 +1,5 @@
 #include "shatter/cut/separate.hpp"
+#include "shatter/cut/separate_exact.hpp"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 

@@ -1,4 +1,5 @@
 #include "shatter/kernel/implicit.hpp"
+#include "shatter/kernel/rationals.hpp"
 
 #include <CGAL/Mpzf.h>
 #include <mpfr.h>

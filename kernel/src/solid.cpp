@@ -9,6 +9,7 @@
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/predicates.hpp"
+#include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/union_find.hpp"
 
 namespace shatter {

@@ -14,11 +14,6 @@ bool both_zero(Sign a, Sign b) { return a == Sign::zero && b == Sign::zero; }
 
 // A corner of a face's loop after the crossing vertices are inserted: the edge
 // from it to the next augmented corner lies on `line`.
-struct AugmentedCorner {
-  VertexIndex vertex;
-  EdgeLine line;
-};
-
 class Splitter {
  public:
   Splitter(const PlaneSet& set, const Solid& solid, PlaneRef cut, SplitSolid& out)
@@ -72,13 +67,15 @@ class Splitter {
     return candidate;
   }
 
-  // The face's loops with crossing vertices inserted, into augmented_ (loop l is
-  // augmented_[loop_start_[l], loop_start_[l + 1])).
+  // The face's loops with crossing vertices inserted: augmented_loops_ over the
+  // corners augmented_, each corner on the line of its edge to the next, as in a
+  // solid (a crossing splits an edge into two on the same line), so that they are
+  // walked with loop_edges like the solid's own loops.
   void augment(const SolidFace& face) {
     augmented_.clear();
-    loop_start_.clear();
+    augmented_loops_.clear();
     for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-      loop_start_.push_back(static_cast<std::uint32_t>(augmented_.size()));
+      const auto first = static_cast<std::uint32_t>(augmented_.size());
       for (const CornerEdge& edge : loop_edges(solid_.corners, solid_.loops[l])) {
         augmented_.push_back({edge.from, edge.line});
         const Sign a = sign_of(edge.from), b = sign_of(edge.to);
@@ -86,8 +83,8 @@ class Splitter {
           augmented_.push_back({crossing_vertex(edge.from, edge.to, face, edge.line), edge.line});
         }
       }
+      augmented_loops_.push_back({first, static_cast<std::uint32_t>(augmented_.size()) - first});
     }
-    loop_start_.push_back(static_cast<std::uint32_t>(augmented_.size()));
   }
 
   // The line of a new edge along the cut, inside a part of `face`.
@@ -152,35 +149,37 @@ class Splitter {
   // plane, in order, form one run; the one jump between non-consecutive corners is
   // the new edge along the cut.
   void emit_convex_part(const SolidFace& face, Sign keep, FaceSet& side_faces, bool below) {
-    const auto count = static_cast<std::uint32_t>(augmented_.size());
-    std::uint32_t start = 0;
+    const SolidLoop& loop = augmented_loops_.front();  // a convex face has one loop
+    std::uint32_t start = loop.first_corner;
     while (sign_of(augmented_[start].vertex) != keep) ++start;
     SolidFace part = face;
     part.first_loop = static_cast<std::uint32_t>(side_faces.loops.size());
     part.loop_count = 1;
     const auto first_corner = static_cast<std::uint32_t>(side_faces.corners.size());
-    // Walk from `start`; emit kept corners; the line of each emitted corner is
-    // decided when its successor is known.
-    std::uint32_t previous = no_index;
-    for (std::uint32_t step = 0; step < count; ++step) {
-      const std::uint32_t i = (start + step) % count;
-      if (sign_of(augmented_[i].vertex) == flip(keep)) continue;
-      if (previous != no_index) close_edge(face, side_faces, previous, i, below);
-      side_faces.corners.push_back({augmented_[i].vertex, EdgeLine{}});
-      previous = i;
+    // Walk from `start`; emit kept corners. A kept corner's edge is its own when
+    // the corner after it is kept too, else the new edge along the cut, which ends
+    // at the next kept corner: each emitted corner's edge is closed when that
+    // corner is known.
+    VertexIndex previous = no_index;
+    EdgeLine previous_line;
+    for (const CornerEdge& edge : loop_edges(augmented_, loop, start)) {
+      if (sign_of(edge.from) == flip(keep)) continue;
+      if (previous != no_index) close_edge(face, side_faces, previous, edge.from, previous_line, below);
+      side_faces.corners.push_back({edge.from, EdgeLine{}});
+      previous = edge.from;
+      previous_line = sign_of(edge.to) == flip(keep) ? cut_line() : edge.line;
     }
-    close_edge(face, side_faces, previous, start, below);
+    close_edge(face, side_faces, previous, augmented_[start].vertex, previous_line, below);
     side_faces.loops.push_back({first_corner, static_cast<std::uint32_t>(side_faces.corners.size()) - first_corner});
     side_faces.faces.push_back(part);
   }
 
-  // Sets the line of the last emitted corner (augmented index `from`), whose
-  // successor in the part is augmented index `to`.
-  void close_edge(const SolidFace& face, FaceSet& side_faces, std::uint32_t from, std::uint32_t to, bool below) {
-    const auto count = static_cast<std::uint32_t>(augmented_.size());
-    const EdgeLine line = (from + 1) % count == to ? augmented_[from].line : cut_line();
+  // Sets the line of the last emitted corner (vertex `from`), whose successor in
+  // the part is vertex `to`.
+  void close_edge(const SolidFace& face, FaceSet& side_faces, VertexIndex from, VertexIndex to, const EdgeLine& line,
+                  bool below) {
     side_faces.corners.back().line = line;
-    note_zero_edge(augmented_[from].vertex, augmented_[to].vertex, face, line, below);
+    note_zero_edge(from, to, face, line, below);
   }
 
   // --- faces that are not convex, or have holes -----------------------------------
@@ -192,12 +191,10 @@ class Splitter {
   // new edge of both parts.
 
   void split_general(const SolidFace& face) {
-    const std::uint32_t loops = static_cast<std::uint32_t>(loop_start_.size()) - 1;
     zero_points_.clear();
-    for (std::uint32_t l = 0; l < loops; ++l) {
-      for (std::uint32_t i = loop_start_[l]; i < loop_start_[l + 1]; ++i) {
-        const std::uint32_t j = i + 1 == loop_start_[l + 1] ? loop_start_[l] : i + 1;
-        const VertexIndex u = augmented_[i].vertex, v = augmented_[j].vertex;
+    for (const SolidLoop& loop : augmented_loops_) {
+      for (const CornerEdge& edge : loop_edges(augmented_, loop)) {
+        const VertexIndex u = edge.from, v = edge.to;
         const Sign su = sign_of(u), sv = sign_of(v);
         if (su == Sign::zero && sv != Sign::zero) count_at(u, sv);
         if (sv == Sign::zero && su != Sign::zero) count_at(v, su);
@@ -219,12 +216,11 @@ class Splitter {
     below_edges_.clear();
     above_edges_.clear();
     // The face's own edges, each to the side it bounds.
-    for (std::uint32_t l = 0; l < loops; ++l) {
-      for (std::uint32_t i = loop_start_[l]; i < loop_start_[l + 1]; ++i) {
-        const std::uint32_t j = i + 1 == loop_start_[l + 1] ? loop_start_[l] : i + 1;
-        const VertexIndex u = augmented_[i].vertex, v = augmented_[j].vertex;
+    for (const SolidLoop& loop : augmented_loops_) {
+      for (const CornerEdge& corner_edge : loop_edges(augmented_, loop)) {
+        const VertexIndex u = corner_edge.from, v = corner_edge.to;
         const Sign su = sign_of(u), sv = sign_of(v);
-        const LoopEdge edge{u, v, augmented_[i].line};
+        const LoopEdge edge{u, v, corner_edge.line};
         if (both_zero(su, sv)) {
           // An edge along the cut bounds the side its face lies on. The face is on
           // the edge's left, and left of d = n_out x n_cut is the -n_cut side
@@ -312,8 +308,8 @@ class Splitter {
   PlaneRef cut_;
   SplitSolid& out_;
 
-  std::vector<AugmentedCorner> augmented_;
-  std::vector<std::uint32_t> loop_start_;
+  std::vector<SolidCorner> augmented_;     // the face's corners with crossings inserted
+  std::vector<SolidLoop> augmented_loops_;  // the face's loops over augmented_
   std::vector<ZeroPoint> zero_points_;
   std::vector<LoopEdge> below_edges_, above_edges_;
   std::vector<Region> regions_;

@@ -20,6 +20,7 @@
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/cut/plane_cut.hpp"
 #include "shatter/generators/corpus.hpp"

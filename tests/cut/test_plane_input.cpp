@@ -14,6 +14,7 @@
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/cut/plane_cut.hpp"

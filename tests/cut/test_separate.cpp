@@ -24,7 +24,7 @@
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/oracle/cut.hpp"
-#include "shatter/cut/separate.hpp"
+#include "shatter/cut/separate_exact.hpp"
 #include "support/checks.hpp"
 #include "shatter/generators/random.hpp"
 #include "shatter/generators/solids.hpp"

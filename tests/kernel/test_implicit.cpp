@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "shatter/kernel/implicit.hpp"
+#include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/generators/random.hpp"
 #include "shatter/generators/solids.hpp"

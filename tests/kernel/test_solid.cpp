@@ -15,9 +15,11 @@
 #include <CGAL/Mpzf.h>
 
 #include <algorithm>
+#include <array>
 #include <map>
 #include <numeric>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -26,6 +28,7 @@
 #include "shatter/generators/solids.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
+#include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "support/checks.hpp"
 #include "support/degenerate.hpp"
@@ -456,6 +459,66 @@ TEST_CASE("solid_from_mesh appends its planes to the geometry it is given", "[pl
   CHECK(check_solid(set, s2) == "");
   CHECK(exact_six_volume(set, s1) == exact_six_volume(a));
   CHECK(exact_six_volume(set, s2) == exact_six_volume(b));
+}
+
+TEST_CASE("loop_edges walks each edge of a loop once from any corner, fan_edges the edges of a fan",
+          "[plane][solid]") {
+  // A triangle and a square over one corner array, each corner's line naming its
+  // corner, so an edge's line shows which corner it was taken from.
+  std::vector<SolidCorner> corners;
+  for (const VertexIndex v : {0u, 1u, 2u, 10u, 11u, 12u, 13u}) corners.push_back({v, EdgeLine{PlaneRef::cut(v)}});
+  const SolidLoop triangle{0, 3}, square{3, 4};
+  using Walk = std::vector<std::array<std::uint32_t, 3>>;  // corner, from, to per edge
+  const auto walk = [](std::span<const SolidCorner> of, const LoopEdges& edges) {
+    Walk out;
+    for (const CornerEdge& edge : edges) {
+      CHECK(edge.line == of[edge.corner].line);
+      out.push_back({edge.corner, edge.from, edge.to});
+    }
+    return out;
+  };
+  const Walk triangle_edges{{0, 0, 1}, {1, 1, 2}, {2, 2, 0}};
+  const Walk square_edges{{3, 10, 11}, {4, 11, 12}, {5, 12, 13}, {6, 13, 10}};
+  const Walk square_from_third{{5, 12, 13}, {6, 13, 10}, {3, 10, 11}, {4, 11, 12}};
+  const Walk square_from_last{{6, 13, 10}, {3, 10, 11}, {4, 11, 12}, {5, 12, 13}};
+  CHECK(walk(corners, loop_edges(corners, triangle)) == triangle_edges);
+  CHECK(walk(corners, loop_edges(corners, square)) == square_edges);
+  CHECK(walk(corners, loop_edges(corners, square, 3)) == square_edges);
+  CHECK(walk(corners, loop_edges(corners, square, 5)) == square_from_third);
+  CHECK(walk(corners, loop_edges(corners, square, 6)) == square_from_last);
+  CHECK(walk(corners, loop_edges(corners, SolidLoop{3, 0})).empty());
+  CHECK(walk(corners, loop_edges(corners, SolidLoop{3, 0}, 3)).empty());
+  // Fans: the edges that do not touch the apex, from the corner after it.
+  const Walk triangle_fan_from_first{{1, 1, 2}};
+  const Walk square_fan_from_second{{5, 12, 13}, {6, 13, 10}};
+  const Walk square_fan_from_last{{3, 10, 11}, {4, 11, 12}};
+  CHECK(walk(corners, fan_edges(corners, triangle, 0)) == triangle_fan_from_first);
+  CHECK(walk(corners, fan_edges(corners, square, 4)) == square_fan_from_second);
+  CHECK(walk(corners, fan_edges(corners, square, 6)) == square_fan_from_last);
+  CHECK(walk(corners, fan_edges(corners, SolidLoop{3, 1}, 3)).empty());
+
+  // On real solids: from every corner of every loop, the walk is the loop's walk
+  // rotated to start there, and the fan is that walk without its first and last
+  // edges (the two at the apex).
+  std::size_t rotations = 0;
+  for (const Mesh& mesh : {staircase(3), box_with_through_hole()}) {
+    InputGeometry geometry;
+    geometry.points = mesh.positions;
+    const Solid solid = solid_from_mesh(mesh, true, geometry);
+    for (const SolidLoop& loop : solid.loops) {
+      const Walk whole = walk(solid.corners, loop_edges(solid.corners, loop));
+      REQUIRE(whole.size() == loop.corner_count);
+      for (std::uint32_t k = 0; k < loop.corner_count; ++k) {
+        Walk rotated = whole;
+        std::rotate(rotated.begin(), rotated.begin() + k, rotated.end());
+        CHECK(walk(solid.corners, loop_edges(solid.corners, loop, loop.first_corner + k)) == rotated);
+        const Walk fan(rotated.begin() + 1, rotated.end() - 1);
+        CHECK(walk(solid.corners, fan_edges(solid.corners, loop, loop.first_corner + k)) == fan);
+        ++rotations;
+      }
+    }
+  }
+  CHECK(rotations >= 100);
 }
 
 TEST_CASE("solid_from_mesh refuses an open mesh and an edge used twice in one direction", "[plane][solid][errors]") {

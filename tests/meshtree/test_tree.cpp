@@ -42,6 +42,7 @@
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/build.hpp"

@@ -1,7 +1,7 @@
 #include "shatter/oracle/cut.hpp"
 
 #include "shatter/kernel/projection.hpp"
-#include "shatter/cut/separate.hpp"
+#include "shatter/cut/separate_exact.hpp"
 #include "shatter/oracle/slice.hpp"
 
 namespace shatter::oracle {

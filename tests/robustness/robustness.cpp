@@ -23,6 +23,7 @@
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/predicates.hpp"
+#include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/build.hpp"

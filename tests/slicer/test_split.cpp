@@ -21,6 +21,7 @@
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/io.hpp"
+#include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/cut/cut_solid.hpp"
 #include "shatter/cut/plane_input.hpp"

@@ -8,6 +8,7 @@
 
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/meshtree/tree.hpp"
 

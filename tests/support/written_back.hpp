@@ -6,6 +6,7 @@
 #include <string>
 
 #include "shatter/kernel/io.hpp"
+#include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "shatter/kernel/io.hpp"
+#include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/cut/cut_solid.hpp"

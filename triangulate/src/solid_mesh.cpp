@@ -13,6 +13,7 @@
 #include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/predicates.hpp"
 #include "shatter/kernel/projection.hpp"
+#include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/union_find.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/triangulate/cap.hpp"
@@ -28,19 +29,18 @@ Sign outward_orient(const PlaneSet& set, const SolidFace& face, Projection proje
   return face.reversed ? flip(s) : s;
 }
 
-// A fan of a convex polygon from corner `apex` is a triangulation exactly when no
-// fan triangle is flat: the polygon is convex, so none is clockwise.
+// A fan of a convex polygon (the face's one loop) from corner `apex` is a
+// triangulation exactly when no fan triangle is flat: the polygon is convex, so
+// none is clockwise.
 bool fan_from(const PlaneSet& set, const SolidFace& face, Projection projection, const Solid& solid,
-              std::span<const VertexIndex> corners, std::size_t apex, std::vector<Triangle>& out) {
-  const std::size_t k = corners.size();
-  const VertexIndex a = corners[apex];
-  if (k > 3) {
-    for (std::size_t i = 1; i + 1 < k; ++i) {
-      const VertexIndex b = corners[(apex + i) % k], c = corners[(apex + i + 1) % k];
-      if (outward_orient(set, face, projection, solid, a, b, c) != Sign::positive) return false;
+              const SolidLoop& loop, std::uint32_t apex, std::vector<Triangle>& out) {
+  const VertexIndex a = solid.corners[apex].vertex;
+  if (loop.corner_count > 3) {
+    for (const CornerEdge& edge : fan_edges(solid.corners, loop, apex)) {
+      if (outward_orient(set, face, projection, solid, a, edge.from, edge.to) != Sign::positive) return false;
     }
   }
-  for (std::size_t i = 1; i + 1 < k; ++i) out.push_back({a, corners[(apex + i) % k], corners[(apex + i + 1) % k]});
+  for (const CornerEdge& edge : fan_edges(solid.corners, loop, apex)) out.push_back({a, edge.from, edge.to});
   return true;
 }
 
@@ -53,8 +53,8 @@ bool fan_from(const PlaneSet& set, const SolidFace& face, Projection projection,
 // finite point (w approximated by zero, or x/w past the double range, as on
 // solids an ulp across). Its quality would be NaN, which the minimum ignored
 // before the tests trapped NaNs; skipping it keeps every choice as it was.
-std::size_t roundest_apex(const Solid& solid, std::span<const VertexIndex> corners) {
-  const std::size_t k = corners.size();
+// Returns the apex's place in the loop (0 for its first corner).
+std::size_t roundest_apex(const Solid& solid, const SolidLoop& loop) {
   auto point = [&](VertexIndex v) -> std::optional<Vec3> {
     const ApproxPoint& a = solid.approx[v];
     const double w = std::fabs(a.w.value), largest = std::numeric_limits<double>::max();
@@ -65,12 +65,12 @@ std::size_t roundest_apex(const Solid& solid, std::span<const VertexIndex> corne
   };
   std::size_t best = 0;
   double best_quality = -1;
-  for (std::size_t apex = 0; apex < k; ++apex) {
-    const std::optional<Vec3> a = point(corners[apex]);
+  for (std::uint32_t apex = 0; apex < loop.corner_count; ++apex) {
+    const std::optional<Vec3> a = point(solid.corners[loop.first_corner + apex].vertex);
     double quality = INFINITY;
-    for (std::size_t i = 1; a && i + 1 < k; ++i) {
-      const std::optional<Vec3> b = point(corners[(apex + i) % k]), c = point(corners[(apex + i + 1) % k]);
-      if (!b || !c) continue;
+    for (const CornerEdge& edge : fan_edges(solid.corners, loop, loop.first_corner + apex)) {
+      const std::optional<Vec3> b = point(edge.from), c = point(edge.to);
+      if (!a || !b || !c) continue;
       const double longest = std::max({dot(*b - *a, *b - *a), dot(*c - *b, *c - *b), dot(*a - *c, *a - *c)});
       if (longest > 0) quality = std::min(quality, norm(cross(*b - *a, *c - *a)) / longest);
     }
@@ -889,16 +889,14 @@ void triangulate_face(const PlaneSet& set, const Solid& solid, std::uint32_t fac
   const Projection projection = projection_of(set, face.plane);
   const std::size_t first = out.size();
   if (face.loop_count == 1 && face.convex) {
-    thread_local std::vector<VertexIndex> corners;
     const SolidLoop& loop = solid.loops[face.first_loop];
-    corners.clear();
-    for (std::uint32_t i = 0; i < loop.corner_count; ++i) corners.push_back(solid.corners[loop.first_corner + i].vertex);
     // Attempt 0 takes the first corner whose fan has no flat triangle; later ones
     // start from the roundest fan, then its neighbours.
-    const std::size_t start = attempt == 0 ? 0 : roundest_apex(solid, corners) + (attempt - 1);
-    for (std::size_t step = 0; step < corners.size(); ++step) {
+    const std::size_t start = attempt == 0 ? 0 : roundest_apex(solid, loop) + (attempt - 1);
+    for (std::size_t step = 0; step < loop.corner_count; ++step) {
       out.resize(first);
-      if (fan_from(set, face, projection, solid, corners, (start + step) % corners.size(), out)) return;
+      const auto apex = loop.first_corner + static_cast<std::uint32_t>((start + step) % loop.corner_count);
+      if (fan_from(set, face, projection, solid, loop, apex, out)) return;
     }
     out.resize(first);
   }

@@ -46,7 +46,7 @@ struct CutPiece {
   /// Rounding collapsed the whole piece: it is thinner than the rounding of its
   /// coordinates, so as written it vanishes into its neighbours across the cut
   /// (whose rounded caps close over it). `mesh` has no triangles, `defect` names
-  /// the collapse, and `moved_volume` is the piece's volume (exact_six_volume / 6),
+  /// the collapse, and `moved_volume` is the piece's exact volume (as a double),
   /// which moves to them; it is at most `moved_volume_bound`, the volume rounding
   /// the piece's vertices can move (see round_solid).
   bool vanished = false;

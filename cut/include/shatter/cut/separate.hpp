@@ -5,7 +5,6 @@
 
 #include <vector>
 
-#include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/half_edges.hpp"
 #include "shatter/kernel/mesh.hpp"
 
@@ -24,8 +23,8 @@ namespace shatter {
 /// its own, so the output stays closed and oriented; validate_mesh reports it.
 /// Throws UnsupportedGeometryError on a non-manifold edge (a directed edge used
 /// twice); std::logic_error on an open surface (a bug upstream).
+/// The same on exact points (ExactMesh): separate_exact.hpp, not installed.
 std::vector<Mesh> separate_solids(const Mesh& surface);
-std::vector<ExactMesh> separate_solids(const ExactMesh& surface);
 /// separate_solids, with the surface's half-edge twins (half_edge_twins) already
 /// found by the caller. Same result.
 std::vector<Mesh> separate_solids(const Mesh& surface, const HalfEdgeTwins& twins);

@@ -51,13 +51,17 @@
 // bound itself) and returns the sign when |value| exceeds the bound; otherwise, or
 // on overflow, it evaluates the same polynomial exactly (CGAL::Mpzf, exact for
 // ring operations on doubles). Zero is a real answer, never an epsilon.
+//
+// The points' exact values as GMP rationals (exact_coordinates, for the exact
+// triangulation of a piece's faces, the tests and the audits) are declared in
+// shatter/kernel/rationals.hpp, beside the sources and not installed: no
+// installed header names a GMP or CGAL type, so a program using the library
+// compiles without either.
 
 #include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
-
-#include <gmpxx.h>
 
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/vec.hpp"
@@ -224,15 +228,6 @@ struct OutputPoint {
   PointDef placed;
 };
 OutputPoint output_point(const PlaneSet& set, const PointDef& point, const ApproxPoint& approx);
-
-/// The point's exact coordinates (x/w, y/w, z/w) as GMP rationals (tests, audits,
-/// and exact triangulations of a piece's faces).
-std::array<mpq_class, 3> exact_coordinates(const PlaneSet& set, const PointDef& point);
-
-/// The exact homogeneous coordinates (x̃, ỹ, z̃, w) of the definition, as the
-/// polynomials of the file comment (w not normalised: its sign is the polynomial's).
-/// For audits that check the bit-length bounds.
-std::array<mpq_class, 4> exact_homogeneous(const PlaneSet& set, const PointDef& point);
 
 /// The bit-length bound of side(plane, point)'s exact value n_Q·x̃ + d_Q w, derived
 /// from the very polynomial the predicate evaluates (the same template code run

@@ -15,9 +15,11 @@
 // (rounded meshes, mass properties). Topology is carried by index: every
 // undirected edge is used by exactly two corners, in opposite directions.
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "shatter/kernel/half_edges.hpp"
@@ -93,43 +95,79 @@ struct CornerEdge {
 };
 
 /// The edges of one loop in order, the one way every loop is walked:
-/// `for (const CornerEdge& edge : loop_edges(solid.corners, loop))`.
+/// `for (const CornerEdge& edge : loop_edges(solid.corners, loop))`. A walk may
+/// start at any corner of the loop (loop_edges(corners, loop, start)); it then
+/// wraps past the loop's last corner to its first and ends with the edge into
+/// `start`. fan_edges walks the edges of a fan from one corner.
 class LoopEdges {
  public:
   class Iterator {
    public:
-    Iterator(const LoopEdges& loop, std::uint32_t corner) : loop_(&loop), corner_(corner) {}
+    Iterator(const LoopEdges& loop, std::uint32_t corner, std::uint32_t left)
+        : loop_(&loop), corner_(corner), left_(left) {}
     CornerEdge operator*() const {
       const SolidCorner& start = loop_->corners_[corner_];
-      const std::uint32_t next = corner_ + 1 == loop_->end_ ? loop_->first_ : corner_ + 1;
-      return {corner_, start.vertex, loop_->corners_[next].vertex, start.line};
+      return {corner_, start.vertex, loop_->corners_[loop_->next(corner_)].vertex, start.line};
     }
     Iterator& operator++() {
-      ++corner_;
+      corner_ = loop_->next(corner_);
+      --left_;
       return *this;
     }
-    bool operator==(const Iterator& other) const { return corner_ == other.corner_; }
+    /// Iterators of one walk are equal when as many edges are left to walk.
+    bool operator==(const Iterator& other) const { return left_ == other.left_; }
 
    private:
     const LoopEdges* loop_;
     std::uint32_t corner_;
+    std::uint32_t left_;  ///< edges not yet walked, this one included
   };
 
-  LoopEdges(std::span<const SolidCorner> corners, const SolidLoop& loop)
-      : corners_(corners), first_(loop.first_corner), end_(loop.first_corner + loop.corner_count) {}
-  Iterator begin() const { return {*this, first_}; }
-  Iterator end() const { return {*this, end_}; }
+  /// `edges` edges of `loop` from corner `start`. Preconditions: as the functions below.
+  LoopEdges(std::span<const SolidCorner> corners, const SolidLoop& loop, std::uint32_t start, std::uint32_t edges)
+      : corners_(corners), first_(loop.first_corner), end_(loop.first_corner + loop.corner_count), start_(start),
+        edges_(edges) {}
+  Iterator begin() const { return {*this, start_, edges_}; }
+  Iterator end() const { return {*this, start_, 0}; }
+  /// The corner after `corner` in the loop (the first after the last).
+  std::uint32_t next(std::uint32_t corner) const { return corner + 1 == end_ ? first_ : corner + 1; }
 
  private:
   std::span<const SolidCorner> corners_;
-  std::uint32_t first_, end_;
+  std::uint32_t first_, end_, start_, edges_;
 };
 
-/// The edges of `loop`, whose corners are corners[loop.first_corner] onwards.
+/// The edges of `loop`, whose corners are corners[loop.first_corner] onwards,
+/// from the loop's first corner.
 /// Precondition: loop.first_corner + loop.corner_count <= corners.size()
 /// (check_solid checks it; code reading unchecked loops checks it first).
 /// Never throws; O(1), the walk O(corners of the loop).
-inline LoopEdges loop_edges(std::span<const SolidCorner> corners, const SolidLoop& loop) { return {corners, loop}; }
+inline LoopEdges loop_edges(std::span<const SolidCorner> corners, const SolidLoop& loop) {
+  return {corners, loop, loop.first_corner, loop.corner_count};
+}
+
+/// The edges of `loop` from corner `start` (an index into `corners`, as
+/// CornerEdge::corner): start's edge first, the edge into start last, each edge
+/// once. For a walk whose output must begin at a chosen corner (a face part that
+/// starts on one side of a cut).
+/// Preconditions: as loop_edges(corners, loop), and loop.first_corner <= start <
+/// loop.first_corner + loop.corner_count. Never throws; O(1), the walk
+/// O(corners of the loop).
+inline LoopEdges loop_edges(std::span<const SolidCorner> corners, const SolidLoop& loop, std::uint32_t start) {
+  return {corners, loop, start, loop.corner_count};
+}
+
+/// The edges of `loop` that do not touch corner `apex`, in order from the corner
+/// after it: the fan from apex is the triangles (apex's vertex, edge.from,
+/// edge.to), loop.corner_count - 2 of them (none for a loop of fewer than 3
+/// corners). A triangulation of the loop when it is convex and no triangle is
+/// flat.
+/// Preconditions: as loop_edges(corners, loop, apex). Never throws; O(1), the
+/// walk O(corners of the loop).
+inline LoopEdges fan_edges(std::span<const SolidCorner> corners, const SolidLoop& loop, std::uint32_t apex) {
+  const LoopEdges whole = loop_edges(corners, loop, apex);
+  return {corners, loop, whole.next(apex), loop.corner_count < 2 ? 0 : loop.corner_count - 2};
+}
 
 /// Faces over a vertex numbering kept elsewhere (a side of a split, a cap).
 struct FaceSet {
@@ -179,12 +217,6 @@ bool solid_is_convex(const PlaneSet& set, const Solid& solid);
 /// The outward side of a face's plane at a point: side() of the plane, negated when
 /// the face is reversed, so negative means inside the face's half-space.
 Sign outward_side(const PlaneSet& set, const SolidFace& face, const PointDef& point, const ApproxPoint& approx);
-
-/// Six times the solid's volume, exactly: the divergence theorem over fans of its
-/// faces, on the vertices' exact rational coordinates. Precondition: closed
-/// (check_solid). For tests and audits, and for pieces too thin for doubles,
-/// whose vertex approximations may coincide. Cost: multi-precision, O(corners).
-mpq_class exact_six_volume(const PlaneSet& set, const Solid& solid);
 
 /// Checks a solid's structure: every corner's vertex in range, every loop of at
 /// least 3 corners, every undirected edge used by exactly two corners in opposite

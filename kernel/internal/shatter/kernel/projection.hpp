@@ -4,6 +4,9 @@
 // two kept axes are ordered so that counter-clockwise seen from +n stays
 // counter-clockwise in 2D: orientation tests in the projection are exact
 // orientation tests in the plane.
+//
+// Not installed (kernel/internal/): the projection of exact points is CGAL's, and
+// its users are the library's own sources (caps, bonds) and the tests.
 
 #include <cmath>
 

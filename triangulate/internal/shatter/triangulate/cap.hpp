@@ -19,6 +19,10 @@
 //    fan to it. Closed and oriented, but the embedding may overlap itself.
 // The checks: every border edge is used once, in its direction, and every other
 // cap edge twice in opposite directions; no zero-area triangle in projection.
+//
+// Not installed (triangulate/internal/): caps are triangulated on CGAL Epeck points
+// as well as on doubles, and their callers are the library's own sources (the
+// exact triangulation of a piece's faces, solid_mesh.cpp) and the tests' oracle.
 
 #include <functional>
 #include <span>

@@ -6,6 +6,10 @@
 // cuts whole meshes with them. Caps and solid separation are written once over
 // Vec3 and ExactPoint, using the overloads below. The kernel's own vertices are
 // plane-based definitions (implicit.hpp), not these.
+//
+// Not installed (kernel/internal/ is on the include path of the build and its
+// tests only): no installed header names a CGAL type, so a program using the
+// library compiles without CGAL, Boost or GMP.
 
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 
