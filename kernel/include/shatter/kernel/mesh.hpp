@@ -39,7 +39,7 @@ struct CornerAttributes {
 };
 
 /// A triangle mesh over points of type Point: Vec3 as stored and written, an
-/// exact point (exact.hpp) where caps are triangulated exactly. Invariants after reading and after every shatter
+/// exact point where caps are triangulated exactly (the library's own kernel/internal exact.hpp). Invariants after reading and after every shatter
 /// operation: `surfaces` has one entry per triangle; every present attribute
 /// channel has 3 entries per triangle; every index is < positions.size().
 template <class Point>
