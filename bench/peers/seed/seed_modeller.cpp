@@ -134,44 +134,33 @@ bool inside(const std::vector<std::array<float, 2>>& poly, float x, float y) {
 std::vector<std::uint32_t> group_positions(const std::vector<Vec3f>& positions, Compare compare) {
   const std::size_t n = positions.size();
   Find find(n);
-  if (compare == Compare::exact) {
-    struct Hash {
-      std::size_t operator()(const std::array<float, 3>& p) const {
-        std::size_t h = 0;
-        for (float f : p) h = h * 1000003u ^ std::hash<float>{}(f);
-        return h;
-      }
-    };
-    std::unordered_map<std::array<float, 3>, std::uint32_t, Hash> first;
-    for (std::uint32_t i = 0; i < n; ++i) {
-      const auto it = first.emplace(std::array<float, 3>{positions[i].x, positions[i].y, positions[i].z}, i);
-      find.join(it.first->second, i);
+  // Bitwise-equal positions first (most corners are copies of one position).
+  struct Hash {
+    std::size_t operator()(const std::array<float, 3>& p) const {
+      std::size_t h = 0;
+      for (float f : p) h = h * 1000003u ^ std::hash<float>{}(f);
+      return h;
     }
-  } else {
-    // Unity's == holds only below a distance of 1e-5, so a pair is in the same or
-    // in neighbouring cells of a 1e-5 grid.
-    struct CellHash {
-      std::size_t operator()(const std::array<std::int64_t, 3>& c) const {
-        return static_cast<std::size_t>(c[0] * 73856093 ^ c[1] * 19349663 ^ c[2] * 83492791);
+  };
+  std::unordered_map<std::array<float, 3>, std::uint32_t, Hash> first;
+  std::vector<std::uint32_t> distinct;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const auto [it, added] = first.emplace(std::array<float, 3>{positions[i].x, positions[i].y, positions[i].z}, i);
+    if (added) distinct.push_back(i);
+    else find.join(it->second, i);
+  }
+  if (compare == Compare::unity) {
+    // Unity's == holds only below a distance of 1e-5: sorted by x, each position is
+    // compared with those whose x is within 2e-5 (a margin over the float test).
+    std::sort(distinct.begin(), distinct.end(),
+              [&](std::uint32_t a, std::uint32_t b) { return positions[a].x < positions[b].x; });
+    for (std::size_t i = 0; i < distinct.size(); ++i) {
+      const Vec3f p = positions[distinct[i]];
+      for (std::size_t j = i + 1; j < distinct.size(); ++j) {
+        const Vec3f q = positions[distinct[j]];
+        if (static_cast<double>(q.x) - p.x > 2e-5) break;
+        if (unity_equal(p, q)) find.join(distinct[i], distinct[j]);
       }
-    };
-    std::unordered_map<std::array<std::int64_t, 3>, std::vector<std::uint32_t>, CellHash> grid;
-    auto cell = [](Vec3f p) {
-      return std::array<std::int64_t, 3>{static_cast<std::int64_t>(std::floor(p.x / 1e-5)),
-                                         static_cast<std::int64_t>(std::floor(p.y / 1e-5)),
-                                         static_cast<std::int64_t>(std::floor(p.z / 1e-5))};
-    };
-    for (std::uint32_t i = 0; i < n; ++i) grid[cell(positions[i])].push_back(i);
-    for (std::uint32_t i = 0; i < n; ++i) {
-      const auto c = cell(positions[i]);
-      for (std::int64_t dx = -1; dx <= 1; ++dx)
-        for (std::int64_t dy = -1; dy <= 1; ++dy)
-          for (std::int64_t dz = -1; dz <= 1; ++dz) {
-            const auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
-            if (it == grid.end()) continue;
-            for (std::uint32_t j : it->second)
-              if (j < i && unity_equal(positions[i], positions[j])) find.join(i, j);
-          }
     }
   }
   std::vector<std::uint32_t> out(n);

@@ -127,7 +127,8 @@ BuildResult build_fragments(const Piece& source, const BuildOptions& options,
 
 /// For every position, the index of the first position of its group: positions are
 /// grouped by the transitive closure of `compare` (Unity's approximate == or
-/// bitwise equality). Linear on average (a hash grid of cell 1e-5).
+/// bitwise equality). O(n log n) when few positions lie within 2e-5 of each other in
+/// x (a hash of the bitwise-distinct positions, then a sweep along x).
 std::vector<std::uint32_t> group_positions(const std::vector<Vec3f>& positions, Compare compare);
 
 }  // namespace seed_peer
