@@ -229,19 +229,20 @@ SliceOutcome slice_piece(const Piece& piece, const PlaneF& plane, const SliceOpt
   }
   out.stats.border_edges = edges.size();
   for (const auto& e : edges) out.stats.tiny_border_edges += same(e.a, e.b, compare) ? 1 : 0;
-  if (!edges.empty()) {
-    // 4.3.1: link the border edges into loops.
-    std::vector<Loop> loops;
-    while (!edges.empty()) {
-      Loop loop;
-      if (!extract_loop(edges, compare, options.linker, loop, out.failure)) return out;
-      if (options.linker == Linker::check_first && loop.size() < 3) {
-        ++out.stats.dropped_loops;
-        continue;
-      }
-      loops.push_back(std::move(loop));
+  // 4.3.1: link the border edges into loops.
+  std::vector<Loop> loops;
+  while (!edges.empty()) {
+    Loop loop;
+    if (!extract_loop(edges, compare, options.linker, loop, out.failure)) return out;
+    if (options.linker == Linker::check_first && loop.size() < 3) {
+      ++out.stats.dropped_loops;
+      continue;
     }
-    out.stats.loops = loops.size();
+    loops.push_back(std::move(loop));
+  }
+  out.stats.loops = loops.size();
+  // No loop (the plane misses the piece, or check_first dropped every loop): no cap.
+  if (!loops.empty()) {
 
     // 4.3.2: polygon outlines turn counter-clockwise around the normal with these
     // edge directions (Eq. 4.1 positive), holes the other way.
