@@ -310,6 +310,28 @@ bool strictly_inside_segment(const Vec3& a, const Vec3& b, const Vec3& v) {
   return false;  // a == b
 }
 
+// Step 2's spikes: x -> y -> x (an edge run forth and back) and repeated
+// corners, removed until none is left.
+void remove_spikes(std::vector<VertexIndex>& loop) {
+  bool changed = true;
+  while (changed && loop.size() >= 3) {
+    changed = false;
+    for (std::size_t i = 0; i < loop.size() && loop.size() >= 3; ++i) {
+      const std::size_t k = loop.size();
+      if (loop[i] == loop[(i + 2) % k]) {
+        // x y x: drop y and the second x.
+        const std::size_t y = (i + 1) % k, x2 = (i + 2) % k;
+        loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(std::max(y, x2)));
+        loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(std::min(y, x2)));
+        changed = true;
+      } else if (loop[i] == loop[(i + 1) % k]) {
+        loop.erase(loop.begin() + static_cast<std::ptrdiff_t>((i + 1) % k));
+        changed = true;
+      }
+    }
+  }
+}
+
 // Steps 1 to 3 on every face's loops (over representatives, consecutive repeats
 // removed). `loops[f]`: face f's loops; `candidates`: the vertices that may lie
 // inside an edge (the merged representatives, and the corners of loops that
@@ -352,23 +374,7 @@ void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vecto
   for (auto& face : loops) {
     std::vector<std::vector<VertexIndex>> simple;
     for (auto& loop : face) {
-      bool changed = true;
-      while (changed && loop.size() >= 3) {
-        changed = false;
-        for (std::size_t i = 0; i < loop.size() && loop.size() >= 3; ++i) {
-          const std::size_t k = loop.size();
-          if (loop[i] == loop[(i + 2) % k]) {
-            // x y x: drop y and the second x.
-            const std::size_t y = (i + 1) % k, x2 = (i + 2) % k;
-            loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(std::max(y, x2)));
-            loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(std::min(y, x2)));
-            changed = true;
-          } else if (loop[i] == loop[(i + 1) % k]) {
-            loop.erase(loop.begin() + static_cast<std::ptrdiff_t>((i + 1) % k));
-            changed = true;
-          }
-        }
-      }
+      remove_spikes(loop);
       if (loop.size() < 3) continue;
       // Split at the first repeated vertex until none is left.
       std::vector<std::vector<VertexIndex>> pending{std::move(loop)};
@@ -790,12 +796,96 @@ struct Separation {
   double volume_bound = 0;     ///< sum over moved copies of distance moved x area of their triangles
 };
 
+// --- Edges that rounding made non-manifold ---------------------------------------
+// A part of a piece thinner than the rounding can round onto an edge without
+// flattening into a sheet: a neck squeezed to a segment, or two walls of a
+// thin slot rounded onto one edge. The edge then has 2k triangles, k running it
+// each way. As where a piece touches itself at a point, the part thinner than
+// the rounding gives way: the triangles around the edge are paired in exact
+// angular order, each pair bounding one wedge of the solid, and each pair gets
+// its own copies of the edge's vertices (separate_touching), which then move a
+// hair into their own wedges. This is how exact boolean operations on
+// non-manifold input untangle an edge (CGAL's corefinement orders the faces
+// around an edge with sorted_around_edge and pairs each face with the next one
+// across the volume: Loriot, Tournois & Jamin, "Polygon Mesh Processing", CGAL
+// 5.5 manual, section "Corefinement and Boolean Operations"; Granados et al.
+// 2003, "Boolean operations on 3D selective Nef complexes", for the general
+// radial order).
+
+// For every directed edge slot of a triangle on a non-manifold edge (slot c of
+// triangle t runs from corner c to corner c + 1; index 3 t + c), the triangle
+// it is paired with across the edge; no_index on the other edges. Around the
+// edge u -> v, a triangle running it v -> u has the solid ahead of it in the
+// right-hand turn about v - u and one running it u -> v has the solid behind it
+// (their outward normals point back and ahead), so each v -> u triangle pairs
+// with the next triangle in that turn, which must run u -> v. Returns nullopt
+// when an edge has an odd or unequal count of each way, two third corners share
+// an angle about the edge, or the directions do not alternate: the edge cannot
+// be untangled by pairing. Exact: order_around_line on the rounded positions.
+std::optional<std::vector<std::uint32_t>> pair_around_non_manifold_edges(const Mesh& mesh) {
+  struct Use {
+    std::uint64_t key;   // the undirected edge
+    std::uint32_t slot;  // 3 t + c
+  };
+  std::vector<Use> uses;
+  uses.reserve(3 * mesh.triangles.size());
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    for (std::uint32_t c = 0; c < 3; ++c) {
+      const VertexIndex a = mesh.triangles[t][c], b = mesh.triangles[t][(c + 1) % 3];
+      uses.push_back({(std::uint64_t{std::min(a, b)} << 32) | std::max(a, b), 3 * t + c});
+    }
+  }
+  std::sort(uses.begin(), uses.end(), [](const Use& x, const Use& y) {
+    return x.key != y.key ? x.key < y.key : x.slot < y.slot;
+  });
+  std::vector<std::uint32_t> partner(uses.size(), no_index);
+  std::vector<Vec3> thirds;
+  std::vector<std::uint32_t> slots;
+  for (std::size_t i = 0; i < uses.size();) {
+    std::size_t j = i;
+    while (j < uses.size() && uses[j].key == uses[i].key) ++j;
+    if (j - i > 2) {
+      const auto u = static_cast<VertexIndex>(uses[i].key >> 32), v = static_cast<VertexIndex>(uses[i].key);
+      thirds.clear();
+      slots.clear();
+      for (std::size_t k = i; k < j; ++k) {
+        const std::uint32_t t = uses[k].slot / 3, c = uses[k].slot % 3;
+        slots.push_back(uses[k].slot);
+        thirds.push_back(mesh.positions[mesh.triangles[t][(c + 2) % 3]]);
+      }
+      const std::optional<std::vector<std::size_t>> order =
+          order_around_line(mesh.positions[u], mesh.positions[v], thirds);
+      if (!order || (j - i) % 2 != 0) return std::nullopt;
+      const auto runs_forward = [&](std::size_t k) {  // u -> v
+        const std::uint32_t slot = slots[k];
+        return mesh.triangles[slot / 3][slot % 3] == u;
+      };
+      const std::size_t count = order->size();
+      for (std::size_t k = 0; k < count; ++k) {
+        const std::size_t here = (*order)[k], next = (*order)[(k + 1) % count];
+        if (runs_forward(here) == runs_forward(next)) return std::nullopt;
+        if (runs_forward(here)) continue;
+        partner[slots[here]] = slots[next] / 3;
+        partner[slots[next]] = slots[here] / 3;
+      }
+    }
+    i = j;
+  }
+  return partner;
+}
+
 // Splits every vertex of `mesh` where several edge-connected fans of triangles
 // meet into one vertex per fan, then moves each copy, and each vertex of
 // `touching` (one fan, touching a cap), toward its fan's neighbours by `scale`
 // times its nearest neighbour's distance. Returns nothing moved when there is
-// nothing to separate. Preconditions: closed and consistently oriented.
-Separation separate_touching(Mesh& mesh, std::span<const VertexIndex> touching, double scale) {
+// nothing to separate. `partner`: empty, or for each directed edge slot on a
+// non-manifold edge the triangle it is paired with (pair_around_non_manifold_edges):
+// triangles meet across such an edge only in their pairs, so the edge's
+// vertices fall into one fan per pair where nothing else joins them.
+// Preconditions: closed and consistently oriented (each edge run as often each
+// way), and every non-manifold edge paired in `partner`.
+Separation separate_touching(Mesh& mesh, std::span<const VertexIndex> touching, double scale,
+                             std::span<const std::uint32_t> partner = {}) {
   const std::size_t n = mesh.positions.size();
   // The triangle corners at each vertex (corner = 3 * triangle + c), grouped by vertex.
   std::vector<std::uint32_t> first(n + 1, 0);
@@ -826,8 +916,12 @@ Separation separate_touching(Mesh& mesh, std::span<const VertexIndex> touching, 
     fans.reset(count);
     for (std::uint32_t i = 0; i < count; ++i) {
       const VertexIndex next = vertex_of(at[begin + i], 1);
+      // Corner i leaves v along its triangle's slot at corner i, v -> next.
+      const std::uint32_t paired = partner.empty() ? no_index : partner[at[begin + i]];
       for (std::uint32_t j = 0; j < count; ++j) {
-        if (vertex_of(at[begin + j], 2) == next) fans.unite(i, j);
+        if (vertex_of(at[begin + j], 2) == next && (paired == no_index || paired == at[begin + j] / 3)) {
+          fans.unite(i, j);
+        }
       }
     }
     std::vector<std::uint32_t> fan_of_root(count, no_index);
@@ -966,8 +1060,14 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
   // a sliver triangle (a corner nearly on the line of its neighbours, where two
   // input faces are nearly coplanar); later attempts take the roundest fans and
   // the exact Delaunay triangulation, which keep such corners out of slivers.
+  // The second round of attempts (untangle_edges) also untangles edges that
+  // rounding made non-manifold (pair_around_non_manifold_edges): a repair tried
+  // only once the others have failed, so that every piece they write is written
+  // as before it existed.
   constexpr std::size_t attempts = 4;
-  for (std::size_t attempt = 0; attempt < attempts; ++attempt) {
+  for (std::size_t step = 0; step < 2 * attempts; ++step) {
+    const std::size_t attempt = step % attempts;
+    const bool untangle_edges = step >= attempts;
     Mesh mesh;
     std::size_t merged = 0;
     ValidationReport report;
@@ -988,7 +1088,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
                                   "the whole piece (it is thinner than the rounding of its coordinates)"});
       }
     }
-    if (attempt == 0) {
+    if (step == 0) {
       first_report = report;
       result.mesh = mesh;
       result.merged_vertices = merged;
@@ -1026,11 +1126,20 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     // The piece may touch itself, exactly (see separate_touching): only then is
     // what is left a pinched vertex or an intersection, on a closed oriented mesh.
     const bool may_touch = !options.allow_self_intersections &&
-                           std::all_of(report.defects.begin(), report.defects.end(), [](const Defect& d) {
+                           std::all_of(report.defects.begin(), report.defects.end(), [&](const Defect& d) {
                              return d.kind == DefectKind::non_manifold_vertex ||
-                                    d.kind == DefectKind::self_intersection;
+                                    d.kind == DefectKind::self_intersection ||
+                                    (untangle_edges && d.kind == DefectKind::non_manifold_edge);
                            });
     if (!may_touch) continue;
+    // The second round repeats the first but for the edges: nothing else to try.
+    if (untangle_edges && report.find(DefectKind::non_manifold_edge) == nullptr) continue;
+    std::vector<std::uint32_t> partner;
+    if (report.find(DefectKind::non_manifold_edge) != nullptr) {
+      std::optional<std::vector<std::uint32_t>> paired = pair_around_non_manifold_edges(mesh);
+      if (!paired) continue;
+      partner = std::move(*paired);
+    }
     if (!touching_caps) touching_caps = corners_touching_caps(set, solid);
     touching.clear();
     for (const VertexIndex v : *touching_caps) {
@@ -1040,7 +1149,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     // first, then further.
     for (const int bits : {40, 30, 20}) {
       Mesh separated = mesh;
-      const Separation separation = separate_touching(separated, touching, std::ldexp(1.0, -bits));
+      const Separation separation = separate_touching(separated, touching, std::ldexp(1.0, -bits), partner);
       if (separation.moved == 0) break;
       if (validate_mesh_against(separated, options.trusted, options.cut).valid()) {
         result.mesh = std::move(separated);
