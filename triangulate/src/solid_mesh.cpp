@@ -286,7 +286,9 @@ bool triangulate_merged_face(const PlaneSet& set, const SolidFace& face,
 //    it then runs forth and back along them, and its neighbours on both sides
 //    share vertices again.
 // 2. Spikes x -> y -> x (an edge run forth and back) are removed, repeatedly:
-//    they enclose nothing. A loop left with fewer than 3 corners vanishes.
+//    they enclose nothing. A loop left with fewer than 3 corners vanishes. Two
+//    loops of a face that run one edge both ways (a hole rounded against the
+//    outer loop) are joined across it: the edge bounds the face on neither side.
 // 3. A loop through one vertex twice (two parts that rounding made touch) is
 //    split there into simple loops, each triangulated on its own; the vertex is
 //    then pinched, which the separation below handles.
@@ -332,6 +334,36 @@ void remove_spikes(std::vector<VertexIndex>& loop) {
   }
 }
 
+// Step 2's edges run both ways: when one loop of a face runs a -> b and another
+// runs b -> a (a hole that rounding laid against the outer loop, or two holes
+// against each other), the two edges bound the face's region on no side, as a
+// spike does, and cancel: the loops are joined into one across them (the face's
+// region, as the sum of its oriented loops, is unchanged). Joins the first such
+// pair; returns whether it found one.
+bool join_at_antiparallel_edge(std::vector<std::vector<VertexIndex>>& face) {
+  for (std::size_t p = 0; p < face.size(); ++p) {
+    const std::vector<VertexIndex>& first = face[p];
+    for (std::size_t i = 0; i < first.size(); ++i) {
+      const VertexIndex a = first[i], b = first[(i + 1) % first.size()];
+      for (std::size_t q = 0; q < face.size(); ++q) {
+        if (q == p) continue;
+        const std::vector<VertexIndex>& second = face[q];
+        for (std::size_t j = 0; j < second.size(); ++j) {
+          if (second[j] != b || second[(j + 1) % second.size()] != a) continue;
+          // first from b round to a, then second from a round to just before b.
+          std::vector<VertexIndex> joined;
+          for (std::size_t k = 0; k < first.size(); ++k) joined.push_back(first[(i + 1 + k) % first.size()]);
+          for (std::size_t k = 1; k + 1 < second.size(); ++k) joined.push_back(second[(j + 1 + k) % second.size()]);
+          face[p] = std::move(joined);
+          face.erase(face.begin() + static_cast<std::ptrdiff_t>(q));
+          return true;
+        }
+      }
+    }
+  }
+  return false;
+}
+
 // Steps 1 to 3 on every face's loops (over representatives, consecutive repeats
 // removed). `loops[f]`: face f's loops; `candidates`: the vertices that may lie
 // inside an edge (the merged representatives, and the corners of loops that
@@ -370,11 +402,15 @@ void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vecto
       loop = std::move(out);
     }
   }
-  // 2. Spikes, and 3. loops through a vertex twice.
+  // 2. Spikes, edges run both ways by two loops, and 3. loops through a vertex twice.
   for (auto& face : loops) {
+    for (bool again = true; again;) {
+      for (auto& loop : face) remove_spikes(loop);
+      std::erase_if(face, [](const std::vector<VertexIndex>& loop) { return loop.size() < 3; });
+      again = join_at_antiparallel_edge(face);
+    }
     std::vector<std::vector<VertexIndex>> simple;
     for (auto& loop : face) {
-      remove_spikes(loop);
       if (loop.size() < 3) continue;
       // Split at the first repeated vertex until none is left.
       std::vector<std::vector<VertexIndex>> pending{std::move(loop)};

@@ -17,8 +17,9 @@
 //    CGAL 6's autorefine_triangle_soup): vertices that rounded onto one point are
 //    merged and the triangles they flatten removed; on a retry, the faces' loops
 //    over merged vertices are repaired as snap rounding repairs segments (a vertex
-//    lying exactly inside an edge is inserted into it, spikes removed, a loop
-//    through one point twice split there) and a fold is retried with another triangulation of the faces
+//    lying exactly inside an edge is inserted into it, spikes removed, loops that
+//    run one edge both ways joined across it, a loop through one point twice
+//    split there) and a fold is retried with another triangulation of the faces
 //    involved; triangles that rounding laid over each other once each way (a
 //    part thinner than the rounding, flattened into a two-sided sheet) vanish;
 //    an edge that a part thinner than the rounding was squeezed onto (2k
