@@ -438,6 +438,98 @@ void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vecto
   }
 }
 
+// Step 1 for a vertex that rounding carried across an edge of its own face:
+// snap rounding routes a segment through every hot pixel it passes (Hobby 1999;
+// Guibas & Marimont 1998, "Rounding arrangements dynamically"), so that no
+// vertex ends up on the wrong side of a segment; here, in the plane of each face
+// (its exact projection), a corner v of the face lies strictly on one side of
+// the line of an edge (a, b) of the face in exact arithmetic (placed points) and
+// strictly on the other on the rounded doubles, and lies between a and b along
+// the edge (exactly, on the doubles): the edge is routed through v, in every
+// loop that has it (the face across the edge too), and step 2 then removes the
+// spike or splits the loop where it passes v twice. Positions do not change;
+// certification vouches for the result. Only corners within 2^-30 of the
+// coordinates' magnitude of the edge's box are tested: rounding moves a point by
+// at most 2^-40 of its magnitude or 64 ulps when snapped (output_position), so
+// no farther corner can have changed side. Returns whether any edge changed.
+bool route_edges_through_crossed_corners(const PlaneSet& set, const Solid& solid, std::span<const PointDef> placed,
+                                         std::span<const Vec3> positions,
+                                         std::vector<std::vector<std::vector<VertexIndex>>>& loops) {
+  std::vector<std::optional<ExactPoint>> exact(positions.size());
+  const auto exact_of = [&](VertexIndex v) -> const ExactPoint& {
+    if (!exact[v]) exact[v] = exact_point(set, placed[v]);
+    return *exact[v];
+  };
+  // Edge (a, b) as a directed key -> the corners to route it through.
+  std::unordered_map<std::uint64_t, std::vector<VertexIndex>> through;
+  const auto key = [](VertexIndex a, VertexIndex b) { return (std::uint64_t{a} << 32) | b; };
+  for (std::uint32_t f = 0; f < loops.size(); ++f) {
+    const Projection projection = projection_of(set, solid.faces[f].plane);
+    const int u = (projection.axis + 1) % 3, w = (projection.axis + 2) % 3;
+    const PlaneProjection kept{u, w};
+    std::vector<VertexIndex> corners;
+    for (const auto& loop : loops[f]) corners.insert(corners.end(), loop.begin(), loop.end());
+    for (const auto& loop : loops[f]) {
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const VertexIndex a = loop[i], b = loop[(i + 1) % loop.size()];
+        const Vec3 &pa = positions[a], &pb = positions[b];
+        double magnitude = 0;
+        for (int k = 0; k < 3; ++k) magnitude = std::max({magnitude, std::fabs(pa[k]), std::fabs(pb[k])});
+        const double margin = std::ldexp(magnitude, -30);
+        for (const VertexIndex v : corners) {
+          if (v == a || v == b) continue;
+          const Vec3& pv = positions[v];
+          bool near = true;
+          for (int k = 0; k < 3; ++k) {
+            near = near && pv[k] >= std::min(pa[k], pb[k]) - margin && pv[k] <= std::max(pa[k], pb[k]) + margin;
+          }
+          if (!near) continue;
+          const Sign rounded = orient2d(kept(pa), kept(pb), kept(pv));
+          if (rounded == Sign::zero) continue;  // on the line: step 1's case
+          const Sign before = orientation_in_projection(kept, exact_of(a), exact_of(b), exact_of(v));
+          if (before == Sign::zero || before == rounded) continue;
+          // Strictly between a and b along the edge: (v - a).(b - a) > 0 and (v - b).(a - b) > 0, exactly.
+          mpq_class along_a = 0, along_b = 0;
+          for (int k = 0; k < 3; ++k) {
+            along_a += (mpq_class(pv[k]) - pa[k]) * (mpq_class(pb[k]) - pa[k]);
+            along_b += (mpq_class(pv[k]) - pb[k]) * (mpq_class(pa[k]) - pb[k]);
+          }
+          if (sgn(along_a) > 0 && sgn(along_b) > 0) through[key(a, b)].push_back(v);
+        }
+      }
+    }
+  }
+  if (through.empty()) return false;
+  // Both directions of an edge take the same corners, in order along it (by the
+  // square of the distance from its start, exactly on the doubles).
+  for (auto& face : loops) {
+    for (auto& loop : face) {
+      std::vector<VertexIndex> out;
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const VertexIndex a = loop[i], b = loop[(i + 1) % loop.size()];
+        out.push_back(a);
+        std::vector<VertexIndex> inside;
+        for (const std::uint64_t k : {key(a, b), key(b, a)}) {
+          if (const auto it = through.find(k); it != through.end()) inside.insert(inside.end(), it->second.begin(), it->second.end());
+        }
+        if (inside.empty()) continue;
+        std::sort(inside.begin(), inside.end());
+        inside.erase(std::unique(inside.begin(), inside.end()), inside.end());
+        const Vec3& pa = positions[a];
+        const auto distance = [&](VertexIndex v) {
+          mpq_class d = 0;
+          for (int k = 0; k < 3; ++k) d += (mpq_class(positions[v][k]) - pa[k]) * (mpq_class(positions[v][k]) - pa[k]);
+          return d;
+        };
+        std::stable_sort(inside.begin(), inside.end(), [&](VertexIndex x, VertexIndex y) { return distance(x) < distance(y); });
+        out.insert(out.end(), inside.begin(), inside.end());
+      }
+      loop = std::move(out);
+    }
+  }
+  return true;
+}
+
 // Steps 1 and 2 (see solid_mesh.hpp): positions, vertices merged where they
 // rounded onto one point, faces triangulated.
 // `repair_loops`: repair the loops of faces over merged vertices
@@ -446,7 +538,7 @@ void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vecto
 // written as before.
 void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options, std::size_t attempt,
                  Mesh& mesh, std::size_t& merged, std::vector<VertexIndex>* mesh_vertex_of = nullptr,
-                 bool repair_loops = false) {
+                 bool repair_loops = false, bool route_crossed = false) {
   const std::size_t n = solid.defs.size();
   thread_local std::vector<Vec3> positions;
   thread_local std::vector<PointDef> placed;
@@ -535,6 +627,7 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
     // Only loops through a candidate, or along an edge it may lie in, can
     // change; a loop that changes marks its face.
     const auto before = repaired;
+    if (route_crossed) route_edges_through_crossed_corners(set, solid, placed, positions, repaired);
     repair_merged_loops(positions, repaired, candidates);
     for (std::uint32_t f = 0; f < solid.faces.size(); ++f) repaired_changed[f] |= repaired[f] != before[f];
   }
@@ -1107,7 +1200,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     Mesh mesh;
     std::size_t merged = 0;
     ValidationReport report;
-    triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of, attempt > 0);
+    triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of, attempt > 0, untangle_edges);
     if (solid.convex && merged == 0 && certify_star_shaped(mesh, vertex_average(mesh))) {
       // A convex solid's rounding certified in O(T) exact orientations.
       result.mesh = std::move(mesh);
