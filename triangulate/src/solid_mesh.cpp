@@ -530,6 +530,136 @@ bool route_edges_through_crossed_corners(const PlaneSet& set, const Solid& solid
   return true;
 }
 
+// Step 2 for faces that rounding laid onto each other: a part thinner than the
+// rounding between two faces that face opposite ways (a slab between a cap and
+// an input face ulps from it) rounds onto one plane, and if the two faces' loops
+// then share their vertices they overlap as a two-sided sheet, but are
+// triangulated differently, so no two triangles cancel. As 2-chains on the common
+// plane the faces add up to their difference, whose boundary is the sum of their
+// loops as traversed, in which an edge run both ways cancels: so faces that share
+// an edge run both ways, all of whose rounded corners lie exactly on one plane
+// (orient3d zero) and of which two face opposite ways, are merged into one face
+// over the loops left once those edges cancel (join_at_antiparallel_edge, spikes,
+// splits). It faces the way of the member whose outward side its loops turn
+// counter-clockwise about (the exact signed area of the loops on the doubles, in
+// that member's projection), and is written as that member; when nothing is left
+// the sheet vanishes whole. `emit_as[f]`: the face whose description face f's
+// triangles take, or no_index when f is merged into another. Returns whether
+// any faces were merged.
+bool merge_coplanar_sheets(const PlaneSet& set, const Solid& solid, std::span<const Vec3> positions,
+                           std::vector<std::vector<std::vector<VertexIndex>>>& loops,
+                           std::vector<std::uint8_t>& changed, std::vector<std::uint32_t>& emit_as) {
+  const auto count = static_cast<std::uint32_t>(loops.size());
+  emit_as.resize(count);
+  for (std::uint32_t f = 0; f < count; ++f) emit_as[f] = f;
+  std::unordered_map<std::uint64_t, std::uint32_t> face_of_edge;
+  const auto key = [](VertexIndex a, VertexIndex b) { return (std::uint64_t{a} << 32) | b; };
+  for (std::uint32_t f = 0; f < count; ++f) {
+    for (const auto& loop : loops[f]) {
+      for (std::size_t i = 0; i < loop.size(); ++i) face_of_edge[key(loop[i], loop[(i + 1) % loop.size()])] = f;
+    }
+  }
+  // Three corners of a face's loops that are not collinear on the doubles.
+  const auto frame = [&](std::uint32_t f) -> std::optional<std::array<VertexIndex, 3>> {
+    std::vector<VertexIndex> corners;
+    for (const auto& loop : loops[f]) corners.insert(corners.end(), loop.begin(), loop.end());
+    if (corners.size() < 3) return std::nullopt;
+    const Vec3 &a = positions[corners[0]];
+    for (std::size_t j = 1; j < corners.size(); ++j) {
+      for (std::size_t k = j + 1; k < corners.size(); ++k) {
+        const Vec3 &b = positions[corners[j]], &c = positions[corners[k]];
+        if (orient2d({a.x, a.y}, {b.x, b.y}, {c.x, c.y}) != Sign::zero ||
+            orient2d({a.y, a.z}, {b.y, b.z}, {c.y, c.z}) != Sign::zero ||
+            orient2d({a.z, a.x}, {b.z, b.x}, {c.z, c.x}) != Sign::zero) {
+          return std::array<VertexIndex, 3>{corners[0], corners[j], corners[k]};
+        }
+      }
+    }
+    return std::nullopt;
+  };
+  const auto on_plane_of = [&](const std::array<VertexIndex, 3>& t, std::uint32_t g) {
+    for (const auto& loop : loops[g]) {
+      for (const VertexIndex v : loop) {
+        if (orient3d(positions[t[0]], positions[t[1]], positions[t[2]], positions[v]) != Sign::zero) return false;
+      }
+    }
+    return true;
+  };
+  // Outward normals of two faces point the same way (exactly).
+  const auto same_facing = [&](std::uint32_t f, std::uint32_t g) {
+    const bool same_plane = compare_normals(set, solid.faces[f].plane, solid.faces[g].plane) == Sign::positive;
+    return same_plane == (solid.faces[f].reversed == solid.faces[g].reversed);
+  };
+  UnionFind groups;
+  groups.reset(count);
+  std::vector<std::optional<std::array<VertexIndex, 3>>> frames(count);
+  std::vector<std::uint8_t> framed(count, 0), opposite(count, 0);
+  bool any = false;
+  for (std::uint32_t f = 0; f < count; ++f) {
+    for (const auto& loop : loops[f]) {
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const auto it = face_of_edge.find(key(loop[(i + 1) % loop.size()], loop[i]));
+        if (it == face_of_edge.end()) continue;
+        const std::uint32_t g = it->second;
+        if (g == f || groups.find(f) == groups.find(g)) continue;
+        if (!framed[f]) frames[f] = frame(f), framed[f] = 1;
+        if (!frames[f] || !on_plane_of(*frames[f], g)) continue;
+        const std::uint32_t rf = groups.find(f), rg = groups.find(g);
+        const bool flips = !same_facing(f, g);
+        groups.unite(f, g);
+        opposite[groups.find(f)] = opposite[rf] || opposite[rg] || flips;
+        any = true;
+      }
+    }
+  }
+  if (!any) return false;
+  bool merged_any = false;
+  std::vector<std::vector<std::uint32_t>> members(count);
+  for (std::uint32_t f = 0; f < count; ++f) members[groups.find(f)].push_back(f);
+  for (std::uint32_t root = 0; root < count; ++root) {
+    const std::vector<std::uint32_t>& group = members[root];
+    if (group.size() < 2 || !opposite[root]) continue;
+    std::vector<std::vector<VertexIndex>> sum;
+    for (const std::uint32_t f : group) sum.insert(sum.end(), loops[f].begin(), loops[f].end());
+    for (bool again = true; again;) {
+      for (auto& loop : sum) remove_spikes(loop);
+      std::erase_if(sum, [](const std::vector<VertexIndex>& loop) { return loop.size() < 3; });
+      again = join_at_antiparallel_edge(sum);
+    }
+    // Twice the signed area of the loops in face f's projection, seen from its outside.
+    const auto area_seen_from = [&](std::uint32_t f) {
+      const Projection projection = projection_of(set, solid.faces[f].plane);
+      const int u = (projection.axis + 1) % 3, w = (projection.axis + 2) % 3;
+      mpq_class twice = 0;
+      for (const auto& loop : sum) {
+        for (std::size_t i = 0; i < loop.size(); ++i) {
+          const Vec3 &p = positions[loop[i]], &q = positions[loop[(i + 1) % loop.size()]];
+          twice += mpq_class(p[u]) * q[w] - mpq_class(q[u]) * p[w];
+        }
+      }
+      return (projection.flipped != solid.faces[f].reversed) ? mpq_class(-twice) : twice;
+    };
+    std::uint32_t as = no_index;
+    for (const std::uint32_t f : group) {
+      if (sgn(area_seen_from(f)) > 0) {
+        as = f;
+        break;
+      }
+    }
+    const std::uint32_t first = group.front();
+    for (const std::uint32_t f : group) {
+      emit_as[f] = no_index;
+      loops[f].clear();
+    }
+    merged_any = true;
+    if (as == no_index) continue;  // nothing left, or nothing facing one way: the sheet vanishes
+    emit_as[first] = as;
+    loops[first] = std::move(sum);
+    changed[first] = 1;
+  }
+  return merged_any;
+}
+
 // Steps 1 and 2 (see solid_mesh.hpp): positions, vertices merged where they
 // rounded onto one point, faces triangulated.
 // `repair_loops`: repair the loops of faces over merged vertices
@@ -588,6 +718,8 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
   // vertex of another.
   thread_local std::vector<std::vector<std::vector<VertexIndex>>> repaired;
   thread_local std::vector<std::uint8_t> repaired_changed;
+  thread_local std::vector<std::uint32_t> emit_as;  // merge_coplanar_sheets
+  emit_as.clear();
   const bool repairing = repair_loops && merged > 0;
   if (repairing) {
     repaired.assign(solid.faces.size(), {});
@@ -630,9 +762,11 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
     if (route_crossed) route_edges_through_crossed_corners(set, solid, placed, positions, repaired);
     repair_merged_loops(positions, repaired, candidates);
     for (std::uint32_t f = 0; f < solid.faces.size(); ++f) repaired_changed[f] |= repaired[f] != before[f];
+    if (route_crossed) merge_coplanar_sheets(set, solid, positions, repaired, repaired_changed, emit_as);
   }
   for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
-    const SolidFace& face = solid.faces[f];
+    if (repairing && route_crossed && emit_as[f] == no_index) continue;
+    const SolidFace& face = solid.faces[repairing && route_crossed ? emit_as[f] : f];
     face_triangles.clear();
     bool changed = false;
     if (repairing) {

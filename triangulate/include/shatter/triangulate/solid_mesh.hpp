@@ -20,7 +20,9 @@
 //    lying exactly inside an edge is inserted into it, spikes removed, loops that
 //    run one edge both ways joined across it, a loop through one point twice
 //    split there; on the last round, an edge of a face routed through a corner of
-//    the face that rounding carried across it) and a fold is retried with another triangulation of the faces
+//    the face that rounding carried across it, and faces facing opposite ways
+//    that rounding laid onto one plane over shared corners merged into the one
+//    face their sum leaves) and a fold is retried with another triangulation of the faces
 //    involved; triangles that rounding laid over each other once each way (a
 //    part thinner than the rounding, flattened into a two-sided sheet) vanish;
 //    an edge that a part thinner than the rounding was squeezed onto (2k
