@@ -892,7 +892,13 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
 // first of its reverse), with their surfaces and corner attributes, then the
 // vertices no triangle uses any more. Returns how many triangles went.
 // `renumbered`: each old vertex's new index (no_index when it went).
-std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumbered) {
+// `quads`: also remove two-sided sheets over four corners triangulated with the
+// two different diagonals, (a, b, c) + (a, c, d) one way and (a, d, b) + (b, d,
+// c) the other (a cap whose corners snapped onto those of two input triangles,
+// triangulated across the other diagonal): the four bound only the thin
+// tetrahedron between the two triangulations, and removing them keeps every
+// directed edge matched (their boundaries are a -> b -> c -> d and its reverse).
+std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumbered, bool quads = false) {
   const std::size_t count = mesh.triangles.size();
   // Key: the triangle rotated to start at its smallest index; its reverse is then
   // (a, c, b) for (a, b, c).
@@ -924,6 +930,44 @@ std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumb
         removed[t] = removed[*it] = 1;
         gone += 2;
         break;
+      }
+    }
+  }
+  if (quads) {
+    // Directed edge -> the triangles running it, among those left.
+    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> running;
+    const auto edge = [](VertexIndex a, VertexIndex b) { return (std::uint64_t{a} << 32) | b; };
+    for (std::uint32_t t = 0; t < count; ++t) {
+      if (removed[t]) continue;
+      for (int c = 0; c < 3; ++c) running[edge(mesh.triangles[t][c], mesh.triangles[t][(c + 1) % 3])].push_back(t);
+    }
+    const auto unremoved = [&](const Triangle& key) -> std::uint32_t {
+      for (auto it = find(rotated(key)); it != order.end() && keys[*it] == rotated(key); ++it) {
+        if (!removed[*it]) return *it;
+      }
+      return no_index;
+    };
+    for (std::uint32_t t = 0; t < count; ++t) {
+      for (int c = 0; c < 3 && !removed[t]; ++c) {
+        // t = (a, b, c) with the diagonal c -> a; its partner runs a -> c.
+        const VertexIndex a = mesh.triangles[t][c], b = mesh.triangles[t][(c + 1) % 3], cc = mesh.triangles[t][(c + 2) % 3];
+        const auto it = running.find(edge(a, cc));
+        if (it == running.end()) continue;
+        for (const std::uint32_t u : it->second) {
+          if (u == t || removed[u]) continue;
+          const Triangle& tu = mesh.triangles[u];
+          VertexIndex d = no_index;
+          for (int k = 0; k < 3; ++k) {
+            if (tu[k] != a && tu[k] != cc) d = tu[k];
+          }
+          if (d == no_index || d == b) continue;
+          const std::uint32_t q1 = unremoved({a, d, b});
+          const std::uint32_t q2 = unremoved({b, d, cc});
+          if (q1 == no_index || q2 == no_index || q1 == q2 || q1 == t || q1 == u || q2 == t || q2 == u) continue;
+          removed[t] = removed[u] = removed[q1] = removed[q2] = 1;
+          gone += 4;
+          break;
+        }
       }
     }
   }
@@ -1361,7 +1405,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     if (!report.valid() && !mesh.triangles.empty()) {
       Mesh sheetless = mesh;
       std::vector<VertexIndex> renumbered;
-      if (const std::size_t gone = cancel_two_sided_sheets(sheetless, renumbered); gone > 0) {
+      if (const std::size_t gone = cancel_two_sided_sheets(sheetless, renumbered, untangle_edges); gone > 0) {
         if (sheetless.triangles.empty()) {
           flattened_whole = true;
           break;
@@ -1378,13 +1422,20 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       }
     }
     if (report.valid()) {
-      result.mesh = std::move(mesh);
-      result.merged_vertices = merged;
-      result.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
-      result.vanished_triangles = sheets_cancelled;
-      if (sheets_cancelled > 0) report_moved_volume(set, solid, result);
-      result.valid = true;
-      return result;
+      RoundedSolid written = result;
+      written.mesh = std::move(mesh);
+      written.merged_vertices = merged;
+      written.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
+      written.vanished_triangles = sheets_cancelled;
+      if (sheets_cancelled > 0) report_moved_volume(set, solid, written);
+      // On the last round (sheets over four corners, faces merged) the volume
+      // the repairs moved is held to the bound of what rounding can move, or the
+      // mesh is not taken.
+      if (!untangle_edges || !(written.moved_volume > written.moved_volume_bound)) {
+        written.valid = true;
+        return written;
+      }
+      continue;
     }
     // The piece may touch itself, exactly (see separate_touching): only then is
     // what is left a pinched vertex or an intersection, on a closed oriented mesh.

@@ -22,9 +22,12 @@
 //    split there; on the last round, an edge of a face routed through a corner of
 //    the face that rounding carried across it, and faces facing opposite ways
 //    that rounding laid onto one plane over shared corners merged into the one
-//    face their sum leaves) and a fold is retried with another triangulation of the faces
-//    involved; triangles that rounding laid over each other once each way (a
-//    part thinner than the rounding, flattened into a two-sided sheet) vanish;
+//    face their sum leaves) and a fold is retried with another triangulation of
+//    the faces involved; triangles that rounding laid over each other once each
+//    way (a part thinner than the rounding, flattened into a two-sided sheet)
+//    vanish, and on the last round so do four triangles that cover four corners
+//    both ways with different diagonals (while the volume moved stays within
+//    its bound);
 //    an edge that a part thinner than the rounding was squeezed onto (2k
 //    triangles around it) is untangled: its triangles paired in exact angular
 //    order, one copy of the edge per pair, moved apart as a pinched vertex is;
