@@ -11,6 +11,11 @@ bool PlaneCut::certified() const {
   return std::all_of(pieces.begin(), pieces.end(), [](const CutPiece& piece) { return piece.defect.empty(); });
 }
 
+bool PlaneCut::misses_as_written() const {
+  const auto kept = std::count_if(pieces.begin(), pieces.end(), [](const CutPiece& piece) { return !piece.vanished; });
+  return plane_missed || kept < 2;
+}
+
 PlaneCut cut_by_plane(const PlaneInput& input, const PlaneSet& set, const Solid& solid, const Mesh* solid_mesh,
                       PlaneRef cut, const PlaneCutOptions& options) {
   SolidCut exact = cut_solid(set, solid, cut, options.cap_surface, input.shells);

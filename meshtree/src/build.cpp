@@ -121,6 +121,10 @@ struct BuildNode {
   std::uint32_t depth = 0;
   std::uint64_t seed = 0;
   std::vector<std::unique_ptr<BuildNode>> children;
+  // Pieces of this node's cut that vanished (thinner than the rounding of their
+  // coordinates: no children), with their exact volume and its bound, summed.
+  std::uint64_t vanished_pieces = 0;
+  double vanished_volume = 0, vanished_volume_bound = 0;
 };
 
 class Builder {
@@ -141,9 +145,13 @@ class Builder {
   /// solid, seed and depth) and the options: which thread runs it, and when,
   /// never shows. The cut is exact, so nothing about the solids is checked: each
   /// child is rounded to doubles at once and certified (cut_by_plane). A plane is
-  /// redrawn when it misses the node, or, exceedingly rarely, when a child cannot
-  /// be written as a valid double mesh (a sliver thinner than the rounding of its
-  /// coordinates: the exact tree would be valid, its rounding would not).
+  /// redrawn only when it misses the node: it leaves the node whole, or every
+  /// piece but one is thinner than the rounding of its coordinates and vanishes
+  /// (as written, the node is not cut). Otherwise the pieces that vanish are no
+  /// children (their volume, which moves to their neighbours, is counted with its
+  /// bound), and the others are. No plane is redrawn for a piece (issue 17): a
+  /// piece that cannot be written as a valid mesh, or a cut that would pinch a
+  /// piece, fails the build with UnsupportedGeometryError.
   void cut(BuildNode& node) const {
     NodeRandom random(node.seed);
     const BoundingBox box = bounding_box(node.solid);
@@ -157,33 +165,34 @@ class Builder {
     cutting.cap_surface = node.depth + 1;
     cutting.interior_uv_scale = recipe_.interior_uv_scale;
     cutting.allow_self_intersections = recipe_.allow_self_intersections;
-    std::uint32_t missed = 0, unroundable = 0;
-    std::string last_defect;
+    std::uint32_t missed = 0, missed_as_written = 0;
     for (std::uint32_t attempt = 0; attempt < recipe_.max_plane_tries; ++attempt) {
       path.back() = draw_plane(recipe_.strategy, box, node.mass.centroid, random);
-      PlaneCut result;
-      try {
-        // node.mesh is certified (the root: the validated input).
-        result = cut_by_plane(*plane_input_, set, node.solid, &node.mesh, cut, cutting);
-      } catch (const UnsupportedGeometryError& error) {
-        // The plane touches the surface inside the solid (a pinch): exactly
-        // degenerate, never met by a random plane but by constructed ones.
-        ++unroundable;
-        last_defect = error.what();
-        continue;
-      }
+      // node.mesh is certified (the root: the validated input). A pinch throws.
+      PlaneCut result = cut_by_plane(*plane_input_, set, node.solid, &node.mesh, cut, cutting);
       if (result.plane_missed) {
         ++missed;
         continue;
       }
-      if (!result.certified()) {
-        ++unroundable;
-        for (const CutPiece& piece : result.pieces) {
-          if (!piece.defect.empty()) last_defect = piece.defect;
+      for (const CutPiece& piece : result.pieces) {
+        if (!piece.vanished && !piece.defect.empty()) {
+          throw UnsupportedGeometryError("cannot cut a fragment at depth " + std::to_string(node.depth) +
+                                         ": a piece cannot be rounded to doubles as a valid mesh: " + piece.defect);
         }
+      }
+      if (result.misses_as_written()) {
+        ++missed_as_written;
         continue;
       }
+      double vanished_volume = 0, vanished_bound = 0;
+      std::uint64_t vanished = 0;
       for (CutPiece& piece : result.pieces) {
+        if (piece.vanished) {
+          ++vanished;
+          vanished_volume += piece.moved_volume;
+          vanished_bound += piece.moved_volume_bound;
+          continue;
+        }
         auto child = std::make_unique<BuildNode>();
         child->mesh = std::move(piece.mesh);
         child->mass = mass_properties(child->mesh);
@@ -195,15 +204,17 @@ class Builder {
         node.children.push_back(std::move(child));
       }
       node.plane = path.back();
-      planes_missed_ += missed;
-      planes_rejected_ += unroundable;
+      node.vanished_pieces = vanished;
+      node.vanished_volume = vanished_volume;
+      node.vanished_volume_bound = vanished_bound;
+      planes_missed_ += missed + missed_as_written;
       return;
     }
     throw UnsupportedGeometryError(
-        "cannot cut a fragment at depth " + std::to_string(node.depth) + ": of " +
-        std::to_string(recipe_.max_plane_tries) + " planes, " + std::to_string(missed) + " missed it and " +
-        std::to_string(unroundable) + " gave a piece that cannot be written as a valid double mesh" +
-        (last_defect.empty() ? std::string() : " (" + last_defect + ")"));
+        "cannot cut a fragment at depth " + std::to_string(node.depth) + ": every one of " +
+        std::to_string(recipe_.max_plane_tries) + " planes missed it (" + std::to_string(missed) +
+        " left it whole, " + std::to_string(missed_as_written) +
+        " only pieces thinner than the rounding of their coordinates besides one)");
   }
 
   void leaf_finished() {
@@ -214,7 +225,6 @@ class Builder {
   const TreeRecipe& recipe() const { return recipe_; }
   const PlaneInput& plane_input() const { return *plane_input_; }
   std::uint64_t planes_missed() const { return planes_missed_; }
-  std::uint64_t planes_rejected() const { return planes_rejected_; }
 
  private:
   const TreeRecipe& recipe_;  // what to build
@@ -223,7 +233,7 @@ class Builder {
   std::atomic<std::size_t> leaves_done_{0};
   // Counted from every worker; cut() is const because it is a pure function of
   // its node, and these tallies never feed back into a decision.
-  mutable std::atomic<std::uint64_t> planes_missed_{0}, planes_rejected_{0};
+  mutable std::atomic<std::uint64_t> planes_missed_{0};
 };
 
 // --- budgets: thesis and axis ---------------------------------------------------
@@ -312,6 +322,7 @@ void undo_surplus_cuts(BuildNode& root, std::uint32_t target) {
     if (!last_cut || leaves - spent < target) continue;
     node.children.clear();
     node.plane = {};
+    node.vanished_pieces = 0, node.vanished_volume = 0, node.vanished_volume_bound = 0;
     leaves -= spent;
   }
 }
@@ -359,6 +370,7 @@ void grow_balanced(Builder& builder, BuildNode& root, std::uint32_t target, unsi
   for (const auto& [node, order] : leaves) {
     node->children.clear();
     node->plane = {};
+    node->vanished_pieces = 0, node->vanished_volume = 0, node->vanished_volume_bound = 0;
     builder.leaf_finished();
   }
 }
@@ -450,6 +462,20 @@ void number_tree(BuildNode& root, MeshTree& tree) {
   }
 }
 
+// The pieces that vanished in the cuts the tree keeps, with their volume and its
+// bound, summed in preorder (so the doubles add up alike on every run).
+void count_vanished(const BuildNode& root, BuildReport& report) {
+  std::vector<const BuildNode*> stack{&root};
+  while (!stack.empty()) {
+    const BuildNode* node = stack.back();
+    stack.pop_back();
+    report.pieces_vanished += node->vanished_pieces;
+    report.vanished_volume += node->vanished_volume;
+    report.vanished_volume_bound += node->vanished_volume_bound;
+    for (auto child = node->children.rbegin(); child != node->children.rend(); ++child) stack.push_back(child->get());
+  }
+}
+
 // Frees a built tree without deep recursion (a chain of cuts can be long).
 void dismantle(std::unique_ptr<BuildNode> root) {
   std::vector<std::unique_ptr<BuildNode>> stack;
@@ -534,12 +560,12 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
   MeshTree tree;
   tree.recipe = recipe;
   tree.shatter_version = std::string(version_string);
+  BuildReport timing;
+  count_vanished(*root, timing);
   number_tree(*root, tree);
   dismantle(std::move(root));
-  BuildReport timing;
   timing.cutting_seconds = seconds_since(phase_start);
   timing.planes_missed = builder.planes_missed();
-  timing.planes_rejected = builder.planes_rejected();
   // The input points and planes the nodes' exact solids are defined over, beside
   // the cut planes number_tree stored.
   tree.geometry = builder.plane_input().geometry;

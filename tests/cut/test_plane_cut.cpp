@@ -250,3 +250,34 @@ TEST_CASE("a cavity's corner on the cut: the piece around it is written, the cor
     CHECK(tally.separated == 2);
   }
 }
+
+TEST_CASE("a plane misses as written when every piece but one vanishes", "[plane][cut]") {
+  // A plane through the corner (1, -1, 1) of the cube up to rounding cuts off a
+  // tetrahedron far thinner than an ulp: it vanishes, and as written the plane
+  // does not cut the cube (the mesh tree builder redraws such a plane, and no
+  // other). With a second box on the tetrahedron's side, the same plane parts two
+  // solids that do not vanish: it cuts, and the tetrahedron is simply no piece of
+  // what is written.
+  const Plane plane{{-0.51784138889905429, 0.87762787624213567, -0.40292203608095672}, 1.7983913012221466};
+  const Mesh cube = read_mesh(mesh_dir() / "cube.off");
+  const PlaneCut alone = cut_mesh_by_plane(cube, plane);
+  REQUIRE_FALSE(alone.plane_missed);
+  REQUIRE(alone.pieces.size() == 2);
+  CHECK(std::count_if(alone.pieces.begin(), alone.pieces.end(), [](const CutPiece& p) { return p.vanished; }) == 1);
+  CHECK(alone.misses_as_written());
+  Tally tally;
+  check_cut(cube, plane, tally);
+  CHECK(tally.vanished == 1);
+
+  const Mesh two = merge({cube, box({9, -11, 9}, {11, -9, 11})});
+  const PlaneCut parted = cut_mesh_by_plane(two, plane);
+  REQUIRE(parted.pieces.size() == 3);
+  CHECK(std::count_if(parted.pieces.begin(), parted.pieces.end(), [](const CutPiece& p) { return p.vanished; }) == 1);
+  CHECK_FALSE(parted.misses_as_written());
+  check_cut(two, plane, tally);
+  CHECK(tally.vanished == 2);
+  // A plane that misses exactly misses as written too.
+  const PlaneCut away = cut_mesh_by_plane(cube, {{1, 0, 0}, 5});
+  CHECK(away.plane_missed);
+  CHECK(away.misses_as_written());
+}

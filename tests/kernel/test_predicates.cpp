@@ -235,3 +235,119 @@ TEST_CASE("orient3d is exact at huge and tiny magnitudes, and says when it needs
   CHECK(orient3d({0, 0, 0}, {1e-320, 0, 0}, {0, 1e-320, 0}, {0, 0, 1e-320}) == Sign::positive);
   CHECK(orient3d({0, 0, 0}, {1e-320, 0, 0}, {0, 1e-320, 0}, {0, 0, -1e-320}) == Sign::negative);
 }
+
+namespace {
+
+// A lattice frame around an integer axis d: e1 = a lattice vector perpendicular
+// to d, e2 = d x e1, so (e1, e2, d) is right-handed and x e1 + y e2 + t d turns
+// counter-clockwise seen from +d as the angle of (x, y) grows. Every point built
+// from small integers times a dyadic scale is exact in doubles.
+struct Frame {
+  Vec3 origin, d, e1, e2;
+  Vec3 at(double x, double y, double t, double scale) const {
+    return origin + (e1 * x + e2 * y + d * t) * scale;
+  }
+};
+
+Frame lattice_frame(Random& random) {
+  const auto small = [&] { return double(random.index(7)) - 3; };
+  Vec3 d;
+  while (d.x == 0 && d.y == 0 && d.z == 0) d = {small(), small(), small()};
+  // A vector perpendicular to d: d x (a non-parallel lattice vector).
+  Vec3 helper{1, 0, 0};
+  if (cross(d, helper).x == 0 && cross(d, helper).y == 0 && cross(d, helper).z == 0) helper = {0, 1, 0};
+  const Vec3 e1 = cross(d, helper);
+  return {Vec3{double(random.index(64)), double(random.index(64)), double(random.index(64))}, d, e1, cross(d, e1)};
+}
+
+// The quarter-turn class and exact comparison of the angles of integer (x, y).
+bool angle_less(const std::pair<long, long>& p, const std::pair<long, long>& q) {
+  const auto half = [](const std::pair<long, long>& v) { return v.second > 0 || (v.second == 0 && v.first > 0) ? 0 : 1; };
+  if (half(p) != half(q)) return half(p) < half(q);
+  return p.first * q.second - p.second * q.first > 0;
+}
+
+}  // namespace
+
+TEST_CASE("coplanar_orientation tells the sides of a line in a plane, exactly, in any plane") {
+  std::size_t same = 0, opposite = 0, on = 0;
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    Random random(seed);
+    for (int i = 0; i < 200; ++i) {
+      const Frame f = lattice_frame(random);
+      const double scale = std::ldexp(1.0, int(random.index(60)) - 30);
+      // Points of the plane spanned by e1 and d (t = 0 of e2), in plane coordinates.
+      const auto coordinate = [&] { return double(random.index(41)) - 20; };
+      const double px = coordinate(), pt = coordinate(), qx = coordinate(), qt = coordinate();
+      const double rx = coordinate(), rt = coordinate();
+      // Every fourth s on the line pq itself.
+      const double sx = i % 4 == 0 ? 2 * qx - px : coordinate(), st = i % 4 == 0 ? 2 * qt - pt : coordinate();
+      const auto cross2 = [](double ax, double at, double bx, double bt) { return ax * bt - at * bx; };
+      const double r_side = cross2(qx - px, qt - pt, rx - px, rt - pt);
+      if (r_side == 0) continue;  // p, q, r collinear: outside the precondition
+      const double s_side = cross2(qx - px, qt - pt, sx - px, st - pt);
+      const Sign expected = s_side == 0 ? Sign::zero : (r_side > 0) == (s_side > 0) ? Sign::positive : Sign::negative;
+      const Vec3 p = f.at(px, 0, pt, scale), q = f.at(qx, 0, qt, scale), r = f.at(rx, 0, rt, scale),
+                 s = f.at(sx, 0, st, scale);
+      REQUIRE(orient3d(p, q, r, s) == Sign::zero);  // the test's own premise
+      REQUIRE(coplanar_orientation(p, q, r, s) == expected);
+      same += expected == Sign::positive, opposite += expected == Sign::negative, on += expected == Sign::zero;
+    }
+  }
+  CHECK(same > 1000);
+  CHECK(opposite > 1000);
+  CHECK(on > 1000);
+}
+
+TEST_CASE("order_around_line orders points by their angle about a line, and refuses equal angles") {
+  std::size_t ordered = 0, refused = 0;
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    Random random(seed);
+    for (int i = 0; i < 100; ++i) {
+      const Frame f = lattice_frame(random);
+      const double scale = std::ldexp(1.0, int(random.index(60)) - 30);
+      const Vec3 a = f.at(0, 0, double(random.index(5)) - 2, scale);
+      const Vec3 b = f.at(0, 0, double(random.index(5)) + 3, scale);  // b - a along +d
+      // Directions (x, y) with distinct angles, at any height t along the line.
+      std::vector<std::pair<long, long>> directions;
+      const std::size_t k = 2 + random.index(7);
+      while (directions.size() < k) {
+        const std::pair<long, long> v{long(random.index(21)) - 10, long(random.index(21)) - 10};
+        if (v.first == 0 && v.second == 0) continue;
+        bool repeated = false;
+        for (const auto& w : directions) repeated |= v.first * w.second == v.second * w.first && (v.first * w.first + v.second * w.second) > 0;
+        if (!repeated) directions.push_back(v);
+      }
+      std::vector<Vec3> around;
+      for (const auto& v : directions) {
+        around.push_back(f.at(double(v.first), double(v.second), double(random.index(9)) - 4, scale));
+      }
+      // The expected order: by angle, starting at around[0].
+      std::vector<std::size_t> expected(k);
+      for (std::size_t j = 0; j < k; ++j) expected[j] = j;
+      std::sort(expected.begin(), expected.end(),
+                [&](std::size_t x, std::size_t y) { return angle_less(directions[x], directions[y]); });
+      std::rotate(expected.begin(), std::find(expected.begin(), expected.end(), std::size_t{0}), expected.end());
+      const std::optional<std::vector<std::size_t>> order = order_around_line(a, b, around);
+      REQUIRE(order.has_value());
+      REQUIRE(*order == expected);
+      // Turned the other way round the line, the order reverses (after the first).
+      const std::optional<std::vector<std::size_t>> reversed = order_around_line(b, a, around);
+      REQUIRE(reversed.has_value());
+      std::vector<std::size_t> back(expected.rbegin(), expected.rend() - 1);
+      back.insert(back.begin(), 0);
+      REQUIRE(*reversed == back);
+      ++ordered;
+      // A second point in the half-plane of one of them: equal angles, no order.
+      const std::size_t twin = random.index(k);
+      around.push_back(f.at(double(2 * directions[twin].first), double(2 * directions[twin].second), 1, scale));
+      REQUIRE_FALSE(order_around_line(a, b, around).has_value());
+      // A point on the line has no angle.
+      around.back() = f.at(0, 0, 7, scale);
+      REQUIRE_FALSE(order_around_line(a, b, around).has_value());
+      ++refused;
+    }
+  }
+  CHECK(ordered == 4000);
+  CHECK(refused == 4000);
+}

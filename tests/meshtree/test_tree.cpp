@@ -149,6 +149,7 @@ TreeRecipe recipe_for(std::uint32_t fragments, Strategy strategy, std::uint64_t 
 
 struct Built {
   MeshTree tree;
+  BuildReport report;  ///< of the build; pieces that vanished loosen check_plane's volume sums
 };
 
 // Known limitation (README, "The mesh tree"): with the axis strategy the 1e-6
@@ -190,7 +191,9 @@ class KnownRefusals {
 // returns nothing, so the other cases still run.
 std::optional<Built> try_build(const Case& c) {
   try {
-    return Built{build_mesh_tree(c.mesh->mesh, c.recipe, {.threads = c.threads})};
+    Built built;
+    built.tree = build_mesh_tree(c.mesh->mesh, c.recipe, {.threads = c.threads, .report = &built.report});
+    return built;
   } catch (const UnsupportedGeometryError& error) {
     if (may_run_out_of_planes(c) && KnownRefusals::active() != nullptr) {
       KnownRefusals::active()->add(describe(c) + ": " + error.what());
@@ -695,7 +698,7 @@ void check_nodes(const MeshTree& tree, const Mesh& input, Level level) {
 // add up exactly: check_plane). Rounding moves a cut point by at
 // most half an ulp of its coordinates; far from the origin that can exceed 1e-9 of
 // a small fragment's volume, so the bound also allows surface area x 2 ulps.
-void check_rounded_volumes(const MeshTree& tree) {
+void check_rounded_volumes(const MeshTree& tree, const BuildReport& report) {
   Problems problems(tree, "children's volumes do not sum to the parent's (1e-9 relative, plus area x 2 ulps)");
   std::vector<CGAL::Mpzf> six;
   six.reserve(tree.nodes.size());
@@ -709,7 +712,9 @@ void check_rounded_volumes(const MeshTree& tree) {
     const double difference = std::fabs((total - six[v]).to_double());
     const double rounding = 2 * std::numeric_limits<double>::epsilon() * largest_coordinate(node.mesh) *
                             surface_area(node.mesh);
-    if (!(difference <= 1e-9 * std::fabs(parent) + 6 * rounding)) {  // six: volumes here are 6x
+    // Pieces that vanished moved at most their reported bound.
+    const double vanished = 6 * report.vanished_volume_bound;
+    if (!(difference <= 1e-9 * std::fabs(parent) + 6 * rounding + vanished)) {  // six: volumes here are 6x
       problems.add(v, "children " + num(total.to_double() / 6) + " vs parent " + num(parent / 6) + " (relative " +
                           num(difference / std::fabs(parent)) + ")");
     }
@@ -723,7 +728,7 @@ void check_rounded_volumes(const MeshTree& tree) {
 // mesh (deterministically), is convex exactly when marked so; children's exact
 // volumes sum exactly to the parent's, the leaves' to the input's. `exact_volumes`
 // off skips the rational volumes (the largest trees).
-void check_plane(const MeshTree& tree, const Mesh& input, bool exact_volumes) {
+void check_plane(const MeshTree& tree, const Mesh& input, bool exact_volumes, const BuildReport& report) {
   REQUIRE(tree.cut_planes.size() == tree.nodes.size());
   const PlaneSet set = tree.plane_set();
   Problems sound(tree, "exact solid not sound (check_solid)");
@@ -773,13 +778,28 @@ void check_plane(const MeshTree& tree, const Mesh& input, bool exact_volumes) {
     for (const auto& [kind, text] : found[v]) kinds[static_cast<std::size_t>(kind)]->add(v, text);
   }
   if (exact_volumes) {
+    mpq_class vanished_six = 0;
     if (six[0] != exact_six_volume(input)) volumes.add(0, "the root's exact volume is not the input's");
     for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
       const MeshTreeNode& node = tree.nodes[v];
       if (node.is_leaf()) continue;
       mpq_class total = 0;
       for (const NodeIndex c : node.children) total += six[c];
-      if (total != six[v]) volumes.add(v, "children " + num(total.get_d() / 6) + " vs parent " + num(six[v].get_d() / 6));
+      // Pieces thinner than their rounding vanish (no children): then the
+      // children hold less than their parent, by what vanished.
+      if (total == six[v]) continue;
+      if (report.pieces_vanished > 0 && total < six[v]) {
+        vanished_six += six[v] - total;
+        continue;
+      }
+      volumes.add(v, "children " + num(total.get_d() / 6) + " vs parent " + num(six[v].get_d() / 6));
+    }
+    // What vanished is what the build reports, within the bound it reports.
+    const double vanished = mpq_class(vanished_six / 6).get_d();
+    if (!(std::fabs(vanished - report.vanished_volume) <= 1e-9 * report.vanished_volume) ||
+        !(report.vanished_volume <= report.vanished_volume_bound)) {
+      volumes.add(0, "vanished volume " + num(vanished) + ", reported " + num(report.vanished_volume) + " within " +
+                         num(report.vanished_volume_bound));
     }
   }
   for (const Problems* p : {&sound, &sides, &caps, &rounding, &convexity, &volumes}) expect_none(*p);
@@ -871,9 +891,9 @@ void check_tree(const Case& c, const Built& built) {
   timer.lap("structure");
   check_nodes(tree, input, c.level);
   timer.lap("nodes");
-  check_rounded_volumes(tree);
+  check_rounded_volumes(tree, built.report);
   timer.lap("volumes");
-  check_plane(tree, input, c.level == Level::full);
+  check_plane(tree, input, c.level == Level::full, built.report);
   timer.lap("exact");
   check_cover(tree);
   check_bonds(tree);
@@ -1227,12 +1247,14 @@ TEST_CASE("self-intersecting input: refused by default, closed and oriented piec
 
 TEST_CASE("planes that keep failing end in UnsupportedGeometryError", "[tree][build][errors]") {
   // A plane through the centroid always has volume on both sides, so it cannot
-  // miss a solid; what keeps failing is a solid thinner than rounding. This
-  // tetrahedron is one ulp on a side (2^-32 at 2^20): every crossing point rounds
-  // onto a corner of its ulp grid, so nearly every piece is degenerate as
-  // rounded for storage. The builder certifies each rounding and tries other
-  // planes; now and then one gives pieces that round validly (cut points landing
-  // on the grid), and then the tree must pass every check.
+  // miss a solid exactly; a solid thinner than rounding can make it miss as
+  // written. This tetrahedron is one ulp on a side (2^-32 at 2^20): every
+  // crossing point rounds onto a corner of its ulp grid, so nearly every piece
+  // is thinner than its rounding and vanishes. A plane that leaves fewer than two
+  // pieces that do not vanish misses the node (PlaneCut::misses_as_written) and
+  // is redrawn, up to max_plane_tries; a piece that could not be written would
+  // fail the build at once. Now and then a plane gives pieces that round validly
+  // (cut points landing on the grid), and then the tree must pass every check.
   const double base = 1048576.0, ulp = 0x1p-32;
   const Mesh tiny = mesh_from({{base, base, base}, {base + ulp, base, base}, {base, base + ulp, base}, {base, base, base + ulp}},
                               {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}});
@@ -1246,9 +1268,10 @@ TEST_CASE("planes that keep failing end in UnsupportedGeometryError", "[tree][bu
       recipe.max_plane_tries = tries;
       INFO(strategy_name(strategy) << " max_plane_tries " << tries);
       try {
-        const MeshTree tree = build_mesh_tree(tiny, recipe);
+        BuildReport report;
+        const MeshTree tree = build_mesh_tree(tiny, recipe, {.report = &report});
         const TestMesh named{"tiny tetrahedron", tiny, true};
-        check_tree({&named, recipe, Level::full, false}, Built{tree});
+        check_tree({&named, recipe, Level::full, false}, Built{tree, report});
         ++built_count;
       } catch (const UnsupportedGeometryError& error) {
         // A clear message: it names the number of planes tried.

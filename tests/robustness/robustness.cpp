@@ -164,10 +164,13 @@ std::string describe(const Plane& p) {
 // The rounded meshes' volume promise: the pieces' volumes sum to the parent's
 // within 1e-9 relative, plus what rounding each cut point by half an ulp of the
 // largest coordinate can move across the surface (matters far from the origin).
-bool rounded_volumes_add_up(const mpq_class& parent_six, const mpq_class& pieces_six, const Mesh& parent) {
+// `vanished_bound`: the most that pieces thinner than their rounding took with
+// them when they vanished (BuildReport::vanished_volume_bound), 0 for a slice.
+bool rounded_volumes_add_up(const mpq_class& parent_six, const mpq_class& pieces_six, const Mesh& parent,
+                            double vanished_bound = 0) {
   const double difference = std::fabs(mpq_class(pieces_six - parent_six).get_d());
   const double rounding = 2 * std::numeric_limits<double>::epsilon() * test::largest_coordinate(parent) * test::surface_area(parent);
-  return difference <= 1e-9 * std::fabs(parent_six.get_d()) + 6 * rounding;
+  return difference <= 1e-9 * std::fabs(parent_six.get_d()) + 6 * rounding + 6 * vanished_bound;
 }
 
 // Attribute channels survive a cut: present in every piece exactly when present
@@ -483,7 +486,8 @@ struct Checker {
   }
 
   void fracture() {
-    const MeshTree tree = build_mesh_tree(c.mesh, c.recipe, {.threads = 1});
+    BuildReport report;
+    const MeshTree tree = build_mesh_tree(c.mesh, c.recipe, {.threads = 1, .report = &report});
     if (tree.leaf_count() < c.recipe.fragments) fail("fewer leaves than fragments asked for");
     // Links, leaf ranges, meshes' indices, bonds, the exact representation: the
     // rest of this check indexes through them.
@@ -497,13 +501,15 @@ struct Checker {
       if (std::string p = test::solid_problem(mesh); !p.empty()) fail("node " + std::to_string(v) + ": " + p);
       six.push_back(test::exact_six_volume(mesh));
     }
-    check_exact_solids(tree);
+    check_exact_solids(tree, report);
     for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
       const MeshTreeNode& node = tree.nodes[v];
       if (node.is_leaf()) continue;
       mpq_class total = 0;
       for (NodeIndex child : node.children) total += six[child];
-      if (!rounded_volumes_add_up(six[v], total, node.mesh)) fail("node " + std::to_string(v) + ": children's volumes");
+      if (!rounded_volumes_add_up(six[v], total, node.mesh, report.vanished_volume_bound)) {
+        fail("node " + std::to_string(v) + ": children's volumes");
+      }
     }
     // Every leaf written as `shatter fracture --export` writes it, read back and
     // validated.
@@ -520,8 +526,10 @@ struct Checker {
 
   // Every node's exact solid sound over the tree's plane set, its stored mesh
   // valid with self-intersections checked, and the children's exact volumes
-  // summing to their parent's exactly (the root's being the input's).
-  void check_exact_solids(const MeshTree& tree) {
+  // summing to their parent's exactly (the root's being the input's), but for
+  // pieces that vanished: then to less, by the volume the build reports within
+  // its bound.
+  void check_exact_solids(const MeshTree& tree, const BuildReport& build) {
     if (tree.cut_planes.size() != tree.nodes.size()) {
       fail("tree with " + std::to_string(tree.cut_planes.size()) + " cut planes for " +
            std::to_string(tree.nodes.size()) + " nodes");
@@ -543,6 +551,7 @@ struct Checker {
       if (!report.valid()) fail(name + ": stored mesh invalid: " + report.summary());
     }
     if (six[0] && *six[0] != test::exact_six_volume(c.mesh)) fail("root: exact volume is not the input's");
+    mpq_class vanished_six = 0;
     for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
       const MeshTreeNode& node = tree.nodes[v];
       if (node.is_leaf() || !six[v]) continue;
@@ -552,8 +561,20 @@ struct Checker {
         if (six[child]) total += *six[child];
         known = known && six[child].has_value();
       }
-      if (known && total != *six[v]) fail("node " + std::to_string(v) + ": children's exact volumes");
+      if (!known || total == *six[v]) continue;
+      if (build.pieces_vanished > 0 && total < *six[v]) {
+        vanished_six += *six[v] - total;
+      } else {
+        fail("node " + std::to_string(v) + ": children's exact volumes");
+      }
     }
+    const double vanished = mpq_class(vanished_six / 6).get_d();
+    if (!(std::fabs(vanished - build.vanished_volume) <= 1e-9 * build.vanished_volume) ||
+        !(build.vanished_volume <= build.vanished_volume_bound)) {
+      fail("the tree's vanished volume " + std::to_string(vanished) + " is not the reported " +
+           std::to_string(build.vanished_volume) + " within its bound " + std::to_string(build.vanished_volume_bound));
+    }
+    outcome.plane_vanished += build.pieces_vanished;
   }
 };
 

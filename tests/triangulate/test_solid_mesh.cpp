@@ -410,6 +410,7 @@ TEST_CASE("round_solid: parts rounding breaks are repaired, or the piece vanishe
   CHECK(tally.collapsed > 0);
   CHECK(tally.separated > 0);
   // What is left unrepaired: folds of thick pieces against a nearly coplanar
-  // face, a ceiling measured 2026-12-03.
-  CHECK(tally.refused <= 20);
+  // face, a ceiling measured 2026-12-03 (20 before round_solid untangled
+  // non-manifold edges and routed edges through corners carried across them).
+  CHECK(tally.refused <= 14);
 }

@@ -286,7 +286,9 @@ bool triangulate_merged_face(const PlaneSet& set, const SolidFace& face,
 //    it then runs forth and back along them, and its neighbours on both sides
 //    share vertices again.
 // 2. Spikes x -> y -> x (an edge run forth and back) are removed, repeatedly:
-//    they enclose nothing. A loop left with fewer than 3 corners vanishes.
+//    they enclose nothing. A loop left with fewer than 3 corners vanishes. Two
+//    loops of a face that run one edge both ways (a hole rounded against the
+//    outer loop) are joined across it: the edge bounds the face on neither side.
 // 3. A loop through one vertex twice (two parts that rounding made touch) is
 //    split there into simple loops, each triangulated on its own; the vertex is
 //    then pinched, which the separation below handles.
@@ -308,6 +310,58 @@ bool strictly_inside_segment(const Vec3& a, const Vec3& b, const Vec3& v) {
     if (lo < hi) return lo < v.*get && v.*get < hi;
   }
   return false;  // a == b
+}
+
+// Step 2's spikes: x -> y -> x (an edge run forth and back) and repeated
+// corners, removed until none is left.
+void remove_spikes(std::vector<VertexIndex>& loop) {
+  bool changed = true;
+  while (changed && loop.size() >= 3) {
+    changed = false;
+    for (std::size_t i = 0; i < loop.size() && loop.size() >= 3; ++i) {
+      const std::size_t k = loop.size();
+      if (loop[i] == loop[(i + 2) % k]) {
+        // x y x: drop y and the second x.
+        const std::size_t y = (i + 1) % k, x2 = (i + 2) % k;
+        loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(std::max(y, x2)));
+        loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(std::min(y, x2)));
+        changed = true;
+      } else if (loop[i] == loop[(i + 1) % k]) {
+        loop.erase(loop.begin() + static_cast<std::ptrdiff_t>((i + 1) % k));
+        changed = true;
+      }
+    }
+  }
+}
+
+// Step 2's edges run both ways: when one loop of a face runs a -> b and another
+// runs b -> a (a hole that rounding laid against the outer loop, or two holes
+// against each other), the two edges bound the face's region on no side, as a
+// spike does, and cancel: the loops are joined into one across them (the face's
+// region, as the sum of its oriented loops, is unchanged). Joins the first such
+// pair; returns whether it found one.
+bool join_at_antiparallel_edge(std::vector<std::vector<VertexIndex>>& face) {
+  for (std::size_t p = 0; p < face.size(); ++p) {
+    const std::vector<VertexIndex>& first = face[p];
+    for (std::size_t i = 0; i < first.size(); ++i) {
+      const VertexIndex a = first[i], b = first[(i + 1) % first.size()];
+      for (std::size_t q = 0; q < face.size(); ++q) {
+        if (q == p) continue;
+        const std::vector<VertexIndex>& second = face[q];
+        for (std::size_t j = 0; j < second.size(); ++j) {
+          if (second[j] != b || second[(j + 1) % second.size()] != a) continue;
+          // first from b round to a, then second from a round to just before b.
+          std::vector<VertexIndex> joined;
+          for (std::size_t k = 0; k < first.size(); ++k) joined.push_back(first[(i + 1 + k) % first.size()]);
+          for (std::size_t k = 1; k + 1 < second.size(); ++k) joined.push_back(second[(j + 1 + k) % second.size()]);
+          face[p] = std::move(joined);
+          face.erase(face.begin() + static_cast<std::ptrdiff_t>(q));
+          return true;
+        }
+      }
+    }
+  }
+  return false;
 }
 
 // Steps 1 to 3 on every face's loops (over representatives, consecutive repeats
@@ -348,27 +402,15 @@ void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vecto
       loop = std::move(out);
     }
   }
-  // 2. Spikes, and 3. loops through a vertex twice.
+  // 2. Spikes, edges run both ways by two loops, and 3. loops through a vertex twice.
   for (auto& face : loops) {
+    for (bool again = true; again;) {
+      for (auto& loop : face) remove_spikes(loop);
+      std::erase_if(face, [](const std::vector<VertexIndex>& loop) { return loop.size() < 3; });
+      again = join_at_antiparallel_edge(face);
+    }
     std::vector<std::vector<VertexIndex>> simple;
     for (auto& loop : face) {
-      bool changed = true;
-      while (changed && loop.size() >= 3) {
-        changed = false;
-        for (std::size_t i = 0; i < loop.size() && loop.size() >= 3; ++i) {
-          const std::size_t k = loop.size();
-          if (loop[i] == loop[(i + 2) % k]) {
-            // x y x: drop y and the second x.
-            const std::size_t y = (i + 1) % k, x2 = (i + 2) % k;
-            loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(std::max(y, x2)));
-            loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(std::min(y, x2)));
-            changed = true;
-          } else if (loop[i] == loop[(i + 1) % k]) {
-            loop.erase(loop.begin() + static_cast<std::ptrdiff_t>((i + 1) % k));
-            changed = true;
-          }
-        }
-      }
       if (loop.size() < 3) continue;
       // Split at the first repeated vertex until none is left.
       std::vector<std::vector<VertexIndex>> pending{std::move(loop)};
@@ -396,6 +438,228 @@ void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vecto
   }
 }
 
+// Step 1 for a vertex that rounding carried across an edge of its own face:
+// snap rounding routes a segment through every hot pixel it passes (Hobby 1999;
+// Guibas & Marimont 1998, "Rounding arrangements dynamically"), so that no
+// vertex ends up on the wrong side of a segment; here, in the plane of each face
+// (its exact projection), a corner v of the face lies strictly on one side of
+// the line of an edge (a, b) of the face in exact arithmetic (placed points) and
+// strictly on the other on the rounded doubles, and lies between a and b along
+// the edge (exactly, on the doubles): the edge is routed through v, in every
+// loop that has it (the face across the edge too), and step 2 then removes the
+// spike or splits the loop where it passes v twice. Positions do not change;
+// certification vouches for the result. Only corners within 2^-30 of the
+// coordinates' magnitude of the edge's box are tested: rounding moves a point by
+// at most 2^-40 of its magnitude or 64 ulps when snapped (output_position), so
+// no farther corner can have changed side. Returns whether any edge changed.
+bool route_edges_through_crossed_corners(const PlaneSet& set, const Solid& solid, std::span<const PointDef> placed,
+                                         std::span<const Vec3> positions,
+                                         std::vector<std::vector<std::vector<VertexIndex>>>& loops) {
+  std::vector<std::optional<ExactPoint>> exact(positions.size());
+  const auto exact_of = [&](VertexIndex v) -> const ExactPoint& {
+    if (!exact[v]) exact[v] = exact_point(set, placed[v]);
+    return *exact[v];
+  };
+  // Edge (a, b) as a directed key -> the corners to route it through.
+  std::unordered_map<std::uint64_t, std::vector<VertexIndex>> through;
+  const auto key = [](VertexIndex a, VertexIndex b) { return (std::uint64_t{a} << 32) | b; };
+  for (std::uint32_t f = 0; f < loops.size(); ++f) {
+    const Projection projection = projection_of(set, solid.faces[f].plane);
+    const int u = (projection.axis + 1) % 3, w = (projection.axis + 2) % 3;
+    const PlaneProjection kept{u, w};
+    std::vector<VertexIndex> corners;
+    for (const auto& loop : loops[f]) corners.insert(corners.end(), loop.begin(), loop.end());
+    for (const auto& loop : loops[f]) {
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const VertexIndex a = loop[i], b = loop[(i + 1) % loop.size()];
+        const Vec3 &pa = positions[a], &pb = positions[b];
+        double magnitude = 0;
+        for (int k = 0; k < 3; ++k) magnitude = std::max({magnitude, std::fabs(pa[k]), std::fabs(pb[k])});
+        const double margin = std::ldexp(magnitude, -30);
+        for (const VertexIndex v : corners) {
+          if (v == a || v == b) continue;
+          const Vec3& pv = positions[v];
+          bool near = true;
+          for (int k = 0; k < 3; ++k) {
+            near = near && pv[k] >= std::min(pa[k], pb[k]) - margin && pv[k] <= std::max(pa[k], pb[k]) + margin;
+          }
+          if (!near) continue;
+          const Sign rounded = orient2d(kept(pa), kept(pb), kept(pv));
+          if (rounded == Sign::zero) continue;  // on the line: step 1's case
+          const Sign before = orientation_in_projection(kept, exact_of(a), exact_of(b), exact_of(v));
+          if (before == Sign::zero || before == rounded) continue;
+          // Strictly between a and b along the edge: (v - a).(b - a) > 0 and (v - b).(a - b) > 0, exactly.
+          mpq_class along_a = 0, along_b = 0;
+          for (int k = 0; k < 3; ++k) {
+            along_a += (mpq_class(pv[k]) - pa[k]) * (mpq_class(pb[k]) - pa[k]);
+            along_b += (mpq_class(pv[k]) - pb[k]) * (mpq_class(pa[k]) - pb[k]);
+          }
+          if (sgn(along_a) > 0 && sgn(along_b) > 0) through[key(a, b)].push_back(v);
+        }
+      }
+    }
+  }
+  if (through.empty()) return false;
+  // Both directions of an edge take the same corners, in order along it (by the
+  // square of the distance from its start, exactly on the doubles).
+  for (auto& face : loops) {
+    for (auto& loop : face) {
+      std::vector<VertexIndex> out;
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const VertexIndex a = loop[i], b = loop[(i + 1) % loop.size()];
+        out.push_back(a);
+        std::vector<VertexIndex> inside;
+        for (const std::uint64_t k : {key(a, b), key(b, a)}) {
+          if (const auto it = through.find(k); it != through.end()) inside.insert(inside.end(), it->second.begin(), it->second.end());
+        }
+        if (inside.empty()) continue;
+        std::sort(inside.begin(), inside.end());
+        inside.erase(std::unique(inside.begin(), inside.end()), inside.end());
+        const Vec3& pa = positions[a];
+        const auto distance = [&](VertexIndex v) {
+          mpq_class d = 0;
+          for (int k = 0; k < 3; ++k) d += (mpq_class(positions[v][k]) - pa[k]) * (mpq_class(positions[v][k]) - pa[k]);
+          return d;
+        };
+        std::stable_sort(inside.begin(), inside.end(), [&](VertexIndex x, VertexIndex y) { return distance(x) < distance(y); });
+        out.insert(out.end(), inside.begin(), inside.end());
+      }
+      loop = std::move(out);
+    }
+  }
+  return true;
+}
+
+// Step 2 for faces that rounding laid onto each other: a part thinner than the
+// rounding between two faces that face opposite ways (a slab between a cap and
+// an input face ulps from it) rounds onto one plane, and if the two faces' loops
+// then share their vertices they overlap as a two-sided sheet, but are
+// triangulated differently, so no two triangles cancel. As 2-chains on the common
+// plane the faces add up to their difference, whose boundary is the sum of their
+// loops as traversed, in which an edge run both ways cancels: so faces that share
+// an edge run both ways, all of whose rounded corners lie exactly on one plane
+// (orient3d zero) and of which two face opposite ways, are merged into one face
+// over the loops left once those edges cancel (join_at_antiparallel_edge, spikes,
+// splits). It faces the way of the member whose outward side its loops turn
+// counter-clockwise about (the exact signed area of the loops on the doubles, in
+// that member's projection), and is written as that member; when nothing is left
+// the sheet vanishes whole. `emit_as[f]`: the face whose description face f's
+// triangles take, or no_index when f is merged into another. Returns whether
+// any faces were merged.
+bool merge_coplanar_sheets(const PlaneSet& set, const Solid& solid, std::span<const Vec3> positions,
+                           std::vector<std::vector<std::vector<VertexIndex>>>& loops,
+                           std::vector<std::uint8_t>& changed, std::vector<std::uint32_t>& emit_as) {
+  const auto count = static_cast<std::uint32_t>(loops.size());
+  emit_as.resize(count);
+  for (std::uint32_t f = 0; f < count; ++f) emit_as[f] = f;
+  std::unordered_map<std::uint64_t, std::uint32_t> face_of_edge;
+  const auto key = [](VertexIndex a, VertexIndex b) { return (std::uint64_t{a} << 32) | b; };
+  for (std::uint32_t f = 0; f < count; ++f) {
+    for (const auto& loop : loops[f]) {
+      for (std::size_t i = 0; i < loop.size(); ++i) face_of_edge[key(loop[i], loop[(i + 1) % loop.size()])] = f;
+    }
+  }
+  // Three corners of a face's loops that are not collinear on the doubles.
+  const auto frame = [&](std::uint32_t f) -> std::optional<std::array<VertexIndex, 3>> {
+    std::vector<VertexIndex> corners;
+    for (const auto& loop : loops[f]) corners.insert(corners.end(), loop.begin(), loop.end());
+    if (corners.size() < 3) return std::nullopt;
+    const Vec3 &a = positions[corners[0]];
+    for (std::size_t j = 1; j < corners.size(); ++j) {
+      for (std::size_t k = j + 1; k < corners.size(); ++k) {
+        const Vec3 &b = positions[corners[j]], &c = positions[corners[k]];
+        if (orient2d({a.x, a.y}, {b.x, b.y}, {c.x, c.y}) != Sign::zero ||
+            orient2d({a.y, a.z}, {b.y, b.z}, {c.y, c.z}) != Sign::zero ||
+            orient2d({a.z, a.x}, {b.z, b.x}, {c.z, c.x}) != Sign::zero) {
+          return std::array<VertexIndex, 3>{corners[0], corners[j], corners[k]};
+        }
+      }
+    }
+    return std::nullopt;
+  };
+  const auto on_plane_of = [&](const std::array<VertexIndex, 3>& t, std::uint32_t g) {
+    for (const auto& loop : loops[g]) {
+      for (const VertexIndex v : loop) {
+        if (orient3d(positions[t[0]], positions[t[1]], positions[t[2]], positions[v]) != Sign::zero) return false;
+      }
+    }
+    return true;
+  };
+  // Outward normals of two faces point the same way (exactly).
+  const auto same_facing = [&](std::uint32_t f, std::uint32_t g) {
+    const bool same_plane = compare_normals(set, solid.faces[f].plane, solid.faces[g].plane) == Sign::positive;
+    return same_plane == (solid.faces[f].reversed == solid.faces[g].reversed);
+  };
+  UnionFind groups;
+  groups.reset(count);
+  std::vector<std::optional<std::array<VertexIndex, 3>>> frames(count);
+  std::vector<std::uint8_t> framed(count, 0), opposite(count, 0);
+  bool any = false;
+  for (std::uint32_t f = 0; f < count; ++f) {
+    for (const auto& loop : loops[f]) {
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const auto it = face_of_edge.find(key(loop[(i + 1) % loop.size()], loop[i]));
+        if (it == face_of_edge.end()) continue;
+        const std::uint32_t g = it->second;
+        if (g == f || groups.find(f) == groups.find(g)) continue;
+        if (!framed[f]) frames[f] = frame(f), framed[f] = 1;
+        if (!frames[f] || !on_plane_of(*frames[f], g)) continue;
+        const std::uint32_t rf = groups.find(f), rg = groups.find(g);
+        const bool flips = !same_facing(f, g);
+        groups.unite(f, g);
+        opposite[groups.find(f)] = opposite[rf] || opposite[rg] || flips;
+        any = true;
+      }
+    }
+  }
+  if (!any) return false;
+  bool merged_any = false;
+  std::vector<std::vector<std::uint32_t>> members(count);
+  for (std::uint32_t f = 0; f < count; ++f) members[groups.find(f)].push_back(f);
+  for (std::uint32_t root = 0; root < count; ++root) {
+    const std::vector<std::uint32_t>& group = members[root];
+    if (group.size() < 2 || !opposite[root]) continue;
+    std::vector<std::vector<VertexIndex>> sum;
+    for (const std::uint32_t f : group) sum.insert(sum.end(), loops[f].begin(), loops[f].end());
+    for (bool again = true; again;) {
+      for (auto& loop : sum) remove_spikes(loop);
+      std::erase_if(sum, [](const std::vector<VertexIndex>& loop) { return loop.size() < 3; });
+      again = join_at_antiparallel_edge(sum);
+    }
+    // Twice the signed area of the loops in face f's projection, seen from its outside.
+    const auto area_seen_from = [&](std::uint32_t f) {
+      const Projection projection = projection_of(set, solid.faces[f].plane);
+      const int u = (projection.axis + 1) % 3, w = (projection.axis + 2) % 3;
+      mpq_class twice = 0;
+      for (const auto& loop : sum) {
+        for (std::size_t i = 0; i < loop.size(); ++i) {
+          const Vec3 &p = positions[loop[i]], &q = positions[loop[(i + 1) % loop.size()]];
+          twice += mpq_class(p[u]) * q[w] - mpq_class(q[u]) * p[w];
+        }
+      }
+      return (projection.flipped != solid.faces[f].reversed) ? mpq_class(-twice) : twice;
+    };
+    std::uint32_t as = no_index;
+    for (const std::uint32_t f : group) {
+      if (sgn(area_seen_from(f)) > 0) {
+        as = f;
+        break;
+      }
+    }
+    const std::uint32_t first = group.front();
+    for (const std::uint32_t f : group) {
+      emit_as[f] = no_index;
+      loops[f].clear();
+    }
+    merged_any = true;
+    if (as == no_index) continue;  // nothing left, or nothing facing one way: the sheet vanishes
+    emit_as[first] = as;
+    loops[first] = std::move(sum);
+    changed[first] = 1;
+  }
+  return merged_any;
+}
+
 // Steps 1 and 2 (see solid_mesh.hpp): positions, vertices merged where they
 // rounded onto one point, faces triangulated.
 // `repair_loops`: repair the loops of faces over merged vertices
@@ -404,7 +668,7 @@ void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vecto
 // written as before.
 void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options, std::size_t attempt,
                  Mesh& mesh, std::size_t& merged, std::vector<VertexIndex>* mesh_vertex_of = nullptr,
-                 bool repair_loops = false) {
+                 bool repair_loops = false, bool route_crossed = false) {
   const std::size_t n = solid.defs.size();
   thread_local std::vector<Vec3> positions;
   thread_local std::vector<PointDef> placed;
@@ -454,6 +718,8 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
   // vertex of another.
   thread_local std::vector<std::vector<std::vector<VertexIndex>>> repaired;
   thread_local std::vector<std::uint8_t> repaired_changed;
+  thread_local std::vector<std::uint32_t> emit_as;  // merge_coplanar_sheets
+  emit_as.clear();
   const bool repairing = repair_loops && merged > 0;
   if (repairing) {
     repaired.assign(solid.faces.size(), {});
@@ -493,11 +759,14 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
     // Only loops through a candidate, or along an edge it may lie in, can
     // change; a loop that changes marks its face.
     const auto before = repaired;
+    if (route_crossed) route_edges_through_crossed_corners(set, solid, placed, positions, repaired);
     repair_merged_loops(positions, repaired, candidates);
     for (std::uint32_t f = 0; f < solid.faces.size(); ++f) repaired_changed[f] |= repaired[f] != before[f];
+    if (route_crossed) merge_coplanar_sheets(set, solid, positions, repaired, repaired_changed, emit_as);
   }
   for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
-    const SolidFace& face = solid.faces[f];
+    if (repairing && route_crossed && emit_as[f] == no_index) continue;
+    const SolidFace& face = solid.faces[repairing && route_crossed ? emit_as[f] : f];
     face_triangles.clear();
     bool changed = false;
     if (repairing) {
@@ -623,7 +892,13 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
 // first of its reverse), with their surfaces and corner attributes, then the
 // vertices no triangle uses any more. Returns how many triangles went.
 // `renumbered`: each old vertex's new index (no_index when it went).
-std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumbered) {
+// `quads`: also remove two-sided sheets over four corners triangulated with the
+// two different diagonals, (a, b, c) + (a, c, d) one way and (a, d, b) + (b, d,
+// c) the other (a cap whose corners snapped onto those of two input triangles,
+// triangulated across the other diagonal): the four bound only the thin
+// tetrahedron between the two triangulations, and removing them keeps every
+// directed edge matched (their boundaries are a -> b -> c -> d and its reverse).
+std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumbered, bool quads = false) {
   const std::size_t count = mesh.triangles.size();
   // Key: the triangle rotated to start at its smallest index; its reverse is then
   // (a, c, b) for (a, b, c).
@@ -655,6 +930,44 @@ std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumb
         removed[t] = removed[*it] = 1;
         gone += 2;
         break;
+      }
+    }
+  }
+  if (quads) {
+    // Directed edge -> the triangles running it, among those left.
+    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> running;
+    const auto edge = [](VertexIndex a, VertexIndex b) { return (std::uint64_t{a} << 32) | b; };
+    for (std::uint32_t t = 0; t < count; ++t) {
+      if (removed[t]) continue;
+      for (int c = 0; c < 3; ++c) running[edge(mesh.triangles[t][c], mesh.triangles[t][(c + 1) % 3])].push_back(t);
+    }
+    const auto unremoved = [&](const Triangle& key) -> std::uint32_t {
+      for (auto it = find(rotated(key)); it != order.end() && keys[*it] == rotated(key); ++it) {
+        if (!removed[*it]) return *it;
+      }
+      return no_index;
+    };
+    for (std::uint32_t t = 0; t < count; ++t) {
+      for (int c = 0; c < 3 && !removed[t]; ++c) {
+        // t = (a, b, c) with the diagonal c -> a; its partner runs a -> c.
+        const VertexIndex a = mesh.triangles[t][c], b = mesh.triangles[t][(c + 1) % 3], cc = mesh.triangles[t][(c + 2) % 3];
+        const auto it = running.find(edge(a, cc));
+        if (it == running.end()) continue;
+        for (const std::uint32_t u : it->second) {
+          if (u == t || removed[u]) continue;
+          const Triangle& tu = mesh.triangles[u];
+          VertexIndex d = no_index;
+          for (int k = 0; k < 3; ++k) {
+            if (tu[k] != a && tu[k] != cc) d = tu[k];
+          }
+          if (d == no_index || d == b) continue;
+          const std::uint32_t q1 = unremoved({a, d, b});
+          const std::uint32_t q2 = unremoved({b, d, cc});
+          if (q1 == no_index || q2 == no_index || q1 == q2 || q1 == t || q1 == u || q2 == t || q2 == u) continue;
+          removed[t] = removed[u] = removed[q1] = removed[q2] = 1;
+          gone += 4;
+          break;
+        }
       }
     }
   }
@@ -790,12 +1103,96 @@ struct Separation {
   double volume_bound = 0;     ///< sum over moved copies of distance moved x area of their triangles
 };
 
+// --- Edges that rounding made non-manifold ---------------------------------------
+// A part of a piece thinner than the rounding can round onto an edge without
+// flattening into a sheet: a neck squeezed to a segment, or two walls of a
+// thin slot rounded onto one edge. The edge then has 2k triangles, k running it
+// each way. As where a piece touches itself at a point, the part thinner than
+// the rounding gives way: the triangles around the edge are paired in exact
+// angular order, each pair bounding one wedge of the solid, and each pair gets
+// its own copies of the edge's vertices (separate_touching), which then move a
+// hair into their own wedges. This is how exact boolean operations on
+// non-manifold input untangle an edge (CGAL's corefinement orders the faces
+// around an edge with sorted_around_edge and pairs each face with the next one
+// across the volume: Loriot, Tournois & Jamin, "Polygon Mesh Processing", CGAL
+// 5.5 manual, section "Corefinement and Boolean Operations"; Granados et al.
+// 2003, "Boolean operations on 3D selective Nef complexes", for the general
+// radial order).
+
+// For every directed edge slot of a triangle on a non-manifold edge (slot c of
+// triangle t runs from corner c to corner c + 1; index 3 t + c), the triangle
+// it is paired with across the edge; no_index on the other edges. Around the
+// edge u -> v, a triangle running it v -> u has the solid ahead of it in the
+// right-hand turn about v - u and one running it u -> v has the solid behind it
+// (their outward normals point back and ahead), so each v -> u triangle pairs
+// with the next triangle in that turn, which must run u -> v. Returns nullopt
+// when an edge has an odd or unequal count of each way, two third corners share
+// an angle about the edge, or the directions do not alternate: the edge cannot
+// be untangled by pairing. Exact: order_around_line on the rounded positions.
+std::optional<std::vector<std::uint32_t>> pair_around_non_manifold_edges(const Mesh& mesh) {
+  struct Use {
+    std::uint64_t key;   // the undirected edge
+    std::uint32_t slot;  // 3 t + c
+  };
+  std::vector<Use> uses;
+  uses.reserve(3 * mesh.triangles.size());
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    for (std::uint32_t c = 0; c < 3; ++c) {
+      const VertexIndex a = mesh.triangles[t][c], b = mesh.triangles[t][(c + 1) % 3];
+      uses.push_back({(std::uint64_t{std::min(a, b)} << 32) | std::max(a, b), 3 * t + c});
+    }
+  }
+  std::sort(uses.begin(), uses.end(), [](const Use& x, const Use& y) {
+    return x.key != y.key ? x.key < y.key : x.slot < y.slot;
+  });
+  std::vector<std::uint32_t> partner(uses.size(), no_index);
+  std::vector<Vec3> thirds;
+  std::vector<std::uint32_t> slots;
+  for (std::size_t i = 0; i < uses.size();) {
+    std::size_t j = i;
+    while (j < uses.size() && uses[j].key == uses[i].key) ++j;
+    if (j - i > 2) {
+      const auto u = static_cast<VertexIndex>(uses[i].key >> 32), v = static_cast<VertexIndex>(uses[i].key);
+      thirds.clear();
+      slots.clear();
+      for (std::size_t k = i; k < j; ++k) {
+        const std::uint32_t t = uses[k].slot / 3, c = uses[k].slot % 3;
+        slots.push_back(uses[k].slot);
+        thirds.push_back(mesh.positions[mesh.triangles[t][(c + 2) % 3]]);
+      }
+      const std::optional<std::vector<std::size_t>> order =
+          order_around_line(mesh.positions[u], mesh.positions[v], thirds);
+      if (!order || (j - i) % 2 != 0) return std::nullopt;
+      const auto runs_forward = [&](std::size_t k) {  // u -> v
+        const std::uint32_t slot = slots[k];
+        return mesh.triangles[slot / 3][slot % 3] == u;
+      };
+      const std::size_t count = order->size();
+      for (std::size_t k = 0; k < count; ++k) {
+        const std::size_t here = (*order)[k], next = (*order)[(k + 1) % count];
+        if (runs_forward(here) == runs_forward(next)) return std::nullopt;
+        if (runs_forward(here)) continue;
+        partner[slots[here]] = slots[next] / 3;
+        partner[slots[next]] = slots[here] / 3;
+      }
+    }
+    i = j;
+  }
+  return partner;
+}
+
 // Splits every vertex of `mesh` where several edge-connected fans of triangles
 // meet into one vertex per fan, then moves each copy, and each vertex of
 // `touching` (one fan, touching a cap), toward its fan's neighbours by `scale`
 // times its nearest neighbour's distance. Returns nothing moved when there is
-// nothing to separate. Preconditions: closed and consistently oriented.
-Separation separate_touching(Mesh& mesh, std::span<const VertexIndex> touching, double scale) {
+// nothing to separate. `partner`: empty, or for each directed edge slot on a
+// non-manifold edge the triangle it is paired with (pair_around_non_manifold_edges):
+// triangles meet across such an edge only in their pairs, so the edge's
+// vertices fall into one fan per pair where nothing else joins them.
+// Preconditions: closed and consistently oriented (each edge run as often each
+// way), and every non-manifold edge paired in `partner`.
+Separation separate_touching(Mesh& mesh, std::span<const VertexIndex> touching, double scale,
+                             std::span<const std::uint32_t> partner = {}) {
   const std::size_t n = mesh.positions.size();
   // The triangle corners at each vertex (corner = 3 * triangle + c), grouped by vertex.
   std::vector<std::uint32_t> first(n + 1, 0);
@@ -826,8 +1223,12 @@ Separation separate_touching(Mesh& mesh, std::span<const VertexIndex> touching, 
     fans.reset(count);
     for (std::uint32_t i = 0; i < count; ++i) {
       const VertexIndex next = vertex_of(at[begin + i], 1);
+      // Corner i leaves v along its triangle's slot at corner i, v -> next.
+      const std::uint32_t paired = partner.empty() ? no_index : partner[at[begin + i]];
       for (std::uint32_t j = 0; j < count; ++j) {
-        if (vertex_of(at[begin + j], 2) == next) fans.unite(i, j);
+        if (vertex_of(at[begin + j], 2) == next && (paired == no_index || paired == at[begin + j] / 3)) {
+          fans.unite(i, j);
+        }
       }
     }
     std::vector<std::uint32_t> fan_of_root(count, no_index);
@@ -964,12 +1365,18 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
   // a sliver triangle (a corner nearly on the line of its neighbours, where two
   // input faces are nearly coplanar); later attempts take the roundest fans and
   // the exact Delaunay triangulation, which keep such corners out of slivers.
+  // The second round of attempts (untangle_edges) also untangles edges that
+  // rounding made non-manifold (pair_around_non_manifold_edges): a repair tried
+  // only once the others have failed, so that every piece they write is written
+  // as before it existed.
   constexpr std::size_t attempts = 4;
-  for (std::size_t attempt = 0; attempt < attempts; ++attempt) {
+  for (std::size_t step = 0; step < 2 * attempts; ++step) {
+    const std::size_t attempt = step % attempts;
+    const bool untangle_edges = step >= attempts;
     Mesh mesh;
     std::size_t merged = 0;
     ValidationReport report;
-    triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of, attempt > 0);
+    triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of, attempt > 0, untangle_edges);
     if (solid.convex && merged == 0 && certify_star_shaped(mesh, vertex_average(mesh))) {
       // A convex solid's rounding certified in O(T) exact orientations.
       result.mesh = std::move(mesh);
@@ -986,7 +1393,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
                                   "the whole piece (it is thinner than the rounding of its coordinates)"});
       }
     }
-    if (attempt == 0) {
+    if (step == 0) {
       first_report = report;
       result.mesh = mesh;
       result.merged_vertices = merged;
@@ -996,7 +1403,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     if (!report.valid() && !mesh.triangles.empty()) {
       Mesh sheetless = mesh;
       std::vector<VertexIndex> renumbered;
-      if (const std::size_t gone = cancel_two_sided_sheets(sheetless, renumbered); gone > 0) {
+      if (const std::size_t gone = cancel_two_sided_sheets(sheetless, renumbered, untangle_edges); gone > 0) {
         if (sheetless.triangles.empty()) {
           flattened_whole = true;
           break;
@@ -1013,22 +1420,38 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       }
     }
     if (report.valid()) {
-      result.mesh = std::move(mesh);
-      result.merged_vertices = merged;
-      result.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
-      result.vanished_triangles = sheets_cancelled;
-      if (sheets_cancelled > 0) report_moved_volume(set, solid, result);
-      result.valid = true;
-      return result;
+      RoundedSolid written = result;
+      written.mesh = std::move(mesh);
+      written.merged_vertices = merged;
+      written.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
+      written.vanished_triangles = sheets_cancelled;
+      if (sheets_cancelled > 0) report_moved_volume(set, solid, written);
+      // On the last round (sheets over four corners, faces merged) the volume
+      // the repairs moved is held to the bound of what rounding can move, or the
+      // mesh is not taken.
+      if (!untangle_edges || !(written.moved_volume > written.moved_volume_bound)) {
+        written.valid = true;
+        return written;
+      }
+      continue;
     }
     // The piece may touch itself, exactly (see separate_touching): only then is
     // what is left a pinched vertex or an intersection, on a closed oriented mesh.
     const bool may_touch = !options.allow_self_intersections &&
-                           std::all_of(report.defects.begin(), report.defects.end(), [](const Defect& d) {
+                           std::all_of(report.defects.begin(), report.defects.end(), [&](const Defect& d) {
                              return d.kind == DefectKind::non_manifold_vertex ||
-                                    d.kind == DefectKind::self_intersection;
+                                    d.kind == DefectKind::self_intersection ||
+                                    (untangle_edges && d.kind == DefectKind::non_manifold_edge);
                            });
     if (!may_touch) continue;
+    // The second round repeats the first but for the edges: nothing else to try.
+    if (untangle_edges && report.find(DefectKind::non_manifold_edge) == nullptr) continue;
+    std::vector<std::uint32_t> partner;
+    if (report.find(DefectKind::non_manifold_edge) != nullptr) {
+      std::optional<std::vector<std::uint32_t>> paired = pair_around_non_manifold_edges(mesh);
+      if (!paired) continue;
+      partner = std::move(*paired);
+    }
     if (!touching_caps) touching_caps = corners_touching_caps(set, solid);
     touching.clear();
     for (const VertexIndex v : *touching_caps) {
@@ -1038,7 +1461,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     // first, then further.
     for (const int bits : {40, 30, 20}) {
       Mesh separated = mesh;
-      const Separation separation = separate_touching(separated, touching, std::ldexp(1.0, -bits));
+      const Separation separation = separate_touching(separated, touching, std::ldexp(1.0, -bits), partner);
       if (separation.moved == 0) break;
       if (validate_mesh_against(separated, options.trusted, options.cut).valid()) {
         result.mesh = std::move(separated);

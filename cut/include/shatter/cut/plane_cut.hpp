@@ -64,6 +64,11 @@ struct PlaneCut {
 
   /// True when every piece is valid as written (no piece has a defect).
   bool certified() const;
+  /// True when, as written, the plane does not cut the solid: it misses it
+  /// (plane_missed), or every piece but at most one vanishes (thinner than the
+  /// rounding of its coordinates). The mesh tree builder redraws such a plane,
+  /// and only such a plane. Never throws.
+  bool misses_as_written() const;
 };
 
 /// Cuts `solid` by the cut plane `cut` of `set` and rounds every piece.

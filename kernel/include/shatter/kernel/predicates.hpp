@@ -7,8 +7,11 @@
 // certify the sign does it recompute exactly (orient3d on double expansions, the
 // others with GMP rationals). Zero is a real answer.
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <span>
+#include <vector>
 
 #include "shatter/kernel/vec.hpp"
 
@@ -42,6 +45,28 @@ Sign orient3d(Vec3 a, Vec3 b, Vec3 c, Vec3 d);
 /// behind it than orient3d's expansion stages (exactly coplanar neighbours in a
 /// self-intersection test). Preconditions: finite inputs. Failure: none.
 std::optional<Sign> orient3d_if_clear(Vec3 a, Vec3 b, Vec3 c, Vec3 d);
+
+/// For four coplanar points with p, q, r not collinear: positive when r and s lie
+/// on the same side of the line pq in their plane, negative when on opposite
+/// sides, zero when s lies on the line (CGAL's coplanar_orientation(p, q, r, s)).
+/// Decided by orient2d in a coordinate projection where (p, q, r) does not
+/// degenerate: such a projection maps the plane one to one and keeps or reverses
+/// every orientation alike, so the product of the two signs is the answer.
+/// Preconditions: finite inputs, the four points coplanar (orient3d zero), p, q, r
+/// not collinear. Guarantees: exact. Failure: none (zero for collinear p, q, r,
+/// which is outside the precondition).
+Sign coplanar_orientation(Vec3 p, Vec3 q, Vec3 r, Vec3 s);
+
+/// The points `around` ordered by their angle about the oriented line from a to
+/// b, counter-clockwise seen from b looking at a (the right-hand turn about b - a),
+/// starting with around[0]: indices into `around`. Every comparison is an exact
+/// orientation (orient3d, and coplanar_orientation for points in one plane with
+/// the line), as CGAL's sorted_around_edge orders the faces around an edge in
+/// its corefinement. Returns nullopt when two points lie in one half-plane bounded
+/// by the line (equal angles: no strict order) or one lies on the line.
+/// Preconditions: finite inputs, a != b. Cost: O(k log k) orientations for k
+/// points. Failure: none.
+std::optional<std::vector<std::size_t>> order_around_line(Vec3 a, Vec3 b, std::span<const Vec3> around);
 
 /// Counters of how often the floating-point filters had to fall back to exact
 /// arithmetic; per thread, so readers need no locking. Used by the predicate

@@ -27,10 +27,22 @@ struct BuildReport {
   double cutting_seconds = 0;
   double hull_seconds = 0;     ///< convex hulls of every node (in parallel)
   double bond_seconds = 0;     ///< find_bonds
-  std::uint64_t planes_missed = 0;    ///< drawn planes that missed their node
-  /// Drawn planes that left a piece that cannot be written as a valid double mesh
-  /// (or that pinched the solid).
+  /// Drawn planes that missed their node: left it whole, or left only one piece
+  /// that is not thinner than the rounding of its coordinates (redrawn).
+  std::uint64_t planes_missed = 0;
+  /// Always 0: no plane is redrawn for its pieces any more (issue 17); a piece
+  /// that cannot be written fails the build. Kept for the benchmarks' columns.
   std::uint64_t planes_rejected = 0;
+  /// Pieces of the tree's cuts that were thinner than the rounding of their
+  /// coordinates and vanished (round_solid: they are no children; their volume
+  /// moves to their neighbours across the cut), their exact volume summed (as
+  /// doubles), and the sum of the bounds on what rounding can move that each
+  /// was checked against: vanished_volume <= vanished_volume_bound. The
+  /// children of a cut with a vanished piece have that much less volume than
+  /// their parent, exactly.
+  std::uint64_t pieces_vanished = 0;
+  double vanished_volume = 0;
+  double vanished_volume_bound = 0;
 };
 
 /// How one build runs: none of it changes the tree, so none of it is kept in the
@@ -67,13 +79,18 @@ struct BuildRunOptions {
 /// self-intersection; with allow_self_intersections only the topology), certified
 /// as it is rounded; every node's exact solid kept (MeshTreeNode::solid, over
 /// tree.geometry and tree.cut_planes), the children's solids partitioning their
-/// parent's exactly; leaf ranges contiguous; cap triangles carry cap_surface_of(cut node);
+/// parent's exactly, but for pieces of a cut thinner than the rounding of their
+/// coordinates, which vanish (no children; their volume, which moves to their
+/// neighbours across the cut, is at most what rounding their vertices can move,
+/// and is reported: BuildReport::pieces_vanished); leaf ranges contiguous; cap triangles carry cap_surface_of(cut node);
 /// mass properties and hulls filled; bonds = find_bonds(tree); tree.recipe =
 /// `recipe`; shatter_version this library's version_string (shatter/version.hpp).
 /// One version of shatter gives a result that depends only on the mesh and the
 /// recipe: byte-identical on any machine, whatever `run` is.
-/// Throws UnsupportedGeometryError when none of max_plane_tries planes gives a node
-/// valid pieces (all missed it, or its pieces are thinner than rounding).
+/// Throws UnsupportedGeometryError when every one of max_plane_tries planes
+/// drawn for a node misses it (PlaneCut::misses_as_written), or when a cut leaves
+/// a piece that cannot be written as a valid double mesh or pinches a piece
+/// (round_solid, cut_solid: no plane is redrawn for its pieces).
 MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const BuildRunOptions& run = {});
 
 }  // namespace shatter

@@ -17,13 +17,23 @@
 //    CGAL 6's autorefine_triangle_soup): vertices that rounded onto one point are
 //    merged and the triangles they flatten removed; on a retry, the faces' loops
 //    over merged vertices are repaired as snap rounding repairs segments (a vertex
-//    lying exactly inside an edge is inserted into it, spikes removed, a loop
-//    through one point twice split there) and a fold is retried with another
-//    triangulation of the faces involved; triangles that rounding laid over each
-//    other once each way (a part thinner than the rounding, flattened into a
-//    two-sided sheet) vanish; the result is checked again. A piece that still
-//    fails and whose volume is within what rounding its vertices can move
-//    vanishes whole. What cannot be repaired is reported, never written as valid.
+//    lying exactly inside an edge is inserted into it, spikes removed, loops that
+//    run one edge both ways joined across it, a loop through one point twice
+//    split there; on the last round, an edge of a face routed through a corner of
+//    the face that rounding carried across it, and faces facing opposite ways
+//    that rounding laid onto one plane over shared corners merged into the one
+//    face their sum leaves) and a fold is retried with another triangulation of
+//    the faces involved; triangles that rounding laid over each other once each
+//    way (a part thinner than the rounding, flattened into a two-sided sheet)
+//    vanish, and on the last round so do four triangles that cover four corners
+//    both ways with different diagonals (while the volume moved stays within
+//    its bound);
+//    an edge that a part thinner than the rounding was squeezed onto (2k
+//    triangles around it) is untangled: its triangles paired in exact angular
+//    order, one copy of the edge per pair, moved apart as a pinched vertex is;
+//    the result is checked again. A piece that still fails and whose volume is
+//    within what rounding its vertices can move vanishes whole. What cannot be
+//    repaired is reported, never written as valid.
 
 #include <string>
 
@@ -111,6 +121,12 @@ struct RoundedSolid {
 /// cap moves toward its own neighbours by 2^-40 of the distance to the nearest
 /// (then 2^-30, 2^-20) until certification passes: the point where the piece
 /// touched itself gives way, moving `moved_volume` (at most `moved_volume_bound`).
+/// Where rounding squeezed a part thinner than the rounding onto an edge (2k
+/// triangles around it, k each way) and nothing else repairs the piece, the
+/// triangles around the edge are paired in exact angular order (each pair bounds
+/// one wedge of the solid; order_around_line) and each pair gets its own copies
+/// of the edge's vertices, separated as above; an edge whose triangles tie in
+/// angle or do not alternate in direction around it (a fold) is left as it is.
 /// A part thinner than the rounding that rounds flat (its triangles laid over each
 /// other once each way) vanishes into its neighbour (`vanished_triangles`); a piece
 /// that rounds flat whole, or that cannot be certified while its exact volume is
@@ -127,9 +143,9 @@ struct RoundedSolid {
 /// no self-intersection); a piece whose first rounding certifies is written as
 /// before any repair existed; every repair is a finite pass (merges and removals
 /// only shrink the mesh, insertions put a vertex into an edge that passes exactly
-/// through it, over a fixed set of four attempts); deterministic. Failure: neither
-/// valid nor collapsed, `defect` names what the first rounding broke (folds of
-/// thick pieces against a nearly coplanar face are the kind left).
+/// through it, over a fixed set of four attempts, each tried again untangling
+/// edges); deterministic. Failure: neither
+/// valid nor collapsed, `defect` names what the first rounding broke.
 RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options = {});
 
 /// The solid's mass properties (unit density), integrated over its faces' fans on
