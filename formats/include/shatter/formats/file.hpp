@@ -49,9 +49,9 @@
 //         (0 thesis, 1 balanced, 2 axis), u8 kernel (0 fast, 1 exact, 2 plane),
 //         f64 interior_uv_scale, u32 max_plane_tries, u8 allow_self_intersections
 //         (0 or 1). How the build ran (threads, ...) is no part of the tree.
-//         max_plane_tries reads the same from every file; since issue 17 it
-//         bounds only the planes that miss a node (TreeRecipe::max_plane_tries),
-//         where before it also bounded planes redrawn for their pieces.
+//         max_plane_tries reads the same from every file; since issue 17 a
+//         plane is no longer redrawn for a piece that vanishes in the rounding
+//         (TreeRecipe::max_plane_tries says what it bounds now).
 //   NODE  u32 node count n (>= 1), u8 flags (bit 0 seeds stored, bit 1 masses
 //         stored, bit 2 leaves' planes stored; other bits 0), then per node in
 //         preorder: vu (c << 1 | above_parent_plane), 64 bits, c its child count; f64 x4

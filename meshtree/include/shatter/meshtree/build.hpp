@@ -30,8 +30,9 @@ struct BuildReport {
   /// Drawn planes that missed their node: left it whole, or left only one piece
   /// that is not thinner than the rounding of its coordinates (redrawn).
   std::uint64_t planes_missed = 0;
-  /// Always 0: no plane is redrawn for its pieces any more (issue 17); a piece
-  /// that cannot be written fails the build. Kept for the benchmarks' columns.
+  /// Drawn planes that gave a piece round_solid cannot write as a valid mesh
+  /// (redrawn: the last case where a plane is redrawn for its pieces; 0 in every
+  /// corpus build measured, README "Robustness").
   std::uint64_t planes_rejected = 0;
   /// Pieces of the tree's cuts that were thinner than the rounding of their
   /// coordinates and vanished (round_solid: they are no children; their volume
@@ -87,10 +88,10 @@ struct BuildRunOptions {
 /// `recipe`; shatter_version this library's version_string (shatter/version.hpp).
 /// One version of shatter gives a result that depends only on the mesh and the
 /// recipe: byte-identical on any machine, whatever `run` is.
-/// Throws UnsupportedGeometryError when every one of max_plane_tries planes
-/// drawn for a node misses it (PlaneCut::misses_as_written), or when a cut leaves
-/// a piece that cannot be written as a valid double mesh or pinches a piece
-/// (round_solid, cut_solid: no plane is redrawn for its pieces).
+/// Throws UnsupportedGeometryError when none of max_plane_tries planes drawn for
+/// a node cuts it into pieces that can all be written (each missed it, as
+/// PlaneCut::misses_as_written says, or left a piece round_solid cannot write
+/// validly), or when a cut pinches a piece (cut_solid).
 MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const BuildRunOptions& run = {});
 
 }  // namespace shatter

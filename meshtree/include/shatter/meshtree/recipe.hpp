@@ -61,14 +61,15 @@ struct TreeRecipe {
   /// refuses any other value); a tree read from an older file may say otherwise.
   KernelKind kernel = KernelKind::plane;
   double interior_uv_scale = 1.0;
-  /// Planes drawn for one node that miss it before the build fails. A plane is
-  /// redrawn only when it misses the node as written (PlaneCut::misses_as_written:
-  /// it leaves the node whole, or every piece but one is thinner than the
-  /// rounding of its coordinates and vanishes); never for its pieces (issue 17:
-  /// until then a plane was also redrawn when a piece could not be written as a
-  /// valid double mesh or the cut pinched a piece; now such a piece fails the
-  /// build). It decides whether a build succeeds rather than what it makes, but
-  /// the file has always stored it, so it stays with what the tree keeps.
+  /// Planes drawn for one node before the build fails. A plane is redrawn when it
+  /// misses the node as written (PlaneCut::misses_as_written: it leaves the node
+  /// whole, or every piece but one is thinner than the rounding of its
+  /// coordinates and vanishes), and in the one case left where its pieces decide:
+  /// a piece round_solid cannot write as a valid mesh (counted in
+  /// BuildReport::planes_rejected). A vanished piece no longer redraws the plane
+  /// (issue 17): it is no child. It decides whether a build succeeds rather than
+  /// what it makes, but the file has always stored it, so it stays with what the
+  /// tree keeps.
   std::uint32_t max_plane_tries = 64;
   /// Accept a self-intersecting input (only topology is promised then).
   bool allow_self_intersections = false;
