@@ -364,6 +364,24 @@ bool join_at_antiparallel_edge(std::vector<std::vector<VertexIndex>>& face) {
   return false;
 }
 
+// Rewrites every loop of every face, putting after each corner a the vertices
+// `inserted(a, b)` names for its edge to the next corner b, in their order.
+template <class InsertedFn>
+void insert_along_loop_edges(std::vector<std::vector<std::vector<VertexIndex>>>& loops, InsertedFn&& inserted) {
+  for (auto& face : loops) {
+    for (auto& loop : face) {
+      std::vector<VertexIndex> out;
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const VertexIndex a = loop[i], b = loop[(i + 1) % loop.size()];
+        out.push_back(a);
+        const std::vector<VertexIndex> inside = inserted(a, b);
+        out.insert(out.end(), inside.begin(), inside.end());
+      }
+      loop = std::move(out);
+    }
+  }
+}
+
 // Steps 1 to 3 on every face's loops (over representatives, consecutive repeats
 // removed). `loops[f]`: face f's loops; `candidates`: the vertices that may lie
 // inside an edge (the merged representatives, and the corners of loops that
@@ -372,36 +390,28 @@ bool join_at_antiparallel_edge(std::vector<std::vector<VertexIndex>>& face) {
 void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vector<std::vector<VertexIndex>>>& loops,
                          std::span<const VertexIndex> candidates) {
   // 1. Vertices inside edges.
-  for (auto& face : loops) {
-    for (auto& loop : face) {
-      std::vector<VertexIndex> out;
-      for (std::size_t i = 0; i < loop.size(); ++i) {
-        const VertexIndex a = loop[i], b = loop[(i + 1) % loop.size()];
-        out.push_back(a);
-        const Vec3 &pa = positions[a], &pb = positions[b];
-        const Vec3 lo{std::min(pa.x, pb.x), std::min(pa.y, pb.y), std::min(pa.z, pb.z)};
-        const Vec3 hi{std::max(pa.x, pb.x), std::max(pa.y, pb.y), std::max(pa.z, pb.z)};
-        std::vector<VertexIndex> inside;
-        for (const VertexIndex v : candidates) {
-          const Vec3& p = positions[v];
-          if (v == a || v == b || p.x < lo.x || p.x > hi.x || p.y < lo.y || p.y > hi.y || p.z < lo.z || p.z > hi.z) {
-            continue;
-          }
-          if (strictly_inside_segment(pa, pb, p)) inside.push_back(v);
-        }
-        // In order from a to b, along the first coordinate where they differ
-        // (exact comparisons of the doubles themselves).
-        const auto get = pa.x != pb.x ? &Vec3::x : pa.y != pb.y ? &Vec3::y : &Vec3::z;
-        const bool rising = pa.*get < pb.*get;
-        std::sort(inside.begin(), inside.end(), [&](VertexIndex u, VertexIndex w) {
-          return rising ? positions[u].*get < positions[w].*get : positions[u].*get > positions[w].*get;
-        });
-        inside.erase(std::unique(inside.begin(), inside.end()), inside.end());
-        out.insert(out.end(), inside.begin(), inside.end());
+  insert_along_loop_edges(loops, [&](VertexIndex a, VertexIndex b) {
+    const Vec3 &pa = positions[a], &pb = positions[b];
+    const Vec3 lo{std::min(pa.x, pb.x), std::min(pa.y, pb.y), std::min(pa.z, pb.z)};
+    const Vec3 hi{std::max(pa.x, pb.x), std::max(pa.y, pb.y), std::max(pa.z, pb.z)};
+    std::vector<VertexIndex> inside;
+    for (const VertexIndex v : candidates) {
+      const Vec3& p = positions[v];
+      if (v == a || v == b || p.x < lo.x || p.x > hi.x || p.y < lo.y || p.y > hi.y || p.z < lo.z || p.z > hi.z) {
+        continue;
       }
-      loop = std::move(out);
+      if (strictly_inside_segment(pa, pb, p)) inside.push_back(v);
     }
-  }
+    // In order from a to b, along the first coordinate where they differ
+    // (exact comparisons of the doubles themselves).
+    const auto get = pa.x != pb.x ? &Vec3::x : pa.y != pb.y ? &Vec3::y : &Vec3::z;
+    const bool rising = pa.*get < pb.*get;
+    std::sort(inside.begin(), inside.end(), [&](VertexIndex u, VertexIndex w) {
+      return rising ? positions[u].*get < positions[w].*get : positions[u].*get > positions[w].*get;
+    });
+    inside.erase(std::unique(inside.begin(), inside.end()), inside.end());
+    return inside;
+  });
   // 2. Spikes, edges run both ways by two loops, and 3. loops through a vertex twice.
   for (auto& face : loops) {
     for (bool again = true; again;) {
@@ -502,31 +512,23 @@ bool route_edges_through_crossed_corners(const PlaneSet& set, const Solid& solid
   if (through.empty()) return false;
   // Both directions of an edge take the same corners, in order along it (by the
   // square of the distance from its start, exactly on the doubles).
-  for (auto& face : loops) {
-    for (auto& loop : face) {
-      std::vector<VertexIndex> out;
-      for (std::size_t i = 0; i < loop.size(); ++i) {
-        const VertexIndex a = loop[i], b = loop[(i + 1) % loop.size()];
-        out.push_back(a);
-        std::vector<VertexIndex> inside;
-        for (const std::uint64_t k : {key(a, b), key(b, a)}) {
-          if (const auto it = through.find(k); it != through.end()) inside.insert(inside.end(), it->second.begin(), it->second.end());
-        }
-        if (inside.empty()) continue;
-        std::sort(inside.begin(), inside.end());
-        inside.erase(std::unique(inside.begin(), inside.end()), inside.end());
-        const Vec3& pa = positions[a];
-        const auto distance = [&](VertexIndex v) {
-          mpq_class d = 0;
-          for (int k = 0; k < 3; ++k) d += (mpq_class(positions[v][k]) - pa[k]) * (mpq_class(positions[v][k]) - pa[k]);
-          return d;
-        };
-        std::stable_sort(inside.begin(), inside.end(), [&](VertexIndex x, VertexIndex y) { return distance(x) < distance(y); });
-        out.insert(out.end(), inside.begin(), inside.end());
-      }
-      loop = std::move(out);
+  insert_along_loop_edges(loops, [&](VertexIndex a, VertexIndex b) {
+    std::vector<VertexIndex> inside;
+    for (const std::uint64_t k : {key(a, b), key(b, a)}) {
+      if (const auto it = through.find(k); it != through.end()) inside.insert(inside.end(), it->second.begin(), it->second.end());
     }
-  }
+    if (inside.empty()) return inside;
+    std::sort(inside.begin(), inside.end());
+    inside.erase(std::unique(inside.begin(), inside.end()), inside.end());
+    const Vec3& pa = positions[a];
+    const auto distance = [&](VertexIndex v) {
+      mpq_class d = 0;
+      for (int k = 0; k < 3; ++k) d += (mpq_class(positions[v][k]) - pa[k]) * (mpq_class(positions[v][k]) - pa[k]);
+      return d;
+    };
+    std::stable_sort(inside.begin(), inside.end(), [&](VertexIndex x, VertexIndex y) { return distance(x) < distance(y); });
+    return inside;
+  });
   return true;
 }
 
