@@ -8,6 +8,7 @@
 #include <iterator>
 #include <map>
 #include <stdexcept>
+#include <string>
 #include <system_error>
 
 #include "shatter/kernel/error.hpp"
@@ -57,8 +58,8 @@ nlohmann::ordered_json case_entry(const Case& c, std::uint64_t id, const std::st
   return entry;
 }
 
-}  // namespace
-
+// The README.md an export holds: the manifest's fields, the plane convention,
+// what shatter promises for each case, and how the cases were drawn.
 std::string corpus_readme() {
   return R"(# shatter-fuzz robustness corpus
 
@@ -101,6 +102,8 @@ case is refused. A tool is robust on a case when it does the same; a crash, a
 hang, an invalid piece or a refusal are what to count.
 )";
 }
+
+}  // namespace
 
 ExportSummary export_corpus(const MeshPool& pool, std::uint64_t seed, const std::vector<std::uint64_t>& indices,
                             const std::filesystem::path& dir) {

@@ -4,11 +4,10 @@
 // JSON manifest, so a peer (another kernel, another fracture tool) can be fuzzed
 // with exactly the cases shatter-fuzz runs, and a robustness table can be
 // computed from exactly that corpus. The layout is written out for readers in
-// the README.md the export puts beside the manifest (corpus_readme()).
+// the README.md the export puts beside the manifest.
 
 #include <cstdint>
 #include <filesystem>
-#include <string>
 #include <vector>
 
 #include "robustness/robustness.hpp"
@@ -34,9 +33,5 @@ struct ExportSummary {
 /// Throws IoError when a file cannot be written (the temporary folder removed).
 ExportSummary export_corpus(const MeshPool& pool, std::uint64_t seed, const std::vector<std::uint64_t>& indices,
                             const std::filesystem::path& dir);
-
-/// The README.md an export holds: the manifest's fields, the plane convention,
-/// what shatter promises for each case, and how the cases were drawn.
-std::string corpus_readme();
 
 }  // namespace shatter::robust
