@@ -20,9 +20,19 @@ namespace {
 
 using json = nlohmann::ordered_json;
 
-json defects_json(const ValidationReport& report) {
+// validate_mesh finds no defect in a mesh with no triangles, but no triangles is no
+// solid: the readers refuse such a file, and --repair can leave one (a mesh made
+// only of degenerate triangles, or of triangles back to back with reversed copies).
+constexpr const char* empty_after_repair = "no triangle left after --repair (the input encloses no volume)";
+
+bool is_valid_solid(const ValidatedMesh& checked) {
+  return checked.report.valid() && !checked.input.mesh.triangles.empty();
+}
+
+json defects_json(const ValidatedMesh& checked) {
   json defects = json::array();
-  for (const Defect& d : report.defects) {
+  if (checked.input.mesh.triangles.empty()) defects.push_back({{"defect", "empty"}, {"count", 0}, {"first", empty_after_repair}});
+  for (const Defect& d : checked.report.defects) {
     defects.push_back({{"defect", defect_name(d.kind)}, {"count", d.count}, {"first", d.first}});
   }
   return defects;
@@ -33,12 +43,12 @@ void print_json(const ValidateArgs& args, const ValidatedMesh& checked) {
   json out{{"file", args.mesh},
            {"vertices", report.vertex_count},
            {"triangles", report.triangle_count},
-           {"valid", report.valid()},
+           {"valid", is_valid_solid(checked)},
            {"self_intersections_checked", report.self_intersections_checked},
-           {"defects", defects_json(report)}};
+           {"defects", defects_json(checked)}};
   out["read_warnings"] = checked.input.read_warnings;
   if (checked.input.repair) add_repair_json(out, *checked.input.repair);
-  if (report.valid()) {
+  if (is_valid_solid(checked)) {
     const MassProperties mass = mass_properties(checked.input.mesh);
     out["volume"] = mass.volume;
     out["centroid"] = {mass.centroid.x, mass.centroid.y, mass.centroid.z};
@@ -48,12 +58,13 @@ void print_json(const ValidateArgs& args, const ValidatedMesh& checked) {
 
 void print_text(const ValidateArgs& args, const ValidatedMesh& checked) {
   const ValidationReport& report = checked.report;
-  if (report.valid()) {
+  if (is_valid_solid(checked)) {
     std::cout << args.mesh << ": valid closed oriented 2-manifold, " << report.vertex_count << " vertices, "
               << report.triangle_count << " triangles, volume " << signed_volume(checked.input.mesh) << '\n';
     return;
   }
   std::cout << args.mesh << ": " << report.vertex_count << " vertices, " << report.triangle_count << " triangles\n";
+  if (checked.input.mesh.triangles.empty()) std::cout << "  empty: " << empty_after_repair << '\n';
   for (const Defect& d : report.defects) {
     std::cout << "  " << defect_name(d.kind) << ": " << d.count << ", first " << d.first << '\n';
   }
@@ -89,6 +100,9 @@ int run_validate(const ValidateArgs& args) {
     print_json(args, checked);
   } else {
     print_text(args, checked);
+  }
+  if (checked.input.mesh.triangles.empty()) {
+    throw InvalidMeshError("invalid mesh " + args.mesh + ": empty: " + empty_after_repair);
   }
   if (!checked.report.valid()) {
     throw InvalidMeshError("invalid mesh " + args.mesh + (checked.input.repair ? " after --repair: " : ": ") +

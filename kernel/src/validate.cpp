@@ -476,8 +476,10 @@ void require_valid_solid(const Mesh& mesh, std::string_view name, bool allow_sel
     throw InvalidMeshError("invalid mesh " + std::string(name) + ": " + report.summary());
   }
   if (self_intersection && !allow_self_intersections) {
+    const bool one = self_intersection->count == 1;
     throw InvalidMeshError("invalid mesh " + std::string(name) + ": self-intersecting: " +
-                           std::to_string(self_intersection->count) + " pairs of intersecting triangles, first " +
+                           std::to_string(self_intersection->count) + (one ? " pair" : " pairs") +
+                           " of intersecting triangles, first " +
                            self_intersection->first + " (--allow-self-intersections cuts it anyway)");
   }
 }

@@ -508,6 +508,79 @@ TEST_CASE("fracture refuses a bad mesh with exit 3 and one line, and leaves noth
   }
 }
 
+// Every line of `err` that starts "error: ", and whether the last line is one.
+std::vector<std::string> error_lines(const std::string& err) {
+  std::vector<std::string> lines;
+  std::size_t begin = 0;
+  while (begin < err.size()) {
+    const std::size_t end = std::min(err.find('\n', begin), err.size());
+    if (err.compare(begin, 7, "error: ") == 0) lines.push_back(err.substr(begin, end - begin));
+    begin = end + 1;
+  }
+  return lines;
+}
+
+TEST_CASE("a mesh --repair leaves empty is refused by every command with one error line, nothing written") {
+  // Regression: validate --repair accepted these as "valid ..., 0 triangles" and
+  // wrote an empty OFF file. Triangles back to back with their reversed copies,
+  // with and without a triangle using one vertex twice, and a triangle whose three
+  // corners are one point: each encloses no volume, and repair removes every triangle.
+  const std::vector<std::pair<std::string, std::string>> meshes = {
+      {"sheet.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n"},
+      {"two-sheets-and-a-spike.off",
+       "OFF\n5 5 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 1 1\n3 0 1 2\n3 0 2 1\n3 0 3 1\n3 0 1 3\n3 4 4 2\n"},
+      {"one-point.off", "OFF\n3 1 0\n0.5 0.5 0.5\n0.5 0.5 0.5\n0.5 0.5 0.5\n3 0 1 2\n"},
+  };
+  for (const auto& [name, text] : meshes) {
+    INFO(name);
+    const fs::path dir = scratch("repair-empty");
+    const fs::path mesh = dir / name;
+    fs::create_directories(dir);
+    std::ofstream(mesh) << text;
+    const std::vector<std::string> commands = {
+        "validate --repair " + quoted(mesh) + " --out " + quoted(dir / "out" / "repaired.off"),
+        "fracture --repair " + quoted(mesh) + " --fragments 4 --out " + quoted(dir / "out" / "t.shatter"),
+        "slice --repair " + quoted(mesh) + " --plane 1,0,0,-0.25 --out " + quoted(dir / "out" / "piece"),
+    };
+    for (const std::string& command : commands) {
+      INFO(command);
+      const Run run = run_shatter(command);
+      CHECK(run.exit_code == 3);
+      const std::vector<std::string> errors = error_lines(run.err);
+      REQUIRE(errors.size() == 1);
+      CHECK(errors[0].find("empty") != std::string::npos);
+      CHECK(errors[0].find(name) != std::string::npos);
+      CHECK(run.err.substr(run.err.size() - errors[0].size() - 1) == errors[0] + "\n");  // the last line
+      CHECK_FALSE(fs::exists(dir / "out"));
+    }
+    const Run json = run_shatter("validate --repair --json " + quoted(mesh));
+    CHECK(json.exit_code == 3);
+    const nlohmann::json report = nlohmann::json::parse(json.out);
+    CHECK(report["valid"] == false);
+    CHECK(report["triangles"] == 0);
+    REQUIRE(!report["defects"].empty());
+    CHECK(report["defects"][0]["defect"] == "empty");
+  }
+}
+
+TEST_CASE("a single intersecting pair is named in the singular by every command") {
+  // Regression: fracture and slice said "1 pairs". Two triangles back to back
+  // are closed and oriented as far as topology goes, and cross each other: one pair.
+  const fs::path dir = scratch("one-pair");
+  fs::create_directories(dir);
+  const fs::path mesh = dir / "sheet.off";
+  std::ofstream(mesh) << "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n";
+  for (const std::string& command : {"validate " + quoted(mesh),
+                                     "fracture " + quoted(mesh) + " --fragments 2 --out " + quoted(dir / "t.shatter"),
+                                     "slice " + quoted(mesh) + " --plane 1,0,0,-0.25 --out " + quoted(dir / "p")}) {
+    INFO(command);
+    const Run run = run_shatter(command);
+    CHECK(run.exit_code == 3);
+    CHECK(is_one_error_line(run.err));
+    CHECK(run.err.find("self-intersecting: 1 pair of intersecting triangles") != std::string::npos);
+  }
+}
+
 TEST_CASE("fracture usage errors exit 2 with one line, before anything is written") {
   const std::string cube = quoted(mesh_dir() / "cube.off");
   const fs::path dir = scratch("fracture-usage");
