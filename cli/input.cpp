@@ -50,9 +50,7 @@ InputMesh read_input(const std::string& path) {
 std::string repair_flag_help(const std::string& then) {
   return "Repair the mesh before using it, printing each change on stderr (`repair: ...`): merge vertices at "
          "equal positions, remove repeated-vertex, duplicate and zero-area triangles, orient consistently and "
-         "outward, stitch and fill holes of up to " +
-         std::to_string(RepairOptions{}.max_hole_edges) +
-         " edges; self-intersections are named, not resolved. A mesh still invalid after repair is refused as "
+         "outward, stitch and fill every hole (over its own vertices, whatever its size); self-intersections are named, not resolved. A mesh still invalid after repair is refused as "
          "without the flag. " +
          then;
 }

@@ -24,6 +24,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -77,6 +78,93 @@ Triangle canonical_rotation(const Triangle& t) {
 }
 
 bool same_cyclic_order(const Triangle& a, const Triangle& b) { return canonical_rotation(a) == canonical_rotation(b); }
+
+// The lid of one hole over its own corners: the triangulation of the polygon
+// `ids` (welded vertex ids, all distinct, in the hole's order) of least total
+// area among those that draw no diagonal `joined` already joins and make no
+// triangle `exists` already has. Dynamic programming over sub-polygons: the
+// minimum-weight triangulation of a polygon (Klincsek 1980), over a hole's
+// vertices as in Barequet & Sharir 1995 and Liepa 2003 (here without their
+// dihedral weights). The area only chooses among lids; whether the repaired mesh
+// is a valid solid is decided exactly afterwards, by validation. Triangles as
+// positions in `ids`, in the polygon's orientation, each after one it shares an
+// edge with; std::nullopt when every triangulation is excluded. O(n^3) time,
+// O(n^2) memory.
+template <class Joined, class Exists>
+std::optional<std::vector<std::array<std::size_t, 3>>> least_area_lid(const std::vector<VertexIndex>& ids,
+                                                                      const std::vector<Vec3>& points,
+                                                                      const Joined& joined, const Exists& exists) {
+  const std::size_t n = ids.size();
+  if (n < 3) return std::nullopt;
+  const auto area = [&](std::size_t i, std::size_t k, std::size_t j) {
+    const Vec3 u = points[k] - points[i], v = points[j] - points[i];
+    const Vec3 c{u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
+    return std::sqrt(c.x * c.x + c.y * c.y + c.z * c.z);
+  };
+  constexpr double none = std::numeric_limits<double>::infinity();
+  std::vector<double> best(n * n, none);
+  std::vector<std::uint32_t> apex(n * n, 0);
+  for (std::size_t i = 0; i + 1 < n; ++i) best[i * n + i + 1] = 0;
+  for (std::size_t span = 2; span < n; ++span) {
+    for (std::size_t i = 0; i + span < n; ++i) {
+      const std::size_t j = i + span;
+      // (0, n - 1) is a side of the polygon, the hole's own border edge.
+      if (!(i == 0 && j == n - 1) && joined(ids[i], ids[j])) continue;
+      for (std::size_t k = i + 1; k < j; ++k) {
+        const double left = best[i * n + k], right = best[k * n + j];
+        if (left == none || right == none || exists(ids[i], ids[k], ids[j])) continue;
+        const double total = left + right + area(i, k, j);
+        if (total < best[i * n + j]) {
+          best[i * n + j] = total;
+          apex[i * n + j] = static_cast<std::uint32_t>(k);
+        }
+      }
+    }
+  }
+  if (best[n - 1] == none) return std::nullopt;
+  std::vector<std::array<std::size_t, 3>> triangles;
+  std::vector<std::pair<std::size_t, std::size_t>> stack{{0, n - 1}};
+  while (!stack.empty()) {
+    const auto [i, j] = stack.back();
+    stack.pop_back();
+    if (j < i + 2) continue;
+    const std::size_t k = apex[i * n + j];
+    triangles.push_back({i, k, j});
+    stack.push_back({i, k});
+    stack.push_back({k, j});
+  }
+  return triangles;
+}
+
+// A hole's boundary as simple polygons: split wherever it passes through one
+// vertex twice (holes touching there), each part closed at that vertex. Empty
+// when a part has fewer than three corners (a slit: two edges between the same
+// two vertices, which no triangle over them closes).
+std::vector<std::vector<std::size_t>> simple_loops(const std::vector<VertexIndex>& ids) {
+  std::vector<std::vector<std::size_t>> loops, pending(1);
+  for (std::size_t i = 0; i < ids.size(); ++i) pending[0].push_back(i);
+  while (!pending.empty()) {
+    std::vector<std::size_t> loop = std::move(pending.back());
+    pending.pop_back();
+    std::unordered_map<VertexIndex, std::size_t> seen;
+    std::size_t first = 0, second = 0;
+    for (std::size_t q = 0; q < loop.size() && second == 0; ++q) {
+      const auto [at, fresh] = seen.try_emplace(ids[loop[q]], q);
+      if (!fresh) first = at->second, second = q;
+    }
+    if (second == 0) {
+      if (loop.size() < 3) return {};
+      loops.push_back(std::move(loop));
+      continue;
+    }
+    const auto at = [&](std::size_t q) { return loop.begin() + static_cast<std::ptrdiff_t>(q); };
+    std::vector<std::size_t> inner(at(first), at(second)), outer(at(second), loop.end());
+    outer.insert(outer.end(), loop.begin(), at(first));
+    pending.push_back(std::move(inner));
+    pending.push_back(std::move(outer));
+  }
+  return loops;
+}
 
 // Autorefinement splits faces; this records which input triangle every piece came
 // from, so attributes can be interpolated and surfaces kept. A face the refinement
@@ -283,6 +371,11 @@ class Repairer {
       std::sort(corners.begin(), corners.end());
       new_faces.push_back(corners);
     }
+    // A lid over a hole that passes through one vertex twice can draw the same
+    // welded edge from both of CGAL's copies of it: as bad as repeating one the
+    // mesh has.
+    std::sort(new_edges.begin(), new_edges.end());
+    if (std::adjacent_find(new_edges.begin(), new_edges.end()) != new_edges.end()) return false;
     for (std::uint64_t e : new_edges) {
       if (edges.count(e)) return false;
     }
@@ -312,16 +405,29 @@ class Repairer {
       welded_faces[corners] = 1;
     }
     std::size_t filled = 0, filled_edges = 0, new_triangles = 0;
-    std::vector<std::size_t> too_large, unfillable, non_manifold;
+    std::vector<std::size_t> too_large, unfillable;
     for (HalfedgeIndex h : cycles) {
-      std::size_t edges = 0;
+      std::vector<SmVertex> cycle;
       HalfedgeIndex walk = h;
       do {
-        ++edges;
+        cycle.push_back(sm_.source(walk));
         walk = sm_.next(walk);
       } while (walk != h);
+      const std::size_t edges = cycle.size();
       if (edges > options_.max_hole_edges) {
         too_large.push_back(edges);
+        continue;
+      }
+      // A border that passes through two of CGAL's copies of one vertex is two
+      // holes touching there, opened into one at the vertex: a lid over the copies
+      // would cover the fan between them twice once they are joined. Such holes,
+      // and those whose CGAL lid repeats an edge once copies are joined, get their
+      // lids over the welded vertices when the mesh is written (to_mesh).
+      std::set<std::uint32_t> welded_seen;
+      bool passes_twice = false;
+      for (const SmVertex v : cycle) passes_twice = passes_twice || !welded_seen.insert(welded_id(v)).second;
+      if (passes_twice) {
+        welded_lid_cycles_.push_back(std::move(cycle));
         continue;
       }
       std::vector<FaceIndex> patch;
@@ -332,39 +438,32 @@ class Repairer {
       }
       if (!patch_is_manifold_when_welded(patch, welded_edges, welded_faces)) {
         for (FaceIndex f : patch) CGAL::Euler::remove_face(sm_.halfedge(f), sm_);
-        non_manifold.push_back(edges);
+        welded_lid_cycles_.push_back(std::move(cycle));
         continue;
       }
       ++filled;
       filled_edges += edges;
       new_triangles += patch.size();
     }
-    if (filled > 0) {
-      change(RepairKind::filled_holes, filled,
-             "filled " + plural(filled, "hole", "holes") + " (" + plural(filled_edges, "border edge", "border edges") +
-                 ") with " + plural(new_triangles, "new triangle", "new triangles"));
-    }
-    auto sizes = [](const std::vector<std::size_t>& v) {
-      std::string text;
-      for (std::size_t i = 0; i < v.size() && i < 8; ++i) text += (i ? ", " : "") + std::to_string(v[i]);
-      if (v.size() > 8) text += ", ...";
-      return text;
-    };
+    // Announced with the welded lids, at the place of this step in the report.
+    holes_filled_ = {filled, filled_edges, new_triangles};
+    holes_change_at_ = report_.changes.size();
     if (!too_large.empty()) {
       report_.notes.push_back({"left " + plural(too_large.size(), "hole", "holes") + " larger than " +
-                               std::to_string(options_.max_hole_edges) + " edges unfilled (" + sizes(too_large) +
+                               std::to_string(options_.max_hole_edges) + " edges unfilled (" + hole_sizes(too_large) +
                                " edges)"});
     }
     if (!unfillable.empty()) {
       report_.notes.push_back({"could not fill " + plural(unfillable.size(), "hole", "holes") + " (" +
-                               sizes(unfillable) + " edges): no valid triangulation over its vertices"});
+                               hole_sizes(unfillable) + " edges): no valid triangulation over its vertices"});
     }
-    if (!non_manifold.empty()) {
-      report_.notes.push_back({"did not fill " + plural(non_manifold.size(), "hole", "holes") + " (" +
-                               sizes(non_manifold) +
-                               " edges): the lid would repeat an existing edge or triangle (holes touching at a "
-                               "vertex, or a lone open piece)"});
-    }
+  }
+
+  static std::string hole_sizes(const std::vector<std::size_t>& v) {
+    std::string text;
+    for (std::size_t i = 0; i < v.size() && i < 8; ++i) text += (i ? ", " : "") + std::to_string(v[i]);
+    if (v.size() > 8) text += ", ...";
+    return text;
   }
 
   // Step 5: CGAL flips the longest edge of a triangle whose third corner lies on
@@ -564,6 +663,103 @@ class Repairer {
       }
     }
 
+    if (record) {
+      // Step 6, finished: the holes whose lid CGAL could not draw over its copies of
+      // a vertex (holes touching there), each split into simple loops at a vertex
+      // it passes twice and closed by least_area_lid over the welded vertices,
+      // avoiding every edge and triangle already there (lids included), so that
+      // no edge gets a third triangle. A new triangle's surface is that of a
+      // triangle across one of its edges.
+      std::unordered_map<std::uint64_t, std::size_t> face_of_edge;  // directed (a, b) -> faces index
+      std::set<std::uint64_t> joined_pairs;
+      std::set<std::array<VertexIndex, 3>> triples;
+      const auto pair_key = [](VertexIndex a, VertexIndex b) {
+        return (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b);
+      };
+      const auto sorted = [](VertexIndex a, VertexIndex b, VertexIndex c) {
+        std::array<VertexIndex, 3> t{a, b, c};
+        std::sort(t.begin(), t.end());
+        return t;
+      };
+      const auto enter = [&](std::size_t f) {
+        const Triangle& t = faces[f].vertices;
+        for (int c = 0; c < 3; ++c) {
+          face_of_edge[(std::uint64_t{t[c]} << 32) | t[(c + 1) % 3]] = f;
+          joined_pairs.insert(pair_key(t[c], t[(c + 1) % 3]));
+        }
+        triples.insert(sorted(t[0], t[1], t[2]));
+      };
+      if (!welded_lid_cycles_.empty()) {
+        for (std::size_t f = 0; f < faces.size(); ++f) enter(f);
+      }
+      const auto position = [&](VertexIndex v) { return v >= new_base ? new_positions[v - new_base] : input_.positions[v]; };
+      std::size_t lids = 0, lid_edges = 0, lid_triangles = 0;
+      std::vector<std::size_t> unclosed;
+      for (const std::vector<SmVertex>& cycle : welded_lid_cycles_) {
+        std::vector<VertexIndex> ids;
+        for (const SmVertex v : cycle) ids.push_back(vertex_id(v));
+        const std::vector<std::vector<std::size_t>> loops = simple_loops(ids);
+        std::vector<Triangle> lid;
+        bool closed = !loops.empty();
+        std::set<std::uint64_t> drawn;  // this lid's diagonals, which later loops avoid too
+        for (std::size_t l = 0; l < loops.size() && closed; ++l) {
+          std::vector<VertexIndex> loop_ids;
+          std::vector<Vec3> points;
+          for (const std::size_t q : loops[l]) {
+            loop_ids.push_back(ids[q]);
+            points.push_back(position(ids[q]));
+          }
+          const auto joined = [&](VertexIndex a, VertexIndex b) {
+            return joined_pairs.count(pair_key(a, b)) > 0 || drawn.count(pair_key(a, b)) > 0;
+          };
+          const auto exists = [&](VertexIndex a, VertexIndex b, VertexIndex c) { return triples.count(sorted(a, b, c)) > 0; };
+          const auto triangles = least_area_lid(loop_ids, points, joined, exists);
+          if (!triangles) {
+            closed = false;
+            break;
+          }
+          for (const auto& [i, k, j] : *triangles) {
+            lid.push_back({loop_ids[i], loop_ids[k], loop_ids[j]});
+            for (const auto& [a, b] : {std::pair{i, k}, std::pair{k, j}, std::pair{i, j}}) {
+              drawn.insert(pair_key(loop_ids[a], loop_ids[b]));
+            }
+          }
+        }
+        if (!closed) {
+          unclosed.push_back(cycle.size());
+          continue;
+        }
+        for (const Triangle& t : lid) {
+          Face face{t, no_origin, false, std::nullopt, SurfaceMesh::null_face()};
+          for (int c = 0; c < 3 && !face.surface; ++c) {
+            const auto across = face_of_edge.find((std::uint64_t{t[(c + 1) % 3]} << 32) | t[c]);
+            if (across != face_of_edge.end()) face.surface = faces[across->second].surface;
+          }
+          faces.push_back(face);
+          enter(faces.size() - 1);
+        }
+        ++lids;
+        lid_edges += cycle.size();
+        lid_triangles += lid.size();
+      }
+      auto [filled, filled_edges, new_triangles] = holes_filled_;
+      if (filled + lids > 0) {
+        const RepairChange fill{RepairKind::filled_holes, filled + lids,
+                                "filled " + plural(filled + lids, "hole", "holes") + " (" +
+                                    plural(filled_edges + lid_edges, "border edge", "border edges") + ") with " +
+                                    plural(new_triangles + lid_triangles, "new triangle", "new triangles") +
+                                    (lids > 0 ? " (" + plural(lids, "hole", "holes") +
+                                                    " touching another at a vertex closed over the welded vertices)"
+                                              : std::string())};
+        report_.changes.insert(report_.changes.begin() + static_cast<std::ptrdiff_t>(holes_change_at_), fill);
+      }
+      if (!unclosed.empty()) {
+        report_.notes.push_back({"did not fill " + plural(unclosed.size(), "hole", "holes") + " (" +
+                                 hole_sizes(unclosed) +
+                                 " edges): every lid over its vertices would repeat an edge or triangle the mesh has"});
+      }
+    }
+
     // Renumber: surviving input vertices in input order, then new ones.
     std::vector<bool> input_used(input_.vertex_count());
     std::vector<bool> new_used(new_positions.size());
@@ -703,6 +899,13 @@ class Repairer {
   SurfaceMesh::Property_map<FaceIndex, bool> split_;
   std::size_t resolved_pairs_ = 0;
   std::unordered_map<PositionKey, std::uint32_t, PositionKeyHash> welded_ids_;
+  // Holes CGAL's lid could not close without repeating an edge (holes touching at
+  // a vertex), closed over the welded vertices when the mesh is written.
+  std::vector<std::vector<SmVertex>> welded_lid_cycles_;
+  // The hole step's counts (holes, their edges, new triangles) and where in the
+  // report its change goes, once the welded lids are added to them.
+  std::array<std::size_t, 3> holes_filled_{};
+  std::size_t holes_change_at_ = 0;
   std::unordered_map<VertexIndex, std::size_t> corner_at_;
   std::unordered_map<std::uint64_t, std::size_t> corner_at_surface_;
 };

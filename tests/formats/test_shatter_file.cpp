@@ -1305,7 +1305,11 @@ std::string read_bytes(const std::filesystem::path& path) {
 }
 
 /// The committed fuzz corpus of the .shatter reader, next to this file.
-std::filesystem::path shatter_corpus() { return std::filesystem::path(__FILE__).parent_path().parent_path() / "fuzz" / "corpus" / "fuzz_read_shatter"; }
+// From the corpus folder the build names (tests/data/corpus), not from __FILE__,
+// which a compiler cache (ccache with base_dir) makes relative to the build folder.
+std::filesystem::path shatter_corpus() {
+  return shatter::test::mesh_dir().parent_path().parent_path() / "fuzz" / "corpus" / "fuzz_read_shatter";
+}
 
 /// The index of the first node (from the back, so a leaf) whose solid has a face
 /// on a cut plane and a vertex of kind three_planes.

@@ -10,6 +10,7 @@
 // filtered predicates on the double coordinates). No tolerance decides anything.
 
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -47,10 +48,13 @@ struct RepairNote {
 };
 
 struct RepairOptions {
-  /// Fill a boundary cycle (hole) only when it has at most this many edges.
-  /// Larger openings are more likely a deliberately open surface than a defect,
-  /// and a filled large hole is an invented surface; they are left and noted.
-  std::size_t max_hole_edges = 64;
+  /// Fill a boundary cycle (hole) only when it has at most this many edges;
+  /// larger ones are left and noted. By default every hole is filled, whatever
+  /// its size: a fracture needs a closed solid, and an opening that is really
+  /// meant to be open cannot be cut into solids anyway. A filled hole's lid is an
+  /// invented surface over the hole's own vertices; the report says how many
+  /// holes and triangles it took.
+  std::size_t max_hole_edges = std::numeric_limits<std::size_t>::max();
   /// Try CGAL's autorefinement on a closed mesh that still self-intersects. This
   /// constructs the intersection points (exactly, inside CGAL) and rounds them to
   /// the nearest double; the rounded result is checked like any other (see
@@ -88,8 +92,13 @@ struct RepairReport {
 ///  4. stitch boundary edges whose endpoints are exactly equal (stitch_borders);
 ///  5. remove exactly collinear triangles by flipping or collapsing edges
 ///     (remove_degenerate_faces; no point is moved or created);
-///  6. fill each hole of at most `max_hole_edges` edges with triangles over its own
-///     vertices (triangulate_hole; no new vertex);
+///  6. fill each hole of at most `max_hole_edges` edges (by default all) with
+///     triangles over its own vertices (triangulate_hole; no new vertex); a hole
+///     whose border passes through one vertex twice (holes touching there), or
+///     whose CGAL lid would repeat an edge once vertex copies are joined, is closed
+///     over the welded vertices instead: split at the vertex it passes twice, each
+///     part by its least-area triangulation that adds no edge or triangle the mesh
+///     has (none when every triangulation does: noted, the hole left);
 ///  7. when the mesh is closed, orient every shell to bound a volume, the outermost
 ///     outward (orient_to_bound_a_volume);
 ///  8. when closed and still self-intersecting and `resolve_self_intersections`,
