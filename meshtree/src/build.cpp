@@ -127,6 +127,30 @@ struct BuildNode {
   double vanished_volume = 0, vanished_volume_bound = 0;
 };
 
+// The cut grows its pieces' arrays by doubling, so they hold about a third more
+// than they use (cube -> 65,536: 334 MB held for 247 MB of meshes and solids),
+// and every node keeps its arrays to the end of the build. Fitting each child's
+// arrays once, when it is made, costs a copy of a small piece and changes no
+// value. (Capacity is no part of the tree.)
+template <class T>
+void fit(std::vector<T>& values) {
+  if (values.capacity() > values.size()) values.shrink_to_fit();
+}
+
+void fit_to_size(BuildNode& node) {
+  fit(node.mesh.positions);
+  fit(node.mesh.triangles);
+  fit(node.mesh.surfaces);
+  fit(node.mesh.corners.normals);
+  fit(node.mesh.corners.uvs);
+  fit(node.mesh.corners.tangents);
+  fit(node.solid.defs);
+  fit(node.solid.approx);
+  fit(node.solid.faces);
+  fit(node.solid.loops);
+  fit(node.solid.corners);
+}
+
 class Builder {
  public:
   Builder(const TreeRecipe& recipe, const LeafProgressFn& progress) : recipe_(recipe), progress_(progress) {}
@@ -203,6 +227,7 @@ class Builder {
         child->mesh = std::move(piece.mesh);
         child->mass = mass_properties(child->mesh);
         child->solid = std::move(piece.solid);
+        fit_to_size(*child);
         child->parent = &node;
         child->above_parent_plane = piece.above;
         child->depth = node.depth + 1;
