@@ -331,8 +331,12 @@ std::string meshes_payload(const MeshTree& tree, bool hulls) {
       continue;
     }
     solid_positions.resize(node.solid.defs.size());
+    // A lean tree keeps no approximations (the validator has checked that a
+    // solid has all or none): they are computed here, as the reader will.
+    const bool cached = !node.solid.approx.empty();
     for (std::size_t v = 0; v < solid_positions.size(); ++v) {
-      solid_positions[v] = output_position(set, node.solid.defs[v], node.solid.approx[v]);
+      const PointDef& def = node.solid.defs[v];
+      solid_positions[v] = output_position(set, def, cached ? node.solid.approx[v] : approximate(set, def));
     }
     write_mesh(out, node.mesh, solid_positions, path, nodes);
   }

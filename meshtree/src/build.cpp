@@ -151,9 +151,15 @@ void fit_to_size(BuildNode& node) {
   fit(node.solid.corners);
 }
 
+// A lean build's release of a node's cached approximations (BuildRunOptions::lean):
+// a pure function of the definitions, so the writer and the bonds recompute
+// what they need, and nothing else reads them once the node will not be cut.
+void release_approximations(Solid& solid) { std::vector<ApproxPoint>().swap(solid.approx); }
+
 class Builder {
  public:
-  Builder(const TreeRecipe& recipe, const LeafProgressFn& progress) : recipe_(recipe), progress_(progress) {}
+  Builder(const TreeRecipe& recipe, const LeafProgressFn& progress, bool lean)
+      : recipe_(recipe), progress_(progress), lean_(lean) {}
 
   std::unique_ptr<BuildNode> root(const Mesh& mesh) {
     auto node = std::make_unique<BuildNode>();
@@ -235,6 +241,8 @@ class Builder {
         node.children.push_back(std::move(child));
       }
       node.plane = path.back();
+      // Cut once and for all (an undone cut leaves it a leaf, never cut again).
+      if (lean_) release_approximations(node.solid);
       node.vanished_pieces = vanished;
       node.vanished_volume = vanished_volume;
       node.vanished_volume_bound = vanished_bound;
@@ -250,10 +258,14 @@ class Builder {
         (last_defect.empty() ? std::string() : " (" + last_defect + ")"));
   }
 
-  void leaf_finished() {
+  /// `node` is a leaf of the finished tree (a cut undone later leaves another).
+  void leaf_finished(BuildNode& node) {
+    if (lean_) release_approximations(node.solid);
     const std::size_t done = ++leaves_done_;
     if (progress_) progress_(done);
   }
+
+  bool lean() const { return lean_; }
 
   const TreeRecipe& recipe() const { return recipe_; }
   const PlaneInput& plane_input() const { return *plane_input_; }
@@ -264,6 +276,7 @@ class Builder {
   const TreeRecipe& recipe_;  // what to build
   std::optional<PlaneInput> plane_input_;
   const LeafProgressFn& progress_;
+  const bool lean_;  // BuildRunOptions::lean
   std::atomic<std::size_t> leaves_done_{0};
   // Counted from every worker; cut() is const because it is a pure function of
   // its node, and these tallies never feed back into a decision.
@@ -315,7 +328,7 @@ constexpr std::uint32_t parallel_budget = 32;
 
 void grow(Builder& builder, BuildNode& node, std::uint32_t budget) {
   if (budget <= 1) {
-    builder.leaf_finished();
+    builder.leaf_finished(node);
     return;
   }
   builder.cut(node);
@@ -406,7 +419,7 @@ void grow_balanced(Builder& builder, BuildNode& root, std::uint32_t target, unsi
     node->children.clear();
     node->plane = {};
     node->vanished_pieces = 0, node->vanished_volume = 0, node->vanished_volume_bound = 0;
-    builder.leaf_finished();
+    builder.leaf_finished(*node);
   }
 }
 
@@ -580,7 +593,7 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
 
   const unsigned threads = run.threads == 0 ? static_cast<unsigned>(tbb::info::default_concurrency()) : run.threads;
   auto phase_start = std::chrono::steady_clock::now();
-  Builder builder(recipe, run.progress);
+  Builder builder(recipe, run.progress, run.lean);
   std::unique_ptr<BuildNode> root = builder.root(mesh);
   tbb::task_arena arena(static_cast<int>(threads));
   arena.execute([&] {

@@ -20,6 +20,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -39,6 +40,7 @@
 #include "shatter/meshtree/build.hpp"
 #include "shatter/formats/file.hpp"
 #include "shatter/meshtree/recipe.hpp"
+#include "shatter/meshtree/validate_tree.hpp"
 #include "shatter/version.hpp"
 #include "support/checks.hpp"
 
@@ -1681,6 +1683,43 @@ TEST_CASE("encode_shatter refuses exact representations a reader could not rebui
   CHECK_THROWS_WITH(encode_shatter(fast), Catch::Contains("geometry has 1 input planes but no input points"));
   check_refused(reference_file(fast), "GEOM section, byte");
   check_refused(reference_file(fast), "geometry has 1 input planes but no input points");
+}
+
+TEST_CASE("solids without their approximations write the same bytes", "[shatter_file]") {
+  // A lean build (BuildRunOptions::lean) drops every Solid::approx; the writer
+  // computes them as the reader will. Any mix of solids with and without them
+  // writes the full tree's bytes, which read back to the full tree.
+  const MeshTree& base = small_plane_tree();
+  REQUIRE(base.nodes.size() >= 3);
+  const std::string bytes = encode_shatter(base);
+  const auto keep_none = [](std::size_t) { return false; };
+  const auto keep_leaves = [&](std::size_t k) { return base.nodes[k].is_leaf(); };
+  const auto keep_odd = [](std::size_t k) { return k % 2 == 1; };
+  for (const std::function<bool(std::size_t)>& keep : {std::function<bool(std::size_t)>(keep_none), std::function<bool(std::size_t)>(keep_leaves), std::function<bool(std::size_t)>(keep_odd)}) {
+    MeshTree tree = base;
+    std::size_t dropped = 0;
+    for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+      REQUIRE(!tree.nodes[k].solid.approx.empty());
+      if (keep(k)) continue;
+      tree.nodes[k].solid.approx.clear();
+      ++dropped;
+    }
+    REQUIRE(dropped > 0);
+    CHECK(validate_tree(tree).summary() == "valid");
+    CHECK(encode_shatter(tree) == bytes);
+    CHECK(tree_difference(decode_within_budget(bytes), base).empty());
+  }
+  // Without a cache to compare, a definition is still approximated: a
+  // degenerate one is refused as the reader would refuse it.
+  MeshTree degenerate = base;
+  const std::size_t k = deep_node(base);
+  Solid& solid = degenerate.nodes[k].solid;
+  solid.approx.clear();
+  const auto three = std::find_if(solid.defs.begin(), solid.defs.end(),
+                                  [](const PointDef& d) { return d.kind == PointKind::three_planes; });
+  REQUIRE(three != solid.defs.end());
+  three->planes[1] = three->planes[0];
+  CHECK_THROWS_WITH(encode_shatter(degenerate), Catch::Contains("degenerate point definition"));
 }
 
 TEST_CASE("a leaf's plane is unused but kept bit for bit", "[shatter_file][compatibility]") {
