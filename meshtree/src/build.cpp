@@ -120,8 +120,21 @@ Plane draw_plane(Strategy strategy, const BoundingBox& box, const Vec3& centroid
 // is preceded by a pointer to its block. A block counts its live nodes plus one
 // while it is open; the thread closes it (drops that one) when it moves on to a
 // new block, and whoever drops the count to zero, closing or freeing the last
-// node, unmaps it. Any thread may free a node.
+// node, unmaps it. Any thread may free a node. (Not under AddressSanitizer,
+// which checks BuildNodes only where malloc makes them.)
 
+#if defined(__SANITIZE_ADDRESS__)
+#define SHATTER_NODE_BLOCKS 0
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define SHATTER_NODE_BLOCKS 0
+#endif
+#endif
+#ifndef SHATTER_NODE_BLOCKS
+#define SHATTER_NODE_BLOCKS 1
+#endif
+
+#if SHATTER_NODE_BLOCKS
 constexpr std::size_t node_block_bytes = std::size_t{1} << 20;
 constexpr std::size_t node_align = alignof(std::max_align_t);
 constexpr std::size_t aligned(std::size_t bytes) { return (bytes + node_align - 1) / node_align * node_align; }
@@ -179,13 +192,16 @@ class OpenNodeBlock {
 };
 
 thread_local OpenNodeBlock open_node_block;
+#endif  // SHATTER_NODE_BLOCKS
 
 // --- the tree under construction ----------------------------------------------
 
 struct BuildNode {
+#if SHATTER_NODE_BLOCKS
   // From the node blocks above, so the records leave the process as they are freed.
   static void* operator new(std::size_t size) { return open_node_block.allocate(size); }
   static void operator delete(void* node) noexcept { OpenNodeBlock::free(node); }
+#endif
 
   Mesh mesh;    // the solid rounded to doubles, certified valid (round_solid)
   // The exact solid; its vertices refer to the cut plane of the ancestor at

@@ -1306,8 +1306,8 @@ std::string read_bytes(const std::filesystem::path& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-/// The committed fuzz corpus of the .shatter reader, next to this file.
-std::filesystem::path shatter_corpus() { return std::filesystem::path(__FILE__).parent_path().parent_path() / "fuzz" / "corpus" / "fuzz_read_shatter"; }
+/// The committed fuzz corpus of the .shatter reader (tests/formats/CMakeLists.txt names it).
+std::filesystem::path shatter_corpus() { return SHATTER_SHATTER_CORPUS; }
 
 /// The index of the first node (from the back, so a leaf) whose solid has a face
 /// on a cut plane and a vertex of kind three_planes.
@@ -1683,6 +1683,23 @@ TEST_CASE("encode_shatter refuses exact representations a reader could not rebui
   CHECK_THROWS_WITH(encode_shatter(fast), Catch::Contains("geometry has 1 input planes but no input points"));
   check_refused(reference_file(fast), "GEOM section, byte");
   check_refused(reference_file(fast), "geometry has 1 input planes but no input points");
+}
+
+TEST_CASE("sections longer than a writer's piece are written byte for byte as documented", "[shatter_file]") {
+  // The writer makes a section in pieces of a mebibyte, cut between records,
+  // and sums the header's length and CRC-32 over them. A fine torus cut once
+  // has a GEOM section of several pieces (a record per point) and SOLD and MESH
+  // sections of a few records each larger than a piece.
+  TreeRecipe recipe;
+  recipe.fragments = 2;
+  const MeshTree tree = build_mesh_tree(test::torus(1.0, 0.35, 300, 300), recipe, {.threads = 1});
+  REQUIRE(24 * tree.geometry.points.size() > 2 * (std::size_t{1} << 20));
+  const std::string bytes = encode_shatter(tree);
+  CHECK(byte_difference(bytes, reference_file_v3(tree)) == "equal");
+  std::string pieces;
+  write_shatter(tree, [&](std::string_view piece) { pieces.append(piece); });
+  CHECK(pieces == bytes);
+  CHECK(tree_difference(decode_within_budget(bytes), tree).empty());
 }
 
 TEST_CASE("solids without their approximations write the same bytes", "[shatter_file]") {
