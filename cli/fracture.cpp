@@ -320,7 +320,10 @@ int run_fracture(const FractureArgs& args) {
     const BuildRunOptions run{.threads = args.threads,
                               // read_valid_solid made the full check: the builder need not repeat it
                               .input_validated = true,
-                              .progress = progress_bar.callback()};
+                              .progress = progress_bar.callback(),
+                              // the tree is only written, summed up and exported
+                              // below: what the build can recompute goes early
+                              .lean = true};
     try {
       tree = build_mesh_tree(input.mesh, recipe, run);
     } catch (const UnsupportedGeometryError& e) {

@@ -428,13 +428,23 @@ void write_shatter(const MeshTree& tree, const ByteSink& sink) {
   for (const unsigned char byte : magic) header.u8(byte);
   header.u32(shatter_format_version);
   sink(header.take());
-  write_version3_sections(tree, [&](Tag tag, std::string_view payload) {
+  write_version3_sections(tree, [&](Tag tag, PayloadPieces& payload) {
+    std::uint64_t size = 0;
+    std::uint32_t crc = 0;
+    for (const std::string& piece : payload) {
+      size += piece.size();
+      crc = crc_of(piece, crc);
+    }
     ByteWriter section_header;
     section_header.tag(tag);
-    section_header.u64(payload.size());
-    section_header.u32(crc_of(payload));
+    section_header.u64(size);
+    section_header.u32(crc);
     sink(section_header.take());
-    sink(payload);
+    // Each piece is freed once written, so the section shrinks as it goes out.
+    for (std::string& piece : payload) {
+      if (!piece.empty()) sink(piece);
+      std::string().swap(piece);
+    }
   });
 }
 

@@ -91,8 +91,10 @@ inline constexpr std::uint8_t known_channel_bits = normals_bit | uvs_bit | tange
 // ---------------------------------------------------------------------------
 // Small helpers
 
-inline std::uint32_t crc_of(std::string_view bytes) {
-  uLong crc = crc32(0L, Z_NULL, 0);
+/// The CRC-32 of `bytes`; with `so_far`, the CRC-32 of the bytes it was the CRC
+/// of followed by `bytes` (so a payload in pieces is checked piece by piece).
+inline std::uint32_t crc_of(std::string_view bytes, std::uint32_t so_far = 0) {
+  uLong crc = so_far;
   // zlib takes a 32-bit length; feed larger payloads in pieces.
   constexpr std::size_t piece = std::size_t{1} << 30;
   while (!bytes.empty()) {
@@ -182,7 +184,34 @@ class ByteWriter {
   void append(std::string_view bytes) { bytes_.append(bytes); }
   void reserve(std::size_t size) { bytes_.reserve(size); }
 
-  std::string take() { return std::move(bytes_); }
+  /// The bytes written, whole. Pieces put aside by end_record are joined first.
+  std::string take() {
+    if (pieces_.empty()) return std::move(bytes_);
+    std::string whole;
+    for (const std::string& piece : pieces_) whole += piece;
+    whole += bytes_;
+    pieces_.clear();
+    bytes_.clear();
+    return whole;
+  }
+
+  /// Marks the end of a record: once the current piece holds piece_bytes or
+  /// more, it is put aside and a new one begun. A section hundreds of megabytes
+  /// long (a million fragments) is then never one string grown by doubling,
+  /// which holds up to twice its size and touches three times it while copying.
+  void end_record() {
+    if (bytes_.size() < piece_bytes) return;
+    pieces_.push_back(std::move(bytes_));
+    bytes_ = std::string();
+  }
+  static constexpr std::size_t piece_bytes = std::size_t{1} << 20;
+
+  /// The bytes written, in the pieces end_record made (the last may be empty).
+  std::vector<std::string> take_pieces() {
+    pieces_.push_back(std::move(bytes_));
+    bytes_ = std::string();
+    return std::move(pieces_);
+  }
 
  private:
   // The file is little-endian; on a little-endian machine a value's bytes are
@@ -198,6 +227,8 @@ class ByteWriter {
     }
     bytes_.append(bytes, sizeof bytes);
   }
+
+  std::vector<std::string> pieces_;  ///< full pieces put aside by end_record, in order
 
   std::string bytes_;
 };
@@ -446,11 +477,16 @@ struct RecordOffsets {
 // ---------------------------------------------------------------------------
 // Version 3 payloads (file_v3.cpp)
 
+/// A section's payload: its bytes are the pieces' in order (ByteWriter::end_record
+/// cuts a large one into pieces of about a mebibyte).
+using PayloadPieces = std::vector<std::string>;
+
 /// Hands `emit` the version 3 sections of `tree` one at a time, in the order
 /// encode_shatter writes them, END last; each payload is made just before its
-/// call and freed after it. Precondition: `tree` passes validate_tree with its
-/// caches.
-void write_version3_sections(const MeshTree& tree, const std::function<void(Tag, std::string_view)>& emit);
+/// call, in pieces, and `emit` may free each piece once it is written.
+/// Precondition: `tree` passes validate_tree with its caches (or none, as
+/// encode_shatter allows).
+void write_version3_sections(const MeshTree& tree, const std::function<void(Tag, PayloadPieces&)>& emit);
 
 /// What a version 3 file leaves to compute once the tree's structure has passed
 /// validate_tree and its caches are filled: per node, per mesh (hull) vertex,

@@ -208,7 +208,7 @@ void write_mesh(ByteWriter& out, const Mesh& mesh, std::span<const Vec3> sources
   write_corner_channels(out, mesh);
 }
 
-std::string nodes_payload(const MeshTree& tree) {
+PayloadPieces nodes_payload(const MeshTree& tree) {
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
   std::uint8_t flags = 0;
   for (std::size_t k = 0; k < nodes.size(); ++k) {
@@ -238,15 +238,16 @@ std::string nodes_payload(const MeshTree& tree) {
       out.vec3(node.mass.centroid);
       for (const double entry : node.mass.inertia) out.f64(entry);
     }
+    out.end_record();
   }
-  return out.take();
+  return out.take_pieces();
 }
 
-std::string solids_payload(const MeshTree& tree) {
+PayloadPieces solids_payload(const MeshTree& tree) {
   ByteWriter out;
   const bool exact = tree.has_exact_representation();
   out.count32(exact ? tree.nodes.size() : 0);
-  if (!exact) return out.take();
+  if (!exact) return out.take_pieces();
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
   AncestorPath path;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> face_of_edge;  // (from, to) -> face, sorted
@@ -310,13 +311,14 @@ std::string solids_payload(const MeshTree& tree) {
         }
       }
     }
+    out.end_record();
   }
-  return out.take();
+  return out.take_pieces();
 }
 
 /// Each mesh's positions coded against its solid's output positions (MESH) or
 /// each hull's against its node's mesh (HULL).
-std::string meshes_payload(const MeshTree& tree, bool hulls) {
+PayloadPieces meshes_payload(const MeshTree& tree, bool hulls) {
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
   const PlaneSet set = tree.plane_set();
   ByteWriter out;
@@ -328,15 +330,21 @@ std::string meshes_payload(const MeshTree& tree, bool hulls) {
     path.enter(static_cast<NodeIndex>(k), node.depth);
     if (hulls) {
       write_mesh(out, node.hull, node.mesh.positions, path, nodes);
+      out.end_record();
       continue;
     }
     solid_positions.resize(node.solid.defs.size());
+    // A lean tree keeps no approximations (the validator has checked that a
+    // solid has all or none): they are computed here, as the reader will.
+    const bool cached = !node.solid.approx.empty();
     for (std::size_t v = 0; v < solid_positions.size(); ++v) {
-      solid_positions[v] = output_position(set, node.solid.defs[v], node.solid.approx[v]);
+      const PointDef& def = node.solid.defs[v];
+      solid_positions[v] = output_position(set, def, cached ? node.solid.approx[v] : approximate(set, def));
     }
     write_mesh(out, node.mesh, solid_positions, path, nodes);
+    out.end_record();
   }
-  return out.take();
+  return out.take_pieces();
 }
 
 /// The child of `ancestor` on the way down to `node` (a strict descendant).
@@ -353,7 +361,7 @@ Vec3 derived_normal(const MeshTree& tree, const Bond& bond) {
   return tree.nodes[side].above_parent_plane ? -unit : unit;
 }
 
-std::string bonds_payload(const MeshTree& tree) {
+PayloadPieces bonds_payload(const MeshTree& tree) {
   std::uint8_t flags = 0;
   for (const Bond& bond : tree.bonds) {
     if (!same_bits(bond.normal, derived_normal(tree, bond))) {
@@ -391,22 +399,26 @@ std::string bonds_payload(const MeshTree& tree) {
       out.f64(coordinate(bond.centroid, (axis + 2) % 3));
     }
     if ((flags & bond_normals_stored_bit) != 0) out.vec3(bond.normal);
+    out.end_record();
   }
-  return out.take();
+  return out.take_pieces();
 }
 
-std::string geometry_payload(const InputGeometry& geometry) {
+PayloadPieces geometry_payload(const InputGeometry& geometry) {
   ByteWriter out;
   out.count32(geometry.points.size());
   out.count32(geometry.planes.size());
-  for (const Vec3& point : geometry.points) out.vec3(point);
+  for (const Vec3& point : geometry.points) {
+    out.vec3(point);
+    out.end_record();
+  }
   for (const auto& plane : geometry.planes) {
     for (const VertexIndex point : plane) out.u32(point);
   }
-  return out.take();
+  return out.take_pieces();
 }
 
-std::string recipe_payload(const TreeRecipe& recipe) {
+PayloadPieces recipe_payload(const TreeRecipe& recipe) {
   ByteWriter out;
   out.u32(recipe.fragments);
   out.u64(recipe.seed);
@@ -415,7 +427,7 @@ std::string recipe_payload(const TreeRecipe& recipe) {
   out.f64(recipe.interior_uv_scale);
   out.u32(recipe.max_plane_tries);
   out.u8(recipe.allow_self_intersections ? 1 : 0);
-  return out.take();
+  return out.take_pieces();
 }
 
 // ---------------------------------------------------------------------------
@@ -504,17 +516,19 @@ Mesh read_mesh(PayloadReader& in, std::size_t source_count, std::vector<std::uin
 
 }  // namespace
 
-void write_version3_sections(const MeshTree& tree, const std::function<void(Tag, std::string_view)>& emit) {
+void write_version3_sections(const MeshTree& tree, const std::function<void(Tag, PayloadPieces&)>& emit) {
   const HeldFloatingPointExceptions held;
-  if (!tree.shatter_version.empty()) emit(version_tag, tree.shatter_version);
-  emit(recipe_tag, recipe_payload(tree.recipe));
-  emit(nodes_tag, nodes_payload(tree));
-  emit(geometry_tag, geometry_payload(tree.geometry));
-  emit(solids_tag, solids_payload(tree));
-  emit(meshes_tag, meshes_payload(tree, false));
-  emit(hulls_tag, meshes_payload(tree, true));
-  emit(bonds_tag, bonds_payload(tree));
-  emit(end_tag, std::string_view());
+  // Each payload lives only for its call.
+  const auto section = [&](Tag tag, PayloadPieces payload) { emit(tag, payload); };
+  if (!tree.shatter_version.empty()) section(version_tag, {tree.shatter_version});
+  section(recipe_tag, recipe_payload(tree.recipe));
+  section(nodes_tag, nodes_payload(tree));
+  section(geometry_tag, geometry_payload(tree.geometry));
+  section(solids_tag, solids_payload(tree));
+  section(meshes_tag, meshes_payload(tree, false));
+  section(hulls_tag, meshes_payload(tree, true));
+  section(bonds_tag, bonds_payload(tree));
+  section(end_tag, {});
 }
 
 void read_version3_nodes(const Section& section, MeshTree& tree, Version3Pending& pending, RecordOffsets& offsets) {

@@ -1,5 +1,6 @@
 #include "shatter/meshtree/build.hpp"
 
+#include <sys/mman.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -7,8 +8,10 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <new>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -104,9 +107,102 @@ Plane draw_plane(Strategy strategy, const BoundingBox& box, const Vec3& centroid
   return plane_through(random.direction(), centroid);
 }
 
+// --- where the build's node records live ------------------------------------------
+// Every node is a BuildNode until number_tree moves its contents into the tree's
+// preorder array, which is allocated whole while the BuildNodes still exist: at
+// 2^20 fragments some 1.0 GB of BuildNodes beside the array's 1.2 GB. Memory
+// freed to malloc stays in the process, and could not hold that one large array
+// anyway, so BuildNodes come from blocks of their own, taken from the system
+// and given back as soon as every node in one is freed: number_tree frees each
+// node once its contents have moved, and the blocks leave as the array fills.
+//
+// A thread takes nodes from its own open block, one after the other; each node
+// is preceded by a pointer to its block. A block counts its live nodes plus one
+// while it is open; the thread closes it (drops that one) when it moves on to a
+// new block, and whoever drops the count to zero, closing or freeing the last
+// node, unmaps it. Any thread may free a node. (Not under AddressSanitizer,
+// which checks BuildNodes only where malloc makes them.)
+
+#if defined(__SANITIZE_ADDRESS__)
+#define SHATTER_NODE_BLOCKS 0
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define SHATTER_NODE_BLOCKS 0
+#endif
+#endif
+#ifndef SHATTER_NODE_BLOCKS
+#define SHATTER_NODE_BLOCKS 1
+#endif
+
+#if SHATTER_NODE_BLOCKS
+constexpr std::size_t node_block_bytes = std::size_t{1} << 20;
+constexpr std::size_t node_align = alignof(std::max_align_t);
+constexpr std::size_t aligned(std::size_t bytes) { return (bytes + node_align - 1) / node_align * node_align; }
+
+// The head of a block; its nodes follow it, from byte node_block_start.
+struct NodeBlock {
+  std::atomic<std::size_t> holds{1};  // live nodes, plus one while open
+  std::size_t used = 0;               // bytes of the block handed out, the head's included
+};
+
+constexpr std::size_t node_block_start = aligned(sizeof(NodeBlock));
+// Before each node, the pointer to its block.
+constexpr std::size_t node_slot_bytes = aligned(sizeof(NodeBlock*));
+
+void drop_hold(NodeBlock* block) {
+  if (block->holds.fetch_sub(1, std::memory_order_acq_rel) == 1) {
+    block->~NodeBlock();
+    ::munmap(block, node_block_bytes);
+  }
+}
+
+class OpenNodeBlock {
+ public:
+  OpenNodeBlock() = default;
+  OpenNodeBlock(const OpenNodeBlock&) = delete;
+  OpenNodeBlock& operator=(const OpenNodeBlock&) = delete;
+  ~OpenNodeBlock() {
+    if (block_ != nullptr) drop_hold(block_);
+  }
+
+  void* allocate(std::size_t size) {
+    // The node's block pointer first, then the node, both aligned as malloc would.
+    const std::size_t need = node_slot_bytes + aligned(size);
+    if (need > node_block_bytes - node_block_start) throw std::bad_alloc();
+    if (block_ == nullptr || block_->used + need > node_block_bytes) {
+      void* memory = ::mmap(nullptr, node_block_bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      if (memory == MAP_FAILED) throw std::bad_alloc();
+      if (block_ != nullptr) drop_hold(block_);
+      block_ = new (memory) NodeBlock();
+      block_->used = node_block_start;
+    }
+    std::byte* at = reinterpret_cast<std::byte*>(block_) + block_->used;
+    block_->used += need;
+    block_->holds.fetch_add(1, std::memory_order_relaxed);
+    *reinterpret_cast<NodeBlock**>(at) = block_;
+    return at + node_slot_bytes;
+  }
+
+  static void free(void* node) {
+    drop_hold(*reinterpret_cast<NodeBlock**>(static_cast<std::byte*>(node) - node_slot_bytes));
+  }
+
+ private:
+  NodeBlock* block_ = nullptr;
+};
+
+thread_local OpenNodeBlock open_node_block;
+#endif  // SHATTER_NODE_BLOCKS
+
 // --- the tree under construction ----------------------------------------------
 
 struct BuildNode {
+#if SHATTER_NODE_BLOCKS
+  // From the node blocks above, so the records leave the process as they are freed.
+  static void* operator new(std::size_t size) { return open_node_block.allocate(size); }
+  static void operator delete(void* node) noexcept { OpenNodeBlock::free(node); }
+#endif
+
   Mesh mesh;    // the solid rounded to doubles, certified valid (round_solid)
   // The exact solid; its vertices refer to the cut plane of the ancestor at
   // depth k as PlaneRef::cut(k). A node's index in the tree is its place in
@@ -127,9 +223,39 @@ struct BuildNode {
   double vanished_volume = 0, vanished_volume_bound = 0;
 };
 
+// The cut grows its pieces' arrays by doubling, so they hold about a third more
+// than they use (cube -> 65,536: 334 MB held for 247 MB of meshes and solids),
+// and every node keeps its arrays to the end of the build. Fitting each child's
+// arrays once, when it is made, costs a copy of a small piece and changes no
+// value. (Capacity is no part of the tree.)
+template <class T>
+void fit(std::vector<T>& values) {
+  if (values.capacity() > values.size()) values.shrink_to_fit();
+}
+
+void fit_to_size(BuildNode& node) {
+  fit(node.mesh.positions);
+  fit(node.mesh.triangles);
+  fit(node.mesh.surfaces);
+  fit(node.mesh.corners.normals);
+  fit(node.mesh.corners.uvs);
+  fit(node.mesh.corners.tangents);
+  fit(node.solid.defs);
+  fit(node.solid.approx);
+  fit(node.solid.faces);
+  fit(node.solid.loops);
+  fit(node.solid.corners);
+}
+
+// A lean build's release of a node's cached approximations (BuildRunOptions::lean):
+// a pure function of the definitions, so the writer and the bonds recompute
+// what they need, and nothing else reads them once the node will not be cut.
+void release_approximations(Solid& solid) { std::vector<ApproxPoint>().swap(solid.approx); }
+
 class Builder {
  public:
-  Builder(const TreeRecipe& recipe, const LeafProgressFn& progress) : recipe_(recipe), progress_(progress) {}
+  Builder(const TreeRecipe& recipe, const LeafProgressFn& progress, bool lean)
+      : recipe_(recipe), progress_(progress), lean_(lean) {}
 
   std::unique_ptr<BuildNode> root(const Mesh& mesh) {
     auto node = std::make_unique<BuildNode>();
@@ -203,6 +329,7 @@ class Builder {
         child->mesh = std::move(piece.mesh);
         child->mass = mass_properties(child->mesh);
         child->solid = std::move(piece.solid);
+        fit_to_size(*child);
         child->parent = &node;
         child->above_parent_plane = piece.above;
         child->depth = node.depth + 1;
@@ -210,6 +337,8 @@ class Builder {
         node.children.push_back(std::move(child));
       }
       node.plane = path.back();
+      // Cut once and for all (an undone cut leaves it a leaf, never cut again).
+      if (lean_) release_approximations(node.solid);
       node.vanished_pieces = vanished;
       node.vanished_volume = vanished_volume;
       node.vanished_volume_bound = vanished_bound;
@@ -225,10 +354,14 @@ class Builder {
         (last_defect.empty() ? std::string() : " (" + last_defect + ")"));
   }
 
-  void leaf_finished() {
+  /// `node` is a leaf of the finished tree (a cut undone later leaves another).
+  void leaf_finished(BuildNode& node) {
+    if (lean_) release_approximations(node.solid);
     const std::size_t done = ++leaves_done_;
     if (progress_) progress_(done);
   }
+
+  bool lean() const { return lean_; }
 
   const TreeRecipe& recipe() const { return recipe_; }
   const PlaneInput& plane_input() const { return *plane_input_; }
@@ -239,6 +372,7 @@ class Builder {
   const TreeRecipe& recipe_;  // what to build
   std::optional<PlaneInput> plane_input_;
   const LeafProgressFn& progress_;
+  const bool lean_;  // BuildRunOptions::lean
   std::atomic<std::size_t> leaves_done_{0};
   // Counted from every worker; cut() is const because it is a pure function of
   // its node, and these tallies never feed back into a decision.
@@ -290,7 +424,7 @@ constexpr std::uint32_t parallel_budget = 32;
 
 void grow(Builder& builder, BuildNode& node, std::uint32_t budget) {
   if (budget <= 1) {
-    builder.leaf_finished();
+    builder.leaf_finished(node);
     return;
   }
   builder.cut(node);
@@ -381,7 +515,7 @@ void grow_balanced(Builder& builder, BuildNode& root, std::uint32_t target, unsi
     node->children.clear();
     node->plane = {};
     node->vanished_pieces = 0, node->vanished_volume = 0, node->vanished_volume_bound = 0;
-    builder.leaf_finished();
+    builder.leaf_finished(*node);
   }
 }
 
@@ -399,20 +533,24 @@ std::size_t count_nodes(const BuildNode& root) {
   return count;
 }
 
-void number_tree(BuildNode& root, MeshTree& tree) {
+// Consumes the built tree: each node is freed as soon as its contents have moved
+// into `tree` (iteratively: a chain of cuts can be long), so its record's block
+// can leave the process while the tree's array fills (see the node blocks).
+void number_tree(std::unique_ptr<BuildNode> root, MeshTree& tree) {
   struct Pending {
-    BuildNode* node;
+    std::unique_ptr<BuildNode> node;
     NodeIndex parent;
   };
   // Sized once: a tree of a million fragments has two million nodes of some
   // 600 bytes each, and growing by doubling would hold the old and new arrays.
-  const std::size_t node_count = count_nodes(root);
+  const std::size_t node_count = count_nodes(*root);
   tree.nodes.reserve(node_count);
   tree.cut_planes.reserve(node_count);
-  std::vector<Pending> stack{{&root, no_node}};
+  std::vector<Pending> stack;
+  stack.push_back({std::move(root), no_node});
   std::vector<NodeIndex> path;  // path[d]: the node at depth d above the current one
   while (!stack.empty()) {
-    const Pending pending = stack.back();
+    const Pending pending = std::move(stack.back());
     stack.pop_back();
     BuildNode& built = *pending.node;
     const auto index = static_cast<NodeIndex>(tree.nodes.size());
@@ -459,7 +597,7 @@ void number_tree(BuildNode& root, MeshTree& tree) {
     if (pending.parent != no_node) tree.nodes[pending.parent].children.push_back(index);
     tree.nodes.push_back(std::move(node));
     for (auto child = built.children.rbegin(); child != built.children.rend(); ++child) {
-      stack.push_back({child->get(), index});
+      stack.push_back({std::move(*child), index});
     }
   }
   // Children follow their parent in preorder: fill ranges from the back.
@@ -483,17 +621,6 @@ void count_vanished(const BuildNode& root, BuildReport& report) {
     report.vanished_volume += node->vanished_volume;
     report.vanished_volume_bound += node->vanished_volume_bound;
     for (auto child = node->children.rbegin(); child != node->children.rend(); ++child) stack.push_back(child->get());
-  }
-}
-
-// Frees a built tree without deep recursion (a chain of cuts can be long).
-void dismantle(std::unique_ptr<BuildNode> root) {
-  std::vector<std::unique_ptr<BuildNode>> stack;
-  stack.push_back(std::move(root));
-  while (!stack.empty()) {
-    std::unique_ptr<BuildNode> node = std::move(stack.back());
-    stack.pop_back();
-    for (auto& child : node->children) stack.push_back(std::move(child));
   }
 }
 
@@ -555,7 +682,7 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
 
   const unsigned threads = run.threads == 0 ? static_cast<unsigned>(tbb::info::default_concurrency()) : run.threads;
   auto phase_start = std::chrono::steady_clock::now();
-  Builder builder(recipe, run.progress);
+  Builder builder(recipe, run.progress, run.lean);
   std::unique_ptr<BuildNode> root = builder.root(mesh);
   tbb::task_arena arena(static_cast<int>(threads));
   arena.execute([&] {
@@ -572,8 +699,7 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
   tree.shatter_version = std::string(version_string);
   BuildReport timing;
   count_vanished(*root, timing);
-  number_tree(*root, tree);
-  dismantle(std::move(root));
+  number_tree(std::move(root), tree);
   timing.cutting_seconds = seconds_since(phase_start);
   timing.planes_missed = builder.planes_missed();
   timing.planes_rejected = builder.planes_rejected();

@@ -321,8 +321,9 @@ std::optional<std::string> point_defect(std::uint32_t point, const ExactContext&
 }
 
 /// The first structural defect of node `node`'s solid (file.hpp lists the checks),
-/// or nothing. `caches`: also require one approx per vertex (the encoder's
-/// precondition; the decoder computes them after these checks).
+/// or nothing. `caches`: also require one approx per vertex or none (a lean
+/// build's; the encoder's precondition; the decoder computes them after these
+/// checks).
 std::optional<std::string> solid_defect(const Solid& solid, std::size_t node, const ExactContext& context, bool caches,
                                         SolidScratch& scratch) {
   const std::size_t vertex_count = solid.defs.size(), loop_count = solid.loops.size(),
@@ -333,7 +334,7 @@ std::optional<std::string> solid_defect(const Solid& solid, std::size_t node, co
                                                                                       {"corners", corner_count}}}) {
     if (size > max_u32) return "has " + str(size) + " " + name + ", more than a u32 can count";
   }
-  if (caches && solid.approx.size() != vertex_count) {
+  if (caches && !solid.approx.empty() && solid.approx.size() != vertex_count) {
     return "has " + str(solid.approx.size()) + " approx entries for " + str(vertex_count) + " vertices";
   }
 
@@ -560,7 +561,9 @@ std::optional<TreeDefect> first_defect(const MeshTree& tree, bool caches) {
 /// equal caches are what makes decode(encode(tree)) equal to the tree).
 /// Requires a tree that passed first_defect. Returns the first vertex whose
 /// definition is degenerate (its planes meet in no single point), or, when
-/// comparing, the first cache entry that differs.
+/// comparing, the first cache entry that differs. A solid without approx (a lean
+/// build's) has nothing to compare; its definitions are approximated all the
+/// same, since a degenerate one is what the reader would refuse.
 std::optional<TreeDefect> caches_defect(const MeshTree& tree, MeshTree* fill) {
   const InputGeometry& geometry = tree.geometry;
   if (geometry.points.empty()) return std::nullopt;
@@ -594,7 +597,7 @@ std::optional<TreeDefect> caches_defect(const MeshTree& tree, MeshTree* fill) {
       }
       if (fill) {
         fill->nodes[k].solid.approx[v] = approx;
-      } else if (std::memcmp(&approx, &solid.approx[v], sizeof approx) != 0) {
+      } else if (!solid.approx.empty() && std::memcmp(&approx, &solid.approx[v], sizeof approx) != 0) {
         return TreeDefect{TreePart::solid, k,
                           vertex() + ": approx is not approximate() of its definition (a stale cache)"};
       }

@@ -20,6 +20,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -39,6 +40,7 @@
 #include "shatter/meshtree/build.hpp"
 #include "shatter/formats/file.hpp"
 #include "shatter/meshtree/recipe.hpp"
+#include "shatter/meshtree/validate_tree.hpp"
 #include "shatter/version.hpp"
 #include "support/checks.hpp"
 
@@ -1304,12 +1306,8 @@ std::string read_bytes(const std::filesystem::path& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-/// The committed fuzz corpus of the .shatter reader, next to this file.
-// From the corpus folder the build names (tests/data/corpus), not from __FILE__,
-// which a compiler cache (ccache with base_dir) makes relative to the build folder.
-std::filesystem::path shatter_corpus() {
-  return shatter::test::mesh_dir().parent_path().parent_path() / "fuzz" / "corpus" / "fuzz_read_shatter";
-}
+/// The committed fuzz corpus of the .shatter reader (tests/formats/CMakeLists.txt names it).
+std::filesystem::path shatter_corpus() { return SHATTER_SHATTER_CORPUS; }
 
 /// The index of the first node (from the back, so a leaf) whose solid has a face
 /// on a cut plane and a vertex of kind three_planes.
@@ -1685,6 +1683,60 @@ TEST_CASE("encode_shatter refuses exact representations a reader could not rebui
   CHECK_THROWS_WITH(encode_shatter(fast), Catch::Contains("geometry has 1 input planes but no input points"));
   check_refused(reference_file(fast), "GEOM section, byte");
   check_refused(reference_file(fast), "geometry has 1 input planes but no input points");
+}
+
+TEST_CASE("sections longer than a writer's piece are written byte for byte as documented", "[shatter_file]") {
+  // The writer makes a section in pieces of a mebibyte, cut between records,
+  // and sums the header's length and CRC-32 over them. A fine torus cut once
+  // has a GEOM section of several pieces (a record per point) and SOLD and MESH
+  // sections of a few records each larger than a piece.
+  TreeRecipe recipe;
+  recipe.fragments = 2;
+  const MeshTree tree = build_mesh_tree(test::torus(1.0, 0.35, 300, 300), recipe, {.threads = 1});
+  REQUIRE(24 * tree.geometry.points.size() > 2 * (std::size_t{1} << 20));
+  const std::string bytes = encode_shatter(tree);
+  CHECK(byte_difference(bytes, reference_file_v3(tree)) == "equal");
+  std::string pieces;
+  write_shatter(tree, [&](std::string_view piece) { pieces.append(piece); });
+  CHECK(pieces == bytes);
+  CHECK(tree_difference(decode_within_budget(bytes), tree).empty());
+}
+
+TEST_CASE("solids without their approximations write the same bytes", "[shatter_file]") {
+  // A lean build (BuildRunOptions::lean) drops every Solid::approx; the writer
+  // computes them as the reader will. Any mix of solids with and without them
+  // writes the full tree's bytes, which read back to the full tree.
+  const MeshTree& base = small_plane_tree();
+  REQUIRE(base.nodes.size() >= 3);
+  const std::string bytes = encode_shatter(base);
+  const auto keep_none = [](std::size_t) { return false; };
+  const auto keep_leaves = [&](std::size_t k) { return base.nodes[k].is_leaf(); };
+  const auto keep_odd = [](std::size_t k) { return k % 2 == 1; };
+  for (const std::function<bool(std::size_t)>& keep : {std::function<bool(std::size_t)>(keep_none), std::function<bool(std::size_t)>(keep_leaves), std::function<bool(std::size_t)>(keep_odd)}) {
+    MeshTree tree = base;
+    std::size_t dropped = 0;
+    for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+      REQUIRE(!tree.nodes[k].solid.approx.empty());
+      if (keep(k)) continue;
+      tree.nodes[k].solid.approx.clear();
+      ++dropped;
+    }
+    REQUIRE(dropped > 0);
+    CHECK(validate_tree(tree).summary() == "valid");
+    CHECK(encode_shatter(tree) == bytes);
+    CHECK(tree_difference(decode_within_budget(bytes), base).empty());
+  }
+  // Without a cache to compare, a definition is still approximated: a
+  // degenerate one is refused as the reader would refuse it.
+  MeshTree degenerate = base;
+  const std::size_t k = deep_node(base);
+  Solid& solid = degenerate.nodes[k].solid;
+  solid.approx.clear();
+  const auto three = std::find_if(solid.defs.begin(), solid.defs.end(),
+                                  [](const PointDef& d) { return d.kind == PointKind::three_planes; });
+  REQUIRE(three != solid.defs.end());
+  three->planes[1] = three->planes[0];
+  CHECK_THROWS_WITH(encode_shatter(degenerate), Catch::Contains("degenerate point definition"));
 }
 
 TEST_CASE("a leaf's plane is unused but kept bit for bit", "[shatter_file][compatibility]") {

@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -47,6 +48,7 @@
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cover.hpp"
+#include "shatter/meshtree/validate_tree.hpp"
 #include "shatter/formats/file.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "support/bond_reference.hpp"
@@ -1133,6 +1135,41 @@ TEST_CASE("the same recipe gives the same bytes, another seed another tree", "[t
     CHECK(encode_shatter(build_mesh_tree(m.mesh, other, {.threads = 2})) != first);
     // threads = 0 (one per hardware thread) gives the same tree too.
     CHECK(byte_difference(encode_shatter(build_mesh_tree(m.mesh, recipe, {.threads = 0})), first) == "equal");
+  }
+}
+
+TEST_CASE("a lean build keeps no approximations and gives the same tree otherwise", "[tree][build][property]") {
+  // Concave meshes, so cuts leave three or more pieces (the surplus cuts are
+  // undone) and caps have non-convex faces (the bonds triangulate them); every
+  // strategy, on one thread and two.
+  for (const char* name : {"torus-800", "hollow-egg", "spool.off"}) {
+    for (const Strategy strategy : all_strategies) {
+      for (const unsigned threads : {1u, 2u}) {
+        const TreeRecipe recipe = recipe_for(std::uint32_t(test::sized(48, 12)), strategy, 23);
+        INFO(describe({&test_mesh(name), recipe, Level::full, false, threads}));
+        const MeshTree full = build_mesh_tree(test_mesh(name).mesh, recipe, {.threads = threads});
+        MeshTree lean = build_mesh_tree(test_mesh(name).mesh, recipe, {.threads = threads, .lean = true});
+        REQUIRE(lean.nodes.size() == full.nodes.size());
+        for (std::size_t k = 0; k < full.nodes.size(); ++k) {
+          INFO("node " << k);
+          // Else there would be nothing to release, nor to compare below.
+          REQUIRE(full.nodes[k].solid.approx.size() == full.nodes[k].solid.defs.size());
+          REQUIRE(!full.nodes[k].solid.defs.empty());
+          CHECK(lean.nodes[k].solid.approx.empty());
+        }
+        CHECK(validate_tree(lean).summary() == "valid");
+        // The bonds were found on approximations computed as needed: the same
+        // bonds, bit for bit (the file stores them, so equal bytes say so too).
+        CHECK(byte_difference(encode_shatter(lean), encode_shatter(full)) == "equal");
+        REQUIRE(!fill_tree_caches(lean));
+        for (std::size_t k = 0; k < full.nodes.size(); ++k) {
+          const std::vector<ApproxPoint>& a = lean.nodes[k].solid.approx;
+          const std::vector<ApproxPoint>& b = full.nodes[k].solid.approx;
+          REQUIRE(a.size() == b.size());
+          CHECK(std::memcmp(a.data(), b.data(), a.size() * sizeof(ApproxPoint)) == 0);
+        }
+      }
+    }
   }
 }
 

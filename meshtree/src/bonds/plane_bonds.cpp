@@ -10,6 +10,12 @@
 // centroid of the rounded clip of the two (a double point) is tested exactly to
 // lie strictly inside both. The overlap's area and centroid are measured on the
 // rounded clip, a construction that never decides anything.
+//
+// A lean tree's solids keep no approximations (BuildRunOptions::lean): each cap
+// corner's is computed once per cut it is met on and kept beside its rounded 2D
+// point, and a non-convex face is triangulated on a copy of its leaf's solid
+// with the approximations filled. Either way the values are approximate()'s, so
+// the bonds are the same bit for bit.
 
 #include <algorithm>
 #include <array>
@@ -55,7 +61,16 @@ class PlaneBonds {
 
   std::vector<Bond> run() {
     gather_faces_by_cut();
+    // The array is the bonds' one copy, so it is sized ahead rather than grown
+    // by doubling and shrunk to fit, which touched some three times its size at
+    // once (+54 MB over the 44 MB of bonds of cube -> 65,536, the command's
+    // peak). Two bonds per cap face holds every tree measured (1.15 to 1.41:
+    // cube -> 65,536, elephant, knot1, fandisk, spool and hand at 1,000 to
+    // 4,096, every strategy); a tree with more grows the array, as before. Capacity
+    // reserved but never written is address space, not memory: its pages are
+    // never touched.
     std::vector<Bond> bonds;
+    bonds.reserve(2 * refs_.size());
     for (NodeIndex k = 0; k < tree_.nodes.size(); ++k) {
       if (start_[k + 1] - start_[k] < 2) continue;
       run_cut(k, bonds);
@@ -65,9 +80,6 @@ class PlaneBonds {
       if (a.second != b.second) return a.second < b.second;
       return a.cut_node < b.cut_node;
     });
-    // Grown by doubling, the array may be twice its size: the tree keeps it (a
-    // million fragments have some ten million bonds of 72 bytes).
-    bonds.shrink_to_fit();
     return bonds;
   }
 
@@ -136,17 +148,37 @@ class PlaneBonds {
       add_part(solid, part_vertices_, reverse, cap);
     } else {
       points3_.clear();
-      for (const ApproxPoint& a : solid.approx) {
+      const Solid& cached = with_approximations(ref.leaf, solid);
+      for (const ApproxPoint& a : cached.approx) {
         points3_.push_back({a.x.value / a.w.value, a.y.value / a.w.value, a.z.value / a.w.value});
       }
-      triangulate_face(set_, solid, ref.face, points3_, triangles_);
+      triangulate_face(set_, cached, ref.face, points3_, triangles_);
       for (const Triangle& t : triangles_) {
         part_vertices_.assign(t.begin(), t.end());
-        add_part(solid, part_vertices_, reverse, cap);
+        add_part(cached, part_vertices_, reverse, cap);
       }
     }
     cap.part_count = static_cast<std::uint32_t>(parts_.size()) - cap.first_part;
     faces_.push_back(cap);
+  }
+
+  // The solid of `leaf` with every approximation there: itself when it keeps
+  // them; else a copy with them computed, made once for the leaf whose faces
+  // are being added (they come in leaf order within a cut) and only for a face
+  // that needs its triangulation.
+  const Solid& with_approximations(LeafIndex leaf, const Solid& solid) {
+    if (!solid.approx.empty() || solid.defs.empty()) return solid;
+    if (filled_leaf_ != leaf) {
+      filled_ = solid;
+      filled_.approx.resize(solid.defs.size());
+      for (std::size_t v = 0; v < solid.defs.size(); ++v) filled_.approx[v] = approximate(set_, solid.defs[v]);
+      filled_leaf_ = leaf;
+    }
+    return filled_;
+  }
+
+  ApproxPoint approximation(const Solid& solid, VertexIndex v) const {
+    return solid.approx.empty() ? approximate(set_, solid.defs[v]) : solid.approx[v];
   }
 
   void add_part(const Solid& solid, std::vector<VertexIndex>& vertices, bool reverse, CapFace& cap) {
@@ -154,9 +186,11 @@ class PlaneBonds {
     Part part{static_cast<std::uint32_t>(corners_.size()), static_cast<std::uint32_t>(vertices.size()), INFINITY,
               -INFINITY, INFINITY, -INFINITY};
     for (VertexIndex v : vertices) {
-      const Vec2 p = project(solid.approx[v]);
-      const double e = project_error(solid.approx[v]);
+      const ApproxPoint a = approximation(solid, v);
+      const Vec2 p = project(a);
+      const double e = project_error(a);
       corners_.push_back(v);
+      corner_approx_.push_back(a);
       points_.push_back(p);
       errors_.push_back(e);
       part.min_u = std::min(part.min_u, p.x - e);
@@ -179,6 +213,7 @@ class PlaneBonds {
     faces_.clear();
     parts_.clear();
     corners_.clear();
+    corner_approx_.clear();
     points_.clear();
     errors_.clear();
     for (std::size_t r = start_[k]; r < start_[k + 1]; ++r) add_face(refs_[order_[r]]);
@@ -321,7 +356,7 @@ class PlaneBonds {
       if (value > bound) continue;
       if (value < -bound) return false;
       const VertexIndex x = corners_[i], y = corners_[j];
-      if (orient_in_plane(set_, raw_, solid.defs[x], solid.approx[x], solid.defs[y], solid.approx[y], p) !=
+      if (orient_in_plane(set_, raw_, solid.defs[x], corner_approx_[i], solid.defs[y], corner_approx_[j], p) !=
           Sign::positive) {
         return false;
       }
@@ -332,12 +367,13 @@ class PlaneBonds {
   // Whether an edge line of `part` has all of `other` on its closed outer side.
   bool separated(const Solid& solid, const Part& part, const Solid& other_solid, const Part& other) const {
     for (std::uint32_t e = 0; e < part.count; ++e) {
-      const VertexIndex x = corners_[part.first + e], y = corners_[part.first + (e + 1) % part.count];
+      const std::uint32_t i = part.first + e, j = part.first + (e + 1) % part.count;
+      const VertexIndex x = corners_[i], y = corners_[j];
       bool all_outside = true;
       for (std::uint32_t c = 0; c < other.count && all_outside; ++c) {
         const VertexIndex z = corners_[other.first + c];
-        all_outside = orient_in_plane(set_, raw_, solid.defs[x], solid.approx[x], solid.defs[y], solid.approx[y],
-                                      other_solid.defs[z], other_solid.approx[z]) != Sign::positive;
+        all_outside = orient_in_plane(set_, raw_, solid.defs[x], corner_approx_[i], solid.defs[y], corner_approx_[j],
+                                      other_solid.defs[z], corner_approx_[other.first + c]) != Sign::positive;
       }
       if (all_outside) return true;
     }
@@ -355,11 +391,14 @@ class PlaneBonds {
   std::vector<CapFace> faces_;
   std::vector<Part> parts_;
   std::vector<VertexIndex> corners_;
+  std::vector<ApproxPoint> corner_approx_;  ///< per corner: its vertex's approximation
   std::vector<Vec2> points_;
   std::vector<double> errors_;  ///< per corner: how far the rounded 2D point may be from the exact one
   std::vector<VertexIndex> part_vertices_;
   std::vector<Triangle> triangles_;
   std::vector<Vec3> points3_;
+  Solid filled_;  ///< with_approximations' copy, of leaf filled_leaf_
+  LeafIndex filled_leaf_ = ~LeafIndex{0};
   std::vector<std::uint32_t> sweep_;
   std::array<std::vector<std::uint32_t>, 2> active_;
   std::vector<Pending> pending_;

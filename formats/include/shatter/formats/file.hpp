@@ -235,7 +235,9 @@ inline constexpr std::uint32_t shatter_oldest_format_version = 1;
 /// decode_shatter makes holds, and the caches are what the reader will
 /// recompute: geometry.plane_approx[j] is approximate_input_plane of input plane
 /// j's points and every solid's approx[v] is approximate() of its definition
-/// over plane_set(), bit for bit (checked, at the cost of recomputing them).
+/// over plane_set(), bit for bit (checked, at the cost of recomputing them), or
+/// the solid has no approx at all (a lean build's, BuildRunOptions::lean: the
+/// writer computes what it needs; the bytes are those of the full tree).
 /// Otherwise throws std::invalid_argument with the defect's message, so no file
 /// is ever written that could not be read back.
 /// A non-empty shatter_version must follow the `vers` rule (std::invalid_argument

@@ -63,6 +63,14 @@ struct BuildRunOptions {
   LeafProgressFn progress = {};
   /// When given, filled in when the build succeeds; left as it was when it throws.
   BuildReport* report = nullptr;
+  /// Free what the build can recompute as soon as it no longer needs it, for a
+  /// caller that only writes the tree (as `shatter fracture` does): every
+  /// node's Solid::approx (the vertices' cached approximations, 64 bytes a
+  /// vertex, a quarter of a cube's tree) is released once the node is cut or is
+  /// known to stay a leaf, so the returned tree has none (MeshTreeNode::solid).
+  /// Everything else is as without it: the same values, bonds and .shatter bytes;
+  /// fill_tree_caches restores the full tree. false: every node keeps its cache.
+  bool lean = false;
 };
 
 /// Builds the mesh tree of `mesh` by `recipe` (see TreeRecipe, Strategy), run as
@@ -83,7 +91,8 @@ struct BuildRunOptions {
 /// parent's exactly, but for pieces of a cut thinner than the rounding of their
 /// coordinates, which vanish (no children; their volume, which moves to their
 /// neighbours across the cut, is at most what rounding their vertices can move,
-/// and is reported: BuildReport::pieces_vanished); leaf ranges contiguous; cap triangles carry cap_surface_of(cut node);
+/// and is reported: BuildReport::pieces_vanished); every solid's approx
+/// cached, or none when run.lean; leaf ranges contiguous; cap triangles carry cap_surface_of(cut node);
 /// mass properties and hulls filled; bonds = find_bonds(tree); tree.recipe =
 /// `recipe`; shatter_version this library's version_string (shatter/version.hpp).
 /// One version of shatter gives a result that depends only on the mesh and the

@@ -32,7 +32,10 @@ struct MeshTreeNode {
   Mesh hull;
   /// Plane kernel: the node's exact solid, its vertices defined over
   /// MeshTree::plane_set() (cut plane k is node k's, MeshTree::cut_planes[k]).
-  /// Empty otherwise.
+  /// Empty otherwise. Its vertices' cached approximations (Solid::approx) are
+  /// there unless the tree was built lean (BuildRunOptions::lean): then every
+  /// node's approx is empty, and fill_tree_caches (validate_tree.hpp) computes
+  /// them for code that needs them.
   Solid solid;
   /// Plane kernel: the solid is convex (decided exactly), so `mesh` is its own
   /// hull and `hull` is left empty. Use MeshTree::hull_of.

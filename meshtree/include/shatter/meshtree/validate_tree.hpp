@@ -52,7 +52,9 @@ struct TreeValidationOptions {
   /// The floating-point caches a .shatter file does not store (every
   /// InputGeometry::plane_approx and Solid::approx) are sized and equal, bit for
   /// bit, to their recomputation; recomputing them also finds vertex definitions
-  /// whose planes meet in no single point. On for a tree in memory. The reader
+  /// whose planes meet in no single point. A solid may come without its approx
+  /// (empty: a lean build's, BuildRunOptions::lean); its definitions are still
+  /// approximated, to find degenerate ones. On for a tree in memory. The reader
   /// turns it off: it recomputes the caches itself, after the structure passed.
   bool caches = true;
   /// What the builder promises of the geometry, too: every internal node's plane
