@@ -81,11 +81,11 @@ bool same_cyclic_order(const Triangle& a, const Triangle& b) { return canonical_
 
 // The lid of one hole over its own corners: the triangulation of the polygon
 // `ids` (welded vertex ids, all distinct, in the hole's order) of least total
-// area among those that draw no diagonal `joined` already joins and make no
-// triangle `exists` already has. Dynamic programming over sub-polygons: the
-// minimum-weight triangulation of a polygon (Klincsek 1980), over a hole's
-// vertices as in Barequet & Sharir 1995 and Liepa 2003 (here without their
-// dihedral weights). The area only chooses among lids; whether the repaired mesh
+// area among those that draw no diagonal `joined` already joins, make no
+// triangle `exists` already has, and make none over three exactly collinear
+// corners. Dynamic programming over sub-polygons: the minimum-weight
+// triangulation of a polygon (Klincsek 1980), over a hole's vertices as in
+// Barequet & Sharir 1995 and Liepa 2003 (here without their dihedral weights). The area only chooses among lids; whether the repaired mesh
 // is a valid solid is decided exactly afterwards, by validation. Triangles as
 // positions in `ids`, in the polygon's orientation, each after one it shares an
 // edge with; std::nullopt when every triangulation is excluded. O(n^3) time,
@@ -113,6 +113,9 @@ std::optional<std::vector<std::array<std::size_t, 3>>> least_area_lid(const std:
       for (std::size_t k = i + 1; k < j; ++k) {
         const double left = best[i * n + k], right = best[k * n + j];
         if (left == none || right == none || exists(ids[i], ids[k], ids[j])) continue;
+        // A triangle over three collinear corners (a straight stretch of the
+        // border) has no area: exactly excluded, as validation would refuse it.
+        if (CGAL::collinear(to_cgal(points[i]), to_cgal(points[k]), to_cgal(points[j]))) continue;
         const double total = left + right + area(i, k, j);
         if (total < best[i * n + j]) {
           best[i * n + j] = total;
@@ -405,7 +408,7 @@ class Repairer {
       welded_faces[corners] = 1;
     }
     std::size_t filled = 0, filled_edges = 0, new_triangles = 0;
-    std::vector<std::size_t> too_large, unfillable;
+    std::vector<std::size_t> too_large;
     for (HalfedgeIndex h : cycles) {
       std::vector<SmVertex> cycle;
       HalfedgeIndex walk = h;
@@ -433,7 +436,9 @@ class Repairer {
       std::vector<FaceIndex> patch;
       PMP::triangulate_hole(sm_, h, std::back_inserter(patch));
       if (patch.empty()) {
-        unfillable.push_back(edges);
+        // CGAL found no lid (its search keeps to triangles it deems valid, e.g.
+        // on a flat or folded border): the least-area lid tries all of them.
+        welded_lid_cycles_.push_back(std::move(cycle));
         continue;
       }
       if (!patch_is_manifold_when_welded(patch, welded_edges, welded_faces)) {
@@ -452,10 +457,6 @@ class Repairer {
       report_.notes.push_back({"left " + plural(too_large.size(), "hole", "holes") + " larger than " +
                                std::to_string(options_.max_hole_edges) + " edges unfilled (" + hole_sizes(too_large) +
                                " edges)"});
-    }
-    if (!unfillable.empty()) {
-      report_.notes.push_back({"could not fill " + plural(unfillable.size(), "hole", "holes") + " (" +
-                               hole_sizes(unfillable) + " edges): no valid triangulation over its vertices"});
     }
   }
 
@@ -748,8 +749,9 @@ class Repairer {
                                 "filled " + plural(filled + lids, "hole", "holes") + " (" +
                                     plural(filled_edges + lid_edges, "border edge", "border edges") + ") with " +
                                     plural(new_triangles + lid_triangles, "new triangle", "new triangles") +
-                                    (lids > 0 ? " (" + plural(lids, "hole", "holes") +
-                                                    " touching another at a vertex closed over the welded vertices)"
+                                    (lids > 0 ? " (" + std::to_string(lids) +
+                                                    " of them by the least-area lid over the welded vertices: holes "
+                                                    "touching at a vertex, or where CGAL's lid failed)"
                                               : std::string())};
         report_.changes.insert(report_.changes.begin() + static_cast<std::ptrdiff_t>(holes_change_at_), fill);
       }
