@@ -1,6 +1,7 @@
 #include "shatter/triangulate/solid_mesh.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -15,6 +16,7 @@
 #include "shatter/kernel/projection.hpp"
 #include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/union_find.hpp"
+#include "shatter/kernel/self_intersections.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/triangulate/cap.hpp"
 
@@ -532,6 +534,61 @@ bool route_edges_through_crossed_corners(const PlaneSet& set, const Solid& solid
   return true;
 }
 
+// The faces of `group` (indices into `loops`, each written as the face
+// `emit_as` names) merged into one face: as 2-chains on a common plane they add
+// up to the sum of their loops as traversed, in which an edge run both ways
+// cancels (join_at_antiparallel_edge, spikes). The merged face faces the way of
+// the member whose outward side its loops turn counter-clockwise about (the
+// exact signed area of the loops on the doubles, in that member's projection),
+// is held by the group's first face and written as that member; when nothing
+// is left (or nothing turns one way) the group vanishes whole. `home[f]`: the
+// face holding f's loops afterwards (the group's first, or no_index when it
+// vanished). Changes no position.
+void merge_face_group(const PlaneSet& set, const Solid& solid, std::span<const Vec3> positions,
+                      std::span<const std::uint32_t> group, std::vector<std::vector<std::vector<VertexIndex>>>& loops,
+                      std::vector<std::uint8_t>& changed, std::vector<std::uint32_t>& emit_as,
+                      std::vector<std::uint32_t>& home) {
+  std::vector<std::vector<VertexIndex>> sum;
+  for (const std::uint32_t f : group) sum.insert(sum.end(), loops[f].begin(), loops[f].end());
+  for (bool again = true; again;) {
+    for (auto& loop : sum) remove_spikes(loop);
+    std::erase_if(sum, [](const std::vector<VertexIndex>& loop) { return loop.size() < 3; });
+    again = join_at_antiparallel_edge(sum);
+  }
+  // Twice the signed area of the loops in face f's projection, seen from its outside.
+  const auto area_seen_from = [&](std::uint32_t f) {
+    const Projection projection = projection_of(set, solid.faces[f].plane);
+    const int u = (projection.axis + 1) % 3, w = (projection.axis + 2) % 3;
+    mpq_class twice = 0;
+    for (const auto& loop : sum) {
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const Vec3 &p = positions[loop[i]], &q = positions[loop[(i + 1) % loop.size()]];
+        twice += mpq_class(p[u]) * q[w] - mpq_class(q[u]) * p[w];
+      }
+    }
+    return (projection.flipped != solid.faces[f].reversed) ? mpq_class(-twice) : twice;
+  };
+  std::uint32_t as = no_index;
+  for (const std::uint32_t f : group) {
+    if (sgn(area_seen_from(emit_as[f])) > 0) {
+      as = emit_as[f];
+      break;
+    }
+  }
+  const std::uint32_t first = group.front();
+  for (const std::uint32_t f : group) {
+    emit_as[f] = no_index;
+    loops[f].clear();
+  }
+  for (std::uint32_t& h : home) {
+    if (h != no_index && std::find(group.begin(), group.end(), h) != group.end()) h = as == no_index ? no_index : first;
+  }
+  if (as == no_index) return;  // nothing left, or nothing facing one way: the group vanishes
+  emit_as[first] = as;
+  loops[first] = std::move(sum);
+  changed[first] = 1;
+}
+
 // Step 2 for faces that rounding laid onto each other: a part thinner than the
 // rounding between two faces that face opposite ways (a slab between a cap and
 // an input face ulps from it) rounds onto one plane, and if the two faces' loops
@@ -542,18 +599,18 @@ bool route_edges_through_crossed_corners(const PlaneSet& set, const Solid& solid
 // an edge run both ways, all of whose rounded corners lie exactly on one plane
 // (orient3d zero) and of which two face opposite ways, are merged into one face
 // over the loops left once those edges cancel (join_at_antiparallel_edge, spikes,
-// splits). It faces the way of the member whose outward side its loops turn
-// counter-clockwise about (the exact signed area of the loops on the doubles, in
-// that member's projection), and is written as that member; when nothing is left
-// the sheet vanishes whole. `emit_as[f]`: the face whose description face f's
-// triangles take, or no_index when f is merged into another. Returns whether
-// any faces were merged.
+// splits; merge_face_group). `emit_as[f]`: the face whose description face f's
+// triangles take, or no_index when f is merged into another; `home[f]`: the
+// face holding f's loops (itself unless merged). Returns whether any faces
+// were merged.
 bool merge_coplanar_sheets(const PlaneSet& set, const Solid& solid, std::span<const Vec3> positions,
                            std::vector<std::vector<std::vector<VertexIndex>>>& loops,
-                           std::vector<std::uint8_t>& changed, std::vector<std::uint32_t>& emit_as) {
+                           std::vector<std::uint8_t>& changed, std::vector<std::uint32_t>& emit_as,
+                           std::vector<std::uint32_t>& home) {
   const auto count = static_cast<std::uint32_t>(loops.size());
   emit_as.resize(count);
-  for (std::uint32_t f = 0; f < count; ++f) emit_as[f] = f;
+  home.resize(count);
+  for (std::uint32_t f = 0; f < count; ++f) emit_as[f] = home[f] = f;
   std::unordered_map<std::uint64_t, std::uint32_t> face_of_edge;
   const auto key = [](VertexIndex a, VertexIndex b) { return (std::uint64_t{a} << 32) | b; };
   for (std::uint32_t f = 0; f < count; ++f) {
@@ -621,45 +678,68 @@ bool merge_coplanar_sheets(const PlaneSet& set, const Solid& solid, std::span<co
   for (std::uint32_t root = 0; root < count; ++root) {
     const std::vector<std::uint32_t>& group = members[root];
     if (group.size() < 2 || !opposite[root]) continue;
-    std::vector<std::vector<VertexIndex>> sum;
-    for (const std::uint32_t f : group) sum.insert(sum.end(), loops[f].begin(), loops[f].end());
-    for (bool again = true; again;) {
-      for (auto& loop : sum) remove_spikes(loop);
-      std::erase_if(sum, [](const std::vector<VertexIndex>& loop) { return loop.size() < 3; });
-      again = join_at_antiparallel_edge(sum);
-    }
-    // Twice the signed area of the loops in face f's projection, seen from its outside.
-    const auto area_seen_from = [&](std::uint32_t f) {
-      const Projection projection = projection_of(set, solid.faces[f].plane);
-      const int u = (projection.axis + 1) % 3, w = (projection.axis + 2) % 3;
-      mpq_class twice = 0;
-      for (const auto& loop : sum) {
-        for (std::size_t i = 0; i < loop.size(); ++i) {
-          const Vec3 &p = positions[loop[i]], &q = positions[loop[(i + 1) % loop.size()]];
-          twice += mpq_class(p[u]) * q[w] - mpq_class(q[u]) * p[w];
-        }
-      }
-      return (projection.flipped != solid.faces[f].reversed) ? mpq_class(-twice) : twice;
-    };
-    std::uint32_t as = no_index;
-    for (const std::uint32_t f : group) {
-      if (sgn(area_seen_from(f)) > 0) {
-        as = f;
-        break;
-      }
-    }
-    const std::uint32_t first = group.front();
-    for (const std::uint32_t f : group) {
-      emit_as[f] = no_index;
-      loops[f].clear();
-    }
+    merge_face_group(set, solid, positions, group, loops, changed, emit_as, home);
     merged_any = true;
-    if (as == no_index) continue;  // nothing left, or nothing facing one way: the sheet vanishes
-    emit_as[first] = as;
-    loops[first] = std::move(sum);
-    changed[first] = 1;
   }
   return merged_any;
+}
+
+// Faces that rounding folded against each other (see round_solid): a pair of
+// faces whose rounded triangles certification found crossing, or sharing an
+// edge with other triangles (a fold: the wedge between them is thinner than
+// the rounding, and rounding turned it inside out), and whose loops share an
+// edge run both ways. The wedge between such faces is a part thinner than the
+// rounding, as a two-sided sheet is, though its faces do not lie on one plane;
+// it vanishes the same way: the faces are merged into the face their sum leaves
+// (merge_face_group), triangulated on the placed corners in projection, and
+// certification and the volume the merge moved (held to what rounding can
+// move) vouch for the result. `folds`: pairs of faces (indices of the loops
+// before any merge, mapped through `home`). Decided by index; changes no
+// position. Returns how many faces were merged (each group counts its members).
+std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::span<const Vec3> positions,
+                        std::vector<std::vector<std::vector<VertexIndex>>>& loops, std::vector<std::uint8_t>& changed,
+                        std::vector<std::uint32_t>& emit_as, std::vector<std::uint32_t>& home,
+                        std::span<const std::pair<std::uint32_t, std::uint32_t>> folds) {
+  const auto count = static_cast<std::uint32_t>(loops.size());
+  std::unordered_map<std::uint64_t, std::uint32_t> face_of_edge;
+  const auto key = [](VertexIndex a, VertexIndex b) { return (std::uint64_t{a} << 32) | b; };
+  for (std::uint32_t f = 0; f < count; ++f) {
+    for (const auto& loop : loops[f]) {
+      for (std::size_t i = 0; i < loop.size(); ++i) face_of_edge[key(loop[i], loop[(i + 1) % loop.size()])] = f;
+    }
+  }
+  const auto share_edge = [&](std::uint32_t f, std::uint32_t g) {
+    for (const auto& loop : loops[f]) {
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const auto it = face_of_edge.find(key(loop[(i + 1) % loop.size()], loop[i]));
+        if (it != face_of_edge.end() && it->second == g) return true;
+      }
+    }
+    return false;
+  };
+  UnionFind groups;
+  groups.reset(count);
+  bool any = false;
+  for (const auto& [f, g] : folds) {
+    if (f >= count || g >= count) continue;
+    const std::uint32_t hf = home[f], hg = home[g];
+    if (hf == no_index || hg == no_index || hf == hg || groups.find(hf) == groups.find(hg)) continue;
+    if (!share_edge(hf, hg)) continue;
+    groups.unite(hf, hg);
+    any = true;
+  }
+  if (!any) return 0;
+  std::vector<std::vector<std::uint32_t>> members(count);
+  for (std::uint32_t f = 0; f < count; ++f) {
+    if (!loops[f].empty()) members[groups.find(f)].push_back(f);
+  }
+  std::size_t merged = 0;
+  for (const std::vector<std::uint32_t>& group : members) {
+    if (group.size() < 2) continue;
+    merge_face_group(set, solid, positions, group, loops, changed, emit_as, home);
+    merged += group.size();
+  }
+  return merged;
 }
 
 // Steps 1 and 2 (see solid_mesh.hpp): positions, vertices merged where they
@@ -670,7 +750,9 @@ bool merge_coplanar_sheets(const PlaneSet& set, const Solid& solid, std::span<co
 // written as before.
 void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options, std::size_t attempt,
                  Mesh& mesh, std::size_t& merged, std::vector<VertexIndex>* mesh_vertex_of = nullptr,
-                 bool repair_loops = false, bool route_crossed = false) {
+                 bool repair_loops = false, bool route_crossed = false,
+                 std::span<const std::pair<std::uint32_t, std::uint32_t>> folds = {},
+                 std::vector<std::uint32_t>* face_of_triangle = nullptr, std::size_t* folded = nullptr) {
   const std::size_t n = solid.defs.size();
   thread_local std::vector<Vec3> positions;
   thread_local std::vector<PointDef> placed;
@@ -720,9 +802,13 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
   // vertex of another.
   thread_local std::vector<std::vector<std::vector<VertexIndex>>> repaired;
   thread_local std::vector<std::uint8_t> repaired_changed;
-  thread_local std::vector<std::uint32_t> emit_as;  // merge_coplanar_sheets
+  thread_local std::vector<std::uint32_t> emit_as, home;  // merge_coplanar_sheets, merge_folded_faces
   emit_as.clear();
-  const bool repairing = repair_loops && merged > 0;
+  if (face_of_triangle != nullptr) face_of_triangle->clear();
+  if (folded != nullptr) *folded = 0;
+  // Folds are merged on the loops over representatives, which the repair
+  // builds, merged vertices or not.
+  const bool repairing = repair_loops && (merged > 0 || (route_crossed && !folds.empty()));
   if (repairing) {
     repaired.assign(solid.faces.size(), {});
     repaired_changed.assign(solid.faces.size(), 0);
@@ -764,7 +850,13 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
     if (route_crossed) route_edges_through_crossed_corners(set, solid, placed, positions, repaired);
     repair_merged_loops(positions, repaired, candidates);
     for (std::uint32_t f = 0; f < solid.faces.size(); ++f) repaired_changed[f] |= repaired[f] != before[f];
-    if (route_crossed) merge_coplanar_sheets(set, solid, positions, repaired, repaired_changed, emit_as);
+    if (route_crossed) {
+      merge_coplanar_sheets(set, solid, positions, repaired, repaired_changed, emit_as, home);
+      if (!folds.empty()) {
+        const std::size_t count = merge_folded_faces(set, solid, positions, repaired, repaired_changed, emit_as, home, folds);
+        if (folded != nullptr) *folded = count;
+      }
+    }
   }
   for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
     if (repairing && route_crossed && emit_as[f] == no_index) continue;
@@ -851,6 +943,7 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
         }
       }
       mesh.triangles.push_back({out_index[t[0]], out_index[t[1]], out_index[t[2]]});
+      if (face_of_triangle != nullptr) face_of_triangle->push_back(f);
       mesh.surfaces.push_back(face.surface);
       for (VertexIndex v : t) {
         if (!cap) {
@@ -900,7 +993,9 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
 // triangulated across the other diagonal): the four bound only the thin
 // tetrahedron between the two triangulations, and removing them keeps every
 // directed edge matched (their boundaries are a -> b -> c -> d and its reverse).
-std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumbered, bool quads = false) {
+// `kept`: when given, the old index of each triangle left, in order.
+std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumbered, bool quads = false,
+                                    std::vector<std::uint32_t>* kept_triangles = nullptr) {
   const std::size_t count = mesh.triangles.size();
   // Key: the triangle rotated to start at its smallest index; its reverse is then
   // (a, c, b) for (a, b, c).
@@ -988,6 +1083,7 @@ std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumb
       out[c] = v;
     }
     kept.triangles.push_back(out);
+    if (kept_triangles != nullptr) kept_triangles->push_back(t);
     kept.surfaces.push_back(mesh.surfaces[t]);
     for (int c = 0; c < 3; ++c) {
       if (mesh.corners.has_normals()) kept.corners.normals.push_back(mesh.corners.normals[3 * t + c]);
@@ -1341,6 +1437,66 @@ void report_moved_volume(const PlaneSet& set, const Solid& solid, RoundedSolid& 
   result.moved_volume_bound = rounding_sweep_bound(set, solid).get_d();
 }
 
+// Adds to `pairs` (kept sorted and unique, the smaller face first) the pairs
+// of faces whose triangles in `mesh` fold against each other: triangles of
+// different faces around an edge that more than two triangles share, or run one
+// way by both, and pairs of triangles of different faces that intersect
+// (self_intersecting_pairs, exact, over the triangles with three distinct
+// non-collinear corners). `face_of[t]`: the face (loop index) triangle t came from.
+void add_folded_face_pairs(const Mesh& mesh, std::span<const std::uint32_t> face_of,
+                           std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs) {
+  const auto add = [&](std::uint32_t f, std::uint32_t g) {
+    if (f != g) pairs.emplace_back(std::min(f, g), std::max(f, g));
+  };
+  struct Use {
+    std::uint64_t key;
+    std::uint32_t triangle;
+    bool forward;
+  };
+  std::vector<Use> uses;
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    for (int c = 0; c < 3; ++c) {
+      const VertexIndex a = mesh.triangles[t][c], b = mesh.triangles[t][(c + 1) % 3];
+      uses.push_back({(std::uint64_t{std::min(a, b)} << 32) | std::max(a, b), t, a < b});
+    }
+  }
+  std::sort(uses.begin(), uses.end(), [](const Use& x, const Use& y) {
+    return x.key != y.key ? x.key < y.key : x.triangle < y.triangle;
+  });
+  for (std::size_t i = 0; i < uses.size();) {
+    std::size_t j = i;
+    while (j < uses.size() && uses[j].key == uses[i].key) ++j;
+    const bool folded = j - i > 2 || (j - i == 2 && uses[i].forward == uses[i + 1].forward);
+    if (folded) {
+      for (std::size_t k = i; k < j; ++k) {
+        for (std::size_t l = k + 1; l < j; ++l) add(face_of[uses[k].triangle], face_of[uses[l].triangle]);
+      }
+    }
+    i = j;
+  }
+  // Triangles with a shape (self_intersecting_pairs' precondition): distinct
+  // corners not on one line, decided exactly on the doubles.
+  std::vector<Triangle> shaped;
+  std::vector<std::uint32_t> shaped_index;
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) continue;
+    const Vec3 &a = mesh.positions[tri[0]], &b = mesh.positions[tri[1]], &c = mesh.positions[tri[2]];
+    if (orient2d({a.x, a.y}, {b.x, b.y}, {c.x, c.y}) == Sign::zero &&
+        orient2d({a.y, a.z}, {b.y, b.z}, {c.y, c.z}) == Sign::zero &&
+        orient2d({a.z, a.x}, {b.z, b.x}, {c.z, c.x}) == Sign::zero) {
+      continue;
+    }
+    shaped.push_back(tri);
+    shaped_index.push_back(t);
+  }
+  for (const TrianglePair& p : self_intersecting_pairs(mesh.positions, shaped)) {
+    add(face_of[shaped_index[p.first]], face_of[shaped_index[p.second]]);
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+}
+
 // Certifies a rounded mesh as round_solid promises: validate_mesh_against its
 // trusted parent, or the topology alone (with vertices where the surface touches
 // itself allowed) for a solid accepted with self-intersections.
@@ -1371,15 +1527,30 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
   // rounding made non-manifold (pair_around_non_manifold_edges): a repair tried
   // only once the others have failed, so that every piece they write is written
   // as before it existed.
-  constexpr std::size_t attempts = 4;
-  for (std::size_t step = 0; step < 2 * attempts; ++step) {
-    const std::size_t attempt = step % attempts;
+  // The third round (folding), tried only when the first two have failed,
+  // merges faces that rounding folded against each other (merge_folded_faces):
+  // attempts 1 to 3 again, each with the pairs of faces whose triangles the
+  // second round's certification found folded, then with those its own
+  // failures add, until a retry finds no new pair (at most fold_retries times).
+  constexpr std::size_t attempts = 4, fold_retries = 6;
+  constexpr std::size_t plain_steps = 2 * attempts, steps = plain_steps + (attempts - 1) * fold_retries;
+  std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts> folds;
+  std::array<bool, attempts> folds_stalled{};
+  std::vector<std::uint32_t> face_of_triangle;
+  for (std::size_t step = 0; step < steps; ++step) {
+    const bool folding = step >= plain_steps;
+    const std::size_t attempt = folding ? 1 + (step - plain_steps) / fold_retries : step % attempts;
     const bool untangle_edges = step >= attempts;
+    if (folding && (folds[attempt].empty() || folds_stalled[attempt])) continue;
     Mesh mesh;
-    std::size_t merged = 0;
+    std::size_t merged = 0, folded_faces = 0;
     ValidationReport report;
-    triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of, attempt > 0, untangle_edges);
-    if (solid.convex && merged == 0 && certify_star_shaped(mesh, vertex_average(mesh))) {
+    triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of, attempt > 0, untangle_edges,
+                folding ? std::span<const std::pair<std::uint32_t, std::uint32_t>>(folds[attempt])
+                        : std::span<const std::pair<std::uint32_t, std::uint32_t>>(),
+                untangle_edges ? &face_of_triangle : nullptr, &folded_faces);
+    // (Not when folds were merged: their volume is held to its bound below.)
+    if (solid.convex && merged == 0 && !folding && certify_star_shaped(mesh, vertex_average(mesh))) {
       // A convex solid's rounding certified in O(T) exact orientations.
       result.mesh = std::move(mesh);
       result.merged_vertices = 0;
@@ -1405,7 +1576,10 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     if (!report.valid() && !mesh.triangles.empty()) {
       Mesh sheetless = mesh;
       std::vector<VertexIndex> renumbered;
-      if (const std::size_t gone = cancel_two_sided_sheets(sheetless, renumbered, untangle_edges); gone > 0) {
+      std::vector<std::uint32_t> kept;
+      if (const std::size_t gone = cancel_two_sided_sheets(sheetless, renumbered, untangle_edges,
+                                                           untangle_edges ? &kept : nullptr);
+          gone > 0) {
         if (sheetless.triangles.empty()) {
           flattened_whole = true;
           break;
@@ -1416,10 +1590,22 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         for (VertexIndex& v : mesh_vertex_of) {
           if (v != no_index) v = renumbered[v];
         }
+        if (untangle_edges) {
+          for (std::uint32_t& t : kept) t = face_of_triangle[t];
+          face_of_triangle = std::move(kept);
+        }
         report = certify_rounded(mesh, options);
       } else {
         sheets_cancelled = 0;
       }
+    }
+    // The faces this attempt folded (what is left once sheets vanished), for
+    // the folding round: only a repair attempt (1 to 3) of the second round or
+    // the folding round collects them.
+    if (untangle_edges && attempt > 0 && !report.valid() && !mesh.triangles.empty()) {
+      const std::size_t before = folds[attempt].size();
+      add_folded_face_pairs(mesh, face_of_triangle, folds[attempt]);
+      if (folding && folds[attempt].size() == before) folds_stalled[attempt] = true;
     }
     if (report.valid()) {
       RoundedSolid written = result;
@@ -1427,7 +1613,8 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       written.merged_vertices = merged;
       written.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
       written.vanished_triangles = sheets_cancelled;
-      if (sheets_cancelled > 0) report_moved_volume(set, solid, written);
+      written.folded_faces = folded_faces;
+      if (sheets_cancelled > 0 || folding) report_moved_volume(set, solid, written);
       // On the last round (sheets over four corners, faces merged) the volume
       // the repairs moved is held to the bound of what rounding can move, or the
       // mesh is not taken.
@@ -1435,6 +1622,9 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         written.valid = true;
         return written;
       }
+      // A fold merged over more than rounding can move: retrying with the
+      // same pairs would only do it again.
+      if (folding) folds_stalled[attempt] = true;
       continue;
     }
     // The piece may touch itself, exactly (see separate_touching): only then is
@@ -1473,12 +1663,16 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         result.moved_volume = separation.volume_change;
         result.moved_volume_bound = separation.volume_bound;
         result.vanished_triangles = sheets_cancelled;
-        if (sheets_cancelled > 0) {
-          // The sheets' volume as well: measured against the exact piece.
+        result.folded_faces = folded_faces;
+        if (sheets_cancelled > 0 || folding) {
+          // The sheets' or the folds' volume as well: measured against the exact piece.
           const double separated_bound = result.moved_volume_bound;
           report_moved_volume(set, solid, result);
           result.moved_volume_bound += separated_bound;
         }
+        // Folds merged: held to the bound, as on the last round (a fold's
+        // wedge is thinner than the rounding, so its volume is within it).
+        if (folding && result.moved_volume > result.moved_volume_bound) break;
         result.valid = true;
         return result;
       }
