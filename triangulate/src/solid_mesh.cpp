@@ -366,6 +366,34 @@ bool join_at_antiparallel_edge(std::vector<std::vector<VertexIndex>>& face) {
   return false;
 }
 
+// The same within one loop: a loop that runs an edge a -> b and later b -> a
+// (a face of a merged group that lies between two others along the edge, so
+// that the group's sum crosses it twice) bounds the sum's region on neither side
+// there; the two edges cancel and the loop falls into the two loops on either
+// side of them. Splits the first such loop; returns whether it found one.
+bool split_at_antiparallel_edge(std::vector<std::vector<VertexIndex>>& face) {
+  for (std::size_t p = 0; p < face.size(); ++p) {
+    const std::vector<VertexIndex>& loop = face[p];
+    const std::size_t k = loop.size();
+    for (std::size_t i = 0; i < k; ++i) {
+      const VertexIndex a = loop[i], b = loop[(i + 1) % k];
+      for (std::size_t j = i + 1; j < k; ++j) {
+        if (loop[j] != b || loop[(j + 1) % k] != a) continue;
+        // loop[i + 1 .. j - 1] (from b round to just before b) and loop[j + 1 .. i - 1]
+        // (from a round to just before a), cyclically.
+        std::vector<VertexIndex> inner(loop.begin() + static_cast<std::ptrdiff_t>(i + 1),
+                                       loop.begin() + static_cast<std::ptrdiff_t>(j));
+        std::vector<VertexIndex> outer;
+        for (std::size_t m = (j + 1) % k; m != i; m = (m + 1) % k) outer.push_back(loop[m]);
+        face[p] = std::move(inner);
+        face.push_back(std::move(outer));
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
 // Rewrites every loop of every face, putting after each corner a the vertices
 // `inserted(a, b)` names for its edge to the next corner b, in their order.
 template <class InsertedFn>
@@ -553,7 +581,7 @@ void merge_face_group(const PlaneSet& set, const Solid& solid, std::span<const V
   for (bool again = true; again;) {
     for (auto& loop : sum) remove_spikes(loop);
     std::erase_if(sum, [](const std::vector<VertexIndex>& loop) { return loop.size() < 3; });
-    again = join_at_antiparallel_edge(sum);
+    again = join_at_antiparallel_edge(sum) || split_at_antiparallel_edge(sum);
   }
   // Twice the signed area of the loops in face f's projection, seen from its outside.
   const auto area_seen_from = [&](std::uint32_t f) {
@@ -684,6 +712,67 @@ bool merge_coplanar_sheets(const PlaneSet& set, const Solid& solid, std::span<co
   return merged_any;
 }
 
+// How far rounding moved the piece's vertices, and which corners lie within
+// that reach of a plane, exactly. `rho`: the largest move of a vertex from its
+// exact position to its output position, in the L1 norm (rationals). A corner
+// lies within reach of plane n.x + d = 0 when its exact L1 distance to it,
+// |n.x + d| / max |n_i|, is at most 2 rho: rounding the piece could have put it
+// on the plane's other side. A face all of whose corners lie within reach of the
+// plane of a face it shares an edge with bounds, with it, a wedge no thicker than
+// that: merging the two moves at most 2 rho times its area.
+struct RoundingReach {
+  const PlaneSet& set;
+  const Solid& solid;
+  std::vector<std::optional<std::array<mpq_class, 3>>> exact;
+  mpq_class rho = 0;
+
+  RoundingReach(const PlaneSet& s, const Solid& piece, std::span<const Vec3> positions)
+      : set(s), solid(piece), exact(piece.defs.size()) {
+    for (VertexIndex v = 0; v < piece.defs.size(); ++v) {
+      const auto& x = point(v);
+      mpq_class moved = 0;
+      for (int k = 0; k < 3; ++k) moved += abs(mpq_class(positions[v][k]) - x[k]);
+      if (moved > rho) rho = moved;
+    }
+  }
+  const std::array<mpq_class, 3>& point(VertexIndex v) {
+    if (!exact[v]) exact[v] = exact_coordinates(set, solid.defs[v]);
+    return *exact[v];
+  }
+  // The plane's exact coefficients: a cut's doubles, or the input plane
+  // through its three points ((p1 - p0) x (p2 - p0), -n.p0).
+  std::array<mpq_class, 4> coefficients(PlaneRef plane) const {
+    if (plane.is_cut()) {
+      const Plane& c = set.cuts[plane.index()];
+      return {mpq_class(c.normal.x), mpq_class(c.normal.y), mpq_class(c.normal.z), mpq_class(c.offset)};
+    }
+    const auto& ids = set.inputs[plane.index()];
+    std::array<std::array<mpq_class, 3>, 3> p;
+    for (int i = 0; i < 3; ++i) {
+      const Vec3& q = set.points[ids[i]];
+      p[i] = {mpq_class(q.x), mpq_class(q.y), mpq_class(q.z)};
+    }
+    const mpq_class u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+    const mpq_class w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+    std::array<mpq_class, 4> n{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0], 0};
+    n[3] = -(n[0] * p[0][0] + n[1] * p[0][1] + n[2] * p[0][2]);
+    return n;
+  }
+  // Every corner of `loops` within reach of `plane`.
+  bool within(const std::vector<std::vector<VertexIndex>>& loops, PlaneRef plane) {
+    const std::array<mpq_class, 4> n = coefficients(plane);
+    const mpq_class largest = std::max({mpq_class(abs(n[0])), mpq_class(abs(n[1])), mpq_class(abs(n[2]))});
+    const mpq_class limit = 2 * rho * largest;
+    for (const auto& loop : loops) {
+      for (const VertexIndex v : loop) {
+        const auto& x = point(v);
+        if (abs(n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + n[3]) > limit) return false;
+      }
+    }
+    return true;
+  }
+};
+
 // Faces that rounding folded against each other (see round_solid): a pair of
 // faces whose rounded triangles certification found crossing, or sharing an
 // edge with other triangles (a fold: the wedge between them is thinner than
@@ -695,11 +784,14 @@ bool merge_coplanar_sheets(const PlaneSet& set, const Solid& solid, std::span<co
 // certification and the volume the merge moved (held to what rounding can
 // move) vouch for the result. `folds`: pairs of faces (indices of the loops
 // before any merge, mapped through `home`). Decided by index; changes no
-// position. Returns how many faces were merged (each group counts its members).
+// position. `thin_only`: merge only pairs whose wedge is thin by its corners
+// (within_rounding_reach), so that no fold that needs a wider merge drags a
+// thick wedge along. Returns how many faces were merged (each group counts its
+// members).
 std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::span<const Vec3> positions,
                         std::vector<std::vector<std::vector<VertexIndex>>>& loops, std::vector<std::uint8_t>& changed,
                         std::vector<std::uint32_t>& emit_as, std::vector<std::uint32_t>& home,
-                        std::span<const std::pair<std::uint32_t, std::uint32_t>> folds) {
+                        std::span<const std::pair<std::uint32_t, std::uint32_t>> folds, bool thin_only) {
   const auto count = static_cast<std::uint32_t>(loops.size());
   std::unordered_map<std::uint64_t, std::uint32_t> face_of_edge;
   const auto key = [](VertexIndex a, VertexIndex b) { return (std::uint64_t{a} << 32) | b; };
@@ -720,11 +812,23 @@ std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::spa
   UnionFind groups;
   groups.reset(count);
   bool any = false;
+  std::optional<RoundingReach> reach;
   for (const auto& [f, g] : folds) {
     if (f >= count || g >= count) continue;
     const std::uint32_t hf = home[f], hg = home[g];
     if (hf == no_index || hg == no_index || hf == hg || groups.find(hf) == groups.find(hg)) continue;
     if (!share_edge(hf, hg)) continue;
+    // Facing opposite ways (their outward normals' dot product negative,
+    // exactly): the solid lies between them, in the wedge. Two faces facing one
+    // way crowd an edge only beside such a wedge; merging them would fill
+    // what lies outside the solid between them.
+    const SolidFace &a = solid.faces[emit_as[hf]], &b = solid.faces[emit_as[hg]];
+    const Sign normals = compare_normals(set, a.plane, b.plane);
+    if (normals == Sign::zero || (normals == Sign::positive) == (a.reversed == b.reversed)) continue;
+    if (thin_only) {
+      if (!reach) reach.emplace(set, solid, positions);
+      if (!reach->within(loops[hg], a.plane) && !reach->within(loops[hf], b.plane)) continue;
+    }
     groups.unite(hf, hg);
     any = true;
   }
@@ -752,7 +856,8 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
                  Mesh& mesh, std::size_t& merged, std::vector<VertexIndex>* mesh_vertex_of = nullptr,
                  bool repair_loops = false, bool route_crossed = false,
                  std::span<const std::pair<std::uint32_t, std::uint32_t>> folds = {},
-                 std::vector<std::uint32_t>* face_of_triangle = nullptr, std::size_t* folded = nullptr) {
+                 std::vector<std::uint32_t>* face_of_triangle = nullptr, std::size_t* folded = nullptr,
+                 bool thin_folds_only = false) {
   const std::size_t n = solid.defs.size();
   thread_local std::vector<Vec3> positions;
   thread_local std::vector<PointDef> placed;
@@ -853,7 +958,8 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
     if (route_crossed) {
       merge_coplanar_sheets(set, solid, positions, repaired, repaired_changed, emit_as, home);
       if (!folds.empty()) {
-        const std::size_t count = merge_folded_faces(set, solid, positions, repaired, repaired_changed, emit_as, home, folds);
+        const std::size_t count =
+            merge_folded_faces(set, solid, positions, repaired, repaired_changed, emit_as, home, folds, thin_folds_only);
         if (folded != nullptr) *folded = count;
       }
     }
@@ -1532,15 +1638,23 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
   // attempts 1 to 3 again, each with the pairs of faces whose triangles the
   // second round's certification found folded, then with those its own
   // failures add, until a retry finds no new pair (at most fold_retries times).
-  constexpr std::size_t attempts = 4, fold_retries = 6;
-  constexpr std::size_t plain_steps = 2 * attempts, steps = plain_steps + (attempts - 1) * fold_retries;
-  std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts> folds;
-  std::array<bool, attempts> folds_stalled{};
+  // It merges first only the pairs whose wedge is thin by its corners (the
+  // faces' corners within reach of each other's planes, RoundingReach), then,
+  // if that fails, every pair found (thin only where it folded).
+  constexpr std::size_t attempts = 4, fold_retries = 6, fold_steps = (attempts - 1) * fold_retries;
+  constexpr std::size_t plain_steps = 2 * attempts, steps = plain_steps + 2 * fold_steps;
+  std::array<std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts>, 2> fold_pairs;
+  std::array<std::array<bool, attempts>, 2> fold_stalled{};
   std::vector<std::uint32_t> face_of_triangle;
   for (std::size_t step = 0; step < steps; ++step) {
     const bool folding = step >= plain_steps;
-    const std::size_t attempt = folding ? 1 + (step - plain_steps) / fold_retries : step % attempts;
+    const bool thin_only = folding && step < plain_steps + fold_steps;
+    const std::size_t attempt = folding ? 1 + (step - plain_steps) % fold_steps / fold_retries : step % attempts;
     const bool untangle_edges = step >= attempts;
+    // The second round's pairs start both phases; each phase adds its own.
+    const std::size_t phase = folding && !thin_only ? 1 : 0;
+    auto& folds = fold_pairs[phase];
+    auto& folds_stalled = fold_stalled[phase];
     if (folding && (folds[attempt].empty() || folds_stalled[attempt])) continue;
     Mesh mesh;
     std::size_t merged = 0, folded_faces = 0;
@@ -1548,7 +1662,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of, attempt > 0, untangle_edges,
                 folding ? std::span<const std::pair<std::uint32_t, std::uint32_t>>(folds[attempt])
                         : std::span<const std::pair<std::uint32_t, std::uint32_t>>(),
-                untangle_edges ? &face_of_triangle : nullptr, &folded_faces);
+                untangle_edges ? &face_of_triangle : nullptr, &folded_faces, thin_only);
     // (Not when folds were merged: their volume is held to its bound below.)
     if (solid.convex && merged == 0 && !folding && certify_star_shaped(mesh, vertex_average(mesh))) {
       // A convex solid's rounding certified in O(T) exact orientations.
@@ -1605,6 +1719,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     if (untangle_edges && attempt > 0 && !report.valid() && !mesh.triangles.empty()) {
       const std::size_t before = folds[attempt].size();
       add_folded_face_pairs(mesh, face_of_triangle, folds[attempt]);
+      if (!folding) fold_pairs[1][attempt] = folds[attempt];
       if (folding && folds[attempt].size() == before) folds_stalled[attempt] = true;
     }
     if (report.valid()) {
@@ -1637,7 +1752,8 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
                            });
     if (!may_touch) continue;
     // The second round repeats the first but for the edges: nothing else to try.
-    if (untangle_edges && report.find(DefectKind::non_manifold_edge) == nullptr) continue;
+    // (The folding round meets new meshes: a fold merged can leave a pinch.)
+    if (untangle_edges && !folding && report.find(DefectKind::non_manifold_edge) == nullptr) continue;
     std::vector<std::uint32_t> partner;
     if (report.find(DefectKind::non_manifold_edge) != nullptr) {
       std::optional<std::vector<std::uint32_t>> paired = pair_around_non_manifold_edges(mesh);
@@ -1656,25 +1772,26 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       const Separation separation = separate_touching(separated, touching, std::ldexp(1.0, -bits), partner);
       if (separation.moved == 0) break;
       if (validate_mesh_against(separated, options.trusted, options.cut).valid()) {
-        result.mesh = std::move(separated);
-        result.merged_vertices = merged;
-        result.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
-        result.separated_vertices = separation.moved;
-        result.moved_volume = separation.volume_change;
-        result.moved_volume_bound = separation.volume_bound;
-        result.vanished_triangles = sheets_cancelled;
-        result.folded_faces = folded_faces;
+        RoundedSolid written = result;
+        written.mesh = std::move(separated);
+        written.merged_vertices = merged;
+        written.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
+        written.separated_vertices = separation.moved;
+        written.moved_volume = separation.volume_change;
+        written.moved_volume_bound = separation.volume_bound;
+        written.vanished_triangles = sheets_cancelled;
+        written.folded_faces = folded_faces;
         if (sheets_cancelled > 0 || folding) {
           // The sheets' or the folds' volume as well: measured against the exact piece.
-          const double separated_bound = result.moved_volume_bound;
-          report_moved_volume(set, solid, result);
-          result.moved_volume_bound += separated_bound;
+          const double separated_bound = written.moved_volume_bound;
+          report_moved_volume(set, solid, written);
+          written.moved_volume_bound += separated_bound;
         }
         // Folds merged: held to the bound, as on the last round (a fold's
         // wedge is thinner than the rounding, so its volume is within it).
-        if (folding && result.moved_volume > result.moved_volume_bound) break;
-        result.valid = true;
-        return result;
+        if (folding && written.moved_volume > written.moved_volume_bound) break;
+        written.valid = true;
+        return written;
       }
     }
   }
