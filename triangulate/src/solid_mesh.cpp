@@ -758,6 +758,12 @@ struct RoundingReach {
     n[3] = -(n[0] * p[0][0] + n[1] * p[0][1] + n[2] * p[0][2]);
     return n;
   }
+  // A rounded position within reach of `plane`.
+  bool within(const Vec3& p, PlaneRef plane) const {
+    const std::array<mpq_class, 4> n = coefficients(plane);
+    const mpq_class largest = std::max({mpq_class(abs(n[0])), mpq_class(abs(n[1])), mpq_class(abs(n[2]))});
+    return abs(n[0] * p.x + n[1] * p.y + n[2] * p.z + n[3]) <= 2 * rho * largest;
+  }
   // Every corner of `loops` within reach of `plane`.
   bool within(const std::vector<std::vector<VertexIndex>>& loops, PlaneRef plane) {
     const std::array<mpq_class, 4> n = coefficients(plane);
@@ -1543,6 +1549,103 @@ void report_moved_volume(const PlaneSet& set, const Solid& solid, RoundedSolid& 
   result.moved_volume_bound = rounding_sweep_bound(set, solid).get_d();
 }
 
+// The hot pixels of 3D snap rounding (Hobby 1999's hot pixels; in 3D, as CGAL
+// 6's autorefine_triangle_soup snaps): a rounded vertex v that landed within
+// rounding's reach of the plane of a face it does not belong to, and inside one
+// of that face's triangles that crosses a triangle at v, is inserted into it: the
+// triangle (a, b, c) becomes (a, b, v), (b, c, v), (c, a, v). The face then
+// passes through v, as its exact surface passes within reach of it, and the
+// piece touches itself at v (two fans), which separate_touching then takes
+// apart. Decided exactly: the crossing pairs by self_intersecting_pairs, reach
+// by RoundingReach on the face's exact plane, "inside" by exact orientations of
+// the doubles in the face's projection (strictly inside, so no triangle made is
+// flat in projection). Each triangle takes one vertex per pass; the new corner's
+// attributes are the mean of the triangle's. `face_of[t]`: triangle t's face,
+// extended for the triangles made. Returns how many vertices were inserted.
+std::size_t insert_vertices_into_crossed_triangles(const PlaneSet& set, const Solid& solid, RoundingReach& reach,
+                                                   Mesh& mesh, std::vector<std::uint32_t>& face_of) {
+  std::vector<Triangle> shaped;
+  std::vector<std::uint32_t> shaped_index;
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) continue;
+    const Vec3 &a = mesh.positions[tri[0]], &b = mesh.positions[tri[1]], &c = mesh.positions[tri[2]];
+    if (orient2d({a.x, a.y}, {b.x, b.y}, {c.x, c.y}) == Sign::zero &&
+        orient2d({a.y, a.z}, {b.y, b.z}, {c.y, c.z}) == Sign::zero &&
+        orient2d({a.z, a.x}, {b.z, b.x}, {c.z, c.x}) == Sign::zero) {
+      continue;
+    }
+    shaped.push_back(tri);
+    shaped_index.push_back(t);
+  }
+  const std::size_t count = mesh.triangles.size();
+  std::vector<VertexIndex> insert(count, no_index);
+  const auto try_insert = [&](std::uint32_t t, std::uint32_t u) {
+    if (insert[t] != no_index) return;
+    const Triangle& tri = mesh.triangles[t];
+    const PlaneRef plane = solid.faces[face_of[t]].plane;
+    const Projection projection = projection_of(set, plane);
+    const int i = (projection.axis + 1) % 3, j = (projection.axis + 2) % 3;
+    const auto kept = [&](const Vec3& p) { return Vec2{p[i], p[j]}; };
+    for (const VertexIndex v : mesh.triangles[u]) {
+      if (v == tri[0] || v == tri[1] || v == tri[2]) continue;
+      const Vec3& p = mesh.positions[v];
+      const Sign s0 = orient2d(kept(mesh.positions[tri[0]]), kept(mesh.positions[tri[1]]), kept(p));
+      const Sign s1 = orient2d(kept(mesh.positions[tri[1]]), kept(mesh.positions[tri[2]]), kept(p));
+      const Sign s2 = orient2d(kept(mesh.positions[tri[2]]), kept(mesh.positions[tri[0]]), kept(p));
+      if (s0 == Sign::zero || s0 != s1 || s1 != s2) continue;
+      if (!reach.within(p, plane)) continue;
+      insert[t] = v;
+      return;
+    }
+  };
+  for (const TrianglePair& pair : self_intersecting_pairs(mesh.positions, shaped)) {
+    const std::uint32_t t = shaped_index[pair.first], u = shaped_index[pair.second];
+    if (face_of[t] == face_of[u]) continue;
+    try_insert(t, u);
+    try_insert(u, t);
+  }
+  std::size_t inserted = 0;
+  for (std::uint32_t t = 0; t < count; ++t) {
+    const VertexIndex v = insert[t];
+    if (v == no_index) continue;
+    const Triangle tri = mesh.triangles[t];
+    const std::array<Triangle, 3> parts{Triangle{tri[0], tri[1], v}, Triangle{tri[1], tri[2], v}, Triangle{tri[2], tri[0], v}};
+    mesh.triangles[t] = parts[0];
+    for (int k = 1; k < 3; ++k) {
+      mesh.triangles.push_back(parts[k]);
+      mesh.surfaces.push_back(mesh.surfaces[t]);
+      face_of.push_back(face_of[t]);
+    }
+    // Corner attributes: corners c and c + 1 of the triangle, then the mean.
+    const auto spread = [&](auto& values) {
+      if (values.empty()) return;
+      using Value = std::decay_t<decltype(values[0])>;
+      const Value a = values[3 * t], b = values[3 * t + 1], c = values[3 * t + 2];
+      Value mean = a;
+      if constexpr (std::is_same_v<Value, Vec2>) {
+        mean = Vec2{(a.x + b.x + c.x) / 3, (a.y + b.y + c.y) / 3};
+      } else if constexpr (std::is_same_v<Value, Vec3>) {
+        mean = normalized(a + b + c);
+      } else {
+        const Vec3 d = normalized(Vec3{a.x + b.x + c.x, a.y + b.y + c.y, a.z + b.z + c.z});
+        mean = Value{d.x, d.y, d.z, a.w};
+      }
+      values[3 * t + 2] = mean;
+      for (const auto& [x, y] : {std::pair{b, c}, std::pair{c, a}}) {
+        values.push_back(x);
+        values.push_back(y);
+        values.push_back(mean);
+      }
+    };
+    spread(mesh.corners.normals);
+    spread(mesh.corners.uvs);
+    spread(mesh.corners.tangents);
+    ++inserted;
+  }
+  return inserted;
+}
+
 // Adds to `pairs` (kept sorted and unique, the smaller face first) the pairs
 // of faces whose triangles in `mesh` fold against each other: triangles of
 // different faces around an edge that more than two triangles share, or run one
@@ -1642,17 +1745,23 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
   // faces' corners within reach of each other's planes, RoundingReach), then,
   // if that fails, every pair found (thin only where it folded).
   constexpr std::size_t attempts = 4, fold_retries = 6, fold_steps = (attempts - 1) * fold_retries;
-  constexpr std::size_t plain_steps = 2 * attempts, steps = plain_steps + 2 * fold_steps;
-  std::array<std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts>, 2> fold_pairs;
-  std::array<std::array<bool, attempts>, 2> fold_stalled{};
+  // A third phase merges the thin pairs again and also inserts rounded
+  // vertices into the triangles they crossed within rounding's reach
+  // (insert_vertices_into_crossed_triangles, 3D snap rounding's hot pixels).
+  constexpr std::size_t plain_steps = 2 * attempts, steps = plain_steps + 3 * fold_steps;
+  std::array<std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts>, 3> fold_pairs;
+  std::array<std::array<bool, attempts>, 3> fold_stalled{};
+  std::optional<RoundingReach> reach;
+  std::vector<Vec3> output_positions;
   std::vector<std::uint32_t> face_of_triangle;
   for (std::size_t step = 0; step < steps; ++step) {
     const bool folding = step >= plain_steps;
-    const bool thin_only = folding && step < plain_steps + fold_steps;
+    const std::size_t phase = folding ? (step - plain_steps) / fold_steps : 0;
+    const bool thin_only = phase != 1;
+    const bool inserting = folding && phase == 2;
     const std::size_t attempt = folding ? 1 + (step - plain_steps) % fold_steps / fold_retries : step % attempts;
     const bool untangle_edges = step >= attempts;
-    // The second round's pairs start both phases; each phase adds its own.
-    const std::size_t phase = folding && !thin_only ? 1 : 0;
+    // The second round's pairs start every phase; each phase adds its own.
     auto& folds = fold_pairs[phase];
     auto& folds_stalled = fold_stalled[phase];
     if (folding && (folds[attempt].empty() || folds_stalled[attempt])) continue;
@@ -1663,6 +1772,16 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
                 folding ? std::span<const std::pair<std::uint32_t, std::uint32_t>>(folds[attempt])
                         : std::span<const std::pair<std::uint32_t, std::uint32_t>>(),
                 untangle_edges ? &face_of_triangle : nullptr, &folded_faces, thin_only);
+    std::size_t inserted = 0;
+    if (inserting) {
+      if (!reach) {
+        for (VertexIndex v = 0; v < solid.defs.size(); ++v) {
+          output_positions.push_back(output_position(set, solid.defs[v], solid.approx[v]));
+        }
+        reach.emplace(set, solid, output_positions);
+      }
+      inserted = insert_vertices_into_crossed_triangles(set, solid, *reach, mesh, face_of_triangle);
+    }
     // (Not when folds were merged: their volume is held to its bound below.)
     if (solid.convex && merged == 0 && !folding && certify_star_shaped(mesh, vertex_average(mesh))) {
       // A convex solid's rounding certified in O(T) exact orientations.
@@ -1719,7 +1838,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     if (untangle_edges && attempt > 0 && !report.valid() && !mesh.triangles.empty()) {
       const std::size_t before = folds[attempt].size();
       add_folded_face_pairs(mesh, face_of_triangle, folds[attempt]);
-      if (!folding) fold_pairs[1][attempt] = folds[attempt];
+      if (!folding) fold_pairs[1][attempt] = fold_pairs[2][attempt] = folds[attempt];
       if (folding && folds[attempt].size() == before) folds_stalled[attempt] = true;
     }
     if (report.valid()) {
@@ -1729,6 +1848,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       written.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
       written.vanished_triangles = sheets_cancelled;
       written.folded_faces = folded_faces;
+      written.inserted_vertices = inserted;
       if (sheets_cancelled > 0 || folding) report_moved_volume(set, solid, written);
       // On the last round (sheets over four corners, faces merged) the volume
       // the repairs moved is held to the bound of what rounding can move, or the
@@ -1781,6 +1901,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         written.moved_volume_bound = separation.volume_bound;
         written.vanished_triangles = sheets_cancelled;
         written.folded_faces = folded_faces;
+        written.inserted_vertices = inserted;
         if (sheets_cancelled > 0 || folding) {
           // The sheets' or the folds' volume as well: measured against the exact piece.
           const double separated_bound = written.moved_volume_bound;
