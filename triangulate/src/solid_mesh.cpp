@@ -857,7 +857,12 @@ std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::spa
 // `repair_loops`: repair the loops of faces over merged vertices
 // (repair_merged_loops) before triangulating them; round_solid asks for it once
 // the plain merge has failed certification, so that a piece valid without it is
-// written as before.
+// written as before. `route_crossed`: the last round's repairs as well (edges
+// routed through crossed corners, faces rounded onto one plane merged).
+// `folds`: pairs of faces rounding folded against each other, merged
+// (merge_folded_faces, only with `route_crossed`; `thin_folds_only` as there);
+// `folded` receives how many faces that merged. `face_of_triangle`: when given,
+// the face (loop index) each triangle of `mesh` came from, in order.
 void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options, std::size_t attempt,
                  Mesh& mesh, std::size_t& merged, std::vector<VertexIndex>* mesh_vertex_of = nullptr,
                  bool repair_loops = false, bool route_crossed = false,
