@@ -1,6 +1,7 @@
 #include "shatter/triangulate/solid_mesh.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -15,6 +16,7 @@
 #include "shatter/kernel/projection.hpp"
 #include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/union_find.hpp"
+#include "shatter/kernel/self_intersections.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/triangulate/cap.hpp"
 
@@ -364,6 +366,34 @@ bool join_at_antiparallel_edge(std::vector<std::vector<VertexIndex>>& face) {
   return false;
 }
 
+// The same within one loop: a loop that runs an edge a -> b and later b -> a
+// (a face of a merged group that lies between two others along the edge, so
+// that the group's sum crosses it twice) bounds the sum's region on neither side
+// there; the two edges cancel and the loop falls into the two loops on either
+// side of them. Splits the first such loop; returns whether it found one.
+bool split_at_antiparallel_edge(std::vector<std::vector<VertexIndex>>& face) {
+  for (std::size_t p = 0; p < face.size(); ++p) {
+    const std::vector<VertexIndex>& loop = face[p];
+    const std::size_t k = loop.size();
+    for (std::size_t i = 0; i < k; ++i) {
+      const VertexIndex a = loop[i], b = loop[(i + 1) % k];
+      for (std::size_t j = i + 1; j < k; ++j) {
+        if (loop[j] != b || loop[(j + 1) % k] != a) continue;
+        // loop[i + 1 .. j - 1] (from b round to just before b) and loop[j + 1 .. i - 1]
+        // (from a round to just before a), cyclically.
+        std::vector<VertexIndex> inner(loop.begin() + static_cast<std::ptrdiff_t>(i + 1),
+                                       loop.begin() + static_cast<std::ptrdiff_t>(j));
+        std::vector<VertexIndex> outer;
+        for (std::size_t m = (j + 1) % k; m != i; m = (m + 1) % k) outer.push_back(loop[m]);
+        face[p] = std::move(inner);
+        face.push_back(std::move(outer));
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
 // Rewrites every loop of every face, putting after each corner a the vertices
 // `inserted(a, b)` names for its edge to the next corner b, in their order.
 template <class InsertedFn>
@@ -532,6 +562,61 @@ bool route_edges_through_crossed_corners(const PlaneSet& set, const Solid& solid
   return true;
 }
 
+// The faces of `group` (indices into `loops`, each written as the face
+// `emit_as` names) merged into one face: as 2-chains on a common plane they add
+// up to the sum of their loops as traversed, in which an edge run both ways
+// cancels (join_at_antiparallel_edge, spikes). The merged face faces the way of
+// the member whose outward side its loops turn counter-clockwise about (the
+// exact signed area of the loops on the doubles, in that member's projection),
+// is held by the group's first face and written as that member; when nothing
+// is left (or nothing turns one way) the group vanishes whole. `home[f]`: the
+// face holding f's loops afterwards (the group's first, or no_index when it
+// vanished). Changes no position.
+void merge_face_group(const PlaneSet& set, const Solid& solid, std::span<const Vec3> positions,
+                      std::span<const std::uint32_t> group, std::vector<std::vector<std::vector<VertexIndex>>>& loops,
+                      std::vector<std::uint8_t>& changed, std::vector<std::uint32_t>& emit_as,
+                      std::vector<std::uint32_t>& home) {
+  std::vector<std::vector<VertexIndex>> sum;
+  for (const std::uint32_t f : group) sum.insert(sum.end(), loops[f].begin(), loops[f].end());
+  for (bool again = true; again;) {
+    for (auto& loop : sum) remove_spikes(loop);
+    std::erase_if(sum, [](const std::vector<VertexIndex>& loop) { return loop.size() < 3; });
+    again = join_at_antiparallel_edge(sum) || split_at_antiparallel_edge(sum);
+  }
+  // Twice the signed area of the loops in face f's projection, seen from its outside.
+  const auto area_seen_from = [&](std::uint32_t f) {
+    const Projection projection = projection_of(set, solid.faces[f].plane);
+    const int u = (projection.axis + 1) % 3, w = (projection.axis + 2) % 3;
+    mpq_class twice = 0;
+    for (const auto& loop : sum) {
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const Vec3 &p = positions[loop[i]], &q = positions[loop[(i + 1) % loop.size()]];
+        twice += mpq_class(p[u]) * q[w] - mpq_class(q[u]) * p[w];
+      }
+    }
+    return (projection.flipped != solid.faces[f].reversed) ? mpq_class(-twice) : twice;
+  };
+  std::uint32_t as = no_index;
+  for (const std::uint32_t f : group) {
+    if (sgn(area_seen_from(emit_as[f])) > 0) {
+      as = emit_as[f];
+      break;
+    }
+  }
+  const std::uint32_t first = group.front();
+  for (const std::uint32_t f : group) {
+    emit_as[f] = no_index;
+    loops[f].clear();
+  }
+  for (std::uint32_t& h : home) {
+    if (h != no_index && std::find(group.begin(), group.end(), h) != group.end()) h = as == no_index ? no_index : first;
+  }
+  if (as == no_index) return;  // nothing left, or nothing facing one way: the group vanishes
+  emit_as[first] = as;
+  loops[first] = std::move(sum);
+  changed[first] = 1;
+}
+
 // Step 2 for faces that rounding laid onto each other: a part thinner than the
 // rounding between two faces that face opposite ways (a slab between a cap and
 // an input face ulps from it) rounds onto one plane, and if the two faces' loops
@@ -542,18 +627,18 @@ bool route_edges_through_crossed_corners(const PlaneSet& set, const Solid& solid
 // an edge run both ways, all of whose rounded corners lie exactly on one plane
 // (orient3d zero) and of which two face opposite ways, are merged into one face
 // over the loops left once those edges cancel (join_at_antiparallel_edge, spikes,
-// splits). It faces the way of the member whose outward side its loops turn
-// counter-clockwise about (the exact signed area of the loops on the doubles, in
-// that member's projection), and is written as that member; when nothing is left
-// the sheet vanishes whole. `emit_as[f]`: the face whose description face f's
-// triangles take, or no_index when f is merged into another. Returns whether
-// any faces were merged.
+// splits; merge_face_group). `emit_as[f]`: the face whose description face f's
+// triangles take, or no_index when f is merged into another; `home[f]`: the
+// face holding f's loops (itself unless merged). Returns whether any faces
+// were merged.
 bool merge_coplanar_sheets(const PlaneSet& set, const Solid& solid, std::span<const Vec3> positions,
                            std::vector<std::vector<std::vector<VertexIndex>>>& loops,
-                           std::vector<std::uint8_t>& changed, std::vector<std::uint32_t>& emit_as) {
+                           std::vector<std::uint8_t>& changed, std::vector<std::uint32_t>& emit_as,
+                           std::vector<std::uint32_t>& home) {
   const auto count = static_cast<std::uint32_t>(loops.size());
   emit_as.resize(count);
-  for (std::uint32_t f = 0; f < count; ++f) emit_as[f] = f;
+  home.resize(count);
+  for (std::uint32_t f = 0; f < count; ++f) emit_as[f] = home[f] = f;
   std::unordered_map<std::uint64_t, std::uint32_t> face_of_edge;
   const auto key = [](VertexIndex a, VertexIndex b) { return (std::uint64_t{a} << 32) | b; };
   for (std::uint32_t f = 0; f < count; ++f) {
@@ -621,45 +706,150 @@ bool merge_coplanar_sheets(const PlaneSet& set, const Solid& solid, std::span<co
   for (std::uint32_t root = 0; root < count; ++root) {
     const std::vector<std::uint32_t>& group = members[root];
     if (group.size() < 2 || !opposite[root]) continue;
-    std::vector<std::vector<VertexIndex>> sum;
-    for (const std::uint32_t f : group) sum.insert(sum.end(), loops[f].begin(), loops[f].end());
-    for (bool again = true; again;) {
-      for (auto& loop : sum) remove_spikes(loop);
-      std::erase_if(sum, [](const std::vector<VertexIndex>& loop) { return loop.size() < 3; });
-      again = join_at_antiparallel_edge(sum);
-    }
-    // Twice the signed area of the loops in face f's projection, seen from its outside.
-    const auto area_seen_from = [&](std::uint32_t f) {
-      const Projection projection = projection_of(set, solid.faces[f].plane);
-      const int u = (projection.axis + 1) % 3, w = (projection.axis + 2) % 3;
-      mpq_class twice = 0;
-      for (const auto& loop : sum) {
-        for (std::size_t i = 0; i < loop.size(); ++i) {
-          const Vec3 &p = positions[loop[i]], &q = positions[loop[(i + 1) % loop.size()]];
-          twice += mpq_class(p[u]) * q[w] - mpq_class(q[u]) * p[w];
-        }
-      }
-      return (projection.flipped != solid.faces[f].reversed) ? mpq_class(-twice) : twice;
-    };
-    std::uint32_t as = no_index;
-    for (const std::uint32_t f : group) {
-      if (sgn(area_seen_from(f)) > 0) {
-        as = f;
-        break;
-      }
-    }
-    const std::uint32_t first = group.front();
-    for (const std::uint32_t f : group) {
-      emit_as[f] = no_index;
-      loops[f].clear();
-    }
+    merge_face_group(set, solid, positions, group, loops, changed, emit_as, home);
     merged_any = true;
-    if (as == no_index) continue;  // nothing left, or nothing facing one way: the sheet vanishes
-    emit_as[first] = as;
-    loops[first] = std::move(sum);
-    changed[first] = 1;
   }
   return merged_any;
+}
+
+// How far rounding moved the piece's vertices, and which corners lie within
+// that reach of a plane, exactly. `rho`: the largest move of a vertex from its
+// exact position to its output position, in the L1 norm (rationals). A corner
+// lies within reach of plane n.x + d = 0 when its exact L1 distance to it,
+// |n.x + d| / max |n_i|, is at most 2 rho: rounding the piece could have put it
+// on the plane's other side. A face all of whose corners lie within reach of the
+// plane of a face it shares an edge with bounds, with it, a wedge no thicker than
+// that: merging the two moves at most 2 rho times its area.
+struct RoundingReach {
+  const PlaneSet& set;
+  const Solid& solid;
+  std::vector<std::optional<std::array<mpq_class, 3>>> exact;
+  mpq_class rho = 0;
+
+  RoundingReach(const PlaneSet& s, const Solid& piece, std::span<const Vec3> positions)
+      : set(s), solid(piece), exact(piece.defs.size()) {
+    for (VertexIndex v = 0; v < piece.defs.size(); ++v) {
+      const auto& x = point(v);
+      mpq_class moved = 0;
+      for (int k = 0; k < 3; ++k) moved += abs(mpq_class(positions[v][k]) - x[k]);
+      if (moved > rho) rho = moved;
+    }
+  }
+  const std::array<mpq_class, 3>& point(VertexIndex v) {
+    if (!exact[v]) exact[v] = exact_coordinates(set, solid.defs[v]);
+    return *exact[v];
+  }
+  // The plane's exact coefficients: a cut's doubles, or the input plane
+  // through its three points ((p1 - p0) x (p2 - p0), -n.p0).
+  std::array<mpq_class, 4> coefficients(PlaneRef plane) const {
+    if (plane.is_cut()) {
+      const Plane& c = set.cuts[plane.index()];
+      return {mpq_class(c.normal.x), mpq_class(c.normal.y), mpq_class(c.normal.z), mpq_class(c.offset)};
+    }
+    const auto& ids = set.inputs[plane.index()];
+    std::array<std::array<mpq_class, 3>, 3> p;
+    for (int i = 0; i < 3; ++i) {
+      const Vec3& q = set.points[ids[i]];
+      p[i] = {mpq_class(q.x), mpq_class(q.y), mpq_class(q.z)};
+    }
+    const mpq_class u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+    const mpq_class w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+    std::array<mpq_class, 4> n{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0], 0};
+    n[3] = -(n[0] * p[0][0] + n[1] * p[0][1] + n[2] * p[0][2]);
+    return n;
+  }
+  // A rounded position within reach of `plane`.
+  bool within(const Vec3& p, PlaneRef plane) const {
+    const std::array<mpq_class, 4> n = coefficients(plane);
+    const mpq_class largest = std::max({mpq_class(abs(n[0])), mpq_class(abs(n[1])), mpq_class(abs(n[2]))});
+    return abs(n[0] * p.x + n[1] * p.y + n[2] * p.z + n[3]) <= 2 * rho * largest;
+  }
+  // Every corner of `loops` within reach of `plane`.
+  bool within(const std::vector<std::vector<VertexIndex>>& loops, PlaneRef plane) {
+    const std::array<mpq_class, 4> n = coefficients(plane);
+    const mpq_class largest = std::max({mpq_class(abs(n[0])), mpq_class(abs(n[1])), mpq_class(abs(n[2]))});
+    const mpq_class limit = 2 * rho * largest;
+    for (const auto& loop : loops) {
+      for (const VertexIndex v : loop) {
+        const auto& x = point(v);
+        if (abs(n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + n[3]) > limit) return false;
+      }
+    }
+    return true;
+  }
+};
+
+// Faces that rounding folded against each other (see round_solid): a pair of
+// faces whose rounded triangles certification found crossing, or sharing an
+// edge with other triangles (a fold: the wedge between them is thinner than
+// the rounding, and rounding turned it inside out), and whose loops share an
+// edge run both ways. The wedge between such faces is a part thinner than the
+// rounding, as a two-sided sheet is, though its faces do not lie on one plane;
+// it vanishes the same way: the faces are merged into the face their sum leaves
+// (merge_face_group), triangulated on the placed corners in projection, and
+// certification and the volume the merge moved (held to what rounding can
+// move) vouch for the result. `folds`: pairs of faces (indices of the loops
+// before any merge, mapped through `home`). Decided by index; changes no
+// position. `thin_only`: merge only pairs whose wedge is thin by its corners
+// (within_rounding_reach), so that no fold that needs a wider merge drags a
+// thick wedge along. Returns how many faces were merged (each group counts its
+// members).
+std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::span<const Vec3> positions,
+                        std::vector<std::vector<std::vector<VertexIndex>>>& loops, std::vector<std::uint8_t>& changed,
+                        std::vector<std::uint32_t>& emit_as, std::vector<std::uint32_t>& home,
+                        std::span<const std::pair<std::uint32_t, std::uint32_t>> folds, bool thin_only) {
+  const auto count = static_cast<std::uint32_t>(loops.size());
+  std::unordered_map<std::uint64_t, std::uint32_t> face_of_edge;
+  const auto key = [](VertexIndex a, VertexIndex b) { return (std::uint64_t{a} << 32) | b; };
+  for (std::uint32_t f = 0; f < count; ++f) {
+    for (const auto& loop : loops[f]) {
+      for (std::size_t i = 0; i < loop.size(); ++i) face_of_edge[key(loop[i], loop[(i + 1) % loop.size()])] = f;
+    }
+  }
+  const auto share_edge = [&](std::uint32_t f, std::uint32_t g) {
+    for (const auto& loop : loops[f]) {
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const auto it = face_of_edge.find(key(loop[(i + 1) % loop.size()], loop[i]));
+        if (it != face_of_edge.end() && it->second == g) return true;
+      }
+    }
+    return false;
+  };
+  UnionFind groups;
+  groups.reset(count);
+  bool any = false;
+  std::optional<RoundingReach> reach;
+  for (const auto& [f, g] : folds) {
+    if (f >= count || g >= count) continue;
+    const std::uint32_t hf = home[f], hg = home[g];
+    if (hf == no_index || hg == no_index || hf == hg || groups.find(hf) == groups.find(hg)) continue;
+    if (!share_edge(hf, hg)) continue;
+    // Facing opposite ways (their outward normals' dot product negative,
+    // exactly): the solid lies between them, in the wedge. Two faces facing one
+    // way crowd an edge only beside such a wedge; merging them would fill
+    // what lies outside the solid between them.
+    const SolidFace &a = solid.faces[emit_as[hf]], &b = solid.faces[emit_as[hg]];
+    const Sign normals = compare_normals(set, a.plane, b.plane);
+    if (normals == Sign::zero || (normals == Sign::positive) == (a.reversed == b.reversed)) continue;
+    if (thin_only) {
+      if (!reach) reach.emplace(set, solid, positions);
+      if (!reach->within(loops[hg], a.plane) && !reach->within(loops[hf], b.plane)) continue;
+    }
+    groups.unite(hf, hg);
+    any = true;
+  }
+  if (!any) return 0;
+  std::vector<std::vector<std::uint32_t>> members(count);
+  for (std::uint32_t f = 0; f < count; ++f) {
+    if (!loops[f].empty()) members[groups.find(f)].push_back(f);
+  }
+  std::size_t merged = 0;
+  for (const std::vector<std::uint32_t>& group : members) {
+    if (group.size() < 2) continue;
+    merge_face_group(set, solid, positions, group, loops, changed, emit_as, home);
+    merged += group.size();
+  }
+  return merged;
 }
 
 // Steps 1 and 2 (see solid_mesh.hpp): positions, vertices merged where they
@@ -667,10 +857,18 @@ bool merge_coplanar_sheets(const PlaneSet& set, const Solid& solid, std::span<co
 // `repair_loops`: repair the loops of faces over merged vertices
 // (repair_merged_loops) before triangulating them; round_solid asks for it once
 // the plain merge has failed certification, so that a piece valid without it is
-// written as before.
+// written as before. `route_crossed`: the last round's repairs as well (edges
+// routed through crossed corners, faces rounded onto one plane merged).
+// `folds`: pairs of faces rounding folded against each other, merged
+// (merge_folded_faces, only with `route_crossed`; `thin_folds_only` as there);
+// `folded` receives how many faces that merged. `face_of_triangle`: when given,
+// the face (loop index) each triangle of `mesh` came from, in order.
 void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options, std::size_t attempt,
                  Mesh& mesh, std::size_t& merged, std::vector<VertexIndex>* mesh_vertex_of = nullptr,
-                 bool repair_loops = false, bool route_crossed = false) {
+                 bool repair_loops = false, bool route_crossed = false,
+                 std::span<const std::pair<std::uint32_t, std::uint32_t>> folds = {},
+                 std::vector<std::uint32_t>* face_of_triangle = nullptr, std::size_t* folded = nullptr,
+                 bool thin_folds_only = false) {
   const std::size_t n = solid.defs.size();
   thread_local std::vector<Vec3> positions;
   thread_local std::vector<PointDef> placed;
@@ -720,9 +918,13 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
   // vertex of another.
   thread_local std::vector<std::vector<std::vector<VertexIndex>>> repaired;
   thread_local std::vector<std::uint8_t> repaired_changed;
-  thread_local std::vector<std::uint32_t> emit_as;  // merge_coplanar_sheets
+  thread_local std::vector<std::uint32_t> emit_as, home;  // merge_coplanar_sheets, merge_folded_faces
   emit_as.clear();
-  const bool repairing = repair_loops && merged > 0;
+  if (face_of_triangle != nullptr) face_of_triangle->clear();
+  if (folded != nullptr) *folded = 0;
+  // Folds are merged on the loops over representatives, which the repair
+  // builds, merged vertices or not.
+  const bool repairing = repair_loops && (merged > 0 || (route_crossed && !folds.empty()));
   if (repairing) {
     repaired.assign(solid.faces.size(), {});
     repaired_changed.assign(solid.faces.size(), 0);
@@ -764,7 +966,14 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
     if (route_crossed) route_edges_through_crossed_corners(set, solid, placed, positions, repaired);
     repair_merged_loops(positions, repaired, candidates);
     for (std::uint32_t f = 0; f < solid.faces.size(); ++f) repaired_changed[f] |= repaired[f] != before[f];
-    if (route_crossed) merge_coplanar_sheets(set, solid, positions, repaired, repaired_changed, emit_as);
+    if (route_crossed) {
+      merge_coplanar_sheets(set, solid, positions, repaired, repaired_changed, emit_as, home);
+      if (!folds.empty()) {
+        const std::size_t count =
+            merge_folded_faces(set, solid, positions, repaired, repaired_changed, emit_as, home, folds, thin_folds_only);
+        if (folded != nullptr) *folded = count;
+      }
+    }
   }
   for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
     if (repairing && route_crossed && emit_as[f] == no_index) continue;
@@ -851,6 +1060,7 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
         }
       }
       mesh.triangles.push_back({out_index[t[0]], out_index[t[1]], out_index[t[2]]});
+      if (face_of_triangle != nullptr) face_of_triangle->push_back(f);
       mesh.surfaces.push_back(face.surface);
       for (VertexIndex v : t) {
         if (!cap) {
@@ -900,7 +1110,9 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
 // triangulated across the other diagonal): the four bound only the thin
 // tetrahedron between the two triangulations, and removing them keeps every
 // directed edge matched (their boundaries are a -> b -> c -> d and its reverse).
-std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumbered, bool quads = false) {
+// `kept`: when given, the old index of each triangle left, in order.
+std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumbered, bool quads = false,
+                                    std::vector<std::uint32_t>* kept_triangles = nullptr) {
   const std::size_t count = mesh.triangles.size();
   // Key: the triangle rotated to start at its smallest index; its reverse is then
   // (a, c, b) for (a, b, c).
@@ -988,6 +1200,7 @@ std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumb
       out[c] = v;
     }
     kept.triangles.push_back(out);
+    if (kept_triangles != nullptr) kept_triangles->push_back(t);
     kept.surfaces.push_back(mesh.surfaces[t]);
     for (int c = 0; c < 3; ++c) {
       if (mesh.corners.has_normals()) kept.corners.normals.push_back(mesh.corners.normals[3 * t + c]);
@@ -1341,6 +1554,163 @@ void report_moved_volume(const PlaneSet& set, const Solid& solid, RoundedSolid& 
   result.moved_volume_bound = rounding_sweep_bound(set, solid).get_d();
 }
 
+// The hot pixels of 3D snap rounding (Hobby 1999's hot pixels; in 3D, as CGAL
+// 6's autorefine_triangle_soup snaps): a rounded vertex v that landed within
+// rounding's reach of the plane of a face it does not belong to, and inside one
+// of that face's triangles that crosses a triangle at v, is inserted into it: the
+// triangle (a, b, c) becomes (a, b, v), (b, c, v), (c, a, v). The face then
+// passes through v, as its exact surface passes within reach of it, and the
+// piece touches itself at v (two fans), which separate_touching then takes
+// apart. Decided exactly: the crossing pairs by self_intersecting_pairs, reach
+// by RoundingReach on the face's exact plane, "inside" by exact orientations of
+// the doubles in the face's projection (strictly inside, so no triangle made is
+// flat in projection). Each triangle takes one vertex per pass; the new corner's
+// attributes are the mean of the triangle's. `face_of[t]`: triangle t's face,
+// extended for the triangles made. Returns how many vertices were inserted.
+std::size_t insert_vertices_into_crossed_triangles(const PlaneSet& set, const Solid& solid, RoundingReach& reach,
+                                                   Mesh& mesh, std::vector<std::uint32_t>& face_of) {
+  std::vector<Triangle> shaped;
+  std::vector<std::uint32_t> shaped_index;
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) continue;
+    const Vec3 &a = mesh.positions[tri[0]], &b = mesh.positions[tri[1]], &c = mesh.positions[tri[2]];
+    if (orient2d({a.x, a.y}, {b.x, b.y}, {c.x, c.y}) == Sign::zero &&
+        orient2d({a.y, a.z}, {b.y, b.z}, {c.y, c.z}) == Sign::zero &&
+        orient2d({a.z, a.x}, {b.z, b.x}, {c.z, c.x}) == Sign::zero) {
+      continue;
+    }
+    shaped.push_back(tri);
+    shaped_index.push_back(t);
+  }
+  const std::size_t count = mesh.triangles.size();
+  std::vector<VertexIndex> insert(count, no_index);
+  const auto try_insert = [&](std::uint32_t t, std::uint32_t u) {
+    if (insert[t] != no_index) return;
+    const Triangle& tri = mesh.triangles[t];
+    const PlaneRef plane = solid.faces[face_of[t]].plane;
+    const Projection projection = projection_of(set, plane);
+    const int i = (projection.axis + 1) % 3, j = (projection.axis + 2) % 3;
+    const auto kept = [&](const Vec3& p) { return Vec2{p[i], p[j]}; };
+    for (const VertexIndex v : mesh.triangles[u]) {
+      if (v == tri[0] || v == tri[1] || v == tri[2]) continue;
+      const Vec3& p = mesh.positions[v];
+      const Sign s0 = orient2d(kept(mesh.positions[tri[0]]), kept(mesh.positions[tri[1]]), kept(p));
+      const Sign s1 = orient2d(kept(mesh.positions[tri[1]]), kept(mesh.positions[tri[2]]), kept(p));
+      const Sign s2 = orient2d(kept(mesh.positions[tri[2]]), kept(mesh.positions[tri[0]]), kept(p));
+      if (s0 == Sign::zero || s0 != s1 || s1 != s2) continue;
+      if (!reach.within(p, plane)) continue;
+      insert[t] = v;
+      return;
+    }
+  };
+  for (const TrianglePair& pair : self_intersecting_pairs(mesh.positions, shaped)) {
+    const std::uint32_t t = shaped_index[pair.first], u = shaped_index[pair.second];
+    if (face_of[t] == face_of[u]) continue;
+    try_insert(t, u);
+    try_insert(u, t);
+  }
+  std::size_t inserted = 0;
+  for (std::uint32_t t = 0; t < count; ++t) {
+    const VertexIndex v = insert[t];
+    if (v == no_index) continue;
+    const Triangle tri = mesh.triangles[t];
+    const std::array<Triangle, 3> parts{Triangle{tri[0], tri[1], v}, Triangle{tri[1], tri[2], v}, Triangle{tri[2], tri[0], v}};
+    mesh.triangles[t] = parts[0];
+    for (int k = 1; k < 3; ++k) {
+      mesh.triangles.push_back(parts[k]);
+      mesh.surfaces.push_back(mesh.surfaces[t]);
+      face_of.push_back(face_of[t]);
+    }
+    // Corner attributes: corners c and c + 1 of the triangle, then the mean.
+    const auto spread = [&](auto& values) {
+      if (values.empty()) return;
+      using Value = std::decay_t<decltype(values[0])>;
+      const Value a = values[3 * t], b = values[3 * t + 1], c = values[3 * t + 2];
+      Value mean = a;
+      if constexpr (std::is_same_v<Value, Vec2>) {
+        mean = Vec2{(a.x + b.x + c.x) / 3, (a.y + b.y + c.y) / 3};
+      } else if constexpr (std::is_same_v<Value, Vec3>) {
+        mean = normalized(a + b + c);
+      } else {
+        const Vec3 d = normalized(Vec3{a.x + b.x + c.x, a.y + b.y + c.y, a.z + b.z + c.z});
+        mean = Value{d.x, d.y, d.z, a.w};
+      }
+      values[3 * t + 2] = mean;
+      for (const auto& [x, y] : {std::pair{b, c}, std::pair{c, a}}) {
+        values.push_back(x);
+        values.push_back(y);
+        values.push_back(mean);
+      }
+    };
+    spread(mesh.corners.normals);
+    spread(mesh.corners.uvs);
+    spread(mesh.corners.tangents);
+    ++inserted;
+  }
+  return inserted;
+}
+
+// Adds to `pairs` (kept sorted and unique, the smaller face first) the pairs
+// of faces whose triangles in `mesh` fold against each other: triangles of
+// different faces around an edge that more than two triangles share, or run one
+// way by both, and pairs of triangles of different faces that intersect
+// (self_intersecting_pairs, exact, over the triangles with three distinct
+// non-collinear corners). `face_of[t]`: the face (loop index) triangle t came from.
+void add_folded_face_pairs(const Mesh& mesh, std::span<const std::uint32_t> face_of,
+                           std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs) {
+  const auto add = [&](std::uint32_t f, std::uint32_t g) {
+    if (f != g) pairs.emplace_back(std::min(f, g), std::max(f, g));
+  };
+  struct Use {
+    std::uint64_t key;
+    std::uint32_t triangle;
+    bool forward;
+  };
+  std::vector<Use> uses;
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    for (int c = 0; c < 3; ++c) {
+      const VertexIndex a = mesh.triangles[t][c], b = mesh.triangles[t][(c + 1) % 3];
+      uses.push_back({(std::uint64_t{std::min(a, b)} << 32) | std::max(a, b), t, a < b});
+    }
+  }
+  std::sort(uses.begin(), uses.end(), [](const Use& x, const Use& y) {
+    return x.key != y.key ? x.key < y.key : x.triangle < y.triangle;
+  });
+  for (std::size_t i = 0; i < uses.size();) {
+    std::size_t j = i;
+    while (j < uses.size() && uses[j].key == uses[i].key) ++j;
+    const bool folded = j - i > 2 || (j - i == 2 && uses[i].forward == uses[i + 1].forward);
+    if (folded) {
+      for (std::size_t k = i; k < j; ++k) {
+        for (std::size_t l = k + 1; l < j; ++l) add(face_of[uses[k].triangle], face_of[uses[l].triangle]);
+      }
+    }
+    i = j;
+  }
+  // Triangles with a shape (self_intersecting_pairs' precondition): distinct
+  // corners not on one line, decided exactly on the doubles.
+  std::vector<Triangle> shaped;
+  std::vector<std::uint32_t> shaped_index;
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) continue;
+    const Vec3 &a = mesh.positions[tri[0]], &b = mesh.positions[tri[1]], &c = mesh.positions[tri[2]];
+    if (orient2d({a.x, a.y}, {b.x, b.y}, {c.x, c.y}) == Sign::zero &&
+        orient2d({a.y, a.z}, {b.y, b.z}, {c.y, c.z}) == Sign::zero &&
+        orient2d({a.z, a.x}, {b.z, b.x}, {c.z, c.x}) == Sign::zero) {
+      continue;
+    }
+    shaped.push_back(tri);
+    shaped_index.push_back(t);
+  }
+  for (const TrianglePair& p : self_intersecting_pairs(mesh.positions, shaped)) {
+    add(face_of[shaped_index[p.first]], face_of[shaped_index[p.second]]);
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+}
+
 // Certifies a rounded mesh as round_solid promises: validate_mesh_against its
 // trusted parent, or the topology alone (with vertices where the surface touches
 // itself allowed) for a solid accepted with self-intersections.
@@ -1371,15 +1741,54 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
   // rounding made non-manifold (pair_around_non_manifold_edges): a repair tried
   // only once the others have failed, so that every piece they write is written
   // as before it existed.
-  constexpr std::size_t attempts = 4;
-  for (std::size_t step = 0; step < 2 * attempts; ++step) {
-    const std::size_t attempt = step % attempts;
+  // The third round (folding), tried only when the first two have failed,
+  // merges faces that rounding folded against each other (merge_folded_faces):
+  // attempts 1 to 3 again, each with the pairs of faces whose triangles the
+  // second round's certification found folded, then with those its own
+  // failures add, until a retry finds no new pair (at most fold_retries times).
+  // It merges first only the pairs whose wedge is thin by its corners (the
+  // faces' corners within reach of each other's planes, RoundingReach), then,
+  // if that fails, every pair found (thin only where it folded).
+  constexpr std::size_t attempts = 4, fold_retries = 6, fold_steps = (attempts - 1) * fold_retries;
+  // A third phase merges the thin pairs again and also inserts rounded
+  // vertices into the triangles they crossed within rounding's reach
+  // (insert_vertices_into_crossed_triangles, 3D snap rounding's hot pixels).
+  constexpr std::size_t plain_steps = 2 * attempts, steps = plain_steps + 3 * fold_steps;
+  std::array<std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts>, 3> fold_pairs;
+  std::array<std::array<bool, attempts>, 3> fold_stalled{};
+  std::optional<RoundingReach> reach;
+  std::vector<Vec3> output_positions;
+  std::vector<std::uint32_t> face_of_triangle;
+  for (std::size_t step = 0; step < steps; ++step) {
+    const bool folding = step >= plain_steps;
+    const std::size_t phase = folding ? (step - plain_steps) / fold_steps : 0;
+    const bool thin_only = phase != 1;
+    const bool inserting = folding && phase == 2;
+    const std::size_t attempt = folding ? 1 + (step - plain_steps) % fold_steps / fold_retries : step % attempts;
     const bool untangle_edges = step >= attempts;
+    // The second round's pairs start every phase; each phase adds its own.
+    auto& folds = fold_pairs[phase];
+    auto& folds_stalled = fold_stalled[phase];
+    if (folding && (folds[attempt].empty() || folds_stalled[attempt])) continue;
     Mesh mesh;
-    std::size_t merged = 0;
+    std::size_t merged = 0, folded_faces = 0;
     ValidationReport report;
-    triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of, attempt > 0, untangle_edges);
-    if (solid.convex && merged == 0 && certify_star_shaped(mesh, vertex_average(mesh))) {
+    triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of, attempt > 0, untangle_edges,
+                folding ? std::span<const std::pair<std::uint32_t, std::uint32_t>>(folds[attempt])
+                        : std::span<const std::pair<std::uint32_t, std::uint32_t>>(),
+                untangle_edges ? &face_of_triangle : nullptr, &folded_faces, thin_only);
+    std::size_t inserted = 0;
+    if (inserting) {
+      if (!reach) {
+        for (VertexIndex v = 0; v < solid.defs.size(); ++v) {
+          output_positions.push_back(output_position(set, solid.defs[v], solid.approx[v]));
+        }
+        reach.emplace(set, solid, output_positions);
+      }
+      inserted = insert_vertices_into_crossed_triangles(set, solid, *reach, mesh, face_of_triangle);
+    }
+    // (Not when folds were merged: their volume is held to its bound below.)
+    if (solid.convex && merged == 0 && !folding && certify_star_shaped(mesh, vertex_average(mesh))) {
       // A convex solid's rounding certified in O(T) exact orientations.
       result.mesh = std::move(mesh);
       result.merged_vertices = 0;
@@ -1405,7 +1814,10 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     if (!report.valid() && !mesh.triangles.empty()) {
       Mesh sheetless = mesh;
       std::vector<VertexIndex> renumbered;
-      if (const std::size_t gone = cancel_two_sided_sheets(sheetless, renumbered, untangle_edges); gone > 0) {
+      std::vector<std::uint32_t> kept;
+      if (const std::size_t gone = cancel_two_sided_sheets(sheetless, renumbered, untangle_edges,
+                                                           untangle_edges ? &kept : nullptr);
+          gone > 0) {
         if (sheetless.triangles.empty()) {
           flattened_whole = true;
           break;
@@ -1416,10 +1828,23 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         for (VertexIndex& v : mesh_vertex_of) {
           if (v != no_index) v = renumbered[v];
         }
+        if (untangle_edges) {
+          for (std::uint32_t& t : kept) t = face_of_triangle[t];
+          face_of_triangle = std::move(kept);
+        }
         report = certify_rounded(mesh, options);
       } else {
         sheets_cancelled = 0;
       }
+    }
+    // The faces this attempt folded (what is left once sheets vanished), for
+    // the folding round: only a repair attempt (1 to 3) of the second round or
+    // the folding round collects them.
+    if (untangle_edges && attempt > 0 && !report.valid() && !mesh.triangles.empty()) {
+      const std::size_t before = folds[attempt].size();
+      add_folded_face_pairs(mesh, face_of_triangle, folds[attempt]);
+      if (!folding) fold_pairs[1][attempt] = fold_pairs[2][attempt] = folds[attempt];
+      if (folding && folds[attempt].size() == before) folds_stalled[attempt] = true;
     }
     if (report.valid()) {
       RoundedSolid written = result;
@@ -1427,7 +1852,9 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       written.merged_vertices = merged;
       written.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
       written.vanished_triangles = sheets_cancelled;
-      if (sheets_cancelled > 0) report_moved_volume(set, solid, written);
+      written.folded_faces = folded_faces;
+      written.inserted_vertices = inserted;
+      if (sheets_cancelled > 0 || folding) report_moved_volume(set, solid, written);
       // On the last round (sheets over four corners, faces merged) the volume
       // the repairs moved is held to the bound of what rounding can move, or the
       // mesh is not taken.
@@ -1435,6 +1862,9 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         written.valid = true;
         return written;
       }
+      // A fold merged over more than rounding can move: retrying with the
+      // same pairs would only do it again.
+      if (folding) folds_stalled[attempt] = true;
       continue;
     }
     // The piece may touch itself, exactly (see separate_touching): only then is
@@ -1447,7 +1877,8 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
                            });
     if (!may_touch) continue;
     // The second round repeats the first but for the edges: nothing else to try.
-    if (untangle_edges && report.find(DefectKind::non_manifold_edge) == nullptr) continue;
+    // (The folding round meets new meshes: a fold merged can leave a pinch.)
+    if (untangle_edges && !folding && report.find(DefectKind::non_manifold_edge) == nullptr) continue;
     std::vector<std::uint32_t> partner;
     if (report.find(DefectKind::non_manifold_edge) != nullptr) {
       std::optional<std::vector<std::uint32_t>> paired = pair_around_non_manifold_edges(mesh);
@@ -1466,21 +1897,27 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       const Separation separation = separate_touching(separated, touching, std::ldexp(1.0, -bits), partner);
       if (separation.moved == 0) break;
       if (validate_mesh_against(separated, options.trusted, options.cut).valid()) {
-        result.mesh = std::move(separated);
-        result.merged_vertices = merged;
-        result.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
-        result.separated_vertices = separation.moved;
-        result.moved_volume = separation.volume_change;
-        result.moved_volume_bound = separation.volume_bound;
-        result.vanished_triangles = sheets_cancelled;
-        if (sheets_cancelled > 0) {
-          // The sheets' volume as well: measured against the exact piece.
-          const double separated_bound = result.moved_volume_bound;
-          report_moved_volume(set, solid, result);
-          result.moved_volume_bound += separated_bound;
+        RoundedSolid written = result;
+        written.mesh = std::move(separated);
+        written.merged_vertices = merged;
+        written.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
+        written.separated_vertices = separation.moved;
+        written.moved_volume = separation.volume_change;
+        written.moved_volume_bound = separation.volume_bound;
+        written.vanished_triangles = sheets_cancelled;
+        written.folded_faces = folded_faces;
+        written.inserted_vertices = inserted;
+        if (sheets_cancelled > 0 || folding) {
+          // The sheets' or the folds' volume as well: measured against the exact piece.
+          const double separated_bound = written.moved_volume_bound;
+          report_moved_volume(set, solid, written);
+          written.moved_volume_bound += separated_bound;
         }
-        result.valid = true;
-        return result;
+        // Folds merged: held to the bound, as on the last round (a fold's
+        // wedge is thinner than the rounding, so its volume is within it).
+        if (folding && written.moved_volume > written.moved_volume_bound) break;
+        written.valid = true;
+        return written;
       }
     }
   }

@@ -31,7 +31,15 @@
 //    an edge that a part thinner than the rounding was squeezed onto (2k
 //    triangles around it) is untangled: its triangles paired in exact angular
 //    order, one copy of the edge per pair, moved apart as a pinched vertex is;
-//    the result is checked again. A piece that still fails and whose volume is
+//    the result is checked again. Last, faces that rounding folded against each
+//    other (their triangles cross, or crowd an edge, and their loops share an
+//    edge: the wedge between them is thinner than the rounding and rounding
+//    turned it inside out) are merged into the face their sum leaves, as faces
+//    rounded onto one plane are, and retried with the pairs each retry still
+//    finds folded; then a rounded vertex that crossed a face within rounding's
+//    reach of its plane is inserted into the triangle it crossed, as 3D snap
+//    rounding inserts a hot pixel (while the volume moved stays within its
+//    bound). A piece that still fails and whose volume is
 //    within what rounding its vertices can move vanishes whole. What cannot be
 //    repaired is reported, never written as valid.
 
@@ -99,6 +107,12 @@ struct RoundedSolid {
   /// Triangles removed because rounding laid them over each other, once each way
   /// (a part thinner than the rounding, flattened into a two-sided sheet).
   std::size_t vanished_triangles = 0;
+  /// Faces merged into each other because rounding folded them against each other
+  /// (a wedge thinner than the rounding turned inside out; see round_solid).
+  std::size_t folded_faces = 0;
+  /// Rounded vertices inserted into a triangle of a face they crossed within
+  /// rounding's reach of its plane (3D snap rounding's hot pixels; see round_solid).
+  std::size_t inserted_vertices = 0;
   /// |volume change| the repairs made: the separation's moves, the written mesh
   /// against the exact piece when parts of it vanished as sheets, the whole
   /// exact volume when the piece collapsed (doubles, from exact values).
@@ -127,6 +141,26 @@ struct RoundedSolid {
 /// one wedge of the solid; order_around_line) and each pair gets its own copies
 /// of the edge's vertices, separated as above; an edge whose triangles tie in
 /// angle or do not alternate in direction around it (a fold) is left as it is.
+/// When all of that fails, faces that rounding folded against each other vanish
+/// into each other: every pair of faces with triangles that certification finds
+/// crossing, or sharing an edge with more than two triangles or run one way by
+/// both, that face opposite ways (the solid between them) and whose loops share
+/// an edge run both ways, is merged into the one face their loops' sum leaves
+/// (edges run both ways cancel; the wedge between the two faces, thinner than
+/// the rounding, is dropped), triangulated over the placed corners in
+/// projection (`folded_faces`); the pairs each retry still finds are added,
+/// until a retry finds none new (a fixed number of times at most). First only
+/// pairs whose wedge is thin by its corners (those of one face all within twice
+/// the largest rounding move of the other's exact plane, in the L1 norm), then
+/// every pair; then the thin pairs again with 3D snap rounding's hot pixels: a
+/// rounded vertex inside a triangle it crosses (in that face's projection) and
+/// within that reach of the face's exact plane is inserted into the triangle
+/// (`inserted_vertices`), after which the piece touches itself there and is
+/// separated as above, or the triangles made cancel as sheets. A mesh so
+/// repaired is taken only when certified and when the volume it moved, measured
+/// exactly against the exact piece (`moved_volume`), is within what rounding the
+/// piece's vertices can move (the sweep below, plus a separation's own bound:
+/// `moved_volume_bound`).
 /// A part thinner than the rounding that rounds flat (its triangles laid over each
 /// other once each way) vanishes into its neighbour (`vanished_triangles`); a piece
 /// that rounds flat whole, or that cannot be certified while its exact volume is
@@ -143,8 +177,10 @@ struct RoundedSolid {
 /// no self-intersection); a piece whose first rounding certifies is written as
 /// before any repair existed; every repair is a finite pass (merges and removals
 /// only shrink the mesh, insertions put a vertex into an edge that passes exactly
-/// through it, over a fixed set of four attempts, each tried again untangling
-/// edges); deterministic. Failure: neither
+/// through it, merges of folded faces only remove loops, a hot pixel splits a
+/// triangle once per step, over a fixed set of four attempts, each tried again
+/// untangling edges, and three of them at most six times in each of three
+/// phases of folds); deterministic. Failure: neither
 /// valid nor collapsed, `defect` names what the first rounding broke.
 RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options = {});
 
