@@ -351,15 +351,21 @@ TEST_CASE("holes touching at vertices are all filled: a convex solid with holes 
   CHECK(welded >= 5);
 }
 
+// The triangles of `mesh` whose three corners have z = 0 exactly (a face of a box).
+std::vector<std::size_t> triangles_on_plane_z0(const Mesh& mesh) {
+  std::vector<std::size_t> on;
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    if (mesh.positions[tri[0]].z == 0 && mesh.positions[tri[1]].z == 0 && mesh.positions[tri[2]].z == 0) on.push_back(t);
+  }
+  return on;
+}
+
 TEST_CASE("a hole of any size is filled by default", "[repair]") {
   // Regression: holes of more than 64 edges were left open by default, so a mesh
   // with one large opening could not be fractured even with --repair.
   Mesh mesh = grid_box({0, 0, 0}, {1, 1, 1}, 40);
-  std::vector<std::size_t> bottom;
-  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const Triangle& tri = mesh.triangles[t];
-    if (mesh.positions[tri[0]].z == 0 && mesh.positions[tri[1]].z == 0 && mesh.positions[tri[2]].z == 0) bottom.push_back(t);
-  }
+  const std::vector<std::size_t> bottom = triangles_on_plane_z0(mesh);
   REQUIRE(bottom.size() == 2 * 40 * 40);
   remove_triangles(mesh, bottom);
   const RepairReport report = repair_mesh(mesh);
@@ -372,11 +378,7 @@ TEST_CASE("a hole of any size is filled by default", "[repair]") {
 TEST_CASE("holes larger than the limit are left, and noted", "[repair]") {
   Mesh mesh = grid_box({0, 0, 0}, {1, 1, 1}, 4);
   // Delete the whole z = 0 face: a 16-edge hole.
-  std::vector<std::size_t> bottom;
-  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const Triangle& tri = mesh.triangles[t];
-    if (mesh.positions[tri[0]].z == 0 && mesh.positions[tri[1]].z == 0 && mesh.positions[tri[2]].z == 0) bottom.push_back(t);
-  }
+  const std::vector<std::size_t> bottom = triangles_on_plane_z0(mesh);
   REQUIRE(bottom.size() == 32);
   remove_triangles(mesh, bottom);
   RepairOptions small;

@@ -1554,6 +1554,25 @@ void report_moved_volume(const PlaneSet& set, const Solid& solid, RoundedSolid& 
   result.moved_volume_bound = rounding_sweep_bound(set, solid).get_d();
 }
 
+// The triangles of `mesh` with a shape (self_intersecting_pairs' precondition):
+// three distinct corners not on one line, decided exactly on the doubles (a line
+// in 3D projects onto a line in all three coordinate planes). `index[i]` is
+// shaped[i]'s place in mesh.triangles.
+void shaped_triangles(const Mesh& mesh, std::vector<Triangle>& shaped, std::vector<std::uint32_t>& index) {
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) continue;
+    const Vec3 &a = mesh.positions[tri[0]], &b = mesh.positions[tri[1]], &c = mesh.positions[tri[2]];
+    if (orient2d({a.x, a.y}, {b.x, b.y}, {c.x, c.y}) == Sign::zero &&
+        orient2d({a.y, a.z}, {b.y, b.z}, {c.y, c.z}) == Sign::zero &&
+        orient2d({a.z, a.x}, {b.z, b.x}, {c.z, c.x}) == Sign::zero) {
+      continue;
+    }
+    shaped.push_back(tri);
+    index.push_back(t);
+  }
+}
+
 // The hot pixels of 3D snap rounding (Hobby 1999's hot pixels; in 3D, as CGAL
 // 6's autorefine_triangle_soup snaps): a rounded vertex v that landed within
 // rounding's reach of the plane of a face it does not belong to, and inside one
@@ -1571,18 +1590,7 @@ std::size_t insert_vertices_into_crossed_triangles(const PlaneSet& set, const So
                                                    Mesh& mesh, std::vector<std::uint32_t>& face_of) {
   std::vector<Triangle> shaped;
   std::vector<std::uint32_t> shaped_index;
-  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
-    const Triangle& tri = mesh.triangles[t];
-    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) continue;
-    const Vec3 &a = mesh.positions[tri[0]], &b = mesh.positions[tri[1]], &c = mesh.positions[tri[2]];
-    if (orient2d({a.x, a.y}, {b.x, b.y}, {c.x, c.y}) == Sign::zero &&
-        orient2d({a.y, a.z}, {b.y, b.z}, {c.y, c.z}) == Sign::zero &&
-        orient2d({a.z, a.x}, {b.z, b.x}, {c.z, c.x}) == Sign::zero) {
-      continue;
-    }
-    shaped.push_back(tri);
-    shaped_index.push_back(t);
-  }
+  shaped_triangles(mesh, shaped, shaped_index);
   const std::size_t count = mesh.triangles.size();
   std::vector<VertexIndex> insert(count, no_index);
   const auto try_insert = [&](std::uint32_t t, std::uint32_t u) {
@@ -1688,22 +1696,9 @@ void add_folded_face_pairs(const Mesh& mesh, std::span<const std::uint32_t> face
     }
     i = j;
   }
-  // Triangles with a shape (self_intersecting_pairs' precondition): distinct
-  // corners not on one line, decided exactly on the doubles.
   std::vector<Triangle> shaped;
   std::vector<std::uint32_t> shaped_index;
-  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
-    const Triangle& tri = mesh.triangles[t];
-    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) continue;
-    const Vec3 &a = mesh.positions[tri[0]], &b = mesh.positions[tri[1]], &c = mesh.positions[tri[2]];
-    if (orient2d({a.x, a.y}, {b.x, b.y}, {c.x, c.y}) == Sign::zero &&
-        orient2d({a.y, a.z}, {b.y, b.z}, {c.y, c.z}) == Sign::zero &&
-        orient2d({a.z, a.x}, {b.z, b.x}, {c.z, c.x}) == Sign::zero) {
-      continue;
-    }
-    shaped.push_back(tri);
-    shaped_index.push_back(t);
-  }
+  shaped_triangles(mesh, shaped, shaped_index);
   for (const TrianglePair& p : self_intersecting_pairs(mesh.positions, shaped)) {
     add(face_of[shaped_index[p.first]], face_of[shaped_index[p.second]]);
   }
