@@ -598,6 +598,8 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
   return report;
 }
 
+bool is_closed_oriented_manifold(const Mesh& mesh) { return closed_oriented_manifold(mesh); }
+
 bool certify_star_shaped(const Mesh& mesh, const Vec3& centre) {
   using Point = CGAL::Epick::Point_3;
   const auto point = [](const Vec3& p) { return Point(p.x, p.y, p.z); };

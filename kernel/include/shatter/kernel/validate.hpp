@@ -96,6 +96,14 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
 /// Cost: O(T log T) plus the pairs of boxes that meet a tested triangle's box.
 ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near = nullptr);
 
+/// Whether the mesh is a closed, consistently oriented 2-manifold by index: every
+/// index in range, every vertex used, no triangle repeating an index, every
+/// directed edge used once and its reverse once, and the triangles around each
+/// vertex one fan. Coordinates are not looked at. The linear fast path of
+/// validate_mesh's topology checks (a mesh that passes has none of the topological
+/// defects). O(T) after sorting each vertex's out-edges. Never throws.
+bool is_closed_oriented_manifold(const Mesh& mesh);
+
 /// A fast exact certificate that a closed, consistently oriented, 2-manifold,
 /// connected triangle mesh is a valid solid star-shaped around `centre`: every
 /// triangle strictly faces away from the centre, and the ring of triangles around

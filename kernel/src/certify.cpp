@@ -1,0 +1,107 @@
+#include "shatter/kernel/certify.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include "shatter/kernel/union_find.hpp"
+#include "shatter/kernel/validate.hpp"
+
+namespace shatter {
+
+namespace {
+
+// Process-wide: the build cuts on several threads.
+std::atomic<std::uint64_t> attempt_count{0}, star_count{0}, declined_count{0};
+
+}  // namespace
+
+CertifyCounts certify_counts() {
+  return {attempt_count.load(std::memory_order_relaxed), star_count.load(std::memory_order_relaxed),
+          declined_count.load(std::memory_order_relaxed)};
+}
+
+void reset_certify_counts() {
+  attempt_count.store(0, std::memory_order_relaxed);
+  star_count.store(0, std::memory_order_relaxed);
+  declined_count.store(0, std::memory_order_relaxed);
+}
+
+bool connected_surface(const Mesh& mesh) {
+  const std::size_t n = mesh.positions.size();
+  if (n == 0) return false;
+  thread_local UnionFind components;
+  components.reset(n);
+  std::size_t sets = n;
+  thread_local std::vector<std::uint8_t> used;
+  used.assign(n, 0);
+  for (const Triangle& t : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      used[t[k]] = 1;
+      if (components.unite(t[k], t[(k + 1) % 3])) --sets;
+    }
+  }
+  return sets == 1 && std::all_of(used.begin(), used.end(), [](std::uint8_t u) { return u != 0; });
+}
+
+namespace {
+
+// The centres certify_piece tries, in order. Any point would do for soundness
+// (the certificate is exact for whatever double point it is given); these are
+// where a piece is most often seen whole: the vertex average (what the convex
+// path uses) and the volume centroid, which an elongated or unevenly
+// triangulated piece pulls less than its vertices do.
+Vec3 vertex_average(const Mesh& mesh) {
+  Vec3 sum;
+  for (const Vec3& p : mesh.positions) sum = sum + p;
+  return sum * (1.0 / static_cast<double>(mesh.positions.size()));
+}
+
+// The volume centroid in doubles, relative to the first vertex so a piece far
+// from the origin keeps its precision; none (false) when the volume is not
+// positive as computed.
+bool volume_centroid(const Mesh& mesh, Vec3& centroid) {
+  const Vec3 origin = mesh.positions.front();
+  double six_volume = 0;
+  Vec3 moment;
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3 a = mesh.positions[t[0]] - origin, b = mesh.positions[t[1]] - origin, c = mesh.positions[t[2]] - origin;
+    const double det = dot(a, cross(b, c));
+    six_volume += det;
+    moment = moment + (a + b + c) * det;
+  }
+  if (!(six_volume > 0)) return false;
+  centroid = origin + moment * (1.0 / (4 * six_volume));
+  return is_finite(centroid);
+}
+
+}  // namespace
+
+bool certify_piece(const Mesh& mesh) {
+  attempt_count.fetch_add(1, std::memory_order_relaxed);
+  const auto decline = [] {
+    declined_count.fetch_add(1, std::memory_order_relaxed);
+    return false;
+  };
+  if (mesh.triangles.empty()) return decline();
+  if (!std::all_of(mesh.positions.begin(), mesh.positions.end(), [](const Vec3& p) { return is_finite(p); })) {
+    return decline();
+  }
+  // certify_star_shaped takes the topology as given: here it is checked first,
+  // and connectivity with it (two star-shaped shells around one centre would each
+  // wind once, yet may cross each other).
+  if (!is_closed_oriented_manifold(mesh) || !connected_surface(mesh)) return decline();
+  const Vec3 average = vertex_average(mesh);
+  if (certify_star_shaped(mesh, average)) {
+    star_count.fetch_add(1, std::memory_order_relaxed);
+    return true;
+  }
+  Vec3 centroid;
+  if (volume_centroid(mesh, centroid) && certify_star_shaped(mesh, centroid)) {
+    star_count.fetch_add(1, std::memory_order_relaxed);
+    return true;
+  }
+  return decline();
+}
+
+}  // namespace shatter
