@@ -1,5 +1,7 @@
 #include "shatter/kernel/certify.hpp"
 
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -75,6 +77,22 @@ bool volume_centroid(const Mesh& mesh, Vec3& centroid) {
   return is_finite(centroid);
 }
 
+// Whether every triangle has `centre` strictly behind it (exact orientations on the
+// doubles, CGAL's filtered orient3d), stopping at the first that does not: the
+// first half of certify_star_shaped, which needs no topology.
+bool faces_away_from(const Mesh& mesh, const Vec3& centre) {
+  using Point = CGAL::Epick::Point_3;
+  const auto point = [](const Vec3& p) { return Point(p.x, p.y, p.z); };
+  const Point c = point(centre);
+  for (const Triangle& t : mesh.triangles) {
+    if (CGAL::orientation(point(mesh.positions[t[0]]), point(mesh.positions[t[1]]), point(mesh.positions[t[2]]), c) !=
+        CGAL::NEGATIVE) {
+      return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 bool certify_piece(const Mesh& mesh) {
@@ -87,19 +105,33 @@ bool certify_piece(const Mesh& mesh) {
   if (!std::all_of(mesh.positions.begin(), mesh.positions.end(), [](const Vec3& p) { return is_finite(p); })) {
     return decline();
   }
-  // certify_star_shaped takes the topology as given: here it is checked first,
-  // and connectivity with it (two star-shaped shells around one centre would each
-  // wind once, yet may cross each other).
-  if (!is_closed_oriented_manifold(mesh) || !connected_surface(mesh)) return decline();
-  const Vec3 average = vertex_average(mesh);
-  if (certify_star_shaped(mesh, average)) {
-    star_count.fetch_add(1, std::memory_order_relaxed);
-    return true;
+  // The centres and the facing test read positions before the topology check.
+  const std::size_t n = mesh.positions.size();
+  if (!std::all_of(mesh.triangles.begin(), mesh.triangles.end(),
+                   [n](const Triangle& t) { return t[0] < n && t[1] < n && t[2] < n; })) {
+    return decline();
   }
-  Vec3 centroid;
-  if (volume_centroid(mesh, centroid) && certify_star_shaped(mesh, centroid)) {
-    star_count.fetch_add(1, std::memory_order_relaxed);
-    return true;
+  Vec3 centres[2];
+  std::size_t centre_count = 0;
+  centres[centre_count++] = vertex_average(mesh);
+  if (volume_centroid(mesh, centres[centre_count])) ++centre_count;
+  bool topology_checked = false;
+  for (std::size_t k = 0; k < centre_count; ++k) {
+    // A piece that is not star-shaped around the centre usually shows it within
+    // a few triangles: that test goes first, so a declined piece costs little
+    // before the full check.
+    if (!faces_away_from(mesh, centres[k])) continue;
+    // certify_star_shaped takes the topology as given: it is checked here, and
+    // connectivity with it (two star-shaped shells around one centre would each
+    // wind once, yet may cross each other).
+    if (!topology_checked) {
+      if (!is_closed_oriented_manifold(mesh) || !connected_surface(mesh)) return decline();
+      topology_checked = true;
+    }
+    if (certify_star_shaped(mesh, centres[k])) {
+      star_count.fetch_add(1, std::memory_order_relaxed);
+      return true;
+    }
   }
   return decline();
 }
