@@ -60,10 +60,17 @@ Vec3 vertex_average(const Mesh& mesh) {
 }
 
 // The volume centroid in doubles, relative to the first vertex so a piece far
-// from the origin keeps its precision; none (false) when the volume is not
-// positive as computed.
+// from the origin keeps its precision; none (false) when the piece's extent is
+// out of the range where these products cannot overflow (tests trap floating-
+// point overflow) or its volume is not positive and above 2^-100 of its extent
+// cubed as computed (a centre is only a guess: any point gives a sound test).
 bool volume_centroid(const Mesh& mesh, Vec3& centroid) {
   const Vec3 origin = mesh.positions.front();
+  double extent = 0;
+  for (const Vec3& p : mesh.positions) {
+    extent = std::max({extent, std::fabs(p.x - origin.x), std::fabs(p.y - origin.y), std::fabs(p.z - origin.z)});
+  }
+  if (!(extent > 0x1p-200 && extent < 0x1p200)) return false;
   double six_volume = 0;
   Vec3 moment;
   for (const Triangle& t : mesh.triangles) {
@@ -72,7 +79,7 @@ bool volume_centroid(const Mesh& mesh, Vec3& centroid) {
     six_volume += det;
     moment = moment + (a + b + c) * det;
   }
-  if (!(six_volume > 0)) return false;
+  if (!(six_volume > 0x1p-100 * extent * extent * extent)) return false;
   centroid = origin + moment * (1.0 / (4 * six_volume));
   return is_finite(centroid);
 }
@@ -102,7 +109,11 @@ bool certify_piece(const Mesh& mesh) {
     return false;
   };
   if (mesh.triangles.empty()) return decline();
-  if (!std::all_of(mesh.positions.begin(), mesh.positions.end(), [](const Vec3& p) { return is_finite(p); })) {
+  // Non-finite coordinates, and coordinates so large that the centres' sums could
+  // overflow (tests trap it), are left to the full check.
+  if (!std::all_of(mesh.positions.begin(), mesh.positions.end(), [](const Vec3& p) {
+        return std::fabs(p.x) < 0x1p500 && std::fabs(p.y) < 0x1p500 && std::fabs(p.z) < 0x1p500;
+      })) {
     return decline();
   }
   // The centres and the facing test read positions before the topology check.

@@ -56,7 +56,8 @@ bool connected_surface(const Mesh& mesh);
 /// the file comment for why that proves validity). Meant for pieces that are not
 /// known to be convex: most small pieces of curved meshes are star-shaped around
 /// their centroid even when some edge is concave.
-/// Preconditions: none (any mesh; non-finite coordinates make it decline).
+/// Preconditions: none (any mesh; out-of-range indices and coordinates that are
+/// not finite or not below 2^500 in magnitude make it decline).
 /// Guarantees: true only for a mesh validate_mesh finds valid; false proves nothing.
 /// Counted in certify_counts(). Cost: O(T) per centre tried, usually declining at
 /// the first triangle that faces a centre. Never throws.

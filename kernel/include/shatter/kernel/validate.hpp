@@ -92,7 +92,11 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
 /// self-intersection count counts only the pairs tested).
 /// `near`: a plane the triangles not in `trusted` are known to lie along (a cut);
 /// only triangles within the slab of n·x + d values those span are then tested
-/// against them (a prefilter in doubles, widened by a bound on its rounding).
+/// against them (a prefilter in doubles, widened by a bound on its rounding). The
+/// new triangles flat along it (the cap: every corner's value within 2^-36 of the
+/// largest |n_x x| + |n_y y| + |n_z z| + |d|) span a slab a few ulps thick, and
+/// are tested only against the triangles reaching that slab; the other new ones
+/// against their own slab.
 /// Cost: O(T log T) plus the pairs of boxes that meet a tested triangle's box.
 ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near = nullptr);
 
