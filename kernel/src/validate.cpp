@@ -626,13 +626,13 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
       const bool side_reach = meets(t, side_lo, side_hi), flat_reach = meets(t, flat_lo, flat_hi);
       if (!side_reach && !flat_reach && !is_new[t]) continue;
       const TriangleBox box = box_of(mesh.positions, mesh.triangles[t], t);
-      // The side triangles against every triangle in their slab (the flat ones
-      // included: a pair of a side and a flat triangle is tested here only).
-      if (side_reach || is_side[t]) all.push_back(box);
+      // The side triangles against every triangle in their slab but the flat ones;
+      // the flat ones against every triangle reaching Z, the side ones included
+      // (most side triangles, those of a clipped face away from the cut, do not).
+      if ((side_reach || is_side[t]) && !is_flat[t]) all.push_back(box);
       if (is_side[t]) fresh.push_back(box);
-      // The flat ones against the other triangles reaching Z but the side ones.
       if (is_flat[t]) flat_boxes.push_back(box);
-      if ((flat_reach || is_flat[t]) && !is_side[t]) near_flat.push_back(box);
+      if (flat_reach || is_flat[t]) near_flat.push_back(box);
     }
     search(fresh, all, is_side);
     search(flat_boxes, near_flat, is_flat);
