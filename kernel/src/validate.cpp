@@ -549,7 +549,7 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
   // new ones span can meet them: each triangle's range of n·p + d, in doubles
   // widened by a bound on their rounding, against the new ones'.
   std::vector<std::array<double, 2>> range;
-  double fresh_lo = INFINITY, fresh_hi = -INFINITY;
+  double largest_term = 0;  // the largest |n_x x| + |n_y y| + |n_z z| + |d| over the vertices
   if (near) {
     range.resize(mesh.triangles.size());
     double largest = 0;
@@ -557,6 +557,7 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
       largest = std::max(largest, std::fabs(near->normal.x * p.x) + std::fabs(near->normal.y * p.y) +
                                       std::fabs(near->normal.z * p.z) + std::fabs(near->offset));
     }
+    largest_term = largest;
     const double slack = 8 * 0x1p-53 * largest;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       double lo = INFINITY, hi = -INFINITY;
@@ -568,35 +569,80 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
       range[t] = {lo - slack, hi + slack};
     }
   }
-  fresh.reserve(mesh.triangles.size());
-  if (near) {
+  report.self_intersections_checked = true;
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  // Tests the triangles of `tested` against those of `against` whose boxes meet
+  // theirs, exactly; `in_tested` marks the triangles of `tested`, so that a pair
+  // of them is tested once.
+  const auto search = [&](std::vector<TriangleBox>& tested, std::vector<TriangleBox>& against,
+                          const std::vector<std::uint8_t>& in_tested) {
+    if (tested.empty()) return;
+    CGAL::box_intersection_d(
+        tested.begin(), tested.end(), against.begin(), against.end(),
+        [&](const TriangleBox& a, const TriangleBox& b) {
+          const std::size_t i = a.handle(), j = b.handle();
+          if (i == j || (in_tested[j] && j < i)) return;  // each pair within `tested` once
+          if (triangles_intersect(mesh.positions, mesh.triangles[i], mesh.triangles[j])) {
+            pairs.emplace_back(std::min(i, j), std::max(i, j));
+          }
+        },
+        std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
+  };
+  if (!near) {
+    fresh.reserve(mesh.triangles.size());
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const TriangleBox box = box_of(mesh.positions, mesh.triangles[t], t);
+      all.push_back(box);
+      if (is_new[t]) fresh.push_back(box);
+    }
+    search(fresh, all, is_new);
+  } else {
+    // The new triangles split in two: those flat along the plane (the cap, all
+    // corners within a rounding's reach of it: their ranges inside [-flat, flat])
+    // and the others (the faces the cut clipped, which may reach far from it).
+    // The flat ones lie in the slab Z their ranges span, a few ulps thick; a
+    // triangle whose range misses Z cannot meet them, so they are tested only
+    // against the triangles that reach Z, and the others against the slab their
+    // own ranges span. Every pair with a new triangle whose boxes meet is still
+    // tested, except pairs of a flat new triangle and a triangle provably off Z.
+    const double flat = 0x1p-36 * largest_term;
+    std::vector<std::uint8_t> is_flat(mesh.triangles.size(), 0), is_side(mesh.triangles.size(), 0);
+    double flat_lo = INFINITY, flat_hi = -INFINITY, side_lo = INFINITY, side_hi = -INFINITY;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       if (!is_new[t]) continue;
-      fresh_lo = std::min(fresh_lo, range[t][0]);
-      fresh_hi = std::max(fresh_hi, range[t][1]);
+      if (range[t][0] >= -flat && range[t][1] <= flat) {
+        is_flat[t] = 1;
+        flat_lo = std::min(flat_lo, range[t][0]);
+        flat_hi = std::max(flat_hi, range[t][1]);
+      } else {
+        is_side[t] = 1;
+        side_lo = std::min(side_lo, range[t][0]);
+        side_hi = std::max(side_hi, range[t][1]);
+      }
     }
+    const auto meets = [&](std::size_t t, double lo, double hi) { return !(range[t][1] < lo || range[t][0] > hi); };
+    std::vector<TriangleBox> flat_boxes, near_flat;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const bool side_reach = meets(t, side_lo, side_hi), flat_reach = meets(t, flat_lo, flat_hi);
+      if (!side_reach && !flat_reach && !is_new[t]) continue;
+      const TriangleBox box = box_of(mesh.positions, mesh.triangles[t], t);
+      // The side triangles against every triangle in their slab but the flat ones;
+      // the flat ones against every triangle reaching Z, the side ones included
+      // (most side triangles, those of a clipped face away from the cut, do not).
+      if ((side_reach || is_side[t]) && !is_flat[t]) all.push_back(box);
+      if (is_side[t]) fresh.push_back(box);
+      if (is_flat[t]) flat_boxes.push_back(box);
+      if (flat_reach || is_flat[t]) near_flat.push_back(box);
+    }
+    search(fresh, all, is_side);
+    search(flat_boxes, near_flat, is_flat);
   }
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    if (near && !is_new[t] && (range[t][1] < fresh_lo || range[t][0] > fresh_hi)) continue;
-    const TriangleBox box = box_of(mesh.positions, mesh.triangles[t], t);
-    all.push_back(box);
-    if (is_new[t]) fresh.push_back(box);
-  }
-  report.self_intersections_checked = true;
-  if (fresh.empty()) return report;
-  std::vector<std::pair<std::size_t, std::size_t>> pairs;
-  CGAL::box_intersection_d(
-      fresh.begin(), fresh.end(), all.begin(), all.end(),
-      [&](const TriangleBox& a, const TriangleBox& b) {
-        const std::size_t i = a.handle(), j = b.handle();
-        if (i == j || (is_new[j] && j < i)) return;  // each pair of new triangles once
-        if (triangles_intersect(mesh.positions, mesh.triangles[i], mesh.triangles[j])) pairs.emplace_back(std::min(i, j), std::max(i, j));
-      },
-      std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
   std::sort(pairs.begin(), pairs.end());
   append_self_intersections(report, pairs);
   return report;
 }
+
+bool is_closed_oriented_manifold(const Mesh& mesh) { return closed_oriented_manifold(mesh); }
 
 bool certify_star_shaped(const Mesh& mesh, const Vec3& centre) {
   using Point = CGAL::Epick::Point_3;

@@ -8,6 +8,7 @@
 #include <optional>
 #include <unordered_map>
 
+#include "shatter/kernel/certify.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/face_loops.hpp"
@@ -1706,11 +1707,23 @@ void add_folded_face_pairs(const Mesh& mesh, std::span<const std::uint32_t> face
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
 }
 
-// Certifies a rounded mesh as round_solid promises: validate_mesh_against its
-// trusted parent, or the topology alone (with vertices where the surface touches
-// itself allowed) for a solid accepted with self-intersections.
+// Certifies a rounded mesh as round_solid promises: the linear certificate of
+// certify_piece when it applies (it accepts only valid meshes, and the full check
+// accepts every valid one, so the mesh written is the same either way), else
+// validate_mesh_against its trusted parent; or the topology alone (with vertices
+// where the surface touches itself allowed) for a solid accepted with
+// self-intersections.
 ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& options) {
-  if (!options.allow_self_intersections) return validate_mesh_against(mesh, options.trusted, options.cut);
+  if (!options.allow_self_intersections) {
+    if (certify_piece(mesh)) {
+      ValidationReport certified;
+      certified.vertex_count = mesh.vertex_count();
+      certified.triangle_count = mesh.triangle_count();
+      certified.self_intersections_checked = true;
+      return certified;
+    }
+    return validate_mesh_against(mesh, options.trusted, options.cut);
+  }
   ValidationOptions topology_only;
   topology_only.check_self_intersections = false;
   ValidationReport report = validate_mesh(mesh, topology_only);

@@ -92,9 +92,21 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
 /// self-intersection count counts only the pairs tested).
 /// `near`: a plane the triangles not in `trusted` are known to lie along (a cut);
 /// only triangles within the slab of n·x + d values those span are then tested
-/// against them (a prefilter in doubles, widened by a bound on its rounding).
+/// against them (a prefilter in doubles, widened by a bound on its rounding). The
+/// new triangles flat along it (the cap: every corner's value within 2^-36 of the
+/// largest |n_x x| + |n_y y| + |n_z z| + |d|) span a slab a few ulps thick, and
+/// are tested only against the triangles reaching that slab; the other new ones
+/// against their own slab.
 /// Cost: O(T log T) plus the pairs of boxes that meet a tested triangle's box.
 ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near = nullptr);
+
+/// Whether the mesh is a closed, consistently oriented 2-manifold by index: every
+/// index in range, every vertex used, no triangle repeating an index, every
+/// directed edge used once and its reverse once, and the triangles around each
+/// vertex one fan. Coordinates are not looked at. The linear fast path of
+/// validate_mesh's topology checks (a mesh that passes has none of the topological
+/// defects). O(T) after sorting each vertex's out-edges. Never throws.
+bool is_closed_oriented_manifold(const Mesh& mesh);
 
 /// A fast exact certificate that a closed, consistently oriented, 2-manifold,
 /// connected triangle mesh is a valid solid star-shaped around `centre`: every

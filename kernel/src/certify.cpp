@@ -1,0 +1,150 @@
+#include "shatter/kernel/certify.hpp"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include "shatter/kernel/union_find.hpp"
+#include "shatter/kernel/validate.hpp"
+
+namespace shatter {
+
+namespace {
+
+// Process-wide: the build cuts on several threads.
+std::atomic<std::uint64_t> attempt_count{0}, star_count{0}, declined_count{0};
+
+}  // namespace
+
+CertifyCounts certify_counts() {
+  return {attempt_count.load(std::memory_order_relaxed), star_count.load(std::memory_order_relaxed),
+          declined_count.load(std::memory_order_relaxed)};
+}
+
+void reset_certify_counts() {
+  attempt_count.store(0, std::memory_order_relaxed);
+  star_count.store(0, std::memory_order_relaxed);
+  declined_count.store(0, std::memory_order_relaxed);
+}
+
+bool connected_surface(const Mesh& mesh) {
+  const std::size_t n = mesh.positions.size();
+  if (n == 0) return false;
+  thread_local UnionFind components;
+  components.reset(n);
+  std::size_t sets = n;
+  thread_local std::vector<std::uint8_t> used;
+  used.assign(n, 0);
+  for (const Triangle& t : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      used[t[k]] = 1;
+      if (components.unite(t[k], t[(k + 1) % 3])) --sets;
+    }
+  }
+  return sets == 1 && std::all_of(used.begin(), used.end(), [](std::uint8_t u) { return u != 0; });
+}
+
+namespace {
+
+// The centres certify_piece tries, in order. Any point would do for soundness
+// (the certificate is exact for whatever double point it is given); these are
+// where a piece is most often seen whole: the vertex average (what the convex
+// path uses) and the volume centroid, which an elongated or unevenly
+// triangulated piece pulls less than its vertices do.
+Vec3 vertex_average(const Mesh& mesh) {
+  Vec3 sum;
+  for (const Vec3& p : mesh.positions) sum = sum + p;
+  return sum * (1.0 / static_cast<double>(mesh.positions.size()));
+}
+
+// The volume centroid in doubles, relative to the first vertex so a piece far
+// from the origin keeps its precision; none (false) when the piece's extent is
+// out of the range where these products cannot overflow (tests trap floating-
+// point overflow) or its volume is not positive and above 2^-100 of its extent
+// cubed as computed (a centre is only a guess: any point gives a sound test).
+bool volume_centroid(const Mesh& mesh, Vec3& centroid) {
+  const Vec3 origin = mesh.positions.front();
+  double extent = 0;
+  for (const Vec3& p : mesh.positions) {
+    extent = std::max({extent, std::fabs(p.x - origin.x), std::fabs(p.y - origin.y), std::fabs(p.z - origin.z)});
+  }
+  if (!(extent > 0x1p-200 && extent < 0x1p200)) return false;
+  double six_volume = 0;
+  Vec3 moment;
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3 a = mesh.positions[t[0]] - origin, b = mesh.positions[t[1]] - origin, c = mesh.positions[t[2]] - origin;
+    const double det = dot(a, cross(b, c));
+    six_volume += det;
+    moment = moment + (a + b + c) * det;
+  }
+  if (!(six_volume > 0x1p-100 * extent * extent * extent)) return false;
+  centroid = origin + moment * (1.0 / (4 * six_volume));
+  return is_finite(centroid);
+}
+
+// Whether every triangle has `centre` strictly behind it (exact orientations on the
+// doubles, CGAL's filtered orient3d), stopping at the first that does not: the
+// first half of certify_star_shaped, which needs no topology.
+bool faces_away_from(const Mesh& mesh, const Vec3& centre) {
+  using Point = CGAL::Epick::Point_3;
+  const auto point = [](const Vec3& p) { return Point(p.x, p.y, p.z); };
+  const Point c = point(centre);
+  for (const Triangle& t : mesh.triangles) {
+    if (CGAL::orientation(point(mesh.positions[t[0]]), point(mesh.positions[t[1]]), point(mesh.positions[t[2]]), c) !=
+        CGAL::NEGATIVE) {
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+bool certify_piece(const Mesh& mesh) {
+  attempt_count.fetch_add(1, std::memory_order_relaxed);
+  const auto decline = [] {
+    declined_count.fetch_add(1, std::memory_order_relaxed);
+    return false;
+  };
+  if (mesh.triangles.empty()) return decline();
+  // Non-finite coordinates, and coordinates so large that the centres' sums could
+  // overflow (tests trap it), are left to the full check.
+  if (!std::all_of(mesh.positions.begin(), mesh.positions.end(), [](const Vec3& p) {
+        return std::fabs(p.x) < 0x1p500 && std::fabs(p.y) < 0x1p500 && std::fabs(p.z) < 0x1p500;
+      })) {
+    return decline();
+  }
+  // The centres and the facing test read positions before the topology check.
+  const std::size_t n = mesh.positions.size();
+  if (!std::all_of(mesh.triangles.begin(), mesh.triangles.end(),
+                   [n](const Triangle& t) { return t[0] < n && t[1] < n && t[2] < n; })) {
+    return decline();
+  }
+  Vec3 centres[2];
+  std::size_t centre_count = 0;
+  centres[centre_count++] = vertex_average(mesh);
+  if (volume_centroid(mesh, centres[centre_count])) ++centre_count;
+  bool topology_checked = false;
+  for (std::size_t k = 0; k < centre_count; ++k) {
+    // A piece that is not star-shaped around the centre usually shows it within
+    // a few triangles: that test goes first, so a declined piece costs little
+    // before the full check.
+    if (!faces_away_from(mesh, centres[k])) continue;
+    // certify_star_shaped takes the topology as given: it is checked here, and
+    // connectivity with it (two star-shaped shells around one centre would each
+    // wind once, yet may cross each other).
+    if (!topology_checked) {
+      if (!is_closed_oriented_manifold(mesh) || !connected_surface(mesh)) return decline();
+      topology_checked = true;
+    }
+    if (certify_star_shaped(mesh, centres[k])) {
+      star_count.fetch_add(1, std::memory_order_relaxed);
+      return true;
+    }
+  }
+  return decline();
+}
+
+}  // namespace shatter
