@@ -359,8 +359,12 @@ TEST_CASE("round_solid: parts rounding breaks are repaired, or the piece vanishe
       case 0: {
         const double start = std::pow(10.0, -random.uniform(1, 8));
         const double ratio = std::pow(10.0, -random.uniform(0.5, 3));
-        planes = near_parallel_fan(m.mesh.positions[t[0]], m.mesh.positions[t[1]], random.direction(),
-                                   2 + int(random.index(2)), start, ratio);
+        // Drawn one statement each: the order a call evaluates its arguments in is
+        // unspecified (GCC and Clang differ), and the sanitized build must test the
+        // same cases as the Release one.
+        const Vec3 tilt = random.direction();
+        const int count = 2 + int(random.index(2));
+        planes = near_parallel_fan(m.mesh.positions[t[0]], m.mesh.positions[t[1]], tilt, count, start, ratio);
         break;
       }
       case 1: {
@@ -428,9 +432,12 @@ TEST_CASE("round_solid: parts rounding breaks are repaired, or the piece vanishe
   CHECK(tally.folded > 0);
   CHECK(tally.inserted > 0);
   // What is left unrepaired: folds of thick pieces against a nearly coplanar
-  // face, a ceiling measured 2026-12-03 (9 before round_solid inserted rounded
-  // vertices into faces they crossed, 14 before it merged faces rounding folded
-  // against each other; 20 before it untangled non-manifold
-  // edges and routed edges through corners carried across them).
-  CHECK(tally.refused <= 7);
+  // face, a ceiling measured 2026-12-03, the same in the Release (GCC) and the
+  // sanitized (Clang) builds since the near-parallel fans draw their random
+  // numbers in a fixed order. On the cases GCC's argument order drew before: 7;
+  // 9 before round_solid inserted rounded vertices into faces they crossed, 14
+  // before it merged faces rounding folded against each other, 20 before it
+  // untangled non-manifold edges and routed edges through corners carried across
+  // them.
+  CHECK(tally.refused <= 8);
 }
