@@ -311,11 +311,9 @@ class Repairer {
     // Returns false when it had to split vertices to make the soup an oriented
     // manifold. The copies sit at the same positions, so the output (welded by
     // position) joins them again and validation names them; nothing is hidden.
-    if (!PMP::orient_polygon_soup(points, polygons)) {
-      report_.notes.push_back({"the surface is not an orientable manifold at " +
-                               plural(points.size() - points_before, "vertex", "vertices") +
-                               " (worked on split copies, joined again on output)"});
-    }
+    // Noted at the end only if the output still has such a vertex: filling the
+    // holes that touch at a vertex usually joins its fans into one.
+    if (!PMP::orient_polygon_soup(points, polygons)) split_vertices_ = points.size() - points_before;
     PMP::polygon_soup_to_polygon_mesh(points, polygons, sm_);
     auto [origin, created] = sm_.add_property_map<FaceIndex, std::int64_t>("f:origin", no_origin);
     origin_ = origin;
@@ -889,6 +887,17 @@ class Repairer {
     }
     report_.vertices_after = out.vertex_count();
     report_.triangles_after = out.triangle_count();
+    if (split_vertices_ > 0) {
+      ValidationOptions topology_only;
+      topology_only.check_self_intersections = false;
+      const ValidationReport topology = validate_mesh(out, topology_only);
+      if (const Defect* pinched = topology.find(DefectKind::non_manifold_vertex)) {
+        report_.notes.push_back({"the surface is not an orientable manifold at " +
+                                 plural(split_vertices_, "vertex", "vertices") +
+                                 " (worked on split copies, joined again on output; " +
+                                 plural(pinched->count, "vertex", "vertices") + " still pinched)"});
+      }
+    }
   }
 
   const Mesh& input_;
@@ -900,6 +909,8 @@ class Repairer {
   SurfaceMesh::Property_map<FaceIndex, std::int64_t> origin_;
   SurfaceMesh::Property_map<FaceIndex, bool> split_;
   std::size_t resolved_pairs_ = 0;
+  // Vertices orient_polygon_soup split to make the soup an oriented manifold.
+  std::size_t split_vertices_ = 0;
   std::unordered_map<PositionKey, std::uint32_t, PositionKeyHash> welded_ids_;
   // Holes CGAL's lid could not close without repeating an edge (holes touching at
   // a vertex), closed over the welded vertices when the mesh is written.
