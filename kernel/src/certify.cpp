@@ -1,13 +1,12 @@
 #include "shatter/kernel/certify.hpp"
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 
 #include "shatter/kernel/union_find.hpp"
 #include "shatter/kernel/validate.hpp"
+#include "star_shaped.hpp"
 
 namespace shatter {
 
@@ -84,22 +83,6 @@ bool volume_centroid(const Mesh& mesh, Vec3& centroid) {
   return is_finite(centroid);
 }
 
-// Whether every triangle has `centre` strictly behind it (exact orientations on the
-// doubles, CGAL's filtered orient3d), stopping at the first that does not: the
-// first half of certify_star_shaped, which needs no topology.
-bool faces_away_from(const Mesh& mesh, const Vec3& centre) {
-  using Point = CGAL::Epick::Point_3;
-  const auto point = [](const Vec3& p) { return Point(p.x, p.y, p.z); };
-  const Point c = point(centre);
-  for (const Triangle& t : mesh.triangles) {
-    if (CGAL::orientation(point(mesh.positions[t[0]]), point(mesh.positions[t[1]]), point(mesh.positions[t[2]]), c) !=
-        CGAL::NEGATIVE) {
-      return false;
-    }
-  }
-  return true;
-}
-
 }  // namespace
 
 bool certify_piece(const Mesh& mesh) {
@@ -131,15 +114,15 @@ bool certify_piece(const Mesh& mesh) {
     // A piece that is not star-shaped around the centre usually shows it within
     // a few triangles: that test goes first, so a declined piece costs little
     // before the full check.
-    if (!faces_away_from(mesh, centres[k])) continue;
-    // certify_star_shaped takes the topology as given: it is checked here, and
+    if (!kernel_detail::faces_away_from(mesh, centres[k])) continue;
+    // The winding test takes the topology as given: it is checked here, and
     // connectivity with it (two star-shaped shells around one centre would each
     // wind once, yet may cross each other).
     if (!topology_checked) {
       if (!is_closed_oriented_manifold(mesh) || !connected_surface(mesh)) return decline();
       topology_checked = true;
     }
-    if (certify_star_shaped(mesh, centres[k])) {
+    if (kernel_detail::winds_once_around(mesh, centres[k])) {
       star_count.fetch_add(1, std::memory_order_relaxed);
       return true;
     }

@@ -24,6 +24,7 @@
 #include "shatter/kernel/predicates.hpp"
 #include "shatter/kernel/self_intersections.hpp"
 #include "shatter/kernel/union_find.hpp"
+#include "star_shaped.hpp"
 #include "triangle_boxes.hpp"
 
 namespace shatter {
@@ -645,17 +646,27 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
 bool is_closed_oriented_manifold(const Mesh& mesh) { return closed_oriented_manifold(mesh); }
 
 bool certify_star_shaped(const Mesh& mesh, const Vec3& centre) {
+  return kernel_detail::faces_away_from(mesh, centre) && kernel_detail::winds_once_around(mesh, centre);
+}
+
+bool kernel_detail::faces_away_from(const Mesh& mesh, const Vec3& centre) {
   using Point = CGAL::Epick::Point_3;
   const auto point = [](const Vec3& p) { return Point(p.x, p.y, p.z); };
   const Point c = point(centre);
-  const std::size_t n = mesh.positions.size();
-  // Every triangle has the centre strictly behind it.
   for (const Triangle& t : mesh.triangles) {
     if (CGAL::orientation(point(mesh.positions[t[0]]), point(mesh.positions[t[1]]), point(mesh.positions[t[2]]), c) !=
         CGAL::NEGATIVE) {
       return false;
     }
   }
+  return true;
+}
+
+bool kernel_detail::winds_once_around(const Mesh& mesh, const Vec3& centre) {
+  using Point = CGAL::Epick::Point_3;
+  const auto point = [](const Vec3& p) { return Point(p.x, p.y, p.z); };
+  const Point c = point(centre);
+  const std::size_t n = mesh.positions.size();
   // The triangles around each vertex, in order: for triangle (v, a, b) the next is
   // the one holding the directed edge (v, b).
   thread_local IndexMap triangle_of_edge;
