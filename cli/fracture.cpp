@@ -331,6 +331,8 @@ int run_fracture(const FractureArgs& args) {
     }
   }
   outcome.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  // The file says that its root is the repaired input, not the file as read.
+  if (outcome.repair) tree.input_repair = *outcome.repair;
 
   // The .shatter file goes last: its rename is the run's point of no return.
   OutputTransaction output;

@@ -16,6 +16,7 @@
 #include "shatter/meshtree/stats.hpp"
 #include "shatter/meshtree/validate_tree.hpp"
 #include "errors.hpp"
+#include "input.hpp"
 #include "node_json.hpp"
 #include "tree_stats_json.hpp"
 
@@ -33,6 +34,17 @@ json info_json(const InfoArgs& args, const MeshTree& tree, const TreeStats& stat
                const std::optional<BondRuleComparison>& rules) {
   json out{{"file", args.input}};
   out["shatter_version"] = tree.shatter_version.empty() ? json(nullptr) : json(tree.shatter_version);
+  if (tree.input_repair.empty()) {
+    out["input_repair"] = nullptr;
+  } else {
+    const RepairReport& report = tree.input_repair;
+    json repair{{"vertices_before", report.vertices_before},
+                {"triangles_before", report.triangles_before},
+                {"vertices_after", report.vertices_after},
+                {"triangles_after", report.triangles_after}};
+    add_repair_json(repair, report);
+    out["input_repair"] = std::move(repair);
+  }
   append_stats_json(out, recipe_json(tree.recipe), stats);
   if (args.check) out["check"] = "valid";
   if (rules) {
@@ -51,6 +63,11 @@ void print_info_text(const InfoArgs& args, const MeshTree& tree, const TreeStats
             << " leaves (fragments), " << stats.internal_count << " internal; leaves at depth " << stats.min_leaf_depth
             << " to " << stats.max_depth << '\n';
   if (!tree.shatter_version.empty()) std::cout << "  built by shatter " << tree.shatter_version << '\n';
+  if (const RepairReport& repair = tree.input_repair; !repair.empty()) {
+    std::cout << "  input repaired before the build (" << repair.triangles_before << " triangles, "
+              << repair.triangles_after << " after): " << repair.summary() << '\n';
+    for (const RepairNote& note : repair.notes) std::cout << "  input repair, not done: " << note.text << '\n';
+  }
   std::cout << "  built with: fragments " << recipe.fragments << ", seed " << recipe.seed << ", strategy "
             << strategy_name(recipe.strategy) << ", kernel " << kernel_name(recipe.kernel)
             << (recipe.kernel == KernelKind::plane ? "" : " (retired: the tree reads, but cannot be re-cut exactly)")

@@ -10,22 +10,6 @@ namespace shatter::cli {
 
 namespace {
 
-std::string_view repair_kind_name(RepairKind kind) {
-  switch (kind) {
-    case RepairKind::merged_duplicate_vertices: return "merged_duplicate_vertices";
-    case RepairKind::removed_repeated_index_triangles: return "removed_repeated_index_triangles";
-    case RepairKind::removed_duplicate_triangles: return "removed_duplicate_triangles";
-    case RepairKind::removed_opposite_triangle_pairs: return "removed_opposite_triangle_pairs";
-    case RepairKind::reversed_triangles: return "reversed_triangles";
-    case RepairKind::stitched_border_edges: return "stitched_border_edges";
-    case RepairKind::fixed_zero_area_triangles: return "fixed_zero_area_triangles";
-    case RepairKind::filled_holes: return "filled_holes";
-    case RepairKind::resolved_self_intersections: return "resolved_self_intersections";
-    case RepairKind::removed_unused_vertices: return "removed_unused_vertices";
-  }
-  return "unknown";
-}
-
 // The lines go to stderr in every mode, JSON included, so a run that then
 // refuses the mesh (and prints no JSON) still shows what was done.
 RepairReport repair_and_print(Mesh& mesh, const std::string& name) {

@@ -109,12 +109,13 @@ SectionTable read_section_table(std::string_view bytes) {
       break;
     }
     const auto slot = std::find_if(known.begin(), known.end(), [&](const auto& entry) { return entry.first == section.tag; });
-    if (section.tag == version_tag) {
-      if (table.shatter_version) {
+    if (section.tag == version_tag || section.tag == repair_tag) {
+      std::optional<Section>& slot_of_optional = section.tag == version_tag ? table.shatter_version : table.input_repair;
+      if (slot_of_optional) {
         refuse("damaged .shatter file: " + section_name(section.tag) + " section at byte " + str(position) + " repeats the one at byte " +
-               str(table.shatter_version->offset));
+               str(slot_of_optional->offset));
       }
-      table.shatter_version = section;
+      slot_of_optional = section;
     } else if (slot != known.end()) {
       if (*slot->second) {
         refuse("damaged .shatter file: " + section_name(section.tag) + " section at byte " + str(position) + " repeats the one at byte " +
@@ -424,6 +425,16 @@ void write_shatter(const MeshTree& tree, const ByteSink& sink) {
       throw std::invalid_argument("encode_shatter: invalid tree: shatter_version: " + *problem);
     }
   }
+  for (const RepairChange& change : tree.input_repair.changes) {
+    if (const std::optional<std::string> problem = repair_text_problem(change.text)) {
+      throw std::invalid_argument("encode_shatter: invalid tree: input_repair: " + *problem);
+    }
+  }
+  for (const RepairNote& note : tree.input_repair.notes) {
+    if (const std::optional<std::string> problem = repair_text_problem(note.text)) {
+      throw std::invalid_argument("encode_shatter: invalid tree: input_repair: " + *problem);
+    }
+  }
   ByteWriter header;
   for (const unsigned char byte : magic) header.u8(byte);
   header.u32(shatter_format_version);
@@ -464,6 +475,7 @@ MeshTree decode_shatter(std::string_view bytes) {
     }
     tree.shatter_version = version->payload;
   }
+  if (sections.input_repair) tree.input_repair = read_repair(*sections.input_repair);
   tree.recipe = read_recipe(*sections.recipe);
   Version3Pending pending;
   if (sections.version >= 3) {
@@ -508,5 +520,84 @@ MeshTree read_shatter_file(const std::filesystem::path& path) {
     throw CorruptFileError(path.string() + ": " + error.what());
   }
 }
+
+namespace file_layout {
+
+std::optional<std::string> repair_text_problem(std::string_view text) {
+  if (text.empty()) return "a repair text is empty";
+  if (text.size() > max_repair_text_size) {
+    return "a repair text is " + str(text.size()) + " bytes long (at most " + str(max_repair_text_size) + ")";
+  }
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    const auto c = static_cast<unsigned char>(text[k]);
+    if (c < 0x20 || c == 0x7F) return "byte " + str(k) + " of a repair text is " + hex(c, 2) + " (a control character)";
+  }
+  return std::nullopt;
+}
+
+std::string repair_payload(const RepairReport& report) {
+  ByteWriter out;
+  out.u64(report.vertices_before);
+  out.u64(report.triangles_before);
+  out.u64(report.vertices_after);
+  out.u64(report.triangles_after);
+  const auto text = [&](const std::string& line) {
+    out.count32(line.size());
+    out.append(line);
+  };
+  out.count32(report.changes.size());
+  for (const RepairChange& change : report.changes) {
+    const auto kind = std::find(all_repair_kinds.begin(), all_repair_kinds.end(), change.kind);
+    out.u8(static_cast<std::uint8_t>(kind - all_repair_kinds.begin()));
+    out.u64(change.count);
+    text(change.text);
+  }
+  out.count32(report.notes.size());
+  for (const RepairNote& note : report.notes) text(note.text);
+  return out.take();
+}
+
+RepairReport read_repair(const Section& section) {
+  PayloadReader in(section);
+  RepairReport report;
+  report.vertices_before = in.u64("the vertex count before");
+  report.triangles_before = in.u64("the triangle count before");
+  report.vertices_after = in.u64("the vertex count after");
+  report.triangles_after = in.u64("the triangle count after");
+  const auto text = [&](const char* field) {
+    const std::uint32_t length = in.u32(field);
+    const std::size_t at = in.offset();
+    in.check_room(length, 1, "text bytes");
+    std::string line;
+    line.reserve(length);
+    for (std::uint32_t k = 0; k < length; ++k) line.push_back(static_cast<char>(in.u8(field)));
+    if (const std::optional<std::string> problem = repair_text_problem(line)) in.fail_at(at, *problem);
+    return line;
+  };
+  const std::uint32_t change_count = in.u32("the change count");
+  in.check_room(change_count, 13, "changes");
+  for (std::uint32_t k = 0; k < change_count; ++k) {
+    in.set_record("change " + str(k));
+    const std::size_t at = in.offset();
+    const std::uint8_t kind = in.u8("the change kind");
+    if (kind >= all_repair_kinds.size()) in.fail_at(at, "unknown repair kind " + str(kind));
+    RepairChange change{all_repair_kinds[kind], 0, {}};
+    change.count = in.u64("the change count");
+    change.text = text("the change text");
+    report.changes.push_back(std::move(change));
+  }
+  in.set_record("");
+  const std::uint32_t note_count = in.u32("the note count");
+  in.check_room(note_count, 4, "notes");
+  for (std::uint32_t k = 0; k < note_count; ++k) {
+    in.set_record("note " + str(k));
+    report.notes.push_back({text("the note text")});
+  }
+  in.expect_end();
+  if (report.empty()) in.fail("no change and no note (a tree built as read has no rpar section)");
+  return report;
+}
+
+}  // namespace file_layout
 
 }  // namespace shatter

@@ -53,6 +53,7 @@ inline constexpr Tag solids_tag = {'S', 'O', 'L', 'D'};    // version 2
 inline constexpr Tag end_tag = {'E', 'N', 'D', ' '};
 // Optional by the tag rule (lower-case first letter): readers that predate it skip it.
 inline constexpr Tag version_tag = {'v', 'e', 'r', 's'};
+inline constexpr Tag repair_tag = {'r', 'p', 'a', 'r'};
 
 // Bytes on disk, the least each record can take: counts are checked against these
 // before anything is allocated, which bounds memory by a multiple of the input.
@@ -76,6 +77,7 @@ inline constexpr std::size_t loop_size = 4;
 inline constexpr std::size_t corner_min_size = 9;  // without its segment
 inline constexpr std::size_t segment_size = 8;
 inline constexpr std::size_t max_version_text_size = 64;
+inline constexpr std::size_t max_repair_text_size = 4096;  // `rpar`: one line of a repair report
 
 // SOLD flag bits: per node, and per face.
 inline constexpr std::uint8_t node_convex_bit = 1;
@@ -260,6 +262,7 @@ struct SectionTable {
   std::optional<Section> recipe, nodes, meshes, hulls, bonds;
   std::optional<Section> geometry, solids;  // version 2
   std::optional<Section> shatter_version;   // optional, in any version
+  std::optional<Section> input_repair;      // optional, in any version
 };
 
 // ---------------------------------------------------------------------------
@@ -473,6 +476,18 @@ struct RecordOffsets {
   std::vector<std::size_t> bonds;  ///< version 3 (bonds of varying size); earlier versions compute them
   std::size_t point_count = 0;
 };
+
+// ---------------------------------------------------------------------------
+// The optional `rpar` section, alike in every version (file.cpp)
+
+/// What is wrong with a repair text (file.hpp, `rpar`: a line without control
+/// characters), or nullopt.
+std::optional<std::string> repair_text_problem(std::string_view text);
+/// The `rpar` payload of `report`. Precondition: every text passes
+/// repair_text_problem (write_shatter checks).
+std::string repair_payload(const RepairReport& report);
+/// Reads an `rpar` payload; refuses with CorruptFileError what file.hpp does not allow.
+RepairReport read_repair(const Section& section);
 
 // ---------------------------------------------------------------------------
 // Version 3 payloads (file_v3.cpp)

@@ -521,6 +521,7 @@ void write_version3_sections(const MeshTree& tree, const std::function<void(Tag,
   // Each payload lives only for its call.
   const auto section = [&](Tag tag, PayloadPieces payload) { emit(tag, payload); };
   if (!tree.shatter_version.empty()) section(version_tag, {tree.shatter_version});
+  if (!tree.input_repair.empty()) section(repair_tag, {repair_payload(tree.input_repair)});
   section(recipe_tag, recipe_payload(tree.recipe));
   section(nodes_tag, nodes_payload(tree));
   section(geometry_tag, geometry_payload(tree.geometry));

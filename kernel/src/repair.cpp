@@ -925,20 +925,6 @@ class Repairer {
 
 }  // namespace
 
-const RepairChange* RepairReport::find(RepairKind kind) const {
-  for (const RepairChange& c : changes) {
-    if (c.kind == kind) return &c;
-  }
-  return nullptr;
-}
-
-std::string RepairReport::summary() const {
-  if (changes.empty()) return "no change";
-  std::string line;
-  for (const RepairChange& c : changes) line += (line.empty() ? "" : "; ") + c.text;
-  return line;
-}
-
 RepairReport repair_mesh(Mesh& mesh, const RepairOptions& options) {
   RepairReport report;
   report.vertices_before = report.vertices_after = mesh.vertex_count();

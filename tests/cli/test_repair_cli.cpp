@@ -93,6 +93,16 @@ TEST_CASE("slice and fracture --repair proceed with the repaired mesh", "[repair
   CHECK(out["repair"][0]["change"] == "filled_holes");
   CHECK(out["leaves"].get<int>() >= 4);
 
+  // The tree says its root is the repaired input, and info reads that back.
+  const auto info = nlohmann::json::parse(run_shatter("info --json " + quoted(tree)).out);
+  REQUIRE(info["input_repair"].is_object());
+  CHECK(info["input_repair"]["repair"] == out["repair"]);
+  CHECK(info["input_repair"]["triangles_after"].get<int>() > info["input_repair"]["triangles_before"].get<int>());
+  CHECK(run_shatter("info " + quoted(tree)).out.find("input repaired before the build") != std::string::npos);
+  const fs::path as_read = scratch("as-read.shatter");
+  REQUIRE(run_shatter("fracture " + quoted(mesh_dir() / "cube.off") + " --fragments 4 --repair --out " + quoted(as_read)).exit_code == 0);
+  CHECK(nlohmann::json::parse(run_shatter("info --json " + quoted(as_read)).out)["input_repair"].is_null());
+
   const Run open = run_shatter("fracture " + quoted(bad("tetra_intersected_by_triangle.off")) +
                                " --fragments 2 --out " + quoted(scratch("no.shatter")) + " --repair");
   CHECK(open.exit_code == 3);

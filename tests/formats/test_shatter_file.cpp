@@ -165,6 +165,24 @@ std::string solid_difference(const Solid& a, const Solid& b) {
   return {};
 }
 
+/// The first field in which the repair reports differ, or an empty string.
+std::string repair_difference(const RepairReport& a, const RepairReport& b) {
+  if (a.vertices_before != b.vertices_before || a.triangles_before != b.triangles_before ||
+      a.vertices_after != b.vertices_after || a.triangles_after != b.triangles_after) {
+    return "counts";
+  }
+  if (a.changes.size() != b.changes.size()) return "change count";
+  for (std::size_t k = 0; k < a.changes.size(); ++k) {
+    const RepairChange &ca = a.changes[k], &cb = b.changes[k];
+    if (ca.kind != cb.kind || ca.count != cb.count || ca.text != cb.text) return "change " + std::to_string(k);
+  }
+  if (a.notes.size() != b.notes.size()) return "note count";
+  for (std::size_t k = 0; k < a.notes.size(); ++k) {
+    if (a.notes[k].text != b.notes[k].text) return "note " + std::to_string(k);
+  }
+  return {};
+}
+
 /// The first field in which the trees differ, or an empty string.
 std::string tree_difference(const MeshTree& a, const MeshTree& b) {
   const TreeRecipe &oa = a.recipe, &ob = b.recipe;
@@ -174,6 +192,7 @@ std::string tree_difference(const MeshTree& a, const MeshTree& b) {
     return "recipe";
   }
   if (a.shatter_version != b.shatter_version) return "shatter_version";
+  if (const std::string d = repair_difference(a.input_repair, b.input_repair); !d.empty()) return "input_repair " + d;
   if (a.nodes.size() != b.nodes.size()) return "node count";
   for (std::size_t k = 0; k < a.nodes.size(); ++k) {
     const MeshTreeNode &na = a.nodes[k], &nb = b.nodes[k];
@@ -760,6 +779,24 @@ std::string bonds_payload_v3(const MeshTree& tree) {
   return out.data;
 }
 
+/// The `rpar` payload file.hpp documents for `report`.
+std::string repair_payload_reference(const RepairReport& report) {
+  Bytes out;
+  out.u64(report.vertices_before).u64(report.triangles_before).u64(report.vertices_after).u64(report.triangles_after);
+  out.u32(static_cast<std::uint32_t>(report.changes.size()));
+  for (const RepairChange& change : report.changes) {
+    const auto kind = std::find(all_repair_kinds.begin(), all_repair_kinds.end(), change.kind) - all_repair_kinds.begin();
+    out.u8(static_cast<std::uint8_t>(kind)).u64(change.count).u32(static_cast<std::uint32_t>(change.text.size()));
+    out.data += change.text;
+  }
+  out.u32(static_cast<std::uint32_t>(report.notes.size()));
+  for (const RepairNote& note : report.notes) {
+    out.u32(static_cast<std::uint32_t>(note.text.size()));
+    out.data += note.text;
+  }
+  return out.data;
+}
+
 /// Version 3 payloads of `tree`, as Payloads holds version 2's, in the order
 /// encode_shatter writes them.
 std::vector<std::pair<std::string, std::string>> payloads_v3(const MeshTree& tree) {
@@ -771,6 +808,7 @@ std::vector<std::pair<std::string, std::string>> payloads_v3(const MeshTree& tre
       {"SOLD", solids_payload_v3(tree)},      {"MESH", meshes_payload_v3(tree, false)}, {"HULL", meshes_payload_v3(tree, true)},
       {"BOND", bonds_payload_v3(tree)}};
   std::fesetenv(&saved);
+  if (!tree.input_repair.empty()) parts.insert(parts.begin(), {"rpar", repair_payload_reference(tree.input_repair)});
   if (!tree.shatter_version.empty()) parts.insert(parts.begin(), {"vers", tree.shatter_version});
   return parts;
 }
@@ -1113,6 +1151,89 @@ TEST_CASE("the version that built a tree is kept in the optional vers section", 
     for (const std::string& bad : {std::string(65, '1'), std::string("0.1 beta"), std::string("0.1\n")}) {
       versioned.shatter_version = bad;
       CHECK_THROWS_AS(encode_shatter(versioned), std::invalid_argument);
+    }
+  }
+}
+
+/// A repair report with one change of every kind (counts and texts varying with
+/// `seed`) and `notes` notes, as `fracture --repair` could record it.
+RepairReport repair_report_of(std::uint64_t seed, std::size_t notes) {
+  RepairReport report;
+  report.vertices_before = 1000 + seed;
+  report.triangles_before = 2000 + 3 * seed;
+  report.vertices_after = 990 + seed;
+  report.triangles_after = (std::uint64_t{1} << 40) + seed;  // counts are 64-bit in the file
+  for (std::size_t k = 0; k < all_repair_kinds.size(); ++k) {
+    const RepairKind kind = all_repair_kinds[(k + seed) % all_repair_kinds.size()];
+    report.changes.push_back({kind, seed * 7 + k, std::string(repair_kind_name(kind)) + ": " + std::string(k + seed % 5, 'x')});
+  }
+  for (std::size_t k = 0; k < notes; ++k) report.notes.push_back({"hole " + std::to_string(k) + " left open \xc3\xa9"});
+  return report;
+}
+
+TEST_CASE("how the input was repaired is kept in the optional rpar section", "[shatter_file][repair]") {
+  const MeshTree plain = two_leaf_tree();
+  REQUIRE(plain.input_repair.empty());
+  CHECK(encode_shatter(plain).find("rpar") == std::string::npos);
+
+  SECTION("every kind, with and without notes, round-trips and is laid out as documented") {
+    for (std::uint64_t seed = 0; seed < 12; ++seed) {
+      MeshTree repaired = plain;
+      repaired.input_repair = repair_report_of(seed, seed % 3);
+      const std::string bytes = encode_shatter(repaired);
+      CHECK(byte_difference(bytes, reference_file_v3(repaired)) == "equal");
+      CHECK(tree_difference(decode_within_budget(bytes), repaired).empty());
+    }
+    MeshTree notes_only = plain;
+    notes_only.input_repair.notes.push_back({"a hole of 3 edges was left"});
+    check_round_trip(notes_only);
+  }
+  MeshTree repaired = plain;
+  repaired.input_repair = repair_report_of(5, 1);
+  const std::string bytes = encode_shatter(repaired);
+  const std::size_t at = bytes.find("rpar");
+  REQUIRE(at == 12);  // first: the hand-built tree has no version
+
+  SECTION("a reader that does not know rpar skips it and reads the same tree without it") {
+    std::string renamed = bytes;
+    renamed.replace(at, 4, "rxyz");
+    CHECK(tree_difference(decode_within_budget(renamed), plain).empty());
+  }
+  SECTION("a repeated, empty or malformed rpar section is refused with one line") {
+    const std::string body = bytes.substr(12);  // the sections, rpar first
+    const std::string payload = repair_payload_reference(repaired.input_repair);
+    const auto with_rpar = [&](const std::string& rpar_payload) {
+      return file_header(3) + section("rpar", rpar_payload) + body.substr(16 + payload.size());
+    };
+    REQUIRE(tree_difference(decode_within_budget(with_rpar(payload)), repaired).empty());
+    check_refused(file_header(3) + section("rpar", payload) + body, "rpar section at byte");
+    check_refused(with_rpar(repair_payload_reference(RepairReport{})), "no change and no note");
+    // Byte 36 is the first change's kind (four u64 counts, then the u32 change count).
+    std::string bad_kind = payload;
+    bad_kind[36] = static_cast<char>(all_repair_kinds.size());
+    check_refused(with_rpar(bad_kind), "unknown repair kind 10");
+    std::string control = payload;
+    control[36 + 1 + 8 + 4] = '\n';  // the first byte of the first change's text
+    check_refused(with_rpar(control), "(a control character)");
+    std::string huge_count = payload;
+    huge_count.replace(32, 4, Bytes{}.u32(0xFFFFFFFF).data);
+    check_refused(with_rpar(huge_count), "4294967295 changes need at least 13 bytes each");
+    std::string huge_text = payload;
+    huge_text.replace(36 + 1 + 8, 4, Bytes{}.u32(0xFFFFFFF0).data);
+    check_refused(with_rpar(huge_text), "4294967280 text bytes need at least 1 bytes each");
+    check_refused(with_rpar(payload + "x"), "1 unexpected bytes after the last record");
+    for (std::size_t cut = 0; cut < payload.size(); cut += 7) {
+      CHECK(refusal(with_rpar(payload.substr(0, cut))).has_value());
+    }
+  }
+  SECTION("encode_shatter refuses a text a reader would refuse") {
+    for (const std::string& bad : {std::string(), std::string("two\nlines"), std::string(4097, 'a'), std::string("tab\there")}) {
+      MeshTree tree = plain;
+      tree.input_repair.changes.push_back({RepairKind::filled_holes, 1, bad});
+      CHECK_THROWS_AS(encode_shatter(tree), std::invalid_argument);
+      tree.input_repair.changes.clear();
+      tree.input_repair.notes.push_back({bad});
+      CHECK_THROWS_AS(encode_shatter(tree), std::invalid_argument);
     }
   }
 }

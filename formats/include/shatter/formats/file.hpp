@@ -45,6 +45,13 @@
 //   vers  optional: the shatter version that built the tree, as text: 1 to 64
 //         bytes of printable ASCII without spaces (0x21-0x7E), e.g. "0.1.0".
 //         Written only when the tree has one (every built tree does).
+//   rpar  optional: how the input was repaired (MeshTree::input_repair; written
+//         only when it holds a change or a note, i.e. `fracture --repair` changed
+//         the input): u64 x4 vertex and triangle counts before, then after; u32
+//         change count C, C x (u8 kind, the position in all_repair_kinds of
+//         kernel/repair.hpp; u64 count; text); u32 note count, each a text. A
+//         text is u32 length and 1 to 4,096 bytes without control characters
+//         (below 0x20, 0x7F). A section with neither change nor note is refused.
 //   OPTS  TreeRecipe, 27 bytes: u32 fragments, u64 seed, u8 strategy
 //         (0 thesis, 1 balanced, 2 axis), u8 kernel (0 fast, 1 exact, 2 plane),
 //         f64 interior_uv_scale, u32 max_plane_tries, u8 allow_self_intersections
@@ -188,10 +195,12 @@
 // would misunderstand is never silently dropped. `vers` is optional data this
 // reader knows: it may occur at most once, anywhere before END, in a file of
 // any version, and a payload outside its rule is refused; a file without it
-// reads with an empty shatter_version. (A damaged `vers` tag that still starts
-// with a lower-case letter is an unknown optional section, so such a file reads
-// as the same tree without its version: the one single-byte change a reader
-// cannot see, and it loses nothing but the version.)
+// reads with an empty shatter_version. `rpar` follows the same rule: at most once, anywhere before
+// END in any version, its payload as above or refused; without it a tree reads
+// with an empty input_repair. (A damaged `vers` or `rpar` tag that still
+// starts with a lower-case letter is an unknown optional section, so such a file
+// reads as the same tree without its version or repair record: the one
+// single-byte change a reader cannot see, and it loses nothing else.)
 //
 // Versions. Version 2 added GEOM and SOLD (the plane kernel's exact
 // representation, so a tree can be re-cut exactly) and kernel 2 in OPTS. A

@@ -9,9 +9,11 @@
 // orientation and self-intersection are decided by exact predicates (CGAL Epick's
 // filtered predicates on the double coordinates). No tolerance decides anything.
 
+#include <array>
 #include <cstddef>
 #include <limits>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "shatter/kernel/mesh.hpp"
@@ -34,6 +36,19 @@ enum class RepairKind {
                                  ///< patches removed (autorefine_and_remove_self_intersections)
   removed_unused_vertices,       ///< vertices no triangle uses any more
 };
+
+/// Every RepairKind in step order; a kind's position is the number the
+/// .shatter file stores for it (formats/file.hpp, section `rpar`), so new kinds
+/// are appended, never inserted.
+inline constexpr std::array<RepairKind, 10> all_repair_kinds = {
+    RepairKind::merged_duplicate_vertices,       RepairKind::removed_repeated_index_triangles,
+    RepairKind::removed_duplicate_triangles,     RepairKind::removed_opposite_triangle_pairs,
+    RepairKind::reversed_triangles,              RepairKind::stitched_border_edges,
+    RepairKind::fixed_zero_area_triangles,       RepairKind::filled_holes,
+    RepairKind::resolved_self_intersections,     RepairKind::removed_unused_vertices};
+
+/// The kind's name as the CLI's JSON prints it, e.g. "filled_holes".
+std::string_view repair_kind_name(RepairKind kind);
 
 struct RepairChange {
   RepairKind kind;
@@ -75,6 +90,8 @@ struct RepairReport {
   std::size_t vertices_after = 0, triangles_after = 0;
 
   bool changed() const { return !changes.empty(); }
+  /// Nothing changed and nothing noted: the report of a mesh used as read.
+  bool empty() const { return changes.empty() && notes.empty(); }
   /// The change of this kind, or nullptr.
   const RepairChange* find(RepairKind kind) const;
   /// One line: "no change" or the changes' texts joined with "; ".

@@ -13,6 +13,7 @@
 
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/repair.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/vec.hpp"
 #include "shatter/meshtree/bonds.hpp"
@@ -61,6 +62,12 @@ struct MeshTree {
   /// unknown: a tree made by hand, or read from a file written before versions
   /// were recorded.
   std::string shatter_version;
+  /// How the input was repaired before the build (`fracture --repair`: its
+  /// changes, what it left undone, the counts before and after); empty when the
+  /// input was built as read. The root's mesh is the repaired input. Kept by the
+  /// .shatter file (the optional `rpar` section), so a tree says where its root
+  /// departs from the file it was made from.
+  RepairReport input_repair;
   std::vector<MeshTreeNode> nodes;   ///< depth-first preorder; nodes[0] is the root
   std::vector<NodeIndex> leaf_nodes; ///< leaf i is nodes[leaf_nodes[i]]
   std::vector<Bond> bonds;           ///< sorted by (first, second, cut_node)
