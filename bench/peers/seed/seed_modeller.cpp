@@ -334,7 +334,10 @@ SliceOutcome slice_piece(const Piece& piece, const PlaneF& plane, const SliceOpt
   // 4.4: each side into its hulls.
   for (Piece* side : {&pos, &neg}) {
     if (side->triangles.empty()) continue;
-    for (auto& hull : separate_hulls(std::move(*side), compare)) out.pieces.push_back(std::move(hull));
+    for (auto& hull : separate_hulls(std::move(*side), compare)) {
+      out.pieces.push_back(std::move(hull));
+      out.above.push_back(side == &pos);
+    }
   }
   return out;
 }

@@ -84,6 +84,7 @@ struct Failure {
 struct SliceOutcome {
   Failure failure;             ///< kind none when the slice succeeded
   std::vector<Piece> pieces;   ///< the hulls of both sides (4.4), empty sides left out
+  std::vector<bool> above;     ///< per piece: on the plane's positive side (GetSide true)
   SliceStats stats;
 };
 

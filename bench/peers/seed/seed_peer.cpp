@@ -11,9 +11,9 @@
 #include <chrono>
 #include <exception>
 #include <iostream>
-#include <unordered_map>
 
 #include "../../command_line.hpp"
+#include "seed_mesh.hpp"
 #include "seed_modeller.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/validate.hpp"
@@ -25,48 +25,6 @@ using namespace seed_peer;
 constexpr int exit_ok = 0;        // every fragment made and valid
 constexpr int exit_failed = 1;    // the method stopped or made an invalid fragment: the JSON says which
 constexpr int exit_usage = 2;     // bad options or an unreadable mesh: one line on stderr, no JSON
-
-// The float mesh Unity would hold: each corner's position rounded to float.
-Piece to_piece(const shatter::Mesh& mesh) {
-  Piece piece;
-  piece.triangles.reserve(mesh.triangles.size());
-  for (const auto& t : mesh.triangles) {
-    std::array<Vec3f, 3> corners;
-    for (int c = 0; c < 3; ++c) {
-      const auto& p = mesh.positions[t[static_cast<std::size_t>(c)]];
-      corners[static_cast<std::size_t>(c)] = {static_cast<float>(p.x), static_cast<float>(p.y),
-                                              static_cast<float>(p.z)};
-    }
-    piece.triangles.push_back(corners);
-  }
-  return piece;
-}
-
-// A fragment as an indexed mesh for validate_mesh: corners are one vertex when the
-// seed's own comparison (`weld`) calls their positions equal; the position kept is
-// the group's first, exactly as a double.
-shatter::Mesh to_mesh(const Piece& piece, Compare weld) {
-  std::vector<Vec3f> corners;
-  corners.reserve(piece.triangles.size() * 3);
-  for (const auto& t : piece.triangles)
-    for (const auto& p : t) corners.push_back(p);
-  const auto group = group_positions(corners, weld);
-  shatter::Mesh mesh;
-  std::unordered_map<std::uint32_t, shatter::VertexIndex> vertex;
-  std::vector<shatter::VertexIndex> index(corners.size());
-  for (std::size_t i = 0; i < corners.size(); ++i) {
-    const auto [it, added] = vertex.emplace(group[i], static_cast<shatter::VertexIndex>(mesh.positions.size()));
-    if (added) {
-      const Vec3f p = corners[group[i]];
-      mesh.positions.push_back({p.x, p.y, p.z});
-    }
-    index[i] = it->second;
-  }
-  for (std::size_t t = 0; t < piece.triangles.size(); ++t)
-    mesh.triangles.push_back({index[3 * t], index[3 * t + 1], index[3 * t + 2]});
-  mesh.surfaces.assign(mesh.triangles.size(), shatter::original_surface);
-  return mesh;
-}
 
 double signed_volume(const shatter::Mesh& mesh) {
   double six = 0;
