@@ -125,8 +125,9 @@ struct HullSurface {
 // A facet of one triangle is that triangle (its three corners are strictly convex,
 // in its own outward order), so only facets of two or more triangles are
 // projected and swept by facet_polygon. Scratch is per thread: hulls are built
-// once per node, in parallel.
-Mesh canonical_hull(const std::vector<Vec3>& positions, const HullSurface& surface) {
+// once per node, in parallel. `positions_sorted`: the positions are in strictly
+// increasing lexicographic order already, so index order is that order.
+Mesh canonical_hull(const std::vector<Vec3>& positions, const HullSurface& surface, bool positions_sorted) {
   const std::vector<Triangle>& triangles = surface.triangles;
   const std::uint32_t count = static_cast<std::uint32_t>(triangles.size());
   thread_local UnionFind facet_of;
@@ -186,9 +187,11 @@ Mesh canonical_hull(const std::vector<Vec3>& positions, const HullSurface& surfa
   used.assign(polygon_corners.begin(), polygon_corners.end());
   std::sort(used.begin(), used.end());
   used.erase(std::unique(used.begin(), used.end()), used.end());
-  std::sort(used.begin(), used.end(), [&](VertexIndex p, VertexIndex q) {
-    return lexicographically_less(positions[p], positions[q]);
-  });
+  if (!positions_sorted) {
+    std::sort(used.begin(), used.end(), [&](VertexIndex p, VertexIndex q) {
+      return lexicographically_less(positions[p], positions[q]);
+    });
+  }
   thread_local std::vector<VertexIndex> index_of;
   index_of.resize(positions.size());
   Mesh hull;
@@ -226,7 +229,7 @@ Mesh canonical_hull(const std::vector<Vec3>& positions, const std::vector<Triang
       surface.next[t][k] = triangle_of_edge.find(directed_edge_key(triangles[t][(k + 1) % 3], triangles[t][k]));
     }
   }
-  return canonical_hull(positions, surface);
+  return canonical_hull(positions, surface, false);
 }
 
 // --- quickhull ---------------------------------------------------------------
@@ -511,7 +514,7 @@ Mesh convex_hull_of_points(std::span<const Vec3> input) {
   std::sort(points.begin(), points.end(), lexicographically_less);
   points.erase(std::unique(points.begin(), points.end()), points.end());
   const Quickhull hull(points);
-  return canonical_hull(points, hull.surface());
+  return canonical_hull(points, hull.surface(), true);
 }
 
 }  // namespace shatter
