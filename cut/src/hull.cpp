@@ -200,7 +200,9 @@ Mesh canonical_hull(const std::vector<Vec3>& positions, const HullSurface& surfa
     index_of[v] = static_cast<VertexIndex>(hull.positions.size());
     hull.positions.push_back(positions[v]);
   }
-  hull.triangles.reserve(count);
+  // A fan of a polygon of k corners has k - 2 triangles: the hull is kept in the
+  // tree, so its arrays are sized exactly.
+  hull.triangles.reserve(polygon_corners.size() - 2 * (polygon_start.size() - 1));
   for (std::size_t f = 0; f + 1 < polygon_start.size(); ++f) {
     const auto polygon = std::span(polygon_corners).subspan(polygon_start[f], polygon_start[f + 1] - polygon_start[f]);
     for (VertexIndex& v : polygon) v = index_of[v];
