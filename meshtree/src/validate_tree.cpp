@@ -248,12 +248,15 @@ std::optional<std::string> mesh_defect(const Mesh& mesh) {
 }
 
 /// The child of `node` whose leaf range holds `leaf`, or no_node.
+// The children's leaf ranges follow each other in order (a valid structure), so
+// the child is found by binary search: a cell node has thousands of children.
 NodeIndex child_holding(const std::vector<MeshTreeNode>& nodes, NodeIndex node, LeafIndex leaf) {
-  for (const NodeIndex child : nodes[node].children) {
-    if (leaf - nodes[child].first_leaf < nodes[child].leaf_count)
-      return child;  // unsigned: also rejects leaf < first_leaf
-  }
-  return no_node;
+  const std::vector<NodeIndex>& children = nodes[node].children;
+  auto after = std::upper_bound(children.begin(), children.end(), leaf,
+                                [&](LeafIndex l, NodeIndex child) { return l < nodes[child].first_leaf; });
+  if (after == children.begin()) return no_node;
+  const NodeIndex child = *(after - 1);
+  return leaf - nodes[child].first_leaf < nodes[child].leaf_count ? child : no_node;  // unsigned: also rejects leaf < first_leaf
 }
 
 /// Bonds in range, sorted, each between two leaves its cut_node's cut separates

@@ -527,7 +527,8 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
   // Canonical definitions (the file comment), adding bisectors as needed.
   for (std::uint32_t s = 0; s < site_count; ++s) {
     for (Solid& solid : cells[s]) {
-      for (PointDef& def : solid.defs) {
+      for (std::size_t v = 0; v < solid.defs.size(); ++v) {
+        PointDef& def = solid.defs[v];
         if (def.kind != PointKind::three_planes) continue;
         std::vector<PlaneRef> others;
         std::vector<std::uint32_t> involved;
@@ -558,7 +559,10 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
           }
           canonical.push_back(PlaneRef::cut(found->second));
         }
+        if (std::equal(canonical.begin(), canonical.end(), def.planes.begin())) continue;
         for (int k = 0; k < 3; ++k) def.planes[k] = canonical[k];
+        // The cache follows the definition (the file's reader recomputes it bit for bit).
+        solid.approx[v] = approximate(input.geometry.plane_set(planes), def);
       }
     }
   }
@@ -578,8 +582,6 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
   arena.execute([&] {
     tbb::parallel_for(std::uint32_t{0}, site_count, [&](std::uint32_t s) {
       for (Solid& solid : cells[s]) {
-        solid.approx.resize(solid.defs.size());
-        for (std::size_t v = 0; v < solid.defs.size(); ++v) solid.approx[v] = approximate(set, solid.defs[v]);
         RoundedSolid r = round_solid(set, solid, meshing);
         rounded[s].push_back({std::move(solid), std::move(r)});
       }
