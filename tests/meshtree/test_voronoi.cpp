@@ -280,3 +280,51 @@ TEST_CASE("neighbouring fragments share their corners bit for bit", "[voronoi]")
 }
 
 }  // namespace shatter
+
+namespace shatter {
+
+TEST_CASE("the checker and the reader refuse broken cell trees", "[voronoi]") {
+  const Mesh cube = corpus("cube.off");
+  VoronoiReport report;
+  const MeshTree tree = build(cube, uniform_sites(cube, 12, 2), report);
+  REQUIRE(tree.cut_planes.size() > tree.nodes.size());
+  CHECK_FALSE(validate_tree(tree, {}).defect.has_value());
+  {
+    MeshTree broken = tree;
+    broken.cut_planes.back() = Plane{};  // a cell plane with a zero normal
+    const auto defect = validate_tree(broken, {}).defect;
+    REQUIRE(defect);
+    CHECK(defect->part == TreePart::cut_planes);
+  }
+  {
+    MeshTree broken = tree;
+    broken.cut_planes.resize(tree.nodes.size() + 1);  // solids now name planes that do not exist
+    const auto defect = validate_tree(broken, {}).defect;
+    REQUIRE(defect);
+    CHECK(defect->part == TreePart::solid);
+  }
+  {
+    MeshTree broken = tree;
+    broken.cut_planes.resize(tree.nodes.size() - 1);  // fewer planes than nodes
+    REQUIRE(validate_tree(broken, {}).defect);
+  }
+  {
+    // A zero plane on an internal node is a defect in a tree without cell planes.
+    MeshTree broken = tree;
+    broken.cut_planes.resize(tree.nodes.size());
+    for (MeshTreeNode& node : broken.nodes) node.solid = {}, node.convex = false;
+    broken.geometry = {};
+    broken.bonds.clear();
+    const auto defect = validate_tree(broken, {.geometry = true}).defect;
+    REQUIRE(defect);
+    CHECK(defect->part == TreePart::node);
+  }
+  // The file without its CELL section is refused (its solids name cell planes).
+  std::string bytes = encode_shatter(tree);
+  const std::size_t at = bytes.find("CELL");
+  REQUIRE(at != std::string::npos);
+  bytes[at] = 'X';  // an unknown upper-case tag: refused, never skipped
+  CHECK_THROWS_AS(decode_shatter(bytes), CorruptFileError);
+}
+
+}  // namespace shatter
