@@ -3,8 +3,9 @@
 // Voronoi cells of a set of sites, each cell cut out by its bisector planes.
 //
 // Exact cells. Sites are first quantized to a grid of spacing h = 2^e, every
-// coordinate k h with |k| < 2^25 (quantize_sites). The bisector of sites p and
-// q is then the plane
+// coordinate k h with |k| <= 2^24 (quantize_sites; exactness allows |k| < 2^25,
+// the spare bit keeps rounding to the grid inside it). The bisector of sites p
+// and q is then the plane
 //     2 (q - p) . x + |p|^2 - |q|^2 = 0      (negative on p's side)
 // whose four coefficients are exact doubles: 2 (k_q - k_p) h has |integer| <
 // 2^26, and |p|^2 - |q|^2 = h^2 sum(k_p^2 - k_q^2) has |integer| < 3 2^50 <
