@@ -669,6 +669,9 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const BuildRunOptions& run) {
   if (recipe.fragments < 1) throw std::invalid_argument("fragments must be at least 1");
   if (recipe.max_plane_tries < 1) throw std::invalid_argument("max_plane_tries must be at least 1");
+  if (recipe.strategy == Strategy::voronoi) {
+    throw std::invalid_argument("the voronoi strategy needs its sites: build_voronoi_tree (voronoi.hpp) builds it");
+  }
   if (recipe.kernel != KernelKind::plane) {
     throw std::invalid_argument("recipe.kernel must be plane: the " + std::string(kernel_name(recipe.kernel)) +
                                 " kernel was retired (its trees still read)");
