@@ -11,8 +11,9 @@ namespace shatter {
 namespace {
 
 // Little-endian base-128 varints (LEB128). A plane reference is coded 0 for
-// none, 2i + 1 for input plane i and 2d + 2 for the cut plane at depth d, so
-// the common ones take a byte; an optional index (no_index: none) is coded + 1.
+// none, 2i + 1 for input plane i and 2d + 2 for cut plane d (the builder's
+// depth, or a node where the names are the tree's), so the common ones take a
+// byte; an optional index (no_index: none) is coded + 1.
 
 constexpr std::uint8_t solid_convex_bit = 1;
 constexpr std::uint8_t named_by_node_bit = 2;
