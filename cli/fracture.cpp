@@ -24,6 +24,7 @@
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/packed_node.hpp"
 #include "shatter/meshtree/sites.hpp"
 #include "shatter/meshtree/voronoi.hpp"
 #include "shatter/formats/export.hpp"
@@ -493,6 +494,9 @@ int run_fracture(const FractureArgs& args) {
     outcome.exported = write_node_mesh_files(output, tree, select_nodes(tree, leaves), args.export_folder,
                                              *outcome.export_format, file_naming_for(leaves));
   }
+  // From here the leaves are only written and summed up: packed too, the
+  // tree keeps no node's arrays (the same bytes; README "Lean memory").
+  pack_leaves(tree);
   if (const fs::path folder = fs::path(args.out).parent_path(); !folder.empty()) output.create_folder(folder);
   output.write_file_in_pieces(args.out, [&](const ByteSink& sink) { write_shatter(tree, sink); });
   output.commit();

@@ -214,6 +214,7 @@ void write_mesh(ByteWriter& out, const Mesh& mesh, std::span<const Vec3> sources
 PayloadPieces nodes_payload(const MeshTree& tree) {
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
   std::uint8_t flags = 0;
+  NodeShapes shapes(tree);
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     const MeshTreeNode& node = nodes[k];
     const std::uint64_t derived_seed =
@@ -222,7 +223,7 @@ PayloadPieces nodes_payload(const MeshTree& tree) {
                                                               std::find(nodes[node.parent].children.begin(), nodes[node.parent].children.end(), k) -
                                                               nodes[node.parent].children.begin()));
     if (node.seed != derived_seed) flags |= seeds_stored_bit;
-    if (!same_bits(node.mass, mass_properties(node.mesh))) flags |= masses_stored_bit;
+    if (!same_bits(node.mass, mass_properties(shapes(static_cast<NodeIndex>(k)).mesh))) flags |= masses_stored_bit;
     if (node.is_leaf() && !all_zero_bits(tree.cut_planes[k])) flags |= leaf_planes_stored_bit;
   }
   ByteWriter out;
@@ -254,9 +255,10 @@ PayloadPieces solids_payload(const MeshTree& tree) {
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
   AncestorPath path;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> face_of_edge;  // (from, to) -> face, sorted
+  NodeShapes shapes(tree);
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     const MeshTreeNode& node = nodes[k];
-    const Solid& solid = node.solid;
+    const Solid& solid = shapes(static_cast<NodeIndex>(k)).solid;
     path.enter(static_cast<NodeIndex>(k), node.depth);
     const auto plane = [&](PlaneRef ref) { out.varint(plane_code(ref, path, nodes)); };
     out.u8(static_cast<std::uint8_t>((node.convex ? node_convex_bit : 0) | (solid.convex ? solid_convex_bit : 0)));
@@ -328,23 +330,29 @@ PayloadPieces meshes_payload(const MeshTree& tree, bool hulls) {
   out.count32(nodes.size());
   AncestorPath path;
   std::vector<Vec3> solid_positions;
+  NodeShapes shapes(tree);
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     const MeshTreeNode& node = nodes[k];
     path.enter(static_cast<NodeIndex>(k), node.depth);
     if (hulls) {
-      write_mesh(out, node.hull, node.mesh.positions, path, nodes);
+      // A convex node's hull is empty: it looks up no position (a packed node stays packed).
+      std::span<const Vec3> sources;
+      if (!node.hull.positions.empty()) sources = shapes(static_cast<NodeIndex>(k)).mesh.positions;
+      write_mesh(out, node.hull, sources, path, nodes);
       out.end_record();
       continue;
     }
-    solid_positions.resize(node.solid.defs.size());
+    // A lean build's internal nodes are packed (MeshTree::packed_shapes).
+    const NodeShape shape = shapes(static_cast<NodeIndex>(k));
+    solid_positions.resize(shape.solid.defs.size());
     // A lean tree keeps no approximations (the validator has checked that a
     // solid has all or none): they are computed here, as the reader will.
-    const bool cached = !node.solid.approx.empty();
+    const bool cached = !shape.solid.approx.empty();
     for (std::size_t v = 0; v < solid_positions.size(); ++v) {
-      const PointDef& def = node.solid.defs[v];
-      solid_positions[v] = output_position(set, def, cached ? node.solid.approx[v] : approximate(set, def));
+      const PointDef& def = shape.solid.defs[v];
+      solid_positions[v] = output_position(set, def, cached ? shape.solid.approx[v] : approximate(set, def));
     }
-    write_mesh(out, node.mesh, solid_positions, path, nodes);
+    write_mesh(out, shape.mesh, solid_positions, path, nodes);
     out.end_record();
   }
   return out.take_pieces();

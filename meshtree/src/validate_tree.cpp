@@ -551,6 +551,7 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
     context.subtree_end[k] = node.is_leaf() ? static_cast<NodeIndex>(k + 1) : context.subtree_end[node.children.back()];
   }
   SolidScratch scratch;
+  NodeShapes shapes(tree);  // first_defect has unpacked every packed node
   for (std::size_t k = 0; k < node_count; ++k) {
     const MeshTreeNode& node = tree.nodes[k];
     if (node.convex && !(node.hull.positions.empty() && node.hull.triangles.empty())) {
@@ -559,8 +560,32 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
           "node " + str(k) + " is convex, so its hull must be empty (its mesh is its hull), but the hull has " +
               str(node.hull.positions.size()) + " vertices and " + str(node.hull.triangles.size()) + " triangles"};
     }
-    if (auto problem = solid_defect(node.solid, k, context, caches, scratch)) {
+    if (auto problem = solid_defect(shapes(static_cast<NodeIndex>(k)).solid, k, context, caches, scratch)) {
       return TreeDefect{TreePart::solid, k, "the solid of node " + str(k) + " " + *problem};
+    }
+  }
+  return std::nullopt;
+}
+
+/// A lean build's packed nodes (MeshTree::packed_shapes): one entry per node or
+/// none, only in a tree with an exact representation, and a packed node keeps
+/// no mesh or solid of its own. (Whether the bytes unpack, first_defect finds.)
+std::optional<TreeDefect> packed_defect(const MeshTree& tree) {
+  if (tree.packed_shapes.empty()) return std::nullopt;
+  if (tree.packed_shapes.size() != tree.nodes.size()) {
+    return TreeDefect{TreePart::mesh, 0,
+                      "the tree has " + str(tree.packed_shapes.size()) + " packed node entries for " +
+                          str(tree.nodes.size()) + " nodes"};
+  }
+  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+    if (!tree.is_packed(static_cast<NodeIndex>(k))) continue;
+    const MeshTreeNode& node = tree.nodes[k];
+    if (!tree.has_exact_representation()) {
+      return TreeDefect{TreePart::mesh, k,
+                        "node " + str(k) + " has a packed mesh and solid, but the tree has no exact representation"};
+    }
+    if (!node.mesh.positions.empty() || !node.mesh.triangles.empty() || !solid_is_empty(node.solid)) {
+      return TreeDefect{TreePart::mesh, k, "node " + str(k) + " has a packed mesh and solid and keeps others of its own"};
     }
   }
   return std::nullopt;
@@ -573,8 +598,16 @@ std::optional<TreeDefect> first_defect(const MeshTree& tree, bool caches) {
   if (auto defect = structure_defect(tree.nodes)) return defect;
   if (auto defect = leaf_list_defect(tree)) return defect;
   if (auto defect = cut_planes_defect(tree)) return defect;
+  if (auto defect = packed_defect(tree)) return defect;
+  NodeShapes shapes(tree);
   for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
-    if (auto problem = mesh_defect(tree.nodes[k].mesh))
+    const Mesh* mesh = nullptr;
+    try {
+      mesh = &shapes(static_cast<NodeIndex>(k)).mesh;
+    } catch (const std::invalid_argument& error) {
+      return TreeDefect{TreePart::mesh, k, "the packed mesh and solid of node " + str(k) + " do not unpack: " + error.what()};
+    }
+    if (auto problem = mesh_defect(*mesh))
       return TreeDefect{TreePart::mesh, k, "the mesh of node " + str(k) + " " + *problem};
     if (auto problem = mesh_defect(tree.nodes[k].hull))
       return TreeDefect{TreePart::hull, k, "the hull of node " + str(k) + " " + *problem};
@@ -613,8 +646,9 @@ std::optional<TreeDefect> caches_defect(const MeshTree& tree, MeshTree* fill) {
   }
   // Made after plane_approx is filled: the set views it.
   const PlaneSet set = tree.plane_set();
+  NodeShapes shapes(tree);  // fill_tree_caches unpacks every node first
   for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
-    const Solid& solid = tree.nodes[k].solid;
+    const Solid& solid = shapes(static_cast<NodeIndex>(k)).solid;
     if (fill) fill->nodes[k].solid.approx.resize(solid.defs.size());
     for (std::size_t v = 0; v < solid.defs.size(); ++v) {
       const auto vertex = [&] {
@@ -650,6 +684,8 @@ bool embedding_defect(DefectKind kind) {
 /// mass, its mesh, its hull. Requires a tree that passed first_defect.
 std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k) {
   const MeshTreeNode& node = tree.nodes[k];
+  NodeShapes shapes(tree);
+  const Mesh& mesh = shapes(k).mesh;  // first_defect has unpacked every packed node
   const std::string name = "node " + str(k);
   if (!node.is_leaf() && !is_cell_node(tree, k)) {
     const Plane& plane = tree.cut_planes[k];
@@ -677,9 +713,9 @@ std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k
   }
 
   // validate_mesh finds nothing wrong with no triangles at all.
-  if (node.mesh.triangles.empty()) return TreeDefect{TreePart::mesh, k, "the mesh of " + name + " is empty"};
+  if (mesh.triangles.empty()) return TreeDefect{TreePart::mesh, k, "the mesh of " + name + " is empty"};
   const bool topology_only = tree.recipe.allow_self_intersections;
-  ValidationReport mesh_report = validate_mesh(node.mesh, {.check_self_intersections = !topology_only});
+  ValidationReport mesh_report = validate_mesh(mesh, {.check_self_intersections = !topology_only});
   if (topology_only) {
     std::erase_if(mesh_report.defects, [](const Defect& defect) { return embedding_defect(defect.kind); });
   }
@@ -715,7 +751,20 @@ std::optional<TreeDefect> geometry_defect(const MeshTree& tree) {
 
 }  // namespace detail
 
-std::optional<TreeDefect> fill_tree_caches(MeshTree& tree) { return detail::caches_defect(tree, &tree); }
+std::optional<TreeDefect> fill_tree_caches(MeshTree& tree) {
+  // A lean build's packed nodes get their meshes and solids back first.
+  if (!tree.packed_shapes.empty()) {
+    NodeShapes shapes(tree);
+    for (NodeIndex k = 0; k < tree.nodes.size(); ++k) {
+      if (!tree.is_packed(k)) continue;
+      const NodeShape shape = shapes(k);
+      tree.nodes[k].mesh = shape.mesh;
+      tree.nodes[k].solid = shape.solid;
+    }
+    std::vector<std::vector<std::uint8_t>>().swap(tree.packed_shapes);
+  }
+  return detail::caches_defect(tree, &tree);
+}
 
 std::string_view tree_part_name(TreePart part) {
   switch (part) {
