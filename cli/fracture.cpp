@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <atomic>
 #include <cctype>
 #include <charconv>
@@ -22,6 +24,9 @@
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/packed_node.hpp"
+#include "shatter/meshtree/sites.hpp"
+#include "shatter/meshtree/voronoi.hpp"
 #include "shatter/formats/export.hpp"
 #include "shatter/formats/file.hpp"
 #include "shatter/meshtree/stats.hpp"
@@ -51,11 +56,97 @@ CLI::Validator whole_number() {
       "", "whole number");
 }
 
+bool is_cell_pattern(const FractureArgs& args) { return args.pattern != "planes"; }
+
 TreeRecipe tree_recipe_of(const FractureArgs& args) {
-  TreeRecipe recipe = tree_recipe_from(args.fragments, args.seed, args.strategy, "--");
+  TreeRecipe recipe = tree_recipe_from(is_cell_pattern(args) ? 1 : args.fragments, args.seed, args.strategy, "--");
+  if (is_cell_pattern(args)) recipe.strategy = Strategy::voronoi;
   recipe.interior_uv_scale = args.interior_uv_scale;
   recipe.allow_self_intersections = args.allow_self_intersections;
   return recipe;
+}
+
+// "x,y,z" as three finite doubles; UsageError naming the flag otherwise.
+Vec3 parse_triple(const std::string& text, const std::string& flag) {
+  double values[3];
+  const char* at = text.data();
+  const char* end = text.data() + text.size();
+  for (int i = 0; i < 3; ++i) {
+    if (at < end && *at == '+') ++at;
+    const auto [next, error] = std::from_chars(at, end, values[i]);
+    const bool separator_ok = i < 2 ? (next < end && *next == ',') : next == end;
+    if (error != std::errc() || !std::isfinite(values[i]) || !separator_ok) {
+      throw UsageError(flag + " must be three finite numbers x,y,z, got '" + text + "'");
+    }
+    at = next + (i < 2 ? 1 : 0);
+  }
+  return {values[0], values[1], values[2]};
+}
+
+std::array<std::uint32_t, 3> parse_cells(const std::string& text) {
+  std::array<std::uint32_t, 3> cells{};
+  std::size_t at = 0;
+  for (int i = 0; i < 3; ++i) {
+    const std::size_t comma = i < 2 ? text.find(',', at) : text.size();
+    const std::optional<std::uint64_t> value =
+        comma == std::string::npos ? std::nullopt : parse_whole_number(std::string_view(text).substr(at, comma - at));
+    if (!value || *value < 1 || *value > 1024) {
+      throw UsageError("--cells must be three whole numbers NX,NY,NZ from 1 to 1024, got '" + text + "'");
+    }
+    cells[i] = static_cast<std::uint32_t>(*value);
+    at = comma + 1;
+  }
+  return cells;
+}
+
+// What each cell pattern needs, checked before the mesh is read.
+void check_pattern_flags(const FractureArgs& args) {
+  const std::string& p = args.pattern;
+  if (p == "planes") {
+    if (args.fragments == 0) throw UsageError("--fragments is required with --pattern planes (the default)");
+    return;
+  }
+  if (args.fragments != 0) throw UsageError("--fragments is for --pattern planes; --pattern " + p + " takes its sites from its own options");
+  const auto need = [&](bool given, const char* flag) {
+    if (!given) throw UsageError(std::string("--pattern ") + p + " needs " + flag);
+  };
+  if (p == "voronoi") need(args.sites > 0, "--sites N");
+  if (p == "clustered") {
+    need(args.clusters > 0, "--clusters C");
+    need(args.sites_per_cluster > 0, "--sites-per-cluster K");
+    need(args.cluster_radius > 0, "--cluster-radius R");
+  }
+  if (p == "radial") {
+    need(args.rings > 0, "--rings R");
+    need(args.sectors > 0, "--sectors S");
+    if (!args.centre.empty()) parse_triple(args.centre, "--centre");
+    const Vec3 d = parse_triple(args.direction, "--direction");
+    if (d.x == 0 && d.y == 0 && d.z == 0) throw UsageError("--direction must not be 0,0,0");
+  }
+  if (p == "grid" || p == "brick") {
+    need(!args.cells.empty(), "--cells NX,NY,NZ");
+    parse_cells(args.cells);
+  }
+  if (p == "sites") need(!args.sites_file.empty(), "--sites-file F");
+}
+
+// The pattern's sites for `mesh` (a valid solid).
+std::vector<Vec3> pattern_sites(const FractureArgs& args, const Mesh& mesh) {
+  const std::string& p = args.pattern;
+  if (p == "voronoi") return uniform_sites(mesh, args.sites, args.seed);
+  if (p == "clustered") return clustered_sites(mesh, args.clusters, args.sites_per_cluster, args.cluster_radius, args.seed);
+  if (p == "grid" || p == "brick") return grid_sites(mesh, parse_cells(args.cells), p == "brick", args.offset, args.jitter, args.seed);
+  if (p == "sites") return read_sites_file(args.sites_file);
+  // radial: about the box's centre and half its diagonal unless given
+  Vec3 lo = mesh.positions.front(), hi = lo;
+  for (const Vec3& q : mesh.positions) {
+    lo = {std::min(lo.x, q.x), std::min(lo.y, q.y), std::min(lo.z, q.z)};
+    hi = {std::max(hi.x, q.x), std::max(hi.y, q.y), std::max(hi.z, q.z)};
+  }
+  const Vec3 centre = args.centre.empty() ? (lo + hi) * 0.5 : parse_triple(args.centre, "--centre");
+  const double radius = args.radius > 0 ? args.radius : 0.5 * norm(hi - lo);
+  return radial_sites(centre, parse_triple(args.direction, "--direction"), args.rings, args.sectors, radius,
+                      args.variability, args.seed);
 }
 
 // The format of the leaf export, nullopt for no export. Checked before the mesh is
@@ -233,7 +324,8 @@ TreeRecipe tree_recipe_from(std::uint64_t fragments, std::uint64_t seed, std::st
     throw UsageError(prefix + "fragments must be a whole number from 1 to 4294967295");
   }
   const std::optional<Strategy> strategy_value = strategy_named(strategy);
-  if (!strategy_value) {
+  // Voronoi trees need their sites: --pattern, not a strategy.
+  if (!strategy_value || *strategy_value == Strategy::voronoi) {
     throw UsageError(prefix + "strategy must be thesis, balanced or axis, got '" + std::string(strategy) + "'");
   }
   TreeRecipe recipe;
@@ -254,8 +346,8 @@ Command add_fracture_command(CLI::App& app) {
       ->required();
   command->add_option("--fragments", args->fragments,
                       "N >= 1: cut until there are at least N fragments (leaves); a cut of a concave solid can "
-                      "give more than two pieces, so the count may pass N")
-      ->required()
+                      "give more than two pieces, so the count may pass N. Required with --pattern planes (the "
+                      "default), refused with the others")
       ->check(whole_number())
       ->check(CLI::Range(std::uint32_t{1}, std::numeric_limits<std::uint32_t>::max()));
   command->add_option("--seed", args->seed, "Seed of the random planes (an unsigned 64-bit integer)")
@@ -268,6 +360,61 @@ Command add_fracture_command(CLI::App& app) {
                       "near the centroid, with jitter, budget shared by volume")
       ->check(CLI::IsMember({"thesis", "balanced", "axis"}))
       ->capture_default_str();
+  command->add_option("--pattern", args->pattern,
+                      "planes: recursive plane cuts (--fragments, --strategy). The others cut the solid into the "
+                      "Voronoi cells of sites (exact shared bisector planes; a tree of depth 1: the solid, then its "
+                      "fragments): voronoi (--sites N uniform in the volume), clustered (--clusters, "
+                      "--sites-per-cluster, --cluster-radius), radial (--rings, --sectors, --centre, --direction, "
+                      "--radius, --variability), grid or brick (--cells, --offset, --jitter), sites (--sites-file). "
+                      "Random draws use --seed; lengths are in the mesh's units")
+      ->check(CLI::IsMember({"planes", "voronoi", "clustered", "radial", "grid", "brick", "sites"}))
+      ->capture_default_str();
+  command->add_option("--sites", args->sites, "voronoi: N >= 1 sites drawn uniformly in the solid's volume (exact point-in-solid)")
+      ->check(whole_number())
+      ->check(CLI::Range(std::uint32_t{1}, std::uint32_t{10'000'000}));
+  command->add_option("--clusters", args->clusters, "clustered: C >= 1 cluster centres drawn uniformly in the solid's volume")
+      ->check(whole_number())
+      ->check(CLI::Range(std::uint32_t{1}, std::uint32_t{1'000'000}));
+  command->add_option("--sites-per-cluster", args->sites_per_cluster,
+                      "clustered: K >= 1 sites per cluster, uniform in the ball of --cluster-radius about its centre")
+      ->check(whole_number())
+      ->check(CLI::Range(std::uint32_t{1}, std::uint32_t{1'000'000}));
+  command->add_option("--cluster-radius", args->cluster_radius, "clustered: the clusters' radius, in mesh units (> 0)")
+      ->check(CLI::PositiveNumber);
+  command->add_option("--centre", args->centre,
+                      "radial: the impact point x,y,z in mesh units (default: the centre of the bounding box)");
+  command->add_option("--direction", args->direction,
+                      "radial: the impact direction x,y,z (any length but zero); the sites lie in the plane through "
+                      "--centre perpendicular to it, so the cells are prisms along it")
+      ->capture_default_str();
+  command->add_option("--rings", args->rings, "radial: R >= 1 rings of sites around the centre, crowding toward it")
+      ->check(whole_number())
+      ->check(CLI::Range(std::uint32_t{1}, std::uint32_t{10'000}));
+  command->add_option("--sectors", args->sectors, "radial: S >= 1 sites per ring, evenly spaced in angle")
+      ->check(whole_number())
+      ->check(CLI::Range(std::uint32_t{1}, std::uint32_t{10'000}));
+  command->add_option("--radius", args->radius,
+                      "radial: the outer ring's radius in mesh units (default: half the bounding box's diagonal)")
+      ->check(CLI::PositiveNumber);
+  command->add_option("--variability", args->variability,
+                      "radial: 0 to 1, how far each site moves at random, as a fraction of its ring spacing and "
+                      "sector width (0: a regular pattern)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  command->add_option("--cells", args->cells,
+                      "grid, brick: NX,NY,NZ cells over the bounding box (1 to 1024 each), one site at each cell's centre");
+  command->add_option("--offset", args->offset,
+                      "grid: the whole lattice shifts by this fraction of a cell along each axis; brick: every other "
+                      "row (along y and z) shifts by it along x (0.5: a running bond). -1 to 1")
+      ->check(CLI::Range(-1.0, 1.0))
+      ->capture_default_str();
+  command->add_option("--jitter", args->jitter,
+                      "grid, brick: 0 to 1, each site moves at random by up to this fraction of half a cell per axis")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  command->add_option("--sites-file", args->sites_file,
+                      "sites: a text file of sites, one \"x y z\" per line in mesh units ('#' starts a comment line); "
+                      "a bad line is refused naming its line number");
   command->add_option("--threads", args->threads,
                       "Worker threads; 0 uses every hardware thread. Changes the speed only, never the output")
       ->check(whole_number())
@@ -303,15 +450,21 @@ int run_fracture(const FractureArgs& args) {
   // Every usage check comes before reading the mesh and building.
   FractureOutcome outcome;
   outcome.export_format = leaf_export_format(args);
-  const TreeRecipe recipe = tree_recipe_of(args);
+  check_pattern_flags(args);
+  TreeRecipe recipe = tree_recipe_of(args);
   const std::chrono::milliseconds progress_delay = progress_bar_delay();
-  if (recipe.fragments < 1) throw UsageError("--fragments must be at least 1");
   if (std::error_code unknown; fs::is_directory(args.out, unknown)) {
     throw UsageError("--out " + args.out + " is a folder; it names the .shatter file to write");
   }
 
   InputMesh input = read_valid_solid(args.mesh, args.repair, args.allow_self_intersections);
   outcome.repair = std::move(input.repair);
+
+  std::vector<Vec3> sites;
+  if (is_cell_pattern(args)) {
+    sites = pattern_sites(args, input.mesh);
+    recipe.fragments = static_cast<std::uint32_t>(std::min<std::size_t>(sites.size(), 0xFFFFFFFFu));
+  }
 
   MeshTree tree;
   const Clock::time_point start = Clock::now();
@@ -325,7 +478,7 @@ int run_fracture(const FractureArgs& args) {
                               // below: what the build can recompute goes early
                               .lean = true};
     try {
-      tree = build_mesh_tree(input.mesh, recipe, run);
+      tree = is_cell_pattern(args) ? build_voronoi_tree(input.mesh, sites, recipe, run) : build_mesh_tree(input.mesh, recipe, run);
     } catch (const UnsupportedGeometryError& e) {
       throw UnsupportedGeometryError("cannot fracture " + args.mesh + ": " + e.what());
     }
@@ -341,6 +494,9 @@ int run_fracture(const FractureArgs& args) {
     outcome.exported = write_node_mesh_files(output, tree, select_nodes(tree, leaves), args.export_folder,
                                              *outcome.export_format, file_naming_for(leaves));
   }
+  // From here the leaves are only written and summed up: packed too, the
+  // tree keeps no node's arrays (the same bytes; README "Lean memory").
+  pack_leaves(tree);
   if (const fs::path folder = fs::path(args.out).parent_path(); !folder.empty()) output.create_folder(folder);
   output.write_file_in_pieces(args.out, [&](const ByteSink& sink) { write_shatter(tree, sink); });
   output.commit();

@@ -1,6 +1,7 @@
 #pragma once
 // `shatter fracture <mesh> --fragments N --out <file.shatter> [--seed S]
-// [--strategy thesis|balanced|axis] [--threads T]
+// [--strategy thesis|balanced|axis] [--pattern planes|voronoi|clustered|radial|grid|brick|sites
+// [pattern options]] [--threads T]
 // [--interior-uv-scale X] [--allow-self-intersections] [--repair]
 // [--export <folder> [--format off|obj|ply|stl]] [--json]`: the mesh tree of a
 // solid, written as a .shatter file.
@@ -34,6 +35,22 @@ struct FractureArgs {
   bool json = false;
   /// Repair the mesh first (read_valid_solid), printing each change.
   bool repair = false;
+  /// planes (the recursive planes of --strategy), or a Voronoi site pattern:
+  /// voronoi, clustered, radial, grid, brick, sites (voronoi.hpp, sites.hpp).
+  std::string pattern = "planes";
+  std::uint32_t sites = 0;              ///< voronoi: sites uniform in the volume
+  std::uint32_t clusters = 0;           ///< clustered
+  std::uint32_t sites_per_cluster = 0;  ///< clustered
+  double cluster_radius = 0;            ///< clustered, mesh units
+  std::string centre;                   ///< radial: "x,y,z"; empty: the bounding box's centre
+  std::string direction = "0,0,1";      ///< radial: "x,y,z"
+  std::uint32_t rings = 0, sectors = 0; ///< radial
+  double radius = 0;                    ///< radial, mesh units; 0: half the box diagonal
+  double variability = 0;               ///< radial, 0 to 1
+  std::string cells;                    ///< grid, brick: "NX,NY,NZ"
+  double offset = 0;                    ///< grid, brick: fraction of a cell
+  double jitter = 0;                    ///< grid, brick: 0 to 1
+  std::string sites_file;               ///< sites
 };
 
 /// A whole number in decimal digits only (no sign, no space, at most 2^64 - 1);

@@ -29,11 +29,31 @@ void append_faces(const FaceSet& from, FaceSet& to) {
 }
 
 // The solid made of the given faces of `faces`, its vertices numbered compactly in
-// order of first use.
+// order of first use. Its arrays are sized exactly first (a count, then the
+// copy): the pieces are kept in the tree, so slack would stay allocated, and
+// growing by doubling would copy them again.
 Solid extract(std::span<const PointDef> defs, std::span<const ApproxPoint> approx, const FaceSet& faces,
               std::span<const std::uint32_t> chosen, std::vector<VertexIndex>& local) {
   Solid solid;
   local.assign(defs.size(), no_index);
+  std::size_t loop_count = 0, corner_count = 0, vertex_count = 0;
+  for (std::uint32_t f : chosen) {
+    const SolidFace& face = faces.faces[f];
+    loop_count += face.loop_count;
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+      const SolidLoop& loop = faces.loops[l];
+      corner_count += loop.corner_count;
+      for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
+        VertexIndex& number = local[faces.corners[loop.first_corner + i].vertex];
+        if (number == no_index) number = static_cast<VertexIndex>(vertex_count++);
+      }
+    }
+  }
+  solid.faces.reserve(chosen.size());
+  solid.loops.reserve(loop_count);
+  solid.corners.reserve(corner_count);
+  solid.defs.resize(vertex_count);
+  solid.approx.resize(vertex_count);
   for (std::uint32_t f : chosen) {
     SolidFace face = faces.faces[f];
     const std::uint32_t first_loop = face.first_loop;
@@ -43,12 +63,10 @@ Solid extract(std::span<const PointDef> defs, std::span<const ApproxPoint> appro
       solid.loops.push_back({static_cast<std::uint32_t>(solid.corners.size()), loop.corner_count});
       for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
         SolidCorner corner = faces.corners[loop.first_corner + i];
-        if (local[corner.vertex] == no_index) {
-          local[corner.vertex] = static_cast<VertexIndex>(solid.defs.size());
-          solid.defs.push_back(defs[corner.vertex]);
-          solid.approx.push_back(approx[corner.vertex]);
-        }
-        corner.vertex = local[corner.vertex];
+        const VertexIndex number = local[corner.vertex];
+        solid.defs[number] = defs[corner.vertex];
+        solid.approx[number] = approx[corner.vertex];
+        corner.vertex = number;
         solid.corners.push_back(corner);
       }
     }

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <span>
 #include <stdexcept>
 #include <vector>
 
@@ -109,53 +110,101 @@ std::vector<VertexIndex> facet_polygon(const std::vector<Vec3>& positions, std::
   return hull;
 }
 
+// A closed convex surface as the hull algorithms hand it over: its triangles,
+// each one's neighbour across edge (v[k], v[k + 1]), and whether that neighbour
+// is exactly coplanar with it where the caller already decided so (quickhull
+// decides it for the edges of its horizons; `unknown` elsewhere).
+constexpr std::int8_t coplanarity_unknown = -1;
+struct HullSurface {
+  std::vector<Triangle> triangles;
+  std::vector<std::array<std::uint32_t, 3>> next;
+  std::vector<std::array<std::int8_t, 3>> coplanar;  // 1, 0 or coplanarity_unknown
+};
+
 // The canonical form of a convex, closed, outward triangle surface over `positions`.
-Mesh canonical_hull(const std::vector<Vec3>& positions, const std::vector<Triangle>& triangles) {
-  IndexMap triangle_of_edge(3 * triangles.size());
-  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
-    for (int k = 0; k < 3; ++k) triangle_of_edge.insert(directed_edge_key(triangles[t][k], triangles[t][(k + 1) % 3]), t);
-  }
-  UnionFind facet_of(triangles.size());
-  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+// A facet of one triangle is that triangle (its three corners are strictly convex,
+// in its own outward order), so only facets of two or more triangles are
+// projected and swept by facet_polygon. Scratch is per thread: hulls are built
+// once per node, in parallel. `positions_sorted`: the positions are in strictly
+// increasing lexicographic order already, so index order is that order.
+Mesh canonical_hull(const std::vector<Vec3>& positions, const HullSurface& surface, bool positions_sorted) {
+  const std::vector<Triangle>& triangles = surface.triangles;
+  const std::uint32_t count = static_cast<std::uint32_t>(triangles.size());
+  thread_local UnionFind facet_of;
+  facet_of.reset(count);
+  for (std::uint32_t t = 0; t < count; ++t) {
     const Triangle& tri = triangles[t];
     for (int k = 0; k < 3; ++k) {
-      const std::uint32_t n = triangle_of_edge.find(directed_edge_key(tri[(k + 1) % 3], tri[k]));
+      const std::uint32_t n = surface.next[t][k];
       if (n == IndexMap::absent || n < t) continue;
-      VertexIndex opposite = triangles[n][0];
-      for (VertexIndex v : triangles[n]) {
-        if (v != tri[k] && v != tri[(k + 1) % 3]) opposite = v;
+      bool flat = surface.coplanar[t][k] == 1;
+      if (surface.coplanar[t][k] == coplanarity_unknown) {
+        VertexIndex opposite = triangles[n][0];
+        for (VertexIndex v : triangles[n]) {
+          if (v != tri[k] && v != tri[(k + 1) % 3]) opposite = v;
+        }
+        flat = orient3d(positions[tri[0]], positions[tri[1]], positions[tri[2]], positions[opposite]) == Sign::zero;
       }
-      if (orient3d(positions[tri[0]], positions[tri[1]], positions[tri[2]], positions[opposite]) == Sign::zero) {
-        facet_of.unite(t, n);
-      }
+      if (flat) facet_of.unite(t, n);
     }
   }
-  std::vector<std::vector<VertexIndex>> corners_of(triangles.size());
-  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
-    auto& corners = corners_of[facet_of.find(t)];
-    corners.insert(corners.end(), triangles[t].begin(), triangles[t].end());
+  // The triangles grouped by facet (each facet's least triangle is its
+  // representative), then each facet's corners as one polygon, all in one array.
+  thread_local std::vector<std::uint32_t> facet_start, facet_members;
+  facet_start.assign(count + 1, 0);
+  for (std::uint32_t t = 0; t < count; ++t) ++facet_start[facet_of.find(t) + 1];
+  for (std::uint32_t t = 0; t < count; ++t) facet_start[t + 1] += facet_start[t];
+  facet_members.resize(count);
+  {
+    thread_local std::vector<std::uint32_t> fill;
+    fill.assign(facet_start.begin(), facet_start.end() - 1);
+    for (std::uint32_t t = 0; t < count; ++t) facet_members[fill[facet_of.find(t)]++] = t;
   }
-  std::vector<std::vector<VertexIndex>> polygons;
-  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
-    if (!corners_of[t].empty()) polygons.push_back(facet_polygon(positions, std::move(corners_of[t]), triangles[t]));
+  thread_local std::vector<VertexIndex> polygon_corners;
+  thread_local std::vector<std::uint32_t> polygon_start;
+  polygon_corners.clear();
+  polygon_start.assign(1, 0);
+  std::vector<VertexIndex> corners;
+  for (std::uint32_t t = 0; t < count; ++t) {
+    const std::uint32_t first = facet_start[t], last = facet_start[t + 1];
+    if (first == last) continue;
+    if (last - first == 1) {
+      polygon_corners.insert(polygon_corners.end(), triangles[t].begin(), triangles[t].end());
+    } else {
+      corners.clear();
+      for (std::uint32_t m = first; m < last; ++m) {
+        corners.insert(corners.end(), triangles[facet_members[m]].begin(), triangles[facet_members[m]].end());
+      }
+      const std::vector<VertexIndex> polygon = facet_polygon(positions, corners, triangles[t]);
+      polygon_corners.insert(polygon_corners.end(), polygon.begin(), polygon.end());
+    }
+    polygon_start.push_back(static_cast<std::uint32_t>(polygon_corners.size()));
   }
 
   // Vertices in lexicographic order of their coordinates, facets fanned from their
   // least vertex, triangles sorted.
-  std::vector<VertexIndex> used;
-  for (const auto& polygon : polygons) used.insert(used.end(), polygon.begin(), polygon.end());
+  thread_local std::vector<VertexIndex> used;
+  used.assign(polygon_corners.begin(), polygon_corners.end());
   std::sort(used.begin(), used.end());
   used.erase(std::unique(used.begin(), used.end()), used.end());
-  std::sort(used.begin(), used.end(), [&](VertexIndex p, VertexIndex q) {
-    return lexicographically_less(positions[p], positions[q]);
-  });
-  std::vector<VertexIndex> index_of(positions.size(), IndexMap::absent);
+  if (!positions_sorted) {
+    std::sort(used.begin(), used.end(), [&](VertexIndex p, VertexIndex q) {
+      return lexicographically_less(positions[p], positions[q]);
+    });
+  }
+  thread_local std::vector<VertexIndex> index_of;
+  index_of.resize(positions.size());
   Mesh hull;
+  hull.positions.reserve(used.size());
   for (VertexIndex v : used) {
     index_of[v] = static_cast<VertexIndex>(hull.positions.size());
     hull.positions.push_back(positions[v]);
   }
-  for (auto& polygon : polygons) {
+  // A fan of a polygon of k corners has k - 2 triangles: the hull is kept in the
+  // tree, so its arrays are sized exactly.
+  hull.triangles.reserve(polygon_corners.size() - 2 * (polygon_start.size() - 1));
+  for (std::size_t f = 0; f + 1 < polygon_start.size(); ++f) {
+    const auto polygon = std::span(polygon_corners).subspan(polygon_start[f], polygon_start[f + 1] - polygon_start[f]);
     for (VertexIndex& v : polygon) v = index_of[v];
     std::rotate(polygon.begin(), std::min_element(polygon.begin(), polygon.end()), polygon.end());
     for (std::size_t i = 1; i + 1 < polygon.size(); ++i) hull.triangles.push_back({polygon[0], polygon[i], polygon[i + 1]});
@@ -163,6 +212,26 @@ Mesh canonical_hull(const std::vector<Vec3>& positions, const std::vector<Triang
   std::sort(hull.triangles.begin(), hull.triangles.end());
   hull.surfaces.assign(hull.triangles.size(), original_surface);
   return hull;
+}
+
+// The same for a closed convex mesh's own triangles: their neighbours found by
+// their directed edges, every coplanarity decided in canonical_hull.
+Mesh canonical_hull(const std::vector<Vec3>& positions, const std::vector<Triangle>& triangles) {
+  HullSurface surface;
+  surface.triangles = triangles;
+  surface.next.resize(triangles.size());
+  surface.coplanar.assign(triangles.size(), {coplanarity_unknown, coplanarity_unknown, coplanarity_unknown});
+  IndexMap& triangle_of_edge = edge_to_triangle;
+  triangle_of_edge.reset(3 * triangles.size());
+  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) triangle_of_edge.insert(directed_edge_key(triangles[t][k], triangles[t][(k + 1) % 3]), t);
+  }
+  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      surface.next[t][k] = triangle_of_edge.find(directed_edge_key(triangles[t][(k + 1) % 3], triangles[t][k]));
+    }
+  }
+  return canonical_hull(positions, surface, false);
 }
 
 // --- quickhull ---------------------------------------------------------------
@@ -199,11 +268,20 @@ class Quickhull {
     }
   }
 
-  // The hull's triangles, outward, over the input's indices.
-  std::vector<Triangle> triangles() const {
-    std::vector<Triangle> result;
+  // The hull's triangles, outward, over the input's indices, with their
+  // neighbours and the coplanarities the horizons decided.
+  HullSurface surface() const {
+    HullSurface result;
+    std::vector<std::uint32_t> number(faces_.size(), IndexMap::absent);
+    for (std::uint32_t f = 0; f < faces_.size(); ++f) {
+      if (faces_[f].alive) number[f] = static_cast<std::uint32_t>(result.triangles.size()), result.triangles.push_back(faces_[f].v);
+    }
+    result.next.reserve(result.triangles.size());
+    result.coplanar.reserve(result.triangles.size());
     for (const Face& face : faces_) {
-      if (face.alive) result.push_back(face.v);
+      if (!face.alive) continue;
+      result.next.push_back({number[face.next[0]], number[face.next[1]], number[face.next[2]]});
+      result.coplanar.push_back(face.coplanar);
     }
     return result;
   }
@@ -216,6 +294,10 @@ class Quickhull {
     std::array<std::uint32_t, 3> next{};  // the face across edge (v[i], v[i + 1])
     Vec3 normal;                       // rounded, of the scaled points: only to pick the furthest point
     std::vector<std::uint32_t> outside;  // points strictly beyond this face, each in one face only
+    // Per edge: whether the face across is exactly coplanar (1, 0, or
+    // coplanarity_unknown), recorded where a horizon's test decided it.
+    std::array<std::int8_t, 3> coplanar{};
+    Sign eye_side = Sign::zero;  // of the current eye, for the faces tested in add_furthest_point_of
     std::uint32_t visible_mark = 0, tested_mark = 0;
     bool alive = false;
   };
@@ -237,6 +319,7 @@ class Quickhull {
     face.v = {a, b, c};
     face.normal = cross(scaled_[b] - scaled_[a], scaled_[c] - scaled_[a]);
     face.outside.clear();
+    face.coplanar = {coplanarity_unknown, coplanarity_unknown, coplanarity_unknown};
     face.alive = true;
     return f;
   }
@@ -345,7 +428,8 @@ class Quickhull {
       for (const std::uint32_t g : face.next) {
         if (faces_[g].tested_mark == mark_) continue;
         faces_[g].tested_mark = mark_;
-        if (side(faces_[g], eye) == Sign::positive) {
+        faces_[g].eye_side = side(faces_[g], eye);
+        if (faces_[g].eye_side == Sign::positive) {
           faces_[g].visible_mark = mark_;
           visible_.push_back(g);
         }
@@ -375,8 +459,12 @@ class Quickhull {
       cone_.push_back(g);
       faces_[g].next[0] = edge.beyond;
       Face& outer = faces_[edge.beyond];
+      // The face across the horizon was tested against the eye above (it
+      // borders a visible face): zero there is exact coplanarity of the two.
+      const std::int8_t coplanar = outer.eye_side == Sign::zero ? 1 : 0;
+      faces_[g].coplanar[0] = coplanar;
       for (int i = 0; i < 3; ++i) {
-        if (outer.v[i] == edge.to && outer.v[(i + 1) % 3] == edge.from) outer.next[i] = g;
+        if (outer.v[i] == edge.to && outer.v[(i + 1) % 3] == edge.from) outer.next[i] = g, outer.coplanar[i] = coplanar;
       }
       e = horizon_from_[edge.to];
     }
@@ -428,7 +516,7 @@ Mesh convex_hull_of_points(std::span<const Vec3> input) {
   std::sort(points.begin(), points.end(), lexicographically_less);
   points.erase(std::unique(points.begin(), points.end()), points.end());
   const Quickhull hull(points);
-  return canonical_hull(points, hull.triangles());
+  return canonical_hull(points, hull.surface(), true);
 }
 
 }  // namespace shatter

@@ -109,7 +109,13 @@ SectionTable read_section_table(std::string_view bytes) {
       break;
     }
     const auto slot = std::find_if(known.begin(), known.end(), [&](const auto& entry) { return entry.first == section.tag; });
-    if (section.tag == version_tag || section.tag == repair_tag) {
+    if (section.tag == cell_planes_tag && table.version >= 3) {
+      if (table.cell_planes) {
+        refuse("damaged .shatter file: " + section_name(section.tag) + " section at byte " + str(position) + " repeats the one at byte " +
+               str(table.cell_planes->offset));
+      }
+      table.cell_planes = section;
+    } else if (section.tag == version_tag || section.tag == repair_tag) {
       std::optional<Section>& slot_of_optional = section.tag == version_tag ? table.shatter_version : table.input_repair;
       if (slot_of_optional) {
         refuse("damaged .shatter file: " + section_name(section.tag) + " section at byte " + str(position) + " repeats the one at byte " +
@@ -480,6 +486,7 @@ MeshTree decode_shatter(std::string_view bytes) {
   Version3Pending pending;
   if (sections.version >= 3) {
     read_version3_nodes(*sections.nodes, tree, pending, offsets);
+    if (sections.cell_planes) read_cell_planes(*sections.cell_planes, tree);
     tree.geometry = read_geometry(*sections.geometry);
     offsets.point_count = tree.geometry.points.size();
     read_version3_solids(*sections.solids, tree, offsets);

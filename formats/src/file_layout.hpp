@@ -51,6 +51,10 @@ inline constexpr Tag bonds_tag = {'B', 'O', 'N', 'D'};
 inline constexpr Tag geometry_tag = {'G', 'E', 'O', 'M'};  // version 2
 inline constexpr Tag solids_tag = {'S', 'O', 'L', 'D'};    // version 2
 inline constexpr Tag end_tag = {'E', 'N', 'D', ' '};
+// Version 3, only in a tree with cell planes (voronoi.hpp): the planes after the
+// nodes' (MeshTree::cut_planes). Upper case: a reader that does not know it
+// refuses the file rather than misread its solids.
+inline constexpr Tag cell_planes_tag = {'C', 'E', 'L', 'L'};
 // Optional by the tag rule (lower-case first letter): readers that predate it skip it.
 inline constexpr Tag version_tag = {'v', 'e', 'r', 's'};
 inline constexpr Tag repair_tag = {'r', 'p', 'a', 'r'};
@@ -263,6 +267,7 @@ struct SectionTable {
   std::optional<Section> geometry, solids;  // version 2
   std::optional<Section> shatter_version;   // optional, in any version
   std::optional<Section> input_repair;      // optional, in any version
+  std::optional<Section> cell_planes;       // version 3, a cell tree's only
 };
 
 // ---------------------------------------------------------------------------
@@ -519,6 +524,8 @@ struct Version3Pending {
 // from child counts is a tree by construction.
 void read_version3_nodes(const Section& section, MeshTree& tree, Version3Pending& pending, RecordOffsets& offsets);
 void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets& offsets);
+/// Appends the CELL section's planes to tree.cut_planes (after the nodes' own).
+void read_cell_planes(const Section& section, MeshTree& tree);
 void read_version3_meshes(const Section& section, MeshTree& tree, bool hulls, Version3Pending& pending, RecordOffsets& offsets);
 void read_version3_bonds(const Section& section, MeshTree& tree, RecordOffsets& offsets);
 /// Fills the derived positions and masses. Precondition: the tree passed

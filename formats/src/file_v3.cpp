@@ -106,9 +106,12 @@ class AncestorPath {
 /// A plane as the node whose solid uses it names it: 0 none, 2i + 1 input plane
 /// i, 2d the cut plane of the ancestor d levels up (the validator has checked
 /// that every cut plane a solid uses is a strict ancestor's).
+/// A cell plane (index nodes.size() + c, voronoi.hpp) is 2(depth + 1 + c): past
+/// every ancestor, where older readers refuse the code.
 std::uint64_t plane_code(PlaneRef plane, const AncestorPath& path, const std::vector<MeshTreeNode>& nodes) {
   if (plane.bits == no_index) return 0;
   if (!plane.is_cut()) return 2 * std::uint64_t{plane.index()} + 1;
+  if (plane.index() >= nodes.size()) return 2 * (std::uint64_t{path.depth()} + 1 + (plane.index() - nodes.size()));
   return 2 * std::uint64_t{path.distance_to(plane.index(), nodes[plane.index()].depth)};
 }
 
@@ -211,6 +214,7 @@ void write_mesh(ByteWriter& out, const Mesh& mesh, std::span<const Vec3> sources
 PayloadPieces nodes_payload(const MeshTree& tree) {
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
   std::uint8_t flags = 0;
+  NodeShapes shapes(tree);
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     const MeshTreeNode& node = nodes[k];
     const std::uint64_t derived_seed =
@@ -219,7 +223,7 @@ PayloadPieces nodes_payload(const MeshTree& tree) {
                                                               std::find(nodes[node.parent].children.begin(), nodes[node.parent].children.end(), k) -
                                                               nodes[node.parent].children.begin()));
     if (node.seed != derived_seed) flags |= seeds_stored_bit;
-    if (!same_bits(node.mass, mass_properties(node.mesh))) flags |= masses_stored_bit;
+    if (!same_bits(node.mass, mass_properties(shapes(static_cast<NodeIndex>(k)).mesh))) flags |= masses_stored_bit;
     if (node.is_leaf() && !all_zero_bits(tree.cut_planes[k])) flags |= leaf_planes_stored_bit;
   }
   ByteWriter out;
@@ -251,9 +255,10 @@ PayloadPieces solids_payload(const MeshTree& tree) {
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
   AncestorPath path;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> face_of_edge;  // (from, to) -> face, sorted
+  NodeShapes shapes(tree);
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     const MeshTreeNode& node = nodes[k];
-    const Solid& solid = node.solid;
+    const Solid& solid = shapes(static_cast<NodeIndex>(k)).solid;
     path.enter(static_cast<NodeIndex>(k), node.depth);
     const auto plane = [&](PlaneRef ref) { out.varint(plane_code(ref, path, nodes)); };
     out.u8(static_cast<std::uint8_t>((node.convex ? node_convex_bit : 0) | (solid.convex ? solid_convex_bit : 0)));
@@ -325,23 +330,29 @@ PayloadPieces meshes_payload(const MeshTree& tree, bool hulls) {
   out.count32(nodes.size());
   AncestorPath path;
   std::vector<Vec3> solid_positions;
+  NodeShapes shapes(tree);
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     const MeshTreeNode& node = nodes[k];
     path.enter(static_cast<NodeIndex>(k), node.depth);
     if (hulls) {
-      write_mesh(out, node.hull, node.mesh.positions, path, nodes);
+      // A convex node's hull is empty: it looks up no position (a packed node stays packed).
+      std::span<const Vec3> sources;
+      if (!node.hull.positions.empty()) sources = shapes(static_cast<NodeIndex>(k)).mesh.positions;
+      write_mesh(out, node.hull, sources, path, nodes);
       out.end_record();
       continue;
     }
-    solid_positions.resize(node.solid.defs.size());
+    // A lean build's internal nodes are packed (MeshTree::packed_shapes).
+    const NodeShape shape = shapes(static_cast<NodeIndex>(k));
+    solid_positions.resize(shape.solid.defs.size());
     // A lean tree keeps no approximations (the validator has checked that a
     // solid has all or none): they are computed here, as the reader will.
-    const bool cached = !node.solid.approx.empty();
+    const bool cached = !shape.solid.approx.empty();
     for (std::size_t v = 0; v < solid_positions.size(); ++v) {
-      const PointDef& def = node.solid.defs[v];
-      solid_positions[v] = output_position(set, def, cached ? node.solid.approx[v] : approximate(set, def));
+      const PointDef& def = shape.solid.defs[v];
+      solid_positions[v] = output_position(set, def, cached ? shape.solid.approx[v] : approximate(set, def));
     }
-    write_mesh(out, node.mesh, solid_positions, path, nodes);
+    write_mesh(out, shape.mesh, solid_positions, path, nodes);
     out.end_record();
   }
   return out.take_pieces();
@@ -355,6 +366,9 @@ NodeIndex child_toward(const std::vector<MeshTreeNode>& nodes, NodeIndex ancesto
 
 /// The bond normal a built tree has: the cut plane's unit normal, pointing from
 /// `first` into `second`.
+/// A plane with a zero normal (a cell node's, voronoi.hpp) derives none.
+bool zero_normal(const Plane& plane) { return plane.normal.x == 0 && plane.normal.y == 0 && plane.normal.z == 0; }
+
 Vec3 derived_normal(const MeshTree& tree, const Bond& bond) {
   const NodeIndex side = child_toward(tree.nodes, bond.cut_node, tree.leaf_nodes[bond.first]);
   const Vec3 unit = normalized(tree.cut_planes[bond.cut_node].normal);
@@ -364,7 +378,7 @@ Vec3 derived_normal(const MeshTree& tree, const Bond& bond) {
 PayloadPieces bonds_payload(const MeshTree& tree) {
   std::uint8_t flags = 0;
   for (const Bond& bond : tree.bonds) {
-    if (!same_bits(bond.normal, derived_normal(tree, bond))) {
+    if (zero_normal(tree.cut_planes[bond.cut_node]) || !same_bits(bond.normal, derived_normal(tree, bond))) {
       flags |= bond_normals_stored_bit;
       break;
     }
@@ -381,6 +395,7 @@ PayloadPieces bonds_payload(const MeshTree& tree) {
                      [&](int a, int b) { return std::fabs(coordinate(plane.normal, a)) > std::fabs(coordinate(plane.normal, b)); });
     std::uint64_t axis_code = centroid_stored;
     for (const int axis : axes) {
+      if (zero_normal(plane)) break;
       const Vec3 solved = point_on_plane_over(plane, axis, coordinate(bond.centroid, (axis + 1) % 3), coordinate(bond.centroid, (axis + 2) % 3));
       if (same_bits(solved, bond.centroid)) {
         axis_code = static_cast<std::uint64_t>(axis);
@@ -399,6 +414,17 @@ PayloadPieces bonds_payload(const MeshTree& tree) {
       out.f64(coordinate(bond.centroid, (axis + 2) % 3));
     }
     if ((flags & bond_normals_stored_bit) != 0) out.vec3(bond.normal);
+    out.end_record();
+  }
+  return out.take_pieces();
+}
+
+PayloadPieces cell_planes_payload(const MeshTree& tree) {
+  ByteWriter out;
+  out.count32(tree.cut_planes.size() - tree.nodes.size());
+  for (std::size_t k = tree.nodes.size(); k < tree.cut_planes.size(); ++k) {
+    out.vec3(tree.cut_planes[k].normal);
+    out.f64(tree.cut_planes[k].offset);
     out.end_record();
   }
   return out.take_pieces();
@@ -434,7 +460,7 @@ PayloadPieces recipe_payload(const TreeRecipe& recipe) {
 // Decoding
 
 /// Reads a plane code of the node at the end of `path`.
-PlaneRef read_plane(PayloadReader& in, const AncestorPath& path, const char* field) {
+PlaneRef read_plane(PayloadReader& in, const AncestorPath& path, const MeshTree& tree, const char* field) {
   const std::size_t at = in.offset();
   const std::uint64_t code = in.varint(field, 64);
   if (code == 0) return PlaneRef{no_index};
@@ -445,6 +471,8 @@ PlaneRef read_plane(PayloadReader& in, const AncestorPath& path, const char* fie
   }
   const std::uint64_t up = code >> 1;
   if (up > path.depth()) {
+    const std::uint64_t cell = up - path.depth() - 1;
+    if (cell < tree.cut_planes.size() - tree.nodes.size()) return PlaneRef::cut(static_cast<std::uint32_t>(tree.nodes.size() + cell));
     in.fail_at(at, std::string(field) + " names the cut plane of the node " + str(up) + " levels up, but the node has depth " + str(path.depth()));
   }
   return PlaneRef::cut(path.above(up));
@@ -524,6 +552,7 @@ void write_version3_sections(const MeshTree& tree, const std::function<void(Tag,
   if (!tree.input_repair.empty()) section(repair_tag, {repair_payload(tree.input_repair)});
   section(recipe_tag, recipe_payload(tree.recipe));
   section(nodes_tag, nodes_payload(tree));
+  if (tree.cut_planes.size() > tree.nodes.size()) section(cell_planes_tag, cell_planes_payload(tree));
   section(geometry_tag, geometry_payload(tree.geometry));
   section(solids_tag, solids_payload(tree));
   section(meshes_tag, meshes_payload(tree, false));
@@ -636,10 +665,10 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
         case PointKind::segment_plane:
           def.a = in.varint32("vertex point");
           def.b = in.varint32("vertex point");
-          def.planes[0] = read_plane(in, path, "vertex plane");
+          def.planes[0] = read_plane(in, path, tree, "vertex plane");
           break;
         case PointKind::three_planes:
-          for (PlaneRef& plane : def.planes) plane = read_plane(in, path, "vertex plane");
+          for (PlaneRef& plane : def.planes) plane = read_plane(in, path, tree, "vertex plane");
           break;
       }
     }
@@ -648,7 +677,7 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
     solid.faces.resize(face_count);
     std::uint64_t next_loop = 0;
     for (SolidFace& face : solid.faces) {
-      face.plane = read_plane(in, path, "face plane");
+      face.plane = read_plane(in, path, tree, "face plane");
       read_face_flags(in, face);
       face.surface = read_surface(in, path, "face surface");
       face.source = in.varint32("face source");
@@ -682,7 +711,7 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
         continue;
       }
       if (mode != line_stored && mode != line_segment) in.fail_at(at, "corner " + str(c) + " has line mode 3 (unknown)");
-      corner.line.other = read_plane(in, path, "corner line plane");
+      corner.line.other = read_plane(in, path, tree, "corner line plane");
       if (mode == line_segment) {
         corner.line.p = in.varint32("corner segment");
         corner.line.q = in.varint32("corner segment");
@@ -789,6 +818,22 @@ void read_version3_bonds(const Section& section, MeshTree& tree, RecordOffsets& 
       const Vec3 unit = normalized(plane.normal);
       bond.normal = nodes[side].above_parent_plane ? -unit : unit;
     }
+  }
+  in.set_record("");
+  in.expect_end();
+}
+
+void read_cell_planes(const Section& section, MeshTree& tree) {
+  PayloadReader in(section);
+  const std::uint32_t count = in.u32("the cell plane count");
+  in.check_room(count, 32, "cell planes");
+  tree.cut_planes.reserve(tree.cut_planes.size() + count);
+  for (std::uint32_t k = 0; k < count; ++k) {
+    in.set_record("cell plane " + str(k));
+    Plane plane;
+    plane.normal = in.vec3("plane normal");
+    plane.offset = in.f64("plane offset");
+    tree.cut_planes.push_back(plane);
   }
   in.set_record("");
   in.expect_end();

@@ -23,6 +23,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/bonds.hpp"
+#include "shatter/meshtree/packed_node.hpp"
 #include "shatter/cut/hull.hpp"
 #include "shatter/cut/plane_cut.hpp"
 #include "shatter/cut/plane_input.hpp"
@@ -203,7 +204,7 @@ struct BuildNode {
   static void operator delete(void* node) noexcept { OpenNodeBlock::free(node); }
 #endif
 
-  Mesh mesh;    // the solid rounded to doubles, certified valid (round_solid)
+  Mesh mesh;    // the solid rounded to doubles, certified valid (round_solid); empty when packed
   // The exact solid; its vertices refer to the cut plane of the ancestor at
   // depth k as PlaneRef::cut(k). A node's index in the tree is its place in
   // depth-first preorder, unknown until every subtree before it is finished
@@ -221,6 +222,10 @@ struct BuildNode {
   // coordinates: no children), with their exact volume and its bound, summed.
   std::uint64_t vanished_pieces = 0;
   double vanished_volume = 0, vanished_volume_bound = 0;
+  // A lean build's cut node: its mesh and solid packed (packed_node.hpp), with
+  // the solid's convex flag, which the tree's node keeps (MeshTreeNode::convex).
+  std::vector<std::uint8_t> packed;
+  bool packed_convex = false;
 };
 
 // The cut grows its pieces' arrays by doubling, so they hold about a third more
@@ -354,6 +359,25 @@ class Builder {
         (last_defect.empty() ? std::string() : " (" + last_defect + ")"));
   }
 
+  /// A lean build's `node`, whose cut is kept (its children are final, unless
+  /// a surplus cut is undone: unpack then restores it): its mesh and solid are
+  /// packed, for nothing below it reads them (the cuts of its descendants need
+  /// only its plane, depth and mass) and the writer unpacks them one at a time.
+  void cut_kept(BuildNode& node) const {
+    if (!lean_ || node.children.empty()) return;
+    node.packed_convex = node.solid.convex;
+    node.packed = pack_node_shape(node.mesh, node.solid);
+    node.mesh = Mesh();
+    node.solid = Solid();
+  }
+
+  /// `node`'s cut is undone: a packed node gets its mesh and solid back.
+  static void cut_undone(BuildNode& node) {
+    if (node.packed.empty()) return;
+    unpack_node_shape(node.packed, {}, node.mesh, node.solid);
+    std::vector<std::uint8_t>().swap(node.packed);
+  }
+
   /// `node` is a leaf of the finished tree (a cut undone later leaves another).
   void leaf_finished(BuildNode& node) {
     if (lean_) release_approximations(node.solid);
@@ -428,6 +452,7 @@ void grow(Builder& builder, BuildNode& node, std::uint32_t budget) {
     return;
   }
   builder.cut(node);
+  builder.cut_kept(node);
   const std::vector<std::uint32_t> shares = builder.recipe().strategy == Strategy::axis
                                                 ? share_by_volume(budget, node)
                                                 : share_evenly(budget, node.children.size());
@@ -467,6 +492,7 @@ void undo_surplus_cuts(BuildNode& root, std::uint32_t target) {
     node.children.clear();
     node.plane = {};
     node.vanished_pieces = 0, node.vanished_volume = 0, node.vanished_volume_bound = 0;
+    Builder::cut_undone(node);
     leaves -= spent;
   }
 }
@@ -508,6 +534,7 @@ void grow_balanced(Builder& builder, BuildNode& root, std::uint32_t target, unsi
       if (node->children.empty()) break;
       leaves.erase(largest);
       for (auto& child : node->children) leaves.insert({child.get(), created++});
+      builder.cut_kept(*node);
     }
   }
   // Cuts made ahead but never reached are undone: those nodes stay leaves.
@@ -546,6 +573,8 @@ void number_tree(std::unique_ptr<BuildNode> root, MeshTree& tree) {
   const std::size_t node_count = count_nodes(*root);
   tree.nodes.reserve(node_count);
   tree.cut_planes.reserve(node_count);
+  // A lean build packed its cut nodes (the root first, when it was cut).
+  if (!root->packed.empty()) tree.packed_shapes.resize(node_count);
   std::vector<Pending> stack;
   stack.push_back({std::move(root), no_node});
   std::vector<NodeIndex> path;  // path[d]: the node at depth d above the current one
@@ -558,30 +587,19 @@ void number_tree(std::unique_ptr<BuildNode> root, MeshTree& tree) {
     path[built.depth] = index;
 
     MeshTreeNode node;
-    node.mesh = std::move(built.mesh);
-    // Caps were labelled by the depth of their cut; now that every node has its
-    // index, each label becomes that ancestor's.
-    for (SurfaceId& surface : node.mesh.surfaces) {
-      if (surface != original_surface) surface = cap_surface_of(path[surface - 1]);
-    }
-    // Likewise the plane kernel's cut planes, referred to by depth until now
-    // (BuildNode::solid says why); the node's own plane takes its index here.
-    node.solid = std::move(built.solid);
-    node.convex = node.solid.convex;
-    for (SolidFace& face : node.solid.faces) {
-      if (face.surface != original_surface) face.surface = cap_surface_of(path[face.surface - 1]);
-      if (face.plane.is_cut()) face.plane = PlaneRef::cut(path[face.plane.index()]);
-    }
-    for (SolidCorner& corner : node.solid.corners) {
-      if (corner.line.other.bits != no_index && corner.line.other.is_cut()) {
-        corner.line.other = PlaneRef::cut(path[corner.line.other.index()]);
-      }
-    }
-    for (PointDef& def : node.solid.defs) {
-      const int planes = def.kind == PointKind::segment_plane ? 1 : def.kind == PointKind::three_planes ? 3 : 0;
-      for (int k = 0; k < planes; ++k) {
-        if (def.planes[k].is_cut()) def.planes[k] = PlaneRef::cut(path[def.planes[k].index()]);
-      }
+    if (!built.packed.empty()) {
+      // Packed as the builder names planes and caps; NodeShapes renames them
+      // by the node's path when it unpacks.
+      node.convex = built.packed_convex;
+      tree.packed_shapes[index] = std::move(built.packed);
+    } else {
+      node.mesh = std::move(built.mesh);
+      node.solid = std::move(built.solid);
+      node.convex = node.solid.convex;
+      // Caps were labelled by the depth of their cut, and the plane kernel's
+      // cut planes referred to by depth (BuildNode::solid says why); now that
+      // every node has its index, each becomes that ancestor's.
+      rename_by_path(path, node.mesh, node.solid);
     }
     node.mass = built.mass;
     node.parent = pending.parent;
@@ -650,8 +668,9 @@ void plane_hulls(tbb::task_arena& arena, MeshTree& tree) {
           return;
         }
         std::vector<Vec3> points;
+        NodeShapes shapes(tree);  // a lean build's convex child may be packed: its hull is its mesh
         for (const NodeIndex c : node.children) {
-          const Mesh& child_hull = tree.hull_of(c);
+          const Mesh& child_hull = tree.nodes[c].convex ? shapes(c).mesh : tree.nodes[c].hull;
           points.insert(points.end(), child_hull.positions.begin(), child_hull.positions.end());
         }
         node.hull = convex_hull_of_points(points);
@@ -669,6 +688,9 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const BuildRunOptions& run) {
   if (recipe.fragments < 1) throw std::invalid_argument("fragments must be at least 1");
   if (recipe.max_plane_tries < 1) throw std::invalid_argument("max_plane_tries must be at least 1");
+  if (recipe.strategy == Strategy::voronoi) {
+    throw std::invalid_argument("the voronoi strategy needs its sites: build_voronoi_tree (voronoi.hpp) builds it");
+  }
   if (recipe.kernel != KernelKind::plane) {
     throw std::invalid_argument("recipe.kernel must be plane: the " + std::string(kernel_name(recipe.kernel)) +
                                 " kernel was retired (its trees still read)");

@@ -9,6 +9,7 @@ std::string_view strategy_name(Strategy strategy) {
     case Strategy::thesis: return "thesis";
     case Strategy::balanced: return "balanced";
     case Strategy::axis: return "axis";
+    case Strategy::voronoi: return "voronoi";
   }
   return "unknown";
 }
@@ -23,7 +24,8 @@ std::string_view kernel_name(KernelKind kernel) {
 }
 
 std::optional<Strategy> strategy_named(std::string_view name) {
-  return enum_named(name, {Strategy::thesis, Strategy::balanced, Strategy::axis}, &strategy_name);
+  return enum_named(name, {Strategy::thesis, Strategy::balanced, Strategy::axis, Strategy::voronoi},
+                    &strategy_name);
 }
 
 std::uint64_t splitmix64(std::uint64_t& state) {

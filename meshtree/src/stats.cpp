@@ -58,15 +58,17 @@ TreeStats tree_stats(const MeshTree& tree) {
   std::vector<double> volumes;
   volumes.reserve(tree.leaf_count());
   stats.min_leaf_depth = tree.leaf_nodes.empty() ? 0 : stats.max_depth;
+  NodeShapes shapes(tree);  // a lean tree's leaves may be packed (pack_leaves)
   for (NodeIndex index : tree.leaf_nodes) {
     const MeshTreeNode& leaf = tree.nodes.at(index);
+    const Mesh& mesh = shapes(index).mesh;
     volumes.push_back(leaf.mass.volume);
     stats.total_leaf_volume += leaf.mass.volume;
     stats.min_leaf_depth = std::min(stats.min_leaf_depth, leaf.depth);
-    stats.leaf_triangles += leaf.mesh.triangle_count();
-    stats.leaf_vertices += leaf.mesh.vertex_count();
+    stats.leaf_triangles += mesh.triangle_count();
+    stats.leaf_vertices += mesh.vertex_count();
     stats.leaf_cap_triangles += static_cast<std::size_t>(
-        std::count_if(leaf.mesh.surfaces.begin(), leaf.mesh.surfaces.end(),
+        std::count_if(mesh.surfaces.begin(), mesh.surfaces.end(),
                       [](SurfaceId surface) { return surface != original_surface; }));
   }
   stats.fragment_volume = spread_of(std::move(volumes));

@@ -167,13 +167,36 @@ std::optional<TreeDefect> structure_defect(const std::vector<MeshTreeNode>& node
 
 // Any tree, of any kernel: the plane of every node, kept beside the nodes
 // (MeshTree::cut_planes), so a node without one would be indexed past the end.
+// A cell tree (voronoi.hpp) keeps its cell planes after the nodes' (MeshTree::
+// cut_planes): each finite with a non-zero normal.
 std::optional<TreeDefect> cut_planes_defect(const MeshTree& tree) {
-  if (tree.cut_planes.size() != tree.nodes.size()) {
+  if (tree.cut_planes.size() < tree.nodes.size()) {
     return TreeDefect{TreePart::cut_planes, 0,
                       "cut_planes has " + str(tree.cut_planes.size()) + " planes for " + str(tree.nodes.size()) +
                           " nodes (one per node)"};
   }
+  if (tree.cut_planes.size() > PlaneRef::cut_bit) {
+    return TreeDefect{TreePart::cut_planes, tree.nodes.size(),
+                      "cut_planes has " + str(tree.cut_planes.size()) + " planes, more than a plane reference can name"};
+  }
+  for (std::size_t k = tree.nodes.size(); k < tree.cut_planes.size(); ++k) {
+    const Plane& plane = tree.cut_planes[k];
+    const Vec3& n = plane.normal;
+    if (!(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z) && std::isfinite(plane.offset)) ||
+        (plane.normal.x == 0 && plane.normal.y == 0 && plane.normal.z == 0)) {
+      return TreeDefect{TreePart::cut_planes, k,
+                        "cell plane " + str(k) + " has a NaN or infinite coefficient or a zero normal"};
+    }
+  }
   return std::nullopt;
+}
+
+/// A node whose children are cells (voronoi.hpp): in a tree with cell planes,
+/// an internal node whose own plane is all zero.
+bool is_cell_node(const MeshTree& tree, NodeIndex k) {
+  const Plane& plane = tree.cut_planes[k];
+  return tree.cut_planes.size() > tree.nodes.size() && !tree.nodes[k].is_leaf() && plane.normal.x == 0 &&
+         plane.normal.y == 0 && plane.normal.z == 0 && plane.offset == 0;
 }
 
 std::optional<TreeDefect> leaf_list_defect(const MeshTree& tree) {
@@ -225,12 +248,15 @@ std::optional<std::string> mesh_defect(const Mesh& mesh) {
 }
 
 /// The child of `node` whose leaf range holds `leaf`, or no_node.
+// The children's leaf ranges follow each other in order (a valid structure), so
+// the child is found by binary search: a cell node has thousands of children.
 NodeIndex child_holding(const std::vector<MeshTreeNode>& nodes, NodeIndex node, LeafIndex leaf) {
-  for (const NodeIndex child : nodes[node].children) {
-    if (leaf - nodes[child].first_leaf < nodes[child].leaf_count)
-      return child;  // unsigned: also rejects leaf < first_leaf
-  }
-  return no_node;
+  const std::vector<NodeIndex>& children = nodes[node].children;
+  auto after = std::upper_bound(children.begin(), children.end(), leaf,
+                                [&](LeafIndex l, NodeIndex child) { return l < nodes[child].first_leaf; });
+  if (after == children.begin()) return no_node;
+  const NodeIndex child = *(after - 1);
+  return leaf - nodes[child].first_leaf < nodes[child].leaf_count ? child : no_node;  // unsigned: also rejects leaf < first_leaf
 }
 
 /// Bonds in range, sorted, each between two leaves its cut_node's cut separates
@@ -289,6 +315,8 @@ std::string point_kind_name(PointKind kind) {
 struct ExactContext {
   std::size_t point_count = 0;
   std::size_t input_plane_count = 0;
+  /// Cut planes from node_count on are cell planes, which any node may use.
+  std::size_t node_count = 0, cut_plane_count = 0;
   /// In preorder node a's subtree is [a, subtree_end[a]), so a is a strict
   /// ancestor of k exactly when a < k < subtree_end[a].
   std::vector<NodeIndex> subtree_end;
@@ -306,6 +334,7 @@ struct SolidScratch {
 std::optional<std::string> plane_defect(PlaneRef plane, std::size_t node, const ExactContext& context) {
   if (plane.is_cut()) {
     const std::uint32_t owner = plane.index();
+    if (owner >= context.node_count && owner < context.cut_plane_count) return std::nullopt;  // a cell plane
     if (owner < node && node < context.subtree_end[owner]) return std::nullopt;
     return "names cut plane " + str(owner) + " (" + hex(plane.bits, 8) + "), but node " + str(owner) +
            " is not an ancestor of node " + str(node) + " (a solid only lies on its ancestors' cut planes)";
@@ -481,6 +510,8 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
   ExactContext context;
   context.point_count = geometry.points.size();
   context.input_plane_count = geometry.planes.size();
+  context.node_count = tree.nodes.size();
+  context.cut_plane_count = tree.cut_planes.size();
   if (context.point_count > max_u32) {
     return TreeDefect{TreePart::input_point, 0,
                       "geometry has " + str(context.point_count) + " input points, more than a u32 can count"};
@@ -520,6 +551,7 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
     context.subtree_end[k] = node.is_leaf() ? static_cast<NodeIndex>(k + 1) : context.subtree_end[node.children.back()];
   }
   SolidScratch scratch;
+  NodeShapes shapes(tree);  // first_defect has unpacked every packed node
   for (std::size_t k = 0; k < node_count; ++k) {
     const MeshTreeNode& node = tree.nodes[k];
     if (node.convex && !(node.hull.positions.empty() && node.hull.triangles.empty())) {
@@ -528,8 +560,32 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
           "node " + str(k) + " is convex, so its hull must be empty (its mesh is its hull), but the hull has " +
               str(node.hull.positions.size()) + " vertices and " + str(node.hull.triangles.size()) + " triangles"};
     }
-    if (auto problem = solid_defect(node.solid, k, context, caches, scratch)) {
+    if (auto problem = solid_defect(shapes(static_cast<NodeIndex>(k)).solid, k, context, caches, scratch)) {
       return TreeDefect{TreePart::solid, k, "the solid of node " + str(k) + " " + *problem};
+    }
+  }
+  return std::nullopt;
+}
+
+/// A lean build's packed nodes (MeshTree::packed_shapes): one entry per node or
+/// none, only in a tree with an exact representation, and a packed node keeps
+/// no mesh or solid of its own. (Whether the bytes unpack, first_defect finds.)
+std::optional<TreeDefect> packed_defect(const MeshTree& tree) {
+  if (tree.packed_shapes.empty()) return std::nullopt;
+  if (tree.packed_shapes.size() != tree.nodes.size()) {
+    return TreeDefect{TreePart::mesh, 0,
+                      "the tree has " + str(tree.packed_shapes.size()) + " packed node entries for " +
+                          str(tree.nodes.size()) + " nodes"};
+  }
+  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+    if (!tree.is_packed(static_cast<NodeIndex>(k))) continue;
+    const MeshTreeNode& node = tree.nodes[k];
+    if (!tree.has_exact_representation()) {
+      return TreeDefect{TreePart::mesh, k,
+                        "node " + str(k) + " has a packed mesh and solid, but the tree has no exact representation"};
+    }
+    if (!node.mesh.positions.empty() || !node.mesh.triangles.empty() || !solid_is_empty(node.solid)) {
+      return TreeDefect{TreePart::mesh, k, "node " + str(k) + " has a packed mesh and solid and keeps others of its own"};
     }
   }
   return std::nullopt;
@@ -542,8 +598,16 @@ std::optional<TreeDefect> first_defect(const MeshTree& tree, bool caches) {
   if (auto defect = structure_defect(tree.nodes)) return defect;
   if (auto defect = leaf_list_defect(tree)) return defect;
   if (auto defect = cut_planes_defect(tree)) return defect;
+  if (auto defect = packed_defect(tree)) return defect;
+  NodeShapes shapes(tree);
   for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
-    if (auto problem = mesh_defect(tree.nodes[k].mesh))
+    const Mesh* mesh = nullptr;
+    try {
+      mesh = &shapes(static_cast<NodeIndex>(k)).mesh;
+    } catch (const std::invalid_argument& error) {
+      return TreeDefect{TreePart::mesh, k, "the packed mesh and solid of node " + str(k) + " do not unpack: " + error.what()};
+    }
+    if (auto problem = mesh_defect(*mesh))
       return TreeDefect{TreePart::mesh, k, "the mesh of node " + str(k) + " " + *problem};
     if (auto problem = mesh_defect(tree.nodes[k].hull))
       return TreeDefect{TreePart::hull, k, "the hull of node " + str(k) + " " + *problem};
@@ -582,8 +646,9 @@ std::optional<TreeDefect> caches_defect(const MeshTree& tree, MeshTree* fill) {
   }
   // Made after plane_approx is filled: the set views it.
   const PlaneSet set = tree.plane_set();
+  NodeShapes shapes(tree);  // fill_tree_caches unpacks every node first
   for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
-    const Solid& solid = tree.nodes[k].solid;
+    const Solid& solid = shapes(static_cast<NodeIndex>(k)).solid;
     if (fill) fill->nodes[k].solid.approx.resize(solid.defs.size());
     for (std::size_t v = 0; v < solid.defs.size(); ++v) {
       const auto vertex = [&] {
@@ -619,8 +684,10 @@ bool embedding_defect(DefectKind kind) {
 /// mass, its mesh, its hull. Requires a tree that passed first_defect.
 std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k) {
   const MeshTreeNode& node = tree.nodes[k];
+  NodeShapes shapes(tree);
+  const Mesh& mesh = shapes(k).mesh;  // first_defect has unpacked every packed node
   const std::string name = "node " + str(k);
-  if (!node.is_leaf()) {
+  if (!node.is_leaf() && !is_cell_node(tree, k)) {
     const Plane& plane = tree.cut_planes[k];
     if (!(finite(plane.normal) && std::isfinite(plane.offset))) {
       return TreeDefect{TreePart::node, k, name + " is cut by a plane with a NaN or infinite coefficient"};
@@ -646,9 +713,9 @@ std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k
   }
 
   // validate_mesh finds nothing wrong with no triangles at all.
-  if (node.mesh.triangles.empty()) return TreeDefect{TreePart::mesh, k, "the mesh of " + name + " is empty"};
+  if (mesh.triangles.empty()) return TreeDefect{TreePart::mesh, k, "the mesh of " + name + " is empty"};
   const bool topology_only = tree.recipe.allow_self_intersections;
-  ValidationReport mesh_report = validate_mesh(node.mesh, {.check_self_intersections = !topology_only});
+  ValidationReport mesh_report = validate_mesh(mesh, {.check_self_intersections = !topology_only});
   if (topology_only) {
     std::erase_if(mesh_report.defects, [](const Defect& defect) { return embedding_defect(defect.kind); });
   }
@@ -684,7 +751,20 @@ std::optional<TreeDefect> geometry_defect(const MeshTree& tree) {
 
 }  // namespace detail
 
-std::optional<TreeDefect> fill_tree_caches(MeshTree& tree) { return detail::caches_defect(tree, &tree); }
+std::optional<TreeDefect> fill_tree_caches(MeshTree& tree) {
+  // A lean build's packed nodes get their meshes and solids back first.
+  if (!tree.packed_shapes.empty()) {
+    NodeShapes shapes(tree);
+    for (NodeIndex k = 0; k < tree.nodes.size(); ++k) {
+      if (!tree.is_packed(k)) continue;
+      const NodeShape shape = shapes(k);
+      tree.nodes[k].mesh = shape.mesh;
+      tree.nodes[k].solid = shape.solid;
+    }
+    std::vector<std::vector<std::uint8_t>>().swap(tree.packed_shapes);
+  }
+  return detail::caches_defect(tree, &tree);
+}
 
 std::string_view tree_part_name(TreePart part) {
   switch (part) {

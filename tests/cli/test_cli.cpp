@@ -952,3 +952,69 @@ TEST_CASE("all files or none: export removes what it wrote when the last file fa
   REQUIRE(run_shatter("export " + quoted(tree) + " --out " + quoted(dir / "new" / "glb" / "t.glb")).exit_code == 0);
   CHECK(fs::is_regular_file(dir / "new" / "glb" / "t.glb"));
 }
+
+TEST_CASE("fracture --pattern: every Voronoi pattern writes a valid tree, simulate breaks it, bad input is refused") {
+  const fs::path dir = scratch("voronoi");
+  fs::create_directories(dir);
+  const std::string cube = quoted(mesh_dir() / "cube.off");
+  const std::string sphere = quoted(mesh_dir() / "sphere.off");
+  {
+    std::ofstream(dir / "sites.txt") << "# four sites\n-0.5 0 0\n0.5 0 0\n0 0.5 0\n0 -0.5 0.25\n";
+  }
+  const std::vector<std::pair<std::string, std::size_t>> runs = {
+      {cube + " --pattern voronoi --sites 30", 30},
+      {sphere + " --pattern clustered --clusters 3 --sites-per-cluster 4 --cluster-radius 0.1", 2},
+      {cube + " --pattern radial --rings 2 --sectors 6 --centre 0,0,0 --direction 0,0,1 --variability 0.2", 7},
+      {cube + " --pattern grid --cells 3,2,2 --jitter 0.3", 12},
+      {sphere + " --pattern brick --cells 3,3,2 --offset 0.5", 2},
+      {cube + " --pattern sites --sites-file " + quoted(dir / "sites.txt"), 4}};
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    INFO(runs[i].first);
+    const fs::path tree = dir / ("v" + std::to_string(i) + ".shatter");
+    const Run run = run_shatter("fracture " + runs[i].first + " --threads 2 --out " + quoted(tree));
+    REQUIRE(fracture_problem(run, tree) == "");
+    const Run check = run_shatter("info --check --json " + quoted(tree));
+    REQUIRE(check.exit_code == 0);
+    const nlohmann::json info = nlohmann::json::parse(check.out);
+    CHECK(info["check"] == "valid");
+    CHECK(info["leaves"].get<std::size_t>() >= runs[i].second);
+    CHECK(info["bonds"]["count"].get<std::size_t>() > 0);
+  }
+  // The same at one thread, byte for byte.
+  REQUIRE(run_shatter("fracture " + runs[0].first + " --threads 1 --out " + quoted(dir / "one.shatter")).exit_code == 0);
+  CHECK(slurp(dir / "one.shatter") == slurp(dir / "v0.shatter"));
+  // A Voronoi tree breaks in the runtime.
+  const Run shot = run_shatter("simulate " + quoted(dir / "v0.shatter") + " --scene shoot --steps 120 --json");
+  REQUIRE(shot.exit_code == 0);
+  CHECK(nlohmann::json::parse(shot.out)["breaks"].size() > 0);
+
+  // A bad sites file: exit 3, one line naming the line.
+  {
+    std::ofstream(dir / "bad.txt") << "0 0 0\n1 2 three\n";
+  }
+  const Run bad = run_shatter("fracture " + cube + " --pattern sites --sites-file " + quoted(dir / "bad.txt") +
+                              " --out " + quoted(dir / "bad.shatter"));
+  CHECK(bad.exit_code == 3);
+  CHECK(is_one_error_line(bad.err));
+  CHECK(bad.err.find("line 2") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "bad.shatter"));
+  // Usage mistakes: exit 2 before anything is read.
+  for (const std::string& arguments :
+       {cube + " --pattern voronoi", cube + " --pattern voronoi --sites 4 --fragments 4", cube + " --pattern hex --sites 4",
+        cube + " --pattern radial --rings 2", cube + " --pattern radial --rings 2 --sectors 3 --direction 0,0,0",
+        cube + " --pattern grid --cells 2,2", cube + " --pattern brick --cells 2,0,2", cube + " --pattern sites",
+        cube + " --pattern radial --rings 1 --sectors 3 --variability 2", cube + " --fragments 4 --strategy voronoi"}) {
+    INFO(arguments);
+    const Run run = run_shatter("fracture " + arguments + " --out " + quoted(dir / "u.shatter"));
+    CHECK(run.exit_code == 2);
+    CHECK(is_one_error_line(run.err));
+  }
+  const Run help = run_shatter("fracture --help");
+  for (const char* option : {"--pattern", "voronoi", "clustered", "radial", "grid", "brick", "--sites", "--clusters",
+                             "--sites-per-cluster", "--cluster-radius", "--centre", "--direction", "--rings",
+                             "--sectors", "--radius", "--variability", "--cells", "--offset", "--jitter",
+                             "--sites-file", "mesh units"}) {
+    INFO(option);
+    CHECK(help.out.find(option) != std::string::npos);
+  }
+}

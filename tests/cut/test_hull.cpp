@@ -149,6 +149,12 @@ void require_hull(const std::vector<Vec3>& points) {
   const Mesh again = convex_hull_of_points(shuffled);
   REQUIRE(again.positions == hull.positions);
   REQUIRE(again.triangles == hull.triangles);
+  // The canonical form is a fixed point: the hull, passed in as a convex mesh,
+  // is its own hull. That path decides every facet's coplanarity with orient3d;
+  // the point hull takes those its horizons decided, so this checks them.
+  const Mesh own = convex_hull_of(hull);
+  REQUIRE(own.positions == hull.positions);
+  REQUIRE(own.triangles == hull.triangles);
 }
 
 // A random direction times a radius, rounded.

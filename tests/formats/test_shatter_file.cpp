@@ -1280,7 +1280,7 @@ TEST_CASE("enum and bool bytes out of range are refused", "[shatter_file][hostil
     payload[at] = static_cast<char>(value);
     return good.substr(0, 12) + section("OPTS", payload) + good.substr(opts_payload + 27);
   };
-  check_refused(with_byte(12, 3), "OPTS section, byte 40: strategy 3 is unknown");
+  check_refused(with_byte(12, 4), "OPTS section, byte 40: strategy 4 is unknown");
   check_refused(with_byte(13, 3), "kernel 3 is unknown");
   check_refused(with_byte(26, 2), "allow_self_intersections is 2 (must be 0 or 1)");
   std::string nodes = nodes_payload(tree);
@@ -1796,8 +1796,11 @@ TEST_CASE("encode_shatter refuses exact representations a reader could not rebui
   fast.nodes[2].solid = base.nodes[0].solid;
   CHECK_THROWS_WITH(encode_shatter(fast), Catch::Contains("node 2 has a solid, but the tree has no geometry"));
   fast = two_leaf_tree();
-  fast.cut_planes.resize(4);
-  CHECK_THROWS_WITH(encode_shatter(fast), Catch::Contains("cut_planes has 4 planes for 3 nodes"));
+  fast.cut_planes.resize(2);
+  CHECK_THROWS_WITH(encode_shatter(fast), Catch::Contains("cut_planes has 2 planes for 3 nodes"));
+  fast = two_leaf_tree();
+  fast.cut_planes.resize(4);  // a cell plane past the nodes' (voronoi.hpp) must have a normal
+  CHECK_THROWS_WITH(encode_shatter(fast), Catch::Contains("cell plane 3 has a NaN or infinite coefficient or a zero normal"));
   fast = two_leaf_tree();
   fast.geometry.planes.push_back({0, 0, 0});
   fast.geometry.plane_approx.resize(1);

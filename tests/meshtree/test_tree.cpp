@@ -48,6 +48,8 @@
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/cover.hpp"
+#include "shatter/meshtree/packed_node.hpp"
+#include "shatter/meshtree/stats.hpp"
 #include "shatter/meshtree/validate_tree.hpp"
 #include "shatter/formats/file.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
@@ -1138,6 +1140,93 @@ TEST_CASE("the same recipe gives the same bytes, another seed another tree", "[t
   }
 }
 
+namespace {
+
+// Why two meshes and solids differ, field by field ("" when they are the same;
+// positions and attributes bit for bit, approximations not compared).
+std::string shape_difference(const Mesh& a_mesh, const Solid& a, const Mesh& b_mesh, const Solid& b) {
+  const auto same_bits = [](const auto& x, const auto& y) {
+    return x.size() == y.size() && (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0);
+  };
+  if (!same_bits(a_mesh.positions, b_mesh.positions)) return "mesh positions";
+  if (a_mesh.triangles != b_mesh.triangles) return "mesh triangles";
+  if (a_mesh.surfaces != b_mesh.surfaces) return "mesh surfaces";
+  if (!same_bits(a_mesh.corners.normals, b_mesh.corners.normals)) return "normals";
+  if (!same_bits(a_mesh.corners.uvs, b_mesh.corners.uvs)) return "uvs";
+  if (!same_bits(a_mesh.corners.tangents, b_mesh.corners.tangents)) return "tangents";
+  if (a.convex != b.convex) return "solid convex";
+  if (a.defs != b.defs) return "solid defs";
+  if (a.faces.size() != b.faces.size()) return "solid face count";
+  for (std::size_t f = 0; f < a.faces.size(); ++f) {
+    const SolidFace &x = a.faces[f], &y = b.faces[f];
+    if (x.plane != y.plane || x.reversed != y.reversed || x.convex != y.convex || x.surface != y.surface ||
+        x.source != y.source || x.first_loop != y.first_loop || x.loop_count != y.loop_count) {
+      return "solid face " + std::to_string(f);
+    }
+  }
+  if (a.loops.size() != b.loops.size()) return "solid loop count";
+  for (std::size_t l = 0; l < a.loops.size(); ++l) {
+    if (a.loops[l].first_corner != b.loops[l].first_corner || a.loops[l].corner_count != b.loops[l].corner_count) {
+      return "solid loop " + std::to_string(l);
+    }
+  }
+  if (a.corners.size() != b.corners.size()) return "solid corner count";
+  for (std::size_t c = 0; c < a.corners.size(); ++c) {
+    if (a.corners[c].vertex != b.corners[c].vertex || !(a.corners[c].line == b.corners[c].line)) {
+      return "solid corner " + std::to_string(c);
+    }
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("a packed node shape unpacks to the same mesh and solid", "[tree][packed][property]") {
+  // Every node of concave and convex trees (caps, non-convex faces, segment
+  // points, several loops), with and without corner attributes.
+  for (const char* name : {"torus-800", "spool.off", "cube.off"}) {
+    const TreeRecipe recipe = recipe_for(std::uint32_t(test::sized(32, 8)), Strategy::thesis, 5);
+    INFO(name);
+    const MeshTree tree = build_mesh_tree(test_mesh(name).mesh, recipe, {.threads = 1});
+    for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+      INFO("node " << k);
+      const MeshTreeNode& node = tree.nodes[k];
+      Mesh mesh = node.mesh;
+      // Attributes on some nodes: every channel's values kept bit for bit.
+      if (k % 3 == 1) {
+        for (std::size_t c = 0; c < 3 * mesh.triangles.size(); ++c) {
+          const double t = double(c) / 7.0;
+          mesh.corners.normals.push_back({t, -t, 0.5});
+          mesh.corners.uvs.push_back({t, 1 / (t + 1)});
+          mesh.corners.tangents.push_back({-t, t, 0.25, -1});
+        }
+      }
+      const std::vector<std::uint8_t> bytes = pack_node_shape(mesh, node.solid);
+      Mesh unpacked_mesh;
+      Solid unpacked_solid;
+      unpack_node_shape(bytes, {}, unpacked_mesh, unpacked_solid);
+      CHECK(shape_difference(unpacked_mesh, unpacked_solid, mesh, node.solid).empty());
+      CHECK(unpacked_solid.approx.empty());
+      CHECK(pack_node_shape(unpacked_mesh, unpacked_solid) == bytes);
+      // With a path, planes and caps are renamed as rename_by_path renames them.
+      std::vector<NodeIndex> path;
+      for (std::uint32_t d = 0; d < tree.nodes.size(); ++d) path.push_back(static_cast<NodeIndex>(tree.nodes.size() - 1 - d));
+      Mesh renamed_mesh = mesh;
+      Solid renamed_solid = node.solid;
+      rename_by_path(path, renamed_mesh, renamed_solid);
+      unpack_node_shape(bytes, path, unpacked_mesh, unpacked_solid);
+      CHECK(shape_difference(unpacked_mesh, unpacked_solid, renamed_mesh, renamed_solid).empty());
+      // Cut short anywhere, or with a byte more, the bytes are refused.
+      for (const std::size_t keep : {std::size_t{0}, bytes.size() / 3, bytes.size() - 1}) {
+        CHECK_THROWS_AS(unpack_node_shape(std::span(bytes).first(keep), {}, unpacked_mesh, unpacked_solid), std::invalid_argument);
+      }
+      std::vector<std::uint8_t> longer = bytes;
+      longer.push_back(0);
+      CHECK_THROWS_AS(unpack_node_shape(longer, {}, unpacked_mesh, unpacked_solid), std::invalid_argument);
+    }
+  }
+}
+
 TEST_CASE("a lean build keeps no approximations and gives the same tree otherwise", "[tree][build][property]") {
   // Concave meshes, so cuts leave three or more pieces (the surplus cuts are
   // undone) and caps have non-convex faces (the bonds triangulate them); every
@@ -1156,13 +1245,54 @@ TEST_CASE("a lean build keeps no approximations and gives the same tree otherwis
           REQUIRE(full.nodes[k].solid.approx.size() == full.nodes[k].solid.defs.size());
           REQUIRE(!full.nodes[k].solid.defs.empty());
           CHECK(lean.nodes[k].solid.approx.empty());
+          // Every internal node is packed, no leaf is.
+          CHECK(lean.is_packed(static_cast<NodeIndex>(k)) == !full.nodes[k].is_leaf());
+          CHECK(lean.nodes[k].convex == full.nodes[k].convex);
+          if (lean.is_packed(static_cast<NodeIndex>(k))) {
+            CHECK(lean.nodes[k].mesh.triangles.empty());
+            CHECK(lean.nodes[k].solid.defs.empty());
+          }
         }
         CHECK(validate_tree(lean).summary() == "valid");
+        {
+          // Packed bytes that do not unpack, a table of the wrong size and a
+          // packed node with a mesh of its own are defects, never a crash.
+          MeshTree broken = lean;
+          REQUIRE(broken.is_packed(0));
+          broken.packed_shapes[0].pop_back();
+          CHECK_THAT(validate_tree(broken).summary(), Catch::Contains("do not unpack"));
+          broken = lean;
+          broken.packed_shapes.pop_back();
+          CHECK_THAT(validate_tree(broken).summary(), Catch::Contains("packed node entries"));
+          broken = lean;
+          broken.nodes[0].mesh = full.nodes[0].mesh;
+          CHECK_THAT(validate_tree(broken).summary(), Catch::Contains("keeps others of its own"));
+        }
         // The bonds were found on approximations computed as needed: the same
         // bonds, bit for bit (the file stores them, so equal bytes say so too).
         CHECK(byte_difference(encode_shatter(lean), encode_shatter(full)) == "equal");
+        {
+          // Its leaves packed as well (what `fracture` does before writing):
+          // still valid, the same bytes and statistics, and unpacked back.
+          MeshTree packed = lean;
+          pack_leaves(packed);
+          for (std::size_t k = 0; k < full.nodes.size(); ++k) CHECK(packed.is_packed(static_cast<NodeIndex>(k)));
+          CHECK(validate_tree(packed).summary() == "valid");
+          CHECK(byte_difference(encode_shatter(packed), encode_shatter(full)) == "equal");
+          const TreeStats a = tree_stats(packed), b = tree_stats(full);
+          CHECK(a.leaf_triangles == b.leaf_triangles);
+          CHECK(a.leaf_vertices == b.leaf_vertices);
+          CHECK(a.leaf_cap_triangles == b.leaf_cap_triangles);
+          REQUIRE(!fill_tree_caches(packed));
+          for (std::size_t k = 0; k < full.nodes.size(); ++k) {
+            CHECK(shape_difference(packed.nodes[k].mesh, packed.nodes[k].solid, full.nodes[k].mesh, full.nodes[k].solid).empty());
+          }
+        }
         REQUIRE(!fill_tree_caches(lean));
+        CHECK(lean.packed_shapes.empty());
         for (std::size_t k = 0; k < full.nodes.size(); ++k) {
+          INFO("node " << k);
+          CHECK(shape_difference(lean.nodes[k].mesh, lean.nodes[k].solid, full.nodes[k].mesh, full.nodes[k].solid).empty());
           const std::vector<ApproxPoint>& a = lean.nodes[k].solid.approx;
           const std::vector<ApproxPoint>& b = full.nodes[k].solid.approx;
           REQUIRE(a.size() == b.size());

@@ -270,13 +270,15 @@ std::vector<Injector> injectors() {
     t.geometry.planes[j][1] = static_cast<VertexIndex>(t.geometry.points.size());
     return Place{TreePart::input_plane, j};
   });
-  add("cut planes: not one per node", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
+  // One plane per node, then a cell tree's cell planes (voronoi.hpp), each with
+  // a non-zero normal: a plane past the nodes' that is zero is a broken cell plane.
+  add("cut planes: fewer than nodes, or a zero cell plane", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
     if (r.index(2) == 0) {
       t.cut_planes.pop_back();
-    } else {
-      t.cut_planes.emplace_back();
+      return Place{TreePart::cut_planes, 0};
     }
-    return Place{TreePart::cut_planes, 0};
+    t.cut_planes.emplace_back();
+    return Place{TreePart::cut_planes, t.cut_planes.size() - 1};
   });
   add("solid: a corner's vertex out of range", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
     if (!exact(t)) return std::nullopt;

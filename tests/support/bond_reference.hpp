@@ -55,6 +55,11 @@ struct ReferenceBond {
   /// The overlap's bounding box in 3D (rounded outward by a few ulps): the
   /// centroid must lie in it.
   Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+  /// The plane both faces lie on (a cut plane index) and whether `first` lies
+  /// above it: set by plane_reference_bonds, for a cell plane (voronoi.hpp),
+  /// whose bond names a node without that plane.
+  std::uint32_t plane = 0;
+  bool first_above = false;
 };
 
 /// What the brute force looked at, so a test can tell it was not vacuous.
@@ -75,6 +80,33 @@ struct Reference {
 inline std::optional<bool> leaf_above(const MeshTree& tree, LeafIndex leaf, NodeIndex k) {
   for (NodeIndex n = tree.leaf_nodes[leaf]; tree.nodes[n].parent != no_node; n = tree.nodes[n].parent) {
     if (tree.nodes[n].parent == k) return tree.nodes[n].above_parent_plane;
+  }
+  return std::nullopt;
+}
+
+/// The node that holds two leaves apart: their lowest common ancestor, by parent links.
+inline NodeIndex separating_ancestor(const MeshTree& tree, LeafIndex a, LeafIndex b) {
+  std::vector<NodeIndex> above_a;
+  for (NodeIndex n = tree.leaf_nodes[a]; n != no_node; n = tree.nodes[n].parent) above_a.push_back(n);
+  for (NodeIndex n = tree.leaf_nodes[b]; n != no_node; n = tree.nodes[n].parent) {
+    if (std::find(above_a.begin(), above_a.end(), n) != above_a.end()) return n;
+  }
+  return no_node;
+}
+
+/// Which side of cell plane k (voronoi.hpp: a cut plane past the nodes') a leaf
+/// lies on, when it has a face on it: the exact side of its first vertex off the
+/// plane (by the leaf's geometry, not its faces' orientation). Nullopt otherwise.
+inline std::optional<bool> leaf_above_cell_plane(const MeshTree& tree, const PlaneSet& set, LeafIndex leaf,
+                                                 std::uint32_t k, const Q4& h) {
+  const Solid& solid = tree.leaf(leaf).solid;
+  const bool on_it = std::any_of(solid.faces.begin(), solid.faces.end(),
+                                 [&](const SolidFace& face) { return face.plane == PlaneRef::cut(k); });
+  if (!on_it) return std::nullopt;
+  for (const PointDef& def : solid.defs) {
+    const Q3 q = rational(homogeneous(set, def));
+    const int s = sgn(mpq_class(h.a * q.x + h.b * q.y + h.c * q.z + h.d));
+    if (s != 0) return s > 0;
   }
   return std::nullopt;
 }
@@ -213,8 +245,10 @@ inline Reference plane_reference_bonds(const MeshTree& tree) {
   using namespace reference_detail;
   Reference reference;
   const PlaneSet set = tree.plane_set();
-  for (NodeIndex k = 0; k < tree.nodes.size(); ++k) {
-    if (tree.nodes[k].is_leaf()) continue;
+  // Node planes, then a cell tree's cell planes (voronoi.hpp).
+  for (std::uint32_t k = 0; k < tree.cut_planes.size(); ++k) {
+    const bool cell_plane = k >= tree.nodes.size();
+    if (!cell_plane && tree.nodes[k].is_leaf()) continue;
     const PlaneRef cut = PlaneRef::cut(k);
     const Q4 h = reference_plane(set, cut);
     const mpq_class n[3] = {h.a, h.b, h.c};
@@ -227,7 +261,8 @@ inline Reference plane_reference_bonds(const MeshTree& tree) {
     std::vector<CapFace> faces;
     std::map<LeafIndex, std::vector<Vec3>> points_on_cut;  // rounded, for the overlap's 3D box
     for (LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) {
-      const std::optional<bool> above = leaf_above(tree, leaf, k);
+      const std::optional<bool> above =
+          cell_plane ? leaf_above_cell_plane(tree, set, leaf, k, h) : leaf_above(tree, leaf, k);
       if (!above) continue;
       const Solid& solid = tree.leaf(leaf).solid;
       struct Projected {
@@ -361,7 +396,10 @@ inline Reference plane_reference_bonds(const MeshTree& tree) {
         (a == 0 ? bond.lo.x : a == 1 ? bond.lo.y : bond.lo.z) = l - pad;
         (a == 0 ? bond.hi.x : a == 1 ? bond.hi.y : bond.hi.z) = u + pad;
       }
-      reference.bonds[{std::min(below, above), std::max(below, above), k}] = bond;
+      const NodeIndex cut_node = cell_plane ? separating_ancestor(tree, below, above) : k;
+      bond.plane = k;
+      bond.first_above = above < below;
+      reference.bonds[{std::min(below, above), std::max(below, above), cut_node}] = bond;
     }
   }
   return reference;
@@ -496,8 +534,10 @@ inline std::string bond_mismatch(const MeshTree& tree, const std::vector<Bond>& 
            << tolerance << ")";
       problem(text.str());
     }
-    const Plane& cut_plane = tree.cut_planes[bond.cut_node];
-    const std::optional<bool> first_above = leaf_above(tree, bond.first, bond.cut_node);
+    const bool on_cell_plane = ref.plane >= tree.nodes.size();
+    const Plane& cut_plane = tree.cut_planes[on_cell_plane ? ref.plane : bond.cut_node];
+    const std::optional<bool> first_above =
+        on_cell_plane ? std::optional<bool>(ref.first_above) : leaf_above(tree, bond.first, bond.cut_node);
     const Vec3 unit = normalized(cut_plane.normal);
     if (!first_above || !(dot(bond.normal, *first_above ? -unit : unit) > 1 - 1e-12) ||
         !(std::fabs(norm(bond.normal) - 1) < 1e-12)) {

@@ -1713,6 +1713,15 @@ void add_folded_face_pairs(const Mesh& mesh, std::span<const std::uint32_t> face
 // validate_mesh_against its trusted parent; or the topology alone (with vertices
 // where the surface touches itself allowed) for a solid accepted with
 // self-intersections.
+// `result` but for its mesh, which the caller replaces (copying it would cost a
+// mesh per certified piece).
+RoundedSolid copy_without_mesh(RoundedSolid& result) {
+  Mesh mesh = std::move(result.mesh);
+  RoundedSolid copy = result;
+  result.mesh = std::move(mesh);
+  return copy;
+}
+
 ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& options) {
   if (!options.allow_self_intersections) {
     if (certify_piece(mesh)) {
@@ -1814,7 +1823,9 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     }
     if (step == 0) {
       first_report = report;
-      result.mesh = mesh;
+      // The first attempt's mesh is what a piece that cannot be certified
+      // reports; one certified now is returned below without reading it.
+      if (!report.valid()) result.mesh = mesh;
       result.merged_vertices = merged;
     }
     // Parts that rounded flat (two-sided sheets) vanish; if that is all of the
@@ -1855,7 +1866,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       if (folding && folds[attempt].size() == before) folds_stalled[attempt] = true;
     }
     if (report.valid()) {
-      RoundedSolid written = result;
+      RoundedSolid written = copy_without_mesh(result);
       written.mesh = std::move(mesh);
       written.merged_vertices = merged;
       written.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
@@ -1905,7 +1916,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       const Separation separation = separate_touching(separated, touching, std::ldexp(1.0, -bits), partner);
       if (separation.moved == 0) break;
       if (validate_mesh_against(separated, options.trusted, options.cut).valid()) {
-        RoundedSolid written = result;
+        RoundedSolid written = copy_without_mesh(result);
         written.mesh = std::move(separated);
         written.merged_vertices = merged;
         written.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();

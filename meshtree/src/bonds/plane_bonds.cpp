@@ -71,7 +71,7 @@ class PlaneBonds {
     // never touched.
     std::vector<Bond> bonds;
     bonds.reserve(2 * refs_.size());
-    for (NodeIndex k = 0; k < tree_.nodes.size(); ++k) {
+    for (std::uint32_t k = 0; k < tree_.cut_planes.size(); ++k) {
       if (start_[k + 1] - start_[k] < 2) continue;
       run_cut(k, bonds);
     }
@@ -85,13 +85,16 @@ class PlaneBonds {
 
  private:
   struct FaceRef {
-    NodeIndex cut;
+    std::uint32_t cut;  // a node's plane, or a cell plane after them (MeshTree::cut_planes)
     LeafIndex leaf;
     std::uint32_t face;
   };
 
-  // Which side of cut `k` a leaf lies on: the side of the child whose range holds it.
-  bool leaf_is_above(NodeIndex cut, LeafIndex leaf) const {
+  // Which side of cut `k` a leaf lies on: the side of the child whose range holds
+  // it; for a cell plane (no node's, see MeshTree::cut_planes), the side its
+  // face there faces away from (a face reversed, facing -n, lies above).
+  bool leaf_is_above(std::uint32_t cut, LeafIndex leaf, const SolidFace& face) const {
+    if (cut >= tree_.nodes.size()) return face.reversed;
     for (const NodeIndex child : tree_.nodes[cut].children) {
       const MeshTreeNode& c = tree_.nodes[child];
       if (leaf >= c.first_leaf && leaf - c.first_leaf < c.leaf_count) return c.above_parent_plane;
@@ -105,17 +108,22 @@ class PlaneBonds {
       const Solid& solid = tree_.leaf(leaf).solid;
       for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
         const SurfaceId surface = solid.faces[f].surface;
-        if (surface == original_surface || surface - 1 >= tree_.nodes.size()) continue;
-        const NodeIndex cut = surface - 1;
+        if (surface == original_surface || surface - 1 >= tree_.cut_planes.size()) continue;
+        const std::uint32_t cut = surface - 1;
+        // A cell plane's faces lie on it (a cell tree's caps carry their plane's id).
+        if (cut >= tree_.nodes.size()) {
+          if (solid.faces[f].plane == PlaneRef::cut(cut)) refs_.push_back({cut, leaf, f});
+          continue;
+        }
         const MeshTreeNode& node = tree_.nodes[cut];
         if (node.is_leaf() || leaf < node.first_leaf || leaf - node.first_leaf >= node.leaf_count) continue;
         refs_.push_back({cut, leaf, f});
       }
     }
     // Counting sort by cut, keeping leaf order within a cut.
-    start_.assign(tree_.nodes.size() + 1, 0);
+    start_.assign(tree_.cut_planes.size() + 1, 0);
     for (const FaceRef& ref : refs_) ++start_[ref.cut + 1];
-    for (std::size_t k = 0; k < tree_.nodes.size(); ++k) start_[k + 1] += start_[k];
+    for (std::size_t k = 0; k < tree_.cut_planes.size(); ++k) start_[k + 1] += start_[k];
     order_.resize(refs_.size());
     std::vector<std::size_t> next(start_.begin(), start_.end() - 1);
     for (std::uint32_t r = 0; r < refs_.size(); ++r) order_[next[refs_[r].cut]++] = r;
@@ -135,7 +143,7 @@ class PlaneBonds {
   void add_face(const FaceRef& ref) {
     const Solid& solid = tree_.leaf(ref.leaf).solid;
     const SolidFace& face = solid.faces[ref.face];
-    CapFace cap{ref.leaf, leaf_is_above(ref.cut, ref.leaf), static_cast<std::uint32_t>(parts_.size()), 0,
+    CapFace cap{ref.leaf, leaf_is_above(ref.cut, ref.leaf, face), static_cast<std::uint32_t>(parts_.size()), 0,
                 INFINITY, -INFINITY, INFINITY, -INFINITY};
     // Faces run counter-clockwise seen from outside; seen in the raw frame that is
     // clockwise when exactly one of (reversed face, mirrored frame) holds.
@@ -205,7 +213,16 @@ class PlaneBonds {
     parts_.push_back(part);
   }
 
-  void run_cut(NodeIndex k, std::vector<Bond>& bonds) {
+  // The node whose subtrees hold both leaves apart: their lowest common ancestor.
+  NodeIndex separating_node(LeafIndex a, LeafIndex b) const {
+    NodeIndex node = tree_.nodes[tree_.leaf_nodes[a]].parent;
+    while (!(tree_.nodes[node].first_leaf <= b && b - tree_.nodes[node].first_leaf < tree_.nodes[node].leaf_count)) {
+      node = tree_.nodes[node].parent;
+    }
+    return node;
+  }
+
+  void run_cut(std::uint32_t k, std::vector<Bond>& bonds) {
     const Projection projection = projection_of(set_, PlaneRef::cut(k));
     axis_ = projection.axis;
     flipped_ = projection.flipped;
@@ -284,7 +301,7 @@ class PlaneBonds {
         Bond bond;
         bond.first = std::min(below, above);
         bond.second = std::max(below, above);
-        bond.cut_node = k;
+        bond.cut_node = k < tree_.nodes.size() ? k : separating_node(bond.first, bond.second);
         bond.area = total.area * area_scale_;
         bond.centroid = point_on_plane_over(plane_, axis_, u, v);
         bond.normal = bond.first == below ? unit : -unit;  // from below into above is +n

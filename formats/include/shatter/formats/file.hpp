@@ -29,7 +29,8 @@
 // relative to the node being written: a node's solid names a cut plane by how
 // many levels up its node is, as preorder visits a node's ancestors first.
 //   plane code (vu, 64 bits): 0 none (PlaneRef FFFFFFFF), 2i + 1 input plane
-//         i, 2d (d >= 1) the cut plane of the ancestor d levels up.
+//         i, 2d (1 <= d <= D, the node's depth) the cut plane of the ancestor d
+//         levels up, 2(D + 1 + c) cell plane c (CELL; cut plane n + c).
 //   surface code (vu, 64 bits) in a node of depth D: 0 the input's surface,
 //         1 <= c <= D cap_surface_of(the ancestor c levels up), D + s any
 //         other surface id s.
@@ -69,6 +70,10 @@
 //         seeds root_node_seed(OPTS seed) and child_node_seed(parent's, index)
 //         (recipe.hpp), the masses mass_properties of the node's mesh
 //         (kernel/mass.hpp), a leaf's plane +0.0 x4.
+//   CELL  only in a tree with cell planes (meshtree/voronoi.hpp: MeshTree::
+//         cut_planes holds more planes than nodes): u32 count C, then C x f64 x4
+//         (normal x, y, z, offset), cut planes n to n + C - 1. At most once;
+//         upper case, so a reader without it refuses the file.
 //   GEOM  as version 2: u32 point count P, u32 input plane count Q, P x f64 x3
 //         points, Q x u32 x3 input planes (point indices); P = 0: no exact
 //         representation (trees of the retired kernels).
@@ -278,9 +283,9 @@ std::string encode_shatter(const MeshTree& tree);
 ///     predicates take them as exact doubles), input planes' point indices in
 ///     range;
 ///   - in every node's solid: vertex kinds in range and unused definition fields
-///     zero; point indices in range; every plane an input plane in range or the
-///     cut plane of an ancestor of the node (a strict one: the node's own plane
-///     cuts it into its children); line.p < line.q < point count, or both none;
+///     zero; point indices in range; every plane an input plane in range, a
+///     cell plane, or the cut plane of an ancestor of the node (a strict one:
+///     the node's own plane cuts it into its children); line.p < line.q < point count, or both none;
 ///     every face with a loop, every loop with at least 3 corners, faces' loop
 ///     ranges and loops' corner ranges contiguous and covering all loops and
 ///     corners; corners' vertices in range, no corner repeating the vertex

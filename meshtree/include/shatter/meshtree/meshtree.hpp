@@ -27,6 +27,8 @@
 #include "shatter/meshtree/recipe.hpp"
 #include "shatter/meshtree/tree.hpp"
 #include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/sites.hpp"
+#include "shatter/meshtree/voronoi.hpp"
 
 #include "shatter/meshtree/bonds.hpp"
 

@@ -24,6 +24,9 @@ enum class Strategy : std::uint8_t {
   /// centroid, with offset and angle jitter (as PhysX APEX slices); the budget is
   /// shared among the children in proportion to their volume.
   axis = 2,
+  /// Voronoi cells of given sites (build_voronoi_tree, voronoi.hpp): the cells of
+  /// neighbouring sites share one exact bisector plane; build_mesh_tree refuses it.
+  voronoi = 3,
 };
 
 /// The kernel that made a tree (DESIGN.md, "Exact arithmetic"). Every tree this
@@ -36,10 +39,11 @@ enum class KernelKind : std::uint8_t { fast = 0, exact = 1, plane = 2 };
 /// The largest Strategy and KernelKind this version knows: a reader refuses a
 /// stored value above them. A new enumerator must be added here, and to the
 /// layout comment of formats/file.hpp, to be stored.
-inline constexpr Strategy last_strategy = Strategy::axis;
+inline constexpr Strategy last_strategy = Strategy::voronoi;
 inline constexpr KernelKind last_kernel = KernelKind::plane;
 
-/// The strategy's name as the CLI spells it ("thesis", "balanced", "axis");
+/// The strategy's name as the CLI spells it ("thesis", "balanced", "axis",
+/// "voronoi");
 /// "unknown" for a value outside the enum. Never throws.
 std::string_view strategy_name(Strategy strategy);
 /// The kernel's name as `shatter info` prints it ("fast", "exact", "plane");

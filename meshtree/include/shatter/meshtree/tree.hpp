@@ -79,6 +79,13 @@ struct MeshTree {
   /// planes, kept here rather than in the nodes because the plane kernel's
   /// predicates view it whole (plane_set(): cut plane k is node k's).
   std::vector<Plane> cut_planes;
+  /// A lean build's internal nodes (BuildRunOptions::lean): one entry per node,
+  /// the node's mesh and exact solid packed (packed_node.hpp) once it was cut,
+  /// with its own `mesh` and `solid` left empty; an empty entry for a node that
+  /// keeps them (every leaf). Empty in every other tree. Read a node's mesh and
+  /// solid through NodeShapes, which unpacks them; fill_tree_caches
+  /// (validate_tree.hpp) unpacks them all into the nodes.
+  std::vector<std::vector<std::uint8_t>> packed_shapes;
 
   std::size_t leaf_count() const { return leaf_nodes.size(); }
   const MeshTreeNode& leaf(LeafIndex i) const { return nodes[leaf_nodes[i]]; }
@@ -89,8 +96,36 @@ struct MeshTree {
   /// The planes the nodes' exact solids are defined over (plane kernel); a view
   /// of `geometry` and `cut_planes`, valid while they are unchanged.
   PlaneSet plane_set() const { return geometry.plane_set(cut_planes); }
-  /// A node's convex hull: its own mesh when it is convex, else `hull`.
+  /// A node's convex hull: its own mesh when it is convex, else `hull`. (A
+  /// packed node's mesh is empty: read a lean tree's through NodeShapes.)
   const Mesh& hull_of(NodeIndex node) const { return nodes[node].convex ? nodes[node].mesh : nodes[node].hull; }
+  /// Whether a lean build packed the node's mesh and solid (packed_shapes).
+  bool is_packed(NodeIndex node) const { return node < packed_shapes.size() && !packed_shapes[node].empty(); }
+};
+
+/// A node's mesh and exact solid, as NodeShapes gives them.
+struct NodeShape {
+  const Mesh& mesh;
+  const Solid& solid;
+};
+
+/// Reads the nodes' meshes and solids one at a time, whether a node keeps its
+/// own or a lean build packed them (MeshTree::packed_shapes): those are
+/// unpacked into buffers reused from call to call, so a returned shape is valid
+/// until the next call and while the tree is unchanged. One per thread.
+class NodeShapes {
+ public:
+  explicit NodeShapes(const MeshTree& tree) : tree_(tree) {}
+  /// Node `node`'s mesh and solid; a packed node's solid has no approx.
+  /// Throws std::invalid_argument when its packed bytes do not unpack (a
+  /// defect validate_tree reports; never in what the builder packs).
+  NodeShape operator()(NodeIndex node);
+
+ private:
+  const MeshTree& tree_;
+  Mesh mesh_;
+  Solid solid_;
+  std::vector<NodeIndex> path_;
 };
 
 /// The surface id cap triangles of the cut at `node` carry.

@@ -122,6 +122,8 @@ std::vector<NodeIndex> leaves_in_order(const std::vector<MeshTreeNode>& nodes);
 /// Computes the floating-point caches a tree may come without (every
 /// InputGeometry::plane_approx and Solid::approx, as TreeValidationOptions::caches
 /// describes them) and stores them in `tree`: what a reader of a stored tree calls.
+/// A lean build's packed nodes (MeshTree::packed_shapes) are unpacked into
+/// their nodes first, so the tree is the one a full build makes.
 /// Precondition: `tree` passed validate_tree with caches off.
 /// Returns the first vertex whose definition is degenerate (its planes meet in no
 /// single point) as a TreePart::solid defect; the caches are then incomplete.

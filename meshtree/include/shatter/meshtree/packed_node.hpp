@@ -1,0 +1,59 @@
+#pragma once
+// The compact form a lean build (BuildRunOptions::lean) keeps an internal
+// node's mesh and exact solid in once it is cut: a few hundred bytes instead of
+// the arrays' kilobyte and more. Nothing below the node needs them again; the
+// writer, the validator and fill_tree_caches unpack one node at a time
+// (NodeShapes, tree.hpp).
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/solid.hpp"
+#include "shatter/meshtree/tree_index.hpp"
+
+namespace shatter {
+
+/// Packs `mesh` and `solid` into bytes: every count and index as a varint,
+/// positions and corner attributes bit for bit, plane references and surface
+/// ids as given (the builder names a cut plane by its node's depth, a cap by
+/// that depth + 1). Solid::approx is not kept (it is recomputed from the
+/// definitions). `named_by_node`: the references already name the tree's
+/// nodes (a finished tree's leaf, pack_leaves), and unpacking keeps them
+/// whatever its path. Deterministic: equal inputs give equal bytes.
+/// Guarantees: unpack_node_shape with an empty path gives `mesh` and `solid`
+/// back exactly, but for an empty approx, provided the solid's definitions keep
+/// the PointDef convention (unused fields zero).
+std::vector<std::uint8_t> pack_node_shape(const Mesh& mesh, const Solid& solid, bool named_by_node = false);
+
+/// Unpacks what pack_node_shape packed into `mesh` and `solid` (their previous
+/// contents replaced; solid.approx left empty). With a non-empty `path`, each
+/// cut plane reference PlaneRef::cut(d) becomes PlaneRef::cut(path[d]) and each
+/// surface id s > 0, in the mesh and the solid's faces, cap_surface_of(path[s -
+/// 1]): the builder's names by depth become the tree's by node, as number_tree
+/// renames an unpacked node's (`path[d]`: the node's ancestor at depth d).
+/// Throws std::invalid_argument when the bytes are not such a packing (cut
+/// short, trailing bytes, a depth outside `path`): a defect, never reached from
+/// what the builder packs.
+void unpack_node_shape(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh,
+                       Solid& solid);
+
+struct MeshTree;
+
+/// Packs every leaf's mesh and solid of a tree with an exact representation
+/// into MeshTree::packed_shapes (named by node), for a caller that only
+/// writes the tree, sums it up and reads it through NodeShapes (`shatter
+/// fracture`, once the bonds are found and the leaves exported): a lean
+/// build's tree then keeps no node's arrays. Nothing else changes: the same
+/// file bytes, and fill_tree_caches unpacks them back. Does nothing to a tree
+/// without an exact representation.
+void pack_leaves(MeshTree& tree);
+
+/// Renames a node's cut plane references and cap surface ids from the
+/// builder's depths to the tree's nodes, as unpack_node_shape does with a
+/// path: cut(d) becomes cut(path[d]), surface s > 0 cap_surface_of(path[s - 1]).
+/// Precondition: every depth named is < path.size().
+void rename_by_path(std::span<const NodeIndex> path, Mesh& mesh, Solid& solid);
+
+}  // namespace shatter

@@ -1,0 +1,112 @@
+#pragma once
+// Voronoi fracture on the plane kernel: the fragments are the solid cut by the
+// Voronoi cells of a set of sites, each cell cut out by its bisector planes.
+//
+// Exact cells. Sites are first quantized to a grid of spacing h = 2^e, every
+// coordinate k h with |k| <= 2^24 (quantize_sites; exactness allows |k| < 2^25,
+// the spare bit keeps rounding to the grid inside it). The bisector of sites p
+// and q is then the plane
+//     2 (q - p) . x + |p|^2 - |q|^2 = 0      (negative on p's side)
+// whose four coefficients are exact doubles: 2 (k_q - k_p) h has |integer| <
+// 2^26, and |p|^2 - |q|^2 = h^2 sum(k_p^2 - k_q^2) has |integer| < 3 2^50 <
+// 2^53, so both are computed in 64-bit integers and scaled by a power of two
+// without rounding (2b + 2 <= 53 bits is what bounds b = 25). The plane kernel
+// itself takes any finite doubles as cut coefficients (its predicates are
+// polynomials of degree <= 7 in them, decided exactly by CGAL::Mpzf whatever
+// their bit length; 7b + 12 <= 383 bits at b = 53): the grid is set by
+// exactness of the bisectors, not by the kernel. With exact coefficients the
+// bisectors of any three sites p, q, r satisfy B_pq + B_qr = B_pr as
+// polynomials, so they meet in one line exactly, and the cell of p, cut out of
+// space by B_pq with p's side kept, and the cell of q, by the same plane with
+// q's side kept, share that plane exactly: the cells partition space with no gap
+// and no overlap, whatever the sites' degeneracy (co-spherical, coplanar,
+// collinear), and each fragment is the solid cut by its cell's planes on the
+// kernel's exact solids, whose pieces partition the solid exactly (cut_solid).
+// Rounded bisectors of arbitrary double sites have no such identity: near a
+// Voronoi vertex the three rounded planes need not meet in one line.
+//
+// Neighbours come from CGAL's Delaunay_triangulation_3 (Epick: its predicates
+// are exact on double input), O(n log n) expected. Eight sentinel sites at the
+// corners of a cube twice the sites' and the solid's box diagonal away from it
+// are added: every point of the solid's box is then strictly nearer to some
+// site than to any sentinel, so the cells restricted to the box are those of
+// the sites alone, every site's cell is bounded, and the triangulation always
+// has dimension 3 (one site, collinear or coplanar sites included).
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/vec.hpp"
+#include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/recipe.hpp"
+#include "shatter/meshtree/tree.hpp"
+
+namespace shatter {
+
+/// Sites on the bisector-exact grid.
+struct QuantizedSites {
+  /// The distinct quantized sites, in the order of their first occurrence.
+  std::vector<Vec3> sites;
+  /// For each given site, the index of its quantized site in `sites`.
+  std::vector<std::uint32_t> site_of_input;
+  /// The grid spacing h, a power of two: every coordinate is k h, |k| <= 2^24.
+  double step = 0;
+  /// Given sites that quantized onto an earlier one (merged into it).
+  std::size_t merged = 0;
+};
+
+/// Quantizes `sites` to the grid of the smallest power-of-two spacing h for
+/// which every coordinate of the sites, of the box [lo, hi] and of the sentinel
+/// sites around them (see the file comment) is k h with |k| <= 2^24: each
+/// coordinate goes to the nearest grid value (ties to even). Sites that land on
+/// one grid point are merged, deterministically: the first given one keeps its
+/// place, the later ones map to it. Throws std::invalid_argument on a
+/// non-finite coordinate, an empty site list, or a box too large or too small
+/// for h^2 to be a normal double.
+QuantizedSites quantize_sites(std::span<const Vec3> sites, const Vec3& lo, const Vec3& hi);
+
+/// The bisector of two grid sites (quantize_sites), exactly: 2 (q - p) . x +
+/// |p|^2 - |q|^2, negative on p's side. Precondition: p != q, both on a grid of
+/// spacing `step` with |k| <= 2^24 (std::invalid_argument otherwise).
+Plane exact_bisector(const Vec3& p, const Vec3& q, double step);
+
+/// What build_voronoi_tree did besides the tree.
+struct VoronoiReport {
+  std::size_t sites_given = 0;
+  std::size_t sites_merged = 0;      ///< QuantizedSites::merged
+  std::size_t cells_empty = 0;       ///< sites whose cell misses the solid
+  std::size_t cells_split = 0;       ///< cells that meet the solid in several pieces
+  std::size_t neighbour_pairs = 0;   ///< Delaunay edges between sites
+  /// Fragments thinner than the rounding of their coordinates: they vanish
+  /// (no leaf), their exact volume (summed as doubles) within the bound.
+  std::size_t fragments_vanished = 0;
+  double vanished_volume = 0, vanished_volume_bound = 0;
+  double step = 0;                   ///< the site grid's spacing
+  double seconds_cells = 0;          ///< quantizing, triangulating, cutting and rounding
+  double seconds_hulls = 0, seconds_bonds = 0;
+};
+
+/// Cuts `mesh` into the Voronoi cells of `sites`: every cell's part of the solid
+/// is cut out by the plane kernel (several components give several fragments,
+/// a cell that misses the solid gives none), rounded and certified as every
+/// cut piece is (round_solid). The tree has the input at its root and the
+/// fragments as its leaves, in site order (depth 1; the root's plane is zero,
+/// which marks a cell node: its children are separated by the bisectors the
+/// tree keeps after its node planes, MeshTree::cut_planes). One site, or one
+/// fragment, gives the root alone. Bonds are the shared cell faces
+/// (find_bonds). recipe.strategy must be voronoi; recipe.fragments is kept as
+/// the number of sites asked for.
+/// Preconditions: as build_mesh_tree (a valid solid, every triangle on surface
+/// 0; validated unless run.input_validated), sites finite and non-empty.
+/// Guarantees: the fragments' exact solids partition the input's exactly (but
+/// for vanished slivers, reported); every stored mesh valid as written;
+/// deterministic at any run.threads. Throws UnsupportedGeometryError when a
+/// fragment cannot be written validly (round_solid), std::invalid_argument on
+/// bad arguments, InvalidMeshError on an invalid input.
+MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> sites, const TreeRecipe& recipe,
+                            const BuildRunOptions& run = {}, VoronoiReport* report = nullptr);
+
+}  // namespace shatter

@@ -1,0 +1,344 @@
+#include "shatter/meshtree/packed_node.hpp"
+
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+#include "shatter/meshtree/tree.hpp"
+
+namespace shatter {
+
+namespace {
+
+// Little-endian base-128 varints (LEB128). A plane reference is coded 0 for
+// none, 2i + 1 for input plane i and 2d + 2 for cut plane d (the builder's
+// depth, or a node where the names are the tree's), so the common ones take a
+// byte; an optional index (no_index: none) is coded + 1.
+
+constexpr std::uint8_t solid_convex_bit = 1;
+constexpr std::uint8_t named_by_node_bit = 2;
+constexpr std::uint8_t face_reversed_bit = 1;
+constexpr std::uint8_t face_convex_bit = 2;
+
+class Packer {
+ public:
+  void varint(std::uint64_t value) {
+    while (value >= 0x80) {
+      bytes_.push_back(static_cast<std::uint8_t>(value | 0x80));
+      value >>= 7;
+    }
+    bytes_.push_back(static_cast<std::uint8_t>(value));
+  }
+  void u8(std::uint8_t value) { bytes_.push_back(value); }
+  template <class T>
+  void raw(const std::vector<T>& values) {
+    const auto* at = reinterpret_cast<const std::uint8_t*>(values.data());
+    bytes_.insert(bytes_.end(), at, at + values.size() * sizeof(T));
+  }
+  void plane(PlaneRef plane) {
+    if (plane.bits == no_index) {
+      varint(0);
+    } else {
+      varint(2 * std::uint64_t{plane.index()} + (plane.is_cut() ? 2 : 1));
+    }
+  }
+  void optional_index(std::uint32_t index) { varint(index == no_index ? 0 : std::uint64_t{index} + 1); }
+  /// The bytes, their array fitted to them: a node keeps them to the end of
+  /// the build, and growth by doubling would leave it nearly twice their size.
+  std::vector<std::uint8_t> take() {
+    bytes_.shrink_to_fit();
+    return std::move(bytes_);
+  }
+
+ private:
+  std::vector<std::uint8_t> bytes_;
+};
+
+class Unpacker {
+ public:
+  Unpacker(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path) : bytes_(bytes), path_(path) {}
+
+  std::uint64_t varint() {
+    std::uint64_t value = 0;
+    for (int shift = 0; shift < 64; shift += 7) {
+      const std::uint8_t byte = u8();
+      value |= std::uint64_t{byte & 0x7fu} << shift;
+      if ((byte & 0x80) == 0) return value;
+    }
+    throw std::invalid_argument("packed node: a varint longer than 64 bits");
+  }
+  std::uint32_t u32() {
+    const std::uint64_t value = varint();
+    if (value > 0xffffffffu) throw std::invalid_argument("packed node: a 32-bit value of " + std::to_string(value));
+    return static_cast<std::uint32_t>(value);
+  }
+  std::uint8_t u8() {
+    if (at_ >= bytes_.size()) throw std::invalid_argument("packed node: cut short");
+    return bytes_[at_++];
+  }
+  /// A count of elements of `size` bytes each that the bytes left could hold.
+  std::size_t count(std::size_t size) {
+    const std::uint64_t value = varint();
+    if (value > (bytes_.size() - at_) / size) throw std::invalid_argument("packed node: a count beyond its bytes");
+    return static_cast<std::size_t>(value);
+  }
+  template <class T>
+  void raw(std::vector<T>& values, std::size_t count) {
+    if (count > (bytes_.size() - at_) / sizeof(T)) throw std::invalid_argument("packed node: cut short");
+    values.resize(count);
+    if (count != 0) std::memcpy(values.data(), bytes_.data() + at_, count * sizeof(T));
+    at_ += count * sizeof(T);
+  }
+  PlaneRef plane() {
+    const std::uint64_t code = varint();
+    if (code == 0) return PlaneRef{no_index};
+    const std::uint64_t index = (code - 1) / 2;
+    if ((code & 1) != 0) {
+      if (index >= PlaneRef::cut_bit) throw std::invalid_argument("packed node: input plane out of range");
+      return PlaneRef::input(static_cast<std::uint32_t>(index));
+    }
+    return PlaneRef::cut(depth_to_node(index));
+  }
+  SurfaceId surface() {
+    const std::uint32_t surface = u32();
+    if (surface == original_surface || path_.empty()) return surface;
+    return cap_surface_of(depth_to_node(surface - 1));
+  }
+  std::uint32_t optional_index() {
+    const std::uint64_t code = varint();
+    if (code > 0xffffffffu) throw std::invalid_argument("packed node: an index of " + std::to_string(code));
+    return code == 0 ? no_index : static_cast<std::uint32_t>(code - 1);
+  }
+  void expect_end() const {
+    if (at_ != bytes_.size()) throw std::invalid_argument("packed node: bytes after its end");
+  }
+
+ private:
+  std::uint32_t depth_to_node(std::uint64_t depth) const {
+    if (path_.empty()) {
+      if (depth >= PlaneRef::cut_bit) throw std::invalid_argument("packed node: cut plane out of range");
+      return static_cast<std::uint32_t>(depth);
+    }
+    if (depth >= path_.size()) {
+      throw std::invalid_argument("packed node: depth " + std::to_string(depth) + " below the node's own");
+    }
+    return path_[depth];
+  }
+
+  std::span<const std::uint8_t> bytes_;
+  std::span<const NodeIndex> path_;
+  std::size_t at_ = 0;
+};
+
+}  // namespace
+
+std::vector<std::uint8_t> pack_node_shape(const Mesh& mesh, const Solid& solid, bool named_by_node) {
+  Packer out;
+  out.u8(static_cast<std::uint8_t>((solid.convex ? solid_convex_bit : 0) | (named_by_node ? named_by_node_bit : 0)));
+  out.varint(mesh.positions.size());
+  out.varint(mesh.triangles.size());
+  out.varint(mesh.corners.normals.size());
+  out.varint(mesh.corners.uvs.size());
+  out.varint(mesh.corners.tangents.size());
+  out.raw(mesh.positions);
+  for (const Triangle& triangle : mesh.triangles) {
+    for (const VertexIndex vertex : triangle) out.varint(vertex);
+  }
+  // Surfaces in runs (a face's triangles are consecutive); their count first.
+  std::size_t runs = 0;
+  for (std::size_t t = 0; t < mesh.surfaces.size(); ++t) runs += t == 0 || mesh.surfaces[t] != mesh.surfaces[t - 1] ? 1 : 0;
+  out.varint(runs);
+  for (std::size_t t = 0; t < mesh.surfaces.size();) {
+    std::size_t end = t + 1;
+    while (end < mesh.surfaces.size() && mesh.surfaces[end] == mesh.surfaces[t]) ++end;
+    out.varint(mesh.surfaces[t]);
+    out.varint(end - t);
+    t = end;
+  }
+  out.raw(mesh.corners.normals);
+  out.raw(mesh.corners.uvs);
+  out.raw(mesh.corners.tangents);
+
+  out.varint(solid.defs.size());
+  out.varint(solid.faces.size());
+  out.varint(solid.loops.size());
+  out.varint(solid.corners.size());
+  for (const PointDef& def : solid.defs) {
+    out.u8(static_cast<std::uint8_t>(def.kind));
+    switch (def.kind) {
+      case PointKind::input: out.varint(def.a); break;
+      case PointKind::segment_plane:
+        out.varint(def.a);
+        out.varint(def.b);
+        out.plane(def.planes[0]);
+        break;
+      case PointKind::three_planes:
+        for (const PlaneRef plane : def.planes) out.plane(plane);
+        break;
+    }
+  }
+  // Ranges as the difference from where the previous one ended (0 when contiguous, as the cut makes them).
+  const auto zigzag = [](std::uint64_t value, std::uint64_t expected) {
+    const auto difference = static_cast<std::int64_t>(value - expected);
+    return (static_cast<std::uint64_t>(difference) << 1) ^ static_cast<std::uint64_t>(difference >> 63);
+  };
+  std::uint64_t next = 0;
+  for (const SolidFace& face : solid.faces) {
+    out.plane(face.plane);
+    out.u8(static_cast<std::uint8_t>((face.reversed ? face_reversed_bit : 0) | (face.convex ? face_convex_bit : 0)));
+    out.varint(face.surface);
+    out.varint(face.source);
+    out.varint(zigzag(face.first_loop, next));
+    out.varint(face.loop_count);
+    next = std::uint64_t{face.first_loop} + face.loop_count;
+  }
+  next = 0;
+  for (const SolidLoop& loop : solid.loops) {
+    out.varint(zigzag(loop.first_corner, next));
+    out.varint(loop.corner_count);
+    next = std::uint64_t{loop.first_corner} + loop.corner_count;
+  }
+  for (const SolidCorner& corner : solid.corners) {
+    out.varint(corner.vertex);
+    out.plane(corner.line.other);
+    out.optional_index(corner.line.p);
+    out.optional_index(corner.line.q);
+  }
+  return out.take();
+}
+
+void unpack_node_shape(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh,
+                       Solid& solid) {
+  if (bytes.empty()) throw std::invalid_argument("packed node: cut short");
+  // Names that are already the tree's are kept whatever the path.
+  const bool named_by_node = (bytes[0] & named_by_node_bit) != 0;
+  Unpacker in(bytes, named_by_node ? std::span<const NodeIndex>() : path);
+  const std::uint8_t flags = in.u8();
+  if ((flags & ~(solid_convex_bit | named_by_node_bit)) != 0) throw std::invalid_argument("packed node: unknown flags");
+  solid.convex = (flags & solid_convex_bit) != 0;
+  const std::size_t position_count = in.count(sizeof(Vec3));
+  const std::size_t triangle_count = in.count(3);
+  const std::size_t normal_count = in.count(sizeof(Vec3));
+  const std::size_t uv_count = in.count(sizeof(Vec2));
+  const std::size_t tangent_count = in.count(sizeof(Vec4));
+  in.raw(mesh.positions, position_count);
+  mesh.triangles.resize(triangle_count);
+  for (Triangle& triangle : mesh.triangles) {
+    for (VertexIndex& vertex : triangle) vertex = in.u32();
+  }
+  const std::size_t runs = in.count(2);
+  mesh.surfaces.clear();
+  mesh.surfaces.reserve(triangle_count);
+  for (std::size_t r = 0; r < runs; ++r) {
+    const SurfaceId surface = in.surface();
+    const std::uint64_t length = in.varint();
+    if (length > triangle_count - mesh.surfaces.size()) throw std::invalid_argument("packed node: surface runs beyond the triangles");
+    mesh.surfaces.insert(mesh.surfaces.end(), static_cast<std::size_t>(length), surface);
+  }
+  in.raw(mesh.corners.normals, normal_count);
+  in.raw(mesh.corners.uvs, uv_count);
+  in.raw(mesh.corners.tangents, tangent_count);
+
+  const std::size_t def_count = in.count(2);
+  const std::size_t face_count = in.count(6);
+  const std::size_t loop_count = in.count(2);
+  const std::size_t corner_count = in.count(4);
+  solid.approx.clear();
+  solid.defs.resize(def_count);
+  for (PointDef& def : solid.defs) {
+    def = PointDef{};
+    const std::uint8_t kind = in.u8();
+    if (kind > static_cast<std::uint8_t>(last_point_kind)) throw std::invalid_argument("packed node: unknown point kind");
+    def.kind = static_cast<PointKind>(kind);
+    switch (def.kind) {
+      case PointKind::input: def.a = in.u32(); break;
+      case PointKind::segment_plane:
+        def.a = in.u32();
+        def.b = in.u32();
+        def.planes[0] = in.plane();
+        break;
+      case PointKind::three_planes:
+        for (PlaneRef& plane : def.planes) plane = in.plane();
+        break;
+    }
+  }
+  const auto unzigzag = [](std::uint64_t code, std::uint64_t expected) {
+    const auto difference = static_cast<std::int64_t>(code >> 1) ^ -static_cast<std::int64_t>(code & 1);
+    return static_cast<std::uint32_t>(expected + static_cast<std::uint64_t>(difference));
+  };
+  std::uint64_t next = 0;
+  solid.faces.resize(face_count);
+  for (SolidFace& face : solid.faces) {
+    face.plane = in.plane();
+    const std::uint8_t face_flags = in.u8();
+    if ((face_flags & ~(face_reversed_bit | face_convex_bit)) != 0) throw std::invalid_argument("packed node: unknown face flags");
+    face.reversed = (face_flags & face_reversed_bit) != 0;
+    face.convex = (face_flags & face_convex_bit) != 0;
+    face.surface = in.surface();
+    face.source = in.u32();
+    face.first_loop = unzigzag(in.varint(), next);
+    face.loop_count = in.u32();
+    next = std::uint64_t{face.first_loop} + face.loop_count;
+  }
+  next = 0;
+  solid.loops.resize(loop_count);
+  for (SolidLoop& loop : solid.loops) {
+    loop.first_corner = unzigzag(in.varint(), next);
+    loop.corner_count = in.u32();
+    next = std::uint64_t{loop.first_corner} + loop.corner_count;
+  }
+  solid.corners.resize(corner_count);
+  for (SolidCorner& corner : solid.corners) {
+    corner.vertex = in.u32();
+    corner.line.other = in.plane();
+    corner.line.p = in.optional_index();
+    corner.line.q = in.optional_index();
+  }
+  in.expect_end();
+}
+
+void rename_by_path(std::span<const NodeIndex> path, Mesh& mesh, Solid& solid) {
+  for (SurfaceId& surface : mesh.surfaces) {
+    if (surface != original_surface) surface = cap_surface_of(path[surface - 1]);
+  }
+  for (SolidFace& face : solid.faces) {
+    if (face.surface != original_surface) face.surface = cap_surface_of(path[face.surface - 1]);
+    if (face.plane.is_cut()) face.plane = PlaneRef::cut(path[face.plane.index()]);
+  }
+  for (SolidCorner& corner : solid.corners) {
+    if (corner.line.other.bits != no_index && corner.line.other.is_cut()) {
+      corner.line.other = PlaneRef::cut(path[corner.line.other.index()]);
+    }
+  }
+  for (PointDef& def : solid.defs) {
+    const int planes = def.kind == PointKind::segment_plane ? 1 : def.kind == PointKind::three_planes ? 3 : 0;
+    for (int k = 0; k < planes; ++k) {
+      if (def.planes[k].is_cut()) def.planes[k] = PlaneRef::cut(path[def.planes[k].index()]);
+    }
+  }
+}
+
+void pack_leaves(MeshTree& tree) {
+  if (!tree.has_exact_representation()) return;
+  if (tree.packed_shapes.empty()) tree.packed_shapes.resize(tree.nodes.size());
+  for (const NodeIndex k : tree.leaf_nodes) {
+    MeshTreeNode& leaf = tree.nodes[k];
+    if (tree.is_packed(k)) continue;
+    tree.packed_shapes[k] = pack_node_shape(leaf.mesh, leaf.solid, true);
+    leaf.mesh = Mesh();
+    leaf.solid = Solid();
+  }
+}
+
+NodeShape NodeShapes::operator()(NodeIndex node) {
+  const MeshTreeNode& own = tree_.nodes[node];
+  if (!tree_.is_packed(node)) return {own.mesh, own.solid};
+  path_.assign(std::size_t{own.depth} + 1, no_node);
+  for (NodeIndex a = node; a != no_node && tree_.nodes[a].depth < path_.size(); a = tree_.nodes[a].parent) {
+    path_[tree_.nodes[a].depth] = a;
+  }
+  unpack_node_shape(tree_.packed_shapes[node], path_, mesh_, solid_);
+  return {mesh_, solid_};
+}
+
+}  // namespace shatter

@@ -1,0 +1,729 @@
+// Voronoi fracture on the plane kernel (voronoi.hpp says why the cells are exact).
+//
+// The cells are cut out of the solid without cutting the whole solid once per
+// cell: the sites are grouped by a k-d tree (recursive median split along the
+// longest axis of the group's sites). Each group has a box that holds every
+// point of its cells inside the solid's box, with room to spare: the box of its
+// cells' Voronoi vertices (the circumcentres of the Delaunay tetrahedra around
+// each site, enclosed in intervals, so rounding only widens the box), grown by a
+// margin and clipped to the solid's box, itself grown by the margin. A group's
+// container is its parent's container cut by the box's planes (intermediate
+// pieces, never kept); a small group cuts its container by each of its cells'
+// bisectors in turn. Correctness does not depend on the boxes beyond that they
+// hold the cells' parts strictly inside: a fragment is the solid cut by its
+// cell's planes and by boxes that contain its part, so it is the solid's part
+// of the cell, and no point of it lies on a box plane (then no vertex, face or
+// edge of it refers to one: every such reference would name a plane it lies
+// on). The assembly checks that last property and throws std::logic_error if a
+// box plane is left, so a wrong box could not pass unnoticed.
+//
+// Shared vertices, shared bits: a point where the cells of sites a, b, c (and
+// d) meet is defined, in each of their fragments, by whichever two (three) of
+// their bisectors that cell's cuts met there. Rounding is a function of the
+// definition, so each definition is put in one canonical form first: its
+// bisectors replaced by those of the smallest site with each of the others
+// (B_pq + B_qr = B_pr exactly, so it is the same point), input plane first.
+// Neighbouring fragments then write their shared corners bit for bit alike.
+
+#include "shatter/meshtree/voronoi.hpp"
+
+#include <CGAL/Delaunay_triangulation_3.h>
+#include <CGAL/Delaunay_triangulation_cell_base_3.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Interval_nt.h>
+#include <CGAL/Triangulation_vertex_base_with_info_3.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/info.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <functional>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "shatter/cut/cut_solid.hpp"
+#include "shatter/cut/hull.hpp"
+#include "shatter/cut/plane_input.hpp"
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "shatter/triangulate/solid_mesh.hpp"
+#include "shatter/version.hpp"
+
+namespace shatter {
+
+namespace {
+
+constexpr std::int64_t grid_limit = std::int64_t{1} << 24;  // |k| <= 2^24
+constexpr std::uint32_t sentinel_count = 8;
+constexpr std::size_t leaf_group_size = 8;
+
+struct Box {
+  Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+  bool empty() const { return !(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z); }
+  void add(const Vec3& p) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  void add(const Box& b) {
+    if (b.empty()) return;
+    add(b.lo);
+    add(b.hi);
+  }
+};
+
+double& axis_of(Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
+double axis_of(const Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
+
+Box intersection(const Box& a, const Box& b) {
+  Box r;
+  r.lo = {std::max(a.lo.x, b.lo.x), std::max(a.lo.y, b.lo.y), std::max(a.lo.z, b.lo.z)};
+  r.hi = {std::min(a.hi.x, b.hi.x), std::min(a.hi.y, b.hi.y), std::min(a.hi.z, b.hi.z)};
+  return r;
+}
+
+// Grown by `margin` on every side and rounded outward, so the result holds the
+// box strictly inside.
+Box grown(const Box& box, double margin) {
+  Box r;
+  for (int a = 0; a < 3; ++a) {
+    axis_of(r.lo, a) = std::nextafter(axis_of(box.lo, a) - margin, -INFINITY);
+    axis_of(r.hi, a) = std::nextafter(axis_of(box.hi, a) + margin, INFINITY);
+  }
+  return r;
+}
+
+// The eight sentinel sites: corners of a cube around `box` whose half-size is
+// twice the box's diagonal. Every point x of the box is then strictly nearer to
+// any site s inside the box than to a sentinel (|x - s| <= diagonal < 2 sqrt(3)
+// diagonal - diagonal / 2 <= |x - sentinel|), and every site inside the box is
+// strictly inside the sentinels' hull, so its cell is bounded.
+std::array<Vec3, sentinel_count> sentinel_sites(const Box& box) {
+  const Vec3 centre = (box.lo + box.hi) * 0.5;
+  const double half = 2 * norm(box.hi - box.lo);
+  std::array<Vec3, sentinel_count> corners;
+  for (std::uint32_t i = 0; i < sentinel_count; ++i) {
+    corners[i] = {centre.x + ((i & 1) ? half : -half), centre.y + ((i & 2) ? half : -half),
+                  centre.z + ((i & 4) ? half : -half)};
+  }
+  return corners;
+}
+
+std::int64_t grid_index(double coordinate, double step) {
+  return static_cast<std::int64_t>(std::nearbyint(coordinate / step));
+}
+
+// --- the Delaunay triangulation --------------------------------------------------
+
+using Epick = CGAL::Exact_predicates_inexact_constructions_kernel;
+using VertexBase = CGAL::Triangulation_vertex_base_with_info_3<std::uint32_t, Epick>;
+using CellBase = CGAL::Delaunay_triangulation_cell_base_3<Epick>;
+using Tds = CGAL::Triangulation_data_structure_3<VertexBase, CellBase>;
+using Delaunay = CGAL::Delaunay_triangulation_3<Epick, Tds>;
+using Interval = CGAL::Interval_nt<>;
+
+struct Triangulated {
+  std::vector<std::array<std::uint32_t, 2>> pairs;  ///< Delaunay edges i < j with a real site, sorted
+  std::vector<Box> cell_boxes;                      ///< per real site: its Voronoi vertices' box
+};
+
+// Morton order of grid points, compared without forming the code (the axis with
+// the highest differing bit decides; Chan 2002): a fixed, spatially coherent
+// insertion order, so each insertion's walk is short and the result never
+// depends on a random shuffle.
+bool morton_less(const std::array<std::uint32_t, 3>& a, const std::array<std::uint32_t, 3>& b) {
+  int axis = 0;
+  std::uint32_t highest = 0;
+  for (int k = 0; k < 3; ++k) {
+    const std::uint32_t diff = a[k] ^ b[k];
+    if (highest < diff && highest < (highest ^ diff)) {
+      axis = k;
+      highest = diff;
+    }
+  }
+  return a[axis] < b[axis];
+}
+
+Triangulated triangulate(std::span<const Vec3> points, std::uint32_t real_count, double step) {
+  std::vector<std::array<std::uint32_t, 3>> keys(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    for (int a = 0; a < 3; ++a) {
+      keys[i][a] = static_cast<std::uint32_t>(grid_index(axis_of(points[i], a), step) + 2 * grid_limit);
+    }
+  }
+  std::vector<std::uint32_t> order(points.size());
+  for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return morton_less(keys[a], keys[b]) || (keys[a] == keys[b] && a < b);
+  });
+  Delaunay dt;
+  Delaunay::Vertex_handle hint;
+  for (const std::uint32_t i : order) {
+    const Vec3& p = points[i];
+    hint = hint == Delaunay::Vertex_handle() ? dt.insert(Epick::Point_3(p.x, p.y, p.z))
+                                              : dt.insert(Epick::Point_3(p.x, p.y, p.z), hint);
+    hint->info() = i;
+  }
+  Triangulated out;
+  for (auto e = dt.finite_edges_begin(); e != dt.finite_edges_end(); ++e) {
+    std::uint32_t a = e->first->vertex(e->second)->info(), b = e->first->vertex(e->third)->info();
+    if (a > b) std::swap(a, b);
+    if (a < real_count) out.pairs.push_back({a, b});
+  }
+  std::sort(out.pairs.begin(), out.pairs.end());
+  out.cell_boxes.assign(real_count, Box{});
+  if (dt.dimension() < 3) {
+    // Only without sentinels; every cell is unbounded.
+    for (Box& box : out.cell_boxes) box = {{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}};
+    return out;
+  }
+  for (auto c = dt.finite_cells_begin(); c != dt.finite_cells_end(); ++c) {
+    std::array<std::array<Interval, 3>, 4> v;
+    for (int k = 0; k < 4; ++k) {
+      const auto& p = c->vertex(k)->point();
+      v[k] = {Interval(p.x()), Interval(p.y()), Interval(p.z())};
+    }
+    std::array<std::array<Interval, 3>, 3> e;
+    for (int k = 0; k < 3; ++k) {
+      for (int a = 0; a < 3; ++a) e[k][a] = v[k + 1][a] - v[0][a];
+    }
+    const auto cross = [](const std::array<Interval, 3>& x, const std::array<Interval, 3>& y) {
+      return std::array<Interval, 3>{x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]};
+    };
+    const auto square = [](const std::array<Interval, 3>& x) { return x[0] * x[0] + x[1] * x[1] + x[2] * x[2]; };
+    const std::array<Interval, 3> cd = cross(e[1], e[2]), db = cross(e[2], e[0]), bc = cross(e[0], e[1]);
+    const Interval det = e[0][0] * cd[0] + e[0][1] * cd[1] + e[0][2] * cd[2];
+    const Interval sb = square(e[0]), sc = square(e[1]), sd = square(e[2]);
+    Box centre;
+    for (int a = 0; a < 3; ++a) {
+      // Circumcentre = v0 + (|b|^2 c x d + |c|^2 d x b + |d|^2 b x c) / (2 det).
+      const Interval value = v[0][a] + (sb * cd[a] + sc * db[a] + sd * bc[a]) / (Interval(2) * det);
+      axis_of(centre.lo, a) = value.inf();
+      axis_of(centre.hi, a) = value.sup();
+    }
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t site = c->vertex(k)->info();
+      if (site < real_count) out.cell_boxes[site].add(centre);
+    }
+  }
+  return out;
+}
+
+// --- cutting --------------------------------------------------------------------
+
+// Cuts every piece by cut plane `plane`, keeping the n.x + d < 0 side (or the
+// other): pieces the plane misses are kept or dropped whole.
+void clip(const PlaneSet& set, const InputShells& shells, std::vector<Solid>& pieces, std::uint32_t plane,
+          bool keep_below) {
+  std::vector<Solid> kept;
+  kept.reserve(pieces.size());
+  for (Solid& piece : pieces) {
+    SolidCut cut = cut_solid(set, piece, PlaneRef::cut(plane), plane + 1, shells);
+    if (cut.plane_missed) {
+      if (cut.all_below == keep_below) kept.push_back(std::move(piece));
+      continue;
+    }
+    for (Solid& side : keep_below ? cut.below : cut.above) kept.push_back(std::move(side));
+  }
+  pieces = std::move(kept);
+}
+
+struct Group {
+  std::uint32_t begin = 0, end = 0;  // into the site order
+  std::int32_t left = -1, right = -1;
+  Box box;
+};
+
+class VoronoiCutter {
+ public:
+  VoronoiCutter(const PlaneInput& input, std::span<const Vec3> sites, std::span<const Box> cell_boxes,
+                const Box& solid_box, double margin, std::span<const std::vector<std::uint32_t>> bisectors_of,
+                std::span<const std::array<std::uint32_t, 2>> plane_pairs, std::vector<Plane>& planes,
+                const std::function<void()>& on_site)
+      : input_(input), sites_(sites), bisectors_of_(bisectors_of), plane_pairs_(plane_pairs), on_site_(on_site) {
+    for (std::uint32_t s = 0; s < sites.size(); ++s) {
+      if (!intersection(cell_boxes[s], solid_box).empty()) order_.push_back(s);
+    }
+    if (!order_.empty()) build_group(0, static_cast<std::uint32_t>(order_.size()), cell_boxes, solid_box, margin);
+    box_base_ = static_cast<std::uint32_t>(planes.size());
+    for (const Group& g : groups_) {
+      for (int a = 0; a < 3; ++a) {
+        Vec3 n{0, 0, 0};
+        axis_of(n, a) = -1;
+        planes.push_back({n, axis_of(g.box.lo, a)});  // -x + lo < 0: x > lo
+        axis_of(n, a) = 1;
+        planes.push_back({n, -axis_of(g.box.hi, a)});  // x - hi < 0: x < hi
+      }
+    }
+    box_end_ = static_cast<std::uint32_t>(planes.size());
+    pieces_.resize(sites.size());
+  }
+
+  std::uint32_t box_base() const { return box_base_; }
+  std::uint32_t box_end() const { return box_end_; }
+
+  /// Runs the groups over `set` (whose cut planes must be the `planes` built by
+  /// the constructor); returns each site's pieces.
+  std::vector<std::vector<Solid>> run(const PlaneSet& set) {
+    set_ = &set;
+    if (!groups_.empty()) {
+      std::vector<Solid> whole{input_.solid};
+      process(0, std::move(whole), groups_[0].box);
+    }
+    return std::move(pieces_);
+  }
+
+ private:
+  std::uint32_t build_group(std::uint32_t begin, std::uint32_t end, std::span<const Box> cell_boxes,
+                            const Box& solid_box, double margin) {
+    const auto index = static_cast<std::uint32_t>(groups_.size());
+    groups_.push_back({begin, end, -1, -1, {}});
+    Box cells, spread;
+    for (std::uint32_t i = begin; i < end; ++i) {
+      cells.add(cell_boxes[order_[i]]);
+      spread.add(sites_[order_[i]]);
+    }
+    groups_[index].box = intersection(grown(cells, margin), solid_box);
+    if (end - begin > leaf_group_size) {
+      const Vec3 extent = spread.hi - spread.lo;
+      const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
+      const std::uint32_t middle = begin + (end - begin) / 2;
+      std::nth_element(order_.begin() + begin, order_.begin() + middle, order_.begin() + end,
+                       [&](std::uint32_t a, std::uint32_t b) {
+                         const double pa = axis_of(sites_[a], axis), pb = axis_of(sites_[b], axis);
+                         return pa < pb || (pa == pb && a < b);
+                       });
+      const std::uint32_t left = build_group(begin, middle, cell_boxes, solid_box, margin);
+      const std::uint32_t right = build_group(middle, end, cell_boxes, solid_box, margin);
+      groups_[index].left = static_cast<std::int32_t>(left);
+      groups_[index].right = static_cast<std::int32_t>(right);
+    }
+    return index;
+  }
+
+  void process(std::uint32_t g, std::vector<Solid> pieces, const Box& parent_box) {
+    const Group& group = groups_[g];
+    for (int a = 0; a < 3 && !pieces.empty(); ++a) {
+      if (axis_of(group.box.lo, a) > axis_of(parent_box.lo, a)) clip(*set_, input_.shells, pieces, box_base_ + 6 * g + 2 * a, true);
+      if (!pieces.empty() && axis_of(group.box.hi, a) < axis_of(parent_box.hi, a)) {
+        clip(*set_, input_.shells, pieces, box_base_ + 6 * g + 2 * a + 1, true);
+      }
+    }
+    if (group.left < 0) {
+      for (std::uint32_t i = group.begin; i < group.end; ++i) {
+        const std::uint32_t site = order_[i];
+        if (!pieces.empty()) pieces_[site] = cell(site, pieces);
+        if (on_site_) on_site_();
+      }
+      return;
+    }
+    if (pieces.empty()) {
+      if (on_site_) {
+        for (std::uint32_t i = group.begin; i < group.end; ++i) on_site_();
+      }
+      return;
+    }
+    std::vector<Solid> copy = pieces;
+    tbb::parallel_invoke([&] { process(static_cast<std::uint32_t>(group.left), std::move(copy), group.box); },
+                         [&] { process(static_cast<std::uint32_t>(group.right), std::move(pieces), group.box); });
+  }
+
+  // The site's part of `container`: cut by its bisectors, nearest neighbour first
+  // (the pieces shrink fastest), keeping the site's side.
+  std::vector<Solid> cell(std::uint32_t site, const std::vector<Solid>& container) const {
+    std::vector<Solid> pieces = container;
+    for (const std::uint32_t plane : bisectors_of_[site]) {
+      if (pieces.empty()) break;
+      clip(*set_, input_.shells, pieces, plane, plane_pairs_[plane][0] == site);
+    }
+    return pieces;
+  }
+
+  const PlaneInput& input_;
+  std::span<const Vec3> sites_;
+  std::span<const std::vector<std::uint32_t>> bisectors_of_;
+  std::span<const std::array<std::uint32_t, 2>> plane_pairs_;
+  const std::function<void()>& on_site_;
+  std::vector<std::uint32_t> order_;
+  std::vector<Group> groups_;
+  std::uint32_t box_base_ = 0, box_end_ = 0;
+  const PlaneSet* set_ = nullptr;
+  std::vector<std::vector<Solid>> pieces_;
+};
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+Box solid_box_of(const Mesh& mesh) {
+  Box box;
+  for (const Vec3& p : mesh.positions) box.add(p);
+  return box;
+}
+
+}  // namespace
+
+QuantizedSites quantize_sites(std::span<const Vec3> sites, const Vec3& lo, const Vec3& hi) {
+  if (sites.empty()) throw std::invalid_argument("quantize_sites: no sites");
+  Box box;
+  box.add(lo);
+  box.add(hi);
+  for (const Vec3& s : sites) {
+    if (!std::isfinite(s.x) || !std::isfinite(s.y) || !std::isfinite(s.z)) {
+      throw std::invalid_argument("quantize_sites: a site has a NaN or infinite coordinate");
+    }
+    box.add(s);
+  }
+  // The sentinels lie around this box; the grid must hold them too.
+  double largest = 0;
+  for (const Vec3& p : sentinel_sites(box)) largest = std::max({largest, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
+  if (!(largest > 0) || !std::isfinite(largest)) largest = 1;
+  int exponent = 0;
+  std::frexp(largest, &exponent);  // largest < 2^exponent
+  // Spacing 2^(exponent - 24): largest / h < 2^24, so |k| <= 2^24 after rounding
+  // (grid_limit), with room for the sentinels' own rounding.
+  const int step_exponent = exponent - 24;
+  if (2 * step_exponent < -1000 || exponent > 500) {
+    throw std::invalid_argument("quantize_sites: coordinates of magnitude " + std::to_string(largest) +
+                                " are outside the range where the bisectors are exact doubles (2^-476 to 2^500)");
+  }
+  QuantizedSites out;
+  out.step = std::ldexp(1.0, step_exponent);
+  std::map<std::array<std::int64_t, 3>, std::uint32_t> seen;
+  out.site_of_input.reserve(sites.size());
+  for (const Vec3& s : sites) {
+    const std::array<std::int64_t, 3> k{grid_index(s.x, out.step), grid_index(s.y, out.step), grid_index(s.z, out.step)};
+    const auto [it, inserted] = seen.emplace(k, static_cast<std::uint32_t>(out.sites.size()));
+    if (inserted) {
+      out.sites.push_back({static_cast<double>(k[0]) * out.step, static_cast<double>(k[1]) * out.step,
+                           static_cast<double>(k[2]) * out.step});
+    } else {
+      ++out.merged;
+    }
+    out.site_of_input.push_back(it->second);
+  }
+  return out;
+}
+
+Plane exact_bisector(const Vec3& p, const Vec3& q, double step) {
+  std::array<std::int64_t, 3> kp{}, kq{};
+  for (int a = 0; a < 3; ++a) {
+    kp[a] = grid_index(axis_of(p, a), step);
+    kq[a] = grid_index(axis_of(q, a), step);
+    if (static_cast<double>(kp[a]) * step != axis_of(p, a) || static_cast<double>(kq[a]) * step != axis_of(q, a) ||
+        std::llabs(kp[a]) > 2 * grid_limit || std::llabs(kq[a]) > 2 * grid_limit) {
+      throw std::invalid_argument("exact_bisector: a site is not on the grid");
+    }
+  }
+  if (kp == kq) throw std::invalid_argument("exact_bisector: equal sites");
+  // |k| <= 2^25 (checked above), so each square <= 2^50 and the sum of three
+  // differences < 3 2^50 < 2^53: exact in int64 and as a double, and so is its
+  // product with h^2, a power of two (quantize_sites keeps it normal).
+  std::int64_t d = 0;
+  for (int a = 0; a < 3; ++a) d += kp[a] * kp[a] - kq[a] * kq[a];
+  const double h = step;
+  return {{std::ldexp(static_cast<double>(kq[0] - kp[0]), 1) * h, std::ldexp(static_cast<double>(kq[1] - kp[1]), 1) * h,
+           std::ldexp(static_cast<double>(kq[2] - kp[2]), 1) * h},
+          static_cast<double>(d) * h * h};
+}
+
+MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites, const TreeRecipe& recipe,
+                            const BuildRunOptions& run, VoronoiReport* report_out) {
+  if (recipe.strategy != Strategy::voronoi) throw std::invalid_argument("build_voronoi_tree needs recipe.strategy voronoi");
+  if (recipe.kernel != KernelKind::plane) throw std::invalid_argument("recipe.kernel must be plane");
+  if (given_sites.empty()) throw std::invalid_argument("build_voronoi_tree needs at least one site");
+  for (SurfaceId surface : mesh.surfaces) {
+    if (surface != original_surface) {
+      throw std::invalid_argument("build_voronoi_tree needs every input triangle on surface 0 (caps are numbered by plane)");
+    }
+  }
+  if (!run.input_validated) require_valid_solid(mesh, "input", recipe.allow_self_intersections);
+  const auto start = std::chrono::steady_clock::now();
+  VoronoiReport report;
+  report.sites_given = given_sites.size();
+
+  const Box mesh_box = solid_box_of(mesh);
+  const QuantizedSites quantized = quantize_sites(given_sites, mesh_box.lo, mesh_box.hi);
+  report.sites_merged = quantized.merged;
+  report.step = quantized.step;
+  const std::vector<Vec3>& sites = quantized.sites;
+  const auto site_count = static_cast<std::uint32_t>(sites.size());
+
+  // The solid's box grown by a margin: it holds the solid strictly inside.
+  // The box the sentinels surround: as quantize_sites takes it, so they fit its grid.
+  Box around = mesh_box;
+  for (const Vec3& s : given_sites) around.add(s);
+  const double extent = std::max({mesh_box.hi.x - mesh_box.lo.x, mesh_box.hi.y - mesh_box.lo.y, mesh_box.hi.z - mesh_box.lo.z});
+  const double margin = std::ldexp(extent, -20);
+  const Box solid_box = grown(mesh_box, margin);
+
+  // Sites, then the sentinels on the same grid.
+  std::vector<Vec3> points = sites;
+  for (const Vec3& s : sentinel_sites(around)) {
+    points.push_back({std::nearbyint(s.x / quantized.step) * quantized.step, std::nearbyint(s.y / quantized.step) * quantized.step,
+                      std::nearbyint(s.z / quantized.step) * quantized.step});
+  }
+  Triangulated triangulated = triangulate(points, site_count, quantized.step);
+  report.neighbour_pairs = 0;
+
+  // Working planes: the Delaunay bisectors, then the groups' box planes, then
+  // the bisectors canonical definitions add.
+  std::vector<Plane> planes;
+  std::vector<std::array<std::uint32_t, 2>> plane_pairs;
+  std::map<std::array<std::uint32_t, 2>, std::uint32_t> plane_of_pair;
+  std::vector<std::vector<std::uint32_t>> bisectors_of(site_count);
+  for (const auto& pair : triangulated.pairs) {
+    const auto index = static_cast<std::uint32_t>(planes.size());
+    planes.push_back(exact_bisector(points[pair[0]], points[pair[1]], quantized.step));
+    plane_pairs.push_back(pair);
+    plane_of_pair.emplace(pair, index);
+    bisectors_of[pair[0]].push_back(index);
+    if (pair[1] < site_count) {
+      bisectors_of[pair[1]].push_back(index);
+      ++report.neighbour_pairs;
+    }
+  }
+  for (std::uint32_t s = 0; s < site_count; ++s) {
+    const Vec3 p = sites[s];
+    auto distance = [&](std::uint32_t plane) {
+      const auto& pair = plane_pairs[plane];
+      const Vec3 d = points[pair[0] == s ? pair[1] : pair[0]] - p;
+      return dot(d, d);
+    };
+    std::sort(bisectors_of[s].begin(), bisectors_of[s].end(), [&](std::uint32_t a, std::uint32_t b) {
+      const double da = distance(a), db = distance(b);
+      return da < db || (da == db && a < b);
+    });
+  }
+
+  const PlaneInput input = prepare_plane_input(mesh);
+  const unsigned threads = run.threads == 0 ? static_cast<unsigned>(tbb::info::default_concurrency()) : run.threads;
+  tbb::task_arena arena(static_cast<int>(threads));
+  std::atomic<std::size_t> sites_done{0};
+  const std::function<void()> on_site = [&] {
+    const std::size_t done = ++sites_done;
+    if (run.progress) run.progress(done);
+  };
+  VoronoiCutter cutter(input, sites, triangulated.cell_boxes, solid_box, margin, bisectors_of, plane_pairs, planes,
+                       on_site);
+  std::vector<std::vector<Solid>> cells;
+  {
+    const PlaneSet set = input.geometry.plane_set(planes);
+    arena.execute([&] { cells = cutter.run(set); });
+  }
+  const std::uint32_t box_base = cutter.box_base(), box_end = cutter.box_end();
+  const auto is_bisector = [&](PlaneRef ref) {
+    return ref.bits != no_index && ref.is_cut() && (ref.index() < box_base || ref.index() >= box_end);
+  };
+  const auto pair_of = [&](std::uint32_t plane) { return plane < box_base ? plane_pairs[plane] : plane_pairs[plane - (box_end - box_base)]; };
+
+  // Canonical definitions (the file comment), adding bisectors as needed.
+  for (std::uint32_t s = 0; s < site_count; ++s) {
+    for (Solid& solid : cells[s]) {
+      for (std::size_t v = 0; v < solid.defs.size(); ++v) {
+        PointDef& def = solid.defs[v];
+        if (def.kind != PointKind::three_planes) continue;
+        std::vector<PlaneRef> others;
+        std::vector<std::uint32_t> involved;
+        int bisectors = 0;
+        for (const PlaneRef ref : def.planes) {
+          if (is_bisector(ref)) {
+            ++bisectors;
+            const auto pair = pair_of(ref.index());
+            involved.push_back(pair[0]);
+            involved.push_back(pair[1]);
+          } else {
+            others.push_back(ref);
+          }
+        }
+        if (bisectors < 2) continue;
+        std::sort(involved.begin(), involved.end());
+        involved.erase(std::unique(involved.begin(), involved.end()), involved.end());
+        if (involved.size() != static_cast<std::size_t>(bisectors) + 1) continue;
+        std::vector<PlaneRef> canonical = others;
+        for (std::size_t k = 1; k < involved.size(); ++k) {
+          const std::array<std::uint32_t, 2> pair{involved[0], involved[k]};
+          auto found = plane_of_pair.find(pair);
+          if (found == plane_of_pair.end()) {
+            const auto index = static_cast<std::uint32_t>(planes.size());
+            planes.push_back(exact_bisector(points[pair[0]], points[pair[1]], quantized.step));
+            plane_pairs.push_back(pair);
+            found = plane_of_pair.emplace(pair, index).first;
+          }
+          canonical.push_back(PlaneRef::cut(found->second));
+        }
+        if (std::equal(canonical.begin(), canonical.end(), def.planes.begin())) continue;
+        for (int k = 0; k < 3; ++k) def.planes[k] = canonical[k];
+        // The cache follows the definition (the file's reader recomputes it bit for bit).
+        solid.approx[v] = approximate(input.geometry.plane_set(planes), def);
+      }
+    }
+  }
+
+  // Round and certify every fragment, in parallel; then number them in site order.
+  const PlaneSet set = input.geometry.plane_set(planes);
+  struct Rounded {
+    Solid solid;
+    RoundedSolid rounded;
+  };
+  std::vector<std::vector<Rounded>> rounded(site_count);
+  SolidMeshOptions meshing;
+  meshing.attributes = &input.mesh;
+  meshing.interior_uv_scale = recipe.interior_uv_scale;
+  meshing.allow_self_intersections = recipe.allow_self_intersections;
+  meshing.trusted = &mesh;
+  arena.execute([&] {
+    tbb::parallel_for(std::uint32_t{0}, site_count, [&](std::uint32_t s) {
+      for (Solid& solid : cells[s]) {
+        RoundedSolid r = round_solid(set, solid, meshing);
+        rounded[s].push_back({std::move(solid), std::move(r)});
+      }
+      std::vector<Solid>().swap(cells[s]);
+    });
+  });
+
+  std::vector<std::pair<std::uint32_t, Rounded*>> kept;  // site, fragment
+  for (std::uint32_t s = 0; s < site_count; ++s) {
+    if (rounded[s].empty()) ++report.cells_empty;
+    std::size_t pieces = 0;
+    for (Rounded& r : rounded[s]) {
+      if (r.rounded.collapsed) {
+        ++report.fragments_vanished;
+        report.vanished_volume += r.rounded.moved_volume;
+        report.vanished_volume_bound += r.rounded.moved_volume_bound;
+        continue;
+      }
+      if (!r.rounded.defect.empty()) {
+        throw UnsupportedGeometryError("the fragment of Voronoi site " + std::to_string(s) +
+                                       " cannot be written as a valid mesh: " + r.rounded.defect);
+      }
+      ++pieces;
+      kept.push_back({s, &r});
+    }
+    if (pieces > 1) ++report.cells_split;
+  }
+
+  MeshTree tree;
+  tree.recipe = recipe;
+  tree.shatter_version = std::string(version_string);
+  tree.geometry = input.geometry;
+  MeshTreeNode root;
+  root.mesh = mesh;
+  root.mass = mass_properties(root.mesh);
+  root.solid = input.solid;
+  root.convex = root.solid.convex;
+  root.seed = root_node_seed(recipe.seed);
+  root.first_leaf = 0;
+  root.leaf_count = 1;
+  tree.nodes.push_back(std::move(root));
+  tree.cut_planes.push_back({});
+  if (kept.size() < 2) {
+    tree.leaf_nodes.push_back(0);
+  } else {
+    const auto node_count = static_cast<std::uint32_t>(kept.size() + 1);
+    // The bisectors the fragments use, in the order of their site pairs.
+    std::vector<char> used(planes.size(), 0);
+    const auto use = [&](PlaneRef ref) {
+      if (ref.bits == no_index || !ref.is_cut()) return;
+      if (!is_bisector(ref)) throw std::logic_error("build_voronoi_tree: a container box cut into a cell's part of the solid");
+      used[ref.index()] = 1;
+    };
+    for (const auto& [site, r] : kept) {
+      for (const SolidFace& face : r->solid.faces) use(face.plane);
+      for (const SolidCorner& corner : r->solid.corners) use(corner.line.other);
+      for (const PointDef& def : r->solid.defs) {
+        const int count = def.kind == PointKind::segment_plane ? 1 : def.kind == PointKind::three_planes ? 3 : 0;
+        for (int k = 0; k < count; ++k) use(def.planes[k]);
+      }
+    }
+    std::vector<std::uint32_t> used_planes;
+    for (std::uint32_t p = 0; p < planes.size(); ++p) {
+      if (used[p]) used_planes.push_back(p);
+    }
+    std::sort(used_planes.begin(), used_planes.end(), [&](std::uint32_t a, std::uint32_t b) { return pair_of(a) < pair_of(b); });
+    std::vector<std::uint32_t> final_index(planes.size(), no_index);
+    for (std::uint32_t r = 0; r < used_planes.size(); ++r) final_index[used_planes[r]] = node_count + r;
+    const auto remap = [&](PlaneRef& ref) {
+      if (ref.bits != no_index && ref.is_cut()) ref = PlaneRef::cut(final_index[ref.index()]);
+    };
+    const auto remap_surface = [&](SurfaceId& surface) {
+      if (surface != original_surface) surface = cap_surface_of(final_index[surface - 1]);
+    };
+    tree.nodes[0].children.reserve(kept.size());
+    tree.nodes[0].leaf_count = static_cast<std::uint32_t>(kept.size());
+    for (std::uint32_t i = 0; i < kept.size(); ++i) {
+      Rounded& r = *kept[i].second;
+      MeshTreeNode leaf;
+      leaf.solid = std::move(r.solid);
+      for (SolidFace& face : leaf.solid.faces) {
+        remap(face.plane);
+        remap_surface(face.surface);
+      }
+      for (SolidCorner& corner : leaf.solid.corners) remap(corner.line.other);
+      for (PointDef& def : leaf.solid.defs) {
+        const int count = def.kind == PointKind::segment_plane ? 1 : def.kind == PointKind::three_planes ? 3 : 0;
+        for (int k = 0; k < count; ++k) remap(def.planes[k]);
+      }
+      leaf.mesh = std::move(r.rounded.mesh);
+      for (SurfaceId& surface : leaf.mesh.surfaces) remap_surface(surface);
+      leaf.mass = mass_properties(leaf.mesh);
+      leaf.convex = leaf.solid.convex;
+      leaf.parent = 0;
+      leaf.depth = 1;
+      leaf.first_leaf = i;
+      leaf.leaf_count = 1;
+      leaf.seed = child_node_seed(tree.nodes[0].seed, i);
+      tree.nodes[0].children.push_back(i + 1);
+      tree.leaf_nodes.push_back(i + 1);
+      tree.nodes.push_back(std::move(leaf));
+      tree.cut_planes.push_back({});
+    }
+    for (const std::uint32_t p : used_planes) tree.cut_planes.push_back(planes[p]);
+  }
+  report.seconds_cells = seconds_since(start);
+
+  auto phase = std::chrono::steady_clock::now();
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t{1}, tree.nodes.size(), [&](std::size_t k) {
+      if (!tree.nodes[k].convex) tree.nodes[k].hull = convex_hull_of(tree.nodes[k].mesh);
+    });
+  });
+  if (!tree.nodes[0].convex) {
+    if (tree.nodes.size() == 1) {
+      tree.nodes[0].hull = convex_hull_of(tree.nodes[0].mesh);
+    } else {
+      std::vector<Vec3> points_of_hulls;
+      for (const NodeIndex c : tree.nodes[0].children) {
+        const Mesh& h = tree.hull_of(c);
+        points_of_hulls.insert(points_of_hulls.end(), h.positions.begin(), h.positions.end());
+      }
+      tree.nodes[0].hull = convex_hull_of_points(points_of_hulls);
+    }
+  }
+  report.seconds_hulls = seconds_since(phase);
+  phase = std::chrono::steady_clock::now();
+  tree.bonds = find_bonds(tree);
+  report.seconds_bonds = seconds_since(phase);
+  if (run.lean) {
+    for (MeshTreeNode& node : tree.nodes) std::vector<ApproxPoint>().swap(node.solid.approx);
+  }
+  if (run.report) {
+    run.report->cutting_seconds = report.seconds_cells;
+    run.report->hull_seconds = report.seconds_hulls;
+    run.report->bond_seconds = report.seconds_bonds;
+    run.report->pieces_vanished = report.fragments_vanished;
+    run.report->vanished_volume = report.vanished_volume;
+    run.report->vanished_volume_bound = report.vanished_volume_bound;
+  }
+  if (report_out) *report_out = report;
+  return tree;
+}
+
+}  // namespace shatter

@@ -1,0 +1,330 @@
+// Voronoi fracture (meshtree/voronoi.hpp, sites.hpp): the fragments partition the
+// solid exactly, every stored mesh is valid, the bonds are the shared cell faces
+// (against an exact brute force), the file round-trips, degenerate site sets work,
+// and the build is the same at any thread count.
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <tuple>
+#include <string>
+#include <vector>
+
+#include "shatter/formats/file.hpp"
+#include "shatter/generators/corpus.hpp"
+#include "shatter/kernel/error.hpp"
+#include "shatter/kernel/io.hpp"
+#include "shatter/kernel/rationals.hpp"
+#include "shatter/meshtree/sites.hpp"
+#include "shatter/meshtree/validate_tree.hpp"
+#include "shatter/meshtree/voronoi.hpp"
+#include "support/bond_reference.hpp"
+#include "support/checks.hpp"
+
+namespace shatter {
+namespace {
+
+Mesh corpus(const std::string& name) { return read_mesh(test::mesh_dir() / name); }
+
+TreeRecipe voronoi_recipe(std::uint64_t seed = 1) {
+  TreeRecipe recipe;
+  recipe.strategy = Strategy::voronoi;
+  recipe.seed = seed;
+  return recipe;
+}
+
+// Every property the issue asks of a Voronoi tree; empty when all hold.
+std::string voronoi_problem(const MeshTree& tree, const VoronoiReport& report) {
+  if (const std::string problem = test::tree_problem(tree, true); !problem.empty()) return "tree: " + problem;
+  const PlaneSet set = tree.plane_set();
+  if (tree.nodes.size() > 1) {
+    // Exact partition: the leaves' exact volumes add up to the root's (a
+    // vanished sliver's volume is missing from the sum, and is reported).
+    mpq_class sum = 0;
+    for (LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) {
+      const mpq_class six = exact_six_volume(set, tree.leaf(leaf).solid);
+      if (sgn(six) <= 0) return "leaf " + std::to_string(leaf) + " has no positive exact volume";
+      sum += six;
+    }
+    const mpq_class whole = exact_six_volume(set, tree.nodes[0].solid);
+    if (report.fragments_vanished == 0 && sum != whole) {
+      return "leaves' exact volumes sum to " + std::to_string(sum.get_d() / 6) + ", the solid's is " +
+             std::to_string(whole.get_d() / 6);
+    }
+    if (report.fragments_vanished > 0 && !(std::fabs(mpq_class(whole - sum).get_d() / 6) <= report.vanished_volume_bound)) {
+      return "vanished volume beyond its bound";
+    }
+    // The bonds are the exact brute force's.
+    const test::Reference reference = test::plane_reference_bonds(tree);
+    if (const std::string mismatch = test::bond_mismatch(tree, tree.bonds, reference); !mismatch.empty()) {
+      return "bonds: " + mismatch;
+    }
+    if (reference.stats.face_problems != 0) return "a face on a cell plane faces the wrong way";
+  }
+  // The file holds the tree as it is.
+  const MeshTree back = decode_shatter(encode_shatter(tree));
+  if (encode_shatter(back) != encode_shatter(tree)) return "the .shatter file does not round-trip";
+  if (back.bonds.size() != tree.bonds.size() || back.cut_planes.size() != tree.cut_planes.size()) {
+    return "the file read back differs";
+  }
+  return {};
+}
+
+MeshTree build(const Mesh& mesh, const std::vector<Vec3>& sites, VoronoiReport& report, unsigned threads = 1) {
+  BuildRunOptions run;
+  run.threads = threads;
+  return build_voronoi_tree(mesh, sites, voronoi_recipe(), run, &report);
+}
+
+}  // namespace
+
+TEST_CASE("bisectors of grid sites are exact and three of them meet in one line", "[voronoi]") {
+  const Vec3 lo{-1, -1, -1}, hi{1, 1, 1};
+  std::uint64_t state = 42;
+  auto draw = [&] { return static_cast<double>(splitmix64(state) >> 11) * 0x1p-52 - 1.0; };
+  for (int round = 0; round < 200; ++round) {
+    const std::vector<Vec3> raw{{draw(), draw(), draw()}, {draw(), draw(), draw()}, {draw(), draw(), draw()}};
+    const QuantizedSites q = quantize_sites(raw, lo, hi);
+    REQUIRE(q.sites.size() == 3);
+    const Plane pq = exact_bisector(q.sites[0], q.sites[1], q.step);
+    const Plane qr = exact_bisector(q.sites[1], q.sites[2], q.step);
+    const Plane pr = exact_bisector(q.sites[0], q.sites[2], q.step);
+    // B_pq + B_qr = B_pr coefficient by coefficient, exactly (as rationals).
+    const auto sum_is = [](double a, double b, double c) { return mpq_class(a) + mpq_class(b) == mpq_class(c); };
+    CHECK(sum_is(pq.normal.x, qr.normal.x, pr.normal.x));
+    CHECK(sum_is(pq.normal.y, qr.normal.y, pr.normal.y));
+    CHECK(sum_is(pq.normal.z, qr.normal.z, pr.normal.z));
+    CHECK(sum_is(pq.offset, qr.offset, pr.offset));
+    // And each is the exact bisector: p and q at exactly opposite values.
+    const auto value = [](const Plane& plane, const Vec3& x) -> mpq_class {
+      return mpq_class(plane.normal.x) * x.x + mpq_class(plane.normal.y) * x.y + mpq_class(plane.normal.z) * x.z +
+             mpq_class(plane.offset);
+    };
+    CHECK(value(pq, q.sites[0]) == -value(pq, q.sites[1]));
+    CHECK(sgn(value(pq, q.sites[0])) < 0);
+  }
+}
+
+TEST_CASE("quantize_sites merges duplicates deterministically", "[voronoi]") {
+  const std::vector<Vec3> sites{{0.5, 0.5, 0.5}, {0.1, 0.2, 0.3}, {0.5, 0.5, 0.5}, {0.1 + 1e-17, 0.2, 0.3}};
+  const QuantizedSites q = quantize_sites(sites, {-1, -1, -1}, {1, 1, 1});
+  CHECK(q.sites.size() == 2);
+  CHECK(q.merged == 2);
+  CHECK(q.site_of_input == std::vector<std::uint32_t>{0, 1, 0, 1});
+  CHECK_THROWS_AS(quantize_sites(std::vector<Vec3>{{NAN, 0, 0}}, {-1, -1, -1}, {1, 1, 1}), std::invalid_argument);
+}
+
+TEST_CASE("uniform Voronoi fragments partition corpus meshes exactly, with exact bonds", "[voronoi][corpus]") {
+  const char* names[] = {"cube.off", "sphere.off", "torus_quad.off", "helmet.off", "spool.off", "double-torus-example.off"};
+  for (const char* name : names) {
+    const Mesh mesh = corpus(name);
+    for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+      const std::uint32_t count = 5 + static_cast<std::uint32_t>(seed) * 9;
+      const std::vector<Vec3> sites = uniform_sites(mesh, count, seed);
+      VoronoiReport report;
+      const MeshTree tree = build(mesh, sites, report);
+      INFO(name << " seed " << seed << " sites " << count);
+      CHECK(tree.leaf_count() >= count - report.cells_empty - report.fragments_vanished);
+      CHECK(voronoi_problem(tree, report) == "");
+    }
+  }
+}
+
+TEST_CASE("degenerate site sets", "[voronoi]") {
+  const Mesh cube = corpus("cube.off");  // [-1, 1]^3
+  struct Case {
+    const char* name;
+    std::vector<Vec3> sites;
+    std::size_t fragments;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"one site", {{0.1, 0.2, 0.3}}, 1});
+  cases.push_back({"one site outside", {{5, 5, 5}}, 1});
+  cases.push_back({"two sites", {{-0.5, 0, 0}, {0.5, 0, 0}}, 2});
+  cases.push_back({"duplicates", {{-0.5, 0, 0}, {0.5, 0, 0}, {-0.5, 0, 0}, {0.5, 0, 0}}, 2});
+  cases.push_back({"three sites", {{-0.5, 0, 0}, {0.5, 0, 0}, {0, 0.5, 0}}, 3});
+  // The cube's 8 corners and its centre: co-spherical, every corner on the surface.
+  std::vector<Vec3> corners;
+  for (int i = 0; i < 8; ++i) corners.push_back({(i & 1) ? 1.0 : -1.0, (i & 2) ? 1.0 : -1.0, (i & 4) ? 1.0 : -1.0});
+  cases.push_back({"cube corners (co-spherical, on the surface)", corners, 8});
+  corners.push_back({0, 0, 0});
+  cases.push_back({"cube corners and centre", corners, 9});
+  // A regular grid: many co-spherical groups.
+  std::vector<Vec3> grid;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k) grid.push_back({-2.0 / 3 + i * 2.0 / 3, -2.0 / 3 + j * 2.0 / 3, -2.0 / 3 + k * 2.0 / 3});
+  cases.push_back({"3x3x3 lattice", grid, 27});
+  std::vector<Vec3> line, plane;
+  for (int i = 0; i < 7; ++i) line.push_back({-0.9 + 0.3 * i, 0.1, -0.2});
+  cases.push_back({"collinear", line, 7});
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) plane.push_back({-0.75 + 0.5 * i, 0.3, -0.75 + 0.5 * j});
+  cases.push_back({"coplanar square lattice", plane, 16});
+  cases.push_back({"some outside", {{-0.5, 0, 0}, {0.5, 0, 0}, {3, 0, 0}, {0, 9, 0}}, 2});
+  // On the surface: sites on faces and edges.
+  cases.push_back({"on the surface", {{1, 0, 0}, {-1, 0, 0}, {0, 1, 1}, {0, -1, 0.5}}, 4});
+  for (const Case& c : cases) {
+    INFO(c.name);
+    VoronoiReport report;
+    const MeshTree tree = build(cube, c.sites, report);
+    CHECK(tree.leaf_count() == c.fragments);
+    CHECK(voronoi_problem(tree, report) == "");
+  }
+}
+
+TEST_CASE("every site pattern over a few meshes", "[voronoi][corpus]") {
+  for (const char* name : {"cube.off", "sphere.off", "helmet.off"}) {
+    const Mesh mesh = corpus(name);
+    Vec3 lo = mesh.positions[0], hi = lo;
+    for (const Vec3& p : mesh.positions) {
+      lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+      hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    }
+    const Vec3 centre = (lo + hi) * 0.5;
+    const double size = norm(hi - lo);
+    const std::vector<std::pair<std::string, std::vector<Vec3>>> patterns{
+        {"uniform", uniform_sites(mesh, 20, 3)},
+        {"clustered", clustered_sites(mesh, 3, 6, 0.1 * size, 4)},
+        {"radial", radial_sites(centre, {0.2, 1, 0.1}, 3, 6, 0.5 * size, 0.3, 5)},
+        {"radial regular", radial_sites(centre, {0, 0, 1}, 2, 8, 0.4 * size, 0, 5)},
+        {"grid", grid_sites(mesh, {3, 2, 2}, false, 0, 0, 6)},
+        {"grid jittered", grid_sites(mesh, {3, 3, 2}, false, 0.25, 0.5, 6)},
+        {"brick", grid_sites(mesh, {4, 3, 2}, true, 0.5, 0, 7)}};
+    for (const auto& [pattern, sites] : patterns) {
+      INFO(name << " " << pattern);
+      VoronoiReport report;
+      const MeshTree tree = build(mesh, sites, report);
+      CHECK(tree.leaf_count() >= 2);
+      CHECK(voronoi_problem(tree, report) == "");
+    }
+  }
+}
+
+TEST_CASE("site patterns are deterministic and where they say", "[voronoi]") {
+  const Mesh sphere = corpus("sphere.off");
+  CHECK(uniform_sites(sphere, 30, 9).size() == 30);
+  const std::vector<Vec3> a = uniform_sites(sphere, 30, 9), b = uniform_sites(sphere, 30, 9);
+  CHECK(std::equal(a.begin(), a.end(), b.begin(), [](const Vec3& x, const Vec3& y) { return x.x == y.x && x.y == y.y && x.z == y.z; }));
+  CHECK(clustered_sites(sphere, 4, 5, 0.1, 1).size() == 20);
+  const std::vector<Vec3> radial = radial_sites({1, 2, 3}, {0, 0, 2}, 3, 5, 1.0, 0, 1);
+  CHECK(radial.size() == 16);
+  for (const Vec3& p : radial) CHECK(p.z == 3);  // in the plane through the centre, across the direction
+  CHECK(grid_sites(sphere, {2, 3, 4}, true, 0.5, 0.2, 1).size() == 24);
+  CHECK_THROWS_AS(radial_sites({0, 0, 0}, {0, 0, 0}, 1, 1, 1, 0, 1), std::invalid_argument);
+  CHECK_THROWS_AS(grid_sites(sphere, {0, 1, 1}, false, 0, 0, 1), std::invalid_argument);
+}
+
+TEST_CASE("sites files: good lines read, bad lines named by number", "[voronoi]") {
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "shatter-test-voronoi-sites";
+  std::filesystem::create_directories(folder);
+  const auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(folder / name) << text;
+    return folder / name;
+  };
+  const std::vector<Vec3> good = read_sites_file(write("good.txt", "# sites\n0 0 0\n\n  1.5\t-2 +3e-1\r\n"));
+  REQUIRE(good.size() == 2);
+  CHECK(good[1].x == 1.5);
+  CHECK(good[1].z == 0.3);
+  for (const auto& [text, line] : std::vector<std::pair<std::string, std::string>>{
+           {"0 0 0\n1 2\n", "line 2"}, {"0 0 0\n0 0 0\nx y z\n", "line 3"}, {"1 2 3 4\n", "line 1"},
+           {"1 2 nan\n", "line 1"}, {"1,2,3\n", "line 1"}, {"# nothing\n", "no sites"}}) {
+    try {
+      read_sites_file(write("bad.txt", text));
+      FAIL("accepted " << text);
+    } catch (const CorruptFileError& error) {
+      CHECK_THAT(error.what(), Catch::Contains(line));
+    }
+  }
+  CHECK_THROWS_AS(read_sites_file(folder / "missing.txt"), IoError);
+  std::filesystem::remove_all(folder);
+}
+
+TEST_CASE("a Voronoi build is the same at any thread count", "[voronoi]") {
+  const Mesh mesh = corpus("spool.off");
+  const std::vector<Vec3> sites = uniform_sites(mesh, 60, 11);
+  VoronoiReport report;
+  const std::string one = encode_shatter(build(mesh, sites, report, 1));
+  CHECK(encode_shatter(build(mesh, sites, report, 2)) == one);
+  CHECK(encode_shatter(build(mesh, sites, report, 4)) == one);
+}
+
+TEST_CASE("neighbouring fragments share their corners bit for bit", "[voronoi]") {
+  // Canonical definitions (voronoi.cpp): every rounded corner of a leaf that lies
+  // on another leaf's cell face is one of that leaf's corners too, where both
+  // leaves have that corner as a vertex of their exact solids. Checked as: every
+  // position a vertex of an exact solid shared by two leaves (equal definition)
+  // rounds to is the same in both meshes; and the leaves' vertex positions on
+  // the cube (no input plane involved) come in equal pairs or more.
+  const Mesh cube = corpus("cube.off");
+  const std::vector<Vec3> sites = uniform_sites(cube, 40, 5);
+  VoronoiReport report;
+  const MeshTree tree = build(cube, sites, report);
+  std::map<std::tuple<double, double, double>, int> leaves_at;
+  for (LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) {
+    std::set<std::tuple<double, double, double>> mine;
+    for (const Vec3& p : tree.leaf(leaf).mesh.positions) mine.insert({p.x, p.y, p.z});
+    for (const auto& p : mine) ++leaves_at[p];
+  }
+  std::size_t alone = 0;
+  for (const auto& [p, count] : leaves_at) {
+    const bool cube_corner = std::fabs(std::get<0>(p)) == 1 && std::fabs(std::get<1>(p)) == 1 && std::fabs(std::get<2>(p)) == 1;
+    if (count == 1 && !cube_corner) ++alone;
+  }
+  // A vertex inside the cube is shared by at least 4 cells, on a face by 3, on
+  // an edge by 2: only the cube's corners can be one leaf's alone.
+  CHECK(alone == 0);
+}
+
+}  // namespace shatter
+
+namespace shatter {
+
+TEST_CASE("the checker and the reader refuse broken cell trees", "[voronoi]") {
+  const Mesh cube = corpus("cube.off");
+  VoronoiReport report;
+  const MeshTree tree = build(cube, uniform_sites(cube, 12, 2), report);
+  REQUIRE(tree.cut_planes.size() > tree.nodes.size());
+  CHECK_FALSE(validate_tree(tree, {}).defect.has_value());
+  {
+    MeshTree broken = tree;
+    broken.cut_planes.back() = Plane{};  // a cell plane with a zero normal
+    const auto defect = validate_tree(broken, {}).defect;
+    REQUIRE(defect);
+    CHECK(defect->part == TreePart::cut_planes);
+  }
+  {
+    MeshTree broken = tree;
+    broken.cut_planes.resize(tree.nodes.size() + 1);  // solids now name planes that do not exist
+    const auto defect = validate_tree(broken, {}).defect;
+    REQUIRE(defect);
+    CHECK(defect->part == TreePart::solid);
+  }
+  {
+    MeshTree broken = tree;
+    broken.cut_planes.resize(tree.nodes.size() - 1);  // fewer planes than nodes
+    REQUIRE(validate_tree(broken, {}).defect);
+  }
+  {
+    // A zero plane on an internal node is a defect in a tree without cell planes.
+    MeshTree broken = tree;
+    broken.cut_planes.resize(tree.nodes.size());
+    for (MeshTreeNode& node : broken.nodes) node.solid = {}, node.convex = false;
+    broken.geometry = {};
+    broken.bonds.clear();
+    const auto defect = validate_tree(broken, {.geometry = true}).defect;
+    REQUIRE(defect);
+    CHECK(defect->part == TreePart::node);
+  }
+  // The file without its CELL section is refused (its solids name cell planes).
+  std::string bytes = encode_shatter(tree);
+  const std::size_t at = bytes.find("CELL");
+  REQUIRE(at != std::string::npos);
+  bytes[at] = 'X';  // an unknown upper-case tag: refused, never skipped
+  CHECK_THROWS_AS(decode_shatter(bytes), CorruptFileError);
+}
+
+}  // namespace shatter
