@@ -6,9 +6,9 @@
 // usage: node fracture.mjs --mesh FILE.off --fragments N [--seed S] [--repeat R] [--json] [--f32-input]
 
 import { readFileSync } from 'node:fs';
-import { fileURLToPath } from 'node:url';
 import { performance } from 'node:perf_hooks';
 import Module from 'manifold-3d';
+import { packageVersion, restoreFloat64 } from './float64_input.mjs';
 
 const USAGE = `usage: node fracture.mjs --mesh FILE.off --fragments N [--seed S] [--repeat R] [--json] [--f32-input]
 
@@ -256,16 +256,6 @@ function fracture(input, target, seed, counters) {
 
 // --- setup ----------------------------------------------------------------------------
 
-function packageVersion() {
-  const url = new URL('./package.json', import.meta.resolve('manifold-3d'));
-  return JSON.parse(readFileSync(fileURLToPath(url), 'utf8')).version;
-}
-
-function float32Key(x, y, z, scratch, bits) {
-  scratch[0] = x; scratch[1] = y; scratch[2] = z;
-  return `${bits[0]},${bits[1]},${bits[2]}`;
-}
-
 /// Builds the input Manifold. Manifold's JS Mesh only takes float32 positions; unless
 /// f32Input, the file's float64 positions are put back with warpBatch (whose callback
 /// sees the internal float64 positions), matching each internal vertex by its float32
@@ -281,40 +271,11 @@ function buildInput(wasm, off, f32Input) {
   }
   if (f32Input) return { manifold: built, precision: 'float32 (as requested by --f32-input)' };
 
-  const scratch = new Float32Array(3), bits = new Uint32Array(scratch.buffer);
-  const byKey = new Map();
-  const ambiguous = new Set();
-  const p = off.positions;
-  for (let v = 0; v < p.length / 3; ++v) {
-    const key = float32Key(p[3 * v], p[3 * v + 1], p[3 * v + 2], scratch, bits);
-    const seen = byKey.get(key);
-    if (seen === undefined) byKey.set(key, v);
-    else if (p[3 * seen] !== p[3 * v] || p[3 * seen + 1] !== p[3 * v + 1] || p[3 * seen + 2] !== p[3 * v + 2]) ambiguous.add(key);
-  }
-  let unmatched = 0, changed = 0;
-  const warped = built.warpBatch((verts, n) => {
-    // A first pass checks every vertex, so the warp is all or nothing.
-    const source = new Int32Array(n);
-    for (let i = 0; i < n; ++i) {
-      const key = float32Key(verts[3 * i], verts[3 * i + 1], verts[3 * i + 2], scratch, bits);
-      const v = byKey.get(key);
-      source[i] = v === undefined || ambiguous.has(key) ? -1 : v;
-      if (source[i] < 0) ++unmatched;
-    }
-    if (unmatched > 0) return;
-    for (let i = 0; i < n; ++i) {
-      for (let k = 0; k < 3; ++k) {
-        const x = p[3 * source[i] + k];
-        if (verts[3 * i + k] !== x) { verts[3 * i + k] = x; ++changed; }
-      }
-    }
-  });
+  const { manifold, unmatched, changed } = restoreFloat64(built, off.positions);
   if (unmatched > 0) {
-    warped.delete();
-    return { manifold: built, precision: `float32 (${unmatched} vertices could not be matched back to float64 positions)` };
+    return { manifold, precision: `float32 (${unmatched} vertices could not be matched back to float64 positions)` };
   }
-  built.delete();
-  return { manifold: warped, precision: `float64 (float32 Mesh, then warpBatch restored ${changed} coordinates)` };
+  return { manifold, precision: `float64 (float32 Mesh, then warpBatch restored ${changed} coordinates)` };
 }
 
 /// Size of the WASM linear memory in bytes. The module does not export its memory, but

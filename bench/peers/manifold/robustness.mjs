@@ -35,22 +35,11 @@
 // warpBatch, whose vertex order is getMesh()'s (checked on every piece: each float64
 // coordinate must round to getMesh()'s float32 one, or the worker stops with an error).
 
-import { readFileSync } from 'node:fs';
-import { fileURLToPath } from 'node:url';
 import { createInterface } from 'node:readline';
 import Module from 'manifold-3d';
-
-function packageVersion() {
-  const url = new URL('./package.json', import.meta.resolve('manifold-3d'));
-  return JSON.parse(readFileSync(fileURLToPath(url), 'utf8')).version;
-}
+import { packageVersion, restoreFloat64 } from './float64_input.mjs';
 
 class Refused extends Error {}
-
-function float32Key(x, y, z, scratch, bits) {
-  scratch[0] = x; scratch[1] = y; scratch[2] = z;
-  return `${bits[0]},${bits[1]},${bits[2]}`;
-}
 
 /// The case's mesh as a Manifold, its float64 positions restored when they can be.
 function buildInput(wasm, positions, triangles) {
@@ -67,33 +56,9 @@ function buildInput(wasm, positions, triangles) {
     built.delete();
     throw new Refused(`Manifold rejected the input mesh: status ${status}`);
   }
-  const scratch = new Float32Array(3), bits = new Uint32Array(scratch.buffer);
-  const byKey = new Map(), ambiguous = new Set();
-  const p = positions;
-  for (let v = 0; v < p.length / 3; ++v) {
-    const key = float32Key(p[3 * v], p[3 * v + 1], p[3 * v + 2], scratch, bits);
-    const seen = byKey.get(key);
-    if (seen === undefined) byKey.set(key, v);
-    else if (p[3 * seen] !== p[3 * v] || p[3 * seen + 1] !== p[3 * v + 1] || p[3 * seen + 2] !== p[3 * v + 2]) ambiguous.add(key);
-  }
-  let unmatched = 0;
-  const warped = built.warpBatch((verts, n) => {
-    const source = new Int32Array(n);
-    for (let i = 0; i < n; ++i) {
-      const key = float32Key(verts[3 * i], verts[3 * i + 1], verts[3 * i + 2], scratch, bits);
-      const v = byKey.get(key);
-      source[i] = v === undefined || ambiguous.has(key) ? -1 : v;
-      if (source[i] < 0) ++unmatched;
-    }
-    if (unmatched > 0) return;
-    for (let i = 0; i < n; ++i) for (let k = 0; k < 3; ++k) verts[3 * i + k] = p[3 * source[i] + k];
-  });
-  if (unmatched > 0) {
-    warped.delete();
-    return { manifold: built, precision: `float32 (${unmatched} vertices not matched back to float64)` };
-  }
-  built.delete();
-  return { manifold: warped, precision: 'float64' };
+  const { manifold, unmatched } = restoreFloat64(built, positions);
+  if (unmatched > 0) return { manifold, precision: `float32 (${unmatched} vertices not matched back to float64)` };
+  return { manifold, precision: 'float64' };
 }
 
 /// A non-empty result in float64, in getMesh()'s vertex order.
