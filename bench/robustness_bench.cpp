@@ -250,6 +250,21 @@ SidedPieces cut_with_seed(const Mesh& mesh, const Plane& plane) {
 
 using CutFn = SidedPieces (*)(const Mesh&, const Plane&);
 
+/// Judges one cut of `parent` (judge_cut). An invalid cut marks `result` invalid,
+/// counting the pieces made so far with the cut's, and returns false; a valid one
+/// moves its pieces onto `next` and returns true.
+bool accept_cut(const Mesh& parent, const Plane& plane, SidedPieces& cut, std::vector<Mesh>& next, ToolResult& result) {
+  if (const std::string defect = judge_cut(parent, plane, cut); !defect.empty()) {
+    result.outcome = Outcome::invalid;
+    result.detail = defect;
+    result.pieces = next.size() + cut.count();
+    return false;
+  }
+  for (auto& side : cut.side)
+    for (Mesh& m : side) next.push_back(std::move(m));
+  return true;
+}
+
 struct Tool {
   const char* name;
   CutFn cut;  ///< null for manifold, which runs in its Node worker
@@ -269,14 +284,7 @@ ToolResult run_chain(const Tool& tool, const Mesh& input, const std::vector<Plan
       std::vector<Mesh> next;
       for (const Mesh& piece : pieces) {
         SidedPieces cut = tool.cut(piece, plane);
-        if (const std::string defect = judge_cut(piece, plane, cut); !defect.empty()) {
-          result.outcome = Outcome::invalid;
-          result.detail = defect;
-          result.pieces = next.size() + cut.count();
-          return result;
-        }
-        for (auto& side : cut.side)
-          for (Mesh& m : side) next.push_back(std::move(m));
+        if (!accept_cut(piece, plane, cut, next, result)) return result;
       }
       pieces = std::move(next);
     }
@@ -395,14 +403,7 @@ ToolResult judge_manifold_answer(const nlohmann::json& answer, const Mesh& input
       const nlohmann::json& piece = cut[s == 0 ? "below" : "above"];
       if (!piece.is_null()) pieces.side[s].push_back(mesh_from_answer(piece));
     }
-    if (const std::string defect = judge_cut(parents[parent], planes[level], pieces); !defect.empty()) {
-      result.outcome = Outcome::invalid;
-      result.detail = defect;
-      result.pieces = next.size() + pieces.count();
-      return result;
-    }
-    for (auto& side : pieces.side)
-      for (Mesh& m : side) next.push_back(std::move(m));
+    if (!accept_cut(parents[parent], planes[level], pieces, next, result)) return result;
   }
   result.pieces = next.size();
   const nlohmann::json& error = answer["error"];
