@@ -23,6 +23,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/predicates.hpp"
 #include "shatter/kernel/self_intersections.hpp"
+#include "shatter/kernel/shells.hpp"
 #include "shatter/kernel/union_find.hpp"
 #include "star_shaped.hpp"
 #include "triangle_boxes.hpp"
@@ -185,6 +186,9 @@ std::string defect_line(const Defect& d) {
       return "inward-facing: negative volume (faces point inward)";
     case DefectKind::self_intersection:
       return "self-intersecting: " + plural(d.count, "pair", "pairs") + " of intersecting triangles" + first;
+    case DefectKind::misnested_shell:
+      return "misnested shells: " + plural(d.count, "shell faces", "shells face") +
+             " the same way as the shell around it, so the solid covers its inside twice" + first;
   }
   return std::string(defect_name(d.kind));
 }
@@ -203,6 +207,7 @@ std::string_view defect_name(DefectKind kind) {
     case DefectKind::inconsistent_orientation: return "inconsistent orientation";
     case DefectKind::inward_orientation: return "inward orientation";
     case DefectKind::self_intersection: return "self-intersecting triangle pairs";
+    case DefectKind::misnested_shell: return "misnested shells";
   }
   return "unknown defect";
 }
@@ -240,6 +245,23 @@ bool collinear_corners(const Mesh& mesh, std::size_t t) {
   return CGAL::collinear(CgalPoint(a.x, a.y, a.z), CgalPoint(b.x, b.y, b.z), CgalPoint(c.x, c.y, c.z));
 }
 
+// Shells whose orientation disagrees with their nesting (shells.hpp). When every
+// shell disagrees the whole mesh is reversed, which inward_orientation names
+// instead. Precondition: as shell_nesting's.
+Tally misnested_shells(const Mesh& mesh) {
+  Tally misnested;
+  const ShellNesting nesting = shell_nesting(mesh);
+  std::vector<std::size_t> first_triangle(nesting.shell_count(), mesh.triangles.size());
+  for (std::size_t t = mesh.triangles.size(); t-- > 0;) first_triangle[nesting.shell_of_triangle[t]] = t;
+  std::size_t disagreeing = 0;
+  for (std::size_t s = 0; s < nesting.shell_count(); ++s) disagreeing += nesting.well_nested(s) ? 0 : 1;
+  if (disagreeing == nesting.shell_count()) return misnested;
+  for (std::size_t s = 0; s < nesting.shell_count(); ++s) {
+    if (!nesting.well_nested(s)) misnested.add([&] { return "shell of " + triangle_text(first_triangle[s]); });
+  }
+  return misnested;
+}
+
 // The geometric checks of a mesh closed_oriented_manifold has passed (finite
 // coordinates checked by the caller): zero-area triangles (only those `area_mask`
 // marks, or all without it), inward orientation, self-intersections. The report
@@ -260,6 +282,7 @@ ValidationReport validate_sound_topology(const Mesh& mesh, const ValidationOptio
   if (options.check_self_intersections && flat_free) {
     append_self_intersections(report, self_intersecting_pairs(mesh.positions, mesh.triangles));
     report.self_intersections_checked = true;
+    if (report.defects.empty()) append(report, DefectKind::misnested_shell, misnested_shells(mesh));
   }
   return report;
 }
@@ -640,6 +663,9 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
   }
   std::sort(pairs.begin(), pairs.end());
   append_self_intersections(report, pairs);
+  // Rounding can move a thin cavity out of its solid, or turn a thin shell inside
+  // out, without any two triangles meeting: only the nesting shows it.
+  if (report.valid()) append(report, DefectKind::misnested_shell, misnested_shells(mesh));
   return report;
 }
 

@@ -266,7 +266,7 @@ TEST_CASE("the empty mesh has no defect", "[validate]") {
 
 TEST_CASE("defect names are distinct and non-empty", "[validate]") {
   std::vector<std::string> names;
-  for (int k = 0; k <= static_cast<int>(DefectKind::self_intersection); ++k) {
+  for (int k = 0; k <= static_cast<int>(DefectKind::misnested_shell); ++k) {
     names.emplace_back(defect_name(static_cast<DefectKind>(k)));
     CHECK_FALSE(names.back().empty());
   }
@@ -274,6 +274,56 @@ TEST_CASE("defect names are distinct and non-empty", "[validate]") {
   CHECK(std::unique(names.begin(), names.end()) == names.end());
   // Messages about crossings always carry the word "self-intersecting".
   CHECK(defect_name(DefectKind::self_intersection).find("self-intersecting") != std::string_view::npos);
+}
+
+// --- Nesting ------------------------------------------------------------------
+// Shells must alternate going inward: outward, cavity, island, cavity... Every
+// orientation of up to four nested lattice boxes (and a fifth beside them) is
+// tried; the mesh is valid exactly when each box faces outward at even depth
+// and inward at odd depth. (Found by shatter-fuzz --repair-cases: two nested
+// outward boxes passed validation, and fracture wrote leaves covering the inner
+// box twice.)
+TEST_CASE("shells nested with the wrong orientation are misnested, every combination", "[validate]") {
+  using test::box;
+  using test::flipped;
+  using test::merge;
+  for (int depth = 2; depth <= 4; ++depth) {
+    for (bool with_neighbour : {false, true}) {
+      for (unsigned orientation = 0; orientation < (1u << depth); ++orientation) {
+        std::vector<Mesh> shells;
+        bool expect_valid = true;
+        for (int level = 0; level < depth; ++level) {
+          const double inset = 2.0 * level;  // exact lattice boxes, one inside the other
+          Mesh shell = box({inset, inset, inset}, {20 - inset, 20 - inset, 20 - inset});
+          const bool outward = (orientation >> level & 1u) == 0;
+          if (!outward) shell = flipped(shell);
+          expect_valid = expect_valid && (outward == (level % 2 == 0));
+          shells.push_back(shell);
+        }
+        // A box beside the outermost one, facing out: depth 0, never misnested.
+        if (with_neighbour) shells.push_back(box({30, 0, 0}, {31, 1, 1}));
+        const ValidationReport report = validate_mesh(merge(shells));
+        INFO("depth " << depth << " orientation " << orientation << " neighbour " << with_neighbour << ": "
+                      << report.summary());
+        CHECK(report.valid() == expect_valid);
+        if (!expect_valid) {
+          // Everything reversed reads as inward-facing; anything else as misnested.
+          CHECK((report.find(DefectKind::misnested_shell) != nullptr ||
+                 report.find(DefectKind::inward_orientation) != nullptr));
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("an outward shell inside an outward shell is named as misnested", "[validate]") {
+  const Mesh two_outward = test::merge({test::box({0, 0, 0}, {8, 8, 8}), test::box({2, 2, 2}, {4, 4, 4})});
+  const ValidationReport report = validate_mesh(two_outward);
+  REQUIRE(report.find(DefectKind::misnested_shell) != nullptr);
+  CHECK(report.find(DefectKind::misnested_shell)->count == 1);
+  CHECK(report.summary().find("misnested shells: 1 shell faces the same way") == 0);
+  // Only the self-intersection-checked validation can tell.
+  CHECK(validate_mesh(two_outward, {.check_self_intersections = false}).valid());
 }
 
 // --- The shared corpus -------------------------------------------------------

@@ -31,6 +31,10 @@ enum class DefectKind {
                              ///< only on a closed, consistently oriented mesh (count 1, first "whole mesh")
   self_intersection,         ///< pairs of triangles that intersect beyond shared elements (first: pair),
                              ///< see ValidationOptions::check_self_intersections
+  misnested_shell,           ///< a shell whose orientation disagrees with its nesting: outward inside an
+                             ///< outward shell, or inward inside a cavity, so part of the solid is covered
+                             ///< twice (first: shell). Checked only on a closed, consistently oriented
+                             ///< manifold with several shells, after the self-intersection test found none
 };
 
 /// Human-readable name of a defect, as used in messages ("boundary edges", ...).
