@@ -33,6 +33,7 @@
 
 #include "position_key.hpp"
 #include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/shells.hpp"
 #include "shatter/kernel/validate.hpp"
 
 namespace shatter {
@@ -612,6 +613,7 @@ class Repairer {
       bool split;
       std::optional<SurfaceId> surface;
       FaceIndex handle;
+      int against_input = 0;  // the input triangle itself: +1 as read, -1 reversed; 0 otherwise
     };
     std::vector<Face> faces;
     faces.reserve(sm.number_of_faces());
@@ -631,8 +633,10 @@ class Repairer {
           // keeping its first corner, so an untouched triangle stays bit-identical.
           if (same_cyclic_order(tri, in)) {
             face.vertices = in;
+            face.against_input = 1;
           } else {
             face.vertices = {in[0], in[2], in[1]};
+            face.against_input = -1;
             ++reversed;
           }
         }
@@ -820,6 +824,23 @@ class Repairer {
           interpolate_corner(out, face.origin == no_origin ? working_.front() : static_cast<std::size_t>(face.origin),
                              out.positions[tri[c]]);
         }
+      }
+    }
+
+    // Step 7 for the lids drawn above: orient_to_bound_volume ran on CGAL's mesh,
+    // still open where these holes were, so it did nothing or oriented only the
+    // shells closed then. Now the output is closed, each shell is turned whole
+    // the way its nesting asks (outward at even depth, a cavity at odd: shells.hpp).
+    if (record && !welded_lid_cycles_.empty() && is_closed_oriented_manifold(out)) {
+      const ShellNesting nesting = shell_nesting(out);
+      for (std::size_t t = 0; t < out.triangles.size(); ++t) {
+        if (nesting.well_nested(nesting.shell_of_triangle[t])) continue;
+        std::swap(out.triangles[t][1], out.triangles[t][2]);
+        if (normals) std::swap(out.corners.normals[3 * t + 1], out.corners.normals[3 * t + 2]);
+        if (uvs) std::swap(out.corners.uvs[3 * t + 1], out.corners.uvs[3 * t + 2]);
+        if (tangents) std::swap(out.corners.tangents[3 * t + 1], out.corners.tangents[3 * t + 2]);
+        if (faces[t].against_input == 1) ++reversed;
+        if (faces[t].against_input == -1) --reversed;
       }
     }
 
