@@ -14,12 +14,14 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "robustness/corpus_export.hpp"
+#include "robustness/repair_fuzz.hpp"
 #include "robustness/robustness.hpp"
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/predicates.hpp"
@@ -343,6 +345,75 @@ int audit(std::uint64_t queries, std::uint64_t seed, unsigned threads) {
   return r.disagreements == 0 && r.queries == old_queries && p.disagreements == 0 && p.queries == plane_queries ? 0 : 1;
 }
 
+// The repair cases (repair_fuzz.hpp): a table per damage class of what came
+// back valid, what was refused (with the most common defect) and what broke a
+// promise. Exit 1 on a failure or on more refusals than `max_refused`.
+int run_repair_cases(std::uint64_t cases, std::uint64_t seed, std::uint64_t first, unsigned threads,
+                     std::optional<std::size_t> max_refused, bool list_refusals) {
+  const auto start = std::chrono::steady_clock::now();
+  const MeshPool pool = MeshPool::load();
+  struct Ran {
+    DamageCase c;
+    DamageOutcome outcome;
+  };
+  std::vector<Ran> ran(cases);
+  tbb::task_arena arena(threads == 0 ? tbb::task_arena::automatic : int(threads));
+  arena.execute([&] {
+    tbb::parallel_for(std::uint64_t(0), cases, [&](std::uint64_t i) {
+      DamageCase c = make_damage_case(pool, seed, first + i);
+      ran[i].outcome = run_damage_case(c);
+      c.original = {}, c.damaged = {}, c.kept = {};
+      ran[i].c = std::move(c);
+    });
+  });
+  struct Totals {
+    std::size_t cases = 0, valid = 0, refused = 0, failed = 0, changes = 0, pieces = 0, unroundable = 0, pinched = 0;
+    double worst_volume_change = 0;
+    std::map<std::string, std::size_t> refusals;
+  };
+  std::array<Totals, damage_class_count> totals{};
+  std::size_t failed = 0, refused = 0;
+  for (const Ran& r : ran) {
+    Totals& t = totals[static_cast<std::size_t>(r.c.kind)];
+    ++t.cases;
+    t.valid += r.outcome.valid;
+    t.changes += r.outcome.changes;
+    t.pieces += r.outcome.pieces, t.unroundable += r.outcome.unroundable, t.pinched += r.outcome.pinched;
+    if (r.outcome.valid) t.worst_volume_change = std::max(t.worst_volume_change, r.outcome.volume_change);
+    if (!r.outcome.valid) {
+      ++t.refused, ++refused, ++t.refusals[r.outcome.refusal.substr(0, r.outcome.refusal.find(':'))];
+      if (list_refusals)
+        std::printf("refused %s case seed %016llx (%s): %s\n", std::string(damage_name(r.c.kind)).c_str(),
+                    (unsigned long long)r.c.seed, r.c.mesh_name.c_str(), r.outcome.refusal.c_str());
+    }
+    if (!r.outcome.failures.empty()) {
+      ++t.failed, ++failed;
+      for (const std::string& f : r.outcome.failures) std::printf("FAIL case seed %016llx: %s\n", (unsigned long long)r.c.seed, f.c_str());
+    }
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("shatter-fuzz --repair-cases %llu --seed %llu: repair_mesh on damaged meshes, then one cut of each repaired solid\n",
+              (unsigned long long)cases, (unsigned long long)seed);
+  std::printf("  %-12s %6s %6s %8s %7s %7s %7s %11s %9s  %s\n", "damage", "cases", "valid", "refused", "failed",
+              "pieces", "unround", "pinched", "max dV/V", "most common refusal");
+  for (int k = 0; k < damage_class_count; ++k) {
+    const Totals& t = totals[std::size_t(k)];
+    std::string common;
+    std::size_t most = 0;
+    for (const auto& [text, n] : t.refusals)
+      if (n > most) most = n, common = text + " (" + std::to_string(n) + ")";
+    std::printf("  %-12s %6zu %6zu %8zu %7zu %7zu %7zu %11zu %9.2g  %s\n",
+                std::string(damage_name(static_cast<DamageClass>(k))).c_str(), t.cases, t.valid, t.refused, t.failed,
+                t.pieces, t.unroundable, t.pinched, t.worst_volume_change, common.c_str());
+  }
+  std::printf("  %zu failed, %zu refused, %.1f s wall\n", failed, refused, wall);
+  if (max_refused && refused > *max_refused) {
+    std::printf("  more refusals than --max-repair-refused %zu\n", *max_refused);
+    return 1;
+  }
+  return failed == 0 ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -376,6 +447,17 @@ int main(int argc, char** argv) {
                  "Run the predicate audit with this many queries instead of drawing cases: half of them audit "
                  "side_of_plane, half the plane kernel's predicates");
   app.add_flag("--list-classes", list, "Print the class names and exit");
+  std::uint64_t repair_cases = 0;
+  std::optional<std::size_t> max_repair_refused;
+  app.add_option("--repair-cases", repair_cases,
+                 "Run this many repair cases instead of cut cases: meshes of the pool damaged (unwelded, duplicated, "
+                 "flipped, holed, nested the wrong way out, touching, overlapping, mixed), repaired by repair_mesh, "
+                 "every promise checked and each repaired solid cut once (--seed, --first and --threads apply)");
+  bool list_repair_refusals = false;
+  app.add_flag("--list-repair-refusals", list_repair_refusals,
+               "With --repair-cases: print each damaged mesh left invalid, its defect and the repair's report");
+  app.add_option("--max-repair-refused", max_repair_refused,
+                 "Fail a repair run when more damaged meshes than this are left invalid after repair");
   std::string export_dir;
   app.add_option("--export-corpus", export_dir,
                  "Write the cases (as --cases, --seed, --first and --class select them) into this new folder instead of "
@@ -400,6 +482,7 @@ int main(int argc, char** argv) {
     }
     if (!replays.empty()) return replay(replays);
     if (audit_queries > 0) return audit(audit_queries, seed, threads);
+    if (repair_cases > 0) return run_repair_cases(repair_cases, seed, first, threads, max_repair_refused, list_repair_refusals);
     if (!export_dir.empty()) return export_cases(cases, seed, first, only, export_dir);
     return run_cases(cases, seed, first, only, threads, reproducers, ceilings, refusal_reproducers);
   } catch (const CLI::ValidationError& e) {
