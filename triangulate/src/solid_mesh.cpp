@@ -418,28 +418,64 @@ void insert_along_loop_edges(std::vector<std::vector<std::vector<VertexIndex>>>&
 // inside an edge (the merged representatives, and the corners of loops that
 // changed), tested against every edge with a bounding-box filter (exact: the
 // positions are doubles).
+// `near`: when given, a candidate within that distance of an edge's line (the
+// Euclidean distance, compared exactly on the doubles) whose projection onto
+// the line falls strictly between the edge's ends is inserted too: the last
+// round's hot pixels in edges (snap_clusters), an edge passing within a pixel of
+// a vertex routed through it.
 void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vector<std::vector<VertexIndex>>>& loops,
-                         std::span<const VertexIndex> candidates) {
+                         std::span<const VertexIndex> candidates, const mpq_class* near = nullptr) {
+  // Within `near` of the line of a -> b and strictly between a and b along it.
+  const auto near_segment = [&](const Vec3& pa, const Vec3& pb, const Vec3& p) {
+    mpq_class ab[3], ap[3];
+    for (int k = 0; k < 3; ++k) ab[k] = mpq_class(pb[k]) - pa[k], ap[k] = mpq_class(p[k]) - pa[k];
+    const mpq_class along = ab[0] * ap[0] + ab[1] * ap[1] + ab[2] * ap[2];
+    const mpq_class length2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+    if (sgn(along) <= 0 || along >= length2) return false;
+    const mpq_class c0 = ab[1] * ap[2] - ab[2] * ap[1], c1 = ab[2] * ap[0] - ab[0] * ap[2],
+                    c2 = ab[0] * ap[1] - ab[1] * ap[0];
+    return c0 * c0 + c1 * c1 + c2 * c2 <= *near * *near * length2;
+  };
+  const double margin = near != nullptr ? 2 * near->get_d() : 0;
   // 1. Vertices inside edges.
   insert_along_loop_edges(loops, [&](VertexIndex a, VertexIndex b) {
     const Vec3 &pa = positions[a], &pb = positions[b];
-    const Vec3 lo{std::min(pa.x, pb.x), std::min(pa.y, pb.y), std::min(pa.z, pb.z)};
-    const Vec3 hi{std::max(pa.x, pb.x), std::max(pa.y, pb.y), std::max(pa.z, pb.z)};
+    const Vec3 lo{std::min(pa.x, pb.x) - margin, std::min(pa.y, pb.y) - margin, std::min(pa.z, pb.z) - margin};
+    const Vec3 hi{std::max(pa.x, pb.x) + margin, std::max(pa.y, pb.y) + margin, std::max(pa.z, pb.z) + margin};
     std::vector<VertexIndex> inside;
     for (const VertexIndex v : candidates) {
       const Vec3& p = positions[v];
       if (v == a || v == b || p.x < lo.x || p.x > hi.x || p.y < lo.y || p.y > hi.y || p.z < lo.z || p.z > hi.z) {
         continue;
       }
-      if (strictly_inside_segment(pa, pb, p)) inside.push_back(v);
+      if (strictly_inside_segment(pa, pb, p) || (near != nullptr && near_segment(pa, pb, p))) inside.push_back(v);
     }
     // In order from a to b, along the first coordinate where they differ
-    // (exact comparisons of the doubles themselves).
+    // (exact comparisons of the doubles themselves); near the edge but off its
+    // line, by the projection onto it (exactly), ties by index, so that both
+    // ways of an edge take the same vertices in reverse order.
     const auto get = pa.x != pb.x ? &Vec3::x : pa.y != pb.y ? &Vec3::y : &Vec3::z;
     const bool rising = pa.*get < pb.*get;
-    std::sort(inside.begin(), inside.end(), [&](VertexIndex u, VertexIndex w) {
-      return rising ? positions[u].*get < positions[w].*get : positions[u].*get > positions[w].*get;
-    });
+    if (near == nullptr) {
+      std::sort(inside.begin(), inside.end(), [&](VertexIndex u, VertexIndex w) {
+        return rising ? positions[u].*get < positions[w].*get : positions[u].*get > positions[w].*get;
+      });
+    } else {
+      // The projection from the edge's smaller end, so that both ways agree.
+      const Vec3& from = a < b ? pa : pb;
+      const Vec3& to = a < b ? pb : pa;
+      const auto along = [&](VertexIndex v) {
+        mpq_class t = 0;
+        for (int k = 0; k < 3; ++k) t += (mpq_class(positions[v][k]) - from[k]) * (mpq_class(to[k]) - from[k]);
+        return t;
+      };
+      std::vector<std::pair<mpq_class, VertexIndex>> keyed;
+      for (const VertexIndex v : inside) keyed.emplace_back(along(v), v);
+      std::sort(keyed.begin(), keyed.end());
+      if (b < a) std::reverse(keyed.begin(), keyed.end());
+      inside.clear();
+      for (const auto& [t, v] : keyed) inside.push_back(v);
+    }
     inside.erase(std::unique(inside.begin(), inside.end()), inside.end());
     return inside;
   });
@@ -869,7 +905,8 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
                  bool repair_loops = false, bool route_crossed = false,
                  std::span<const std::pair<std::uint32_t, std::uint32_t>> folds = {},
                  std::vector<std::uint32_t>* face_of_triangle = nullptr, std::size_t* folded = nullptr,
-                 bool thin_folds_only = false) {
+                 bool thin_folds_only = false, std::span<const VertexIndex> snapped_to = {},
+                 const mpq_class* snap_within = nullptr) {
   const std::size_t n = solid.defs.size();
   thread_local std::vector<Vec3> positions;
   thread_local std::vector<PointDef> placed;
@@ -879,6 +916,13 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
     const OutputPoint point = output_point(set, solid.defs[v], solid.approx[v]);
     positions[v] = point.position;
     placed[v] = point.placed;
+  }
+  // The last round's hot pixels (snap_clusters): every vertex takes its
+  // cluster's representative's place, and so merges with it below.
+  if (!snapped_to.empty()) {
+    for (std::size_t v = 0; v < n; ++v) {
+      if (snapped_to[v] != v) positions[v] = positions[snapped_to[v]], placed[v] = placed[snapped_to[v]];
+    }
   }
   // One representative per position: an open-addressing table keyed by a hash of
   // the position, collisions resolved by comparing positions.
@@ -925,7 +969,7 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
   if (folded != nullptr) *folded = 0;
   // Folds are merged on the loops over representatives, which the repair
   // builds, merged vertices or not.
-  const bool repairing = repair_loops && (merged > 0 || (route_crossed && !folds.empty()));
+  const bool repairing = repair_loops && (merged > 0 || (route_crossed && !folds.empty()) || snap_within != nullptr);
   if (repairing) {
     repaired.assign(solid.faces.size(), {});
     repaired_changed.assign(solid.faces.size(), 0);
@@ -959,13 +1003,13 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
     }
     std::vector<VertexIndex> candidates;
     for (VertexIndex v = 0; v < n; ++v) {
-      if (candidate[v] && representative[v] == v) candidates.push_back(v);
+      if ((candidate[v] || snap_within != nullptr) && representative[v] == v) candidates.push_back(v);
     }
     // Only loops through a candidate, or along an edge it may lie in, can
     // change; a loop that changes marks its face.
     const auto before = repaired;
     if (route_crossed) route_edges_through_crossed_corners(set, solid, placed, positions, repaired);
-    repair_merged_loops(positions, repaired, candidates);
+    repair_merged_loops(positions, repaired, candidates, snap_within);
     for (std::uint32_t f = 0; f < solid.faces.size(); ++f) repaired_changed[f] |= repaired[f] != before[f];
     if (route_crossed) {
       merge_coplanar_sheets(set, solid, positions, repaired, repaired_changed, emit_as, home);
@@ -1225,13 +1269,15 @@ std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumb
 // from the exact one by at most the sum over the fan triangles; a piece whose
 // rounding leaves no volume at all (it collapsed onto sheets or points) has
 // its whole volume within it.
-mpq_class rounding_sweep_bound(const PlaneSet& set, const Solid& solid) {
+// `written`: the positions the mesh gives the vertices when they are not their
+// output positions (snap_clusters moved them further), else empty.
+mpq_class rounding_sweep_bound(const PlaneSet& set, const Solid& solid, std::span<const Vec3> written = {}) {
   const std::size_t n = solid.defs.size();
   std::vector<std::array<mpq_class, 3>> exact(n);
   std::vector<mpq_class> moved(n);
   for (std::size_t v = 0; v < n; ++v) {
     exact[v] = exact_coordinates(set, solid.defs[v]);
-    const Vec3 p = output_position(set, solid.defs[v], solid.approx[v]);
+    const Vec3 p = written.empty() ? output_position(set, solid.defs[v], solid.approx[v]) : written[v];
     const double coordinates[3] = {p.x, p.y, p.z};
     for (int k = 0; k < 3; ++k) moved[v] += abs(mpq_class(coordinates[k]) - exact[v][k]);
   }
@@ -1543,7 +1589,8 @@ namespace {
 // (both sides exact: the mesh's doubles and the solid's rationals), and the bound
 // rounding_sweep_bound puts on it (the mesh's triangles are the exact piece's,
 // moved by the rounding, less sheets of no volume).
-void report_moved_volume(const PlaneSet& set, const Solid& solid, RoundedSolid& result) {
+void report_moved_volume(const PlaneSet& set, const Solid& solid, RoundedSolid& result,
+                         std::span<const Vec3> written = {}) {
   mpq_class mesh_six = 0;
   for (const Triangle& t : result.mesh.triangles) {
     const Vec3 &a = result.mesh.positions[t[0]], &b = result.mesh.positions[t[1]], &c = result.mesh.positions[t[2]];
@@ -1552,7 +1599,7 @@ void report_moved_volume(const PlaneSet& set, const Solid& solid, RoundedSolid& 
   }
   const mpq_class change = abs(mesh_six - exact_six_volume(set, solid)) / 6;
   result.moved_volume = change.get_d();
-  result.moved_volume_bound = rounding_sweep_bound(set, solid).get_d();
+  result.moved_volume_bound = rounding_sweep_bound(set, solid, written).get_d();
 }
 
 // The triangles of `mesh` with a shape (self_intersecting_pairs' precondition):
@@ -1658,6 +1705,60 @@ std::size_t insert_vertices_into_crossed_triangles(const PlaneSet& set, const So
     ++inserted;
   }
   return inserted;
+}
+
+// The last round's hot pixels (3D snap rounding, Halperin & Packer 2002's
+// iterated form, Lazard & Valque 2025 behind CGAL 6's autorefine_triangle_soup:
+// features closer than the rounding unit are snapped together). Rounding each
+// vertex on its own to doubles can scramble vertices that lie closer together
+// than the rounding moves them: the tip of a wedge between near-parallel planes
+// holds corners of both of its faces ulps apart, and a face a few ulps off
+// another holds its corners that close to the other's; rounded separately they
+// change order and the faces fold. Vertices whose output positions lie within
+// `within` of each other (the L-infinity norm, decided exactly on the doubles)
+// are put into one cluster, transitively, and each vertex of a cluster is
+// placed at its representative's output position: an input point of the
+// cluster when it has one (doubles hold it exactly), else its smallest index.
+// The part between the vertices of a cluster, thinner than the pixel, then
+// vanishes, as parts that rounded onto one point do. `snapped_to[v]`: v's
+// representative (v itself when alone). Returns whether any cluster has two
+// vertices.
+bool snap_clusters(const Solid& solid, std::span<const Vec3> positions, const mpq_class& within,
+                   std::vector<VertexIndex>& snapped_to) {
+  const auto n = static_cast<VertexIndex>(positions.size());
+  std::vector<VertexIndex> order(n);
+  for (VertexIndex v = 0; v < n; ++v) order[v] = v;
+  std::sort(order.begin(), order.end(), [&](VertexIndex a, VertexIndex b) {
+    return positions[a].x != positions[b].x ? positions[a].x < positions[b].x : a < b;
+  });
+  const auto close = [&](VertexIndex a, VertexIndex b, int axis) {
+    return abs(mpq_class(positions[a][axis]) - positions[b][axis]) <= within;
+  };
+  UnionFind clusters;
+  clusters.reset(n);
+  bool any = false;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    for (std::size_t j = i + 1; j < order.size() && close(order[i], order[j], 0); ++j) {
+      if (close(order[i], order[j], 1) && close(order[i], order[j], 2)) {
+        clusters.unite(order[i], order[j]);
+        any = true;
+      }
+    }
+  }
+  snapped_to.resize(n);
+  for (VertexIndex v = 0; v < n; ++v) snapped_to[v] = v;
+  if (!any) return false;
+  std::vector<VertexIndex> best(n, no_index);
+  const auto better = [&](VertexIndex a, VertexIndex b) {  // a preferred to b
+    const bool ia = solid.defs[a].kind == PointKind::input, ib = solid.defs[b].kind == PointKind::input;
+    return ia != ib ? ia : a < b;
+  };
+  for (VertexIndex v = 0; v < n; ++v) {
+    VertexIndex& b = best[clusters.find(v)];
+    if (b == no_index || better(v, b)) b = v;
+  }
+  for (VertexIndex v = 0; v < n; ++v) snapped_to[v] = best[clusters.find(v)];
+  return true;
 }
 
 // Adds to `pairs` (kept sorted and unique, the smaller face first) the pairs
@@ -1771,17 +1872,89 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
   // vertices into the triangles they crossed within rounding's reach
   // (insert_vertices_into_crossed_triangles, 3D snap rounding's hot pixels).
   constexpr std::size_t plain_steps = 2 * attempts, steps = plain_steps + 3 * fold_steps;
+  // The last round (snapping), tried only when all of the above has failed, so
+  // that no piece written before it existed is written differently, is 3D snap
+  // rounding at a coarser pixel: for each pixel of 2^k times the largest
+  // rounding move rho (k in snap_levels), vertices within a pixel of each other
+  // are placed at one of them (snap_clusters) and edges passing within a pixel
+  // of a vertex are routed through it (repair_merged_loops' `near`); then
+  // attempts 1 to 3, each retried with the faces its failures find folded
+  // merged (merge_folded_faces, every pair), until a retry finds no new pair.
+  // Why it ends: four pixels x three attempts x at most fold_retries retries,
+  // each one pass of triangulate and certify, every part of which is finite
+  // (clusters by one union-find; insertions only of existing vertices into
+  // edges, each edge taking each vertex once; spike removal and splitting only
+  // shorten loops; merges only remove faces). Why what it writes is valid:
+  // nothing of it is trusted, the mesh is taken only when certify_rounded
+  // passes (closed, oriented, manifold, no self-intersection, positive volume)
+  // and when the volume it moved, measured exactly against the exact piece, is
+  // within the Steiner sweep of the moves it made (rounding_sweep_bound over the
+  // snapped positions: at most 2 d A + 4 d^2 P + 5 d^3 per fan triangle, d the
+  // furthest move of its corners, exactly). What vanishes is the part between vertices a pixel apart:
+  // the tip of a wedge between near-parallel planes, thinner than the rounding
+  // near their shared edge, which folded when its corners were rounded one by
+  // one.
+  constexpr std::array<int, 4> snap_levels{1, 3, 6, 10};
+  constexpr std::size_t snap_steps = (attempts - 1) * fold_retries;
+  constexpr std::size_t all_steps = steps + snap_levels.size() * snap_steps;
+  std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts> snap_folds;
+  std::array<bool, attempts> snap_stalled{};
+  std::vector<VertexIndex> snapped_to;
+  std::vector<Vec3> snapped_positions;
+  bool snap_level_empty = false;
+  mpq_class snap_pixel;
   std::array<std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts>, 3> fold_pairs;
   std::array<std::array<bool, attempts>, 3> fold_stalled{};
   std::optional<RoundingReach> reach;
   std::vector<Vec3> output_positions;
   std::vector<std::uint32_t> face_of_triangle;
-  for (std::size_t step = 0; step < steps; ++step) {
-    const bool folding = step >= plain_steps;
+  // Whether the piece's exact volume is within what rounding its vertices can
+  // move (rounding_sweep_bound): then it may vanish whole (see below).
+  std::optional<bool> thin_whole;
+  const auto within_its_rounding = [&] {
+    if (!thin_whole) thin_whole = exact_six_volume(set, solid) <= 6 * rounding_sweep_bound(set, solid);
+    return *thin_whole;
+  };
+  for (std::size_t step = 0; step < all_steps; ++step) {
+    const bool snapping = step >= steps;
+    const bool folding = step >= plain_steps && !snapping;
     const std::size_t phase = folding ? (step - plain_steps) / fold_steps : 0;
-    const bool thin_only = phase != 1;
+    const bool thin_only = phase != 1 && !snapping;
     const bool inserting = folding && phase == 2;
-    const std::size_t attempt = folding ? 1 + (step - plain_steps) % fold_steps / fold_retries : step % attempts;
+    const std::size_t snap_retry = snapping ? (step - steps) % fold_retries : 0;
+    const std::size_t attempt = snapping  ? 1 + (step - steps) % snap_steps / fold_retries
+                                : folding ? 1 + (step - plain_steps) % fold_steps / fold_retries
+                                          : step % attempts;
+    if (snapping && attempt == 1 && snap_retry == 0) {
+      // A new pixel size: the clusters it makes, and where they place the vertices.
+      if (!reach) {
+        for (VertexIndex v = 0; v < solid.defs.size(); ++v) {
+          output_positions.push_back(output_position(set, solid.defs[v], solid.approx[v]));
+        }
+        reach.emplace(set, solid, output_positions);
+      }
+      if (output_positions.empty()) {
+        for (VertexIndex v = 0; v < solid.defs.size(); ++v) {
+          output_positions.push_back(output_position(set, solid.defs[v], solid.approx[v]));
+        }
+      }
+      const int level = snap_levels[(step - steps) / snap_steps];
+      for (auto& pairs : snap_folds) pairs.clear();
+      snap_stalled = {};
+      snap_pixel = reach->rho * mpq_class(mpz_class(1) << level);
+      snap_level_empty = !snap_clusters(solid, output_positions, snap_pixel, snapped_to);
+      snapped_positions = output_positions;
+      if (!snap_level_empty) {
+        for (VertexIndex v = 0; v < solid.defs.size(); ++v) snapped_positions[v] = output_positions[snapped_to[v]];
+      }
+    }
+    std::size_t snapped = 0;
+    if (snapping) {
+      for (VertexIndex v = 0; v < solid.defs.size(); ++v) snapped += snapped_to[v] != v;
+    }
+    if (snapping && ((snap_retry > 0 && (snap_folds[attempt].empty() || snap_stalled[attempt])))) {
+      continue;
+    }
     const bool untangle_edges = step >= attempts;
     // The second round's pairs start every phase; each phase adds its own.
     auto& folds = fold_pairs[phase];
@@ -1791,9 +1964,12 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     std::size_t merged = 0, folded_faces = 0;
     ValidationReport report;
     triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of, attempt > 0, untangle_edges,
-                folding ? std::span<const std::pair<std::uint32_t, std::uint32_t>>(folds[attempt])
-                        : std::span<const std::pair<std::uint32_t, std::uint32_t>>(),
-                untangle_edges ? &face_of_triangle : nullptr, &folded_faces, thin_only);
+                folding    ? std::span<const std::pair<std::uint32_t, std::uint32_t>>(folds[attempt])
+                : snapping ? std::span<const std::pair<std::uint32_t, std::uint32_t>>(snap_folds[attempt])
+                           : std::span<const std::pair<std::uint32_t, std::uint32_t>>(),
+                untangle_edges ? &face_of_triangle : nullptr, &folded_faces, thin_only,
+                snapping ? std::span<const VertexIndex>(snapped_to) : std::span<const VertexIndex>(),
+                snapping ? &snap_pixel : nullptr);
     std::size_t inserted = 0;
     if (inserting) {
       if (!reach) {
@@ -1838,6 +2014,10 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
                                                            untangle_edges ? &kept : nullptr);
           gone > 0) {
         if (sheetless.triangles.empty()) {
+          // A repair that merged folds or snapped vertices can flatten a piece
+          // that is not thin (it merged across a thick part): when the piece
+          // cannot vanish whole (below), the later repairs are tried instead.
+          if ((folding || snapping) && !within_its_rounding()) continue;
           flattened_whole = true;
           break;
         }
@@ -1859,7 +2039,12 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     // The faces this attempt folded (what is left once sheets vanished), for
     // the folding round: only a repair attempt (1 to 3) of the second round or
     // the folding round collects them.
-    if (untangle_edges && attempt > 0 && !report.valid() && !mesh.triangles.empty()) {
+    if (snapping && !report.valid() && !mesh.triangles.empty()) {
+      const std::size_t before = snap_folds[attempt].size();
+      add_folded_face_pairs(mesh, face_of_triangle, snap_folds[attempt]);
+      if (snap_folds[attempt].size() == before) snap_stalled[attempt] = true;
+    }
+    if (untangle_edges && attempt > 0 && !snapping && !report.valid() && !mesh.triangles.empty()) {
       const std::size_t before = folds[attempt].size();
       add_folded_face_pairs(mesh, face_of_triangle, folds[attempt]);
       if (!folding) fold_pairs[1][attempt] = fold_pairs[2][attempt] = folds[attempt];
@@ -1873,7 +2058,11 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       written.vanished_triangles = sheets_cancelled;
       written.folded_faces = folded_faces;
       written.inserted_vertices = inserted;
-      if (sheets_cancelled > 0 || folding) report_moved_volume(set, solid, written);
+      written.snapped_vertices = snapped;
+      if (sheets_cancelled > 0 || folding || snapping) {
+        report_moved_volume(set, solid, written,
+                            snapping ? std::span<const Vec3>(snapped_positions) : std::span<const Vec3>());
+      }
       // On the last round (sheets over four corners, faces merged) the volume
       // the repairs moved is held to the bound of what rounding can move, or the
       // mesh is not taken.
@@ -1884,6 +2073,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       // A fold merged over more than rounding can move: retrying with the
       // same pairs would only do it again.
       if (folding) folds_stalled[attempt] = true;
+      if (snapping) snap_stalled[attempt] = true;
       continue;
     }
     // The piece may touch itself, exactly (see separate_touching): only then is
@@ -1897,7 +2087,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     if (!may_touch) continue;
     // The second round repeats the first but for the edges: nothing else to try.
     // (The folding round meets new meshes: a fold merged can leave a pinch.)
-    if (untangle_edges && !folding && report.find(DefectKind::non_manifold_edge) == nullptr) continue;
+    if (untangle_edges && !folding && !snapping && report.find(DefectKind::non_manifold_edge) == nullptr) continue;
     std::vector<std::uint32_t> partner;
     if (report.find(DefectKind::non_manifold_edge) != nullptr) {
       std::optional<std::vector<std::uint32_t>> paired = pair_around_non_manifold_edges(mesh);
@@ -1926,15 +2116,17 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         written.vanished_triangles = sheets_cancelled;
         written.folded_faces = folded_faces;
         written.inserted_vertices = inserted;
-        if (sheets_cancelled > 0 || folding) {
+        written.snapped_vertices = snapped;
+        if (sheets_cancelled > 0 || folding || snapping) {
           // The sheets' or the folds' volume as well: measured against the exact piece.
           const double separated_bound = written.moved_volume_bound;
-          report_moved_volume(set, solid, written);
+          report_moved_volume(set, solid, written,
+                              snapping ? std::span<const Vec3>(snapped_positions) : std::span<const Vec3>());
           written.moved_volume_bound += separated_bound;
         }
         // Folds merged: held to the bound, as on the last round (a fold's
         // wedge is thinner than the rounding, so its volume is within it).
-        if (folding && written.moved_volume > written.moved_volume_bound) break;
+        if ((folding || snapping) && written.moved_volume > written.moved_volume_bound) break;
         written.valid = true;
         return written;
       }
