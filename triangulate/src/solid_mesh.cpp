@@ -426,7 +426,13 @@ void insert_along_loop_edges(std::vector<std::vector<std::vector<VertexIndex>>>&
 void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vector<std::vector<VertexIndex>>>& loops,
                          std::span<const VertexIndex> candidates, const mpq_class* near = nullptr) {
   // Within `near` of the line of a -> b and strictly between a and b along it.
+  const double near_squared = near != nullptr ? near->get_d() * near->get_d() : 0;
   const auto near_segment = [&](const Vec3& pa, const Vec3& pb, const Vec3& p) {
+    // Clearly farther than `near` from the line, in doubles (a relative error
+    // far below the factor 2 allowed for), before the exact test.
+    const Vec3 dab = pb - pa, dap = p - pa;
+    const Vec3 c = cross(dab, dap);
+    if (dot(c, c) > 2 * near_squared * dot(dab, dab)) return false;
     mpq_class ab[3], ap[3];
     for (int k = 0; k < 3; ++k) ab[k] = mpq_class(pb[k]) - pa[k], ap[k] = mpq_class(p[k]) - pa[k];
     const mpq_class along = ab[0] * ap[0] + ab[1] * ap[1] + ab[2] * ap[2];
@@ -437,13 +443,21 @@ void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vecto
     return c0 * c0 + c1 * c1 + c2 * c2 <= *near * *near * length2;
   };
   const double margin = near != nullptr ? 2 * near->get_d() : 0;
+  // The candidates by x, so that each edge visits only those within its box's x range.
+  std::vector<VertexIndex> by_x(candidates.begin(), candidates.end());
+  std::sort(by_x.begin(), by_x.end(), [&](VertexIndex u, VertexIndex w) {
+    return positions[u].x != positions[w].x ? positions[u].x < positions[w].x : u < w;
+  });
   // 1. Vertices inside edges.
   insert_along_loop_edges(loops, [&](VertexIndex a, VertexIndex b) {
     const Vec3 &pa = positions[a], &pb = positions[b];
     const Vec3 lo{std::min(pa.x, pb.x) - margin, std::min(pa.y, pb.y) - margin, std::min(pa.z, pb.z) - margin};
     const Vec3 hi{std::max(pa.x, pb.x) + margin, std::max(pa.y, pb.y) + margin, std::max(pa.z, pb.z) + margin};
     std::vector<VertexIndex> inside;
-    for (const VertexIndex v : candidates) {
+    const auto first = std::lower_bound(by_x.begin(), by_x.end(), lo.x,
+                                        [&](VertexIndex v, double x) { return positions[v].x < x; });
+    for (auto it = first; it != by_x.end() && positions[*it].x <= hi.x; ++it) {
+      const VertexIndex v = *it;
       const Vec3& p = positions[v];
       if (v == a || v == b || p.x < lo.x || p.x > hi.x || p.y < lo.y || p.y > hi.y || p.z < lo.z || p.z > hi.z) {
         continue;
@@ -1269,15 +1283,13 @@ std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumb
 // from the exact one by at most the sum over the fan triangles; a piece whose
 // rounding leaves no volume at all (it collapsed onto sheets or points) has
 // its whole volume within it.
-// `written`: the positions the mesh gives the vertices when they are not their
-// output positions (snap_clusters moved them further), else empty.
-mpq_class rounding_sweep_bound(const PlaneSet& set, const Solid& solid, std::span<const Vec3> written = {}) {
+mpq_class rounding_sweep_bound(const PlaneSet& set, const Solid& solid) {
   const std::size_t n = solid.defs.size();
   std::vector<std::array<mpq_class, 3>> exact(n);
   std::vector<mpq_class> moved(n);
   for (std::size_t v = 0; v < n; ++v) {
     exact[v] = exact_coordinates(set, solid.defs[v]);
-    const Vec3 p = written.empty() ? output_position(set, solid.defs[v], solid.approx[v]) : written[v];
+    const Vec3 p = output_position(set, solid.defs[v], solid.approx[v]);
     const double coordinates[3] = {p.x, p.y, p.z};
     for (int k = 0; k < 3; ++k) moved[v] += abs(mpq_class(coordinates[k]) - exact[v][k]);
   }
@@ -1589,8 +1601,7 @@ namespace {
 // (both sides exact: the mesh's doubles and the solid's rationals), and the bound
 // rounding_sweep_bound puts on it (the mesh's triangles are the exact piece's,
 // moved by the rounding, less sheets of no volume).
-void report_moved_volume(const PlaneSet& set, const Solid& solid, RoundedSolid& result,
-                         std::span<const Vec3> written = {}) {
+void report_moved_volume(const PlaneSet& set, const Solid& solid, RoundedSolid& result) {
   mpq_class mesh_six = 0;
   for (const Triangle& t : result.mesh.triangles) {
     const Vec3 &a = result.mesh.positions[t[0]], &b = result.mesh.positions[t[1]], &c = result.mesh.positions[t[2]];
@@ -1599,7 +1610,7 @@ void report_moved_volume(const PlaneSet& set, const Solid& solid, RoundedSolid& 
   }
   const mpq_class change = abs(mesh_six - exact_six_volume(set, solid)) / 6;
   result.moved_volume = change.get_d();
-  result.moved_volume_bound = rounding_sweep_bound(set, solid, written).get_d();
+  result.moved_volume_bound = rounding_sweep_bound(set, solid).get_d();
 }
 
 // The triangles of `mesh` with a shape (self_intersecting_pairs' precondition):
@@ -1731,7 +1742,13 @@ bool snap_clusters(const Solid& solid, std::span<const Vec3> positions, const mp
   std::sort(order.begin(), order.end(), [&](VertexIndex a, VertexIndex b) {
     return positions[a].x != positions[b].x ? positions[a].x < positions[b].x : a < b;
   });
+  // Decided in doubles when the difference is clearly apart from the pixel
+  // (the subtraction's relative error is at most 2^-53), else exactly.
+  const double pixel = within.get_d();
   const auto close = [&](VertexIndex a, VertexIndex b, int axis) {
+    const double difference = std::fabs(positions[a][axis] - positions[b][axis]);
+    if (difference > pixel * (1 + 0x1p-40)) return false;
+    if (difference < pixel * (1 - 0x1p-40)) return true;
     return abs(mpq_class(positions[a][axis]) - positions[b][axis]) <= within;
   };
   UnionFind clusters;
@@ -1874,13 +1891,13 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
   constexpr std::size_t plain_steps = 2 * attempts, steps = plain_steps + 3 * fold_steps;
   // The last round (snapping), tried only when all of the above has failed, so
   // that no piece written before it existed is written differently, is 3D snap
-  // rounding at a coarser pixel: for each pixel of 2^k times the largest
+  // rounding at coarser pixels: for each pixel of 2^k times the largest
   // rounding move rho (k in snap_levels), vertices within a pixel of each other
   // are placed at one of them (snap_clusters) and edges passing within a pixel
   // of a vertex are routed through it (repair_merged_loops' `near`); then
   // attempts 1 to 3, each retried with the faces its failures find folded
   // merged (merge_folded_faces, every pair), until a retry finds no new pair.
-  // Why it ends: four pixels x three attempts x at most fold_retries retries,
+  // Why it ends: six pixels x three attempts x at most snap_retries tries,
   // each one pass of triangulate and certify, every part of which is finite
   // (clusters by one union-find; insertions only of existing vertices into
   // edges, each edge taking each vertex once; spike removal and splitting only
@@ -1888,20 +1905,21 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
   // nothing of it is trusted, the mesh is taken only when certify_rounded
   // passes (closed, oriented, manifold, no self-intersection, positive volume)
   // and when the volume it moved, measured exactly against the exact piece, is
-  // within the Steiner sweep of the moves it made (rounding_sweep_bound over the
-  // snapped positions: at most 2 d A + 4 d^2 P + 5 d^3 per fan triangle, d the
-  // furthest move of its corners, exactly). What vanishes is the part between vertices a pixel apart:
+  // within what rounding the piece's vertices alone can move (rounding_sweep_bound,
+  // as for folds merged), however large the pixel: what vanishes is a part
+  // thinner than the rounding of its coordinates, between vertices a pixel apart:
   // the tip of a wedge between near-parallel planes, thinner than the rounding
   // near their shared edge, which folded when its corners were rounded one by
   // one.
-  constexpr std::array<int, 4> snap_levels{1, 3, 6, 10};
-  constexpr std::size_t snap_steps = (attempts - 1) * fold_retries;
+  // (Pixels to 2^10 rho repair the fuzz's wedges; the pieces of a chain cut
+  // again as written, themselves wedges 2^-20 to 2^-40 thick, need 2^16 and
+  // 2^24: measured on the robustness corpus, 2026-12-03.)
+  constexpr std::array<int, 6> snap_levels{1, 3, 6, 10, 16, 24};
+  constexpr std::size_t snap_retries = 2, snap_steps = (attempts - 1) * snap_retries;
   constexpr std::size_t all_steps = steps + snap_levels.size() * snap_steps;
   std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts> snap_folds;
   std::array<bool, attempts> snap_stalled{};
   std::vector<VertexIndex> snapped_to;
-  std::vector<Vec3> snapped_positions;
-  bool snap_level_empty = false;
   mpq_class snap_pixel;
   std::array<std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts>, 3> fold_pairs;
   std::array<std::array<bool, attempts>, 3> fold_stalled{};
@@ -1921,8 +1939,8 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     const std::size_t phase = folding ? (step - plain_steps) / fold_steps : 0;
     const bool thin_only = phase != 1 && !snapping;
     const bool inserting = folding && phase == 2;
-    const std::size_t snap_retry = snapping ? (step - steps) % fold_retries : 0;
-    const std::size_t attempt = snapping  ? 1 + (step - steps) % snap_steps / fold_retries
+    const std::size_t snap_retry = snapping ? (step - steps) % snap_retries : 0;
+    const std::size_t attempt = snapping  ? 1 + (step - steps) % snap_steps / snap_retries
                                 : folding ? 1 + (step - plain_steps) % fold_steps / fold_retries
                                           : step % attempts;
     if (snapping && attempt == 1 && snap_retry == 0) {
@@ -1933,20 +1951,11 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         }
         reach.emplace(set, solid, output_positions);
       }
-      if (output_positions.empty()) {
-        for (VertexIndex v = 0; v < solid.defs.size(); ++v) {
-          output_positions.push_back(output_position(set, solid.defs[v], solid.approx[v]));
-        }
-      }
       const int level = snap_levels[(step - steps) / snap_steps];
       for (auto& pairs : snap_folds) pairs.clear();
       snap_stalled = {};
       snap_pixel = reach->rho * mpq_class(mpz_class(1) << level);
-      snap_level_empty = !snap_clusters(solid, output_positions, snap_pixel, snapped_to);
-      snapped_positions = output_positions;
-      if (!snap_level_empty) {
-        for (VertexIndex v = 0; v < solid.defs.size(); ++v) snapped_positions[v] = output_positions[snapped_to[v]];
-      }
+      snap_clusters(solid, output_positions, snap_pixel, snapped_to);
     }
     std::size_t snapped = 0;
     if (snapping) {
@@ -1979,6 +1988,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         reach.emplace(set, solid, output_positions);
       }
       inserted = insert_vertices_into_crossed_triangles(set, solid, *reach, mesh, face_of_triangle);
+
     }
     // (Not when folds were merged: their volume is held to its bound below.)
     if (solid.convex && merged == 0 && !folding && certify_star_shaped(mesh, vertex_average(mesh))) {
@@ -2060,8 +2070,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       written.inserted_vertices = inserted;
       written.snapped_vertices = snapped;
       if (sheets_cancelled > 0 || folding || snapping) {
-        report_moved_volume(set, solid, written,
-                            snapping ? std::span<const Vec3>(snapped_positions) : std::span<const Vec3>());
+        report_moved_volume(set, solid, written);
       }
       // On the last round (sheets over four corners, faces merged) the volume
       // the repairs moved is held to the bound of what rounding can move, or the
@@ -2120,8 +2129,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         if (sheets_cancelled > 0 || folding || snapping) {
           // The sheets' or the folds' volume as well: measured against the exact piece.
           const double separated_bound = written.moved_volume_bound;
-          report_moved_volume(set, solid, written,
-                              snapping ? std::span<const Vec3>(snapped_positions) : std::span<const Vec3>());
+          report_moved_volume(set, solid, written);
           written.moved_volume_bound += separated_bound;
         }
         // Folds merged: held to the bound, as on the last round (a fold's

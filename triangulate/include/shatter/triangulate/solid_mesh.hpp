@@ -168,8 +168,8 @@ struct RoundedSolid {
 /// `moved_volume_bound`).
 /// The last round, tried only when every other has failed, is 3D snap rounding
 /// at a coarser pixel (Halperin & Packer 2002's iterated snap rounding; CGAL 6's
-/// autorefine_triangle_soup snaps the same way): with pixels of 2, 8, 64 and 1024
-/// times the largest rounding move, vertices whose rounded positions lie within
+/// autorefine_triangle_soup snaps the same way): with pixels of 2^1, 2^3, 2^6,
+/// 2^10, 2^16 and 2^24 times the largest rounding move, vertices whose rounded positions lie within
 /// a pixel of each other (L-infinity, exactly) are placed at one of them (an
 /// input point when the cluster has one), and an edge that passes within a
 /// pixel of a vertex, between its ends, is routed through it; the loops are then
@@ -177,8 +177,9 @@ struct RoundedSolid {
 /// with the pairs each failure finds). The tip of a wedge between near-parallel
 /// planes, thinner than the rounding near the shared edge, so vanishes into the
 /// edge (`snapped_vertices`); the mesh is taken only when certified and when the
-/// volume moved, measured exactly, is within the sweep bound computed with the
-/// snapped positions' moves.
+/// volume moved, measured exactly against the exact piece (the signed volume
+/// difference), is within what rounding the piece's vertices can move (the sweep
+/// below), as for folds merged.
 /// A part thinner than the rounding that rounds flat (its triangles laid over each
 /// other once each way) vanishes into its neighbour (`vanished_triangles`); a piece
 /// that rounds flat whole, or that cannot be certified while its exact volume is
@@ -198,7 +199,7 @@ struct RoundedSolid {
 /// through it, merges of folded faces only remove loops, a hot pixel splits a
 /// triangle once per step, over a fixed set of four attempts, each tried again
 /// untangling edges, and three of them at most six times in each of three
-/// phases of folds and of four pixel sizes: a finite ladder of steps, each a
+/// phases of folds and of six pixel sizes: a finite ladder of steps, each a
 /// finite pass); deterministic. Failure: neither
 /// valid nor collapsed, `defect` names what the first rounding broke.
 RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options = {});
