@@ -418,28 +418,78 @@ void insert_along_loop_edges(std::vector<std::vector<std::vector<VertexIndex>>>&
 // inside an edge (the merged representatives, and the corners of loops that
 // changed), tested against every edge with a bounding-box filter (exact: the
 // positions are doubles).
+// `near`: when given, a candidate within that distance of an edge's line (the
+// Euclidean distance, compared exactly on the doubles) whose projection onto
+// the line falls strictly between the edge's ends is inserted too: the last
+// round's hot pixels in edges (snap_clusters), an edge passing within a pixel of
+// a vertex routed through it.
 void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vector<std::vector<VertexIndex>>>& loops,
-                         std::span<const VertexIndex> candidates) {
+                         std::span<const VertexIndex> candidates, const mpq_class* near = nullptr) {
+  // Within `near` of the line of a -> b and strictly between a and b along it.
+  const double near_squared = near != nullptr ? near->get_d() * near->get_d() : 0;
+  const auto near_segment = [&](const Vec3& pa, const Vec3& pb, const Vec3& p) {
+    // Clearly farther than `near` from the line, in doubles (a relative error
+    // far below the factor 2 allowed for), before the exact test.
+    const Vec3 dab = pb - pa, dap = p - pa;
+    const Vec3 c = cross(dab, dap);
+    if (dot(c, c) > 2 * near_squared * dot(dab, dab)) return false;
+    mpq_class ab[3], ap[3];
+    for (int k = 0; k < 3; ++k) ab[k] = mpq_class(pb[k]) - pa[k], ap[k] = mpq_class(p[k]) - pa[k];
+    const mpq_class along = ab[0] * ap[0] + ab[1] * ap[1] + ab[2] * ap[2];
+    const mpq_class length2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+    if (sgn(along) <= 0 || along >= length2) return false;
+    const mpq_class c0 = ab[1] * ap[2] - ab[2] * ap[1], c1 = ab[2] * ap[0] - ab[0] * ap[2],
+                    c2 = ab[0] * ap[1] - ab[1] * ap[0];
+    return c0 * c0 + c1 * c1 + c2 * c2 <= *near * *near * length2;
+  };
+  const double margin = near != nullptr ? 2 * near->get_d() : 0;
+  // The candidates by x, so that each edge visits only those within its box's x range.
+  std::vector<VertexIndex> by_x(candidates.begin(), candidates.end());
+  std::sort(by_x.begin(), by_x.end(), [&](VertexIndex u, VertexIndex w) {
+    return positions[u].x != positions[w].x ? positions[u].x < positions[w].x : u < w;
+  });
   // 1. Vertices inside edges.
   insert_along_loop_edges(loops, [&](VertexIndex a, VertexIndex b) {
     const Vec3 &pa = positions[a], &pb = positions[b];
-    const Vec3 lo{std::min(pa.x, pb.x), std::min(pa.y, pb.y), std::min(pa.z, pb.z)};
-    const Vec3 hi{std::max(pa.x, pb.x), std::max(pa.y, pb.y), std::max(pa.z, pb.z)};
+    const Vec3 lo{std::min(pa.x, pb.x) - margin, std::min(pa.y, pb.y) - margin, std::min(pa.z, pb.z) - margin};
+    const Vec3 hi{std::max(pa.x, pb.x) + margin, std::max(pa.y, pb.y) + margin, std::max(pa.z, pb.z) + margin};
     std::vector<VertexIndex> inside;
-    for (const VertexIndex v : candidates) {
+    const auto first = std::lower_bound(by_x.begin(), by_x.end(), lo.x,
+                                        [&](VertexIndex v, double x) { return positions[v].x < x; });
+    for (auto it = first; it != by_x.end() && positions[*it].x <= hi.x; ++it) {
+      const VertexIndex v = *it;
       const Vec3& p = positions[v];
       if (v == a || v == b || p.x < lo.x || p.x > hi.x || p.y < lo.y || p.y > hi.y || p.z < lo.z || p.z > hi.z) {
         continue;
       }
-      if (strictly_inside_segment(pa, pb, p)) inside.push_back(v);
+      if (strictly_inside_segment(pa, pb, p) || (near != nullptr && near_segment(pa, pb, p))) inside.push_back(v);
     }
     // In order from a to b, along the first coordinate where they differ
-    // (exact comparisons of the doubles themselves).
+    // (exact comparisons of the doubles themselves); near the edge but off its
+    // line, by the projection onto it (exactly), ties by index, so that both
+    // ways of an edge take the same vertices in reverse order.
     const auto get = pa.x != pb.x ? &Vec3::x : pa.y != pb.y ? &Vec3::y : &Vec3::z;
     const bool rising = pa.*get < pb.*get;
-    std::sort(inside.begin(), inside.end(), [&](VertexIndex u, VertexIndex w) {
-      return rising ? positions[u].*get < positions[w].*get : positions[u].*get > positions[w].*get;
-    });
+    if (near == nullptr) {
+      std::sort(inside.begin(), inside.end(), [&](VertexIndex u, VertexIndex w) {
+        return rising ? positions[u].*get < positions[w].*get : positions[u].*get > positions[w].*get;
+      });
+    } else {
+      // The projection from the edge's smaller end, so that both ways agree.
+      const Vec3& from = a < b ? pa : pb;
+      const Vec3& to = a < b ? pb : pa;
+      const auto along = [&](VertexIndex v) {
+        mpq_class t = 0;
+        for (int k = 0; k < 3; ++k) t += (mpq_class(positions[v][k]) - from[k]) * (mpq_class(to[k]) - from[k]);
+        return t;
+      };
+      std::vector<std::pair<mpq_class, VertexIndex>> keyed;
+      for (const VertexIndex v : inside) keyed.emplace_back(along(v), v);
+      std::sort(keyed.begin(), keyed.end());
+      if (b < a) std::reverse(keyed.begin(), keyed.end());
+      inside.clear();
+      for (const auto& [t, v] : keyed) inside.push_back(v);
+    }
     inside.erase(std::unique(inside.begin(), inside.end()), inside.end());
     return inside;
   });
@@ -869,7 +919,8 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
                  bool repair_loops = false, bool route_crossed = false,
                  std::span<const std::pair<std::uint32_t, std::uint32_t>> folds = {},
                  std::vector<std::uint32_t>* face_of_triangle = nullptr, std::size_t* folded = nullptr,
-                 bool thin_folds_only = false) {
+                 bool thin_folds_only = false, std::span<const VertexIndex> snapped_to = {},
+                 const mpq_class* snap_within = nullptr) {
   const std::size_t n = solid.defs.size();
   thread_local std::vector<Vec3> positions;
   thread_local std::vector<PointDef> placed;
@@ -879,6 +930,13 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
     const OutputPoint point = output_point(set, solid.defs[v], solid.approx[v]);
     positions[v] = point.position;
     placed[v] = point.placed;
+  }
+  // The last round's hot pixels (snap_clusters): every vertex takes its
+  // cluster's representative's place, and so merges with it below.
+  if (!snapped_to.empty()) {
+    for (std::size_t v = 0; v < n; ++v) {
+      if (snapped_to[v] != v) positions[v] = positions[snapped_to[v]], placed[v] = placed[snapped_to[v]];
+    }
   }
   // One representative per position: an open-addressing table keyed by a hash of
   // the position, collisions resolved by comparing positions.
@@ -925,7 +983,7 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
   if (folded != nullptr) *folded = 0;
   // Folds are merged on the loops over representatives, which the repair
   // builds, merged vertices or not.
-  const bool repairing = repair_loops && (merged > 0 || (route_crossed && !folds.empty()));
+  const bool repairing = repair_loops && (merged > 0 || (route_crossed && !folds.empty()) || snap_within != nullptr);
   if (repairing) {
     repaired.assign(solid.faces.size(), {});
     repaired_changed.assign(solid.faces.size(), 0);
@@ -959,13 +1017,13 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
     }
     std::vector<VertexIndex> candidates;
     for (VertexIndex v = 0; v < n; ++v) {
-      if (candidate[v] && representative[v] == v) candidates.push_back(v);
+      if ((candidate[v] || snap_within != nullptr) && representative[v] == v) candidates.push_back(v);
     }
     // Only loops through a candidate, or along an edge it may lie in, can
     // change; a loop that changes marks its face.
     const auto before = repaired;
     if (route_crossed) route_edges_through_crossed_corners(set, solid, placed, positions, repaired);
-    repair_merged_loops(positions, repaired, candidates);
+    repair_merged_loops(positions, repaired, candidates, snap_within);
     for (std::uint32_t f = 0; f < solid.faces.size(); ++f) repaired_changed[f] |= repaired[f] != before[f];
     if (route_crossed) {
       merge_coplanar_sheets(set, solid, positions, repaired, repaired_changed, emit_as, home);
@@ -1660,6 +1718,66 @@ std::size_t insert_vertices_into_crossed_triangles(const PlaneSet& set, const So
   return inserted;
 }
 
+// The last round's hot pixels (3D snap rounding, Halperin & Packer 2002's
+// iterated form, Lazard & Valque 2025 behind CGAL 6's autorefine_triangle_soup:
+// features closer than the rounding unit are snapped together). Rounding each
+// vertex on its own to doubles can scramble vertices that lie closer together
+// than the rounding moves them: the tip of a wedge between near-parallel planes
+// holds corners of both of its faces ulps apart, and a face a few ulps off
+// another holds its corners that close to the other's; rounded separately they
+// change order and the faces fold. Vertices whose output positions lie within
+// `within` of each other (the L-infinity norm, decided exactly on the doubles)
+// are put into one cluster, transitively, and each vertex of a cluster is
+// placed at its representative's output position: an input point of the
+// cluster when it has one (doubles hold it exactly), else its smallest index.
+// The part between the vertices of a cluster, thinner than the pixel, then
+// vanishes, as parts that rounded onto one point do. `snapped_to[v]`: v's
+// representative (v itself when alone). Returns whether any cluster has two
+// vertices.
+bool snap_clusters(const Solid& solid, std::span<const Vec3> positions, const mpq_class& within,
+                   std::vector<VertexIndex>& snapped_to) {
+  const auto n = static_cast<VertexIndex>(positions.size());
+  std::vector<VertexIndex> order(n);
+  for (VertexIndex v = 0; v < n; ++v) order[v] = v;
+  std::sort(order.begin(), order.end(), [&](VertexIndex a, VertexIndex b) {
+    return positions[a].x != positions[b].x ? positions[a].x < positions[b].x : a < b;
+  });
+  // Decided in doubles when the difference is clearly apart from the pixel
+  // (the subtraction's relative error is at most 2^-53), else exactly.
+  const double pixel = within.get_d();
+  const auto close = [&](VertexIndex a, VertexIndex b, int axis) {
+    const double difference = std::fabs(positions[a][axis] - positions[b][axis]);
+    if (difference > pixel * (1 + 0x1p-40)) return false;
+    if (difference < pixel * (1 - 0x1p-40)) return true;
+    return abs(mpq_class(positions[a][axis]) - positions[b][axis]) <= within;
+  };
+  UnionFind clusters;
+  clusters.reset(n);
+  bool any = false;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    for (std::size_t j = i + 1; j < order.size() && close(order[i], order[j], 0); ++j) {
+      if (close(order[i], order[j], 1) && close(order[i], order[j], 2)) {
+        clusters.unite(order[i], order[j]);
+        any = true;
+      }
+    }
+  }
+  snapped_to.resize(n);
+  for (VertexIndex v = 0; v < n; ++v) snapped_to[v] = v;
+  if (!any) return false;
+  std::vector<VertexIndex> best(n, no_index);
+  const auto better = [&](VertexIndex a, VertexIndex b) {  // a preferred to b
+    const bool ia = solid.defs[a].kind == PointKind::input, ib = solid.defs[b].kind == PointKind::input;
+    return ia != ib ? ia : a < b;
+  };
+  for (VertexIndex v = 0; v < n; ++v) {
+    VertexIndex& b = best[clusters.find(v)];
+    if (b == no_index || better(v, b)) b = v;
+  }
+  for (VertexIndex v = 0; v < n; ++v) snapped_to[v] = best[clusters.find(v)];
+  return true;
+}
+
 // Adds to `pairs` (kept sorted and unique, the smaller face first) the pairs
 // of faces whose triangles in `mesh` fold against each other: triangles of
 // different faces around an edge that more than two triangles share, or run one
@@ -1771,17 +1889,81 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
   // vertices into the triangles they crossed within rounding's reach
   // (insert_vertices_into_crossed_triangles, 3D snap rounding's hot pixels).
   constexpr std::size_t plain_steps = 2 * attempts, steps = plain_steps + 3 * fold_steps;
+  // The last round (snapping), tried only when all of the above has failed, so
+  // that no piece written before it existed is written differently, is 3D snap
+  // rounding at coarser pixels: for each pixel of 2^k times the largest
+  // rounding move rho (k in snap_levels), vertices within a pixel of each other
+  // are placed at one of them (snap_clusters) and edges passing within a pixel
+  // of a vertex are routed through it (repair_merged_loops' `near`); then
+  // attempts 1 to 3, each retried with the faces its failures find folded
+  // merged (merge_folded_faces, every pair), until a retry finds no new pair.
+  // Why it ends: six pixels x three attempts x at most snap_retries tries,
+  // each one pass of triangulate and certify, every part of which is finite
+  // (clusters by one union-find; insertions only of existing vertices into
+  // edges, each edge taking each vertex once; spike removal and splitting only
+  // shorten loops; merges only remove faces). Why what it writes is valid:
+  // nothing of it is trusted, the mesh is taken only when certify_rounded
+  // passes (closed, oriented, manifold, no self-intersection, positive volume)
+  // and when the volume it moved, measured exactly against the exact piece, is
+  // within what rounding the piece's vertices alone can move (rounding_sweep_bound,
+  // as for folds merged), however large the pixel: what vanishes is a part
+  // thinner than the rounding of its coordinates, between vertices a pixel apart:
+  // the tip of a wedge between near-parallel planes, thinner than the rounding
+  // near their shared edge, which folded when its corners were rounded one by
+  // one.
+  // (Pixels to 2^10 rho repair the fuzz's wedges; the pieces of a chain cut
+  // again as written, themselves wedges 2^-20 to 2^-40 thick, need 2^16 and
+  // 2^24: measured on the robustness corpus, 2026-12-03.)
+  constexpr std::array<int, 6> snap_levels{1, 3, 6, 10, 16, 24};
+  constexpr std::size_t snap_retries = 2, snap_steps = (attempts - 1) * snap_retries;
+  constexpr std::size_t all_steps = steps + snap_levels.size() * snap_steps;
+  std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts> snap_folds;
+  std::array<bool, attempts> snap_stalled{};
+  std::vector<VertexIndex> snapped_to;
+  mpq_class snap_pixel;
   std::array<std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts>, 3> fold_pairs;
   std::array<std::array<bool, attempts>, 3> fold_stalled{};
   std::optional<RoundingReach> reach;
   std::vector<Vec3> output_positions;
   std::vector<std::uint32_t> face_of_triangle;
-  for (std::size_t step = 0; step < steps; ++step) {
-    const bool folding = step >= plain_steps;
+  // Whether the piece's exact volume is within what rounding its vertices can
+  // move (rounding_sweep_bound): then it may vanish whole (see below).
+  std::optional<bool> thin_whole;
+  const auto within_its_rounding = [&] {
+    if (!thin_whole) thin_whole = exact_six_volume(set, solid) <= 6 * rounding_sweep_bound(set, solid);
+    return *thin_whole;
+  };
+  for (std::size_t step = 0; step < all_steps; ++step) {
+    const bool snapping = step >= steps;
+    const bool folding = step >= plain_steps && !snapping;
     const std::size_t phase = folding ? (step - plain_steps) / fold_steps : 0;
-    const bool thin_only = phase != 1;
+    const bool thin_only = phase != 1 && !snapping;
     const bool inserting = folding && phase == 2;
-    const std::size_t attempt = folding ? 1 + (step - plain_steps) % fold_steps / fold_retries : step % attempts;
+    const std::size_t snap_retry = snapping ? (step - steps) % snap_retries : 0;
+    const std::size_t attempt = snapping  ? 1 + (step - steps) % snap_steps / snap_retries
+                                : folding ? 1 + (step - plain_steps) % fold_steps / fold_retries
+                                          : step % attempts;
+    if (snapping && attempt == 1 && snap_retry == 0) {
+      // A new pixel size: the clusters it makes, and where they place the vertices.
+      if (!reach) {
+        for (VertexIndex v = 0; v < solid.defs.size(); ++v) {
+          output_positions.push_back(output_position(set, solid.defs[v], solid.approx[v]));
+        }
+        reach.emplace(set, solid, output_positions);
+      }
+      const int level = snap_levels[(step - steps) / snap_steps];
+      for (auto& pairs : snap_folds) pairs.clear();
+      snap_stalled = {};
+      snap_pixel = reach->rho * mpq_class(mpz_class(1) << level);
+      snap_clusters(solid, output_positions, snap_pixel, snapped_to);
+    }
+    std::size_t snapped = 0;
+    if (snapping) {
+      for (VertexIndex v = 0; v < solid.defs.size(); ++v) snapped += snapped_to[v] != v;
+    }
+    if (snapping && ((snap_retry > 0 && (snap_folds[attempt].empty() || snap_stalled[attempt])))) {
+      continue;
+    }
     const bool untangle_edges = step >= attempts;
     // The second round's pairs start every phase; each phase adds its own.
     auto& folds = fold_pairs[phase];
@@ -1791,9 +1973,12 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     std::size_t merged = 0, folded_faces = 0;
     ValidationReport report;
     triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of, attempt > 0, untangle_edges,
-                folding ? std::span<const std::pair<std::uint32_t, std::uint32_t>>(folds[attempt])
-                        : std::span<const std::pair<std::uint32_t, std::uint32_t>>(),
-                untangle_edges ? &face_of_triangle : nullptr, &folded_faces, thin_only);
+                folding    ? std::span<const std::pair<std::uint32_t, std::uint32_t>>(folds[attempt])
+                : snapping ? std::span<const std::pair<std::uint32_t, std::uint32_t>>(snap_folds[attempt])
+                           : std::span<const std::pair<std::uint32_t, std::uint32_t>>(),
+                untangle_edges ? &face_of_triangle : nullptr, &folded_faces, thin_only,
+                snapping ? std::span<const VertexIndex>(snapped_to) : std::span<const VertexIndex>(),
+                snapping ? &snap_pixel : nullptr);
     std::size_t inserted = 0;
     if (inserting) {
       if (!reach) {
@@ -1803,6 +1988,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         reach.emplace(set, solid, output_positions);
       }
       inserted = insert_vertices_into_crossed_triangles(set, solid, *reach, mesh, face_of_triangle);
+
     }
     // (Not when folds were merged: their volume is held to its bound below.)
     if (solid.convex && merged == 0 && !folding && certify_star_shaped(mesh, vertex_average(mesh))) {
@@ -1838,6 +2024,10 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
                                                            untangle_edges ? &kept : nullptr);
           gone > 0) {
         if (sheetless.triangles.empty()) {
+          // A repair that merged folds or snapped vertices can flatten a piece
+          // that is not thin (it merged across a thick part): when the piece
+          // cannot vanish whole (below), the later repairs are tried instead.
+          if ((folding || snapping) && !within_its_rounding()) continue;
           flattened_whole = true;
           break;
         }
@@ -1859,7 +2049,12 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     // The faces this attempt folded (what is left once sheets vanished), for
     // the folding round: only a repair attempt (1 to 3) of the second round or
     // the folding round collects them.
-    if (untangle_edges && attempt > 0 && !report.valid() && !mesh.triangles.empty()) {
+    if (snapping && !report.valid() && !mesh.triangles.empty()) {
+      const std::size_t before = snap_folds[attempt].size();
+      add_folded_face_pairs(mesh, face_of_triangle, snap_folds[attempt]);
+      if (snap_folds[attempt].size() == before) snap_stalled[attempt] = true;
+    }
+    if (untangle_edges && attempt > 0 && !snapping && !report.valid() && !mesh.triangles.empty()) {
       const std::size_t before = folds[attempt].size();
       add_folded_face_pairs(mesh, face_of_triangle, folds[attempt]);
       if (!folding) fold_pairs[1][attempt] = fold_pairs[2][attempt] = folds[attempt];
@@ -1873,7 +2068,10 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       written.vanished_triangles = sheets_cancelled;
       written.folded_faces = folded_faces;
       written.inserted_vertices = inserted;
-      if (sheets_cancelled > 0 || folding) report_moved_volume(set, solid, written);
+      written.snapped_vertices = snapped;
+      if (sheets_cancelled > 0 || folding || snapping) {
+        report_moved_volume(set, solid, written);
+      }
       // On the last round (sheets over four corners, faces merged) the volume
       // the repairs moved is held to the bound of what rounding can move, or the
       // mesh is not taken.
@@ -1884,6 +2082,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       // A fold merged over more than rounding can move: retrying with the
       // same pairs would only do it again.
       if (folding) folds_stalled[attempt] = true;
+      if (snapping) snap_stalled[attempt] = true;
       continue;
     }
     // The piece may touch itself, exactly (see separate_touching): only then is
@@ -1897,7 +2096,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     if (!may_touch) continue;
     // The second round repeats the first but for the edges: nothing else to try.
     // (The folding round meets new meshes: a fold merged can leave a pinch.)
-    if (untangle_edges && !folding && report.find(DefectKind::non_manifold_edge) == nullptr) continue;
+    if (untangle_edges && !folding && !snapping && report.find(DefectKind::non_manifold_edge) == nullptr) continue;
     std::vector<std::uint32_t> partner;
     if (report.find(DefectKind::non_manifold_edge) != nullptr) {
       std::optional<std::vector<std::uint32_t>> paired = pair_around_non_manifold_edges(mesh);
@@ -1926,7 +2125,8 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         written.vanished_triangles = sheets_cancelled;
         written.folded_faces = folded_faces;
         written.inserted_vertices = inserted;
-        if (sheets_cancelled > 0 || folding) {
+        written.snapped_vertices = snapped;
+        if (sheets_cancelled > 0 || folding || snapping) {
           // The sheets' or the folds' volume as well: measured against the exact piece.
           const double separated_bound = written.moved_volume_bound;
           report_moved_volume(set, solid, written);
@@ -1934,7 +2134,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         }
         // Folds merged: held to the bound, as on the last round (a fold's
         // wedge is thinner than the rounding, so its volume is within it).
-        if (folding && written.moved_volume > written.moved_volume_bound) break;
+        if ((folding || snapping) && written.moved_volume > written.moved_volume_bound) break;
         written.valid = true;
         return written;
       }

@@ -113,6 +113,11 @@ struct RoundedSolid {
   /// Rounded vertices inserted into a triangle of a face they crossed within
   /// rounding's reach of its plane (3D snap rounding's hot pixels; see round_solid).
   std::size_t inserted_vertices = 0;
+  /// Vertices the last round placed at another vertex's rounded position, within
+  /// a pixel of it, and edges routed through a vertex within a pixel of them
+  /// (snap rounding's hot pixels at a coarser pixel; see round_solid): the count
+  /// of vertices so moved.
+  std::size_t snapped_vertices = 0;
   /// |volume change| the repairs made: the separation's moves, the written mesh
   /// against the exact piece when parts of it vanished as sheets, the whole
   /// exact volume when the piece collapsed (doubles, from exact values).
@@ -161,6 +166,20 @@ struct RoundedSolid {
 /// exactly against the exact piece (`moved_volume`), is within what rounding the
 /// piece's vertices can move (the sweep below, plus a separation's own bound:
 /// `moved_volume_bound`).
+/// The last round, tried only when every other has failed, is 3D snap rounding
+/// at a coarser pixel (Halperin & Packer 2002's iterated snap rounding; CGAL 6's
+/// autorefine_triangle_soup snaps the same way): with pixels of 2^1, 2^3, 2^6,
+/// 2^10, 2^16 and 2^24 times the largest rounding move, vertices whose rounded positions lie within
+/// a pixel of each other (L-infinity, exactly) are placed at one of them (an
+/// input point when the cluster has one), and an edge that passes within a
+/// pixel of a vertex, between its ends, is routed through it; the loops are then
+/// repaired as above (spikes, splits, sheets, separation, folds merged, retried
+/// with the pairs each failure finds). The tip of a wedge between near-parallel
+/// planes, thinner than the rounding near the shared edge, so vanishes into the
+/// edge (`snapped_vertices`); the mesh is taken only when certified and when the
+/// volume moved, measured exactly against the exact piece (the signed volume
+/// difference), is within what rounding the piece's vertices can move (the sweep
+/// below), as for folds merged.
 /// A part thinner than the rounding that rounds flat (its triangles laid over each
 /// other once each way) vanishes into its neighbour (`vanished_triangles`); a piece
 /// that rounds flat whole, or that cannot be certified while its exact volume is
@@ -180,7 +199,8 @@ struct RoundedSolid {
 /// through it, merges of folded faces only remove loops, a hot pixel splits a
 /// triangle once per step, over a fixed set of four attempts, each tried again
 /// untangling edges, and three of them at most six times in each of three
-/// phases of folds); deterministic. Failure: neither
+/// phases of folds and of six pixel sizes: a finite ladder of steps, each a
+/// finite pass); deterministic. Failure: neither
 /// valid nor collapsed, `defect` names what the first rounding broke.
 RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options = {});
 
