@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "shatter/formats/file.hpp"
+#include "shatter/meshtree/tree.hpp"
 #include "errors.hpp"
 #include "viewer_page.hpp"
 
@@ -75,7 +76,8 @@ NodeSelection selection_of(const std::string& text) {
 
 std::size_t triangles_of(const MeshTree& tree, const std::vector<NodeIndex>& nodes) {
   std::size_t triangles = 0;
-  for (NodeIndex node : nodes) triangles += tree.nodes[node].mesh.triangle_count();
+  NodeShapes shapes(tree);
+  for (NodeIndex node : nodes) triangles += shapes(node).mesh.triangle_count();
   return triangles;
 }
 
@@ -88,7 +90,8 @@ std::vector<fs::path> write_node_mesh_files(OutputTransaction& output, const Mes
   paths.reserve(nodes.size());
   for (NodeIndex node : nodes) paths.push_back(folder / mesh_file_name(tree, node, naming, format));
   output.create_folder(folder);
-  for (std::size_t i = 0; i < nodes.size(); ++i) output.write_mesh(paths[i], tree.nodes[nodes[i]].mesh, format);
+  NodeShapes shapes(tree);  // `fracture` exports a lean build's packed leaves
+  for (std::size_t i = 0; i < nodes.size(); ++i) output.write_mesh(paths[i], shapes(nodes[i]).mesh, format);
   return paths;
 }
 

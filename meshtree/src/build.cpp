@@ -365,10 +365,7 @@ class Builder {
   /// only its plane, depth and mass) and the writer unpacks them one at a time.
   void cut_kept(BuildNode& node) const {
     if (!lean_ || node.children.empty()) return;
-    node.packed_convex = node.solid.convex;
-    node.packed = pack_node_shape(node.mesh, node.solid);
-    node.mesh = Mesh();
-    node.solid = Solid();
+    pack(node);
   }
 
   /// `node`'s cut is undone: a packed node gets its mesh and solid back.
@@ -379,13 +376,24 @@ class Builder {
   }
 
   /// `node` is a leaf of the finished tree (a cut undone later leaves another).
+  /// A lean build packs it, as a cut node: what reads it later (hulls, bonds,
+  /// the writer) unpacks it (NodeShapes), and a million leaves' arrays would
+  /// otherwise be the largest part of the tree (README "Lean memory").
   void leaf_finished(BuildNode& node) {
-    if (lean_) release_approximations(node.solid);
+    if (lean_) pack(node);
     const std::size_t done = ++leaves_done_;
     if (progress_) progress_(done);
   }
 
   bool lean() const { return lean_; }
+
+  // A lean build's packing of `node`'s mesh and solid (its approximations go).
+  static void pack(BuildNode& node) {
+    node.packed_convex = node.solid.convex;
+    node.packed = pack_node_shape(node.mesh, node.solid);
+    node.mesh = Mesh();
+    node.solid = Solid();
+  }
 
   const TreeRecipe& recipe() const { return recipe_; }
   const PlaneInput& plane_input() const { return *plane_input_; }
@@ -663,12 +671,12 @@ void plane_hulls(tbb::task_arena& arena, MeshTree& tree) {
       tbb::parallel_for(std::size_t{0}, level.size(), [&](std::size_t i) {
         MeshTreeNode& node = tree.nodes[level[i]];
         if (node.convex) return;
+        NodeShapes shapes(tree);  // a lean build's nodes are packed
         if (node.is_leaf()) {
-          node.hull = convex_hull_of(node.mesh);
+          node.hull = convex_hull_of(shapes(level[i]).mesh);
           return;
         }
         std::vector<Vec3> points;
-        NodeShapes shapes(tree);  // a lean build's convex child may be packed: its hull is its mesh
         for (const NodeIndex c : node.children) {
           const Mesh& child_hull = tree.nodes[c].convex ? shapes(c).mesh : tree.nodes[c].hull;
           points.insert(points.end(), child_hull.positions.begin(), child_hull.positions.end());

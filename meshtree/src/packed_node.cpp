@@ -89,6 +89,11 @@ class Unpacker {
     if (count != 0) std::memcpy(values.data(), bytes_.data() + at_, count * sizeof(T));
     at_ += count * sizeof(T);
   }
+  /// Steps over `count` elements of `size` bytes.
+  void skip(std::size_t count, std::size_t size) {
+    if (count > (bytes_.size() - at_) / size) throw std::invalid_argument("packed node: cut short");
+    at_ += count * size;
+  }
   PlaneRef plane() {
     const std::uint64_t code = varint();
     if (code == 0) return PlaneRef{no_index};
@@ -207,8 +212,11 @@ std::vector<std::uint8_t> pack_node_shape(const Mesh& mesh, const Solid& solid, 
   return out.take();
 }
 
-void unpack_node_shape(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh,
-                       Solid& solid) {
+namespace {
+
+// Unpacks into `mesh` and `solid`; a null `mesh` is read past (its bytes
+// checked as they are when unpacked) and left out.
+void unpack(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh* mesh, Solid& solid) {
   if (bytes.empty()) throw std::invalid_argument("packed node: cut short");
   // Names that are already the tree's are kept whatever the path.
   const bool named_by_node = (bytes[0] & named_by_node_bit) != 0;
@@ -221,23 +229,39 @@ void unpack_node_shape(std::span<const std::uint8_t> bytes, std::span<const Node
   const std::size_t normal_count = in.count(sizeof(Vec3));
   const std::size_t uv_count = in.count(sizeof(Vec2));
   const std::size_t tangent_count = in.count(sizeof(Vec4));
-  in.raw(mesh.positions, position_count);
-  mesh.triangles.resize(triangle_count);
-  for (Triangle& triangle : mesh.triangles) {
-    for (VertexIndex& vertex : triangle) vertex = in.u32();
+  if (mesh == nullptr) {
+    in.skip(position_count, sizeof(Vec3));
+    for (std::size_t i = 0; i < 3 * triangle_count; ++i) in.u32();
+    const std::size_t runs = in.count(2);
+    std::uint64_t covered = 0;
+    for (std::size_t r = 0; r < runs; ++r) {
+      in.surface();
+      const std::uint64_t length = in.varint();
+      if (length > triangle_count - covered) throw std::invalid_argument("packed node: surface runs beyond the triangles");
+      covered += length;
+    }
+    in.skip(normal_count, sizeof(Vec3));
+    in.skip(uv_count, sizeof(Vec2));
+    in.skip(tangent_count, sizeof(Vec4));
+  } else {
+    in.raw(mesh->positions, position_count);
+    mesh->triangles.resize(triangle_count);
+    for (Triangle& triangle : mesh->triangles) {
+      for (VertexIndex& vertex : triangle) vertex = in.u32();
+    }
+    const std::size_t runs = in.count(2);
+    mesh->surfaces.clear();
+    mesh->surfaces.reserve(triangle_count);
+    for (std::size_t r = 0; r < runs; ++r) {
+      const SurfaceId surface = in.surface();
+      const std::uint64_t length = in.varint();
+      if (length > triangle_count - mesh->surfaces.size()) throw std::invalid_argument("packed node: surface runs beyond the triangles");
+      mesh->surfaces.insert(mesh->surfaces.end(), static_cast<std::size_t>(length), surface);
+    }
+    in.raw(mesh->corners.normals, normal_count);
+    in.raw(mesh->corners.uvs, uv_count);
+    in.raw(mesh->corners.tangents, tangent_count);
   }
-  const std::size_t runs = in.count(2);
-  mesh.surfaces.clear();
-  mesh.surfaces.reserve(triangle_count);
-  for (std::size_t r = 0; r < runs; ++r) {
-    const SurfaceId surface = in.surface();
-    const std::uint64_t length = in.varint();
-    if (length > triangle_count - mesh.surfaces.size()) throw std::invalid_argument("packed node: surface runs beyond the triangles");
-    mesh.surfaces.insert(mesh.surfaces.end(), static_cast<std::size_t>(length), surface);
-  }
-  in.raw(mesh.corners.normals, normal_count);
-  in.raw(mesh.corners.uvs, uv_count);
-  in.raw(mesh.corners.tangents, tangent_count);
 
   const std::size_t def_count = in.count(2);
   const std::size_t face_count = in.count(6);
@@ -297,6 +321,17 @@ void unpack_node_shape(std::span<const std::uint8_t> bytes, std::span<const Node
   in.expect_end();
 }
 
+}  // namespace
+
+void unpack_node_shape(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh,
+                       Solid& solid) {
+  unpack(bytes, path, &mesh, solid);
+}
+
+void unpack_node_solid(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Solid& solid) {
+  unpack(bytes, path, nullptr, solid);
+}
+
 void rename_by_path(std::span<const NodeIndex> path, Mesh& mesh, Solid& solid) {
   for (SurfaceId& surface : mesh.surfaces) {
     if (surface != original_surface) surface = cap_surface_of(path[surface - 1]);
@@ -330,15 +365,27 @@ void pack_leaves(MeshTree& tree) {
   }
 }
 
-NodeShape NodeShapes::operator()(NodeIndex node) {
-  const MeshTreeNode& own = tree_.nodes[node];
-  if (!tree_.is_packed(node)) return {own.mesh, own.solid};
-  path_.assign(std::size_t{own.depth} + 1, no_node);
+void NodeShapes::find_path(NodeIndex node) {
+  path_.assign(std::size_t{tree_.nodes[node].depth} + 1, no_node);
   for (NodeIndex a = node; a != no_node && tree_.nodes[a].depth < path_.size(); a = tree_.nodes[a].parent) {
     path_[tree_.nodes[a].depth] = a;
   }
+}
+
+NodeShape NodeShapes::operator()(NodeIndex node) {
+  const MeshTreeNode& own = tree_.nodes[node];
+  if (!tree_.is_packed(node)) return {own.mesh, own.solid};
+  find_path(node);
   unpack_node_shape(tree_.packed_shapes[node], path_, mesh_, solid_);
   return {mesh_, solid_};
+}
+
+const Solid& NodeShapes::solid(NodeIndex node) {
+  const MeshTreeNode& own = tree_.nodes[node];
+  if (!tree_.is_packed(node)) return own.solid;
+  find_path(node);
+  unpack_node_solid(tree_.packed_shapes[node], path_, solid_);
+  return solid_;
 }
 
 }  // namespace shatter

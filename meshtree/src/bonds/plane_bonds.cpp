@@ -16,6 +16,12 @@
 // point, and a non-convex face is triangulated on a copy of its leaf's solid
 // with the approximations filled. Either way the values are approximate()'s, so
 // the bonds are the same bit for bit.
+//
+// A lean tree's leaves are packed (packed_node.hpp): their solids are unpacked
+// as the cuts meet them, into a small cache by leaf (the cuts go in preorder,
+// so a subtree's cuts, which meet the same few leaves, come one after the
+// other), and each cap corner's definition is kept beside its approximation,
+// so the pairs are tested without the leaves' solids.
 
 #include <algorithm>
 #include <array>
@@ -34,9 +40,9 @@ namespace {
 using detail::Clipper;
 
 // One convex part of a cap face: corners counter-clockwise in the projection's
-// raw frame, as vertex indices of the leaf's solid and as rounded 2D points.
+// raw frame, as their vertices' definitions and as rounded 2D points.
 struct Part {
-  std::uint32_t first, count;  // into CutFaces::corners / points
+  std::uint32_t first, count;  // into corner_defs_ / points_
   double min_u, max_u, min_v, max_v;
 };
 
@@ -57,7 +63,10 @@ double quotient_error(const Estimate& x, const Estimate& w) {
 
 class PlaneBonds {
  public:
-  explicit PlaneBonds(const MeshTree& tree) : tree_(tree), set_(tree.plane_set()) {}
+  explicit PlaneBonds(const MeshTree& tree) : tree_(tree), set_(tree.plane_set()) {
+    cache_.reserve(cache_slots);
+    for (std::size_t i = 0; i < cache_slots; ++i) cache_.push_back({no_leaf, NodeShapes(tree)});
+  }
 
   std::vector<Bond> run() {
     gather_faces_by_cut();
@@ -105,7 +114,7 @@ class PlaneBonds {
   void gather_faces_by_cut() {
     refs_.clear();
     for (LeafIndex leaf = 0; leaf < tree_.leaf_count(); ++leaf) {
-      const Solid& solid = tree_.leaf(leaf).solid;
+      const Solid& solid = leaf_solid(leaf);
       for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
         const SurfaceId surface = solid.faces[f].surface;
         if (surface == original_surface || surface - 1 >= tree_.cut_planes.size()) continue;
@@ -141,7 +150,7 @@ class PlaneBonds {
 
   // The face's convex parts, counter-clockwise in the raw projection frame.
   void add_face(const FaceRef& ref) {
-    const Solid& solid = tree_.leaf(ref.leaf).solid;
+    const Solid& solid = leaf_solid(ref.leaf);
     const SolidFace& face = solid.faces[ref.face];
     CapFace cap{ref.leaf, leaf_is_above(ref.cut, ref.leaf, face), static_cast<std::uint32_t>(parts_.size()), 0,
                 INFINITY, -INFINITY, INFINITY, -INFINITY};
@@ -170,6 +179,20 @@ class PlaneBonds {
     faces_.push_back(cap);
   }
 
+  // The solid of `leaf`: its own, or unpacked into the cache's slot for it
+  // (valid until the next call).
+  const Solid& leaf_solid(LeafIndex leaf) {
+    const NodeIndex node = tree_.leaf_nodes[leaf];
+    if (!tree_.is_packed(node)) return tree_.nodes[node].solid;
+    CachedSolid& slot = cache_[leaf % cache_slots];
+    if (slot.leaf != leaf) {
+      slot.leaf = no_leaf;  // until it unpacks
+      slot.solid = &slot.shapes.solid(node);
+      slot.leaf = leaf;
+    }
+    return *slot.solid;
+  }
+
   // The solid of `leaf` with every approximation there: itself when it keeps
   // them; else a copy with them computed, made once for the leaf whose faces
   // are being added (they come in leaf order within a cut) and only for a face
@@ -191,13 +214,13 @@ class PlaneBonds {
 
   void add_part(const Solid& solid, std::vector<VertexIndex>& vertices, bool reverse, CapFace& cap) {
     if (reverse) std::reverse(vertices.begin(), vertices.end());
-    Part part{static_cast<std::uint32_t>(corners_.size()), static_cast<std::uint32_t>(vertices.size()), INFINITY,
+    Part part{static_cast<std::uint32_t>(corner_defs_.size()), static_cast<std::uint32_t>(vertices.size()), INFINITY,
               -INFINITY, INFINITY, -INFINITY};
     for (VertexIndex v : vertices) {
       const ApproxPoint a = approximation(solid, v);
       const Vec2 p = project(a);
       const double e = project_error(a);
-      corners_.push_back(v);
+      corner_defs_.push_back(solid.defs[v]);
       corner_approx_.push_back(a);
       points_.push_back(p);
       errors_.push_back(e);
@@ -229,7 +252,7 @@ class PlaneBonds {
     raw_ = Projection{axis_, false};
     faces_.clear();
     parts_.clear();
-    corners_.clear();
+    corner_defs_.clear();
     corner_approx_.clear();
     points_.clear();
     errors_.clear();
@@ -322,8 +345,6 @@ class PlaneBonds {
 
   void measure_pair(const CapFace& below, const CapFace& above) {
     Pending pending{below.leaf, above.leaf, false, {}, {INFINITY, -INFINITY, INFINITY, -INFINITY}};
-    const Solid& below_solid = tree_.leaf(below.leaf).solid;
-    const Solid& above_solid = tree_.leaf(above.leaf).solid;
     bool any_box = false;
     for (std::uint32_t i = below.first_part; i < below.first_part + below.part_count; ++i) {
       for (std::uint32_t j = above.first_part; j < above.first_part + above.part_count; ++j) {
@@ -335,9 +356,9 @@ class PlaneBonds {
         bool overlap = false;
         if (m.area > 0) {
           const Vec2 witness{reference_.x + m.area_times_u / m.area, reference_.y + m.area_times_v / m.area};
-          overlap = strictly_inside(below_solid, a, witness) && strictly_inside(above_solid, b, witness);
+          overlap = strictly_inside(a, witness) && strictly_inside(b, witness);
         }
-        if (!overlap) overlap = !separated(below_solid, a, above_solid, b) && !separated(above_solid, b, below_solid, a);
+        if (!overlap) overlap = !separated(a, b) && !separated(b, a);
         if (!overlap) continue;
         pending.touching = true;
         pending.measure.area += m.area;
@@ -358,7 +379,7 @@ class PlaneBonds {
   // corners' errors (ea, eb: each coordinate within them of the exact one) and
   // the arithmetic can change; only an edge that bound cannot settle goes to the
   // exact predicate on the defined points.
-  bool strictly_inside(const Solid& solid, const Part& part, Vec2 p) const {
+  bool strictly_inside(const Part& part, Vec2 p) const {
     for (std::uint32_t e = 0; e < part.count; ++e) {
       const std::uint32_t i = part.first + e, j = part.first + (e + 1) % part.count;
       const Vec2 a = points_[i], b = points_[j];
@@ -372,8 +393,7 @@ class PlaneBonds {
                            0x1p-50 * span * span;
       if (value > bound) continue;
       if (value < -bound) return false;
-      const VertexIndex x = corners_[i], y = corners_[j];
-      if (orient_in_plane(set_, raw_, solid.defs[x], corner_approx_[i], solid.defs[y], corner_approx_[j], p) !=
+      if (orient_in_plane(set_, raw_, corner_defs_[i], corner_approx_[i], corner_defs_[j], corner_approx_[j], p) !=
           Sign::positive) {
         return false;
       }
@@ -382,23 +402,31 @@ class PlaneBonds {
   }
 
   // Whether an edge line of `part` has all of `other` on its closed outer side.
-  bool separated(const Solid& solid, const Part& part, const Solid& other_solid, const Part& other) const {
+  bool separated(const Part& part, const Part& other) const {
     for (std::uint32_t e = 0; e < part.count; ++e) {
       const std::uint32_t i = part.first + e, j = part.first + (e + 1) % part.count;
-      const VertexIndex x = corners_[i], y = corners_[j];
       bool all_outside = true;
       for (std::uint32_t c = 0; c < other.count && all_outside; ++c) {
-        const VertexIndex z = corners_[other.first + c];
-        all_outside = orient_in_plane(set_, raw_, solid.defs[x], corner_approx_[i], solid.defs[y], corner_approx_[j],
-                                      other_solid.defs[z], corner_approx_[other.first + c]) != Sign::positive;
+        const std::uint32_t z = other.first + c;
+        all_outside = orient_in_plane(set_, raw_, corner_defs_[i], corner_approx_[i], corner_defs_[j], corner_approx_[j],
+                                      corner_defs_[z], corner_approx_[z]) != Sign::positive;
       }
       if (all_outside) return true;
     }
     return false;
   }
 
+  struct CachedSolid {
+    LeafIndex leaf;      // whose solid `solid` is; no_leaf: none
+    NodeShapes shapes;   // owns what `solid` points to
+    const Solid* solid = nullptr;
+  };
+  static constexpr LeafIndex no_leaf = ~LeafIndex{0};
+  static constexpr std::size_t cache_slots = 256;
+
   const MeshTree& tree_;
   const PlaneSet set_;
+  std::vector<CachedSolid> cache_;  ///< by leaf % cache_slots (leaf_solid)
   std::vector<FaceRef> refs_;
   std::vector<std::size_t> start_;
   std::vector<std::uint32_t> order_;
@@ -407,7 +435,7 @@ class PlaneBonds {
   Projection raw_;
   std::vector<CapFace> faces_;
   std::vector<Part> parts_;
-  std::vector<VertexIndex> corners_;
+  std::vector<PointDef> corner_defs_;       ///< per corner: its vertex's definition
   std::vector<ApproxPoint> corner_approx_;  ///< per corner: its vertex's approximation
   std::vector<Vec2> points_;
   std::vector<double> errors_;  ///< per corner: how far the rounded 2D point may be from the exact one

@@ -67,9 +67,11 @@ struct BuildRunOptions {
   /// caller that only writes the tree (as `shatter fracture` does): every
   /// node's Solid::approx (the vertices' cached approximations, 64 bytes a
   /// vertex, a quarter of a cube's tree) is released once the node is cut or is
-  /// known to stay a leaf, so the returned tree has none (MeshTreeNode::solid).
-  /// Everything else is as without it: the same values, bonds and .shatter bytes;
-  /// fill_tree_caches restores the full tree. false: every node keeps its cache.
+  /// known to stay a leaf, so the returned tree has none (MeshTreeNode::solid),
+  /// and its mesh and solid are packed then (MeshTree::packed_shapes; read them
+  /// through NodeShapes). Everything else is as without it: the same values,
+  /// bonds and .shatter bytes; fill_tree_caches restores the full tree. false:
+  /// every node keeps its cache and its arrays.
   bool lean = false;
 };
 

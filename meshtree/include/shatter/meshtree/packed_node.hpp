@@ -39,6 +39,11 @@ std::vector<std::uint8_t> pack_node_shape(const Mesh& mesh, const Solid& solid, 
 void unpack_node_shape(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh,
                        Solid& solid);
 
+/// unpack_node_shape's solid alone: the mesh's bytes are read past (and
+/// checked as there), not unpacked, for a reader that needs only the exact
+/// solid (the bonds). Throws as unpack_node_shape does.
+void unpack_node_solid(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Solid& solid);
+
 struct MeshTree;
 
 /// Packs every leaf's mesh and solid of a tree with an exact representation

@@ -79,12 +79,13 @@ struct MeshTree {
   /// planes, kept here rather than in the nodes because the plane kernel's
   /// predicates view it whole (plane_set(): cut plane k is node k's).
   std::vector<Plane> cut_planes;
-  /// A lean build's internal nodes (BuildRunOptions::lean): one entry per node,
-  /// the node's mesh and exact solid packed (packed_node.hpp) once it was cut,
-  /// with its own `mesh` and `solid` left empty; an empty entry for a node that
-  /// keeps them (every leaf). Empty in every other tree. Read a node's mesh and
-  /// solid through NodeShapes, which unpacks them; fill_tree_caches
-  /// (validate_tree.hpp) unpacks them all into the nodes.
+  /// A lean build's nodes (BuildRunOptions::lean): one entry per node, the
+  /// node's mesh and exact solid packed (packed_node.hpp) once it was cut or
+  /// finished as a leaf, with its own `mesh` and `solid` left empty; an empty
+  /// entry for a node that keeps them (a leaf whose cut was undone, as a
+  /// surplus). Empty in every other tree. Read a node's mesh and solid through
+  /// NodeShapes, which unpacks them; fill_tree_caches (validate_tree.hpp)
+  /// unpacks them all into the nodes.
   std::vector<std::vector<std::uint8_t>> packed_shapes;
 
   std::size_t leaf_count() const { return leaf_nodes.size(); }
@@ -120,8 +121,13 @@ class NodeShapes {
   /// Throws std::invalid_argument when its packed bytes do not unpack (a
   /// defect validate_tree reports; never in what the builder packs).
   NodeShape operator()(NodeIndex node);
+  /// Node `node`'s solid alone (a packed node's mesh is not unpacked), valid
+  /// as operator()'s shapes are; throws as it does.
+  const Solid& solid(NodeIndex node);
 
  private:
+  void find_path(NodeIndex node);  // path_[d]: the node's ancestor at depth d
+
   const MeshTree& tree_;
   Mesh mesh_;
   Solid solid_;
