@@ -84,8 +84,14 @@ struct VoronoiReport {
   /// (no leaf), their exact volume (summed as doubles) within the bound.
   std::size_t fragments_vanished = 0;
   double vanished_volume = 0, vanished_volume_bound = 0;
+  /// Internal nodes made by gluing fragments (the hierarchy, see
+  /// build_voronoi_tree), and face-connected sets of parts left unglued because
+  /// their union was no closed 2-manifold as glued or did not round validly
+  /// (their parts then hang one level higher).
+  std::size_t nodes_glued = 0, sets_unglued = 0;
   double step = 0;                   ///< the site grid's spacing
   double seconds_cells = 0;          ///< quantizing, triangulating, cutting and rounding
+  double seconds_glue = 0;           ///< gluing and rounding the internal nodes
   double seconds_hulls = 0, seconds_bonds = 0;
 };
 
