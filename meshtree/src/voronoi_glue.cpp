@@ -213,11 +213,20 @@ std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> p
     };
     for (std::uint32_t k = 0; k < at.size(); ++k) grid[key_of(at[k])].push_back(k);
     const auto near = [](double a, double b) { return std::fabs(a - b) <= 0x1p-38 * std::max(std::fabs(a), std::fabs(b)); };
+    // A point within tolerance of another lies in its cell, or in a neighbour
+    // across a side it is within tolerance of: only those cells are looked in.
     for (std::uint32_t a = 0; a < at.size(); ++a) {
       const Key key = key_of(at[a]);
-      for (std::int64_t dx = -1; dx <= 1; ++dx) {
-        for (std::int64_t dy = -1; dy <= 1; ++dy) {
-          for (std::int64_t dz = -1; dz <= 1; ++dz) {
+      std::array<std::array<std::int64_t, 2>, 3> range{};
+      for (int axis = 0; axis < 3 && cell > 0; ++axis) {
+        const double c = axis == 0 ? at[a].x : axis == 1 ? at[a].y : at[a].z;
+        const double reach = 0x1p-38 * std::fabs(c) * 2 + 0x1p-38 * largest;
+        range[axis] = {std::floor((c - reach) / cell) < static_cast<double>(key[axis]) ? -1 : 0,
+                       std::floor((c + reach) / cell) > static_cast<double>(key[axis]) ? 1 : 0};
+      }
+      for (std::int64_t dx = range[0][0]; dx <= range[0][1]; ++dx) {
+        for (std::int64_t dy = range[1][0]; dy <= range[1][1]; ++dy) {
+          for (std::int64_t dz = range[2][0]; dz <= range[2][1]; ++dz) {
             const auto found = grid.find(Key{key[0] + dx, key[1] + dy, key[2] + dz});
             if (found == grid.end()) continue;
             for (const std::uint32_t b : found->second) {

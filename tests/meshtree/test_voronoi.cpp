@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -36,6 +37,54 @@ TreeRecipe voronoi_recipe(std::uint64_t seed = 1) {
   return recipe;
 }
 
+// How far rounding can move a mesh's volume from its exact solid's: every
+// vertex within 2^-40 of the largest coordinate per axis (rounded_position),
+// or 64 ulps of it where output_position snaps to an input vertex, so within d
+// in the L1 norm; Steiner's bound 2 d A + 4 d^2 P + 5 d^3 per triangle (as
+// round_solid bounds what it sweeps), P <= 3 (longest edge) summed loosely.
+double rounding_volume_bound(const Mesh& mesh) {
+  double largest = 0, perimeter = 0;
+  for (const Vec3& p : mesh.positions) largest = std::max({largest, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
+  const double d = 3 * (0x1p-40 + 64 * 0x1p-52) * largest;
+  for (const Triangle& t : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) perimeter += norm(mesh.positions[t[(k + 1) % 3]] - mesh.positions[t[k]]);
+  }
+  return (2 * d * test::surface_area(mesh) + 4 * d * d * perimeter + 5 * d * d * d * static_cast<double>(mesh.triangles.size())) *
+         (1 + 0x1p-20);
+}
+
+// The hierarchy (build_voronoi_tree): every internal node but the root is its
+// children glued, a sound exact solid whose exact volume is theirs summed
+// exactly, its mesh's volume theirs within what rounding moves; the report
+// counts the glued nodes.
+std::string hierarchy_problem(const MeshTree& tree, const VoronoiReport& report) {
+  const PlaneSet set = tree.plane_set();
+  std::size_t internal = 0;
+  for (NodeIndex k = 1; k < tree.nodes.size(); ++k) {
+    const MeshTreeNode& node = tree.nodes[k];
+    if (node.is_leaf()) continue;
+    ++internal;
+    const std::string name = "internal node " + std::to_string(k);
+    if (const std::string problem = check_solid(set, node.solid); !problem.empty()) return name + ": " + problem;
+    mpq_class children = 0;
+    double children_volume = 0, bound = rounding_volume_bound(node.mesh);
+    for (const NodeIndex c : node.children) {
+      children += exact_six_volume(set, tree.nodes[c].solid);
+      children_volume += tree.nodes[c].mass.volume;
+      bound += rounding_volume_bound(tree.nodes[c].mesh);
+    }
+    if (exact_six_volume(set, node.solid) != children) return name + ": exact volume is not its children's sum";
+    if (!(std::fabs(node.mass.volume - children_volume) <= bound)) {
+      return name + ": mesh volume " + std::to_string(node.mass.volume) + " is not its children's " +
+             std::to_string(children_volume) + " within the rounding bound";
+    }
+  }
+  if (internal != report.nodes_glued) {
+    return "the report counts " + std::to_string(report.nodes_glued) + " glued nodes, the tree has " + std::to_string(internal);
+  }
+  return {};
+}
+
 // Every property the issue asks of a Voronoi tree; empty when all hold.
 std::string voronoi_problem(const MeshTree& tree, const VoronoiReport& report) {
   if (const std::string problem = test::tree_problem(tree, true); !problem.empty()) return "tree: " + problem;
@@ -63,6 +112,7 @@ std::string voronoi_problem(const MeshTree& tree, const VoronoiReport& report) {
       return "bonds: " + mismatch;
     }
     if (reference.stats.face_problems != 0) return "a face on a cell plane faces the wrong way";
+    if (const std::string problem = hierarchy_problem(tree, report); !problem.empty()) return problem;
   }
   // The file holds the tree as it is.
   const MeshTree back = decode_shatter(encode_shatter(tree));
@@ -325,6 +375,49 @@ TEST_CASE("the checker and the reader refuse broken cell trees", "[voronoi]") {
   REQUIRE(at != std::string::npos);
   bytes[at] = 'X';  // an unknown upper-case tag: refused, never skipped
   CHECK_THROWS_AS(decode_shatter(bytes), CorruptFileError);
+}
+
+}  // namespace shatter
+
+namespace shatter {
+
+// hierarchy_problem (in voronoi_problem) checks every internal node; here the
+// trees must also be deeper than one level.
+void check_hierarchies(std::uint64_t seeds) {
+  for (const char* name : {"cube.off", "sphere.off", "torus_quad.off", "spool.off"}) {
+    const Mesh mesh = corpus(name);
+    Vec3 lo = mesh.positions[0], hi = lo;
+    for (const Vec3& p : mesh.positions) {
+      lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+      hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    }
+    const double size = norm(hi - lo);
+    for (std::uint64_t seed = 1; seed <= seeds; ++seed) {
+      const std::vector<std::pair<std::string, std::vector<Vec3>>> patterns{
+          {"uniform", uniform_sites(mesh, 32 + 16 * static_cast<std::uint32_t>(seed), seed)},
+          {"clustered", clustered_sites(mesh, 3, 12, 0.15 * size, seed)},
+          {"grid", grid_sites(mesh, {4, 3, 3}, false, 0.25, 0.2, seed)},
+          {"brick jittered", grid_sites(mesh, {4, 3, 3}, true, 0.5, 0.3, seed)}};
+      for (const auto& [pattern, sites] : patterns) {
+        INFO(name << " " << pattern << " seed " << seed);
+        VoronoiReport report;
+        const MeshTree tree = build(mesh, sites, report);
+        std::uint32_t depth = 0;
+        for (const MeshTreeNode& node : tree.nodes) depth = std::max(depth, node.depth);
+        CHECK(report.nodes_glued > 0);
+        CHECK(depth >= 3);
+        CHECK(voronoi_problem(tree, report) == "");
+      }
+    }
+  }
+}
+
+TEST_CASE("Voronoi trees are hierarchies of glued cells over patterns and meshes", "[voronoi][corpus]") {
+  check_hierarchies(1);
+}
+
+TEST_CASE("Voronoi trees are hierarchies of glued cells over seeds, patterns and meshes", "[voronoi][corpus][heavy]") {
+  check_hierarchies(4);
 }
 
 }  // namespace shatter
