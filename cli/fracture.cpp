@@ -362,8 +362,8 @@ Command add_fracture_command(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--pattern", args->pattern,
                       "planes: recursive plane cuts (--fragments, --strategy). The others cut the solid into the "
-                      "Voronoi cells of sites (exact shared bisector planes; a tree of depth 1: the solid, then its "
-                      "fragments): voronoi (--sites N uniform in the volume), clustered (--clusters, "
+                      "Voronoi cells of sites (exact shared bisector planes; a tree whose internal nodes are nearby "
+                      "fragments glued along their shared cell faces, grouped by a k-d split of the sites): voronoi (--sites N uniform in the volume), clustered (--clusters, "
                       "--sites-per-cluster, --cluster-radius), radial (--rings, --sectors, --centre, --direction, "
                       "--radius, --variability), grid or brick (--cells, --offset, --jitter), sites (--sites-file). "
                       "Random draws use --seed; lengths are in the mesh's units")

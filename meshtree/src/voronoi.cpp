@@ -24,6 +24,11 @@
 // bisectors replaced by those of the smallest site with each of the others
 // (B_pq + B_qr = B_pr exactly, so it is the same point), input plane first.
 // Neighbouring fragments then write their shared corners bit for bit alike.
+//
+// The hierarchy reuses the k-d groups: bottom up, each group below the root
+// glues the face-connected sets of its parts (voronoi_glue.hpp). Groups of
+// sites near each other are compact, so their unions are mostly single solids;
+// a set that is not (pinched, or not certified once rounded) stays unglued.
 
 #include "shatter/meshtree/voronoi.hpp"
 

@@ -37,7 +37,9 @@ struct GluePart {
 using SitePairs = std::span<const std::array<std::uint32_t, 2>>;
 
 /// The parts grouped by shared cell faces: part i and part j are in one group when
-/// i has a face on the bisector of a site of i and a site of j. Each group lists
+/// i has a face on the bisector of a site of i and a site of j (a cell split into
+/// several fragments puts its site in several parts: each is grouped with i,
+/// and glue_parts finds out whether the twins cancel). Each group lists
 /// its parts in increasing order; groups are ordered by their first part.
 /// Deterministic; O(faces log parts).
 std::vector<std::vector<std::uint32_t>> face_connected_groups(std::span<const GluePart> parts, SitePairs pairs);
