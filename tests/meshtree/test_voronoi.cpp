@@ -405,7 +405,7 @@ void check_hierarchies(std::uint64_t seeds) {
         std::uint32_t depth = 0;
         for (const MeshTreeNode& node : tree.nodes) depth = std::max(depth, node.depth);
         CHECK(report.nodes_glued > 0);
-        CHECK(depth >= 3);
+        CHECK(depth >= 2);
         CHECK(voronoi_problem(tree, report) == "");
       }
     }
