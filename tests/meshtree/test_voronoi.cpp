@@ -421,3 +421,73 @@ TEST_CASE("Voronoi trees are hierarchies of glued cells over seeds, patterns and
 }
 
 }  // namespace shatter
+
+// The glue itself (a private header of meshtree: the library's own part).
+#include "../../meshtree/src/voronoi_glue.hpp"
+
+namespace shatter {
+
+TEST_CASE("gluing cells: twins cancel, a union touching along an edge only is refused", "[voronoi]") {
+  // Four sites around the cube's z axis: four cells, each pair of neighbours
+  // sharing a face, the two diagonal pairs touching along the axis only.
+  const Mesh cube = corpus("cube.off");
+  VoronoiReport report;
+  const MeshTree tree = build(cube, {{-0.5, -0.5, 0}, {0.5, -0.5, 0}, {0.5, 0.5, 0}, {-0.5, 0.5, 0}}, report);
+  REQUIRE(tree.leaf_count() == 4);
+  const PlaneSet set = tree.plane_set();
+  // Each leaf its own site; each cell plane bisects the two leaves with a face on it.
+  std::vector<std::array<std::uint32_t, 2>> pairs(tree.cut_planes.size(), {no_index, no_index});
+  for (LeafIndex leaf = 0; leaf < 4; ++leaf) {
+    for (const SolidFace& face : tree.leaf(leaf).solid.faces) {
+      if (!face.plane.is_cut()) continue;
+      auto& pair = pairs[face.plane.index()];
+      if (pair[0] == no_index) pair = {leaf, no_index};
+      else pair[1] = leaf;
+    }
+  }
+  for (auto& pair : pairs) {
+    if (pair[1] != no_index && pair[0] > pair[1]) std::swap(pair[0], pair[1]);
+  }
+  std::array<std::vector<std::uint32_t>, 4> sites{{{0}, {1}, {2}, {3}}};
+  const auto part = [&](LeafIndex leaf) { return detail::GluePart{&tree.leaf(leaf).solid, sites[leaf]}; };
+  // The diagonal neighbour of leaf 0: the leaf it shares no cell plane with.
+  LeafIndex diagonal = 0;
+  for (LeafIndex other = 1; other < 4; ++other) {
+    bool shares = false;
+    for (const auto& pair : pairs) shares |= (pair[0] == 0 && pair[1] == other);
+    if (!shares) diagonal = other;
+  }
+  REQUIRE(diagonal != 0);
+  std::string why;
+  // Two face neighbours: one solid, its exact volume theirs summed, sound.
+  for (LeafIndex other = 1; other < 4; ++other) {
+    if (other == diagonal) continue;
+    const std::vector<detail::GluePart> two{part(0), part(other)};
+    CHECK(detail::face_connected_groups(two, pairs).size() == 1);
+    const std::optional<Solid> glued = detail::glue_parts(set, two, pairs, why);
+    REQUIRE(glued);
+    CHECK(check_solid(set, *glued) == "");
+    CHECK(exact_six_volume(set, *glued) == exact_six_volume(set, *two[0].solid) + exact_six_volume(set, *two[1].solid));
+    CHECK(glued->convex);  // half the cube
+  }
+  // The diagonal pair: two face-connected sets, and glued anyway, refused.
+  const std::vector<detail::GluePart> diagonal_pair{part(0), part(diagonal)};
+  CHECK(detail::face_connected_groups(diagonal_pair, pairs).size() == 2);
+  CHECK_FALSE(detail::glue_parts(set, diagonal_pair, pairs, why));
+  CHECK_THAT(why, Catch::Contains("edge"));
+  // All four: the cube again, every twin gone.
+  const std::vector<detail::GluePart> all{part(0), part(1), part(2), part(3)};
+  const std::optional<Solid> whole = detail::glue_parts(set, all, pairs, why);
+  REQUIRE(whole);
+  CHECK(whole->convex);
+  CHECK(exact_six_volume(set, *whole) == exact_six_volume(set, tree.nodes[0].solid));
+  for (const SolidFace& face : whole->faces) CHECK_FALSE(face.plane.is_cut());
+  // Three: an L, not convex.
+  const std::vector<detail::GluePart> three{part(0), part(diagonal == 1 ? 2 : 1), part(diagonal)};
+  const std::optional<Solid> ell = detail::glue_parts(set, three, pairs, why);
+  REQUIRE(ell);
+  CHECK_FALSE(ell->convex);
+  CHECK(check_solid(set, *ell) == "");
+}
+
+}  // namespace shatter
