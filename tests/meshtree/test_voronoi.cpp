@@ -491,3 +491,29 @@ TEST_CASE("gluing cells: twins cancel, a union touching along an edge only is re
 }
 
 }  // namespace shatter
+
+namespace shatter {
+
+TEST_CASE("a tree keeps how its sites were made, and its file keeps it", "[voronoi]") {
+  const Mesh cube = corpus("cube.off");
+  TreeRecipe recipe = voronoi_recipe(2);
+  recipe.pattern = "voronoi --sites 12 --seed 2";
+  const MeshTree tree = build_voronoi_tree(cube, uniform_sites(cube, 12, 2), recipe);
+  const std::string bytes = encode_shatter(tree);
+  CHECK(bytes.find("patt") != std::string::npos);
+  const MeshTree back = decode_shatter(bytes);
+  CHECK(back.recipe.pattern == recipe.pattern);
+  CHECK(encode_shatter(back) == bytes);
+  // Not printable text: refused when written.
+  MeshTree bad = tree;
+  bad.recipe.pattern = "voronoi\n--sites 12";
+  CHECK_THROWS_AS(encode_shatter(bad), std::invalid_argument);
+  // A tree without a pattern writes no section (plane trees' files are unchanged).
+  MeshTree plain = tree;
+  plain.recipe.pattern.clear();
+  const std::string plain_bytes = encode_shatter(plain);
+  CHECK(plain_bytes.find("patt") == std::string::npos);
+  CHECK(decode_shatter(plain_bytes).recipe.pattern.empty());
+}
+
+}  // namespace shatter
