@@ -58,9 +58,47 @@ CLI::Validator whole_number() {
 
 bool is_cell_pattern(const FractureArgs& args) { return args.pattern != "planes"; }
 
+// A number as the shortest text that reads back to it.
+std::string shortest(double value) {
+  char text[32];
+  const auto result = std::to_chars(text, text + sizeof text, value);
+  return std::string(text, result.ptr);
+}
+
+// How a cell pattern's sites are made, as its options spell it
+// (TreeRecipe::pattern): printable ASCII, at most 1024 bytes.
+std::string pattern_text(const FractureArgs& args) {
+  const std::string& p = args.pattern;
+  std::string text = p;
+  if (p == "voronoi") text += " --sites " + std::to_string(args.sites);
+  if (p == "clustered") {
+    text += " --clusters " + std::to_string(args.clusters) + " --sites-per-cluster " + std::to_string(args.sites_per_cluster) +
+            " --cluster-radius " + shortest(args.cluster_radius);
+  }
+  if (p == "radial") {
+    text += " --rings " + std::to_string(args.rings) + " --sectors " + std::to_string(args.sectors) +
+            (args.centre.empty() ? std::string() : " --centre " + args.centre) + " --direction " + args.direction +
+            (args.radius > 0 ? " --radius " + shortest(args.radius) : std::string()) + " --variability " +
+            shortest(args.variability);
+  }
+  if (p == "grid" || p == "brick") {
+    text += " --cells " + args.cells + " --offset " + shortest(args.offset) + " --jitter " + shortest(args.jitter);
+  }
+  if (p == "sites") text += " --sites-file " + args.sites_file;
+  if (p != "sites") text += " --seed " + std::to_string(args.seed);
+  for (char& c : text) {
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) > 0x7E) c = '?';
+  }
+  if (text.size() > 1024) text.resize(1024);
+  return text;
+}
+
 TreeRecipe tree_recipe_of(const FractureArgs& args) {
   TreeRecipe recipe = tree_recipe_from(is_cell_pattern(args) ? 1 : args.fragments, args.seed, args.strategy, "--");
-  if (is_cell_pattern(args)) recipe.strategy = Strategy::voronoi;
+  if (is_cell_pattern(args)) {
+    recipe.strategy = Strategy::voronoi;
+    recipe.pattern = pattern_text(args);
+  }
   recipe.interior_uv_scale = args.interior_uv_scale;
   recipe.allow_self_intersections = args.allow_self_intersections;
   return recipe;
@@ -362,8 +400,8 @@ Command add_fracture_command(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--pattern", args->pattern,
                       "planes: recursive plane cuts (--fragments, --strategy). The others cut the solid into the "
-                      "Voronoi cells of sites (exact shared bisector planes; a tree of depth 1: the solid, then its "
-                      "fragments): voronoi (--sites N uniform in the volume), clustered (--clusters, "
+                      "Voronoi cells of sites (exact shared bisector planes; a tree whose internal nodes are nearby "
+                      "fragments glued along their shared cell faces, grouped by a k-d split of the sites): voronoi (--sites N uniform in the volume), clustered (--clusters, "
                       "--sites-per-cluster, --cluster-radius), radial (--rings, --sectors, --centre, --direction, "
                       "--radius, --variability), grid or brick (--cells, --offset, --jitter), sites (--sites-file). "
                       "Random draws use --seed; lengths are in the mesh's units")

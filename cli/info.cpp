@@ -68,6 +68,7 @@ void print_info_text(const InfoArgs& args, const MeshTree& tree, const TreeStats
               << repair.triangles_after << " after): " << repair.summary() << '\n';
     for (const RepairNote& note : repair.notes) std::cout << "  input repair, not done: " << note.text << '\n';
   }
+  if (!recipe.pattern.empty()) std::cout << "  sites: --pattern " << recipe.pattern << '\n';
   std::cout << "  built with: fragments " << recipe.fragments << ", seed " << recipe.seed << ", strategy "
             << strategy_name(recipe.strategy) << ", kernel " << kernel_name(recipe.kernel)
             << (recipe.kernel == KernelKind::plane ? "" : " (retired: the tree reads, but cannot be re-cut exactly)")

@@ -115,8 +115,10 @@ SectionTable read_section_table(std::string_view bytes) {
                str(table.cell_planes->offset));
       }
       table.cell_planes = section;
-    } else if (section.tag == version_tag || section.tag == repair_tag) {
-      std::optional<Section>& slot_of_optional = section.tag == version_tag ? table.shatter_version : table.input_repair;
+    } else if (section.tag == version_tag || section.tag == repair_tag || section.tag == pattern_tag) {
+      std::optional<Section>& slot_of_optional = section.tag == version_tag  ? table.shatter_version
+                                                 : section.tag == repair_tag ? table.input_repair
+                                                                             : table.pattern;
       if (slot_of_optional) {
         refuse("damaged .shatter file: " + section_name(section.tag) + " section at byte " + str(position) + " repeats the one at byte " +
                str(slot_of_optional->offset));
@@ -431,6 +433,11 @@ void write_shatter(const MeshTree& tree, const ByteSink& sink) {
       throw std::invalid_argument("encode_shatter: invalid tree: shatter_version: " + *problem);
     }
   }
+  if (!tree.recipe.pattern.empty()) {
+    if (const std::optional<std::string> problem = pattern_text_problem(tree.recipe.pattern)) {
+      throw std::invalid_argument("encode_shatter: invalid tree: recipe.pattern: " + *problem);
+    }
+  }
   for (const RepairChange& change : tree.input_repair.changes) {
     if (const std::optional<std::string> problem = repair_text_problem(change.text)) {
       throw std::invalid_argument("encode_shatter: invalid tree: input_repair: " + *problem);
@@ -483,6 +490,12 @@ MeshTree decode_shatter(std::string_view bytes) {
   }
   if (sections.input_repair) tree.input_repair = read_repair(*sections.input_repair);
   tree.recipe = read_recipe(*sections.recipe);
+  if (const std::optional<Section>& pattern = sections.pattern) {
+    if (const std::optional<std::string> problem = pattern_text_problem(pattern->payload)) {
+      refuse("damaged .shatter file: " + section_name(pattern_tag) + " section at byte " + str(pattern->offset) + ": " + *problem);
+    }
+    tree.recipe.pattern = pattern->payload;
+  }
   Version3Pending pending;
   if (sections.version >= 3) {
     read_version3_nodes(*sections.nodes, tree, pending, offsets);

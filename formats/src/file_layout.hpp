@@ -58,6 +58,7 @@ inline constexpr Tag cell_planes_tag = {'C', 'E', 'L', 'L'};
 // Optional by the tag rule (lower-case first letter): readers that predate it skip it.
 inline constexpr Tag version_tag = {'v', 'e', 'r', 's'};
 inline constexpr Tag repair_tag = {'r', 'p', 'a', 'r'};
+inline constexpr Tag pattern_tag = {'p', 'a', 't', 't'};  // TreeRecipe::pattern
 
 // Bytes on disk, the least each record can take: counts are checked against these
 // before anything is allocated, which bounds memory by a multiple of the input.
@@ -121,6 +122,18 @@ inline std::optional<std::string> version_text_problem(std::string_view text) {
   for (std::size_t k = 0; k < text.size(); ++k) {
     const auto c = static_cast<unsigned char>(text[k]);
     if (c < 0x21 || c > 0x7E) return "byte " + std::to_string(k) + " of the version is " + hex(c, 2) + " (printable ASCII without spaces only)";
+  }
+  return std::nullopt;
+}
+
+/// What is wrong with a `patt` payload (TreeRecipe::pattern: 1 to 1024 bytes of
+/// printable ASCII, spaces allowed), or nullopt.
+inline std::optional<std::string> pattern_text_problem(std::string_view text) {
+  if (text.empty()) return "the pattern is empty";
+  if (text.size() > 1024) return "the pattern is " + std::to_string(text.size()) + " bytes long (at most 1024)";
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    const auto c = static_cast<unsigned char>(text[k]);
+    if (c < 0x20 || c > 0x7E) return "byte " + std::to_string(k) + " of the pattern is " + hex(c, 2) + " (printable ASCII only)";
   }
   return std::nullopt;
 }
@@ -266,6 +279,7 @@ struct SectionTable {
   std::optional<Section> recipe, nodes, meshes, hulls, bonds;
   std::optional<Section> geometry, solids;  // version 2
   std::optional<Section> shatter_version;   // optional, in any version
+  std::optional<Section> pattern;           // optional, in any version
   std::optional<Section> input_repair;      // optional, in any version
   std::optional<Section> cell_planes;       // version 3, a cell tree's only
 };

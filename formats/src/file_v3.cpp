@@ -551,6 +551,7 @@ void write_version3_sections(const MeshTree& tree, const std::function<void(Tag,
   if (!tree.shatter_version.empty()) section(version_tag, {tree.shatter_version});
   if (!tree.input_repair.empty()) section(repair_tag, {repair_payload(tree.input_repair)});
   section(recipe_tag, recipe_payload(tree.recipe));
+  if (!tree.recipe.pattern.empty()) section(pattern_tag, {tree.recipe.pattern});
   section(nodes_tag, nodes_payload(tree));
   if (tree.cut_planes.size() > tree.nodes.size()) section(cell_planes_tag, cell_planes_payload(tree));
   section(geometry_tag, geometry_payload(tree.geometry));

@@ -24,6 +24,11 @@
 // bisectors replaced by those of the smallest site with each of the others
 // (B_pq + B_qr = B_pr exactly, so it is the same point), input plane first.
 // Neighbouring fragments then write their shared corners bit for bit alike.
+//
+// The hierarchy reuses the k-d groups: bottom up, each group below the root
+// glues the face-connected sets of its parts (voronoi_glue.hpp). Groups of
+// sites near each other are compact, so their unions are mostly single solids;
+// a set that is not (pinched, or not certified once rounded) stays unglued.
 
 #include "shatter/meshtree/voronoi.hpp"
 
@@ -44,6 +49,7 @@
 #include <functional>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -56,6 +62,7 @@
 #include "shatter/kernel/validate.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "shatter/version.hpp"
+#include "voronoi_glue.hpp"
 
 namespace shatter {
 
@@ -64,6 +71,12 @@ namespace {
 constexpr std::int64_t grid_limit = std::int64_t{1} << 24;  // |k| <= 2^24
 constexpr std::uint32_t sentinel_count = 8;
 constexpr std::size_t leaf_group_size = 8;
+// The hierarchy glues the lowest k-d groups and every second level above them
+// (so a node has up to 8 fragments, or up to 4 parts, as children): every node
+// is rounded and certified once glued, which costs about the whole surface per
+// level glued; at 1,000 sites every level cost 2.5 to 4.5 times main's build,
+// every second level 2 to 3.4 times (shatter-bench-voronoi, README).
+constexpr std::uint32_t glue_every_levels = 2;
 
 struct Box {
   Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
@@ -268,6 +281,10 @@ class VoronoiCutter {
 
   std::uint32_t box_base() const { return box_base_; }
   std::uint32_t box_end() const { return box_end_; }
+  /// The k-d groups (groups()[0] the root, when there are sites) and the site
+  /// order their ranges index.
+  const std::vector<Group>& groups() const { return groups_; }
+  const std::vector<std::uint32_t>& order() const { return order_; }
 
   /// Runs the groups over `set` (whose cut planes must be the `planes` built by
   /// the constructor); returns each site's pieces.
@@ -356,6 +373,14 @@ class VoronoiCutter {
   std::uint32_t box_base_ = 0, box_end_ = 0;
   const PlaneSet* set_ = nullptr;
   std::vector<std::vector<Solid>> pieces_;
+};
+
+// A node of the hierarchy being built: a fragment, or a glued set of parts.
+struct Part {
+  Solid solid;
+  Mesh mesh;
+  std::vector<std::uint32_t> sites;  ///< the sites of its fragments, sorted
+  std::vector<Part> children;        ///< none for a fragment
 };
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -589,10 +614,10 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
     });
   });
 
-  std::vector<std::pair<std::uint32_t, Rounded*>> kept;  // site, fragment
+  std::vector<std::vector<Rounded*>> kept_of(site_count);  // per site, its fragments
+  std::size_t kept_count = 0;
   for (std::uint32_t s = 0; s < site_count; ++s) {
     if (rounded[s].empty()) ++report.cells_empty;
-    std::size_t pieces = 0;
     for (Rounded& r : rounded[s]) {
       if (r.rounded.collapsed) {
         ++report.fragments_vanished;
@@ -604,11 +629,98 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
         throw UnsupportedGeometryError("the fragment of Voronoi site " + std::to_string(s) +
                                        " cannot be written as a valid mesh: " + r.rounded.defect);
       }
-      ++pieces;
-      kept.push_back({s, &r});
+      kept_of[s].push_back(&r);
     }
-    if (pieces > 1) ++report.cells_split;
+    kept_count += kept_of[s].size();
+    if (kept_of[s].size() > 1) ++report.cells_split;
   }
+  report.seconds_cells = seconds_since(start);
+
+  // The hierarchy (the file comment): the k-d groups, bottom up, each gluing the
+  // face-connected sets of its parts into nodes.
+  auto phase = std::chrono::steady_clock::now();
+  std::vector<std::array<std::uint32_t, 2>> site_pairs(planes.size(), {no_index, no_index});
+  for (std::uint32_t p = 0; p < planes.size(); ++p) {
+    if (p < box_base || p >= box_end) site_pairs[p] = pair_of(p);
+  }
+  std::atomic<std::size_t> nodes_glued{0}, sets_unglued{0};
+  const std::vector<Group>& groups = cutter.groups();
+  const std::vector<std::uint32_t>& order = cutter.order();
+  const auto glue_level = [&](std::vector<Part> items) {
+    std::vector<detail::GluePart> parts;
+    parts.reserve(items.size());
+    for (const Part& item : items) parts.push_back({&item.solid, item.sites});
+    std::vector<Part> out;
+    for (const std::vector<std::uint32_t>& members : detail::face_connected_groups(parts, site_pairs)) {
+      if (members.size() > 1) {
+        std::vector<detail::GluePart> chosen;
+        for (const std::uint32_t m : members) chosen.push_back(parts[m]);
+        std::string why;
+        std::optional<Solid> glued = detail::glue_parts(set, chosen, site_pairs, why);
+        if (glued) {
+          // A union round_solid cannot place is left unglued, as one it cannot certify.
+          RoundedSolid r;
+          try {
+            r = round_solid(set, *glued, meshing);
+          } catch (const UnsupportedGeometryError&) {
+            r.valid = false;
+          }
+          if (r.valid && !r.collapsed) {
+            Part node;
+            node.solid = std::move(*glued);
+            node.mesh = std::move(r.mesh);
+            for (const std::uint32_t m : members) {
+              node.sites.insert(node.sites.end(), items[m].sites.begin(), items[m].sites.end());
+              node.children.push_back(std::move(items[m]));
+            }
+            std::sort(node.sites.begin(), node.sites.end());
+            node.sites.erase(std::unique(node.sites.begin(), node.sites.end()), node.sites.end());
+            out.push_back(std::move(node));
+            ++nodes_glued;
+            continue;
+          }
+        }
+        ++sets_unglued;
+      }
+      for (const std::uint32_t m : members) out.push_back(std::move(items[m]));
+    }
+    return out;
+  };
+  std::vector<std::uint32_t> height(groups.size(), 0);  // above the lowest groups; children follow parents
+  for (std::size_t g = groups.size(); g-- > 0;) {
+    if (groups[g].left >= 0) height[g] = 1 + std::max(height[groups[g].left], height[groups[g].right]);
+  }
+  std::function<std::vector<Part>(std::uint32_t)> parts_of_group = [&](std::uint32_t g) {
+    const Group& group = groups[g];
+    std::vector<Part> items;
+    if (group.left < 0) {
+      for (std::uint32_t i = group.begin; i < group.end; ++i) {
+        const std::uint32_t s = order[i];
+        for (Rounded* r : kept_of[s]) {
+          Part leaf;
+          leaf.solid = std::move(r->solid);
+          leaf.mesh = std::move(r->rounded.mesh);
+          leaf.sites = {s};
+          items.push_back(std::move(leaf));
+        }
+      }
+    } else {
+      std::vector<Part> right;
+      tbb::parallel_invoke([&] { items = parts_of_group(static_cast<std::uint32_t>(group.left)); },
+                           [&] { right = parts_of_group(static_cast<std::uint32_t>(group.right)); });
+      for (Part& part : right) items.push_back(std::move(part));
+    }
+    // The root group is the input itself.
+    if (g == 0 || items.size() < 2 || height[g] % glue_every_levels != 0) return items;
+    return glue_level(std::move(items));
+  };
+  std::vector<Part> top;
+  if (kept_count >= 2) arena.execute([&] { top = parts_of_group(0); });
+  // A group holding every fragment is the root again: its children take its place.
+  while (top.size() == 1 && !top[0].children.empty()) top = std::move(top[0].children);
+  report.nodes_glued = nodes_glued;
+  report.sets_unglued = sets_unglued;
+  report.seconds_glue = seconds_since(phase);
 
   MeshTree tree;
   tree.recipe = recipe;
@@ -624,72 +736,83 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
   root.leaf_count = 1;
   tree.nodes.push_back(std::move(root));
   tree.cut_planes.push_back({});
-  if (kept.size() < 2) {
+  if (top.size() < 2) {
     tree.leaf_nodes.push_back(0);
   } else {
-    const auto node_count = static_cast<std::uint32_t>(kept.size() + 1);
-    // The bisectors the fragments use, in the order of their site pairs.
+    std::size_t node_count = 1;
+    const std::function<void(const Part&)> count_nodes = [&](const Part& part) {
+      ++node_count;
+      for (const Part& child : part.children) count_nodes(child);
+    };
+    for (const Part& part : top) count_nodes(part);
+    // The bisectors the fragments use, in the order of their site pairs (a
+    // glued node's planes are its fragments').
     std::vector<char> used(planes.size(), 0);
     const auto use = [&](PlaneRef ref) {
       if (ref.bits == no_index || !ref.is_cut()) return;
       if (!is_bisector(ref)) throw std::logic_error("build_voronoi_tree: a container box cut into a cell's part of the solid");
       used[ref.index()] = 1;
     };
-    for (const auto& [site, r] : kept) {
-      for (const SolidFace& face : r->solid.faces) use(face.plane);
-      for (const SolidCorner& corner : r->solid.corners) use(corner.line.other);
-      for (const PointDef& def : r->solid.defs) {
+    const std::function<void(const Part&)> use_planes = [&](const Part& part) {
+      for (const Part& child : part.children) use_planes(child);
+      if (!part.children.empty()) return;
+      for (const SolidFace& face : part.solid.faces) use(face.plane);
+      for (const SolidCorner& corner : part.solid.corners) use(corner.line.other);
+      for (const PointDef& def : part.solid.defs) {
         const int count = def.kind == PointKind::segment_plane ? 1 : def.kind == PointKind::three_planes ? 3 : 0;
         for (int k = 0; k < count; ++k) use(def.planes[k]);
       }
-    }
+    };
+    for (const Part& part : top) use_planes(part);
     std::vector<std::uint32_t> used_planes;
     for (std::uint32_t p = 0; p < planes.size(); ++p) {
       if (used[p]) used_planes.push_back(p);
     }
     std::sort(used_planes.begin(), used_planes.end(), [&](std::uint32_t a, std::uint32_t b) { return pair_of(a) < pair_of(b); });
     std::vector<std::uint32_t> final_index(planes.size(), no_index);
-    for (std::uint32_t r = 0; r < used_planes.size(); ++r) final_index[used_planes[r]] = node_count + r;
+    for (std::uint32_t r = 0; r < used_planes.size(); ++r) final_index[used_planes[r]] = static_cast<std::uint32_t>(node_count) + r;
     const auto remap = [&](PlaneRef& ref) {
       if (ref.bits != no_index && ref.is_cut()) ref = PlaneRef::cut(final_index[ref.index()]);
     };
     const auto remap_surface = [&](SurfaceId& surface) {
       if (surface != original_surface) surface = cap_surface_of(final_index[surface - 1]);
     };
-    tree.nodes[0].children.reserve(kept.size());
-    tree.nodes[0].leaf_count = static_cast<std::uint32_t>(kept.size());
-    for (std::uint32_t i = 0; i < kept.size(); ++i) {
-      Rounded& r = *kept[i].second;
-      MeshTreeNode leaf;
-      leaf.solid = std::move(r.solid);
-      for (SolidFace& face : leaf.solid.faces) {
+    // Nodes in preorder, leaves numbered in that order.
+    tree.nodes.reserve(node_count);
+    const std::function<void(Part&, NodeIndex, std::size_t)> add = [&](Part& part, NodeIndex parent, std::size_t index) {
+      const auto k = static_cast<NodeIndex>(tree.nodes.size());
+      MeshTreeNode node;
+      node.solid = std::move(part.solid);
+      for (SolidFace& face : node.solid.faces) {
         remap(face.plane);
         remap_surface(face.surface);
       }
-      for (SolidCorner& corner : leaf.solid.corners) remap(corner.line.other);
-      for (PointDef& def : leaf.solid.defs) {
+      for (SolidCorner& corner : node.solid.corners) remap(corner.line.other);
+      for (PointDef& def : node.solid.defs) {
         const int count = def.kind == PointKind::segment_plane ? 1 : def.kind == PointKind::three_planes ? 3 : 0;
-        for (int k = 0; k < count; ++k) remap(def.planes[k]);
+        for (int c = 0; c < count; ++c) remap(def.planes[c]);
       }
-      leaf.mesh = std::move(r.rounded.mesh);
-      for (SurfaceId& surface : leaf.mesh.surfaces) remap_surface(surface);
-      leaf.mass = mass_properties(leaf.mesh);
-      leaf.convex = leaf.solid.convex;
-      leaf.parent = 0;
-      leaf.depth = 1;
-      leaf.first_leaf = i;
-      leaf.leaf_count = 1;
-      leaf.seed = child_node_seed(tree.nodes[0].seed, i);
-      tree.nodes[0].children.push_back(i + 1);
-      tree.leaf_nodes.push_back(i + 1);
-      tree.nodes.push_back(std::move(leaf));
+      node.mesh = std::move(part.mesh);
+      for (SurfaceId& surface : node.mesh.surfaces) remap_surface(surface);
+      node.mass = mass_properties(node.mesh);
+      node.convex = node.solid.convex;
+      node.parent = parent;
+      node.depth = tree.nodes[parent].depth + 1;
+      node.first_leaf = static_cast<LeafIndex>(tree.leaf_nodes.size());
+      node.seed = child_node_seed(tree.nodes[parent].seed, index);
+      tree.nodes[parent].children.push_back(k);
+      tree.nodes.push_back(std::move(node));
       tree.cut_planes.push_back({});
-    }
+      if (part.children.empty()) tree.leaf_nodes.push_back(k);
+      for (std::size_t c = 0; c < part.children.size(); ++c) add(part.children[c], k, c);
+      tree.nodes[k].leaf_count = static_cast<std::uint32_t>(tree.leaf_nodes.size() - tree.nodes[k].first_leaf);
+    };
+    for (std::size_t c = 0; c < top.size(); ++c) add(top[c], 0, c);
+    tree.nodes[0].leaf_count = static_cast<std::uint32_t>(tree.leaf_nodes.size());
     for (const std::uint32_t p : used_planes) tree.cut_planes.push_back(planes[p]);
   }
-  report.seconds_cells = seconds_since(start);
 
-  auto phase = std::chrono::steady_clock::now();
+  phase = std::chrono::steady_clock::now();
   arena.execute([&] {
     tbb::parallel_for(std::size_t{1}, tree.nodes.size(), [&](std::size_t k) {
       if (!tree.nodes[k].convex) tree.nodes[k].hull = convex_hull_of(tree.nodes[k].mesh);
@@ -715,7 +838,7 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
     for (MeshTreeNode& node : tree.nodes) std::vector<ApproxPoint>().swap(node.solid.approx);
   }
   if (run.report) {
-    run.report->cutting_seconds = report.seconds_cells;
+    run.report->cutting_seconds = report.seconds_cells + report.seconds_glue;
     run.report->hull_seconds = report.seconds_hulls;
     run.report->bond_seconds = report.seconds_bonds;
     run.report->pieces_vanished = report.fragments_vanished;

@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -36,6 +37,54 @@ TreeRecipe voronoi_recipe(std::uint64_t seed = 1) {
   return recipe;
 }
 
+// How far rounding can move a mesh's volume from its exact solid's: every
+// vertex within 2^-40 of the largest coordinate per axis (rounded_position),
+// or 64 ulps of it where output_position snaps to an input vertex, so within d
+// in the L1 norm; Steiner's bound 2 d A + 4 d^2 P + 5 d^3 per triangle (as
+// round_solid bounds what it sweeps), P <= 3 (longest edge) summed loosely.
+double rounding_volume_bound(const Mesh& mesh) {
+  double largest = 0, perimeter = 0;
+  for (const Vec3& p : mesh.positions) largest = std::max({largest, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
+  const double d = 3 * (0x1p-40 + 64 * 0x1p-52) * largest;
+  for (const Triangle& t : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) perimeter += norm(mesh.positions[t[(k + 1) % 3]] - mesh.positions[t[k]]);
+  }
+  return (2 * d * test::surface_area(mesh) + 4 * d * d * perimeter + 5 * d * d * d * static_cast<double>(mesh.triangles.size())) *
+         (1 + 0x1p-20);
+}
+
+// The hierarchy (build_voronoi_tree): every internal node but the root is its
+// children glued, a sound exact solid whose exact volume is theirs summed
+// exactly, its mesh's volume theirs within what rounding moves; the report
+// counts the glued nodes.
+std::string hierarchy_problem(const MeshTree& tree, const VoronoiReport& report) {
+  const PlaneSet set = tree.plane_set();
+  std::size_t internal = 0;
+  for (NodeIndex k = 1; k < tree.nodes.size(); ++k) {
+    const MeshTreeNode& node = tree.nodes[k];
+    if (node.is_leaf()) continue;
+    ++internal;
+    const std::string name = "internal node " + std::to_string(k);
+    if (const std::string problem = check_solid(set, node.solid); !problem.empty()) return name + ": " + problem;
+    mpq_class children = 0;
+    double children_volume = 0, bound = rounding_volume_bound(node.mesh);
+    for (const NodeIndex c : node.children) {
+      children += exact_six_volume(set, tree.nodes[c].solid);
+      children_volume += tree.nodes[c].mass.volume;
+      bound += rounding_volume_bound(tree.nodes[c].mesh);
+    }
+    if (exact_six_volume(set, node.solid) != children) return name + ": exact volume is not its children's sum";
+    if (!(std::fabs(node.mass.volume - children_volume) <= bound)) {
+      return name + ": mesh volume " + std::to_string(node.mass.volume) + " is not its children's " +
+             std::to_string(children_volume) + " within the rounding bound";
+    }
+  }
+  if (internal != report.nodes_glued) {
+    return "the report counts " + std::to_string(report.nodes_glued) + " glued nodes, the tree has " + std::to_string(internal);
+  }
+  return {};
+}
+
 // Every property the issue asks of a Voronoi tree; empty when all hold.
 std::string voronoi_problem(const MeshTree& tree, const VoronoiReport& report) {
   if (const std::string problem = test::tree_problem(tree, true); !problem.empty()) return "tree: " + problem;
@@ -63,6 +112,7 @@ std::string voronoi_problem(const MeshTree& tree, const VoronoiReport& report) {
       return "bonds: " + mismatch;
     }
     if (reference.stats.face_problems != 0) return "a face on a cell plane faces the wrong way";
+    if (const std::string problem = hierarchy_problem(tree, report); !problem.empty()) return problem;
   }
   // The file holds the tree as it is.
   const MeshTree back = decode_shatter(encode_shatter(tree));
@@ -325,6 +375,145 @@ TEST_CASE("the checker and the reader refuse broken cell trees", "[voronoi]") {
   REQUIRE(at != std::string::npos);
   bytes[at] = 'X';  // an unknown upper-case tag: refused, never skipped
   CHECK_THROWS_AS(decode_shatter(bytes), CorruptFileError);
+}
+
+}  // namespace shatter
+
+namespace shatter {
+
+// hierarchy_problem (in voronoi_problem) checks every internal node; here the
+// trees must also be deeper than one level.
+void check_hierarchies(std::uint64_t seeds) {
+  for (const char* name : {"cube.off", "sphere.off", "torus_quad.off", "spool.off"}) {
+    const Mesh mesh = corpus(name);
+    Vec3 lo = mesh.positions[0], hi = lo;
+    for (const Vec3& p : mesh.positions) {
+      lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+      hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    }
+    const double size = norm(hi - lo);
+    for (std::uint64_t seed = 1; seed <= seeds; ++seed) {
+      const std::vector<std::pair<std::string, std::vector<Vec3>>> patterns{
+          {"uniform", uniform_sites(mesh, 32 + 16 * static_cast<std::uint32_t>(seed), seed)},
+          {"clustered", clustered_sites(mesh, 3, 12, 0.15 * size, seed)},
+          {"grid", grid_sites(mesh, {4, 3, 3}, false, 0.25, 0.2, seed)},
+          {"brick jittered", grid_sites(mesh, {4, 3, 3}, true, 0.5, 0.3, seed)}};
+      for (const auto& [pattern, sites] : patterns) {
+        INFO(name << " " << pattern << " seed " << seed);
+        VoronoiReport report;
+        const MeshTree tree = build(mesh, sites, report);
+        std::uint32_t depth = 0;
+        for (const MeshTreeNode& node : tree.nodes) depth = std::max(depth, node.depth);
+        CHECK(report.nodes_glued > 0);
+        CHECK(depth >= 2);
+        CHECK(voronoi_problem(tree, report) == "");
+      }
+    }
+  }
+}
+
+TEST_CASE("Voronoi trees are hierarchies of glued cells over patterns and meshes", "[voronoi][corpus]") {
+  check_hierarchies(1);
+}
+
+TEST_CASE("Voronoi trees are hierarchies of glued cells over seeds, patterns and meshes", "[voronoi][corpus][heavy]") {
+  check_hierarchies(4);
+}
+
+}  // namespace shatter
+
+// The glue itself (a private header of meshtree: the library's own part).
+#include "../../meshtree/src/voronoi_glue.hpp"
+
+namespace shatter {
+
+TEST_CASE("gluing cells: twins cancel, a union touching along an edge only is refused", "[voronoi]") {
+  // Four sites around the cube's z axis: four cells, each pair of neighbours
+  // sharing a face, the two diagonal pairs touching along the axis only.
+  const Mesh cube = corpus("cube.off");
+  VoronoiReport report;
+  const MeshTree tree = build(cube, {{-0.5, -0.5, 0}, {0.5, -0.5, 0}, {0.5, 0.5, 0}, {-0.5, 0.5, 0}}, report);
+  REQUIRE(tree.leaf_count() == 4);
+  const PlaneSet set = tree.plane_set();
+  // Each leaf its own site; each cell plane bisects the two leaves with a face on it.
+  std::vector<std::array<std::uint32_t, 2>> pairs(tree.cut_planes.size(), {no_index, no_index});
+  for (LeafIndex leaf = 0; leaf < 4; ++leaf) {
+    for (const SolidFace& face : tree.leaf(leaf).solid.faces) {
+      if (!face.plane.is_cut()) continue;
+      auto& pair = pairs[face.plane.index()];
+      if (pair[0] == no_index) pair = {leaf, no_index};
+      else pair[1] = leaf;
+    }
+  }
+  for (auto& pair : pairs) {
+    if (pair[1] != no_index && pair[0] > pair[1]) std::swap(pair[0], pair[1]);
+  }
+  std::array<std::vector<std::uint32_t>, 4> sites{{{0}, {1}, {2}, {3}}};
+  const auto part = [&](LeafIndex leaf) { return detail::GluePart{&tree.leaf(leaf).solid, sites[leaf]}; };
+  // The diagonal neighbour of leaf 0: the leaf it shares no cell plane with.
+  LeafIndex diagonal = 0;
+  for (LeafIndex other = 1; other < 4; ++other) {
+    bool shares = false;
+    for (const auto& pair : pairs) shares |= (pair[0] == 0 && pair[1] == other);
+    if (!shares) diagonal = other;
+  }
+  REQUIRE(diagonal != 0);
+  std::string why;
+  // Two face neighbours: one solid, its exact volume theirs summed, sound.
+  for (LeafIndex other = 1; other < 4; ++other) {
+    if (other == diagonal) continue;
+    const std::vector<detail::GluePart> two{part(0), part(other)};
+    CHECK(detail::face_connected_groups(two, pairs).size() == 1);
+    const std::optional<Solid> glued = detail::glue_parts(set, two, pairs, why);
+    REQUIRE(glued);
+    CHECK(check_solid(set, *glued) == "");
+    CHECK(exact_six_volume(set, *glued) == exact_six_volume(set, *two[0].solid) + exact_six_volume(set, *two[1].solid));
+    CHECK(glued->convex);  // half the cube
+  }
+  // The diagonal pair: two face-connected sets, and glued anyway, refused.
+  const std::vector<detail::GluePart> diagonal_pair{part(0), part(diagonal)};
+  CHECK(detail::face_connected_groups(diagonal_pair, pairs).size() == 2);
+  CHECK_FALSE(detail::glue_parts(set, diagonal_pair, pairs, why));
+  CHECK_THAT(why, Catch::Contains("edge"));
+  // All four: the cube again, every twin gone.
+  const std::vector<detail::GluePart> all{part(0), part(1), part(2), part(3)};
+  const std::optional<Solid> whole = detail::glue_parts(set, all, pairs, why);
+  REQUIRE(whole);
+  CHECK(whole->convex);
+  CHECK(exact_six_volume(set, *whole) == exact_six_volume(set, tree.nodes[0].solid));
+  for (const SolidFace& face : whole->faces) CHECK_FALSE(face.plane.is_cut());
+  // Three: an L, not convex.
+  const std::vector<detail::GluePart> three{part(0), part(diagonal == 1 ? 2 : 1), part(diagonal)};
+  const std::optional<Solid> ell = detail::glue_parts(set, three, pairs, why);
+  REQUIRE(ell);
+  CHECK_FALSE(ell->convex);
+  CHECK(check_solid(set, *ell) == "");
+}
+
+}  // namespace shatter
+
+namespace shatter {
+
+TEST_CASE("a tree keeps how its sites were made, and its file keeps it", "[voronoi]") {
+  const Mesh cube = corpus("cube.off");
+  TreeRecipe recipe = voronoi_recipe(2);
+  recipe.pattern = "voronoi --sites 12 --seed 2";
+  const MeshTree tree = build_voronoi_tree(cube, uniform_sites(cube, 12, 2), recipe);
+  const std::string bytes = encode_shatter(tree);
+  CHECK(bytes.find("patt") != std::string::npos);
+  const MeshTree back = decode_shatter(bytes);
+  CHECK(back.recipe.pattern == recipe.pattern);
+  CHECK(encode_shatter(back) == bytes);
+  // Not printable text: refused when written.
+  MeshTree bad = tree;
+  bad.recipe.pattern = "voronoi\n--sites 12";
+  CHECK_THROWS_AS(encode_shatter(bad), std::invalid_argument);
+  // A tree without a pattern writes no section (plane trees' files are unchanged).
+  MeshTree plain = tree;
+  plain.recipe.pattern.clear();
+  const std::string plain_bytes = encode_shatter(plain);
+  CHECK(plain_bytes.find("patt") == std::string::npos);
+  CHECK(decode_shatter(plain_bytes).recipe.pattern.empty());
 }
 
 }  // namespace shatter

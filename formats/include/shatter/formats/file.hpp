@@ -60,6 +60,9 @@
 //         max_plane_tries reads the same from every file; since issue 17 a
 //         plane is no longer redrawn for a piece that vanishes in the rounding
 //         (TreeRecipe::max_plane_tries says what it bounds now).
+//   patt  optional: TreeRecipe::pattern, how a Voronoi tree's sites were made,
+//         as text: 1 to 1024 bytes of printable ASCII (0x20-0x7E). Written only
+//         when the recipe has one (`fracture --pattern` other than planes).
 //   NODE  u32 node count n (>= 1), u8 flags (bit 0 seeds stored, bit 1 masses
 //         stored, bit 2 leaves' planes stored; other bits 0), then per node in
 //         preorder: vu (c << 1 | above_parent_plane), 64 bits, c its child count; f64 x4

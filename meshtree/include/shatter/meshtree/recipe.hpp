@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <string_view>
 
 namespace shatter {
@@ -77,6 +78,12 @@ struct TreeRecipe {
   std::uint32_t max_plane_tries = 64;
   /// Accept a self-intersecting input (only topology is promised then).
   bool allow_self_intersections = false;
+  /// How a Voronoi tree's sites were made, as `fracture` spells its pattern
+  /// options (e.g. "voronoi --sites 1000 --seed 1"), so that `info` can say; empty
+  /// for a plane tree and for sites a program gave build_voronoi_tree. Kept by the
+  /// .shatter file in its optional `patt` section (printable ASCII, 1 to 1024
+  /// bytes), written only when not empty, so plane trees' files are unchanged.
+  std::string pattern;
 };
 
 /// One step of splitmix64 (Steele, Lea & Flood 2014): advances `state` and

@@ -84,25 +84,42 @@ struct VoronoiReport {
   /// (no leaf), their exact volume (summed as doubles) within the bound.
   std::size_t fragments_vanished = 0;
   double vanished_volume = 0, vanished_volume_bound = 0;
+  /// Internal nodes made by gluing fragments (the hierarchy, see
+  /// build_voronoi_tree), and face-connected sets of parts left unglued because
+  /// their union was no closed 2-manifold as glued or did not round validly
+  /// (their parts then hang one level higher).
+  std::size_t nodes_glued = 0, sets_unglued = 0;
   double step = 0;                   ///< the site grid's spacing
   double seconds_cells = 0;          ///< quantizing, triangulating, cutting and rounding
+  double seconds_glue = 0;           ///< gluing and rounding the internal nodes
   double seconds_hulls = 0, seconds_bonds = 0;
 };
 
 /// Cuts `mesh` into the Voronoi cells of `sites`: every cell's part of the solid
 /// is cut out by the plane kernel (several components give several fragments,
 /// a cell that misses the solid gives none), rounded and certified as every
-/// cut piece is (round_solid). The tree has the input at its root and the
-/// fragments as its leaves, in site order (depth 1; the root's plane is zero,
-/// which marks a cell node: its children are separated by the bisectors the
-/// tree keeps after its node planes, MeshTree::cut_planes). One site, or one
-/// fragment, gives the root alone. Bonds are the shared cell faces
-/// (find_bonds). recipe.strategy must be voronoi; recipe.fragments is kept as
-/// the number of sites asked for.
+/// cut piece is (round_solid). The fragments are the leaves; the root is the
+/// input; between them, a hierarchy: the sites are split by a k-d tree
+/// (median along the longest axis, groups of at most 8 at the bottom), and at
+/// every group below the root, the face-connected sets of its parts (its
+/// fragments, or its two halves' parts) are glued into one internal node each,
+/// without a Boolean (voronoi_glue.hpp): twin cell faces deleted, the rest
+/// joined by vertex identity, the union rounded and certified by round_solid.
+/// A set whose union is not a closed 2-manifold as glued (parts touching along
+/// an edge or at a point only, twins that do not cancel edge for edge, as
+/// around a vanished sliver) or does not round validly is not glued: its parts
+/// hang one level higher (VoronoiReport::sets_unglued). Every node's plane is
+/// zero, which marks a cell node: its children are separated by the bisectors
+/// the tree keeps after its node planes (MeshTree::cut_planes). One site, or
+/// one fragment, gives the root alone. Bonds are the shared cell faces between
+/// leaves (find_bonds), on their lowest common ancestor. recipe.strategy must
+/// be voronoi; recipe.fragments is kept as the number of sites asked for.
 /// Preconditions: as build_mesh_tree (a valid solid, every triangle on surface
 /// 0; validated unless run.input_validated), sites finite and non-empty.
 /// Guarantees: the fragments' exact solids partition the input's exactly (but
-/// for vanished slivers, reported); every stored mesh valid as written;
+/// for vanished slivers, reported); an internal node's exact solid is the union
+/// of its children's, so its exact volume is theirs summed, exactly; every
+/// stored mesh valid as written;
 /// deterministic at any run.threads. Throws UnsupportedGeometryError when a
 /// fragment cannot be written validly (round_solid), std::invalid_argument on
 /// bad arguments, InvalidMeshError on an invalid input.

@@ -1,0 +1,340 @@
+// Gluing Voronoi fragments (voronoi_glue.hpp says why it is exact).
+
+#include "voronoi_glue.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "shatter/kernel/union_find.hpp"
+
+namespace shatter::detail {
+namespace {
+
+struct DefHash {
+  std::size_t operator()(const PointDef& d) const {
+    std::uint64_t h = static_cast<std::uint64_t>(d.kind) * 0x9E3779B97F4A7C15ull;
+    const auto mix = [&](std::uint64_t x) { h = (h ^ x) * 0xBF58476D1CE4E5B9ull; h ^= h >> 31; };
+    mix(d.a);
+    mix(d.b);
+    for (const PlaneRef p : d.planes) mix(p.bits);
+    return static_cast<std::size_t>(h);
+  }
+};
+
+bool is_pair(const std::array<std::uint32_t, 2>& pair) { return pair[0] != no_index; }
+
+bool holds(std::span<const std::uint32_t> sites, std::uint32_t site) {
+  return std::binary_search(sites.begin(), sites.end(), site);
+}
+
+// The site across a face of part `part` on a bisector: the one of the plane's two
+// sites that is not the part's; no_index when the face is on no bisector, or
+// when the part holds both sites (a face whose twin is missing).
+std::uint32_t site_across(const GluePart& part, const SolidFace& face, SitePairs pairs) {
+  if (!face.plane.is_cut() || face.plane.index() >= pairs.size()) return no_index;
+  const auto& pair = pairs[face.plane.index()];
+  if (!is_pair(pair)) return no_index;
+  const bool first = holds(part.sites, pair[0]), second = holds(part.sites, pair[1]);
+  if (first == second) return no_index;
+  return first ? pair[1] : pair[0];
+}
+
+// Site -> the parts holding it (several for a cell split into several
+// fragments), as a sorted list.
+class PartsOfSite {
+ public:
+  explicit PartsOfSite(std::span<const GluePart> parts) {
+    for (std::uint32_t i = 0; i < parts.size(); ++i) {
+      for (const std::uint32_t s : parts[i].sites) entries_.push_back({s, i});
+    }
+    std::sort(entries_.begin(), entries_.end());
+  }
+  /// The parts holding `site`, in increasing order.
+  std::span<const std::array<std::uint32_t, 2>> operator()(std::uint32_t site) const {
+    const auto begin = std::lower_bound(entries_.begin(), entries_.end(), std::array<std::uint32_t, 2>{site, 0});
+    auto end = begin;
+    while (end != entries_.end() && (*end)[0] == site) ++end;
+    return {begin, end};
+  }
+
+ private:
+  std::vector<std::array<std::uint32_t, 2>> entries_;
+};
+
+// Whether two defined points are one point, decided exactly. A three_planes
+// point is the only point on its three (independent) planes; a segment_plane
+// point is the only point of its segment's line on its plane. Points of
+// different input segments, or an input point and a segment's inner point, are
+// taken as different: in an embedded input they are (a self-intersecting input
+// may give a false "different", which only leaves parts unglued, never a wrong
+// union).
+bool same_point(const PlaneSet& set, const PointDef& p, const ApproxPoint& pa, const PointDef& q, const ApproxPoint& qa) {
+  if (p == q) return true;
+  const auto on_all = [&](const PointDef& definer, const PointDef& point, const ApproxPoint& approx) {
+    for (const PlaneRef plane : definer.planes) {
+      if (side(set, plane, point, approx) != Sign::zero) return false;
+    }
+    return true;
+  };
+  if (q.kind == PointKind::three_planes) return on_all(q, p, pa);
+  if (p.kind == PointKind::three_planes) return on_all(p, q, qa);
+  if (p.kind == PointKind::segment_plane && q.kind == PointKind::segment_plane && p.a == q.a && p.b == q.b) {
+    return side(set, q.planes[0], p, pa) == Sign::zero;
+  }
+  return false;
+}
+
+std::uint64_t edge_key(std::uint32_t from, std::uint32_t to) { return (std::uint64_t{from} << 32) | to; }
+
+}  // namespace
+
+std::vector<std::vector<std::uint32_t>> face_connected_groups(std::span<const GluePart> parts, SitePairs pairs) {
+  const PartsOfSite parts_of(parts);
+  UnionFind groups(parts.size());
+  for (std::uint32_t i = 0; i < parts.size(); ++i) {
+    for (const SolidFace& face : parts[i].solid->faces) {
+      const std::uint32_t across = site_across(parts[i], face, pairs);
+      if (across == no_index) continue;
+      for (const auto& [site, j] : parts_of(across)) groups.unite(i, j);
+    }
+  }
+  std::vector<std::vector<std::uint32_t>> out;
+  std::vector<std::uint32_t> slot(parts.size(), no_index);
+  for (std::uint32_t i = 0; i < parts.size(); ++i) {
+    const std::uint32_t root = groups.find(i);  // the smallest index: a group's first part
+    if (slot[root] == no_index) {
+      slot[root] = static_cast<std::uint32_t>(out.size());
+      out.emplace_back();
+    }
+    out[slot[root]].push_back(i);
+  }
+  return out;
+}
+
+std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> parts, SitePairs pairs, std::string& why) {
+  const PartsOfSite parts_of(parts);
+
+  // Every vertex of every part gets a global id; equal definitions share one.
+  std::vector<std::uint32_t> first_vertex(parts.size() + 1, 0);
+  for (std::size_t i = 0; i < parts.size(); ++i) first_vertex[i + 1] = first_vertex[i] + static_cast<std::uint32_t>(parts[i].solid->defs.size());
+  std::vector<std::uint32_t> id(first_vertex.back());
+  std::vector<std::uint32_t> owner;  // per id: the global vertex (part's first + v) that defines it
+  {
+    std::unordered_map<PointDef, std::uint32_t, DefHash> by_def;
+    by_def.reserve(first_vertex.back());
+    for (std::uint32_t i = 0; i < parts.size(); ++i) {
+      const Solid& solid = *parts[i].solid;
+      for (std::uint32_t v = 0; v < solid.defs.size(); ++v) {
+        const auto [it, inserted] = by_def.emplace(solid.defs[v], static_cast<std::uint32_t>(owner.size()));
+        if (inserted) owner.push_back(first_vertex[i] + v);
+        id[first_vertex[i] + v] = it->second;
+      }
+    }
+  }
+  const auto part_and_vertex = [&](std::uint32_t global) {
+    const auto i = static_cast<std::uint32_t>(std::upper_bound(first_vertex.begin(), first_vertex.end(), global) - first_vertex.begin() - 1);
+    return std::array<std::uint32_t, 2>{i, global - first_vertex[i]};
+  };
+  UnionFind same(owner.size());
+
+  // The twin faces: per bisector, the faces of the parts on either side.
+  struct Twin {
+    std::uint32_t plane, part, face;
+  };
+  std::vector<Twin> twins;
+  std::vector<std::vector<char>> deleted(parts.size());
+  for (std::uint32_t i = 0; i < parts.size(); ++i) {
+    const Solid& solid = *parts[i].solid;
+    deleted[i].assign(solid.faces.size(), 0);
+    for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+      const std::uint32_t across = site_across(parts[i], solid.faces[f], pairs);
+      if (across == no_index || parts_of(across).empty()) continue;
+      twins.push_back({solid.faces[f].plane.index(), i, f});
+      deleted[i][f] = 1;
+    }
+  }
+  std::sort(twins.begin(), twins.end(), [](const Twin& a, const Twin& b) {
+    return std::tie(a.plane, a.part, a.face) < std::tie(b.plane, b.part, b.face);
+  });
+
+  // The directed edges of a run of twins, over ids: one side's, and the other's reversed.
+  std::vector<std::uint64_t> one, other;
+  const auto gather = [&](std::size_t begin, std::size_t end) {
+    one.clear();
+    other.clear();
+    const std::uint32_t first_site = pairs[twins[begin].plane][0];
+    for (std::size_t t = begin; t < end; ++t) {
+      const Solid& solid = *parts[twins[t].part].solid;
+      const SolidFace& face = solid.faces[twins[t].face];
+      const bool first_side = holds(parts[twins[t].part].sites, first_site);
+      for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+        for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+          const std::uint32_t u = same.find(id[first_vertex[twins[t].part] + edge.from]);
+          const std::uint32_t v = same.find(id[first_vertex[twins[t].part] + edge.to]);
+          (first_side ? one : other).push_back(first_side ? edge_key(u, v) : edge_key(v, u));
+        }
+      }
+    }
+    std::sort(one.begin(), one.end());
+    std::sort(other.begin(), other.end());
+  };
+  const auto approx_of = [&](std::uint32_t id_root) -> std::pair<const PointDef&, const ApproxPoint&> {
+    const auto [i, v] = part_and_vertex(owner[id_root]);
+    return {parts[i].solid->defs[v], parts[i].solid->approx[v]};
+  };
+  // Equal points of different definitions (a point where four or more cells
+  // meet, defined from different triples in different parts), wherever the
+  // parts meet: candidates are the pairs whose rounded positions are within
+  // what rounding can move two copies of one point apart (rounded_position is
+  // within 2^-40 of each coordinate's magnitude), each decided exactly.
+  {
+    std::vector<Vec3> at(owner.size());
+    for (std::uint32_t k = 0; k < owner.size(); ++k) {
+      const auto [d, a] = approx_of(k);
+      at[k] = rounded_position(set, d, a);
+    }
+    // Cells four times the tolerance wide, scaled to the largest coordinate:
+    // a pair within tolerance lies in one cell or in neighbouring ones.
+    double largest = 0;
+    for (const Vec3& p : at) largest = std::max({largest, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
+    const double cell = 0x1p-36 * largest;
+    using Key = std::array<std::int64_t, 3>;
+    struct KeyHash {
+      std::size_t operator()(const Key& k) const {
+        return static_cast<std::size_t>((k[0] * 0x9E3779B97F4A7C15ll) ^ (k[1] * 0xBF58476D1CE4E5B9ll) ^ (k[2] * 0x94D049BB133111EBll));
+      }
+    };
+    std::unordered_map<Key, std::vector<std::uint32_t>, KeyHash> grid;
+    const auto key_of = [&](const Vec3& p) {
+      return cell > 0 ? Key{static_cast<std::int64_t>(std::floor(p.x / cell)), static_cast<std::int64_t>(std::floor(p.y / cell)),
+                            static_cast<std::int64_t>(std::floor(p.z / cell))}
+                      : Key{0, 0, 0};
+    };
+    for (std::uint32_t k = 0; k < at.size(); ++k) grid[key_of(at[k])].push_back(k);
+    const auto near = [](double a, double b) { return std::fabs(a - b) <= 0x1p-38 * std::max(std::fabs(a), std::fabs(b)); };
+    // A point within tolerance of another lies in its cell, or in a neighbour
+    // across a side it is within tolerance of: only those cells are looked in.
+    for (std::uint32_t a = 0; a < at.size(); ++a) {
+      const Key key = key_of(at[a]);
+      std::array<std::array<std::int64_t, 2>, 3> range{};
+      for (int axis = 0; axis < 3 && cell > 0; ++axis) {
+        const double c = axis == 0 ? at[a].x : axis == 1 ? at[a].y : at[a].z;
+        const double reach = 0x1p-38 * std::fabs(c) * 2 + 0x1p-38 * largest;
+        range[axis] = {std::floor((c - reach) / cell) < static_cast<double>(key[axis]) ? -1 : 0,
+                       std::floor((c + reach) / cell) > static_cast<double>(key[axis]) ? 1 : 0};
+      }
+      for (std::int64_t dx = range[0][0]; dx <= range[0][1]; ++dx) {
+        for (std::int64_t dy = range[1][0]; dy <= range[1][1]; ++dy) {
+          for (std::int64_t dz = range[2][0]; dz <= range[2][1]; ++dz) {
+            const auto found = grid.find(Key{key[0] + dx, key[1] + dy, key[2] + dz});
+            if (found == grid.end()) continue;
+            for (const std::uint32_t b : found->second) {
+              if (b <= a || !near(at[a].x, at[b].x) || !near(at[a].y, at[b].y) || !near(at[a].z, at[b].z) ||
+                  same.find(a) == same.find(b)) {
+                continue;
+              }
+              const auto [ad, aa] = approx_of(a);
+              const auto [bd, ba] = approx_of(b);
+              if (same_point(set, ad, aa, bd, ba)) same.unite(a, b);
+            }
+          }
+        }
+      }
+    }
+  }
+  // Every run of twins on one plane must cancel, edge for edge.
+  for (std::size_t begin = 0; begin < twins.size();) {
+    std::size_t end = begin;
+    while (end < twins.size() && twins[end].plane == twins[begin].plane) ++end;
+    gather(begin, end);
+    if (one != other) {
+      why = "the twin faces on a bisector do not share their boundary edges";
+      return std::nullopt;
+    }
+    begin = end;
+  }
+
+  // The kept faces over compact vertex numbers, in part and face order.
+  Solid glued;
+  std::vector<std::uint32_t> number(owner.size(), no_index);
+  for (std::uint32_t i = 0; i < parts.size(); ++i) {
+    const Solid& solid = *parts[i].solid;
+    for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+      if (deleted[i][f]) continue;
+      SolidFace face = solid.faces[f];
+      face.first_loop = static_cast<std::uint32_t>(glued.loops.size());
+      for (std::uint32_t l = solid.faces[f].first_loop; l < solid.faces[f].first_loop + solid.faces[f].loop_count; ++l) {
+        const SolidLoop& loop = solid.loops[l];
+        glued.loops.push_back({static_cast<std::uint32_t>(glued.corners.size()), loop.corner_count});
+        for (std::uint32_t c = loop.first_corner; c < loop.first_corner + loop.corner_count; ++c) {
+          SolidCorner corner = solid.corners[c];
+          const std::uint32_t root = same.find(id[first_vertex[i] + corner.vertex]);
+          if (number[root] == no_index) {
+            number[root] = static_cast<std::uint32_t>(glued.defs.size());
+            const auto [d, a] = approx_of(root);
+            glued.defs.push_back(d);
+            glued.approx.push_back(a);
+          }
+          corner.vertex = number[root];
+          glued.corners.push_back(corner);
+        }
+      }
+      glued.faces.push_back(face);
+    }
+  }
+
+  // Closed and 2-manifold as glued: every directed edge once with its reverse,
+  // and one fan of faces around every vertex.
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;  // edge, corner
+  std::vector<std::uint32_t> next_corner(glued.corners.size());
+  edges.reserve(glued.corners.size());
+  for (const SolidLoop& loop : glued.loops) {
+    for (const CornerEdge& edge : loop_edges(glued.corners, loop)) {
+      if (edge.from == edge.to) {
+        why = "a loop runs through one point twice in a row";
+        return std::nullopt;
+      }
+      edges.push_back({edge_key(edge.from, edge.to), edge.corner});
+      next_corner[edge.corner] = edge.corner + 1 == loop.first_corner + loop.corner_count ? loop.first_corner : edge.corner + 1;
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  for (std::size_t e = 0; e + 1 < edges.size(); ++e) {
+    if (edges[e].first == edges[e + 1].first) {
+      why = "the parts touch along an edge only (an edge used twice one way)";
+      return std::nullopt;
+    }
+  }
+  const auto corner_of = [&](std::uint64_t key) {
+    const auto it = std::lower_bound(edges.begin(), edges.end(), std::pair<std::uint64_t, std::uint32_t>{key, 0});
+    return it != edges.end() && it->first == key ? it->second : no_index;
+  };
+  std::vector<char> seen(glued.corners.size(), 0);
+  std::vector<char> has_fan(glued.defs.size(), 0);
+  for (std::uint32_t c = 0; c < glued.corners.size(); ++c) {
+    if (seen[c]) continue;
+    const VertexIndex v = glued.corners[c].vertex;
+    if (has_fan[v]) {
+      why = "the parts touch at a point only (a vertex with several fans)";
+      return std::nullopt;
+    }
+    has_fan[v] = 1;
+    // Around v: the edge v -> w of corner c, its reverse w -> v, then the edge
+    // after that reverse, which leaves v again.
+    for (std::uint32_t at = c; !seen[at];) {
+      seen[at] = 1;
+      const VertexIndex w = glued.corners[next_corner[at]].vertex;
+      const std::uint32_t reverse = corner_of(edge_key(w, v));
+      if (reverse == no_index) {
+        why = "the glued surface is open";
+        return std::nullopt;
+      }
+      at = next_corner[reverse];
+    }
+  }
+  glued.convex = solid_is_convex(set, glued);
+  return glued;
+}
+
+}  // namespace shatter::detail
