@@ -117,7 +117,8 @@ const std::map<std::string, std::string>& defect_of_bad_mesh() {
   static const std::map<std::string, std::string> defect_of = {
       {"cube-ouvert.off", "boundary edges"},         {"tet-shuffled.off", "inconsistent"},
       {"tetrahedron.off", "inward"},                 {"degtri_sliding.off", "zero-area"},
-      {"elephant-with-holes.off", "boundary edges"}, {"tetra_intersected_by_triangle.off", "boundary edges"}};
+      {"elephant-with-holes.off", "boundary edges"}, {"tetra_intersected_by_triangle.off", "boundary edges"},
+      {"box-in-box-both-outward.off", "misnested shells"}};
   return defect_of;
 }
 

@@ -423,6 +423,8 @@ TEST_CASE("every bad corpus mesh is repaired or refused as recorded", "[repair][
       {"cube-ouvert.off", {true, {RepairKind::filled_holes}, {}, 48}},
       {"tet-shuffled.off", {true, {RepairKind::reversed_triangles}, {}, 1}},
       {"tetrahedron.off", {true, {RepairKind::reversed_triangles}, {}, 1}},
+      // The inner box reversed into a cavity: six times (512 - 8).
+      {"box-in-box-both-outward.off", {true, {RepairKind::reversed_triangles}, {}, 3024}},
       // Flat: every triangle lies in z = 0; no solid to recover.
       {"degtri_sliding.off", {false, {}, DefectKind::zero_area_triangle}},
       // 106 holes, touching at 65 pinched vertices, one of 78 edges: all filled

@@ -370,6 +370,9 @@ TEST_CASE("every bad corpus mesh reports the defect its name implies", "[validat
       // are open, so the mesh is refused as open before any crossing is looked for.
       {"tetra_intersected_by_triangle.off",
        {{DefectKind::boundary_edge}, DefectKind::boundary_edge, 3, "edge ("}},
+      // A box of side 8 holding one of side 2, both facing out: the inner is misnested.
+      {"box-in-box-both-outward.off",
+       {{DefectKind::misnested_shell}, DefectKind::misnested_shell, 1, "shell of triangle 12"}},
   };
   const auto paths = shatter::test::bad_meshes();
   CHECK(paths.size() == expected.size());
