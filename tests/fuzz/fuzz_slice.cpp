@@ -65,7 +65,7 @@ void check_plane_cut(const shatter::Mesh& mesh, const shatter::Plane& plane) {
     require(!collapsed || !piece.defect.empty(), "plane cut piece: no triangles, yet no defect named");
     require(collapsed == piece.vanished, "plane cut piece: vanished exactly when rounding collapsed it whole");
     require(piece.moved_volume <= piece.moved_volume_bound * (1 + 1e-12) || piece.vanished,
-            "plane cut piece: the separation moved more volume than its bound");
+            "plane cut piece: a repair moved more volume than its bound");
     require(collapsed || piece.defect.empty() == shatter::validate_mesh(piece.mesh).valid(),
             "plane cut piece: a defect named for a valid mesh, or none for an invalid one");
   }

@@ -122,10 +122,13 @@ struct RoundedSolid {
   /// against the exact piece when parts of it vanished as sheets, the whole
   /// exact volume when the piece collapsed (doubles, from exact values).
   double moved_volume = 0;
-  /// A bound on moved_volume: the separation's (sum of distance moved x area of
-  /// the moved copies' triangles), plus, when parts or the whole vanished, the
-  /// most that rounding the piece's vertices can move (Steiner's bound over its
-  /// faces' fan triangles, see round_solid).
+  /// A bound on moved_volume, which a repaired mesh is held to: the separation's
+  /// (sum of distance moved x area of the moved copies' triangles), plus, when
+  /// parts vanished or faces were merged or snapped, the most that rounding the
+  /// piece's vertices can move whatever the triangulation over them (Steiner's
+  /// bound over each face's fan triangles with the face's furthest move, its
+  /// area term doubled for a triangulation other than the fan; see round_solid);
+  /// for a collapsed piece, that bound with each fan triangle's own furthest move.
   double moved_volume_bound = 0;
   std::string defect;       ///< when not valid: validate_mesh's summary of what is left
 };
