@@ -1390,9 +1390,11 @@ std::vector<VertexIndex> corners_touching_caps(const PlaneSet& set, const Solid&
 
 // What separate_touching did.
 struct Separation {
-  std::size_t moved = 0;       ///< vertex copies moved (a pinched vertex counts once per fan)
-  double volume_change = 0;    ///< |signed volume after - before|, in doubles
-  double volume_bound = 0;     ///< sum over moved copies of distance moved x area of their triangles
+  std::size_t moved = 0;        ///< vertex copies moved (a pinched vertex counts once per fan)
+  mpq_class volume_change = 0;  ///< |signed volume after - before|, exactly
+  /// Sum over moved copies of the distance moved x twice the area of their
+  /// triangles, both in the L1 norm (upper bounds of the Euclidean), exactly.
+  mpq_class volume_bound = 0;
 };
 
 // --- Edges that rounding made non-manifold ---------------------------------------
@@ -1546,31 +1548,44 @@ Separation separate_touching(Mesh& mesh, std::span<const VertexIndex> touching, 
   // the change of the divergence sum, and it is computed on differences near p,
   // not on coordinates near the origin. Each triangle's part is a tetrahedron no
   // thicker than the move over the triangle: at most distance x area / 3.
+  // The change and its bound are exact (rationals over the doubles): coordinates
+  // near the top of the double range overflow any double sum of products
+  // (fuzz_slice corpus: cube-ply-huge-coordinates-pinch.bin gave NaN for both).
   Separation result;
-  double volume_change = 0;
+  mpq_class volume_change6 = 0;
   for (const Fan& fan : to_move) {
     const Vec3 p = mesh.positions[fan.vertex];
-    Vec3 direction, normal_sum;
-    double nearest = INFINITY, area = 0;
+    Vec3 direction;
+    double nearest = INFINITY;
     for (const std::uint32_t corner : fan.corners) {
       const Vec3 b = mesh.positions[vertex_of(corner, 1)] - p, c = mesh.positions[vertex_of(corner, 2)] - p;
       for (const Vec3& d : {b, c}) {
         const double length = norm(d);
         if (length > 0) direction = direction + d * (1 / length), nearest = std::min(nearest, length);
       }
-      normal_sum = normal_sum + cross(b, c);
-      area += 0.5 * norm(cross(b, c));
     }
     const double length = norm(direction);
     if (!(length > 0) || !std::isfinite(nearest)) continue;
     const double distance = scale * nearest;
     const Vec3 move = direction * (distance / length);
     mesh.positions[fan.vertex] = p + move;
-    volume_change += dot(move, normal_sum) / 6;
+    const Vec3 moved_to = mesh.positions[fan.vertex];
+    const std::array<mpq_class, 3> from{mpq_class(p.x), mpq_class(p.y), mpq_class(p.z)};
+    const std::array<mpq_class, 3> step{mpq_class(moved_to.x) - from[0], mpq_class(moved_to.y) - from[1],
+                                        mpq_class(moved_to.z) - from[2]};
+    mpq_class twice_area1 = 0;
+    for (const std::uint32_t corner : fan.corners) {
+      const Vec3 &bp = mesh.positions[vertex_of(corner, 1)], &cp = mesh.positions[vertex_of(corner, 2)];
+      const std::array<mpq_class, 3> b{mpq_class(bp.x) - from[0], mpq_class(bp.y) - from[1], mpq_class(bp.z) - from[2]};
+      const std::array<mpq_class, 3> c{mpq_class(cp.x) - from[0], mpq_class(cp.y) - from[1], mpq_class(cp.z) - from[2]};
+      const std::array<mpq_class, 3> normal{b[1] * c[2] - b[2] * c[1], b[2] * c[0] - b[0] * c[2], b[0] * c[1] - b[1] * c[0]};
+      volume_change6 += step[0] * normal[0] + step[1] * normal[1] + step[2] * normal[2];
+      twice_area1 += abs(normal[0]) + abs(normal[1]) + abs(normal[2]);
+    }
     ++result.moved;
-    result.volume_bound += distance * area;
+    result.volume_bound += (abs(step[0]) + abs(step[1]) + abs(step[2])) * twice_area1;
   }
-  result.volume_change = std::fabs(volume_change);
+  result.volume_change = abs(volume_change6) / 6;
   return result;
 }
 
@@ -1621,16 +1636,26 @@ namespace {
 // (rounding_sweep_bound with any_triangulation), which the repaired mesh is held
 // to: its triangles are the exact piece's, moved by the rounding and triangulated
 // again, less sheets of no volume.
-void report_moved_volume(const PlaneSet& set, const Solid& solid, RoundedSolid& result) {
+struct MovedVolume {
+  mpq_class change = 0, bound = 0;
+};
+
+MovedVolume measured_moved_volume(const PlaneSet& set, const Solid& solid, const Mesh& mesh) {
   mpq_class mesh_six = 0;
-  for (const Triangle& t : result.mesh.triangles) {
-    const Vec3 &a = result.mesh.positions[t[0]], &b = result.mesh.positions[t[1]], &c = result.mesh.positions[t[2]];
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
     const mpq_class ax(a.x), ay(a.y), az(a.z), bx(b.x), by(b.y), bz(b.z), cx(c.x), cy(c.y), cz(c.z);
     mesh_six += ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx);
   }
-  const mpq_class change = abs(mesh_six - exact_six_volume(set, solid)) / 6;
-  result.moved_volume = change.get_d();
-  result.moved_volume_bound = rounding_sweep_bound(set, solid, /*any_triangulation=*/true).get_d();
+  return {abs(mesh_six - exact_six_volume(set, solid)) / 6, rounding_sweep_bound(set, solid, /*any_triangulation=*/true)};
+}
+
+// Reports `moved` in `result` (as doubles, each rounded toward zero, so the
+// order the exact values have is kept) and says whether it is within its bound.
+bool report_moved_volume(const MovedVolume& moved, RoundedSolid& result) {
+  result.moved_volume = moved.change.get_d();
+  result.moved_volume_bound = moved.bound.get_d();
+  return moved.change <= moved.bound;
 }
 
 // The triangles of `mesh` with a shape (self_intersecting_pairs' precondition):
@@ -2089,13 +2114,12 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       written.folded_faces = folded_faces;
       written.inserted_vertices = inserted;
       written.snapped_vertices = snapped;
-      if (sheets_cancelled > 0 || folding || snapping) {
-        report_moved_volume(set, solid, written);
-      }
       // The volume the repairs moved is held to the bound of what rounding can
       // move, or the mesh is not taken (fuzz_slice corpus: cube-off-cap-routed-
       // through-vertex.bin, taken at the first round beyond the bound it reported).
-      if (!(written.moved_volume > written.moved_volume_bound)) {
+      const bool within = !(sheets_cancelled > 0 || folding || snapping) ||
+                          report_moved_volume(measured_moved_volume(set, solid, written.mesh), written);
+      if (within) {
         written.valid = true;
         return written;
       }
@@ -2140,21 +2164,19 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
         written.merged_vertices = merged;
         written.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
         written.separated_vertices = separation.moved;
-        written.moved_volume = separation.volume_change;
-        written.moved_volume_bound = separation.volume_bound;
         written.vanished_triangles = sheets_cancelled;
         written.folded_faces = folded_faces;
         written.inserted_vertices = inserted;
         written.snapped_vertices = snapped;
+        MovedVolume moved{separation.volume_change, separation.volume_bound};
         if (sheets_cancelled > 0 || folding || snapping) {
           // The sheets' or the folds' volume as well: measured against the exact piece.
-          const double separated_bound = written.moved_volume_bound;
-          report_moved_volume(set, solid, written);
-          written.moved_volume_bound += separated_bound;
+          moved = measured_moved_volume(set, solid, written.mesh);
+          moved.bound += separation.volume_bound;
         }
         // Held to the bound, as above (a fold's wedge is thinner than the
         // rounding, so its volume is within it).
-        if (written.moved_volume > written.moved_volume_bound) break;
+        if (!report_moved_volume(moved, written)) break;
         written.valid = true;
         return written;
       }

@@ -120,10 +120,13 @@ struct RoundedSolid {
   std::size_t snapped_vertices = 0;
   /// |volume change| the repairs made: the separation's moves, the written mesh
   /// against the exact piece when parts of it vanished as sheets, the whole
-  /// exact volume when the piece collapsed (doubles, from exact values).
+  /// exact volume when the piece collapsed (exact values rounded toward zero to
+  /// doubles, so moved_volume <= moved_volume_bound holds as it does exactly;
+  /// infinite where the exact value exceeds the double range).
   double moved_volume = 0;
   /// A bound on moved_volume, which a repaired mesh is held to: the separation's
-  /// (sum of distance moved x area of the moved copies' triangles), plus, when
+  /// (sum of distance moved x twice the area of the moved copies' triangles, in
+  /// the L1 norm), plus, when
   /// parts vanished or faces were merged or snapped, the most that rounding the
   /// piece's vertices can move whatever the triangulation over them (Steiner's
   /// bound over each face's fan triangles with the face's furthest move, its
