@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
   // No floating-point traps, unlike the test main (tests/support/catch_main.cpp),
   // and as under libFuzzer: the fuzzers feed coordinates up to the top of the
   // double range, where CGAL's interval filters overflow, and subtract infinities,
-  // by design before they fall back to exact arithmetic (corpus:
+  // by design before they fall back to exact arithmetic (regressions:
   // cube-ply-huge-coordinates-pinch.bin stopped inside CGAL's orientation). A NaN
   // the library makes reaches the targets' properties, which compare it (NaN fails
   // every comparison) or decide on exact values.

@@ -1548,33 +1548,57 @@ Separation separate_touching(Mesh& mesh, std::span<const VertexIndex> touching, 
   // the change of the divergence sum, and it is computed on differences near p,
   // not on coordinates near the origin. Each triangle's part is a tetrahedron no
   // thicker than the move over the triangle: at most distance x area / 3.
-  // The change and its bound are exact (rationals over the doubles): coordinates
-  // near the top of the double range overflow any double sum of products
-  // (fuzz_slice corpus: cube-ply-huge-coordinates-pinch.bin gave NaN for both).
+  // In doubles first, as the moves are made; where coordinates near the top of
+  // the double range overflow the products (fuzz_slice regressions:
+  // cube-ply-huge-coordinates-pinch.bin gave NaN for both), again exactly, on
+  // rationals over the moved doubles, the bound in the L1 norm (an upper bound
+  // of the Euclidean one): twice the area x the distance, a third of which
+  // bounds the change.
   Separation result;
-  mpq_class volume_change6 = 0;
+  double volume_change = 0, volume_bound = 0;
+  struct Move {
+    VertexIndex vertex;
+    const std::vector<std::uint32_t>* corners;
+    Vec3 from, to;
+  };
+  std::vector<Move> moves;
   for (const Fan& fan : to_move) {
     const Vec3 p = mesh.positions[fan.vertex];
-    Vec3 direction;
-    double nearest = INFINITY;
+    Vec3 direction, normal_sum;
+    double nearest = INFINITY, area = 0;
     for (const std::uint32_t corner : fan.corners) {
       const Vec3 b = mesh.positions[vertex_of(corner, 1)] - p, c = mesh.positions[vertex_of(corner, 2)] - p;
       for (const Vec3& d : {b, c}) {
         const double length = norm(d);
         if (length > 0) direction = direction + d * (1 / length), nearest = std::min(nearest, length);
       }
+      normal_sum = normal_sum + cross(b, c);
+      area += 0.5 * norm(cross(b, c));
     }
     const double length = norm(direction);
     if (!(length > 0) || !std::isfinite(nearest)) continue;
     const double distance = scale * nearest;
     const Vec3 move = direction * (distance / length);
     mesh.positions[fan.vertex] = p + move;
-    const Vec3 moved_to = mesh.positions[fan.vertex];
-    const std::array<mpq_class, 3> from{mpq_class(p.x), mpq_class(p.y), mpq_class(p.z)};
-    const std::array<mpq_class, 3> step{mpq_class(moved_to.x) - from[0], mpq_class(moved_to.y) - from[1],
-                                        mpq_class(moved_to.z) - from[2]};
+    volume_change += dot(move, normal_sum) / 6;
+    volume_bound += distance * area;
+    moves.push_back({fan.vertex, &fan.corners, p, mesh.positions[fan.vertex]});
+    ++result.moved;
+  }
+  if (std::isfinite(volume_change) && std::isfinite(volume_bound)) {
+    result.volume_change = std::fabs(volume_change);
+    result.volume_bound = volume_bound;
+    return result;
+  }
+  // Exactly: the moves replayed in order, each against the positions its
+  // neighbours had when it was made, so that the changes add up to the whole.
+  for (auto m = moves.rbegin(); m != moves.rend(); ++m) mesh.positions[m->vertex] = m->from;
+  mpq_class volume_change6 = 0, bound = 0;
+  for (const Move& m : moves) {
+    const std::array<mpq_class, 3> from{mpq_class(m.from.x), mpq_class(m.from.y), mpq_class(m.from.z)};
+    const std::array<mpq_class, 3> step{mpq_class(m.to.x) - from[0], mpq_class(m.to.y) - from[1], mpq_class(m.to.z) - from[2]};
     mpq_class twice_area1 = 0;
-    for (const std::uint32_t corner : fan.corners) {
+    for (const std::uint32_t corner : *m.corners) {
       const Vec3 &bp = mesh.positions[vertex_of(corner, 1)], &cp = mesh.positions[vertex_of(corner, 2)];
       const std::array<mpq_class, 3> b{mpq_class(bp.x) - from[0], mpq_class(bp.y) - from[1], mpq_class(bp.z) - from[2]};
       const std::array<mpq_class, 3> c{mpq_class(cp.x) - from[0], mpq_class(cp.y) - from[1], mpq_class(cp.z) - from[2]};
@@ -1582,10 +1606,11 @@ Separation separate_touching(Mesh& mesh, std::span<const VertexIndex> touching, 
       volume_change6 += step[0] * normal[0] + step[1] * normal[1] + step[2] * normal[2];
       twice_area1 += abs(normal[0]) + abs(normal[1]) + abs(normal[2]);
     }
-    ++result.moved;
-    result.volume_bound += (abs(step[0]) + abs(step[1]) + abs(step[2])) * twice_area1;
+    bound += (abs(step[0]) + abs(step[1]) + abs(step[2])) * twice_area1;
+    mesh.positions[m.vertex] = m.to;
   }
   result.volume_change = abs(volume_change6) / 6;
+  result.volume_bound = bound;
   return result;
 }
 
