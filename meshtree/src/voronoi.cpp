@@ -459,6 +459,104 @@ Plane exact_bisector(const Vec3& p, const Vec3& q, double step) {
           static_cast<double>(d) * h * h};
 }
 
+namespace {
+
+// What the cells are made of, shared by build_voronoi_tree and
+// voronoi_cell_planes: the quantized sites, the sentinels on their grid, the
+// Delaunay bisectors (each site's sorted nearest neighbour first), the solid's
+// box grown by a margin that holds it strictly inside.
+struct CellPlanes {
+  QuantizedSites quantized;
+  std::vector<Vec3> points;  ///< the sites, then the sentinels
+  Triangulated triangulated;
+  std::vector<Plane> planes;
+  std::vector<std::array<std::uint32_t, 2>> plane_pairs;
+  std::map<std::array<std::uint32_t, 2>, std::uint32_t> plane_of_pair;
+  std::vector<std::vector<std::uint32_t>> bisectors_of;
+  std::size_t neighbour_pairs = 0;
+  double margin = 0;
+  Box solid_box;
+};
+
+CellPlanes cell_planes(const Mesh& mesh, std::span<const Vec3> given_sites) {
+  CellPlanes cell;
+  const Box mesh_box = solid_box_of(mesh);
+  cell.quantized = quantize_sites(given_sites, mesh_box.lo, mesh_box.hi);
+  const QuantizedSites& quantized = cell.quantized;
+  const std::vector<Vec3>& sites = quantized.sites;
+  const auto site_count = static_cast<std::uint32_t>(sites.size());
+
+  // The solid's box grown by a margin: it holds the solid strictly inside.
+  // The box the sentinels surround: as quantize_sites takes it, so they fit its grid.
+  Box around = mesh_box;
+  for (const Vec3& s : given_sites) around.add(s);
+  const double extent = std::max({mesh_box.hi.x - mesh_box.lo.x, mesh_box.hi.y - mesh_box.lo.y, mesh_box.hi.z - mesh_box.lo.z});
+  const double margin = std::ldexp(extent, -20);
+  const Box solid_box = grown(mesh_box, margin);
+
+  // Sites, then the sentinels on the same grid.
+  std::vector<Vec3>& points = cell.points;
+  points = sites;
+  for (const Vec3& s : sentinel_sites(around)) {
+    points.push_back({std::nearbyint(s.x / quantized.step) * quantized.step, std::nearbyint(s.y / quantized.step) * quantized.step,
+                      std::nearbyint(s.z / quantized.step) * quantized.step});
+  }
+  cell.triangulated = triangulate(points, site_count, quantized.step);
+
+  // Working planes: the Delaunay bisectors, then the groups' box planes, then
+  // the bisectors canonical definitions add.
+  std::vector<Plane>& planes = cell.planes;
+  std::vector<std::array<std::uint32_t, 2>>& plane_pairs = cell.plane_pairs;
+  std::vector<std::vector<std::uint32_t>>& bisectors_of = cell.bisectors_of;
+  bisectors_of.resize(site_count);
+  for (const auto& pair : cell.triangulated.pairs) {
+    const auto index = static_cast<std::uint32_t>(planes.size());
+    planes.push_back(exact_bisector(points[pair[0]], points[pair[1]], quantized.step));
+    plane_pairs.push_back(pair);
+    cell.plane_of_pair.emplace(pair, index);
+    bisectors_of[pair[0]].push_back(index);
+    if (pair[1] < site_count) {
+      bisectors_of[pair[1]].push_back(index);
+      ++cell.neighbour_pairs;
+    }
+  }
+  for (std::uint32_t s = 0; s < site_count; ++s) {
+    const Vec3 p = sites[s];
+    auto distance = [&](std::uint32_t plane) {
+      const auto& pair = plane_pairs[plane];
+      const Vec3 d = points[pair[0] == s ? pair[1] : pair[0]] - p;
+      return dot(d, d);
+    };
+    std::sort(bisectors_of[s].begin(), bisectors_of[s].end(), [&](std::uint32_t a, std::uint32_t b) {
+      const double da = distance(a), db = distance(b);
+      return da < db || (da == db && a < b);
+    });
+  }
+
+  cell.margin = margin;
+  cell.solid_box = solid_box;
+  return cell;
+}
+
+}  // namespace
+
+VoronoiCellPlanes voronoi_cell_planes(const Mesh& mesh, std::span<const Vec3> sites) {
+  if (mesh.positions.empty()) throw std::invalid_argument("voronoi_cell_planes needs a non-empty mesh");
+  if (sites.empty()) throw std::invalid_argument("voronoi_cell_planes needs at least one site");
+  CellPlanes cell = cell_planes(mesh, sites);
+  VoronoiCellPlanes out;
+  out.cells.resize(cell.quantized.sites.size());
+  for (std::size_t s = 0; s < out.cells.size(); ++s) {
+    for (const std::uint32_t plane : cell.bisectors_of[s]) {
+      // Stored as B_pq with p the lower index: negative on p's side.
+      const Plane& b = cell.planes[plane];
+      out.cells[s].push_back(cell.plane_pairs[plane][0] == s ? b : Plane{-b.normal, -b.offset});
+    }
+  }
+  out.quantized = std::move(cell.quantized);
+  return out;
+}
+
 MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites, const TreeRecipe& recipe,
                             const BuildRunOptions& run, VoronoiReport* report_out) {
   if (recipe.strategy != Strategy::voronoi) throw std::invalid_argument("build_voronoi_tree needs recipe.strategy voronoi");
@@ -474,59 +572,21 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
   VoronoiReport report;
   report.sites_given = given_sites.size();
 
-  const Box mesh_box = solid_box_of(mesh);
-  const QuantizedSites quantized = quantize_sites(given_sites, mesh_box.lo, mesh_box.hi);
-  report.sites_merged = quantized.merged;
-  report.step = quantized.step;
-  const std::vector<Vec3>& sites = quantized.sites;
+  CellPlanes cell = cell_planes(mesh, given_sites);
+  report.sites_merged = cell.quantized.merged;
+  report.step = cell.quantized.step;
+  report.neighbour_pairs = cell.neighbour_pairs;
+  const std::vector<Vec3>& sites = cell.quantized.sites;
   const auto site_count = static_cast<std::uint32_t>(sites.size());
-
-  // The solid's box grown by a margin: it holds the solid strictly inside.
-  // The box the sentinels surround: as quantize_sites takes it, so they fit its grid.
-  Box around = mesh_box;
-  for (const Vec3& s : given_sites) around.add(s);
-  const double extent = std::max({mesh_box.hi.x - mesh_box.lo.x, mesh_box.hi.y - mesh_box.lo.y, mesh_box.hi.z - mesh_box.lo.z});
-  const double margin = std::ldexp(extent, -20);
-  const Box solid_box = grown(mesh_box, margin);
-
-  // Sites, then the sentinels on the same grid.
-  std::vector<Vec3> points = sites;
-  for (const Vec3& s : sentinel_sites(around)) {
-    points.push_back({std::nearbyint(s.x / quantized.step) * quantized.step, std::nearbyint(s.y / quantized.step) * quantized.step,
-                      std::nearbyint(s.z / quantized.step) * quantized.step});
-  }
-  Triangulated triangulated = triangulate(points, site_count, quantized.step);
-  report.neighbour_pairs = 0;
-
-  // Working planes: the Delaunay bisectors, then the groups' box planes, then
-  // the bisectors canonical definitions add.
-  std::vector<Plane> planes;
-  std::vector<std::array<std::uint32_t, 2>> plane_pairs;
-  std::map<std::array<std::uint32_t, 2>, std::uint32_t> plane_of_pair;
-  std::vector<std::vector<std::uint32_t>> bisectors_of(site_count);
-  for (const auto& pair : triangulated.pairs) {
-    const auto index = static_cast<std::uint32_t>(planes.size());
-    planes.push_back(exact_bisector(points[pair[0]], points[pair[1]], quantized.step));
-    plane_pairs.push_back(pair);
-    plane_of_pair.emplace(pair, index);
-    bisectors_of[pair[0]].push_back(index);
-    if (pair[1] < site_count) {
-      bisectors_of[pair[1]].push_back(index);
-      ++report.neighbour_pairs;
-    }
-  }
-  for (std::uint32_t s = 0; s < site_count; ++s) {
-    const Vec3 p = sites[s];
-    auto distance = [&](std::uint32_t plane) {
-      const auto& pair = plane_pairs[plane];
-      const Vec3 d = points[pair[0] == s ? pair[1] : pair[0]] - p;
-      return dot(d, d);
-    };
-    std::sort(bisectors_of[s].begin(), bisectors_of[s].end(), [&](std::uint32_t a, std::uint32_t b) {
-      const double da = distance(a), db = distance(b);
-      return da < db || (da == db && a < b);
-    });
-  }
+  const double margin = cell.margin;
+  const Box solid_box = cell.solid_box;
+  Triangulated& triangulated = cell.triangulated;
+  std::vector<Plane>& planes = cell.planes;
+  std::vector<std::array<std::uint32_t, 2>>& plane_pairs = cell.plane_pairs;
+  std::map<std::array<std::uint32_t, 2>, std::uint32_t>& plane_of_pair = cell.plane_of_pair;
+  std::vector<std::vector<std::uint32_t>>& bisectors_of = cell.bisectors_of;
+  const std::vector<Vec3>& points = cell.points;
+  const QuantizedSites& quantized = cell.quantized;
 
   const PlaneInput input = prepare_plane_input(mesh);
   const unsigned threads = run.threads == 0 ? static_cast<unsigned>(tbb::info::default_concurrency()) : run.threads;

@@ -159,6 +159,53 @@ TEST_CASE("bisectors of grid sites are exact and three of them meet in one line"
   }
 }
 
+// voronoi_cell_planes against a brute force: a point of the solid's box lies in
+// site s's cell (on the negative side of all its planes) exactly when s is its
+// nearest site, both decided exactly (rationals over the doubles), for random
+// and degenerate (grid, coplanar) site sets; each site is inside its own cell,
+// and a bisector between two sites is in both cells, opposite.
+TEST_CASE("voronoi_cell_planes are exactly the nearest-site cells", "[voronoi]") {
+  const Mesh cube = corpus("cube.off");
+  std::uint64_t state = 7;
+  auto draw = [&] { return static_cast<double>(splitmix64(state) >> 11) * 0x1p-52 * 2.4 - 1.2; };
+  const auto value = [](const Plane& plane, const Vec3& x) -> mpq_class {
+    return mpq_class(plane.normal.x) * x.x + mpq_class(plane.normal.y) * x.y + mpq_class(plane.normal.z) * x.z +
+           mpq_class(plane.offset);
+  };
+  const auto distance2 = [](const Vec3& a, const Vec3& b) -> mpq_class {
+    const mpq_class dx = mpq_class(a.x) - b.x, dy = mpq_class(a.y) - b.y, dz = mpq_class(a.z) - b.z;
+    return dx * dx + dy * dy + dz * dz;
+  };
+  for (int round = 0; round < 12; ++round) {
+    std::vector<Vec3> raw;
+    const int kind = round % 3;
+    for (int i = 0; i < 5 + 4 * round; ++i) {
+      if (kind == 0) raw.push_back({draw(), draw(), draw()});               // random, some outside the solid
+      if (kind == 1) raw.push_back({0.5 * (i % 3), 0.5 * (i / 3 % 3), 0.5 * (i / 9)});  // a grid: co-spherical
+      if (kind == 2) raw.push_back({draw(), draw(), 0.25});                 // all in one plane
+    }
+    const VoronoiCellPlanes cells = voronoi_cell_planes(cube, raw);
+    const std::vector<Vec3>& sites = cells.quantized.sites;
+    REQUIRE(cells.cells.size() == sites.size());
+    for (std::size_t s = 0; s < sites.size(); ++s) {
+      REQUIRE(!cells.cells[s].empty());
+      for (const Plane& plane : cells.cells[s]) CHECK(sgn(value(plane, sites[s])) < 0);
+    }
+    for (int sample = 0; sample < 300; ++sample) {
+      const Vec3 x{draw(), draw(), draw()};
+      std::vector<mpq_class> d(sites.size());
+      for (std::size_t s = 0; s < sites.size(); ++s) d[s] = distance2(x, sites[s]);
+      const mpq_class nearest = *std::min_element(d.begin(), d.end());
+      for (std::size_t s = 0; s < sites.size(); ++s) {
+        bool inside = true;  // closed cell: every plane <= 0
+        for (const Plane& plane : cells.cells[s]) inside = inside && sgn(value(plane, x)) <= 0;
+        CHECK(inside == (d[s] == nearest));
+      }
+    }
+  }
+  CHECK_THROWS_AS(voronoi_cell_planes(cube, std::vector<Vec3>{}), std::invalid_argument);
+}
+
 TEST_CASE("quantize_sites merges duplicates deterministically", "[voronoi]") {
   const std::vector<Vec3> sites{{0.5, 0.5, 0.5}, {0.1, 0.2, 0.3}, {0.5, 0.5, 0.5}, {0.1 + 1e-17, 0.2, 0.3}};
   const QuantizedSites q = quantize_sites(sites, {-1, -1, -1}, {1, 1, 1});

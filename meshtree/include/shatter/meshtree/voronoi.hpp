@@ -73,6 +73,24 @@ QuantizedSites quantize_sites(std::span<const Vec3> sites, const Vec3& lo, const
 /// spacing `step` with |k| <= 2^24 (std::invalid_argument otherwise).
 Plane exact_bisector(const Vec3& p, const Vec3& q, double step);
 
+/// The planes that bound each site's Voronoi cell, as build_voronoi_tree cuts
+/// them, for comparing other tools on the same cells (bench/voronoi_bench.cpp
+/// hands them to a Manifold pipeline).
+struct VoronoiCellPlanes {
+  QuantizedSites quantized;  ///< the sites as the cells use them (quantize_sites)
+  /// Per quantized site, the exact bisectors with its Delaunay neighbours (the
+  /// sentinels included), nearest neighbour first; each is negative on the
+  /// site's side, so the cell is where every one of them is <= 0.
+  std::vector<std::vector<Plane>> cells;
+};
+
+/// The cells of `sites` around `mesh` exactly as build_voronoi_tree makes them:
+/// sites quantized to the bisector-exact grid of the mesh's box, neighbours
+/// from the Delaunay triangulation with the eight sentinels, every bisector an
+/// exact Plane. Nothing is cut. Preconditions: `mesh` non-empty, sites finite
+/// and non-empty. Throws std::invalid_argument as quantize_sites does.
+VoronoiCellPlanes voronoi_cell_planes(const Mesh& mesh, std::span<const Vec3> sites);
+
 /// What build_voronoi_tree did besides the tree.
 struct VoronoiReport {
   std::size_t sites_given = 0;
