@@ -133,8 +133,24 @@ struct GlueScratch {
 std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> parts, SitePairs pairs, std::string& why) {
   const PartsOfSite parts_of(parts);
   thread_local GlueScratch scratch;
-  auto& [first_vertex, first_face, id, owner, number, next_corner, by_def, same, deleted, seen, has_fan, one, other, positions, grid,
-         edges] = scratch;
+  // Plain references, not a structured binding: lambdas below capture them
+  // (clang 14, which the sanitized build uses, cannot capture a binding).
+  auto& first_vertex = scratch.first_vertex;
+  auto& first_face = scratch.first_face;
+  auto& id = scratch.id;
+  auto& owner = scratch.owner;
+  auto& number = scratch.number;
+  auto& next_corner = scratch.next_corner;
+  auto& by_def = scratch.by_def;
+  auto& same = scratch.same;
+  auto& deleted = scratch.deleted;
+  auto& seen = scratch.seen;
+  auto& has_fan = scratch.has_fan;
+  auto& one = scratch.one;
+  auto& other = scratch.other;
+  auto& positions = scratch.positions;
+  auto& grid = scratch.grid;
+  auto& edges = scratch.edges;
 
   // Every vertex of every part gets a global id; equal definitions share one.
   first_vertex.assign(parts.size() + 1, 0);
