@@ -19,6 +19,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "shatter/kernel/certify.hpp"
 #include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/predicates.hpp"
@@ -250,6 +251,12 @@ bool collinear_corners(const Mesh& mesh, std::size_t t) {
 // instead. Precondition: as shell_nesting's.
 Tally misnested_shells(const Mesh& mesh) {
   Tally misnested;
+  // One shell cannot disagree with a nesting of its own (it is the whole mesh,
+  // which inward_orientation judges). On a closed manifold the triangles around
+  // a vertex are one fan, so triangles joined through vertices are joined
+  // through edges: one vertex-connected surface is one shell, found by a
+  // union-find over vertices, far cheaper than shell_nesting's half-edges.
+  if (connected_surface(mesh)) return misnested;
   const ShellNesting nesting = shell_nesting(mesh);
   std::vector<std::size_t> first_triangle(nesting.shell_count(), mesh.triangles.size());
   for (std::size_t t = mesh.triangles.size(); t-- > 0;) first_triangle[nesting.shell_of_triangle[t]] = t;
@@ -545,6 +552,38 @@ struct TriangleKeyEqual {
   }
 };
 
+// Marks as new (untrusted) every triangle with a corner whose position another
+// vertex of the mesh shares. A valid mesh has no two vertices at one position
+// (every vertex is used, and triangles around two vertices at one point meet
+// there beyond any element they share), so in a mesh's trusted triangles and in
+// the valid mesh they were found in, two corners are one vertex exactly when
+// they are at one position: a pair of trusted triangles then shares the same
+// corners in both, and triangles_intersect answers alike. Without this, two
+// coincident copies of a trusted triangle, over different vertices, would be
+// skipped as a trusted pair; so marked, they are tested (and found).
+void untrust_shared_positions(const Mesh& mesh, std::vector<std::uint8_t>& is_new) {
+  std::vector<VertexIndex> order(mesh.positions.size());
+  for (VertexIndex v = 0; v < order.size(); ++v) order[v] = v;
+  const auto less = [&](VertexIndex a, VertexIndex b) {
+    const Vec3& p = mesh.positions[a];
+    const Vec3& q = mesh.positions[b];
+    return std::tie(p.x, p.y, p.z) < std::tie(q.x, q.y, q.z);
+  };
+  std::sort(order.begin(), order.end(), less);
+  std::vector<std::uint8_t> shared;
+  for (std::size_t k = 1; k < order.size(); ++k) {
+    if (less(order[k - 1], order[k])) continue;  // sorted: not less means equal (NaNs aside: not finite, refused before)
+    if (shared.empty()) shared.assign(mesh.positions.size(), 0);
+    shared[order[k - 1]] = shared[order[k]] = 1;
+  }
+  if (shared.empty()) return;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    for (const VertexIndex v : mesh.triangles[t]) {
+      if (v < shared.size() && shared[v]) is_new[t] = 1;
+    }
+  }
+}
+
 }  // namespace
 
 ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near) {
@@ -567,6 +606,7 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
   without.check_self_intersections = false;
   ValidationReport report = validate_masked(mesh, without, &is_new);
   if (!report.valid()) return report;
+  if (trusted) untrust_shared_positions(mesh, is_new);
   std::vector<TriangleBox> all, fresh;
   all.reserve(mesh.triangles.size());
   // With a plane the new triangles lie along, only triangles within the slab the
@@ -665,6 +705,149 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
   append_self_intersections(report, pairs);
   // Rounding can move a thin cavity out of its solid, or turn a thin shell inside
   // out, without any two triangles meeting: only the nesting shows it.
+  if (report.valid()) append(report, DefectKind::misnested_shell, misnested_shells(mesh));
+  return report;
+}
+
+ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* const> parts) {
+  constexpr std::uint32_t untrusted = std::numeric_limits<std::uint32_t>::max();
+  // Reused buffers: a hierarchy certifies thousands of unions, and fresh large
+  // allocations each cost their pages' zeroing again. Those grown past a few
+  // megabytes (the few largest unions) are released at the end.
+  thread_local std::vector<std::uint32_t> part_of;  // per triangle: the part it is found in, or `untrusted`
+  thread_local std::vector<std::uint8_t> is_new;
+  thread_local std::vector<TriangleBox> boxes, fresh, all, tested, against;
+  thread_local std::vector<std::size_t> first, by_part, fill;
+  thread_local std::unordered_map<std::array<Vec3, 3>, std::uint32_t, TriangleKeyHash, TriangleKeyEqual> known;
+  struct Release {  // at every return
+    ~Release() {
+      constexpr std::size_t kept = std::size_t{1} << 16;  // triangles
+      if (part_of.capacity() > kept) {
+        part_of = {};
+        is_new = {};
+        first = {};
+        by_part = {};
+        fill = {};
+        known = {};
+      }
+      for (std::vector<TriangleBox>* v : {&boxes, &fresh, &all, &tested, &against}) {
+        if (v->capacity() > kept) *v = {};
+      }
+    }
+  } release;
+  // Each triangle's part: the first part whose mesh has it (same corner
+  // positions, turning the same way).
+  part_of.assign(mesh.triangles.size(), untrusted);
+  {
+    known.clear();
+    std::size_t total = 0;
+    for (const Mesh* part : parts) total += part ? part->triangles.size() : 0;
+    known.reserve(total);
+    for (std::uint32_t k = 0; k < parts.size(); ++k) {
+      if (!parts[k]) continue;
+      for (const Triangle& t : parts[k]->triangles) known.emplace(triangle_key(*parts[k], t), k);
+    }
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const Triangle& tri = mesh.triangles[t];
+      if (tri[0] >= mesh.positions.size() || tri[1] >= mesh.positions.size() || tri[2] >= mesh.positions.size()) continue;
+      const auto found = known.find(triangle_key(mesh, tri));
+      if (found != known.end()) part_of[t] = found->second;
+    }
+  }
+  // A triangle of a valid part is not flat: only the new ones are tested.
+  is_new.resize(mesh.triangles.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) is_new[t] = part_of[t] == untrusted;
+  ValidationOptions without;
+  without.check_self_intersections = false;
+  ValidationReport report = validate_masked(mesh, without, &is_new);
+  if (!report.valid()) return report;
+  untrust_shared_positions(mesh, is_new);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (is_new[t]) part_of[t] = untrusted;
+  }
+  report.self_intersections_checked = true;
+
+  // Which pairs are tested (the argument in validate.hpp): every pair whose boxes
+  // meet, except two triangles of one part. The new triangles are tested against
+  // every triangle; the triangles of part k against those of the later parts,
+  // each side first narrowed to the triangles whose boxes meet the other side's
+  // bounding box (a triangle missing that box meets none of its triangles).
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  const auto test = [&](std::size_t i, std::size_t j) {
+    if (triangles_intersect(mesh.positions, mesh.triangles[i], mesh.triangles[j])) {
+      pairs.emplace_back(std::min(i, j), std::max(i, j));
+    }
+  };
+  boxes.clear();
+  fresh.clear();
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    boxes.push_back(box_of(mesh.positions, mesh.triangles[t], t));
+    if (is_new[t]) fresh.push_back(boxes.back());
+  }
+  if (!fresh.empty()) {
+    all.assign(boxes.begin(), boxes.end());
+    CGAL::box_intersection_d(
+        fresh.begin(), fresh.end(), all.begin(), all.end(),
+        [&](const TriangleBox& a, const TriangleBox& b) {
+          const std::size_t i = a.handle(), j = b.handle();
+          if (i == j || (is_new[j] && j < i)) return;  // each pair of new triangles once
+          test(i, j);
+        },
+        std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
+  }
+  // The parts' triangles, grouped by part (in mesh order within a part), and
+  // each part's bounding box.
+  const std::size_t part_count = parts.size();
+  first.assign(part_count + 1, 0);
+  for (const std::uint32_t k : part_of) {
+    if (k != untrusted) ++first[k + 1];
+  }
+  for (std::size_t k = 0; k < part_count; ++k) first[k + 1] += first[k];
+  by_part.resize(first.back());
+  {
+    fill.assign(first.begin(), first.end() - 1);
+    for (std::size_t t = 0; t < part_of.size(); ++t) {
+      if (part_of[t] != untrusted) by_part[fill[part_of[t]]++] = t;
+    }
+  }
+  const auto bound = [&](std::span<const std::size_t> triangles) {
+    CGAL::Bbox_3 box;  // empty
+    for (const std::size_t t : triangles) box += boxes[t].bbox();
+    return box;
+  };
+  const auto meets = [](const CGAL::Bbox_3& a, const CGAL::Bbox_3& b) {
+    for (int axis = 0; axis < 3; ++axis) {
+      if (a.max(axis) < b.min(axis) || b.max(axis) < a.min(axis)) return false;
+    }
+    return true;
+  };
+  const auto triangles_of = [&](std::size_t k) { return std::span<const std::size_t>(by_part).subspan(first[k], first[k + 1] - first[k]); };
+  std::vector<CGAL::Bbox_3> part_box(part_count);
+  for (std::size_t k = 0; k < part_count; ++k) part_box[k] = bound(triangles_of(k));
+  for (std::size_t k = 0; k + 1 < part_count; ++k) {
+    if (first[k + 1] == first[k]) continue;
+    against.clear();
+    for (std::size_t l = k + 1; l < part_count; ++l) {
+      if (first[l + 1] == first[l] || !meets(part_box[k], part_box[l])) continue;
+      for (const std::size_t t : triangles_of(l)) {
+        if (meets(boxes[t].bbox(), part_box[k])) against.push_back(boxes[t]);
+      }
+    }
+    if (against.empty()) continue;
+    CGAL::Bbox_3 reach;
+    for (const TriangleBox& b : against) reach += b.bbox();
+    tested.clear();
+    for (const std::size_t t : triangles_of(k)) {
+      if (meets(boxes[t].bbox(), reach)) tested.push_back(boxes[t]);
+    }
+    if (tested.empty()) continue;
+    CGAL::box_intersection_d(
+        tested.begin(), tested.end(), against.begin(), against.end(),
+        [&](const TriangleBox& a, const TriangleBox& b) { test(a.handle(), b.handle()); }, std::ptrdiff_t{10},
+        CGAL::Box_intersection_d::CLOSED);
+  }
+  std::sort(pairs.begin(), pairs.end());
+  append_self_intersections(report, pairs);
   if (report.valid()) append(report, DefectKind::misnested_shell, misnested_shells(mesh));
   return report;
 }

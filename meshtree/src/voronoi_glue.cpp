@@ -112,16 +112,57 @@ std::vector<std::vector<std::uint32_t>> face_connected_groups(std::span<const Gl
   return out;
 }
 
+namespace {
+
+// glue_parts' working arrays, kept per thread between calls: a hierarchy glues
+// thousands of sets, and fresh large allocations each cost their pages'
+// zeroing again (a third of the gluing's time when allocated per call).
+struct GlueScratch {
+  std::vector<std::uint32_t> first_vertex, first_face, id, owner, number, next_corner;
+  std::unordered_map<PointDef, std::uint32_t, DefHash> by_def;
+  UnionFind same;
+  std::vector<char> deleted, seen, has_fan;
+  std::vector<std::uint64_t> one, other;
+  std::vector<Vec3> positions;  // per id, rounded
+  std::vector<std::pair<std::array<std::int64_t, 3>, std::uint32_t>> grid;  // (cell, id), sorted
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;               // (edge, corner), sorted
+};
+
+}  // namespace
+
 std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> parts, SitePairs pairs, std::string& why) {
   const PartsOfSite parts_of(parts);
+  thread_local GlueScratch scratch;
+  // Plain references, not a structured binding: lambdas below capture them
+  // (clang 14, which the sanitized build uses, cannot capture a binding).
+  auto& first_vertex = scratch.first_vertex;
+  auto& first_face = scratch.first_face;
+  auto& id = scratch.id;
+  auto& owner = scratch.owner;
+  auto& number = scratch.number;
+  auto& next_corner = scratch.next_corner;
+  auto& by_def = scratch.by_def;
+  auto& same = scratch.same;
+  auto& deleted = scratch.deleted;
+  auto& seen = scratch.seen;
+  auto& has_fan = scratch.has_fan;
+  auto& one = scratch.one;
+  auto& other = scratch.other;
+  auto& positions = scratch.positions;
+  auto& grid = scratch.grid;
+  auto& edges = scratch.edges;
 
   // Every vertex of every part gets a global id; equal definitions share one.
-  std::vector<std::uint32_t> first_vertex(parts.size() + 1, 0);
-  for (std::size_t i = 0; i < parts.size(); ++i) first_vertex[i + 1] = first_vertex[i] + static_cast<std::uint32_t>(parts[i].solid->defs.size());
-  std::vector<std::uint32_t> id(first_vertex.back());
-  std::vector<std::uint32_t> owner;  // per id: the global vertex (part's first + v) that defines it
+  first_vertex.assign(parts.size() + 1, 0);
+  first_face.assign(parts.size() + 1, 0);
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    first_vertex[i + 1] = first_vertex[i] + static_cast<std::uint32_t>(parts[i].solid->defs.size());
+    first_face[i + 1] = first_face[i] + static_cast<std::uint32_t>(parts[i].solid->faces.size());
+  }
+  id.resize(first_vertex.back());
+  owner.clear();  // per id: the global vertex (part's first + v) that defines it
   {
-    std::unordered_map<PointDef, std::uint32_t, DefHash> by_def;
+    by_def.clear();
     by_def.reserve(first_vertex.back());
     for (std::uint32_t i = 0; i < parts.size(); ++i) {
       const Solid& solid = *parts[i].solid;
@@ -136,22 +177,21 @@ std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> p
     const auto i = static_cast<std::uint32_t>(std::upper_bound(first_vertex.begin(), first_vertex.end(), global) - first_vertex.begin() - 1);
     return std::array<std::uint32_t, 2>{i, global - first_vertex[i]};
   };
-  UnionFind same(owner.size());
+  same.reset(owner.size());
 
   // The twin faces: per bisector, the faces of the parts on either side.
   struct Twin {
     std::uint32_t plane, part, face;
   };
   std::vector<Twin> twins;
-  std::vector<std::vector<char>> deleted(parts.size());
+  deleted.assign(first_face.back(), 0);  // per part's face (first_face[part] + f)
   for (std::uint32_t i = 0; i < parts.size(); ++i) {
     const Solid& solid = *parts[i].solid;
-    deleted[i].assign(solid.faces.size(), 0);
     for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
       const std::uint32_t across = site_across(parts[i], solid.faces[f], pairs);
       if (across == no_index || parts_of(across).empty()) continue;
       twins.push_back({solid.faces[f].plane.index(), i, f});
-      deleted[i][f] = 1;
+      deleted[first_face[i] + f] = 1;
     }
   }
   std::sort(twins.begin(), twins.end(), [](const Twin& a, const Twin& b) {
@@ -159,7 +199,6 @@ std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> p
   });
 
   // The directed edges of a run of twins, over ids: one side's, and the other's reversed.
-  std::vector<std::uint64_t> one, other;
   const auto gather = [&](std::size_t begin, std::size_t end) {
     one.clear();
     other.clear();
@@ -189,37 +228,34 @@ std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> p
   // what rounding can move two copies of one point apart (rounded_position is
   // within 2^-40 of each coordinate's magnitude), each decided exactly.
   {
-    std::vector<Vec3> at(owner.size());
+    positions.resize(owner.size());
     for (std::uint32_t k = 0; k < owner.size(); ++k) {
       const auto [d, a] = approx_of(k);
-      at[k] = rounded_position(set, d, a);
+      positions[k] = rounded_position(set, d, a);
     }
     // Cells four times the tolerance wide, scaled to the largest coordinate:
     // a pair within tolerance lies in one cell or in neighbouring ones.
     double largest = 0;
-    for (const Vec3& p : at) largest = std::max({largest, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
+    for (const Vec3& p : positions) largest = std::max({largest, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
     const double cell = 0x1p-36 * largest;
     using Key = std::array<std::int64_t, 3>;
-    struct KeyHash {
-      std::size_t operator()(const Key& k) const {
-        return static_cast<std::size_t>((k[0] * 0x9E3779B97F4A7C15ll) ^ (k[1] * 0xBF58476D1CE4E5B9ll) ^ (k[2] * 0x94D049BB133111EBll));
-      }
-    };
-    std::unordered_map<Key, std::vector<std::uint32_t>, KeyHash> grid;
     const auto key_of = [&](const Vec3& p) {
       return cell > 0 ? Key{static_cast<std::int64_t>(std::floor(p.x / cell)), static_cast<std::int64_t>(std::floor(p.y / cell)),
                             static_cast<std::int64_t>(std::floor(p.z / cell))}
                       : Key{0, 0, 0};
     };
-    for (std::uint32_t k = 0; k < at.size(); ++k) grid[key_of(at[k])].push_back(k);
+    // The grid as (cell, id) pairs sorted by cell: a cell's ids are one run.
+    grid.clear();
+    for (std::uint32_t k = 0; k < positions.size(); ++k) grid.push_back({key_of(positions[k]), k});
+    std::sort(grid.begin(), grid.end());
     const auto near = [](double a, double b) { return std::fabs(a - b) <= 0x1p-38 * std::max(std::fabs(a), std::fabs(b)); };
     // A point within tolerance of another lies in its cell, or in a neighbour
     // across a side it is within tolerance of: only those cells are looked in.
-    for (std::uint32_t a = 0; a < at.size(); ++a) {
-      const Key key = key_of(at[a]);
+    for (std::uint32_t a = 0; a < positions.size(); ++a) {
+      const Key key = key_of(positions[a]);
       std::array<std::array<std::int64_t, 2>, 3> range{};
       for (int axis = 0; axis < 3 && cell > 0; ++axis) {
-        const double c = axis == 0 ? at[a].x : axis == 1 ? at[a].y : at[a].z;
+        const double c = axis == 0 ? positions[a].x : axis == 1 ? positions[a].y : positions[a].z;
         const double reach = 0x1p-38 * std::fabs(c) * 2 + 0x1p-38 * largest;
         range[axis] = {std::floor((c - reach) / cell) < static_cast<double>(key[axis]) ? -1 : 0,
                        std::floor((c + reach) / cell) > static_cast<double>(key[axis]) ? 1 : 0};
@@ -227,11 +263,14 @@ std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> p
       for (std::int64_t dx = range[0][0]; dx <= range[0][1]; ++dx) {
         for (std::int64_t dy = range[1][0]; dy <= range[1][1]; ++dy) {
           for (std::int64_t dz = range[2][0]; dz <= range[2][1]; ++dz) {
-            const auto found = grid.find(Key{key[0] + dx, key[1] + dy, key[2] + dz});
-            if (found == grid.end()) continue;
-            for (const std::uint32_t b : found->second) {
-              if (b <= a || !near(at[a].x, at[b].x) || !near(at[a].y, at[b].y) || !near(at[a].z, at[b].z) ||
-                  same.find(a) == same.find(b)) {
+            const Key neighbour{key[0] + dx, key[1] + dy, key[2] + dz};
+            const auto run = std::equal_range(grid.begin(), grid.end(), std::pair<Key, std::uint32_t>{neighbour, 0},
+                                              [](const auto& x, const auto& y) { return x.first < y.first; });
+            for (auto entry = run.first; entry != run.second; ++entry) {
+              const std::uint32_t b = entry->second;
+              const Vec3& p = positions[a];
+              const Vec3& q = positions[b];
+              if (b <= a || !near(p.x, q.x) || !near(p.y, q.y) || !near(p.z, q.z) || same.find(a) == same.find(b)) {
                 continue;
               }
               const auto [ad, aa] = approx_of(a);
@@ -257,11 +296,31 @@ std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> p
 
   // The kept faces over compact vertex numbers, in part and face order.
   Solid glued;
-  std::vector<std::uint32_t> number(owner.size(), no_index);
+  {
+    // The kept faces' sizes, so no vector is moved while it grows.
+    std::size_t faces = 0, loops = 0, corners = 0;
+    for (std::uint32_t i = 0; i < parts.size(); ++i) {
+      const Solid& solid = *parts[i].solid;
+      for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+        if (deleted[first_face[i] + f]) continue;
+        ++faces;
+        loops += solid.faces[f].loop_count;
+        for (std::uint32_t l = solid.faces[f].first_loop; l < solid.faces[f].first_loop + solid.faces[f].loop_count; ++l) {
+          corners += solid.loops[l].corner_count;
+        }
+      }
+    }
+    glued.faces.reserve(faces);
+    glued.loops.reserve(loops);
+    glued.corners.reserve(corners);
+    glued.defs.reserve(owner.size());
+    glued.approx.reserve(owner.size());
+  }
+  number.assign(owner.size(), no_index);
   for (std::uint32_t i = 0; i < parts.size(); ++i) {
     const Solid& solid = *parts[i].solid;
     for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
-      if (deleted[i][f]) continue;
+      if (deleted[first_face[i] + f]) continue;
       SolidFace face = solid.faces[f];
       face.first_loop = static_cast<std::uint32_t>(glued.loops.size());
       for (std::uint32_t l = solid.faces[f].first_loop; l < solid.faces[f].first_loop + solid.faces[f].loop_count; ++l) {
@@ -286,9 +345,8 @@ std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> p
 
   // Closed and 2-manifold as glued: every directed edge once with its reverse,
   // and one fan of faces around every vertex.
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;  // edge, corner
-  std::vector<std::uint32_t> next_corner(glued.corners.size());
-  edges.reserve(glued.corners.size());
+  edges.clear();
+  next_corner.resize(glued.corners.size());
   for (const SolidLoop& loop : glued.loops) {
     for (const CornerEdge& edge : loop_edges(glued.corners, loop)) {
       if (edge.from == edge.to) {
@@ -310,8 +368,8 @@ std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> p
     const auto it = std::lower_bound(edges.begin(), edges.end(), std::pair<std::uint64_t, std::uint32_t>{key, 0});
     return it != edges.end() && it->first == key ? it->second : no_index;
   };
-  std::vector<char> seen(glued.corners.size(), 0);
-  std::vector<char> has_fan(glued.defs.size(), 0);
+  seen.assign(glued.corners.size(), 0);
+  has_fan.assign(glued.defs.size(), 0);
   for (std::uint32_t c = 0; c < glued.corners.size(); ++c) {
     if (seen[c]) continue;
     const VertexIndex v = glued.corners[c].vertex;

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -452,6 +453,90 @@ TEST_CASE("validate_mesh_against finds what validate_mesh finds, on its own and 
   const ValidationReport against = validate_mesh_against(pierced, &tetrahedron_only);
   REQUIRE(against.find(DefectKind::self_intersection) != nullptr);
   CHECK(against.find(DefectKind::self_intersection)->count == 3);
+}
+
+namespace {
+
+// The two reports name the same defects with the same counts and first elements.
+bool same_defects(const ValidationReport& a, const ValidationReport& b) {
+  if (a.defects.size() != b.defects.size()) return false;
+  for (std::size_t k = 0; k < a.defects.size(); ++k) {
+    const Defect& x = a.defects[k];
+    const Defect& y = b.defects[k];
+    if (x.kind != y.kind || x.count != y.count || x.first != y.first) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("validate_mesh_of_parts reports what validate_mesh reports on meshes joined from valid parts",
+          "[validate][certify]") {
+  // Parts placed anywhere (apart, touching, overlapping, nested, coincident),
+  // joined as they are (merge) and given as the parts: the pairs within a part
+  // are skipped, and the report must still be validate_mesh's, counts and first
+  // pairs included.
+  const std::vector<Mesh> shapes{test::grid_box({0, 0, 0}, {1, 1, 1}, 3), test::ellipsoid({0.5, 0.5, 0.5}, {0.6, 0.4, 0.5}, 12, 7),
+                                 test::torus(0.6, 0.2, 12, 8), test::box({0, 0, 0}, {1, 0.5, 0.25})};
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> offset(-1.2, 1.2);
+  std::size_t refused = 0, accepted = 0;
+  for (int trial = 0; trial < 120; ++trial) {
+    const Mesh& first = shapes[trial % shapes.size()];
+    const Mesh& second = shapes[(trial / shapes.size()) % shapes.size()];
+    Vec3 shift{offset(random), offset(random), offset(random)};
+    if (trial % 10 == 0) shift = {0, 0, 0};        // coincident (or nested) copies
+    if (trial % 10 == 1) shift = {1, 0, 0};        // touching along a face or less
+    if (trial % 10 == 2) shift = {10, 0, 0};       // apart
+    const double scale = trial % 10 == 3 ? 0.25 : 1.0;  // often nested
+    const Mesh moved = test::transformed(second, scale, shift);
+    const Mesh joined = test::merge({first, moved});
+    const std::array<const Mesh*, 2> parts{&first, &moved};
+    INFO("trial " << trial);
+    const ValidationReport full = validate_mesh(joined);
+    const ValidationReport fast = validate_mesh_of_parts(joined, parts);
+    CHECK(same_defects(fast, full));
+    CHECK(fast.valid() == full.valid());
+    (full.valid() ? accepted : refused) += 1;
+  }
+  // Both outcomes occur, so the comparison can fail either way.
+  CHECK(accepted > 10);
+  CHECK(refused > 10);
+}
+
+TEST_CASE("validate_mesh_of_parts refuses parts that cross, touch or repeat each other", "[validate][certify]") {
+  const Mesh cube = test::grid_box({0, 0, 0}, {1, 1, 1}, 2);
+  // Crossing: every triangle of the mesh is one of a part's, so only the pairs
+  // across the parts are tested, and they intersect.
+  const Mesh crossing = test::transformed(cube, 1, {0.5, 0.25, 0.125});
+  const std::array<const Mesh*, 2> crossing_parts{&cube, &crossing};
+  const ValidationReport crossed = validate_mesh_of_parts(test::merge({cube, crossing}), crossing_parts);
+  REQUIRE(crossed.find(DefectKind::self_intersection) != nullptr);
+  CHECK(crossed.find(DefectKind::self_intersection)->count ==
+        validate_mesh(test::merge({cube, crossing})).find(DefectKind::self_intersection)->count);
+  // A coincident copy over other vertices: each triangle is one of the first
+  // part's (the same corner positions), yet the copies meet everywhere. Only
+  // the shared positions show it: their triangles are tested as new.
+  const std::array<const Mesh*, 1> one_part{&cube};
+  const ValidationReport doubled = validate_mesh_of_parts(test::merge({cube, cube}), one_part);
+  REQUIRE(doubled.find(DefectKind::self_intersection) != nullptr);
+  CHECK(same_defects(doubled, validate_mesh(test::merge({cube, cube}))));
+  // Touching along a face, vertices at one position but not one vertex.
+  const Mesh beside = test::transformed(cube, 1, {1, 0, 0});
+  const std::array<const Mesh*, 2> touching_parts{&cube, &beside};
+  CHECK_FALSE(validate_mesh_of_parts(test::merge({cube, beside}), touching_parts).valid());
+  // New triangles are tested against everything: the pierced tetrahedron given
+  // only its tetrahedron as a part.
+  const Mesh pierced = pierced_tetrahedron();
+  Mesh tetrahedron_only = pierced;
+  tetrahedron_only.triangles.resize(4);
+  tetrahedron_only.surfaces.resize(4);
+  const std::array<const Mesh*, 2> with_null{nullptr, &tetrahedron_only};
+  CHECK(same_defects(validate_mesh_of_parts(pierced, with_null), validate_mesh(pierced)));
+  // Parts that are valid and apart: accepted, as validate_mesh accepts them.
+  const Mesh far = test::transformed(cube, 1, {3, 0, 0});
+  const std::array<const Mesh*, 2> apart{&cube, &far};
+  CHECK(validate_mesh_of_parts(test::merge({cube, far}), apart).valid());
 }
 
 TEST_CASE("the star-shaped certificate accepts convex solids around an inner point and nothing invalid",

@@ -1895,12 +1895,6 @@ void add_folded_face_pairs(const Mesh& mesh, std::span<const std::uint32_t> face
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
 }
 
-// Certifies a rounded mesh as round_solid promises: the linear certificate of
-// certify_piece when it applies (it accepts only valid meshes, and the full check
-// accepts every valid one, so the mesh written is the same either way), else
-// validate_mesh_against its trusted parent; or the topology alone (with vertices
-// where the surface touches itself allowed) for a solid accepted with
-// self-intersections.
 // `result` but for its mesh, which the caller replaces (copying it would cost a
 // mesh per certified piece).
 RoundedSolid copy_without_mesh(RoundedSolid& result) {
@@ -1910,6 +1904,20 @@ RoundedSolid copy_without_mesh(RoundedSolid& result) {
   return copy;
 }
 
+// The full check, self-intersections included, narrowed by what is known to be
+// valid already: the parts of a union (their pairs within one part skipped), or
+// else the trusted mesh the piece was cut from. Both accept exactly the meshes
+// validate_mesh accepts (validate.hpp says why).
+ValidationReport validate_knowing(const Mesh& mesh, const SolidMeshOptions& options) {
+  if (!options.parts.empty()) return validate_mesh_of_parts(mesh, options.parts);
+  return validate_mesh_against(mesh, options.trusted, options.cut);
+}
+
+// Certifies a rounded mesh as round_solid promises: the linear certificate of
+// certify_piece when it applies (it accepts only valid meshes, and the full check
+// accepts every valid one, so the mesh written is the same either way), else
+// validate_knowing; or the topology alone (with vertices where the surface
+// touches itself allowed) for a solid accepted with self-intersections.
 ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& options) {
   if (!options.allow_self_intersections) {
     if (certify_piece(mesh)) {
@@ -1919,7 +1927,7 @@ ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& optio
       certified.self_intersections_checked = true;
       return certified;
     }
-    return validate_mesh_against(mesh, options.trusted, options.cut);
+    return validate_knowing(mesh, options);
   }
   ValidationOptions topology_only;
   topology_only.check_self_intersections = false;
@@ -2183,7 +2191,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       Mesh separated = mesh;
       const Separation separation = separate_touching(separated, touching, std::ldexp(1.0, -bits), partner);
       if (separation.moved == 0) break;
-      if (validate_mesh_against(separated, options.trusted, options.cut).valid()) {
+      if (validate_knowing(separated, options).valid()) {
         RoundedSolid written = copy_without_mesh(result);
         written.mesh = std::move(separated);
         written.merged_vertices = merged;

@@ -3,6 +3,7 @@
 // named with its count and the first element where it occurs.
 
 #include <cstddef>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -103,6 +104,30 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
 /// against their own slab.
 /// Cost: O(T log T) plus the pairs of boxes that meet a tested triangle's box.
 ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near = nullptr);
+
+/// validate_mesh for a mesh made of the triangles of several valid meshes
+/// (`parts`, each of which passed validate_mesh with the self-intersection
+/// test; nullptr entries are skipped), plus any new ones: the union of solids
+/// glued along shared faces (meshtree's Voronoi hierarchy). Every check is made
+/// in full except the self-intersection test, which skips the pairs of
+/// triangles that both appear in one part (the same three corner positions,
+/// turning the same way; a triangle found in several parts counts as the first
+/// one's). Every other pair whose boxes meet is tested exactly (triangles_intersect):
+/// pairs from different parts, and every pair with a triangle found in no part.
+/// Why that is sound: the skipped pair's two triangles are two different
+/// triangles of one valid mesh, so they do not intersect there; the test is a
+/// function of the six corner positions and of which corners are one vertex,
+/// and that is the same in both meshes once no two vertices share a position.
+/// A valid mesh has no two vertices at one position; in `mesh`, the triangles
+/// with a corner at a position another vertex shares are tested as new ones
+/// (so two coincident copies of a part are found). Two triangles over the same
+/// vertices turning the same way fail the topology check first.
+/// Same report as validate_mesh when valid; when not, the same defects but a
+/// self-intersection count of the pairs tested.
+/// Cost: O(T log T) plus the pairs of boxes that meet across parts or with a
+/// new triangle; the pairs within one part (most pairs of nearby triangles)
+/// are never enumerated.
+ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* const> parts);
 
 /// Whether the mesh is a closed, consistently oriented 2-manifold by index: every
 /// index in range, every vertex used, no triangle repeating an index, every

@@ -43,6 +43,7 @@
 //    within what rounding its vertices can move vanishes whole. What cannot be
 //    repaired is reported, never written as valid.
 
+#include <span>
 #include <string>
 
 #include "shatter/kernel/mass.hpp"
@@ -65,6 +66,16 @@ struct SolidMeshOptions {
   /// The cut plane that made this solid from `trusted` (its new triangles lie
   /// along it), or nullptr: narrows the intersection tests to a slab around it.
   const Plane* cut = nullptr;
+  /// The valid meshes of the parts this solid is the union of (a union glued
+  /// along the parts' shared faces, which are gone from it), or empty. When not
+  /// empty, certification tests for self-intersections only the pairs of
+  /// triangles not both found in one part (validate_mesh_of_parts; `trusted`
+  /// and `cut` are then not used): each part was certified already, and a
+  /// triangle the union writes differently (a vertex rounded elsewhere, a face
+  /// triangulated or repaired otherwise) is found in no part and tested against
+  /// every triangle. The mesh written is the same as without it (the checks
+  /// accept the same meshes); only the time differs.
+  std::span<const Mesh* const> parts;
   /// Certify without the self-intersection check, and accept vertices where the
   /// surface touches itself (a self-intersecting input was accepted on request:
   /// only the topology can be promised).
