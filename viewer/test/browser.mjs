@@ -710,6 +710,20 @@ const cases = {
     const recorded = JSON.parse(run('info', repaired, '--json')).input_repair;
     assert.ok(recorded && recorded.repair.length > 0, 'the tree records its repair');
 
+    // Refused with one line before serving: a file that cannot be read, one that is not this tree's input (the
+    // knot's box does not hold the cube's), and --original with a .glb.
+    const missing = runFailing('view', repaired, '--original', file('no-such-mesh.off'));
+    assert.equal(missing.code, 4);
+    assert.match(missing.stderr, /^error: --original .*no-such-mesh\.off: cannot open .*\n$/);
+    const other = runFailing('view', repaired, '--original', env('SHATTER_MESH'));
+    assert.equal(other.code, 3);
+    assert.match(other.stderr, /^error: --original .*knot1\.off is not the input of this tree: .*\n$/);
+    run('export', repaired, '--out', file('repaired.glb'));
+    const glb = runFailing('view', file('repaired.glb'), '--original', damaged);
+    assert.equal(glb.code, 2);
+    assert.match(glb.stderr, /^error: --original goes with a \.shatter file/);
+    assert.match(run('view', '--help'), /--original/);
+
     const server = await startView(repaired, ['--original', damaged]);
     const browser = await openBrowser();
     try {
