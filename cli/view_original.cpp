@@ -144,11 +144,12 @@ OriginalInput read_original_input(const std::string& path, const Mesh& root, con
                            (repaired ? " (a repaired root lies within its input's bounding box)"
                                      : " (the tree records no repair, so its root is its input as read)"));
   }
-  ValidationOptions options;
-  options.check_self_intersections = false;
-  original.report = validate_mesh(mesh, options);
+  original.report = validate_mesh(mesh);
   find_edge_defects(original);
-  find_self_intersections(original);
+  // A closed mesh validate_mesh tested and found free of crossings needs no second test.
+  const bool none_crossing =
+      original.report.self_intersections_checked && !original.report.find(DefectKind::self_intersection);
+  if (!none_crossing) find_self_intersections(original);
   return original;
 }
 
@@ -168,7 +169,8 @@ json original_json(const OriginalInput& original, const RepairReport& repair) {
   for (const Defect& defect : original.report.defects) {
     defects.push_back({{"kind", defect_name(defect.kind)}, {"count", defect.count}, {"first", defect.first}});
   }
-  if (original.self_intersecting_pairs > 0) {
+  // validate_mesh names the self-intersections of a mesh it tested; those of another (open, say) are added.
+  if (original.self_intersecting_pairs > 0 && !original.report.self_intersections_checked) {
     defects.push_back({{"kind", defect_name(DefectKind::self_intersection)},
                        {"count", original.self_intersecting_pairs},
                        {"first", "triangles " + std::to_string(original.first_intersecting_pair[0]) + " and " +

@@ -23,13 +23,15 @@ struct OriginalInput {
   std::string name;  ///< the file name shown on the page
   Mesh mesh;         ///< as read_mesh read it
   std::vector<std::string> read_warnings;
-  /// validate_mesh without its self-intersection test: that one runs on closed
-  /// manifolds only, and self_intersecting_triangles covers open meshes too.
+  /// validate_mesh's, in full. Its self-intersection test runs on closed
+  /// manifolds only; self_intersecting_triangles covers open meshes too.
   ValidationReport report;
   std::vector<Edge> boundary_edges;      ///< edges with one triangle, as (low, high) vertex indices, sorted
   std::vector<Edge> non_manifold_edges;  ///< edges with three or more triangles, likewise
   /// Triangles in at least one intersecting pair (self_intersecting_pairs over
-  /// the triangles that are not degenerate), ascending.
+  /// the triangles that are not degenerate), ascending. Not looked for again
+  /// when `report` tested the mesh and found none. Unlike validate_mesh, two fans
+  /// that only touch at a non-manifold vertex are no pair here.
   std::vector<TriangleIndex> self_intersecting_triangles;
   std::size_t self_intersecting_pairs = 0;
   std::array<TriangleIndex, 2> first_intersecting_pair{};  ///< the first pair, when there is one
@@ -55,7 +57,8 @@ OriginalInput read_original_input(const std::string& path, const Mesh& root, con
 
 /// The answer of GET /api/original:
 ///   {file, vertices, triangles, positions [x, y, z, ...], indices [a, b, c, ...],
-///    validation (the report's one line), defects [{kind, count, first}],
+///    validation (the report's one line, with the self-intersecting pairs
+///    found beyond its test appended), defects [{kind, count, first}],
 ///    boundary_edges [a, b, ...], non_manifold_edges [a, b, ...],
 ///    self_intersecting_triangles [t, ...], degenerate_triangles, read_warnings,
 ///    repair {changes [text], not_done [text], vertices_before, triangles_before,

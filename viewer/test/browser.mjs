@@ -783,6 +783,9 @@ const cases = {
       assert.equal(off.depth, deepest, 'the depth shown before comes back');
       assert.equal((await canvasPixels(page, tubeColour)).count, 0);
       assert.deepEqual(errors, [], 'console errors');
+    } catch (error) {
+      server.proc.kill('SIGTERM');  // a failed check leaves no server behind
+      throw error;
     } finally {
       await browser.close();
     }
@@ -801,6 +804,9 @@ const cases = {
       assert.equal(answers.original, 404);
       assert.equal(await page.locator('#original').isVisible(), false);
       assert.equal((await state(page)).original, undefined);
+    } catch (error) {
+      plain.proc.kill('SIGTERM');
+      throw error;
     } finally {
       await second.close();
     }
