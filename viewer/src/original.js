@@ -1,6 +1,7 @@
 // The original input of a repaired tree (`shatter view TREE --original MESH`, issue 21): the server's answer to
 // GET api/original read and checked, placed beside the tree's root, and drawn as it is, its defects highlighted:
-// open (boundary) edges and non-manifold edges as tubes, self-intersecting triangles in their own colour.
+// open (boundary) edges and non-manifold edges as tubes, self-intersecting triangles in their own colour and
+// outlined by tubes of it.
 
 import * as THREE from 'three';
 
@@ -120,7 +121,7 @@ function edgeTubes(positions, edges, radius, colour, name) {
 
 /**
  * The original drawn as it is (a readOriginal result): its triangles both sides lit (an open or inward surface still
- * shows), the self-intersecting ones in their colour, boundary and non-manifold edges as tubes. A Group named
+ * shows), the self-intersecting ones in their colour and outlined, boundary and non-manifold edges as tubes. A Group named
  * 'original', hidden; the caller places it (besideOffset) and shows it.
  */
 export function originalObject(original) {
@@ -156,6 +157,18 @@ export function originalObject(original) {
   if (original.nonManifoldEdges.length) {
     group.add(edgeTubes(original.positions, original.nonManifoldEdges, radius, ORIGINAL_COLOURS.nonManifold,
       'original-non-manifold'));
+  }
+  if (original.selfIntersecting.length) {
+    // Crossing triangles are often small slivers: their outlines keep them visible at any size.
+    const outline = new Uint32Array(6 * original.selfIntersecting.length);
+    original.selfIntersecting.forEach((t, i) => {
+      for (let c = 0; c < 3; ++c) {
+        outline[6 * i + 2 * c] = original.indices[3 * t + c];
+        outline[6 * i + 2 * c + 1] = original.indices[3 * t + (c + 1) % 3];
+      }
+    });
+    group.add(edgeTubes(original.positions, outline, radius, ORIGINAL_COLOURS.selfIntersecting,
+      'original-self-intersecting-outline'));
   }
   group.userData.box = box;
   return group;

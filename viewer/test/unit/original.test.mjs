@@ -111,7 +111,7 @@ describe('besideOffset', () => {
 });
 
 describe('originalObject', () => {
-  test('draws every triangle once, the self-intersecting ones apart, and a tube per marked edge', () => {
+  test('draws every triangle once, the self-intersecting ones apart and outlined, and a tube per marked edge', () => {
     for (const answer of samples) {
       const read = viewer.readOriginal(answer);
       const group = viewer.originalObject(read);
@@ -124,6 +124,7 @@ describe('originalObject', () => {
       const tubes = (mesh) => (mesh ? mesh.count : 0);
       assert.equal(tubes(named('original-boundary')), read.boundaryEdges.length / 2);
       assert.equal(tubes(named('original-non-manifold')), read.nonManifoldEdges.length / 2);
+      assert.equal(tubes(named('original-self-intersecting-outline')), 3 * read.selfIntersecting.length);
       if (named('original-self-intersecting')) {
         assert.equal(named('original-self-intersecting').material.color.getHex(), viewer.ORIGINAL_COLOURS.selfIntersecting);
       }
