@@ -34,6 +34,7 @@
 #include "shatter/formats/tinygltf.hpp"
 #include "errors.hpp"
 #include "tree_stats_json.hpp"
+#include "view_original.hpp"
 #include "viewer_page.hpp"
 
 namespace shatter::cli {
@@ -81,8 +82,11 @@ void require_glb(const fs::path& path, const std::string& bytes) {
 // server's threads and the fracture job.
 class Session {
  public:
-  Session(std::string file, std::optional<MeshTree> tree, std::string glb)
-      : file_(std::move(file)), editable_(tree.has_value()), glb_(std::make_shared<const std::string>(std::move(glb))) {
+  Session(std::string file, std::optional<MeshTree> tree, std::string glb, std::string original_name = {})
+      : file_(std::move(file)),
+        editable_(tree.has_value()),
+        original_name_(std::move(original_name)),
+        glb_(std::make_shared<const std::string>(std::move(glb))) {
     if (tree) {
       root_ = std::move(tree->nodes[0].mesh);
       recipe_ = tree->recipe;
@@ -117,6 +121,7 @@ class Session {
       options["seed"] = std::to_string(recipe_.seed);  // beyond 2^53 a JavaScript number would round it
       out["options"] = std::move(options);
     }
+    if (!original_name_.empty()) out["original"] = {{"file", original_name_}};
     return out;
   }
 
@@ -194,6 +199,7 @@ class Session {
 
   const std::string file_;
   const bool editable_;
+  const std::string original_name_;  // of --original; empty without it
   Mesh root_;  // the tree's root solid: what the editor fractures again
   mutable std::mutex mutex_;
   std::shared_ptr<const std::string> glb_;  // guarded by mutex_
@@ -235,7 +241,8 @@ void send_json(httplib::Response& response, int status, const json& body) {
   response.set_content(body.dump(), json_type);
 }
 
-void add_routes(httplib::Server& server, Session& session, const std::string& page) {
+// `original`: the body of GET /api/original, or empty without --original (the route is then not served).
+void add_routes(httplib::Server& server, Session& session, const std::string& page, const std::string& original) {
   server.Get("/", [&page](const httplib::Request&, httplib::Response& response) {
     response.set_content(page, "text/html; charset=utf-8");
   });
@@ -247,6 +254,11 @@ void add_routes(httplib::Server& server, Session& session, const std::string& pa
   server.Get("/api/session", [&session](const httplib::Request&, httplib::Response& response) {
     send_json(response, 200, session.session_json());
   });
+  if (!original.empty()) {
+    server.Get("/api/original", [&original](const httplib::Request&, httplib::Response& response) {
+      response.set_content(original, json_type);
+    });
+  }
   server.Get("/api/fracture", [&session](const httplib::Request&, httplib::Response& response) {
     send_json(response, 200, session.job_json());
   });
@@ -292,6 +304,13 @@ Command add_view_command(CLI::App& app) {
                       "A mesh tree (.shatter; every level is shown) or a glTF binary (.glb) from `export` or "
                       "`simulate --record`")
       ->required();
+  command->add_option("--original", args->original,
+                      "With a .shatter file built with --repair: the mesh file it was built from (read as fracture "
+                      "reads it). The page gets an \"Original input\" panel with the repair report and a switch that "
+                      "draws the file as it is beside the tree's root, its boundary edges, non-manifold edges and "
+                      "self-intersecting triangles highlighted. Refused with one line when the file cannot be read or "
+                      "drawn, or its bounding box does not hold the root's (equals it, for a tree built without "
+                      "--repair)");
   command->add_option("--port", args->port, "Port on 127.0.0.1 to listen on; 0 picks a free one")
       ->capture_default_str();
   return {command, [args] { return run_view(*args); }};
@@ -304,12 +323,23 @@ int run_view(const ViewArgs& args) {
   if (extension != ".shatter" && extension != ".glb") {
     throw UsageError("view shows a .shatter or .glb file, got '" + args.input + "'");
   }
+  if (!args.original.empty() && extension != ".shatter") {
+    throw UsageError("--original goes with a .shatter file (the tree built from it), not with '" + args.input + "'");
+  }
   std::unique_ptr<Session> session;
+  std::string original;  // the answer of GET /api/original
   if (extension == ".shatter") {
     MeshTree tree = read_shatter_file(path);
     if (tree.nodes.empty()) throw CorruptFileError(args.input + ": the tree has no nodes");
+    std::string original_name;
+    if (!args.original.empty()) {
+      const OriginalInput input = read_original_input(args.original, tree.nodes[0].mesh, tree.input_repair);
+      original = original_json(input, tree.input_repair).dump();
+      original_name = input.name;
+    }
     std::string glb = encode_glb(tree, select_nodes(tree, NodeSelection{NodeSelectionKind::all}));
-    session = std::make_unique<Session>(path.filename().string(), std::move(tree), std::move(glb));
+    session = std::make_unique<Session>(path.filename().string(), std::move(tree), std::move(glb),
+                                        std::move(original_name));
   } else {
     std::string glb = read_bytes(path);
     require_glb(path, glb);
@@ -336,7 +366,7 @@ int run_view(const ViewArgs& args) {
     const int yes = 1;
     ::setsockopt(socket, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
   });
-  add_routes(server, *session, page);
+  add_routes(server, *session, page, original);
   constexpr const char* host = "127.0.0.1";
   int port = args.port;
   if (args.port == 0) {

@@ -20,6 +20,8 @@ struct ViewArgs {
   std::string input;
   /// 0: any free port (printed).
   std::uint16_t port = default_view_port;
+  /// --original: the mesh file the tree was built from (empty: none).
+  std::string original;
 };
 
 /// Declares the `view` subcommand on `app`.
@@ -33,14 +35,19 @@ Command add_view_command(CLI::App& app);
 /// viewer/src/editor.js):
 ///   GET  /                   the viewer page
 ///   GET  /model.glb          the tree (or file) shown now
-///   GET  /api/session        {file, kind ("tree" or "glb"), editable, generation, options}
+///   GET  /api/session        {file, kind ("tree" or "glb"), editable, generation, options,
+///                            and original {file} with --original}
+///   GET  /api/original       with --original only: the input file and its defects
+///                            (original_json, view_original.hpp)
 ///   POST /api/fracture       {fragments, seed, strategy}: fracture the root solid again
 ///                            in the background (202), or 400 / 409 {error}
 ///   GET  /api/fracture       {state, leaves_done, fragments, generation, leaves, seconds, error}
 /// Anything else is 404 with {error}. A fracture still running at the stop is
 /// abandoned (nothing is written: the editor never writes files).
-/// Throws UsageError for a file that is neither .shatter nor .glb or a build
-/// without the viewer, CorruptFileError for a damaged file, IoError for one
+/// With --original, the mesh file is read and checked first (read_original_input:
+/// refused with one line when unreadable, undrawable or not the tree's input).
+/// Throws UsageError for a file that is neither .shatter nor .glb, --original
+/// with a .glb, or a build without the viewer, CorruptFileError for a damaged file, IoError for one
 /// that cannot be read or a port that cannot be listened on.
 int run_view(const ViewArgs& args);
 

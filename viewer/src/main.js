@@ -8,6 +8,7 @@ import * as THREE from 'three';
 
 import { Viewer, bodyOf } from './viewer.js';
 import { Editor, errorOf } from './editor.js';
+import { ORIGINAL_COLOURS, originalObject, readOriginal } from './original.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -190,6 +191,66 @@ function presentModel(viewer, name) {
   viewer.setInteriorMaterial($('interior-material').checked);
 }
 
+// The "Original input" panel (`shatter view TREE --original MESH`): the file's name, what validation finds in it with
+// a colour key and counts, and the repair the tree records, one line per change.
+function presentOriginal(original) {
+  $('original').hidden = false;
+  $('original-name').textContent = `${original.file}: ${original.triangles} triangles, ${original.vertices} vertices`;
+  $('original-validation').textContent = original.validation === 'valid' ? 'Valid as read.'
+    : `As read: ${original.validation}.`;
+  const legend = $('original-legend');
+  legend.replaceChildren();
+  const key = (colour, text, field, count) => {
+    const item = document.createElement('li');
+    item.dataset.field = field;
+    item.dataset.value = String(count);
+    const swatch = document.createElement('span');
+    swatch.className = 'swatch';
+    swatch.style.background = `#${colour.toString(16).padStart(6, '0')}`;
+    item.append(swatch, `${text}: ${count}`);
+    legend.append(item);
+  };
+  key(ORIGINAL_COLOURS.boundary, 'boundary (open) edges', 'boundary_edges', original.boundaryEdges.length / 2);
+  key(ORIGINAL_COLOURS.nonManifold, 'non-manifold edges', 'non_manifold_edges', original.nonManifoldEdges.length / 2);
+  key(ORIGINAL_COLOURS.selfIntersecting, 'self-intersecting triangles', 'self_intersecting_triangles',
+    original.selfIntersecting.length);
+  const repair = $('original-repair');
+  repair.replaceChildren();
+  const line = (text, field) => {
+    const item = document.createElement('li');
+    item.dataset.field = field;
+    item.textContent = text;
+    repair.append(item);
+  };
+  if (original.repair) {
+    $('original-repair-title').textContent = `Repaired before the build (${original.repair.trianglesBefore} triangles, `
+      + `${original.repair.trianglesAfter} after):`;
+    for (const change of original.repair.changes) line(change, 'repair');
+    for (const note of original.repair.notDone) line(`not done: ${note}`, 'repair_not_done');
+  } else {
+    $('original-repair-title').textContent = 'The tree records no repair: its root is this file as read.';
+  }
+  for (const warning of original.readWarnings) line(`read: ${warning}`, 'read_warning');
+}
+
+// Shows the original beside the tree's root (the tree cut back to depth 0) or hides it (the depth shown before back).
+function showOriginal(viewer, on) {
+  if (!viewer.original) return;
+  if (viewer.kind === 'tree' && viewer.depths.length) {
+    if (on) {
+      if (viewer.depthBeforeOriginal === undefined) viewer.depthBeforeOriginal = viewer.depth;
+      viewer.setDepth(viewer.depths[0]);
+    } else if (viewer.depthBeforeOriginal !== undefined) {
+      viewer.setDepth(viewer.depthBeforeOriginal);
+      viewer.depthBeforeOriginal = undefined;
+    }
+    $('depth').value = Math.max(viewer.depths.indexOf(viewer.depth), 0);
+    updateDepthLabel(viewer);
+    showSelection(viewer, viewer.selected);
+  }
+  viewer.setShowOriginal(on);
+}
+
 async function main() {
   const cfg = config();
   const viewer = new Viewer($('view'));
@@ -213,6 +274,13 @@ async function main() {
           centroids: shown.map((n) => n.centroid.clone().add(n.object.position).toArray()),
           bondSegments: viewer.bondMesh ? viewer.bondMesh.userData.bondCount : 0,
         });
+        if (viewer.original) {
+          const o = viewer.original.userData.read;
+          out.original = { shown: viewer.original.visible, triangles: o.triangles, vertices: o.vertices,
+            boundaryEdges: o.boundaryEdges.length / 2, nonManifoldEdges: o.nonManifoldEdges.length / 2,
+            selfIntersecting: o.selfIntersecting.length, position: viewer.original.position.toArray(),
+            box: o.box };
+        }
       } else if (viewer.kind === 'recording') {
         const bodies = [];
         viewer.root.traverse((o) => {
@@ -252,6 +320,16 @@ async function main() {
       if (!response.ok) throw new Error(`api/session: ${await errorOf(response)}`);
       const session = await response.json();
       await load(await fetchBytes(`model.glb?generation=${session.generation}`), session.file);
+      if (session.original) {
+        const answer = await fetch('api/original', { cache: 'no-store' });
+        if (!answer.ok) throw new Error(`api/original: ${await errorOf(answer)}`);
+        const original = readOriginal(await answer.json());
+        const object = originalObject(original);
+        object.userData.read = { ...original, box: object.userData.box };
+        viewer.setOriginal(object);
+        presentOriginal(original);
+        $('show-original').addEventListener('change', (e) => showOriginal(viewer, e.target.checked));
+      }
       if (session.editable) {
         $('editor').hidden = false;
         const editor = new Editor({
@@ -260,6 +338,11 @@ async function main() {
         }, async (generation) => {
           $('message').hidden = true;
           await load(await fetchBytes(`model.glb?generation=${generation}`), session.file);
+          // A new tree comes at its deepest level: with the original shown, back to its root beside it.
+          if (viewer.original && $('show-original').checked) {
+            viewer.depthBeforeOriginal = undefined;
+            showOriginal(viewer, true);
+          }
         }, showError);
         editor.setOptions(session.options);
         api.editor = editor;

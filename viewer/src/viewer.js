@@ -11,6 +11,7 @@ import { bondsOfNode, crossingBonds, drawableDepths, explodeOffset, isMeshTree, 
   from './tree.js';
 import { Replay } from './replay.js';
 import { ReplayFraming, fitDistance } from './framing.js';
+import { besideOffset } from './original.js';
 
 const INTERIOR = 'interior';
 const EXTERIOR = 'exterior';
@@ -55,6 +56,7 @@ export class Viewer {
     this.interiorMaterial = true;
     this.selected = null;  // tree node index, or Object3D of a recording body
     this.bondMesh = null;
+    this.original = null;  // with `view --original`: the input drawn beside the tree's root (original.js)
     this.renderCount = 0;
 
     this.lastFrame = performance.now();
@@ -286,6 +288,28 @@ export class Viewer {
     this.scene.add(mesh);
   }
 
+  // --- the original input (view --original) ------------------------------------------
+
+  /** Adds the original input (an originalObject, hidden) to the scene; it stays across trees the editor loads. */
+  setOriginal(object) {
+    if (this.original) this.scene.remove(this.original);
+    this.original = object;
+    this.scene.add(object);
+  }
+
+  /** Shows the original beside the tree's root (to its left) and frames both, or hides it and frames the tree. */
+  setShowOriginal(on) {
+    if (!this.original) return;
+    if (on && this.tree && this.tree.nodes[0] && this.tree.nodes[0].object) {
+      const rootBox = new THREE.Box3().setFromObject(this.tree.nodes[0].object);
+      const box = { min: rootBox.min.toArray(), max: rootBox.max.toArray() };
+      this.original.position.fromArray(besideOffset(box, this.original.userData.box));
+    }
+    this.original.visible = on;
+    this.original.updateMatrixWorld(true);
+    this.frameCamera();
+  }
+
   // --- picking -----------------------------------------------------------------
 
   /** The fragment under the canvas pixel (x, y) (CSS pixels from its top left), or null. */
@@ -322,8 +346,11 @@ export class Viewer {
       if (o.isMesh && o.name !== 'floor' && !(o.parent && o.parent.name === 'floor') && isShown(o)) box.expandByObject(o);
     });
     if (box.isEmpty()) box.setFromObject(this.root);
+    const beside = this.original && this.original.visible;
+    if (beside) box.expandByObject(this.original);
     const centre = box.getCenter(new THREE.Vector3());
-    const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-6);
+    // Two objects side by side reach the edges where the panels cover them: a margin keeps both clear.
+    const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-6) * (beside ? 1.3 : 1);
     this.placeCamera(centre, radius, DEFAULT_VIEW_DIRECTION);
   }
 

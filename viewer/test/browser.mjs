@@ -25,6 +25,11 @@
 //                                 past CTest's 300 s: one case each keeps every case well under it.)
 //   node browser.mjs editor       the editor re-fractures on the server with progress, giving the tree the
 //                                 fracture command gives; bad input and server errors show as messages
+//   node browser.mjs original     `shatter view` of a tree fractured from a cube with a hole with --repair, with
+//                                 --original: the panel lists the repair `info` reads and the hole's 4 boundary
+//                                 edges; its switch shows the original left of the root (the depth goes to 0) with
+//                                 the open edges drawn in their colour, and takes both back; without --original the
+//                                 session, the panel and api/original are as before (screenshots kept)
 //   node browser.mjs server       the command: 127.0.0.1 only, 404 as JSON, refused files and busy ports, SIGTERM
 //
 // Environment (set by CTest): SHATTER_EXE, SHATTER_CHROMIUM, SHATTER_NODE_MODULES, SHATTER_MESH,
@@ -280,6 +285,35 @@ function bodiesShare(page) {
     }
     return differing / (data.length / 4);
   });
+}
+
+/**
+ * Counts the WebGL canvas's pixels of `colour` ([r, g, b], within 40 in sum; null: any pixel not the background),
+ * in all and left and right of the vertical line at `split` (a fraction of the width): {count, left, right, total}.
+ */
+function canvasPixels(page, colour, split = 0.5) {
+  return page.evaluate(([wanted, at]) => {
+    const { viewer } = window.shatterViewer;
+    viewer.renderer.render(viewer.scene, viewer.camera);
+    const canvas = viewer.renderer.domElement;
+    const copy = document.createElement('canvas');
+    copy.width = canvas.width;
+    copy.height = canvas.height;
+    const context = copy.getContext('2d');
+    context.drawImage(canvas, 0, 0);
+    const data = context.getImageData(0, 0, copy.width, copy.height).data;
+    const background = [0x15, 0x17, 0x1c];
+    let count = 0;
+    let left = 0;
+    for (let i = 0; i < data.length; i += 4) {
+      const distance = (c) => Math.abs(data[i] - c[0]) + Math.abs(data[i + 1] - c[1]) + Math.abs(data[i + 2] - c[2]);
+      const hit = wanted ? distance(wanted) <= 40 : distance(background) > 24;
+      if (!hit) continue;
+      ++count;
+      if ((i / 4) % copy.width < copy.width * at) ++left;
+    }
+    return { count, left, right: count - left, total: data.length / 4 };
+  }, [colour, split]);
 }
 
 // Camera poses {position, target} equal but for rounding: the followed camera keeps the direction it had, renormalised.
@@ -665,6 +699,118 @@ const cases = {
       await browser.close();
     }
     assert.equal((await stopView(server)).code, 0);
+  },
+
+  async original() {
+    // A cube with one face missing (tests/data/corpus/bad): repair fills the hole, so the root is not the input.
+    const damaged = path.join(path.dirname(env('SHATTER_MESH')), 'bad', 'cube-ouvert.off');
+    mkdirSync(work, { recursive: true });
+    const repaired = file('repaired.shatter');
+    run('fracture', damaged, '--fragments', '6', '--repair', '--out', repaired);
+    const recorded = JSON.parse(run('info', repaired, '--json')).input_repair;
+    assert.ok(recorded && recorded.repair.length > 0, 'the tree records its repair');
+
+    // Refused with one line before serving: a file that cannot be read, one that is not this tree's input (the
+    // knot's box does not hold the cube's), and --original with a .glb.
+    const missing = runFailing('view', repaired, '--original', file('no-such-mesh.off'));
+    assert.equal(missing.code, 4);
+    assert.match(missing.stderr, /^error: --original .*no-such-mesh\.off: cannot open .*\n$/);
+    const other = runFailing('view', repaired, '--original', env('SHATTER_MESH'));
+    assert.equal(other.code, 3);
+    assert.match(other.stderr, /^error: --original .*knot1\.off is not the input of this tree: .*\n$/);
+    run('export', repaired, '--out', file('repaired.glb'));
+    const glb = runFailing('view', file('repaired.glb'), '--original', damaged);
+    assert.equal(glb.code, 2);
+    assert.match(glb.stderr, /^error: --original goes with a \.shatter file/);
+    assert.match(run('view', '--help'), /--original/);
+
+    const server = await startView(repaired, ['--original', damaged]);
+    const browser = await openBrowser();
+    try {
+      const { page, errors } = await openViewer(browser, server.url);
+      assert.equal(await page.locator('#original').isVisible(), true, 'the panel shows with --original');
+      const panel = () => page.evaluate(() => ({
+        repair: [...document.querySelectorAll('#original-repair [data-field=repair]')].map((e) => e.textContent),
+        legend: Object.fromEntries([...document.querySelectorAll('#original-legend li')]
+          .map((e) => [e.dataset.field, Number(e.dataset.value)])),
+        validation: document.getElementById('original-validation').textContent,
+      }));
+      const shown = await panel();
+      assert.deepEqual(shown.repair, recorded.repair.map((r) => r.text), 'the repair lines are the file\'s');
+      assert.deepEqual(shown.legend, { boundary_edges: 4, non_manifold_edges: 0, self_intersecting_triangles: 0 });
+      assert.match(shown.validation, /open mesh: 4 boundary edges/);
+      const before = await state(page);
+      assert.equal(before.original.shown, false, 'hidden until the switch is turned on');
+      assert.equal(before.original.triangles, recorded.triangles_before);
+      const deepest = before.depth;
+      const tubeColour = [0xff, 0xc8, 0x3d];
+      const tubesBefore = await canvasPixels(page, tubeColour);
+
+      await setCheckbox(page, 'show-original', true);
+      await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+      const on = await state(page);
+      assert.equal(on.original.shown, true);
+      assert.equal(on.depth, on.depths[0], 'the tree is cut back to its root beside the original');
+      assert.equal(on.meshesShown, 1);
+      // Beside, not over: the moved original ends left of the root's box, and only x moved.
+      const rootBox = await page.evaluate(() => {
+        const { viewer, THREE } = window.shatterViewer;
+        const box = new THREE.Box3().setFromObject(viewer.tree.nodes[0].object);
+        return { min: box.min.toArray(), max: box.max.toArray() };
+      });
+      assert.ok(on.original.box.max[0] + on.original.position[0] < rootBox.min[0], 'the original lies left of the root');
+      assert.deepEqual(on.original.position.slice(1), [0, 0]);
+      const shot = await screenshot(page, 'original-beside-root');
+      assertNotBlank(shot, 'original beside the root');
+      // Where the root's centre is on the screen, as a fraction of the canvas width.
+      const rootCentre = await page.evaluate(() => {
+        const { viewer, THREE } = window.shatterViewer;
+        const centre = new THREE.Box3().setFromObject(viewer.tree.nodes[0].object).getCenter(new THREE.Vector3());
+        return viewer.toScreen(centre).x / viewer.renderer.domElement.getBoundingClientRect().width;
+      });
+      const tubes = await canvasPixels(page, tubeColour, rootCentre);
+      console.log(`open edges: ${tubes.count} pixels of their colour (${tubesBefore.count} before), `
+        + `${tubes.left} left of the root's centre`);
+      assert.equal(tubesBefore.count, 0, 'nothing in the open-edge colour before the switch');
+      assert.ok(tubes.count > 200 && tubes.left === tubes.count, 'the open edges are drawn, left of the root');
+      const covered = await canvasPixels(page, null);
+      assert.ok(covered.left > 0.05 * covered.total && covered.right > 0.05 * covered.total,
+        `both halves of the view show a solid: ${JSON.stringify(covered)}`);
+
+      await setCheckbox(page, 'show-original', false);
+      const off = await state(page);
+      assert.equal(off.original.shown, false);
+      assert.equal(off.depth, deepest, 'the depth shown before comes back');
+      assert.equal((await canvasPixels(page, tubeColour)).count, 0);
+      assert.deepEqual(errors, [], 'console errors');
+    } catch (error) {
+      server.proc.kill('SIGTERM');  // a failed check leaves no server behind
+      throw error;
+    } finally {
+      await browser.close();
+    }
+    assert.equal((await stopView(server)).code, 0);
+
+    // Without --original nothing changes: no original in the session, no panel, no api/original.
+    const plain = await startView(repaired);
+    const second = await openBrowser();
+    try {
+      const { page } = await openViewer(second, plain.url);
+      const answers = await page.evaluate(async () => ({
+        session: await (await fetch('api/session')).json(),
+        original: (await fetch('api/original')).status,
+      }));
+      assert.equal('original' in answers.session, false);
+      assert.equal(answers.original, 404);
+      assert.equal(await page.locator('#original').isVisible(), false);
+      assert.equal((await state(page)).original, undefined);
+    } catch (error) {
+      plain.proc.kill('SIGTERM');
+      throw error;
+    } finally {
+      await second.close();
+    }
+    assert.equal((await stopView(plain)).code, 0);
   },
 
   async server() {

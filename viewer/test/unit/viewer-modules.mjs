@@ -22,9 +22,10 @@ export * from './tree.js';
 export * from './replay.js';
 export * from './framing.js';
 export { fragmentColour } from './viewer.js';
+export * from './original.js';
 `;
 
-/** The bundle's exports: THREE, GLTFLoader and what tree.js, replay.js and framing.js export, and fragmentColour. */
+/** The bundle's exports: THREE, GLTFLoader, what tree.js, replay.js, framing.js and original.js export, and fragmentColour. */
 export async function loadViewerModules() {
   const nodeModules = process.env.SHATTER_NODE_MODULES;
   if (!nodeModules) {
