@@ -262,7 +262,20 @@ DamageCase make_damage_case(const MeshPool& pool, std::uint64_t seed, std::uint6
                           : lattice_box(hi, random);
       c.damaged = without_attributes(test::merge({a, b}));
       c.original = c.damaged;
-      keep_all();
+      // The parts come apart by moving copies of the positions they share a hair:
+      // every triangle away from those is kept.
+      std::vector<Vec3> shared;
+      for (const Vec3& p : a.positions) {
+        if (std::find(b.positions.begin(), b.positions.end(), p) != b.positions.end()) shared.push_back(p);
+      }
+      for (const Triangle& t : c.original.triangles) {
+        const std::array<Vec3, 3> corners = corners_of(c.original, t);
+        if (std::none_of(corners.begin(), corners.end(), [&](const Vec3& p) {
+              return std::find(shared.begin(), shared.end(), p) != shared.end();
+            })) {
+          c.kept.push_back(corners);
+        }
+      }
       break;
     }
     case DamageClass::overlapping: {
@@ -342,6 +355,22 @@ DamageOutcome run_damage_case(const DamageCase& c) {
     }
     const double before_volume = signed_volume(c.original), after_volume = signed_volume(repaired);
     out.volume_change = std::abs(after_volume - before_volume) / std::abs(before_volume);
+    if (c.kind == DamageClass::touching) {
+      // Separated by moves of 2^-20 of an edge (RepairOptions::touching_separation):
+      // the volume lost is at most what those moves sweep.
+      if (!report.find(RepairKind::separated_touching_parts)) fail("valid without separating the parts: " + report.summary());
+      double longest = 0;
+      for (const Triangle& t : c.original.triangles) {
+        for (int k = 0; k < 3; ++k) {
+          longest = std::max(longest, norm(c.original.positions[t[(k + 1) % 3]] - c.original.positions[t[k]]));
+        }
+      }
+      if (!(after_volume < before_volume) ||
+          before_volume - after_volume > RepairOptions{}.touching_separation * longest * test::surface_area(c.original)) {
+        fail("separating the parts changed the volume from " + std::to_string(before_volume) + " to " +
+             std::to_string(after_volume));
+      }
+    }
 
     // What fracture --repair does next: the repaired solid is cut, every piece
     // rounded, certified and valid as written (or vanished, or counted as the
