@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "position_key.hpp"
+#include "repair_touching.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/shells.hpp"
 #include "shatter/kernel/validate.hpp"
@@ -547,6 +548,13 @@ class Repairer {
     return text;
   }
 
+  // A share as 2^k when it is a power of two (the default 2^-20), else as %g.
+  static std::string share_text(double share) {
+    int exponent = 0;
+    if (share > 0 && std::frexp(share, &exponent) == 0.5) return "2^" + std::to_string(exponent - 1);
+    return number_text(share);
+  }
+
   static std::string first_line(const std::string& text) {
     const std::size_t end = text.find_first_of("\r\n");
     return end == std::string::npos ? text : text.substr(0, end);
@@ -827,11 +835,17 @@ class Repairer {
       }
     }
 
+    // Step 9: parts touching at a vertex or along an edge, taken apart now that the
+    // surface is closed and its copies of a vertex joined again.
+    const bool separated = record && separate_touching(out);
+
     // Step 7 for the lids drawn above: orient_to_bound_volume ran on CGAL's mesh,
     // still open where these holes were, so it did nothing or oriented only the
     // shells closed then. Now the output is closed, each shell is turned whole
     // the way its nesting asks (outward at even depth, a cavity at odd: shells.hpp).
-    if (record && !welded_lid_cycles_.empty() && is_closed_oriented_manifold(out)) {
+    // The same once step 9 has separated touching parts: CGAL oriented its split
+    // copies, in which the parts sharing an edge may have been glued otherwise.
+    if (record && (!welded_lid_cycles_.empty() || separated) && is_closed_oriented_manifold(out)) {
       const ShellNesting nesting = shell_nesting(out);
       for (std::size_t t = 0; t < out.triangles.size(); ++t) {
         if (nesting.well_nested(nesting.shell_of_triangle[t])) continue;
@@ -856,10 +870,56 @@ class Repairer {
                    " (autorefinement: " + plural(created_vertices, "new vertex", "new vertices") +
                    " rounded to doubles, inner parts removed)");
       }
-      std::size_t kept_input_vertices = out.positions.size() - created_vertices;
+      if (separation_change_) report_.changes.push_back(std::move(*separation_change_));
+      // Step 9's copies are new vertices too, not input vertices kept.
+      std::size_t kept_input_vertices = out.positions.size() - created_vertices - separation_copies_;
       finish_report(out, kept_input_vertices, created_vertices);
     }
     return out;
+  }
+
+  // Step 9 (repair_touching.hpp): when the output is closed and consistently
+  // oriented but touches itself at non-manifold vertices or edges, their parts
+  // are split apart and moved a hair into their own wedges. Only vertex indices
+  // and the moved copies' positions change: triangles, surfaces and corner
+  // attributes keep their places. Returns whether it changed `out`.
+  bool separate_touching(Mesh& out) {
+    if (out.triangles.empty() || is_closed_oriented_manifold(out)) return false;
+    ValidationOptions topology_only;
+    topology_only.check_self_intersections = false;
+    const ValidationReport topology = validate_mesh(out, topology_only);
+    const Defect* pinched = topology.find(DefectKind::non_manifold_vertex);
+    const Defect* crowded = topology.find(DefectKind::non_manifold_edge);
+    if (!pinched && !crowded) return false;
+    for (const DefectKind blocking : {DefectKind::nonfinite_coordinate, DefectKind::index_out_of_range,
+                                      DefectKind::zero_area_triangle, DefectKind::boundary_edge,
+                                      DefectKind::inconsistent_orientation}) {
+      if (const Defect* defect = topology.find(blocking)) {
+        report_.notes.push_back({"did not separate parts touching at non-manifold vertices or edges: the surface "
+                                 "still has " + std::string(defect_name(blocking)) + " (" +
+                                 std::to_string(defect->count) + ")"});
+        return false;
+      }
+    }
+    const kernel_detail::TouchingSeparation separation =
+        kernel_detail::separate_touching_parts(out, options_.touching_separation);
+    if (!separation.separated) {
+      if (!separation.failure.empty()) report_.notes.push_back({separation.failure});
+      return false;
+    }
+    std::string text = "separated parts touching at " + plural(separation.vertices, "vertex", "vertices");
+    if (separation.edges > 0) {
+      text += " (on " + plural(separation.edges, "edge", "edges") +
+              " with more than two triangles, paired into wedges in exact angular order)";
+    }
+    text += ": " + plural(separation.copies, "vertex copy", "vertex copies") +
+            " moved into their own parts by at most " + number_text(separation.largest_move) + " (" +
+            share_text(options_.touching_separation) + " of the nearest neighbour's distance), volume change " +
+            number_text(separation.volume_change) + " (bound " + number_text(separation.volume_bound) + ")";
+    // Named after the reversal and self-intersection steps, which are counted later.
+    separation_copies_ = separation.copies;
+    separation_change_ = RepairChange{RepairKind::separated_touching_parts, separation.vertices, std::move(text)};
+    return true;
   }
 
   // Attributes of a point inside input triangle t, barycentric in t's corners
@@ -930,6 +990,8 @@ class Repairer {
   SurfaceMesh::Property_map<FaceIndex, std::int64_t> origin_;
   SurfaceMesh::Property_map<FaceIndex, bool> split_;
   std::size_t resolved_pairs_ = 0;
+  std::optional<RepairChange> separation_change_;  // step 9's, once it is done
+  std::size_t separation_copies_ = 0;               // the vertex copies step 9 made
   // Vertices orient_polygon_soup split to make the soup an oriented manifold.
   std::size_t split_vertices_ = 0;
   std::unordered_map<PositionKey, std::uint32_t, PositionKeyHash> welded_ids_;

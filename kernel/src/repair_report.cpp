@@ -34,6 +34,7 @@ std::string_view repair_kind_name(RepairKind kind) {
     case RepairKind::filled_holes: return "filled_holes";
     case RepairKind::resolved_self_intersections: return "resolved_self_intersections";
     case RepairKind::removed_unused_vertices: return "removed_unused_vertices";
+    case RepairKind::separated_touching_parts: return "separated_touching_parts";
   }
   return "unknown";
 }

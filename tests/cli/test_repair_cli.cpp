@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <string>
 
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "support/checks.hpp"
 #include "shatter/generators/corpus.hpp"
@@ -107,4 +108,27 @@ TEST_CASE("slice and fracture --repair proceed with the repaired mesh", "[repair
                                " --fragments 2 --out " + quoted(scratch("no.shatter")) + " --repair");
   CHECK(open.exit_code == 3);
   CHECK(last_line(open.err).find("(after --repair)") != std::string::npos);
+}
+
+TEST_CASE("validate --repair separates two cubes sharing an edge, says so, and --json names it", "[repair][cli]") {
+  const fs::path in = scratch("cubes-sharing-an-edge.off"), out = scratch("cubes-apart.off");
+  write_mesh(merge({box({0, 0, 0}, {1, 1, 1}), box({1, 1, 0}, {2, 2, 1})}), in, MeshFormat::off);
+  const Run refused = run_shatter("validate " + quoted(in));
+  CHECK(refused.exit_code == 3);
+
+  const Run run = run_shatter("validate " + quoted(in) + " --repair --out " + quoted(out));
+  CHECK(run.exit_code == 0);
+  CHECK(run.err.find("repair: separated parts touching at 2 vertices (on 1 edge with more than two triangles") !=
+        std::string::npos);
+  const Mesh written = read_mesh(out);
+  CHECK(solid_problem(written).empty());
+  CHECK(written.vertex_count() == 16);
+
+  const Run json_run = run_shatter("validate " + quoted(in) + " --repair --json");
+  CHECK(json_run.exit_code == 0);
+  const auto json = nlohmann::json::parse(json_run.out);
+  CHECK(json["valid"] == true);
+  bool named = false;
+  for (const auto& change : json["repair"]) named = named || (change["change"] == "separated_touching_parts" && change["count"] == 2);
+  CHECK(named);
 }

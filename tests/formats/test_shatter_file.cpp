@@ -1211,7 +1211,7 @@ TEST_CASE("how the input was repaired is kept in the optional rpar section", "[s
     // Byte 36 is the first change's kind (four u64 counts, then the u32 change count).
     std::string bad_kind = payload;
     bad_kind[36] = static_cast<char>(all_repair_kinds.size());
-    check_refused(with_rpar(bad_kind), "unknown repair kind 10");
+    check_refused(with_rpar(bad_kind), "unknown repair kind " + std::to_string(all_repair_kinds.size()));
     std::string control = payload;
     control[36 + 1 + 8 + 4] = '\n';  // the first byte of the first change's text
     check_refused(with_rpar(control), "(a control character)");

@@ -9,6 +9,8 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +18,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "shatter/generators/corpus.hpp"
@@ -456,6 +459,7 @@ TEST_CASE("every bad corpus mesh is repaired or refused as recorded", "[repair][
     } else if (it->second.valid) {
       CHECK(exact_six_volume(mesh) == it->second.six_volume);
     } else {
+      CHECK_FALSE(names(report, RepairKind::separated_touching_parts));
       REQUIRE_FALSE(after.defects.empty());
       CHECK(after.defects.front().kind == it->second.remaining);
       CHECK_THROWS_AS(require_valid_solid(mesh, name, false), InvalidMeshError);
@@ -482,6 +486,239 @@ TEST_CASE("self-intersections: left and named by default, and the opt-in resolve
       CHECK(validate_mesh(opted).valid());
     }
   }
+}
+
+// --- touching parts (step 9) ---------------------------------------------------------
+
+namespace {
+
+// An oriented triangle as its three positions, starting at the smallest.
+std::array<Vec3, 3> position_triple(const Mesh& mesh, const Triangle& t) {
+  std::array<Vec3, 3> corners{mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]};
+  const auto less = [](const Vec3& a, const Vec3& b) {
+    return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+  };
+  const int first = int(std::min_element(corners.begin(), corners.end(), less) - corners.begin());
+  return {corners[first], corners[(first + 1) % 3], corners[(first + 2) % 3]};
+}
+
+bool has_triangle(const Mesh& mesh, const std::array<Vec3, 3>& triple) {
+  for (const Triangle& t : mesh.triangles) {
+    if (position_triple(mesh, t) == triple) return true;
+  }
+  return false;
+}
+
+Mesh outward(Mesh mesh) { return validate_mesh(mesh).find(DefectKind::inward_orientation) ? flipped(mesh) : mesh; }
+
+Mesh tetrahedron(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
+  return outward(mesh_from({a, b, c, d}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}));
+}
+
+double longest_edge(const Mesh& mesh) {
+  double longest = 0;
+  for (const Triangle& t : mesh.triangles) {
+    for (int c = 0; c < 3; ++c) longest = std::max(longest, norm(mesh.positions[t[(c + 1) % 3]] - mesh.positions[t[c]]));
+  }
+  return longest;
+}
+
+// Positions that occur in more than one of `parts`: where they touch.
+std::set<std::array<double, 3>> shared_positions(const std::vector<Mesh>& parts) {
+  std::map<std::array<double, 3>, std::set<std::size_t>> owners;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    for (const Vec3& p : parts[i].positions) owners[{p.x, p.y, p.z}].insert(i);
+  }
+  std::set<std::array<double, 3>> shared;
+  for (const auto& [p, who] : owners) {
+    if (who.size() > 1) shared.insert(p);
+  }
+  return shared;
+}
+
+}  // namespace
+
+TEST_CASE("a bowtie: two tetrahedra sharing a vertex are separated into a valid solid", "[repair][touching]") {
+  const Mesh below = tetrahedron({0, 0, 0}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1});
+  const Mesh above = tetrahedron({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1});
+  Mesh mesh = merge({below, above});
+  add_tracer_uvs(mesh);
+  const Mesh input = mesh;
+  REQUIRE(validate_mesh(mesh).find(DefectKind::self_intersection) != nullptr);  // touching at the apex
+
+  const RepairReport report = repair_mesh(mesh);
+  INFO(report.summary());
+  CHECK(problem_after_repair(mesh).empty());
+  CHECK(count_of(report, RepairKind::merged_duplicate_vertices) == 1);
+  CHECK(count_of(report, RepairKind::separated_touching_parts) == 1);
+  CHECK(report.notes.empty());
+  CHECK(report.find(RepairKind::separated_touching_parts)->text.rfind("separated parts touching at 1 vertex: 1 vertex copy", 0) == 0);
+  // The merged apex split again: 7 positions read, 8 vertices written.
+  CHECK(mesh.vertex_count() == 8);
+  REQUIRE(mesh.triangle_count() == 8);
+  // Triangles and their corners' attributes keep their places; the lower
+  // tetrahedron (the apex's first fan) is untouched.
+  CHECK(mesh.corners.uvs == input.corners.uvs);
+  for (std::size_t t = 0; t < 4; ++t) CHECK(position_triple(mesh, mesh.triangles[t]) == position_triple(input, input.triangles[t]));
+  // The upper one's apex moved into it, by 2^-20 of its shortest edge (1).
+  const Vec3 apex = mesh.positions[mesh.triangles[4][0]];
+  CHECK(apex.x > 0);
+  CHECK(apex.y > 0);
+  CHECK(apex.z > 0);
+  CHECK(norm(apex) <= 0x1p-20 * (1 + 1e-12));
+  // The volume lost is the sliver swept by the apex's three faces: at most the
+  // move times their area (3/2) over 3.
+  const mpq_class six = exact_six_volume(mesh);
+  CHECK(six < 2);
+  CHECK(six.get_d() >= 2 - 6 * 0x1p-20 * 1.5 / 3);
+}
+
+TEST_CASE("two cubes sharing an edge are separated into a valid solid", "[repair][touching]") {
+  const Mesh a = box({0, 0, 0}, {1, 1, 1}), b = box({1, 1, 0}, {2, 2, 1});
+  Mesh mesh = merge({a, b});
+  REQUIRE(validate_mesh(mesh).valid() == false);
+  const RepairReport report = repair_mesh(mesh);
+  INFO(report.summary());
+  CHECK(problem_after_repair(mesh).empty());
+  CHECK(count_of(report, RepairKind::merged_duplicate_vertices) == 2);
+  CHECK(count_of(report, RepairKind::separated_touching_parts) == 2);
+  CHECK(report.find(RepairKind::separated_touching_parts)->text.find("on 1 edge with more than two triangles") != std::string::npos);
+  CHECK(mesh.vertex_count() == 16);
+  CHECK(mesh.triangle_count() == 24);
+  for (const Triangle& t : a.triangles) CHECK(has_triangle(mesh, position_triple(a, t)));
+  // Each cube's own triangles away from the edge are kept too.
+  std::size_t kept = 0;
+  for (const Triangle& t : b.triangles) kept += has_triangle(mesh, position_triple(b, t)) ? 1 : 0;
+  CHECK(kept >= 4);  // the faces x = 2, y = 2 (and whatever triangles of the others miss the edge)
+  const mpq_class six = exact_six_volume(mesh);
+  CHECK(six < 12);
+  CHECK(six.get_d() > 12 - 6 * 0x1p-20 * 6);
+}
+
+TEST_CASE("parts touching at vertices and edges are separated over seeds: valid, deterministic, the rest kept",
+          "[repair][touching]") {
+  for (std::uint64_t seed = 0; seed < 60; ++seed) {
+    INFO("seed " << seed);
+    Random random(seed);
+    const auto integer = [&](int lo, int hi) { return double(lo + int(random.index(std::size_t(hi - lo + 1)))); };
+    // A box, and two more: one sharing a corner or an edge with it, and one
+    // sharing a corner or an edge with the second (a chain of touching parts).
+    std::vector<Mesh> parts{box({0, 0, 0}, {integer(1, 3), integer(1, 3), integer(1, 3)})};
+    for (int k = 0; k < 2; ++k) {
+      Vec3 hi = parts.back().positions[0];
+      for (const Vec3& p : parts.back().positions) hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+      Vec3 lo = parts.back().positions[0];
+      for (const Vec3& p : parts.back().positions) lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+      if (random.index(2) == 0) {
+        parts.push_back(box(hi, {hi.x + integer(1, 3), hi.y + integer(1, 3), hi.z + integer(1, 3)}));
+      } else {
+        parts.push_back(box({hi.x, hi.y, lo.z}, {hi.x + integer(1, 3), hi.y + integer(1, 3), hi.z}));
+      }
+    }
+    const bool rotate = random.index(2) == 0;
+    const Vec3 axis = random.direction();
+    const double angle = random.uniform(0, 6.283185307179586), c = std::cos(angle), s = std::sin(angle);
+    for (Mesh& part : parts) {
+      if (!rotate) continue;
+      // The same rotation of the same doubles: shared positions stay shared.
+      for (Vec3& p : part.positions) p = p * c + cross(axis, p) * s + axis * (dot(axis, p) * (1 - c));
+    }
+    Mesh original = merge(parts);
+    const std::set<std::array<double, 3>> shared = shared_positions(parts);
+    REQUIRE(shared.size() >= 2);
+    // The damage: one part reversed sometimes, triangles shuffled, corners rotated.
+    Mesh damaged = original;
+    if (random.index(3) == 0) {
+      const std::size_t part = random.index(parts.size());
+      for (std::size_t t = 12 * part; t < 12 * part + 12; ++t) reverse(damaged.triangles[t]);
+    }
+    for (std::size_t i = damaged.triangles.size(); i > 1; --i) std::swap(damaged.triangles[i - 1], damaged.triangles[random.index(i)]);
+    for (Triangle& t : damaged.triangles) std::rotate(t.begin(), t.begin() + random.index(3), t.end());
+
+    Mesh repaired = damaged, again = damaged;
+    const RepairReport report = repair_mesh(repaired);
+    repair_mesh(again);
+    INFO(report.summary());
+    CHECK(canonical_bytes(repaired) == canonical_bytes(again));
+    REQUIRE(problem_after_repair(repaired).empty());
+    CHECK(names(report, RepairKind::separated_touching_parts));
+    CHECK(report.notes.empty());
+    CHECK(repaired.triangle_count() == original.triangle_count());
+    // Every triangle away from where the parts touch is kept, as oriented in the
+    // original; the others moved by at most 2^-20 of the longest edge.
+    const auto at_touching = [&](const Mesh& mesh, const Triangle& t) {
+      for (const VertexIndex v : t) {
+        const Vec3 p = mesh.positions[v];
+        if (shared.count({p.x, p.y, p.z})) return true;
+      }
+      return false;
+    };
+    for (const Triangle& t : original.triangles) {
+      if (!at_touching(original, t)) CHECK(has_triangle(repaired, position_triple(original, t)));
+    }
+    const double reach = 0x1p-20 * longest_edge(original);
+    for (const Vec3& p : repaired.positions) {
+      if (shared.count({p.x, p.y, p.z})) continue;
+      bool from_input = false;
+      for (const Vec3& q : original.positions) from_input = from_input || q == p;
+      if (from_input) continue;
+      double nearest = INFINITY;
+      for (const auto& q : shared) nearest = std::min(nearest, norm(p - Vec3{q[0], q[1], q[2]}));
+      CHECK(nearest <= reach);
+    }
+    // The volume lost: at most the moves times the area they sweep.
+    const double before = signed_volume(original), after = signed_volume(repaired);
+    CHECK(after < before);
+    CHECK(before - after <= reach * surface_area(original));
+  }
+}
+
+TEST_CASE("a surface touching itself that is still open is not separated, and the note says why", "[repair][touching]") {
+  Mesh a = box({0, 0, 0}, {1, 1, 1}), b = box({1, 1, 0}, {2, 2, 1});
+  // Open the second cube's top (z = 1) face, away from the shared edge's sides.
+  std::vector<std::size_t> top;
+  for (std::size_t t = 0; t < b.triangles.size(); ++t) {
+    bool all_top = true;
+    for (const VertexIndex v : b.triangles[t]) all_top = all_top && b.positions[v].z == 1;
+    if (all_top) top.push_back(t);
+  }
+  REQUIRE(top.size() == 2);
+  remove_triangles(b, top);
+  Mesh mesh = merge({a, b});
+  RepairOptions no_fill;
+  no_fill.max_hole_edges = 0;
+  const RepairReport report = repair_mesh(mesh, no_fill);
+  INFO(report.summary());
+  CHECK_FALSE(names(report, RepairKind::separated_touching_parts));
+  bool noted = false;
+  for (const RepairNote& note : report.notes) noted = noted || note.text.find("did not separate") != std::string::npos;
+  CHECK(noted);
+  const ValidationReport after = validate_mesh(mesh);
+  CHECK(after.find(DefectKind::boundary_edge) != nullptr);
+  CHECK(after.find(DefectKind::non_manifold_edge) != nullptr);
+  // Filled, the same mesh is separated.
+  Mesh filled = merge({a, b});
+  const RepairReport full = repair_mesh(filled);
+  INFO(full.summary());
+  CHECK(names(full, RepairKind::filled_holes));
+  CHECK(names(full, RepairKind::separated_touching_parts));
+  CHECK(problem_after_repair(filled).empty());
+}
+
+TEST_CASE("an edge whose triangles cannot be paired into wedges is left, noted and refused", "[repair][touching]") {
+  // Two tetrahedra on one edge with a face each in the half-plane y = 0, x > 0:
+  // those faces overlap, and their third corners share an angle about the edge.
+  const Mesh a = tetrahedron({0, 0, 0}, {0, 0, 1}, {1, 0, 0.5}, {0, 1, 0.5});
+  const Mesh b = tetrahedron({0, 0, 0}, {0, 0, 1}, {2, 0, 0.5}, {0, -1, 0.5});
+  Mesh mesh = merge({a, b});
+  const RepairReport report = repair_mesh(mesh);
+  INFO(report.summary());
+  CHECK_FALSE(names(report, RepairKind::separated_touching_parts));
+  bool noted = false;
+  for (const RepairNote& note : report.notes) noted = noted || note.text.find("cannot be paired") != std::string::npos;
+  CHECK(noted);
+  CHECK_FALSE(validate_mesh(mesh).valid());
+  CHECK_THROWS_AS(require_valid_solid(mesh, "two tetrahedra", false), InvalidMeshError);
 }
 
 // --- the command ------------------------------------------------------------------

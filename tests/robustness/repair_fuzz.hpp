@@ -25,7 +25,8 @@ enum class DamageClass : std::uint8_t {
   flipped,      ///< a random share of the triangles reversed: back exactly
   holes,        ///< triangles removed (scattered or one patch): closed again, every kept triangle kept
   nested,       ///< a shell inside a shell, both outward: the inner reversed into a cavity, exactly
-  touching,     ///< two lattice boxes sharing exactly one vertex or one edge (non-manifold)
+  touching,     ///< two lattice boxes sharing exactly one vertex or one edge (non-manifold): separated, every
+                ///< triangle away from the shared positions kept, the volume lost within the moves' bound
   overlapping,  ///< the mesh and a shifted copy of it: the surfaces cross (self-intersecting)
   mixed,        ///< unwelded, duplicated, flipped and holed at once: closed again, every kept triangle kept
 };

@@ -13,6 +13,7 @@
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/face_loops.hpp"
 #include "shatter/kernel/index_map.hpp"
+#include "shatter/kernel/non_manifold.hpp"
 #include "shatter/kernel/predicates.hpp"
 #include "shatter/kernel/projection.hpp"
 #include "shatter/kernel/rationals.hpp"
@@ -1413,67 +1414,7 @@ struct Separation {
 // 2003, "Boolean operations on 3D selective Nef complexes", for the general
 // radial order).
 
-// For every directed edge slot of a triangle on a non-manifold edge (slot c of
-// triangle t runs from corner c to corner c + 1; index 3 t + c), the triangle
-// it is paired with across the edge; no_index on the other edges. Around the
-// edge u -> v, a triangle running it v -> u has the solid ahead of it in the
-// right-hand turn about v - u and one running it u -> v has the solid behind it
-// (their outward normals point back and ahead), so each v -> u triangle pairs
-// with the next triangle in that turn, which must run u -> v. Returns nullopt
-// when an edge has an odd or unequal count of each way, two third corners share
-// an angle about the edge, or the directions do not alternate: the edge cannot
-// be untangled by pairing. Exact: order_around_line on the rounded positions.
-std::optional<std::vector<std::uint32_t>> pair_around_non_manifold_edges(const Mesh& mesh) {
-  struct Use {
-    std::uint64_t key;   // the undirected edge
-    std::uint32_t slot;  // 3 t + c
-  };
-  std::vector<Use> uses;
-  uses.reserve(3 * mesh.triangles.size());
-  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
-    for (std::uint32_t c = 0; c < 3; ++c) {
-      const VertexIndex a = mesh.triangles[t][c], b = mesh.triangles[t][(c + 1) % 3];
-      uses.push_back({(std::uint64_t{std::min(a, b)} << 32) | std::max(a, b), 3 * t + c});
-    }
-  }
-  std::sort(uses.begin(), uses.end(), [](const Use& x, const Use& y) {
-    return x.key != y.key ? x.key < y.key : x.slot < y.slot;
-  });
-  std::vector<std::uint32_t> partner(uses.size(), no_index);
-  std::vector<Vec3> thirds;
-  std::vector<std::uint32_t> slots;
-  for (std::size_t i = 0; i < uses.size();) {
-    std::size_t j = i;
-    while (j < uses.size() && uses[j].key == uses[i].key) ++j;
-    if (j - i > 2) {
-      const auto u = static_cast<VertexIndex>(uses[i].key >> 32), v = static_cast<VertexIndex>(uses[i].key);
-      thirds.clear();
-      slots.clear();
-      for (std::size_t k = i; k < j; ++k) {
-        const std::uint32_t t = uses[k].slot / 3, c = uses[k].slot % 3;
-        slots.push_back(uses[k].slot);
-        thirds.push_back(mesh.positions[mesh.triangles[t][(c + 2) % 3]]);
-      }
-      const std::optional<std::vector<std::size_t>> order =
-          order_around_line(mesh.positions[u], mesh.positions[v], thirds);
-      if (!order || (j - i) % 2 != 0) return std::nullopt;
-      const auto runs_forward = [&](std::size_t k) {  // u -> v
-        const std::uint32_t slot = slots[k];
-        return mesh.triangles[slot / 3][slot % 3] == u;
-      };
-      const std::size_t count = order->size();
-      for (std::size_t k = 0; k < count; ++k) {
-        const std::size_t here = (*order)[k], next = (*order)[(k + 1) % count];
-        if (runs_forward(here) == runs_forward(next)) return std::nullopt;
-        if (runs_forward(here)) continue;
-        partner[slots[here]] = slots[next] / 3;
-        partner[slots[next]] = slots[here] / 3;
-      }
-    }
-    i = j;
-  }
-  return partner;
-}
+// pair_around_non_manifold_edges (shatter/kernel/non_manifold.hpp) pairs them.
 
 // Splits every vertex of `mesh` where several edge-connected fans of triangles
 // meet into one vertex per fan, then moves each copy, and each vertex of

@@ -35,17 +35,21 @@ enum class RepairKind {
   resolved_self_intersections,   ///< intersecting triangles refined along their intersection and the inner
                                  ///< patches removed (autorefine_and_remove_self_intersections)
   removed_unused_vertices,       ///< vertices no triangle uses any more
+  separated_touching_parts,      ///< parts of a closed surface touching at a vertex or along an edge (non-manifold
+                                 ///< vertices and edges) split apart and moved a hair into their own wedges; runs
+                                 ///< before removed_unused_vertices (appended here: the position is the file's number)
 };
 
-/// Every RepairKind in step order; a kind's position is the number the
+/// Every RepairKind (in step order, but for the last); a kind's position is the number the
 /// .shatter file stores for it (formats/file.hpp, section `rpar`), so new kinds
 /// are appended, never inserted.
-inline constexpr std::array<RepairKind, 10> all_repair_kinds = {
+inline constexpr std::array<RepairKind, 11> all_repair_kinds = {
     RepairKind::merged_duplicate_vertices,       RepairKind::removed_repeated_index_triangles,
     RepairKind::removed_duplicate_triangles,     RepairKind::removed_opposite_triangle_pairs,
     RepairKind::reversed_triangles,              RepairKind::stitched_border_edges,
     RepairKind::fixed_zero_area_triangles,       RepairKind::filled_holes,
-    RepairKind::resolved_self_intersections,     RepairKind::removed_unused_vertices};
+    RepairKind::resolved_self_intersections,     RepairKind::removed_unused_vertices,
+    RepairKind::separated_touching_parts};
 
 /// The kind's name as the CLI's JSON prints it, e.g. "filled_holes".
 std::string_view repair_kind_name(RepairKind kind);
@@ -81,6 +85,16 @@ struct RepairOptions {
   /// acceptance test rests, is not reliable), so the outcome depends on the build.
   /// Opt in from the library to study it; the CLI does not.
   bool resolve_self_intersections = false;
+  /// How far step 9 moves each copy of a vertex where parts of a closed surface
+  /// touch (a non-manifold vertex, or the ends of an edge with more than two
+  /// triangles), as a share of the distance to the copy's nearest neighbour. The
+  /// copies cannot stay at one position: validate_mesh counts triangles of
+  /// different fans meeting at one point as intersecting (the surface touches
+  /// itself), so a split alone is still refused. 2^-20 keeps the change far below
+  /// any feature of the mesh and still about 2^32 units in the last place of a
+  /// coordinate near the copy's edges, so every later exact decision and rounding
+  /// sees the parts apart. 0 < value < 1.
+  double touching_separation = 0x1p-20;
 };
 
 struct RepairReport {
@@ -123,7 +137,20 @@ struct RepairReport {
 ///     if the rounded result validates with no defect at all and keeps at least
 ///     half the signed volume (resolving overlaps removes only doubly covered
 ///     volume; CGAL sometimes keeps the wrong side, as on the corpus cow and elk);
-///  9. drop vertices no triangle uses.
+///  9. when the surface is closed and consistently oriented but touches itself
+///     (parts sharing a vertex or an edge: non-manifold vertices and edges), split
+///     every edge with more than two triangles into pairs, each bounding one wedge
+///     of the solid (exact angular order around the edge:
+///     pair_around_non_manifold_edges, non_manifold.hpp), and every vertex where
+///     several fans meet into one vertex per fan; then move each copy but the
+///     first into its own part, `touching_separation` times its nearest
+///     neighbour's distance, along the mean of its edges (against its fan's
+///     normal where that makes triangles cross). Kept only if no moved triangle
+///     then meets another one or loses its shape (exact); otherwise undone and
+///     noted. The report gives the largest move and the exact volume change
+///     with a bound (distance x area / 3 summed over the moves); then each
+///     shell is oriented by its nesting, as after welded lids;
+///  10. drop vertices no triangle uses.
 ///
 /// Attributes: a surviving triangle keeps its corners' attributes (they follow the
 /// vertex when it is reversed or rotated; normals are not negated on reversal, as
@@ -133,7 +160,9 @@ struct RepairReport {
 /// surface where there is one); its surface id is that of an adjacent triangle.
 /// A triangle cut by autorefinement gets its attributes interpolated from the
 /// triangle it came from. Unchanged triangles keep their order and corner order,
-/// and unchanged vertices their relative order; new ones come after.
+/// and unchanged vertices their relative order; new ones (step 9's copies among
+/// them) come after. A triangle at a copy step 9 moved keeps its corners'
+/// attributes: the move is a hair, far below what a normal or UV would show.
 ///
 /// Preconditions: none; any mesh may be passed. A mesh with a non-finite
 /// coordinate or an index out of range is left unchanged with a note (there is no
