@@ -9,7 +9,7 @@ import { readFileSync } from 'node:fs';
 import { performance } from 'node:perf_hooks';
 import Module from 'manifold-3d';
 import { packageVersion } from './float64_input.mjs';
-import { buildInput, parseOff } from './off_input.mjs';
+import { buildInput, median, parseOff } from './off_input.mjs';
 
 const USAGE = `usage: node fracture.mjs --mesh FILE.off --fragments N [--seed S] [--repeat R] [--json] [--f32-input]
 
@@ -197,12 +197,6 @@ function wasmMemoryBytes(wasm) {
   warped.delete();
   probe.delete();
   return bytes;
-}
-
-function median(values) {
-  const s = [...values].sort((a, b) => a - b);
-  const m = s.length >> 1;
-  return s.length % 2 ? s[m] : (s[m - 1] + s[m]) / 2;
 }
 
 const MB = 1024 * 1024;

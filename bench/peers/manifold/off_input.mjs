@@ -1,5 +1,6 @@
 // What the Manifold peers that read an OFF file share (fracture.mjs, voronoi.mjs):
-// the OFF reader and the input Manifold with the file's float64 positions.
+// the OFF reader, the input Manifold with the file's float64 positions, and the
+// median of repeated timings.
 import { restoreFloat64 } from './float64_input.mjs';
 
 // --- OFF reader -------------------------------------------------------------------
@@ -94,3 +95,10 @@ export function buildInput(wasm, off, f32Input) {
   return { manifold, precision: `float64 (float32 Mesh, then warpBatch restored ${changed} coordinates)` };
 }
 
+
+/// The median of a non-empty list of numbers.
+export function median(values) {
+  const s = [...values].sort((a, b) => a - b);
+  const m = s.length >> 1;
+  return s.length % 2 ? s[m] : (s[m - 1] + s[m]) / 2;
+}

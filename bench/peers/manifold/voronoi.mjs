@@ -13,7 +13,7 @@ import { readFileSync } from 'node:fs';
 import { performance } from 'node:perf_hooks';
 import Module from 'manifold-3d';
 import { packageVersion } from './float64_input.mjs';
-import { buildInput, parseOff } from './off_input.mjs';
+import { buildInput, median, parseOff } from './off_input.mjs';
 
 const USAGE = `usage: node voronoi.mjs --mesh FILE.off --cells FILE [--repeat R] [--json]
 
@@ -106,12 +106,6 @@ function cutCell(input, planes) {
     else kept.push(component);
   }
   return kept;
-}
-
-function median(values) {
-  const s = [...values].sort((a, b) => a - b);
-  const m = s.length >> 1;
-  return s.length % 2 ? s[m] : (s[m - 1] + s[m]) / 2;
 }
 
 const MB = 1024 * 1024;
