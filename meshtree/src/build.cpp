@@ -29,6 +29,7 @@
 #include "shatter/cut/plane_input.hpp"
 #include "shatter/meshtree/tree.hpp"
 #include "shatter/version.hpp"
+#include "validate_tree_certificate.hpp"
 
 namespace shatter {
 
@@ -742,6 +743,20 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
   phase_start = std::chrono::steady_clock::now();
   tree.bonds = find_bonds(tree);
   timing.bond_seconds = seconds_since(phase_start);
+  // The tree passes validate_tree, caches included, by construction (README
+  // "Certificates carried, not re-checked"): number_tree made the links, depths,
+  // leaf ranges, leaf list and one cut plane per node in preorder; every mesh
+  // is one the cut certified a valid solid as written (round_solid: closed,
+  // manifold, oriented, its indices in range), or the input read_valid_solid /
+  // require_valid_solid checked; every hull is one convex_hull_of built over its
+  // own positions; find_bonds lists bonds sorted, between leaves its cut node
+  // separates; every solid is what the exact cut made of its parent's, closed,
+  // its vertices' definitions approximated by the cut itself (so none is
+  // degenerate), its planes input planes or its ancestors' (named by depth,
+  // renamed by path); the packed nodes unpack to what was packed. The writer
+  // would re-check all of that; the certificate carries it there instead, bound
+  // to the content by a digest, so any later change makes it check again.
+  detail::TreeCertifier::certify(tree);
   if (run.report) *run.report = timing;
   return tree;
 }

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "shatter/meshtree/tree.hpp"
+#include "validate_tree_certificate.hpp"
 
 namespace shatter {
 
@@ -355,6 +356,12 @@ void rename_by_path(std::span<const NodeIndex> path, Mesh& mesh, Solid& solid) {
 
 void pack_leaves(MeshTree& tree) {
   if (!tree.has_exact_representation()) return;
+  // Packing changes the representation, not the tree (NodeShapes gives back
+  // the same meshes and solids, bit for bit; a packed leaf has no approx, which
+  // validate_tree allows): a certificate that held before holds after, and is
+  // carried across by taking the digest again. One that did not hold is dropped.
+  const bool certified = detail::TreeCertifier::holds(tree);
+  detail::TreeCertifier::clear(tree);
   if (tree.packed_shapes.empty()) tree.packed_shapes.resize(tree.nodes.size());
   for (const NodeIndex k : tree.leaf_nodes) {
     MeshTreeNode& leaf = tree.nodes[k];
@@ -363,6 +370,7 @@ void pack_leaves(MeshTree& tree) {
     leaf.mesh = Mesh();
     leaf.solid = Solid();
   }
+  if (certified) detail::TreeCertifier::certify(tree);
 }
 
 void NodeShapes::find_path(NodeIndex node) {

@@ -11,18 +11,21 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <tuple>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/validate.hpp"
+#include "validate_tree_certificate.hpp"
 
 namespace shatter {
 
@@ -749,7 +752,180 @@ std::optional<TreeDefect> geometry_defect(const MeshTree& tree) {
 
 }  // namespace
 
+// --- the certificate's digest (validate_tree_certificate.hpp) ----------------------
+
+namespace {
+
+/// Two lanes over 64-bit words. Each step, lane' = rotl((lane op word) * K, r)
+/// with K odd, is a bijection of the lane for a fixed word and of the word for
+/// a fixed lane, so two inputs that differ in one word leave different lanes
+/// after it, and every later step keeps them different: such a change is
+/// always seen. The final mix (MurmurHash3's fmix64, itself a bijection)
+/// spreads the lanes. Not a cryptographic hash (TreeCertifier::digest says
+/// why none is needed).
+class ContentDigest {
+ public:
+  void word(std::uint64_t w) {
+    a_ = std::rotl((a_ ^ w) * 0x9E3779B97F4A7C15ull, 27);
+    b_ = std::rotl((b_ + w) * 0xC2B2AE3D27D4EB4Full, 31);
+    ++words_;
+  }
+  /// `count` bytes, with the count first, so arrays of different lengths never
+  /// run into each other.
+  void bytes(const void* data, std::size_t count) {
+    word(count);
+    const auto* at = static_cast<const unsigned char*>(data);
+    std::size_t k = 0;
+    for (; k + 8 <= count; k += 8) {
+      std::uint64_t w;
+      std::memcpy(&w, at + k, 8);
+      word(w);
+    }
+    if (k < count) {
+      std::uint64_t w = 0;
+      std::memcpy(&w, at + k, count - k);
+      word(w);
+    }
+  }
+  /// A vector of a type without padding (its bytes are its value).
+  template <class T>
+  void values(const std::vector<T>& vector) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    bytes(vector.data(), vector.size() * sizeof(T));
+  }
+  void real(double value) { word(std::bit_cast<std::uint64_t>(value)); }
+  std::array<std::uint64_t, 2> finish() const { return {fmix(a_ ^ words_), fmix(b_ + words_)}; }
+
+ private:
+  static std::uint64_t fmix(std::uint64_t k) {
+    k ^= k >> 33;
+    k *= 0xFF51AFD7ED558CCDull;
+    k ^= k >> 33;
+    k *= 0xC4CEB9FE1A85EC53ull;
+    k ^= k >> 33;
+    return k;
+  }
+  std::uint64_t a_ = 0x243F6A8885A308D3ull, b_ = 0x13198A2E03707344ull, words_ = 0;
+};
+
+// The arrays hashed as bytes have no padding: every byte is part of a value.
+// (Structs with padding, PointDef, SolidFace and Bond, are hashed field by
+// field, and so are the records below.) A new field in a record hashed field by
+// field changes its size: the asserts say where to add it.
+static_assert(sizeof(Vec2) == 16 && sizeof(Vec3) == 24 && sizeof(Vec4) == 32 && sizeof(Plane) == 32);
+static_assert(sizeof(ApproxPoint) == 64 && sizeof(ApproxPlane) == 64);
+static_assert(sizeof(MassProperties) == 13 * sizeof(double));
+static_assert(std::has_unique_object_representations_v<SolidCorner> &&
+              std::has_unique_object_representations_v<SolidLoop> &&
+              std::has_unique_object_representations_v<std::array<VertexIndex, 3>>);
+#if defined(__x86_64__) && defined(__GLIBCXX__)
+static_assert(sizeof(PointDef) == 24, "a new PointDef field: add it to hash_solid");
+static_assert(sizeof(SolidFace) == 24, "a new SolidFace field: add it to hash_solid");
+static_assert(sizeof(Solid) == 128, "a new Solid field: add it to hash_solid");
+static_assert(sizeof(Mesh) == 144, "a new Mesh field: add it to hash_mesh");
+static_assert(sizeof(Bond) == 72, "a new Bond field: add it to TreeCertifier::digest");
+static_assert(sizeof(MeshTreeNode) == 576, "a new MeshTreeNode field: add it to TreeCertifier::digest");
+static_assert(sizeof(InputGeometry) == 72, "a new InputGeometry field: add it to TreeCertifier::digest");
+static_assert(sizeof(TreeRecipe) == 72, "a new TreeRecipe field: add it to TreeCertifier::digest");
+#endif
+
+void hash_mesh(ContentDigest& digest, const Mesh& mesh) {
+  digest.values(mesh.positions);
+  digest.values(mesh.triangles);
+  digest.values(mesh.surfaces);
+  digest.values(mesh.corners.normals);
+  digest.values(mesh.corners.uvs);
+  digest.values(mesh.corners.tangents);
+}
+
+std::uint64_t pair_of(std::uint32_t low, std::uint32_t high) { return std::uint64_t{low} | std::uint64_t{high} << 32; }
+
+void hash_solid(ContentDigest& digest, const Solid& solid) {
+  digest.word(solid.defs.size());
+  for (const PointDef& def : solid.defs) {
+    digest.word(static_cast<std::uint64_t>(def.kind) | std::uint64_t{def.a} << 8);
+    digest.word(pair_of(def.b, def.planes[0].bits));
+    digest.word(pair_of(def.planes[1].bits, def.planes[2].bits));
+  }
+  digest.values(solid.approx);
+  digest.word(solid.faces.size());
+  for (const SolidFace& face : solid.faces) {
+    digest.word(pair_of(face.plane.bits, (face.reversed ? 1u : 0u) | (face.convex ? 2u : 0u)));
+    digest.word(pair_of(face.surface, face.source));
+    digest.word(pair_of(face.first_loop, face.loop_count));
+  }
+  digest.values(solid.loops);
+  digest.values(solid.corners);
+  digest.word(solid.convex ? 1 : 0);
+}
+
+}  // namespace
+
+std::array<std::uint64_t, 2> TreeCertifier::digest(const MeshTree& tree) {
+  ContentDigest digest;
+  const TreeRecipe& recipe = tree.recipe;
+  digest.word(pair_of(recipe.fragments, recipe.max_plane_tries));
+  digest.word(recipe.seed);
+  digest.word(static_cast<std::uint64_t>(recipe.strategy) | static_cast<std::uint64_t>(recipe.kernel) << 8 |
+              std::uint64_t{recipe.allow_self_intersections} << 16);
+  digest.real(recipe.interior_uv_scale);
+  digest.bytes(recipe.pattern.data(), recipe.pattern.size());
+  digest.word(tree.nodes.size());
+  for (const MeshTreeNode& node : tree.nodes) {
+    hash_mesh(digest, node.mesh);
+    digest.bytes(&node.mass, sizeof node.mass);
+    hash_mesh(digest, node.hull);
+    hash_solid(digest, node.solid);
+    digest.word(pair_of(node.parent, node.depth));
+    digest.values(node.children);
+    digest.word(std::uint64_t{node.convex} | std::uint64_t{node.above_parent_plane} << 1);
+    digest.word(pair_of(node.first_leaf, node.leaf_count));
+    digest.word(node.seed);
+  }
+  digest.values(tree.leaf_nodes);
+  digest.word(tree.bonds.size());
+  for (const Bond& bond : tree.bonds) {
+    digest.word(pair_of(bond.first, bond.second));
+    digest.word(bond.cut_node);
+    digest.real(bond.area);
+    digest.bytes(&bond.centroid, sizeof bond.centroid);
+    digest.bytes(&bond.normal, sizeof bond.normal);
+  }
+  digest.values(tree.geometry.points);
+  digest.values(tree.geometry.planes);
+  digest.values(tree.geometry.plane_approx);
+  digest.values(tree.cut_planes);
+  digest.word(tree.packed_shapes.size());
+  for (const std::vector<std::uint8_t>& packed : tree.packed_shapes) digest.values(packed);
+  return digest.finish();
+}
+
+void TreeCertifier::certify(MeshTree& tree) {
+  const std::array<std::uint64_t, 2> value = digest(tree);
+  tree.certificate.present_ = true;
+  tree.certificate.digest_[0] = value[0];
+  tree.certificate.digest_[1] = value[1];
+}
+
+bool TreeCertifier::holds(const MeshTree& tree) {
+  if (!tree.certificate.present_) return false;
+  const std::array<std::uint64_t, 2> value = digest(tree);
+  return value[0] == tree.certificate.digest_[0] && value[1] == tree.certificate.digest_[1];
+}
+
 }  // namespace detail
+
+bool certificate_holds(const MeshTree& tree) { return detail::TreeCertifier::holds(tree); }
+
+TreeValidationReport certify_tree(MeshTree& tree) {
+  TreeValidationReport report = validate_tree(tree);
+  if (report.valid()) {
+    detail::TreeCertifier::certify(tree);
+  } else {
+    detail::TreeCertifier::clear(tree);
+  }
+  return report;
+}
 
 std::optional<TreeDefect> fill_tree_caches(MeshTree& tree) {
   // A lean build's packed nodes get their meshes and solids back first.

@@ -51,8 +51,9 @@ struct MeshTree;
 /// writes the tree, sums it up and reads it through NodeShapes (`shatter
 /// fracture`, once the bonds are found and the leaves exported): a lean
 /// build's tree then keeps no node's arrays. Nothing else changes: the same
-/// file bytes, and fill_tree_caches unpacks them back. Does nothing to a tree
-/// without an exact representation.
+/// file bytes, and fill_tree_caches unpacks them back. A certificate that held
+/// (MeshTree::certificate) still holds after: packing is lossless. Does nothing
+/// to a tree without an exact representation.
 void pack_leaves(MeshTree& tree);
 
 /// Renames a node's cut plane references and cap surface ids from the

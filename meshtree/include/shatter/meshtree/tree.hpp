@@ -54,6 +54,31 @@ struct MeshTreeNode {
   bool is_leaf() const { return children.empty(); }
 };
 
+namespace detail {
+struct TreeCertifier;
+}
+
+/// What the code that made a tree established of it, bound to the tree's
+/// content: a 128-bit digest (validate_tree.hpp, certificate_holds) of
+/// everything validate_tree reads, taken when the tree was certified. Only the
+/// meshtree library makes one: build_mesh_tree, for the tree it built (its
+/// invariants hold by construction: README "Certificates carried, not re-checked"),
+/// and certify_tree, after validate_tree passed. It never has to be cleared by
+/// hand: a tree changed afterwards no longer matches its digest, and a consumer
+/// (encode_shatter) then checks the tree in full, as it does a tree without one.
+/// Copying a tree copies its certificate, which holds for the copy as long as
+/// the content is equal. Not stored in a file.
+class TreeCertificate {
+ public:
+  /// Whether a certificate was made at all (not whether it still holds).
+  bool present() const { return present_; }
+
+ private:
+  friend struct detail::TreeCertifier;
+  bool present_ = false;
+  std::uint64_t digest_[2] = {0, 0};
+};
+
 /// What `build_mesh_tree` produces and the .shatter file stores.
 struct MeshTree {
   TreeRecipe recipe;  ///< what decides the tree's contents (how it was built is not kept)
@@ -87,6 +112,9 @@ struct MeshTree {
   /// NodeShapes, which unpacks them; fill_tree_caches (validate_tree.hpp)
   /// unpacks them all into the nodes.
   std::vector<std::vector<std::uint8_t>> packed_shapes;
+  /// What the code that made the tree certified of it (TreeCertificate): the
+  /// writer's full check is replaced by a digest comparison while it holds.
+  TreeCertificate certificate;
 
   std::size_t leaf_count() const { return leaf_nodes.size(); }
   const MeshTreeNode& leaf(LeafIndex i) const { return nodes[leaf_nodes[i]]; }

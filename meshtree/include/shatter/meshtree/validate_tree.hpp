@@ -115,6 +115,24 @@ struct TreeValidationReport {
 /// TreeValidationOptions::geometry says.
 TreeValidationReport validate_tree(const MeshTree& tree, const TreeValidationOptions& options = {});
 
+/// Whether `tree` carries a certificate that still holds (MeshTree::certificate,
+/// TreeCertificate): one was made, by build_mesh_tree for the tree it built or
+/// by certify_tree, and the digest of the tree's content is still the one taken
+/// then. When it holds, validate_tree(tree) (caches on) passes, so a consumer
+/// may stand on that instead of repeating the check; encode_shatter does.
+/// validate_tree itself never consults a certificate, so `shatter info --check`
+/// and the reader check everything whatever a tree carries.
+/// Cost: one pass over the tree's memory, no unpacking and no arithmetic on
+/// the geometry (far less than validate_tree). Never throws.
+bool certificate_holds(const MeshTree& tree);
+
+/// Runs validate_tree(tree) (structure and caches) and, when it passes,
+/// certifies the tree (MeshTree::certificate), so that encode_shatter need not
+/// repeat the check while the tree is unchanged; otherwise clears any
+/// certificate. For a tree assembled or changed by hand that will be written
+/// more than once. Returns validate_tree's report. Throws only std::bad_alloc.
+TreeValidationReport certify_tree(MeshTree& tree);
+
 /// The leaves among `nodes` in node order: what MeshTree::leaf_nodes must be.
 /// Never throws but std::bad_alloc.
 std::vector<NodeIndex> leaves_in_order(const std::vector<MeshTreeNode>& nodes);
