@@ -260,9 +260,12 @@ void map_edges_to_faces(const Solid& solid, IndexMap& face_of_edge) {
 }  // namespace
 
 bool solid_is_convex(const PlaneSet& set, const Solid& solid) {
-  IndexMap face_of_edge;
+  // Called once per non-convex parent's piece: the scratch is kept per thread
+  // so that deciding a small piece allocates nothing.
+  thread_local IndexMap face_of_edge;
+  thread_local UnionFind shells;
   map_edges_to_faces(solid, face_of_edge);
-  UnionFind shells(solid.faces.size());
+  shells.reset(solid.faces.size());
   for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
     const SolidFace& face = solid.faces[f];
     for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
