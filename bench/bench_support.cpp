@@ -53,7 +53,7 @@ std::string allocator_description() {
   const std::size_t open = modes.find('['), close = modes.find(']');
   if (open != std::string::npos && close != std::string::npos && close > open) mode = modes.substr(open + 1, close - open - 1);
 #if SHATTER_WITH_JEMALLOC
-  return "jemalloc, transparent huge pages asked for (kernel THP mode: " + mode + ")";
+  return "jemalloc, transparent huge pages left to the kernel (THP mode: " + mode + ")";
 #else
   return "the C library's malloc (kernel THP mode: " + mode + ")";
 #endif

@@ -42,7 +42,7 @@ std::size_t cgal_component_count(CgalMesh& mesh);
 bool cgal_self_intersects(const CgalMesh& mesh);
 
 /// The allocator the benchmark runs on, for the header of its tables: "jemalloc,
-/// transparent huge pages asked for (kernel THP mode: madvise)" or "the C
+/// transparent huge pages left to the kernel (THP mode: madvise)" or "the C
 /// library's malloc (...)". The kernel's mode is read from /sys; "unknown" when
 /// that cannot be read.
 std::string allocator_description();

@@ -1,13 +1,19 @@
-// jemalloc's compiled-in options (read once, at its first allocation): back its
-// memory with transparent huge pages, for the data and for its own metadata.
-// A build of a mesh tree writes gigabytes of fresh memory, and on these
-// machines a 4 KiB page fault costs more than the geometry done on the page:
-// cube -> 65,536 fragments builds in about 1.8-2.3 s with huge pages and 3.5 s
-// without (shatter-bench-plane, README "Benchmark"). With the kernel's THP mode
-// "madvise" (Debian's default) jemalloc asks for them; with "never" this does
-// nothing. Linked only into executables (cmake/shatter_allocator.cmake); the
-// libraries leave the allocator to whoever links them.
+// jemalloc's compiled-in options (read once, at its first allocation). jemalloc
+// is here for its speed on the builder's many small, short-lived arrays (cube
+// -> 65,536 end to end: 8.2 s with glibc's malloc, 4.0 s with jemalloc; README
+// "Dependencies"). Transparent huge pages are left to the system (`thp:default`:
+// with the kernel's mode "madvise", Debian's default, none are used): on these
+// virtual machines a fresh 2 MiB page costs far more to fault in than the 4 KiB
+// pages it replaces, because the host backs the guest's untouched memory on
+// first touch, page by page. Paired in one session (farm-bench, cpu seconds,
+// 2026-12-04, `shatter fracture --threads 1`): `thp:always` over `thp:default`
+// 1.22x for cube -> 65,536 and 1.30x for cube -> 2^18 (system seconds 5x), and
+// (one run each, /usr/bin/time) 2.1x for `shatter slice` of a 1.3 M-triangle
+// sphere; but 1.03x for cube -> 65,536 once most of the guest's memory had been
+// touched (user time 4 % lower, system time higher). Linked only into executables
+// (cmake/shatter_allocator.cmake); the libraries leave the allocator to whoever
+// links them.
 extern "C" {
 // NOLINTNEXTLINE: the name and type are jemalloc's interface.
-const char* malloc_conf = "thp:always,metadata_thp:auto";
+const char* malloc_conf = "thp:default,metadata_thp:disabled";
 }

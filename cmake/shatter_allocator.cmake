@@ -1,5 +1,5 @@
 # The executables (the `shatter` command and the benchmarks) allocate through
-# jemalloc with transparent huge pages (cli/jemalloc_options.cpp says why). The
+# jemalloc (cli/jemalloc_options.cpp says why, and why not with huge pages). The
 # sanitizers and libFuzzer replace malloc themselves, so there the C library's
 # allocator stays, as it does with -DSHATTER_JEMALLOC=OFF.
 if(SHATTER_SANITIZE OR SHATTER_BUILD_FUZZERS)
@@ -7,7 +7,7 @@ if(SHATTER_SANITIZE OR SHATTER_BUILD_FUZZERS)
 else()
   set(shatter_jemalloc_default ON)
 endif()
-option(SHATTER_JEMALLOC "Link the executables with jemalloc, set to use transparent huge pages"
+option(SHATTER_JEMALLOC "Link the executables with jemalloc"
        ${shatter_jemalloc_default})
 if(SHATTER_JEMALLOC)
   pkg_check_modules(jemalloc REQUIRED IMPORTED_TARGET jemalloc)
