@@ -424,7 +424,10 @@ std::string read_whole_file(const std::filesystem::path& path) {
 
 }  // namespace
 
-void write_shatter(const MeshTree& tree, const ByteSink& sink) {
+namespace {
+
+/// Refuses, before any byte is written, a tree encode_shatter cannot write.
+void check_before_writing(const MeshTree& tree) {
   if (const TreeValidationReport report = validate_tree(tree); !report.valid()) {
     throw std::invalid_argument("encode_shatter: invalid tree: " + report.defect->message);
   }
@@ -448,33 +451,83 @@ void write_shatter(const MeshTree& tree, const ByteSink& sink) {
       throw std::invalid_argument("encode_shatter: invalid tree: input_repair: " + *problem);
     }
   }
+}
+
+/// The file's bytes handed to `append`, a section at a time. With `overwrite`,
+/// a payload goes out in pieces as it is made (ByteWriter's flush), after a
+/// header holding a zero length and checksum that is replaced once they are
+/// known: the file is then never held more than a piece at a time. Without it,
+/// each payload is held, in pieces, until its header is written.
+void write_checked_shatter(const MeshTree& tree, const ByteSink& append,
+                           const std::function<void(std::uint64_t, std::string_view)>& overwrite) {
+  std::uint64_t written = 0;
+  const auto out = [&](std::string_view bytes) {
+    append(bytes);
+    written += bytes.size();
+  };
   ByteWriter header;
   for (const unsigned char byte : magic) header.u8(byte);
   header.u32(shatter_format_version);
-  sink(header.take());
-  write_version3_sections(tree, [&](Tag tag, PayloadPieces& payload) {
+  out(header.take());
+  const auto section_header = [](Tag tag, std::uint64_t size, std::uint32_t crc) {
+    ByteWriter bytes;
+    bytes.tag(tag);
+    bytes.u64(size);
+    bytes.u32(crc);
+    return bytes.take();
+  };
+  write_version3_sections(tree, [&](Tag tag, const SectionPayload& payload) {
     std::uint64_t size = 0;
     std::uint32_t crc = 0;
-    for (const std::string& piece : payload) {
+    if (overwrite) {
+      const std::uint64_t header_at = written;
+      out(section_header(tag, 0, 0));
+      const auto piece_out = [&](std::string_view piece) {
+        if (piece.empty()) return;
+        size += piece.size();
+        crc = crc_of(piece, crc);
+        out(piece);
+      };
+      ByteWriter streamed(piece_out);
+      payload(streamed);
+      for (const std::string& rest : streamed.take_pieces()) piece_out(rest);
+      overwrite(header_at, section_header(tag, size, crc));
+      return;
+    }
+    ByteWriter held;
+    payload(held);
+    std::vector<std::string> pieces = held.take_pieces();
+    for (const std::string& piece : pieces) {
       size += piece.size();
       crc = crc_of(piece, crc);
     }
-    ByteWriter section_header;
-    section_header.tag(tag);
-    section_header.u64(size);
-    section_header.u32(crc);
-    sink(section_header.take());
+    out(section_header(tag, size, crc));
     // Each piece is freed once written, so the section shrinks as it goes out.
-    for (std::string& piece : payload) {
-      if (!piece.empty()) sink(piece);
+    for (std::string& piece : pieces) {
+      if (!piece.empty()) out(piece);
       std::string().swap(piece);
     }
   });
 }
 
+}  // namespace
+
+void write_shatter(const MeshTree& tree, const ByteSink& sink) {
+  check_before_writing(tree);
+  write_checked_shatter(tree, sink, {});
+}
+
+void write_shatter(const MeshTree& tree, const RewritableSink& sink) {
+  check_before_writing(tree);
+  write_checked_shatter(tree, sink.append, sink.overwrite);
+}
+
 std::string encode_shatter(const MeshTree& tree) {
   std::string bytes;
-  write_shatter(tree, [&](std::string_view piece) { bytes.append(piece); });
+  write_shatter(tree, RewritableSink{[&](std::string_view piece) { bytes.append(piece); },
+                                     [&](std::uint64_t offset, std::string_view piece) {
+                                       bytes.replace(static_cast<std::size_t>(offset), piece.size(), piece);
+                                     }});
   return bytes;
 }
 
@@ -529,7 +582,7 @@ MeshTree decode_shatter(std::string_view bytes) {
 }
 
 void write_shatter_file(const std::filesystem::path& path, const MeshTree& tree) {
-  write_file_atomically_in_pieces(path, [&](const ByteSink& sink) { write_shatter(tree, sink); });
+  write_file_atomically_rewritable(path, [&](const RewritableSink& sink) { write_shatter(tree, sink); });
 }
 
 MeshTree read_shatter_file(const std::filesystem::path& path) {

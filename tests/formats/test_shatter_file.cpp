@@ -1824,6 +1824,32 @@ TEST_CASE("sections longer than a writer's piece are written byte for byte as do
   write_shatter(tree, [&](std::string_view piece) { pieces.append(piece); });
   CHECK(pieces == bytes);
   CHECK(tree_difference(decode_within_budget(bytes), tree).empty());
+
+  // Streamed (a sink that can go back): every section's header is written
+  // ahead and replaced once, and no piece handed on is much over a mebibyte,
+  // though SOLD and MESH each hold a record larger than that.
+  std::string streamed;
+  std::size_t largest_append = 0, overwrites = 0;
+  write_shatter(tree, RewritableSink{[&](std::string_view piece) {
+                                       largest_append = std::max(largest_append, piece.size());
+                                       streamed.append(piece);
+                                     },
+                                     [&](std::uint64_t offset, std::string_view piece) {
+                                       ++overwrites;
+                                       REQUIRE(offset + piece.size() <= streamed.size());
+                                       streamed.replace(static_cast<std::size_t>(offset), piece.size(), piece);
+                                     }});
+  CHECK(streamed == bytes);
+  CHECK(largest_append < bytes.size() / 2);
+  CHECK(overwrites == 9);  // vers, OPTS, NODE, GEOM, SOLD, MESH, HULL, BOND and END
+  // write_shatter_file streams to its file the same bytes.
+  const std::filesystem::path directory = std::filesystem::temp_directory_path() / ("shatter-stream-test-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(directory);
+  std::filesystem::create_directories(directory);
+  write_shatter_file(directory / "torus.shatter", tree);
+  std::ifstream in(directory / "torus.shatter", std::ios::binary);
+  CHECK(std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()) == bytes);
+  std::filesystem::remove_all(directory);
 }
 
 TEST_CASE("solids without their approximations write the same bytes", "[shatter_file]") {
