@@ -223,8 +223,8 @@ Mesh read_mesh_record(PayloadReader& in) {
   return mesh;
 }
 
-/// Reads one mesh per node into `which` of each node.
-void read_meshes(const Section& section, std::vector<MeshTreeNode>& nodes, Mesh MeshTreeNode::*which, std::vector<std::size_t>& record_offsets) {
+/// Reads one mesh per node into each node's mesh, or its hull when `hulls`.
+void read_meshes(const Section& section, std::vector<MeshTreeNode>& nodes, bool hulls, std::vector<std::size_t>& record_offsets) {
   PayloadReader in(section);
   const std::uint32_t mesh_count = in.u32("the mesh count");
   if (mesh_count != nodes.size()) in.fail(str(mesh_count) + " meshes for " + str(nodes.size()) + " nodes");
@@ -233,7 +233,12 @@ void read_meshes(const Section& section, std::vector<MeshTreeNode>& nodes, Mesh 
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     record_offsets[k] = in.offset();
     in.set_record("node " + str(k));
-    nodes[k].*which = read_mesh_record(in);
+    Mesh mesh = read_mesh_record(in);
+    if (!hulls) {
+      nodes[k].mesh = std::move(mesh);
+    } else if (!mesh.positions.empty() || !mesh.triangles.empty()) {
+      nodes[k].hull = std::move(mesh);  // a convex node's stays absent (Boxed)
+    }
   }
   in.set_record("");
   in.expect_end();
@@ -562,8 +567,8 @@ MeshTree decode_shatter(std::string_view bytes) {
     read_version3_bonds(*sections.bonds, tree, offsets);
   } else {
     read_nodes(*sections.nodes, tree, offsets.nodes);
-    read_meshes(*sections.meshes, tree.nodes, &MeshTreeNode::mesh, offsets.meshes);
-    read_meshes(*sections.hulls, tree.nodes, &MeshTreeNode::hull, offsets.hulls);
+    read_meshes(*sections.meshes, tree.nodes, false, offsets.meshes);
+    read_meshes(*sections.hulls, tree.nodes, true, offsets.hulls);
     tree.bonds = read_bonds(*sections.bonds);
     if (sections.version >= 2) {
       tree.geometry = read_geometry(*sections.geometry);

@@ -332,7 +332,7 @@ void meshes_payload(const MeshTree& tree, bool hulls, ByteWriter& out) {
     if (hulls) {
       // A convex node's hull is empty: it looks up no position (a packed node stays packed).
       std::span<const Vec3> sources;
-      if (!node.hull.positions.empty()) sources = shapes(static_cast<NodeIndex>(k)).mesh.positions;
+      if (!node.hull->positions.empty()) sources = shapes(static_cast<NodeIndex>(k)).mesh.positions;
       write_mesh(out, node.hull, sources, path, nodes);
       out.end_record();
       continue;
@@ -748,7 +748,12 @@ void read_version3_meshes(const Section& section, MeshTree& tree, bool hulls, Ve
     in.set_record("node " + str(k));
     path.enter(static_cast<NodeIndex>(k), nodes[k].depth);
     const std::size_t source_count = hulls ? nodes[k].mesh.positions.size() : nodes[k].solid.defs.size();
-    (hulls ? nodes[k].hull : nodes[k].mesh) = read_mesh(in, source_count, sources[k], path);
+    Mesh mesh = read_mesh(in, source_count, sources[k], path);
+    if (!hulls) {
+      nodes[k].mesh = std::move(mesh);
+    } else if (!mesh.positions.empty() || !mesh.triangles.empty()) {
+      nodes[k].hull = std::move(mesh);  // a convex node's stays absent (Boxed)
+    }
   }
   in.set_record("");
   in.expect_end();
@@ -836,7 +841,7 @@ void finish_version3(MeshTree& tree, const Version3Pending& pending) {
     }
     const std::vector<std::uint32_t>& hull_sources = pending.hull_sources[k];
     for (std::size_t v = 0; v < hull_sources.size(); ++v) {
-      if (const std::uint32_t s = hull_sources[v]; s != no_index) node.hull.positions[v] = node.mesh.positions[s];
+      if (const std::uint32_t s = hull_sources[v]; s != no_index) node.hull->positions[v] = node.mesh.positions[s];
     }
     if (pending.masses_derived) node.mass = mass_properties(node.mesh);
   }

@@ -554,11 +554,11 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
   NodeShapes shapes(tree);  // first_defect has unpacked every packed node
   for (std::size_t k = 0; k < node_count; ++k) {
     const MeshTreeNode& node = tree.nodes[k];
-    if (node.convex && !(node.hull.positions.empty() && node.hull.triangles.empty())) {
+    if (node.convex && !(node.hull->positions.empty() && node.hull->triangles.empty())) {
       return TreeDefect{
           TreePart::hull, k,
           "node " + str(k) + " is convex, so its hull must be empty (its mesh is its hull), but the hull has " +
-              str(node.hull.positions.size()) + " vertices and " + str(node.hull.triangles.size()) + " triangles"};
+              str(node.hull->positions.size()) + " vertices and " + str(node.hull->triangles.size()) + " triangles"};
     }
     if (auto problem = solid_defect(shapes(static_cast<NodeIndex>(k)).solid, k, context, caches, scratch)) {
       return TreeDefect{TreePart::solid, k, "the solid of node " + str(k) + " " + *problem};
@@ -609,7 +609,7 @@ std::optional<TreeDefect> first_defect(const MeshTree& tree, bool caches) {
     }
     if (auto problem = mesh_defect(*mesh))
       return TreeDefect{TreePart::mesh, k, "the mesh of node " + str(k) + " " + *problem};
-    if (auto problem = mesh_defect(tree.nodes[k].hull))
+    if (auto problem = mesh_defect(*tree.nodes[k].hull))
       return TreeDefect{TreePart::hull, k, "the hull of node " + str(k) + " " + *problem};
   }
   if (auto defect = bonds_defect(tree)) return defect;
@@ -724,10 +724,10 @@ std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k
   }
   // A convex node is its own hull (the structure checked that none is stored).
   if (!node.convex) {
-    if (node.hull.triangles.empty()) {
+    if (node.hull->triangles.empty()) {
       return TreeDefect{TreePart::hull, k, "the hull of " + name + " is empty, and the node is not marked convex"};
     }
-    const ValidationReport hull_report = validate_mesh(node.hull, {.check_self_intersections = false});
+    const ValidationReport hull_report = validate_mesh(*node.hull, {.check_self_intersections = false});
     if (!hull_report.valid()) {
       return TreeDefect{TreePart::hull, k, "the hull of " + name + " is not a valid solid: " + hull_report.summary()};
     }
