@@ -536,7 +536,7 @@ int run_fracture(const FractureArgs& args) {
   // tree keeps no node's arrays (the same bytes; README "Lean memory").
   pack_leaves(tree);
   if (const fs::path folder = fs::path(args.out).parent_path(); !folder.empty()) output.create_folder(folder);
-  output.write_file_in_pieces(args.out, [&](const ByteSink& sink) { write_shatter(tree, sink); });
+  output.write_file_rewritable(args.out, [&](const RewritableSink& sink) { write_shatter(tree, sink); });
   output.commit();
 
   const TreeStats stats = tree_stats(tree);

@@ -38,8 +38,9 @@ void OutputTransaction::write_file(const fs::path& path, std::string_view bytes)
   files_.push_back(path);
 }
 
-void OutputTransaction::write_file_in_pieces(const fs::path& path, const std::function<void(const ByteSink&)>& produce) {
-  write_file_atomically_in_pieces(path, produce);
+void OutputTransaction::write_file_rewritable(const fs::path& path,
+                                              const std::function<void(const RewritableSink&)>& produce) {
+  write_file_atomically_rewritable(path, produce);
   files_.push_back(path);
 }
 

@@ -44,11 +44,12 @@ class OutputTransaction {
   /// exist. Throws IoError naming `path` (which is then as it was).
   void write_file(const std::filesystem::path& path, std::string_view bytes);
 
-  /// Writes to `path` atomically what `produce` hands its sink, piece by piece
-  /// (write_file_atomically_in_pieces: a large file is never held whole), and
+  /// Writes to `path` atomically what `produce` hands its sink, piece by piece,
+  /// going back over bytes already handed when it asks
+  /// (write_file_atomically_rewritable: a large file is never held whole), and
   /// remembers it. Throws IoError naming `path`, or what `produce` throws; either
   /// way `path` is as it was.
-  void write_file_in_pieces(const std::filesystem::path& path, const std::function<void(const ByteSink&)>& produce);
+  void write_file_rewritable(const std::filesystem::path& path, const std::function<void(const RewritableSink&)>& produce);
 
   /// write_file of write_mesh_to_bytes(mesh, format): the bytes write_mesh writes.
   void write_mesh(const std::filesystem::path& path, const Mesh& mesh, MeshFormat format);

@@ -223,8 +223,8 @@ Mesh read_mesh_record(PayloadReader& in) {
   return mesh;
 }
 
-/// Reads one mesh per node into `which` of each node.
-void read_meshes(const Section& section, std::vector<MeshTreeNode>& nodes, Mesh MeshTreeNode::*which, std::vector<std::size_t>& record_offsets) {
+/// Reads one mesh per node into each node's mesh, or its hull when `hulls`.
+void read_meshes(const Section& section, std::vector<MeshTreeNode>& nodes, bool hulls, std::vector<std::size_t>& record_offsets) {
   PayloadReader in(section);
   const std::uint32_t mesh_count = in.u32("the mesh count");
   if (mesh_count != nodes.size()) in.fail(str(mesh_count) + " meshes for " + str(nodes.size()) + " nodes");
@@ -233,7 +233,12 @@ void read_meshes(const Section& section, std::vector<MeshTreeNode>& nodes, Mesh 
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     record_offsets[k] = in.offset();
     in.set_record("node " + str(k));
-    nodes[k].*which = read_mesh_record(in);
+    Mesh mesh = read_mesh_record(in);
+    if (!hulls) {
+      nodes[k].mesh = std::move(mesh);
+    } else if (!mesh.positions.empty() || !mesh.triangles.empty()) {
+      nodes[k].hull = std::move(mesh);  // a convex node's stays absent (Boxed)
+    }
   }
   in.set_record("");
   in.expect_end();
@@ -424,7 +429,10 @@ std::string read_whole_file(const std::filesystem::path& path) {
 
 }  // namespace
 
-void write_shatter(const MeshTree& tree, const ByteSink& sink) {
+namespace {
+
+/// Refuses, before any byte is written, a tree encode_shatter cannot write.
+void check_before_writing(const MeshTree& tree) {
   // A tree whose certificate still holds (validate_tree.hpp, certificate_holds:
   // made by the code that built or checked it, and the tree's content digest
   // unchanged since) passes validate_tree by what that code established; any
@@ -455,33 +463,83 @@ void write_shatter(const MeshTree& tree, const ByteSink& sink) {
       throw std::invalid_argument("encode_shatter: invalid tree: input_repair: " + *problem);
     }
   }
+}
+
+/// The file's bytes handed to `append`, a section at a time. With `overwrite`,
+/// a payload goes out in pieces as it is made (ByteWriter's flush), after a
+/// header holding a zero length and checksum that is replaced once they are
+/// known: the file is then never held more than a piece at a time. Without it,
+/// each payload is held, in pieces, until its header is written.
+void write_checked_shatter(const MeshTree& tree, const ByteSink& append,
+                           const std::function<void(std::uint64_t, std::string_view)>& overwrite) {
+  std::uint64_t written = 0;
+  const auto out = [&](std::string_view bytes) {
+    append(bytes);
+    written += bytes.size();
+  };
   ByteWriter header;
   for (const unsigned char byte : magic) header.u8(byte);
   header.u32(shatter_format_version);
-  sink(header.take());
-  write_version3_sections(tree, [&](Tag tag, PayloadPieces& payload) {
+  out(header.take());
+  const auto section_header = [](Tag tag, std::uint64_t size, std::uint32_t crc) {
+    ByteWriter bytes;
+    bytes.tag(tag);
+    bytes.u64(size);
+    bytes.u32(crc);
+    return bytes.take();
+  };
+  write_version3_sections(tree, [&](Tag tag, const SectionPayload& payload) {
     std::uint64_t size = 0;
     std::uint32_t crc = 0;
-    for (const std::string& piece : payload) {
+    if (overwrite) {
+      const std::uint64_t header_at = written;
+      out(section_header(tag, 0, 0));
+      const auto piece_out = [&](std::string_view piece) {
+        if (piece.empty()) return;
+        size += piece.size();
+        crc = crc_of(piece, crc);
+        out(piece);
+      };
+      ByteWriter streamed(piece_out);
+      payload(streamed);
+      for (const std::string& rest : streamed.take_pieces()) piece_out(rest);
+      overwrite(header_at, section_header(tag, size, crc));
+      return;
+    }
+    ByteWriter held;
+    payload(held);
+    std::vector<std::string> pieces = held.take_pieces();
+    for (const std::string& piece : pieces) {
       size += piece.size();
       crc = crc_of(piece, crc);
     }
-    ByteWriter section_header;
-    section_header.tag(tag);
-    section_header.u64(size);
-    section_header.u32(crc);
-    sink(section_header.take());
+    out(section_header(tag, size, crc));
     // Each piece is freed once written, so the section shrinks as it goes out.
-    for (std::string& piece : payload) {
-      if (!piece.empty()) sink(piece);
+    for (std::string& piece : pieces) {
+      if (!piece.empty()) out(piece);
       std::string().swap(piece);
     }
   });
 }
 
+}  // namespace
+
+void write_shatter(const MeshTree& tree, const ByteSink& sink) {
+  check_before_writing(tree);
+  write_checked_shatter(tree, sink, {});
+}
+
+void write_shatter(const MeshTree& tree, const RewritableSink& sink) {
+  check_before_writing(tree);
+  write_checked_shatter(tree, sink.append, sink.overwrite);
+}
+
 std::string encode_shatter(const MeshTree& tree) {
   std::string bytes;
-  write_shatter(tree, [&](std::string_view piece) { bytes.append(piece); });
+  write_shatter(tree, RewritableSink{[&](std::string_view piece) { bytes.append(piece); },
+                                     [&](std::uint64_t offset, std::string_view piece) {
+                                       bytes.replace(static_cast<std::size_t>(offset), piece.size(), piece);
+                                     }});
   return bytes;
 }
 
@@ -516,8 +574,8 @@ MeshTree decode_shatter(std::string_view bytes) {
     read_version3_bonds(*sections.bonds, tree, offsets);
   } else {
     read_nodes(*sections.nodes, tree, offsets.nodes);
-    read_meshes(*sections.meshes, tree.nodes, &MeshTreeNode::mesh, offsets.meshes);
-    read_meshes(*sections.hulls, tree.nodes, &MeshTreeNode::hull, offsets.hulls);
+    read_meshes(*sections.meshes, tree.nodes, false, offsets.meshes);
+    read_meshes(*sections.hulls, tree.nodes, true, offsets.hulls);
     tree.bonds = read_bonds(*sections.bonds);
     if (sections.version >= 2) {
       tree.geometry = read_geometry(*sections.geometry);
@@ -536,7 +594,7 @@ MeshTree decode_shatter(std::string_view bytes) {
 }
 
 void write_shatter_file(const std::filesystem::path& path, const MeshTree& tree) {
-  write_file_atomically_in_pieces(path, [&](const ByteSink& sink) { write_shatter(tree, sink); });
+  write_file_atomically_rewritable(path, [&](const RewritableSink& sink) { write_shatter(tree, sink); });
 }
 
 MeshTree read_shatter_file(const std::filesystem::path& path) {

@@ -16,6 +16,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "shatter/kernel/error.hpp"
@@ -165,6 +166,12 @@ inline std::string str(std::uint64_t value) { return std::to_string(value); }
 
 class ByteWriter {
  public:
+  ByteWriter() = default;
+  /// A writer that hands each full piece to `flush` at end_record instead of
+  /// putting it aside, and reuses its buffer: a section streamed to its file
+  /// then holds one piece at a time. take_pieces gives what is left.
+  explicit ByteWriter(std::function<void(std::string_view)> flush) : flush_(std::move(flush)) {}
+
   void u8(std::uint8_t value) { bytes_.push_back(static_cast<char>(value)); }
   void u32(std::uint32_t value) { little_endian(value); }
   void u64(std::uint64_t value) { little_endian(value); }
@@ -220,6 +227,11 @@ class ByteWriter {
   /// which holds up to twice its size and touches three times it while copying.
   void end_record() {
     if (bytes_.size() < piece_bytes) return;
+    if (flush_) {
+      flush_(bytes_);
+      bytes_.clear();
+      return;
+    }
     pieces_.push_back(std::move(bytes_));
     bytes_ = std::string();
   }
@@ -248,6 +260,7 @@ class ByteWriter {
   }
 
   std::vector<std::string> pieces_;  ///< full pieces put aside by end_record, in order
+  std::function<void(std::string_view)> flush_;  ///< where full pieces go instead, when set
 
   std::string bytes_;
 };
@@ -511,16 +524,16 @@ RepairReport read_repair(const Section& section);
 // ---------------------------------------------------------------------------
 // Version 3 payloads (file_v3.cpp)
 
-/// A section's payload: its bytes are the pieces' in order (ByteWriter::end_record
-/// cuts a large one into pieces of about a mebibyte).
-using PayloadPieces = std::vector<std::string>;
+/// A section's payload: written into the given writer, which may hand it on in
+/// pieces as it goes (ByteWriter's flush) or keep them (take_pieces).
+using SectionPayload = std::function<void(ByteWriter&)>;
 
 /// Hands `emit` the version 3 sections of `tree` one at a time, in the order
-/// encode_shatter writes them, END last; each payload is made just before its
-/// call, in pieces, and `emit` may free each piece once it is written.
+/// encode_shatter writes them, END last, each as the function that writes its
+/// payload, to be called once during `emit`'s call.
 /// Precondition: `tree` passes validate_tree with its caches (or none, as
 /// encode_shatter allows).
-void write_version3_sections(const MeshTree& tree, const std::function<void(Tag, PayloadPieces&)>& emit);
+void write_version3_sections(const MeshTree& tree, const std::function<void(Tag, const SectionPayload&)>& emit);
 
 /// What a version 3 file leaves to compute once the tree's structure has passed
 /// validate_tree and its caches are filled: per node, per mesh (hull) vertex,

@@ -211,7 +211,7 @@ void write_mesh(ByteWriter& out, const Mesh& mesh, std::span<const Vec3> sources
   write_corner_channels(out, mesh);
 }
 
-PayloadPieces nodes_payload(const MeshTree& tree) {
+void nodes_payload(const MeshTree& tree, ByteWriter& out) {
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
   std::uint8_t flags = 0;
   NodeShapes shapes(tree);
@@ -226,7 +226,6 @@ PayloadPieces nodes_payload(const MeshTree& tree) {
     if (!same_bits(node.mass, mass_properties(shapes(static_cast<NodeIndex>(k)).mesh))) flags |= masses_stored_bit;
     if (node.is_leaf() && !all_zero_bits(tree.cut_planes[k])) flags |= leaf_planes_stored_bit;
   }
-  ByteWriter out;
   out.count32(nodes.size());
   out.u8(flags);
   for (std::size_t k = 0; k < nodes.size(); ++k) {
@@ -244,14 +243,12 @@ PayloadPieces nodes_payload(const MeshTree& tree) {
     }
     out.end_record();
   }
-  return out.take_pieces();
 }
 
-PayloadPieces solids_payload(const MeshTree& tree) {
-  ByteWriter out;
+void solids_payload(const MeshTree& tree, ByteWriter& out) {
   const bool exact = tree.has_exact_representation();
   out.count32(exact ? tree.nodes.size() : 0);
-  if (!exact) return out.take_pieces();
+  if (!exact) return;
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
   AncestorPath path;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> face_of_edge;  // (from, to) -> face, sorted
@@ -318,15 +315,13 @@ PayloadPieces solids_payload(const MeshTree& tree) {
     }
     out.end_record();
   }
-  return out.take_pieces();
 }
 
 /// Each mesh's positions coded against its solid's output positions (MESH) or
 /// each hull's against its node's mesh (HULL).
-PayloadPieces meshes_payload(const MeshTree& tree, bool hulls) {
+void meshes_payload(const MeshTree& tree, bool hulls, ByteWriter& out) {
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
   const PlaneSet set = tree.plane_set();
-  ByteWriter out;
   out.count32(nodes.size());
   AncestorPath path;
   std::vector<Vec3> solid_positions;
@@ -337,7 +332,7 @@ PayloadPieces meshes_payload(const MeshTree& tree, bool hulls) {
     if (hulls) {
       // A convex node's hull is empty: it looks up no position (a packed node stays packed).
       std::span<const Vec3> sources;
-      if (!node.hull.positions.empty()) sources = shapes(static_cast<NodeIndex>(k)).mesh.positions;
+      if (!node.hull->positions.empty()) sources = shapes(static_cast<NodeIndex>(k)).mesh.positions;
       write_mesh(out, node.hull, sources, path, nodes);
       out.end_record();
       continue;
@@ -355,7 +350,6 @@ PayloadPieces meshes_payload(const MeshTree& tree, bool hulls) {
     write_mesh(out, shape.mesh, solid_positions, path, nodes);
     out.end_record();
   }
-  return out.take_pieces();
 }
 
 /// The child of `ancestor` on the way down to `node` (a strict descendant).
@@ -375,7 +369,7 @@ Vec3 derived_normal(const MeshTree& tree, const Bond& bond) {
   return tree.nodes[side].above_parent_plane ? -unit : unit;
 }
 
-PayloadPieces bonds_payload(const MeshTree& tree) {
+void bonds_payload(const MeshTree& tree, ByteWriter& out) {
   std::uint8_t flags = 0;
   for (const Bond& bond : tree.bonds) {
     if (zero_normal(tree.cut_planes[bond.cut_node]) || !same_bits(bond.normal, derived_normal(tree, bond))) {
@@ -383,7 +377,6 @@ PayloadPieces bonds_payload(const MeshTree& tree) {
       break;
     }
   }
-  ByteWriter out;
   out.u64(tree.bonds.size());
   out.u8(flags);
   LeafIndex previous_first = 0;
@@ -416,22 +409,18 @@ PayloadPieces bonds_payload(const MeshTree& tree) {
     if ((flags & bond_normals_stored_bit) != 0) out.vec3(bond.normal);
     out.end_record();
   }
-  return out.take_pieces();
 }
 
-PayloadPieces cell_planes_payload(const MeshTree& tree) {
-  ByteWriter out;
+void cell_planes_payload(const MeshTree& tree, ByteWriter& out) {
   out.count32(tree.cut_planes.size() - tree.nodes.size());
   for (std::size_t k = tree.nodes.size(); k < tree.cut_planes.size(); ++k) {
     out.vec3(tree.cut_planes[k].normal);
     out.f64(tree.cut_planes[k].offset);
     out.end_record();
   }
-  return out.take_pieces();
 }
 
-PayloadPieces geometry_payload(const InputGeometry& geometry) {
-  ByteWriter out;
+void geometry_payload(const InputGeometry& geometry, ByteWriter& out) {
   out.count32(geometry.points.size());
   out.count32(geometry.planes.size());
   for (const Vec3& point : geometry.points) {
@@ -441,11 +430,9 @@ PayloadPieces geometry_payload(const InputGeometry& geometry) {
   for (const auto& plane : geometry.planes) {
     for (const VertexIndex point : plane) out.u32(point);
   }
-  return out.take_pieces();
 }
 
-PayloadPieces recipe_payload(const TreeRecipe& recipe) {
-  ByteWriter out;
+void recipe_payload(const TreeRecipe& recipe, ByteWriter& out) {
   out.u32(recipe.fragments);
   out.u64(recipe.seed);
   out.u8(static_cast<std::uint8_t>(recipe.strategy));
@@ -453,7 +440,6 @@ PayloadPieces recipe_payload(const TreeRecipe& recipe) {
   out.f64(recipe.interior_uv_scale);
   out.u32(recipe.max_plane_tries);
   out.u8(recipe.allow_self_intersections ? 1 : 0);
-  return out.take_pieces();
 }
 
 // ---------------------------------------------------------------------------
@@ -544,22 +530,21 @@ Mesh read_mesh(PayloadReader& in, std::size_t source_count, std::vector<std::uin
 
 }  // namespace
 
-void write_version3_sections(const MeshTree& tree, const std::function<void(Tag, PayloadPieces&)>& emit) {
+void write_version3_sections(const MeshTree& tree, const std::function<void(Tag, const SectionPayload&)>& emit) {
   const HeldFloatingPointExceptions held;
-  // Each payload lives only for its call.
-  const auto section = [&](Tag tag, PayloadPieces payload) { emit(tag, payload); };
-  if (!tree.shatter_version.empty()) section(version_tag, {tree.shatter_version});
-  if (!tree.input_repair.empty()) section(repair_tag, {repair_payload(tree.input_repair)});
-  section(recipe_tag, recipe_payload(tree.recipe));
-  if (!tree.recipe.pattern.empty()) section(pattern_tag, {tree.recipe.pattern});
-  section(nodes_tag, nodes_payload(tree));
-  if (tree.cut_planes.size() > tree.nodes.size()) section(cell_planes_tag, cell_planes_payload(tree));
-  section(geometry_tag, geometry_payload(tree.geometry));
-  section(solids_tag, solids_payload(tree));
-  section(meshes_tag, meshes_payload(tree, false));
-  section(hulls_tag, meshes_payload(tree, true));
-  section(bonds_tag, bonds_payload(tree));
-  section(end_tag, {});
+  const auto bytes = [](const std::string& text) { return [&text](ByteWriter& out) { out.append(text); }; };
+  if (!tree.shatter_version.empty()) emit(version_tag, bytes(tree.shatter_version));
+  if (!tree.input_repair.empty()) emit(repair_tag, [&](ByteWriter& out) { out.append(repair_payload(tree.input_repair)); });
+  emit(recipe_tag, [&](ByteWriter& out) { recipe_payload(tree.recipe, out); });
+  if (!tree.recipe.pattern.empty()) emit(pattern_tag, bytes(tree.recipe.pattern));
+  emit(nodes_tag, [&](ByteWriter& out) { nodes_payload(tree, out); });
+  if (tree.cut_planes.size() > tree.nodes.size()) emit(cell_planes_tag, [&](ByteWriter& out) { cell_planes_payload(tree, out); });
+  emit(geometry_tag, [&](ByteWriter& out) { geometry_payload(tree.geometry, out); });
+  emit(solids_tag, [&](ByteWriter& out) { solids_payload(tree, out); });
+  emit(meshes_tag, [&](ByteWriter& out) { meshes_payload(tree, false, out); });
+  emit(hulls_tag, [&](ByteWriter& out) { meshes_payload(tree, true, out); });
+  emit(bonds_tag, [&](ByteWriter& out) { bonds_payload(tree, out); });
+  emit(end_tag, [](ByteWriter&) {});
 }
 
 void read_version3_nodes(const Section& section, MeshTree& tree, Version3Pending& pending, RecordOffsets& offsets) {
@@ -763,7 +748,12 @@ void read_version3_meshes(const Section& section, MeshTree& tree, bool hulls, Ve
     in.set_record("node " + str(k));
     path.enter(static_cast<NodeIndex>(k), nodes[k].depth);
     const std::size_t source_count = hulls ? nodes[k].mesh.positions.size() : nodes[k].solid.defs.size();
-    (hulls ? nodes[k].hull : nodes[k].mesh) = read_mesh(in, source_count, sources[k], path);
+    Mesh mesh = read_mesh(in, source_count, sources[k], path);
+    if (!hulls) {
+      nodes[k].mesh = std::move(mesh);
+    } else if (!mesh.positions.empty() || !mesh.triangles.empty()) {
+      nodes[k].hull = std::move(mesh);  // a convex node's stays absent (Boxed)
+    }
   }
   in.set_record("");
   in.expect_end();
@@ -851,7 +841,7 @@ void finish_version3(MeshTree& tree, const Version3Pending& pending) {
     }
     const std::vector<std::uint32_t>& hull_sources = pending.hull_sources[k];
     for (std::size_t v = 0; v < hull_sources.size(); ++v) {
-      if (const std::uint32_t s = hull_sources[v]; s != no_index) node.hull.positions[v] = node.mesh.positions[s];
+      if (const std::uint32_t s = hull_sources[v]; s != no_index) node.hull->positions[v] = node.mesh.positions[s];
     }
     if (pending.masses_derived) node.mass = mass_properties(node.mesh);
   }

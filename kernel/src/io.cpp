@@ -105,6 +105,17 @@ class NewFile {
     }
     return 0;
   }
+  /// Replaces bytes from `offset` on with all of `bytes`; returns 0 or errno.
+  int write_at(std::uint64_t offset, std::string_view bytes) {
+    while (!bytes.empty()) {
+      const ssize_t written = ::pwrite(descriptor_, bytes.data(), bytes.size(), static_cast<off_t>(offset));
+      if (written < 0 && errno == EINTR) continue;
+      if (written < 0) return errno;
+      bytes.remove_prefix(static_cast<std::size_t>(written));
+      offset += static_cast<std::uint64_t>(written);
+    }
+    return 0;
+  }
   /// Closes the file; returns 0 or errno (close() can report a deferred write
   /// failure: NFS, a full disk).
   int close() {
@@ -211,6 +222,10 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view b
 }
 
 void write_file_atomically_in_pieces(const std::filesystem::path& path, const std::function<void(const ByteSink&)>& produce) {
+  write_file_atomically_rewritable(path, [&](const RewritableSink& sink) { produce(sink.append); });
+}
+
+void write_file_atomically_rewritable(const std::filesystem::path& path, const std::function<void(const RewritableSink&)>& produce) {
   // The temporary sits beside the target so the rename stays on one file system
   // (and so is atomic); pid and counter keep concurrent writers apart.
   static std::atomic<unsigned long> counter{0};
@@ -220,9 +235,16 @@ void write_file_atomically_in_pieces(const std::filesystem::path& path, const st
   int error = 0;
   NewFile file(temporary, error);
   if (error != 0) throw IoError(describe_errno(path, "write", error));
-  produce([&](std::string_view piece) {
-    if (const int write_error = file.write(piece); write_error != 0) throw IoError(describe_errno(path, "write", write_error));
-  });
+  const RewritableSink sink{
+      [&](std::string_view piece) {
+        if (const int write_error = file.write(piece); write_error != 0) throw IoError(describe_errno(path, "write", write_error));
+      },
+      [&](std::uint64_t offset, std::string_view bytes) {
+        if (const int write_error = file.write_at(offset, bytes); write_error != 0) {
+          throw IoError(describe_errno(path, "write", write_error));
+        }
+      }};
+  produce(sink);
   if (const int close_error = file.close(); close_error != 0) throw IoError(describe_errno(path, "write", close_error));
   std::error_code rename_error;
   std::filesystem::rename(temporary, path, rename_error);

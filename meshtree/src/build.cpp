@@ -679,7 +679,7 @@ void plane_hulls(tbb::task_arena& arena, MeshTree& tree) {
         }
         std::vector<Vec3> points;
         for (const NodeIndex c : node.children) {
-          const Mesh& child_hull = tree.nodes[c].convex ? shapes(c).mesh : tree.nodes[c].hull;
+          const Mesh& child_hull = tree.nodes[c].convex ? shapes(c).mesh : *std::as_const(tree.nodes[c]).hull;
           points.insert(points.end(), child_hull.positions.begin(), child_hull.positions.end());
         }
         node.hull = convex_hull_of_points(points);

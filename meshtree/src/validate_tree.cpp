@@ -557,11 +557,11 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
   NodeShapes shapes(tree);  // first_defect has unpacked every packed node
   for (std::size_t k = 0; k < node_count; ++k) {
     const MeshTreeNode& node = tree.nodes[k];
-    if (node.convex && !(node.hull.positions.empty() && node.hull.triangles.empty())) {
+    if (node.convex && !(node.hull->positions.empty() && node.hull->triangles.empty())) {
       return TreeDefect{
           TreePart::hull, k,
           "node " + str(k) + " is convex, so its hull must be empty (its mesh is its hull), but the hull has " +
-              str(node.hull.positions.size()) + " vertices and " + str(node.hull.triangles.size()) + " triangles"};
+              str(node.hull->positions.size()) + " vertices and " + str(node.hull->triangles.size()) + " triangles"};
     }
     if (auto problem = solid_defect(shapes(static_cast<NodeIndex>(k)).solid, k, context, caches, scratch)) {
       return TreeDefect{TreePart::solid, k, "the solid of node " + str(k) + " " + *problem};
@@ -612,7 +612,7 @@ std::optional<TreeDefect> first_defect(const MeshTree& tree, bool caches) {
     }
     if (auto problem = mesh_defect(*mesh))
       return TreeDefect{TreePart::mesh, k, "the mesh of node " + str(k) + " " + *problem};
-    if (auto problem = mesh_defect(tree.nodes[k].hull))
+    if (auto problem = mesh_defect(*tree.nodes[k].hull))
       return TreeDefect{TreePart::hull, k, "the hull of node " + str(k) + " " + *problem};
   }
   if (auto defect = bonds_defect(tree)) return defect;
@@ -727,10 +727,10 @@ std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k
   }
   // A convex node is its own hull (the structure checked that none is stored).
   if (!node.convex) {
-    if (node.hull.triangles.empty()) {
+    if (node.hull->triangles.empty()) {
       return TreeDefect{TreePart::hull, k, "the hull of " + name + " is empty, and the node is not marked convex"};
     }
-    const ValidationReport hull_report = validate_mesh(node.hull, {.check_self_intersections = false});
+    const ValidationReport hull_report = validate_mesh(*node.hull, {.check_self_intersections = false});
     if (!hull_report.valid()) {
       return TreeDefect{TreePart::hull, k, "the hull of " + name + " is not a valid solid: " + hull_report.summary()};
     }
@@ -824,7 +824,7 @@ static_assert(sizeof(SolidFace) == 24, "a new SolidFace field: add it to hash_so
 static_assert(sizeof(Solid) == 128, "a new Solid field: add it to hash_solid");
 static_assert(sizeof(Mesh) == 144, "a new Mesh field: add it to hash_mesh");
 static_assert(sizeof(Bond) == 72, "a new Bond field: add it to TreeCertifier::digest");
-static_assert(sizeof(MeshTreeNode) == 576, "a new MeshTreeNode field: add it to TreeCertifier::digest");
+static_assert(sizeof(MeshTreeNode) == 440, "a new MeshTreeNode field: add it to TreeCertifier::digest");
 static_assert(sizeof(InputGeometry) == 72, "a new InputGeometry field: add it to TreeCertifier::digest");
 static_assert(sizeof(TreeRecipe) == 72, "a new TreeRecipe field: add it to TreeCertifier::digest");
 #endif

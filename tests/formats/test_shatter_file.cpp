@@ -352,7 +352,7 @@ MeshTree deep_tree() {
     if (!node.is_leaf()) tree.cut_planes[k] = {{special_doubles[k], 1, -0.0}, special_doubles[k + 1]};
     node.mass.inertia[k] = special_doubles[k];
     add_attributes(node.mesh, static_cast<unsigned>(k + 2) % 8, cursor);
-    add_attributes(node.hull, static_cast<unsigned>(k) % 8, cursor);
+    add_attributes(*node.hull, static_cast<unsigned>(k) % 8, cursor);
   }
   tree.nodes[2].mesh.positions[0] = {special_doubles[0], special_doubles[2], special_doubles[3]};
   tree.nodes[3].mesh.surfaces[0] = 0xFFFFFFFFu;
@@ -466,7 +466,7 @@ std::string mesh_record(const Mesh& m) {
 
 std::string meshes_payload(const std::vector<MeshTreeNode>& nodes, bool hulls) {
   std::string out = Bytes{}.u32(static_cast<std::uint32_t>(nodes.size())).data;
-  for (const MeshTreeNode& n : nodes) out += mesh_record(hulls ? n.hull : n.mesh);
+  for (const MeshTreeNode& n : nodes) out += mesh_record(hulls ? *n.hull : n.mesh);
   return out;
 }
 
@@ -733,7 +733,7 @@ std::string meshes_payload_v3(const MeshTree& tree, bool hulls) {
       sources.clear();
       for (std::size_t v = 0; v < n.solid.defs.size(); ++v) sources.push_back(output_position(set, n.solid.defs[v], n.solid.approx[v]));
     }
-    mesh_record_v3(out, hulls ? n.hull : n.mesh, sources, path_to(tree, k));
+    mesh_record_v3(out, hulls ? *n.hull : n.mesh, sources, path_to(tree, k));
   }
   return out.data;
 }
@@ -1310,7 +1310,7 @@ TEST_CASE("invalid trees with correct checksums are refused", "[shatter_file][ho
 
   add("triangle index out of range", small, [](MeshTree& t) { t.nodes[1].mesh.triangles[3][2] = 8; },
       "MESH section, byte 991: the mesh of node 1 triangle 3 corner 2 has vertex index 8, but there are only 8 vertices");
-  add("hull triangle index out of range", deep, [](MeshTree& t) { t.nodes[4].hull.triangles.back()[0] = 0xFFFFFFFFu; },
+  add("hull triangle index out of range", deep, [](MeshTree& t) { t.nodes[4].hull->triangles.back()[0] = 0xFFFFFFFFu; },
       "the hull of node 4 triangle");
   add("root with a parent", small, [](MeshTree& t) { t.nodes[0].parent = 2; }, "node 0 (the root) has parent 2");
   add("root with depth", small, [](MeshTree& t) { t.nodes[0].depth = 1; }, "node 0 (the root) has depth 1");
@@ -1362,7 +1362,7 @@ TEST_CASE("encode_shatter refuses trees a reader could not trust", "[shatter_fil
   tree.nodes[2].mesh.surfaces.pop_back();
   CHECK_THROWS_WITH(encode_shatter(tree), Catch::Contains("the mesh of node 2 has 11 surface ids for 12 triangles"));
   tree = two_leaf_tree();
-  tree.nodes[1].hull.corners.uvs.resize(5);
+  tree.nodes[1].hull->corners.uvs.resize(5);
   CHECK_THROWS_WITH(encode_shatter(tree), Catch::Contains("has 5 uvs for 12 triangles"));
   CHECK_THROWS_AS(encode_shatter(MeshTree{}), std::invalid_argument);
   tree = two_leaf_tree();
@@ -1468,7 +1468,7 @@ TEST_CASE("version 1 files still read, as trees without an exact representation"
       CHECK(decoded.recipe.kernel != KernelKind::plane);
       CHECK(decoded.geometry.points.empty());
       CHECK(decoded.leaf_count() >= 2);
-      for (const MeshTreeNode& node : decoded.nodes) CHECK((node.solid.defs.empty() && !node.convex && !node.hull.positions.empty()));
+      for (const MeshTreeNode& node : decoded.nodes) CHECK((node.solid.defs.empty() && !node.convex && !node.hull->positions.empty()));
       check_round_trip(decoded);
       if (std::string_view(name) != "optional-section-before-end.shatter") {
         CHECK(tree_difference(decode_within_budget(converted_from_version_1(v1)), decoded).empty());
@@ -1517,7 +1517,7 @@ TEST_CASE("plane-kernel trees round-trip exactly, exact representation and cache
         for (const MeshTreeNode& node : tree.nodes) {
           REQUIRE(!node.solid.defs.empty());
           (node.convex ? convex : non_convex) += 1;
-          if (node.convex) REQUIRE(node.hull.positions.empty());
+          if (node.convex) REQUIRE(node.hull->positions.empty());
         }
         check_round_trip(tree);
         ++trees;
@@ -1824,6 +1824,32 @@ TEST_CASE("sections longer than a writer's piece are written byte for byte as do
   write_shatter(tree, [&](std::string_view piece) { pieces.append(piece); });
   CHECK(pieces == bytes);
   CHECK(tree_difference(decode_within_budget(bytes), tree).empty());
+
+  // Streamed (a sink that can go back): every section's header is written
+  // ahead and replaced once, and no piece handed on is much over a mebibyte,
+  // though SOLD and MESH each hold a record larger than that.
+  std::string streamed;
+  std::size_t largest_append = 0, overwrites = 0;
+  write_shatter(tree, RewritableSink{[&](std::string_view piece) {
+                                       largest_append = std::max(largest_append, piece.size());
+                                       streamed.append(piece);
+                                     },
+                                     [&](std::uint64_t offset, std::string_view piece) {
+                                       ++overwrites;
+                                       REQUIRE(offset + piece.size() <= streamed.size());
+                                       streamed.replace(static_cast<std::size_t>(offset), piece.size(), piece);
+                                     }});
+  CHECK(streamed == bytes);
+  CHECK(largest_append < bytes.size() / 2);
+  CHECK(overwrites == 9);  // vers, OPTS, NODE, GEOM, SOLD, MESH, HULL, BOND and END
+  // write_shatter_file streams to its file the same bytes.
+  const std::filesystem::path directory = std::filesystem::temp_directory_path() / ("shatter-stream-test-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(directory);
+  std::filesystem::create_directories(directory);
+  write_shatter_file(directory / "torus.shatter", tree);
+  std::ifstream in(directory / "torus.shatter", std::ios::binary);
+  CHECK(std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()) == bytes);
+  std::filesystem::remove_all(directory);
 }
 
 TEST_CASE("solids without their approximations write the same bytes", "[shatter_file]") {

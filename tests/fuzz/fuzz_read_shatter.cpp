@@ -77,7 +77,7 @@ void check_exact_invariants(const shatter::MeshTree& tree) {
   for (std::size_t n = 0; n < tree.nodes.size(); ++n) {
     const shatter::MeshTreeNode& node = tree.nodes[n];
     const shatter::Solid& solid = node.solid;
-    require(!node.convex || node.hull.positions.empty(), "decoded convex node with a hull");
+    require(!node.convex || node.hull->positions.empty(), "decoded convex node with a hull");
     require(solid.approx.size() == solid.defs.size(), "decoded approx not one per vertex");
     for (const shatter::PointDef& def : solid.defs) {
       if (def.kind == shatter::PointKind::input) require(def.a < geometry.points.size(), "decoded input vertex out of range");
@@ -115,7 +115,7 @@ void check_tree_invariants(const shatter::MeshTree& tree) {
     for (const shatter::NodeIndex child : node.children) {
       require(child < tree.nodes.size() && tree.nodes[child].parent == n, "decoded child link broken at node " + std::to_string(n));
     }
-    for (const shatter::Mesh* mesh : {&node.mesh, &node.hull}) {
+    for (const shatter::Mesh* mesh : {&node.mesh, &*node.hull}) {
       require(mesh->surfaces.size() == mesh->triangles.size(), "decoded surfaces size");
       for (const shatter::Triangle& triangle : mesh->triangles) {
         for (const shatter::VertexIndex v : triangle) require(v < mesh->positions.size(), "decoded triangle index out of range");

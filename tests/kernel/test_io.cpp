@@ -821,6 +821,38 @@ TEST_CASE("a file written in pieces is their concatenation, or nothing", "[io][f
   CHECK(!asked);
 }
 
+TEST_CASE("a file written with going back holds the bytes last written at each place", "[io][files]") {
+  const ScratchDirectory scratch;
+  const auto path = scratch.path / "rewritten.bin";
+  const auto bytes_of = [](const std::filesystem::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  // A header replaced after a piece larger than a write() may take at once,
+  // the first byte replaced twice, and a replacement at the very end.
+  write_file_atomically_rewritable(path, [&](const RewritableSink& sink) {
+    sink.append("HEAD----");
+    sink.append(std::string(1 << 22, 'x'));
+    sink.overwrite(4, "1234");
+    sink.append("end");
+    sink.overwrite(0, "h");
+    sink.overwrite(0, "H");
+    sink.overwrite(std::uint64_t{8} + (1 << 22) + 2, "D");
+  });
+  CHECK(bytes_of(path) == "HEAD1234" + std::string(1 << 22, 'x') + "enD");
+  // A producer that fails after going back leaves the old file, and no temporary.
+  struct Interrupted {};
+  CHECK_THROWS_AS(write_file_atomically_rewritable(path,
+                                                   [](const RewritableSink& sink) {
+                                                     sink.append("new");
+                                                     sink.overwrite(0, "N");
+                                                     throw Interrupted{};
+                                                   }),
+                  Interrupted);
+  CHECK(bytes_of(path) == "HEAD1234" + std::string(1 << 22, 'x') + "enD");
+  CHECK(scratch.entries().size() == 1);
+}
+
 TEST_CASE("reading names the file on failure", "[io][files]") {
   const ScratchDirectory scratch;
   CHECK_THROWS_AS(read_mesh(scratch.path / "absent.off"), IoError);

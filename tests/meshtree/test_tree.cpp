@@ -612,7 +612,7 @@ void check_nodes(const MeshTree& tree, const Mesh& input, Level level) {
     if (node.convex) {
       // A convex node (plane kernel) is its own hull: convex exactly as a solid,
       // which rounding keeps up to the flat edges inside its faces.
-      if (!node.hull.positions.empty()) out.add(hull, "a convex node stores a separate hull");
+      if (!node.hull->positions.empty()) out.add(hull, "a convex node stores a separate hull");
       if (&tree.hull_of(v) != &node.mesh) out.add(hull, "hull_of a convex node is not its mesh");
       if (!solid_is_convex(tree.plane_set(), node.solid)) out.add(hull, "marked convex, but its solid is not");
     } else if (!node.is_leaf()) {

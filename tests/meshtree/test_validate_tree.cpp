@@ -112,7 +112,7 @@ std::optional<NodeIndex> draw_node(const MeshTree& tree, test::Random& random, W
 const auto any_node = [](const MeshTreeNode&, NodeIndex) { return true; };
 const auto internal = [](const MeshTreeNode& node, NodeIndex) { return !node.is_leaf(); };
 const auto non_root = [](const MeshTreeNode&, NodeIndex k) { return k > 0; };
-const auto with_hull = [](const MeshTreeNode& node, NodeIndex) { return !node.convex && !node.hull.triangles.empty(); };
+const auto with_hull = [](const MeshTreeNode& node, NodeIndex) { return !node.convex && !node.hull->triangles.empty(); };
 
 // Removes triangle t with its surface id and corner attributes.
 void remove_triangle(Mesh& mesh, std::size_t t) {
@@ -230,7 +230,7 @@ std::vector<Injector> injectors() {
   add("hull: a vertex index out of range", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
     const auto k = draw_node(t, r, with_hull);
     if (!k) return std::nullopt;
-    Mesh& hull = t.nodes[*k].hull;
+    Mesh& hull = *t.nodes[*k].hull;
     hull.triangles[r.index(hull.triangles.size())][r.index(3)] = no_index;
     return Place{TreePart::hull, *k};
   });
@@ -395,7 +395,7 @@ std::vector<Injector> injectors() {
   add("hull: a triangle turned over", geometry, [](MeshTree& t, R& r) -> std::optional<Place> {
     const auto k = draw_node(t, r, with_hull);
     if (!k) return std::nullopt;
-    Triangle& triangle = t.nodes[*k].hull.triangles[r.index(t.nodes[*k].hull.triangles.size())];
+    Triangle& triangle = t.nodes[*k].hull->triangles[r.index(t.nodes[*k].hull->triangles.size())];
     std::swap(triangle[1], triangle[2]);
     return Place{TreePart::hull, *k};
   });

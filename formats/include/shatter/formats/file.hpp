@@ -314,8 +314,15 @@ MeshTree decode_shatter(std::string_view bytes);
 /// tree is checked before the first piece), and whatever `sink` throws.
 void write_shatter(const MeshTree& tree, const ByteSink& sink);
 
-/// Writes encode_shatter(tree) to `path` atomically and in pieces
-/// (write_file_atomically_in_pieces, write_shatter): `path` is either untouched
+/// write_shatter streaming each section as it is made: its header goes out
+/// first with a zero length and checksum and is replaced (sink.overwrite) once
+/// the payload is written, so no more than a piece of about a mebibyte of the
+/// file is held at a time. The same bytes; preconditions, guarantees and
+/// exceptions as write_shatter's.
+void write_shatter(const MeshTree& tree, const RewritableSink& sink);
+
+/// Writes encode_shatter(tree) to `path` atomically and streamed
+/// (write_file_atomically_rewritable, write_shatter): `path` is either untouched
 /// or complete. Throws IoError when it cannot be written, std::invalid_argument
 /// as encode_shatter.
 void write_shatter_file(const std::filesystem::path& path, const MeshTree& tree);

@@ -17,6 +17,7 @@
 #include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/vec.hpp"
 #include "shatter/meshtree/bonds.hpp"
+#include "shatter/meshtree/boxed.hpp"
 #include "shatter/meshtree/recipe.hpp"
 #include "shatter/meshtree/tree_index.hpp"
 
@@ -29,8 +30,10 @@ struct MeshTreeNode {
   Mesh mesh;
   MassProperties mass;  ///< of `mesh`, unit density
   /// The convex hull of `mesh` (outward triangles over its own positions; every
-  /// surface id 0, no attributes), for colliders.
-  Mesh hull;
+  /// surface id 0, no attributes), for colliders. Boxed: held on the heap only
+  /// when set, since a convex node leaves it empty (read it as `*node.hull` or
+  /// `node.hull->positions`, or through MeshTree::hull_of).
+  Boxed<Mesh> hull;
   /// Plane kernel: the node's exact solid, its vertices defined over
   /// MeshTree::plane_set() (cut plane k is node k's, MeshTree::cut_planes[k]).
   /// Empty otherwise. Its vertices' cached approximations (Solid::approx) are
@@ -127,7 +130,7 @@ struct MeshTree {
   PlaneSet plane_set() const { return geometry.plane_set(cut_planes); }
   /// A node's convex hull: its own mesh when it is convex, else `hull`. (A
   /// packed node's mesh is empty: read a lean tree's through NodeShapes.)
-  const Mesh& hull_of(NodeIndex node) const { return nodes[node].convex ? nodes[node].mesh : nodes[node].hull; }
+  const Mesh& hull_of(NodeIndex node) const { return nodes[node].convex ? nodes[node].mesh : *nodes[node].hull; }
   /// Whether a lean build packed the node's mesh and solid (packed_shapes).
   bool is_packed(NodeIndex node) const { return node < packed_shapes.size() && !packed_shapes[node].empty(); }
 };
