@@ -117,7 +117,7 @@ TEST_CASE("a change to any field validate_tree reads makes the certificate stop 
       {"leaf mesh surface", [](MeshTree& t, NodeIndex k) { t.nodes[k].mesh.surfaces[0] ^= 1; }},
       {"leaf mesh normals", [](MeshTree& t, NodeIndex k) { t.nodes[k].mesh.corners.normals.resize(3 * t.nodes[k].mesh.triangles.size()); }},
       {"leaf mass", [](MeshTree& t, NodeIndex k) { t.nodes[k].mass.inertia[8] = -t.nodes[k].mass.inertia[8]; }},
-      {"root hull", [](MeshTree& t, NodeIndex) { t.nodes[0].hull.positions.push_back({}); }},
+      {"root hull", [](MeshTree& t, NodeIndex) { t.nodes[0].hull->positions.push_back({}); }},
       {"leaf solid definition", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid.defs[0].b ^= 1; }},
       {"leaf solid approximation", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid.approx.pop_back(); }},
       {"leaf solid face", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid.faces[0].reversed ^= true; }},
