@@ -166,14 +166,175 @@ void absorb(Solid& host, const Solid& part) {
   }
 }
 
+// Where a piece meets itself along a chord (both faces of the surface there in
+// one piece), four of its faces run the chord: the two of the surface, each
+// closing up with the cap face that runs the chord the other way (separate_side),
+// so each directed edge is run twice and the piece is no sound solid. As at a
+// point where a piece touches itself, the part thinner than any rounding, the
+// segment, gives way, here already in the exact solid: around each end of such
+// a chord the corners of the faces (a face's corners there: where its loops
+// meet at the vertex, each incoming edge with the outgoing edge first
+// clockwise from it, as group_into_regions links them) fall into fans,
+// neighbours across an edge, across a doubled edge only a surface face and a
+// cap face, and every fan but the first gets its own copy of the vertex (the
+// same exact point). Each sheet then runs its own edge, every edge is run once
+// each way (check_solid), a face whose loops met at the vertex is relinked
+// into the loops its corners now make, and round_solid moves the copies apart
+// a hair when it writes the piece, as it does the fans of a pinched vertex.
+void separate_pinched_chords(const PlaneSet& set, Solid& solid, PlaneRef cut) {
+  thread_local std::vector<std::uint64_t> directed, doubled;
+  directed.clear();
+  doubled.clear();
+  for (const SolidLoop& loop : solid.loops) {
+    for (const CornerEdge& edge : loop_edges(solid.corners, loop)) directed.push_back(directed_edge_key(edge.from, edge.to));
+  }
+  std::sort(directed.begin(), directed.end());
+  for (std::size_t i = 1; i < directed.size(); ++i) {
+    if (directed[i] == directed[i - 1]) doubled.push_back(directed[i]);
+  }
+  if (doubled.empty()) return;
+  const auto is_doubled = [&](VertexIndex u, VertexIndex v) {
+    return std::binary_search(doubled.begin(), doubled.end(), directed_edge_key(u, v)) ||
+           std::binary_search(doubled.begin(), doubled.end(), directed_edge_key(v, u));
+  };
+  const std::size_t corner_count = solid.corners.size();
+  std::vector<std::uint8_t> at_chord(solid.defs.size(), 0);
+  std::vector<std::uint32_t> next(corner_count), prev(corner_count), face_of(corner_count);
+  for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+    const SolidFace& face = solid.faces[f];
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+      for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+        if (is_doubled(edge.from, edge.to)) at_chord[edge.from] = at_chord[edge.to] = 1;
+        const std::uint32_t after = loop_edges(solid.corners, solid.loops[l]).next(edge.corner);
+        next[edge.corner] = after;
+        prev[after] = edge.corner;
+        face_of[edge.corner] = f;
+      }
+    }
+  }
+  // A corner of a face's region at a chord's end v: the corner whose edge comes
+  // in (w -> v) and the corner at v whose edge goes out (v -> x).
+  struct Sector {
+    VertexIndex vertex;
+    std::uint32_t in, out;
+  };
+  std::vector<Sector> sectors;
+  thread_local std::vector<std::uint32_t> at_vertex;
+  for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+    const SolidFace& face = solid.faces[f];
+    at_vertex.clear();
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+      const SolidLoop& loop = solid.loops[l];
+      for (std::uint32_t c = loop.first_corner; c < loop.first_corner + loop.corner_count; ++c) {
+        if (at_chord[solid.corners[c].vertex]) at_vertex.push_back(c);
+      }
+    }
+    std::sort(at_vertex.begin(), at_vertex.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return solid.corners[a].vertex != solid.corners[b].vertex ? solid.corners[a].vertex < solid.corners[b].vertex
+                                                                : a < b;
+    });
+    const FaceGeometry geometry{set, solid.defs, solid.approx, projection_of(set, face.plane), face.reversed};
+    for (std::size_t begin = 0; begin < at_vertex.size();) {
+      const VertexIndex v = solid.corners[at_vertex[begin]].vertex;
+      std::size_t end = begin;
+      while (end < at_vertex.size() && solid.corners[at_vertex[end]].vertex == v) ++end;
+      for (std::size_t i = begin; i < end; ++i) {
+        // The edge coming in at this visit of v, continued by the outgoing edge
+        // first clockwise from it among the face's visits of v.
+        const std::uint32_t in = prev[at_vertex[i]];
+        const VertexIndex w = solid.corners[in].vertex;
+        std::uint32_t out = at_vertex[begin];
+        for (std::size_t k = begin + 1; k < end; ++k) {
+          const std::uint32_t candidate = at_vertex[k];
+          if (clockwise_before(geometry, v, w, solid.corners[next[candidate]].vertex, solid.corners[next[out]].vertex)) {
+            out = candidate;
+          }
+        }
+        sectors.push_back({v, in, out});
+      }
+      begin = end;
+    }
+  }
+  std::sort(sectors.begin(), sectors.end(), [](const Sector& a, const Sector& b) {
+    return a.vertex != b.vertex ? a.vertex < b.vertex : a.out < b.out;
+  });
+  const auto is_cap = [&](std::uint32_t corner) { return solid.faces[face_of[corner]].plane == cut; };
+  // Per corner: the vertex its edge leaves from and the vertex it comes to, and
+  // the corner after it, as the sectors make them.
+  std::vector<VertexIndex> from(corner_count), to(corner_count);
+  for (std::uint32_t c = 0; c < corner_count; ++c) from[c] = solid.corners[c].vertex, to[c] = solid.corners[next[c]].vertex;
+  UnionFind fans;
+  for (std::size_t begin = 0; begin < sectors.size();) {
+    const VertexIndex v = sectors[begin].vertex;
+    std::size_t end = begin;
+    while (end < sectors.size() && sectors[end].vertex == v) ++end;
+    const auto count = static_cast<std::uint32_t>(end - begin);
+    fans.reset(count);
+    // Sector i leaves v towards x; the sector entering v from x is its neighbour
+    // around v, across a doubled edge only the one of the other kind.
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const Sector& a = sectors[begin + i];
+      const VertexIndex x = solid.corners[next[a.out]].vertex;
+      const bool chord = is_doubled(v, x);
+      for (std::uint32_t j = 0; j < count; ++j) {
+        const Sector& b = sectors[begin + j];
+        if (solid.corners[b.in].vertex == x && (!chord || is_cap(a.out) != is_cap(b.in))) fans.unite(i, j);
+      }
+    }
+    std::vector<VertexIndex> copy_of_root(count, no_index);
+    copy_of_root[fans.find(0)] = v;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      VertexIndex& copy = copy_of_root[fans.find(i)];
+      if (copy == no_index) {
+        copy = static_cast<VertexIndex>(solid.defs.size());
+        solid.defs.push_back(solid.defs[v]);
+        solid.approx.push_back(solid.approx[v]);
+      }
+      const Sector& s = sectors[begin + i];
+      from[s.out] = copy;
+      to[s.in] = copy;
+      next[s.in] = s.out;
+    }
+    begin = end;
+  }
+  // The loops again, each face's as its corners now follow each other (the same
+  // loops, from the same corners, where nothing changed).
+  std::vector<SolidLoop> loops;
+  std::vector<SolidCorner> corners;
+  loops.reserve(solid.loops.size());
+  corners.reserve(corner_count);
+  std::vector<std::uint8_t> placed(corner_count, 0);
+  for (SolidFace& face : solid.faces) {
+    const std::uint32_t first_loop = face.first_loop, loop_count = face.loop_count;
+    face.first_loop = static_cast<std::uint32_t>(loops.size());
+    for (std::uint32_t l = first_loop; l < first_loop + loop_count; ++l) {
+      const SolidLoop& loop = solid.loops[l];
+      for (std::uint32_t start = loop.first_corner; start < loop.first_corner + loop.corner_count; ++start) {
+        if (placed[start]) continue;
+        SolidLoop relinked{static_cast<std::uint32_t>(corners.size()), 0};
+        for (std::uint32_t c = start; !placed[c]; c = next[c]) {
+          placed[c] = 1;
+          corners.push_back({from[c], solid.corners[c].line});
+          ++relinked.corner_count;
+        }
+        loops.push_back(relinked);
+      }
+    }
+    face.loop_count = static_cast<std::uint32_t>(loops.size()) - face.first_loop;
+  }
+  solid.loops = std::move(loops);
+  solid.corners = std::move(corners);
+}
+
 // The pieces of one side: its faces plus its cap, separated into edge-connected
 // shells. A shell with a cap face is the outer shell of a piece (the cut crossed
 // it). A shell without one was not touched, so it is a whole input shell, and
 // the input tells what it is: an outer shell is a solid of its own, a cavity
 // joins its own outer shell when that is whole too, and otherwise the piece
 // around it (an exact ray cast; pieces with a cap face are never nested).
-void separate_side(const PlaneSet& set, std::span<const PointDef> defs, std::span<const ApproxPoint> approx,
-                   const FaceSet& faces, std::size_t first_cap_face, bool parent_convex, const InputShells& shells,
+void separate_side(const PlaneSet& set, PlaneRef cut, std::span<const PointDef> defs,
+                   std::span<const ApproxPoint> approx, const FaceSet& faces, std::size_t first_cap_face,
+                   bool parent_convex, const InputShells& shells,
                    std::span<const std::uint64_t> chord_keys, std::vector<Solid>& out) {
   thread_local std::vector<VertexIndex> local;
   thread_local std::vector<std::uint32_t> chosen;
@@ -219,15 +380,14 @@ void separate_side(const PlaneSet& set, std::span<const PointDef> defs, std::spa
       if (cap.cap && cap.key == surface.key && cap.from != surface.from) components.unite(surface.face, cap.face);
     }
   }
+  // Chords whose two sides are one piece (a tunnel whose lowest edge lies on
+  // the plane): that piece meets itself along the chord, and its sheets there
+  // get their own copies of the chord's ends once it is extracted.
+  bool any_pinched = false;
   for (const ChordUse& a : chord_uses) {
     for (const ChordUse& b : chord_uses) {
-      if (!a.cap && !b.cap && a.key == b.key && a.face < b.face && components.find(a.face) == components.find(b.face)) {
-        // The pieces on both sides of the edge are one piece, which would meet
-        // itself along the edge: exactly, no 2-manifold solid.
-        throw UnsupportedGeometryError(
-            "the cut plane holds a concave edge of the surface across the cut whose two sides are one piece: it "
-            "would be pinched along the edge, which no valid mesh represents");
-      }
+      any_pinched = any_pinched || (!a.cap && !b.cap && a.key == b.key && a.face < b.face &&
+                                    components.find(a.face) == components.find(b.face));
     }
   }
   thread_local std::vector<std::uint8_t> touched;
@@ -261,6 +421,7 @@ void separate_side(const PlaneSet& set, std::span<const PointDef> defs, std::spa
         group_touched[g] || shells.outer_of_shell[input_shell_of(groups[g])] == input_shell_of(groups[g]);
     if (!is_piece) continue;
     out.push_back(extract(defs, approx, faces, groups[g], local));
+    if (any_pinched && group_touched[g]) separate_pinched_chords(set, out.back(), cut);
     whole_outer_shell.push_back(group_touched[g] ? no_index : input_shell_of(groups[g]));
   }
   const std::size_t piece_count = out.size() - first;
@@ -397,7 +558,7 @@ SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, Surfac
     append_faces(below ? split.below : split.above, side);
     const std::size_t first_cap = side.faces.size();
     append_faces(below ? below_cap : above_cap, side);
-    separate_side(set, split.defs, split.approx, side, first_cap, solid.convex, shells,
+    separate_side(set, cut, split.defs, split.approx, side, first_cap, solid.convex, shells,
                   below ? chords.below_keys : chords.above_keys, below ? result.below : result.above);
   }
   return result;

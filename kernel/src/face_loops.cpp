@@ -25,19 +25,6 @@ Sign compare_on(const FaceGeometry& g, int axis, VertexIndex p, VertexIndex q) {
   return compare_coordinate(g.set, axis, g.defs[p], g.approx[p], g.defs[q], g.approx[q]);
 }
 
-// Is `b` before `c` going clockwise (seen from outside) from the ray v -> a?
-// Neither lies on the ray itself (edges at v never overlap).
-bool clockwise_before(const FaceGeometry& g, VertexIndex v, VertexIndex a, VertexIndex b, VertexIndex c) {
-  // Halves: angle in (0, pi) clockwise from v->a is 0, exactly pi is 1, beyond 2.
-  auto half = [&](VertexIndex x) {
-    const Sign s = g.orient(v, a, x);
-    return s == Sign::negative ? 0 : s == Sign::zero ? 1 : 2;
-  };
-  const int hb = half(b), hc = half(c);
-  if (hb != hc) return hb < hc;
-  if (hb == 1) return false;  // both opposite a: the same ray, cannot happen for distinct edges
-  return g.orient(v, b, c) == Sign::negative;
-}
 
 // The lexicographically smallest vertex of a loop in the projection frame.
 std::size_t lowest_corner(const FaceGeometry& g, std::span<const LoopEdge> loop) {
@@ -64,24 +51,48 @@ bool loop_has_vertex(std::span<const LoopEdge> loop, VertexIndex v) {
   return std::any_of(loop.begin(), loop.end(), [v](const LoopEdge& e) { return e.from == v; });
 }
 
-// A vertex of `loop` that is not a vertex of `other`, or no_index.
-VertexIndex vertex_off(std::span<const LoopEdge> loop, std::span<const LoopEdge> other) {
-  for (const LoopEdge& e : loop) {
-    if (!loop_has_vertex(other, e.from)) return e.from;
-  }
-  return no_index;
-}
-
-// Is loop `inner` inside loop `outer` (the two do not cross)?
+// Is loop `inner` inside loop `outer` (the two do not cross)? Decided at a
+// vertex of `inner` off `outer`: not one of its corners, nor at the place of
+// one (where a piece meets itself along a chord, copies of a vertex lie at one
+// point, cut_solid).
 bool loop_inside(const FaceGeometry& g, std::span<const LoopEdge> inner, std::span<const LoopEdge> outer) {
-  const VertexIndex v = vertex_off(inner, outer);
-  if (v == no_index) {
-    throw UnsupportedGeometryError("face loops: every vertex of a loop lies on another loop; cannot place it");
+  for (const LoopEdge& e : inner) {
+    if (loop_has_vertex(outer, e.from)) continue;
+    const Sign where = locate_in_loop(g, e.from, outer);
+    if (where != Sign::zero) return where == Sign::positive;
   }
-  return inside_loop(g, v, outer);
+  throw UnsupportedGeometryError("face loops: every vertex of a loop lies on another loop; cannot place it");
 }
 
 }  // namespace
+
+Sign locate_in_loop(const FaceGeometry& g, VertexIndex v, std::span<const LoopEdge> loop) {
+  const int i = (g.projection.axis + 1) % 3, j = (g.projection.axis + 2) % 3;
+  bool inside = false;
+  for (const LoopEdge& e : loop) {
+    const Sign height = compare_on(g, j, v, e.from);
+    if (height == Sign::zero && compare_on(g, i, v, e.from) == Sign::zero) return Sign::zero;
+    const bool a_above = height == Sign::positive;
+    const bool b_above = compare_on(g, j, v, e.to) == Sign::positive;
+    if (a_above == b_above) continue;
+    const Sign o = raw_orient(g, e.from, e.to, v);
+    if (o == Sign::zero) return Sign::zero;
+    if (b_above ? o == Sign::positive : o == Sign::negative) inside = !inside;
+  }
+  return inside ? Sign::positive : Sign::negative;
+}
+
+bool clockwise_before(const FaceGeometry& g, VertexIndex v, VertexIndex a, VertexIndex b, VertexIndex c) {
+  // Halves: angle in (0, pi) clockwise from v->a is 0, exactly pi is 1, beyond 2.
+  auto half = [&](VertexIndex x) {
+    const Sign s = g.orient(v, a, x);
+    return s == Sign::negative ? 0 : s == Sign::zero ? 1 : 2;
+  };
+  const int hb = half(b), hc = half(c);
+  if (hb != hc) return hb < hc;
+  if (hb == 1) return false;  // both opposite a: the same ray, cannot happen for distinct edges
+  return g.orient(v, b, c) == Sign::negative;
+}
 
 bool inside_loop(const FaceGeometry& g, VertexIndex v, std::span<const LoopEdge> loop) {
   const int j = (g.projection.axis + 2) % 3;

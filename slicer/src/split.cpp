@@ -208,10 +208,9 @@ class Splitter {
       Sign s = compare_along(set_, face.plane, cut_, out_.defs[a.vertex], out_.approx[a.vertex], out_.defs[b.vertex],
                              out_.approx[b.vertex]);
       if (reversed) s = flip(s);
-      if (s == Sign::zero && a.vertex != b.vertex) {
-        throw UnsupportedGeometryError("split: two distinct vertices at one point of a face (the solid is not embedded)");
-      }
-      return s == Sign::positive;
+      // Distinct vertices at one point: the copies a piece that meets itself
+      // along a chord has there (cut_solid), taken together below.
+      return s == Sign::zero ? a.vertex < b.vertex : s == Sign::positive;
     });
     below_edges_.clear();
     above_edges_.clear();
@@ -236,19 +235,55 @@ class Splitter {
         }
       }
     }
-    // New edges where the face lies on both sides of the line.
+    // New edges where the face lies on both sides of the line, between
+    // consecutive points (a point: the zero points at one place).
+    const auto same_place = [&](std::size_t i, std::size_t j) {
+      return compare_along(set_, face.plane, cut_, out_.defs[zero_points_[i].vertex], out_.approx[zero_points_[i].vertex],
+                           out_.defs[zero_points_[j].vertex], out_.approx[zero_points_[j].vertex]) == Sign::zero;
+    };
     bool inside_below = false, inside_above = false;
-    for (std::size_t k = 0; k + 1 < zero_points_.size(); ++k) {
-      inside_below ^= (zero_points_[k].below_count & 1u) != 0;
-      inside_above ^= (zero_points_[k].above_count & 1u) != 0;
-      if (inside_below && inside_above) {
-        const VertexIndex a = zero_points_[k].vertex, b = zero_points_[k + 1].vertex;
+    for (std::size_t k = 0; k < zero_points_.size();) {
+      std::size_t end = k + 1;
+      while (end < zero_points_.size() && same_place(k, end)) ++end;
+      for (std::size_t i = k; i < end; ++i) {
+        inside_below ^= (zero_points_[i].below_count & 1u) != 0;
+        inside_above ^= (zero_points_[i].above_count & 1u) != 0;
+      }
+      if (inside_below && inside_above && end < zero_points_.size()) {
+        std::size_t next_end = end + 1;
+        while (next_end < zero_points_.size() && same_place(end, next_end)) ++next_end;
+        const VertexIndex a = vertex_toward(face, k, end, zero_points_[end].vertex);
+        const VertexIndex b = vertex_toward(face, end, next_end, zero_points_[k].vertex);
         below_edges_.push_back({a, b, cut_line()});
         above_edges_.push_back({b, a, cut_line()});
       }
+      k = end;
     }
     emit_parts(face, below_edges_, out_.below, true);
     emit_parts(face, above_edges_, out_.above, false);
+  }
+
+  // Of the zero points [begin, end) at one place, the vertex whose corner of
+  // the face the new edge toward `toward` (on the line) starts into: the only
+  // one unless copies of a vertex meet there (cut_solid gives each sheet of a
+  // piece that meets itself along a chord its own copy of the chord's ends),
+  // else the copy one of whose corners in the face's loops holds the direction
+  // (strictly between its outgoing and incoming edges, clockwise from the
+  // incoming one, exactly).
+  VertexIndex vertex_toward(const SolidFace& face, std::size_t begin, std::size_t end, VertexIndex toward) const {
+    if (end - begin == 1) return zero_points_[begin].vertex;
+    const FaceGeometry geometry{set_, out_.defs, out_.approx, projection_of(set_, face.plane), face.reversed};
+    for (const SolidLoop& loop : augmented_loops_) {
+      VertexIndex before = augmented_[loop.first_corner + loop.corner_count - 1].vertex;
+      for (const CornerEdge& edge : loop_edges(augmented_, loop)) {
+        const VertexIndex at = edge.from, after = edge.to;
+        bool ours = false;
+        for (std::size_t i = begin; i < end && !ours; ++i) ours = zero_points_[i].vertex == at;
+        if (ours && clockwise_before(geometry, at, before, toward, after)) return at;
+        before = at;
+      }
+    }
+    throw UnsupportedGeometryError("split: two distinct vertices at one point of a face (the solid is not embedded)");
   }
 
   struct ZeroPoint {

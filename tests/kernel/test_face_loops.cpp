@@ -92,6 +92,13 @@ class FacePlane {
     }
     return it->second;
   }
+  // Another vertex at p's place, whether or not one is there already (as
+  // copies of a vertex lie at one point where a piece meets itself along a chord).
+  VertexIndex add_copy(Lattice p) {
+    lattice_.push_back(p);
+    points_.push_back(frame_.origin + frame_.e1 * static_cast<double>(p[0]) + frame_.e2 * static_cast<double>(p[1]));
+    return static_cast<VertexIndex>(points_.size() - 1);
+  }
   const Lattice& lattice(VertexIndex v) const { return lattice_[v]; }
 
   // The FaceGeometry over every point added so far (valid until the next add).
@@ -228,7 +235,7 @@ using EdgeKey = std::pair<VertexIndex, VertexIndex>;
 
 struct Tally {
   std::size_t regions = 0, holes = 0, convex_loops = 0, concave_loops = 0, inside = 0, outside = 0,
-              on_vertex_rows = 0;
+              on_vertex_rows = 0, on_boundary = 0;
 };
 
 // Groups the drawn loops' edges and checks the regions against the drawing.
@@ -333,8 +340,15 @@ void check_inside(FacePlane& plane, const std::vector<DrawnLoop>& drawn, Random&
     }
     queries.push_back(p);
   }
+  // At the place of a corner, as another vertex (copies of a vertex lie at one
+  // point where a piece meets itself along a chord): on the loop for
+  // locate_in_loop.
+  const std::size_t drawn_queries = queries.size();
+  for (const DrawnLoop& d : drawn) queries.push_back(d.corners.front());
   std::vector<VertexIndex> query_vertices;
-  for (const Lattice& p : queries) query_vertices.push_back(plane.add(p));
+  for (std::size_t q = 0; q < queries.size(); ++q) {
+    query_vertices.push_back(q < drawn_queries ? plane.add(queries[q]) : plane.add_copy(queries[q]));
+  }
   const FaceGeometry geometry = plane.geometry();
   for (std::size_t q = 0; q < queries.size(); ++q) {
     const Lattice& p = queries[q];
@@ -355,10 +369,13 @@ void check_inside(FacePlane& plane, const std::vector<DrawnLoop>& drawn, Random&
           if ((orient2(a, b, p) > 0) == upward) inside = !inside;
         }
       }
-      if (on_boundary) continue;  // inside_loop's precondition
       std::vector<LoopEdge> loop;
       for (std::size_t i = 0; i < c.size(); ++i) loop.push_back({plane.add(c[i]), plane.add(c[(i + 1) % c.size()]), {}});
       INFO("point (" << p[0] << ", " << p[1] << ")");
+      const Sign located = locate_in_loop(geometry, query_vertices[q], loop);
+      CHECK(located == (on_boundary ? Sign::zero : inside ? Sign::positive : Sign::negative));
+      tally.on_boundary += on_boundary;
+      if (on_boundary) continue;  // inside_loop's precondition
       CHECK(inside_loop(geometry, query_vertices[q], loop) == inside);
       ++(inside ? tally.inside : tally.outside);
       for (const Lattice& corner : c) tally.on_vertex_rows += corner[1] == p[1] || corner[0] == p[0];
@@ -400,6 +417,9 @@ TEST_CASE("group_into_regions: random nests of rings on every kind of plane (see
   CHECK(tally.inside >= 300);
   CHECK(tally.outside >= 1000);
   CHECK(tally.on_vertex_rows >= 200);
+  // Points on a loop, as locate_in_loop finds them: on its edges, at its
+  // corners, and copies of its corners (another vertex at the place).
+  CHECK(tally.on_boundary >= 100);
 }
 
 TEST_CASE("group_into_regions: loops touching at a vertex stay simple and keep their roles", "[plane][face-loops]") {

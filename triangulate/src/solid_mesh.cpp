@@ -1349,7 +1349,7 @@ mpq_class rounding_sweep_bound(const PlaneSet& set, const Solid& solid, bool any
 // Certification then vouches for the result, as for any other rounding.
 
 // The solid's vertices that lie on the plane of one of its cut faces (a cap)
-// strictly inside that face without being a corner of it. Exact.
+// inside that face or on its boundary without being a corner of it. Exact.
 std::vector<VertexIndex> corners_touching_caps(const PlaneSet& set, const Solid& solid) {
   std::vector<VertexIndex> touching;
   std::vector<PlaneRef> planes;
@@ -1373,13 +1373,17 @@ std::vector<VertexIndex> corners_touching_caps(const PlaneSet& set, const Solid&
       if (corner_of_plane[v] || side(set, plane, solid.defs[v], solid.approx[v]) != Sign::zero) continue;
       for (const SolidFace& face : solid.faces) {
         if (face.plane != plane) continue;
-        bool inside = false;
-        for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+        // On a loop (at the place of a corner: a copy of a vertex of a piece
+        // that meets itself along a chord) touches the cap as well.
+        bool inside = false, on = false;
+        for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count && !on; ++l) {
           loop.clear();
           for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) loop.push_back({edge.from, edge.to, {}});
-          if (inside_loop(geometry, v, loop)) inside = !inside;
+          const Sign where = locate_in_loop(geometry, v, loop);
+          on = where == Sign::zero;
+          if (where == Sign::positive) inside = !inside;
         }
-        if (inside) {
+        if (inside || on) {
           touching.push_back(v);
           break;
         }

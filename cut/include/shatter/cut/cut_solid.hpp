@@ -41,11 +41,15 @@ struct InputShells {
 /// first face. Where the plane holds a concave edge of the surface across the
 /// cap (a chord: both its faces on one side), the cap of that side is split
 /// along it and the pieces meeting there are separate solids, each with its own
-/// cap face. A solid may touch itself at a point exactly (a saddle vertex of the
-/// surface on the plane, or a cavity's corner on the cap: round_solid separates
-/// such points when it writes the piece). Throws UnsupportedGeometryError as
-/// split_solid and make_caps, and when the two sides of a chord are one piece
-/// (it would meet itself along the edge).
+/// cap face. When the two sides of a chord are one piece (a tunnel whose lowest
+/// edge lies on the plane), that piece meets itself along the chord: each of its
+/// two sheets there has its own copies of the chord's ends (distinct vertices at
+/// one exact point), so that the solid stays sound (check_solid), and a face
+/// whose loops met at such an end is relinked into the loops its corners then
+/// make. A solid may touch itself at a point exactly (a saddle vertex of the
+/// surface on the plane, a cavity's corner on the cap, or those copies:
+/// round_solid separates such points when it writes the piece). Throws
+/// UnsupportedGeometryError as split_solid and make_caps.
 /// `shells` describes the input shells (InputShells) for the faces' `source`
 /// triangles; it matters only when a cut leaves a whole shell untouched.
 SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, SurfaceId cap_surface,

@@ -80,11 +80,11 @@ struct PlaneCut {
 /// or moved against it (validate_mesh_against) instead of every pair.
 /// Guarantees: as cut_solid for the solids (closed, exact, meeting only on the
 /// cut, volumes adding up exactly), as round_solid for the meshes (a mesh with
-/// no defect passes validate_mesh; a piece that touches itself at a point is
-/// separated there, see round_solid; a piece thinner than its rounding
+/// no defect passes validate_mesh; a piece that touches itself at a point, or
+/// meets itself along a concave edge of the surface on the plane, is separated
+/// there, see cut_solid and round_solid; a piece thinner than its rounding
 /// vanishes, see CutPiece::vanished); deterministic. Throws
-/// UnsupportedGeometryError when the plane holds a concave edge across the cap
-/// whose two sides are one piece (cut_solid).
+/// UnsupportedGeometryError only as cut_solid does.
 PlaneCut cut_by_plane(const PlaneInput& input, const PlaneSet& set, const Solid& solid, const Mesh* solid_mesh,
                       PlaneRef cut, const PlaneCutOptions& options = {});
 

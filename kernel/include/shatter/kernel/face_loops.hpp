@@ -29,6 +29,14 @@ struct FaceGeometry {
   Sign orient(VertexIndex p, VertexIndex q, VertexIndex r) const;
 };
 
+/// Whether ray v -> b comes before ray v -> c going clockwise (seen from the
+/// outward side) from ray v -> a. Exact. Precondition: neither b nor c lies on
+/// ray v -> a, and b and c not on one ray from v (edges at a vertex of an
+/// embedded face never overlap). Where loops of a face meet at v, an incoming
+/// edge a -> v is continued by the outgoing edge v -> b first clockwise from
+/// v -> a: the two bound one corner of the face's region.
+bool clockwise_before(const FaceGeometry& g, VertexIndex v, VertexIndex a, VertexIndex b, VertexIndex c);
+
 /// Links `edges` into simple loops (no vertex twice) and groups them into regions.
 /// Preconditions: every vertex has as many incoming as outgoing edges; the edges
 /// bound a region on their left whose boundary pieces meet only at shared
@@ -43,6 +51,13 @@ void group_into_regions(const FaceGeometry& geometry, std::vector<LoopEdge>& edg
 /// True when the loop turns left or goes straight at every corner (seen from the
 /// outward side): a convex polygon. Exact.
 bool is_convex_loop(const FaceGeometry& geometry, std::span<const LoopEdge> loop);
+
+/// Where point `v` lies against the loop, by an exact ray cast in the
+/// projection: positive strictly inside, negative strictly outside, zero on it
+/// (on an edge, or at the place of a corner: copies of a vertex lie at one
+/// point where a piece meets itself along a chord, cut_solid). Precondition: v
+/// is on the plane.
+Sign locate_in_loop(const FaceGeometry& geometry, VertexIndex v, std::span<const LoopEdge> loop);
 
 /// Whether point `v` lies strictly inside the loop, by an exact ray cast in the
 /// projection. Precondition: v is on the plane and not on the loop.
