@@ -124,7 +124,9 @@ struct RepairReport {
 ///  5. remove exactly collinear triangles by flipping or collapsing edges
 ///     (remove_degenerate_faces; no point is moved or created);
 ///  6. fill each hole of at most `max_hole_edges` edges (by default all) with
-///     triangles over its own vertices (triangulate_hole; no new vertex); a hole
+///     triangles over its own vertices (triangulate_hole over every triangulation
+///     of them, cubic in the hole's edges: its default Delaunay-restricted search
+///     depends on memory addresses; no new vertex); a hole
 ///     whose border passes through one vertex twice (holes touching there), or
 ///     whose CGAL lid would repeat an edge once vertex copies are joined, is closed
 ///     over the welded vertices instead: split at the vertex it passes twice, each
