@@ -124,9 +124,10 @@ struct RepairReport {
 ///  5. remove exactly collinear triangles by flipping or collapsing edges
 ///     (remove_degenerate_faces; no point is moved or created);
 ///  6. fill each hole of at most `max_hole_edges` edges (by default all) with
-///     triangles over its own vertices (triangulate_hole over every triangulation
-///     of them, cubic in the hole's edges: its default Delaunay-restricted search
-///     depends on memory addresses; no new vertex); a hole
+///     triangles over its own vertices (triangulate_hole; no new vertex: up to 200
+///     edges over every triangulation of them, cubic in the hole's edges, since its
+///     Delaunay-restricted search breaks exact ties by memory address; a larger
+///     hole keeps that search, deterministic unless two lids weigh the same); a hole
 ///     whose border passes through one vertex twice or meets exactly one other
 ///     hole's border at a vertex (holes touching there), or whose CGAL lid would
 ///     repeat an edge once vertex copies are joined, is closed over the welded
