@@ -414,6 +414,110 @@ TEST_CASE("holes larger than the limit are left, and noted", "[repair]") {
 }
 
 // What repair does with each mesh in the corpus's bad/ folder, recorded.
+// The oriented triangles of `mesh` as position triples, each rotated to start at
+// its least position and the list sorted: equal for the same oriented surface
+// whatever its vertex and triangle numbering.
+std::vector<std::array<double, 9>> oriented_triangles(const Mesh& mesh) {
+  std::vector<std::array<double, 9>> all;
+  for (const Triangle& t : mesh.triangles) {
+    std::array<std::array<double, 3>, 3> corners;
+    for (int c = 0; c < 3; ++c) {
+      const Vec3& p = mesh.positions[t[c]];
+      corners[c] = {p.x, p.y, p.z};
+    }
+    const int first = int(std::min_element(corners.begin(), corners.end()) - corners.begin());
+    std::array<double, 9> key;
+    for (int c = 0; c < 3; ++c) std::copy(corners[(first + c) % 3].begin(), corners[(first + c) % 3].end(), key.begin() + 3 * c);
+    all.push_back(key);
+  }
+  std::sort(all.begin(), all.end());
+  return all;
+}
+
+TEST_CASE("a patch cut off all round by holes touching its corners is joined back, not closed on its own",
+          "[repair][touching]") {
+  // Regression (shatter-fuzz --repair-cases 800 --seed 2, case 7fdb8afdd0fc228b):
+  // two triangles of a torus whose four neighbours across their outer edges are
+  // removed hang on by their four corners alone. CGAL's orientation split those
+  // corners, the pair became a piece of its own, and its own border was lidded:
+  // closed into a tetrahedron beside the torus, then separated from it (step 9)
+  // and, where it bounded its volume inside out, turned over: input triangles
+  // came back reversed. Each removed triangle is the gap between the two fans at
+  // each of its corners, a hole of three edges whose one lid is the triangle
+  // itself: every case must give the torus back exactly, every triangle as read.
+  // Over every pair of triangles sharing an edge, on a torus and on the fuzz's
+  // scaled copy of it.
+  std::size_t cases = 0;
+  for (const Mesh& whole : {torus(1.0, 0.35, 12, 10), transformed(torus(1.0, 0.35, 12, 10), 1e6, {0, 0, 0})}) {
+    const std::vector<std::array<double, 9>> expected = oriented_triangles(whole);
+    std::map<std::pair<VertexIndex, VertexIndex>, std::size_t> triangle_of_edge;  // directed edge -> triangle
+    for (std::size_t t = 0; t < whole.triangle_count(); ++t) {
+      for (int c = 0; c < 3; ++c) triangle_of_edge[{whole.triangles[t][c], whole.triangles[t][(c + 1) % 3]}] = t;
+    }
+    const auto across = [&](std::size_t t, int c) {
+      return triangle_of_edge.at({whole.triangles[t][(c + 1) % 3], whole.triangles[t][c]});
+    };
+    for (std::size_t t = 0; t < whole.triangle_count(); ++t) {
+      for (int c = 0; c < 3; ++c) {
+        const std::size_t u = across(t, c);
+        if (u < t) continue;  // each pair once
+        std::set<std::size_t> doomed;
+        for (int k = 1; k < 3; ++k) doomed.insert(across(t, (c + k) % 3));
+        for (int k = 0; k < 3; ++k) {
+          const std::size_t w = across(u, k);
+          if (w != t) doomed.insert(w);
+        }
+        if (doomed.size() != 4 || doomed.count(t) || doomed.count(u)) continue;
+        Mesh mesh = whole;
+        remove_triangles(mesh, {doomed.begin(), doomed.end()});
+        INFO("triangles " << t << " and " << u << " of " << whole.triangle_count());
+        const RepairReport report = repair_mesh(mesh);
+        INFO(report.summary());
+        CHECK(problem_after_repair(mesh) == "");
+        CHECK(oriented_triangles(mesh) == expected);
+        CHECK_FALSE(names(report, RepairKind::reversed_triangles));
+        ++cases;
+      }
+    }
+  }
+  CHECK(cases == 2 * 360);
+}
+
+TEST_CASE("repairing one mesh again and again gives the same bytes (hole lids do not depend on the heap)",
+          "[repair]") {
+  // Regression (shatter-fuzz --repair-cases 800 --seed 2, case c3e86611603229a3,
+  // "two repairs of the same mesh differ"): CGAL's triangulate_hole searched a 3D
+  // Delaunay triangulation of a hole's vertices by default, whose edge iterator
+  // starts each edge at its incident cell of least address; between lids of
+  // exactly equal weight (the symmetric holes of a torus) the one it met first
+  // won, so the lid followed where malloc had put the cells. The case itself
+  // (four triangles at one vertex of the fuzz's scaled torus), then the whole fan
+  // of vertices around the torus, each repaired several times with the heap
+  // stirred in between, must give one mesh, byte for byte.
+  const Mesh whole = transformed(torus(1.0, 0.35, 12, 10), 1e6, {0, 0, 0});
+  std::vector<std::vector<std::size_t>> damages{{190, 191, 192, 213}};
+  for (VertexIndex v = 3; v < whole.vertex_count(); v += 11) damages.push_back(triangles_at(whole, v));
+  for (const std::vector<std::size_t>& doomed : damages) {
+    Mesh damaged = whole;
+    remove_triangles(damaged, doomed);
+    INFO("removed " << doomed.size() << " triangles, the first " << doomed.front());
+    std::string first;
+    for (int repeat = 0; repeat < 6; ++repeat) {
+      // Blocks of several sizes, half of them freed again: the next repair's
+      // allocations land elsewhere.
+      std::vector<std::vector<char>> stir;
+      for (int k = 0; k < 7 * repeat + 3; ++k) stir.emplace_back(std::size_t(24 + 40 * (k % 7) + 200 * repeat));
+      for (std::size_t k = 0; k < stir.size(); k += 2) stir[k] = {};
+      Mesh mesh = damaged;
+      repair_mesh(mesh);
+      REQUIRE(problem_after_repair(mesh) == "");
+      const std::string bytes = canonical_bytes(mesh);
+      if (repeat == 0) first = bytes;
+      CHECK(bytes == first);
+    }
+  }
+}
+
 TEST_CASE("every bad corpus mesh is repaired or refused as recorded", "[repair][corpus]") {
   struct Expected {
     bool valid;

@@ -1433,60 +1433,29 @@ struct Separation {
 Separation separate_touching(Mesh& mesh, std::span<const VertexIndex> touching, double scale,
                              std::span<const std::uint32_t> partner = {}) {
   const std::size_t n = mesh.positions.size();
-  // The triangle corners at each vertex (corner = 3 * triangle + c), grouped by vertex.
-  std::vector<std::uint32_t> first(n + 1, 0);
-  for (const Triangle& t : mesh.triangles) {
-    for (const VertexIndex v : t) ++first[v + 1];
-  }
-  for (std::size_t v = 0; v < n; ++v) first[v + 1] += first[v];
-  std::vector<std::uint32_t> slot(first.begin(), first.end() - 1), at(first.back());
-  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
-    for (std::uint32_t c = 0; c < 3; ++c) at[slot[mesh.triangles[t][c]]++] = 3 * t + c;
-  }
   const auto vertex_of = [&](std::uint32_t corner, std::uint32_t step) {
     return mesh.triangles[corner / 3][(corner % 3 + step) % 3];
   };
-  // Each vertex's corners fall into fans: the corner leaving v along v -> w and the
-  // corner entering v along w -> v are neighbours around v (closed: one each).
+  // The fans of every vertex where several meet, each vertex's first keeping it
+  // (split_vertex_fans), and every vertex of `touching` that has one fan: all
+  // move, in vertex order, each vertex's fans in the order of their first corner.
+  std::vector<VertexFan> split = split_vertex_fans(mesh, partner);
   std::vector<std::uint8_t> wanted(n, 0);
   for (const VertexIndex v : touching) wanted[v] = 1;
-  struct Fan {
-    VertexIndex vertex;              ///< the vertex the fan's corners use (a new copy for all but the first)
-    std::vector<std::uint32_t> corners;
-  };
-  std::vector<Fan> to_move;
-  UnionFind fans;
+  for (const VertexFan& fan : split) wanted[fan.split_from] = 0;
+  std::vector<std::vector<std::uint32_t>> lone_corners(n);  // of the wanted vertices left whole, in triangle order
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    for (std::uint32_t c = 0; c < 3; ++c) {
+      const VertexIndex v = mesh.triangles[t][c];
+      if (v < n && wanted[v]) lone_corners[v].push_back(3 * t + c);
+    }
+  }
+  std::vector<VertexFan> to_move;
+  to_move.reserve(split.size() + touching.size());
+  std::size_t next_split = 0;
   for (VertexIndex v = 0; v < n; ++v) {
-    const std::uint32_t begin = first[v], count = first[v + 1] - first[v];
-    if (count == 0) continue;
-    fans.reset(count);
-    for (std::uint32_t i = 0; i < count; ++i) {
-      const VertexIndex next = vertex_of(at[begin + i], 1);
-      // Corner i leaves v along its triangle's slot at corner i, v -> next.
-      const std::uint32_t paired = partner.empty() ? no_index : partner[at[begin + i]];
-      for (std::uint32_t j = 0; j < count; ++j) {
-        if (vertex_of(at[begin + j], 2) == next && (paired == no_index || paired == at[begin + j] / 3)) {
-          fans.unite(i, j);
-        }
-      }
-    }
-    std::vector<std::uint32_t> fan_of_root(count, no_index);
-    std::vector<Fan> found;
-    for (std::uint32_t i = 0; i < count; ++i) {
-      const std::uint32_t root = fans.find(i);
-      if (fan_of_root[root] == no_index) {
-        fan_of_root[root] = static_cast<std::uint32_t>(found.size());
-        found.push_back({v, {}});
-      }
-      found[fan_of_root[root]].corners.push_back(at[begin + i]);
-    }
-    if (found.size() == 1 && !wanted[v]) continue;
-    for (std::size_t f = 1; f < found.size(); ++f) {
-      found[f].vertex = static_cast<VertexIndex>(mesh.positions.size());
-      mesh.positions.push_back(mesh.positions[v]);
-      for (const std::uint32_t corner : found[f].corners) mesh.triangles[corner / 3][corner % 3] = found[f].vertex;
-    }
-    for (Fan& fan : found) to_move.push_back(std::move(fan));
+    if (!lone_corners[v].empty()) to_move.push_back({v, v, std::move(lone_corners[v])});
+    while (next_split < split.size() && split[next_split].split_from == v) to_move.push_back(std::move(split[next_split++]));
   }
   // Moving p to p' changes the volume by dot(p' - p, sum of (b - p) x (c - p))/6
   // over its fan's triangles (p, b, c): each fan is a closed ring, so this equals
@@ -1507,7 +1476,7 @@ Separation separate_touching(Mesh& mesh, std::span<const VertexIndex> touching, 
     Vec3 from, to;
   };
   std::vector<Move> moves;
-  for (const Fan& fan : to_move) {
+  for (const VertexFan& fan : to_move) {
     const Vec3 p = mesh.positions[fan.vertex];
     Vec3 direction, normal_sum;
     double nearest = INFINITY, area = 0;

@@ -124,12 +124,18 @@ struct RepairReport {
 ///  5. remove exactly collinear triangles by flipping or collapsing edges
 ///     (remove_degenerate_faces; no point is moved or created);
 ///  6. fill each hole of at most `max_hole_edges` edges (by default all) with
-///     triangles over its own vertices (triangulate_hole; no new vertex); a hole
-///     whose border passes through one vertex twice (holes touching there), or
-///     whose CGAL lid would repeat an edge once vertex copies are joined, is closed
-///     over the welded vertices instead: split at the vertex it passes twice, each
-///     part by its least-area triangulation that adds no edge or triangle the mesh
-///     has (none when every triangulation does: noted, the hole left);
+///     triangles over its own vertices (triangulate_hole; no new vertex: up to 200
+///     edges over every triangulation of them, cubic in the hole's edges, since its
+///     Delaunay-restricted search breaks exact ties by memory address; a larger
+///     hole keeps that search, deterministic unless two lids weigh the same); a hole
+///     whose border passes through one vertex twice or meets exactly one other
+///     hole's border at a vertex (holes touching there), or whose CGAL lid would
+///     repeat an edge once vertex copies are joined, is closed over the welded
+///     vertices instead: where two borders pass a vertex, each gap between its
+///     two fans becomes one hole (from one fan's border to the other's), split
+///     where a hole still passes a vertex twice, each part by its least-area
+///     triangulation that adds no edge or triangle the mesh has (none when every
+///     triangulation does: noted, the hole left);
 ///  7. when the mesh is closed, orient every shell to bound a volume, the outermost
 ///     outward (orient_to_bound_a_volume);
 ///  8. when closed and still self-intersecting and `resolve_self_intersections`,
