@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "shatter/generators/corpus.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "support/checks.hpp"
@@ -306,6 +307,50 @@ TEST_CASE("a plane that misses returns the mesh whole and says so") {
   CHECK(run.exit_code == 0);
   CHECK(run.out.find("returned whole") != std::string::npos);
   CHECK(files_in(out) == 1);
+}
+
+TEST_CASE("slice writes the piece that meets itself along an edge on the plane either way up") {
+  // A block with a diamond tunnel along y whose lowest edge (x = 2, z = 1) lies on
+  // z = 1: above it, the block around the tunnel is one piece meeting itself along
+  // that edge. shatter slice exited 3 ("pinched along the edge") until 2026-12-04.
+  const std::vector<Vec2> section{{0, 0}, {4, 0}, {4, 4}, {0, 4}, {2, 1}, {3, 2}, {2, 3}, {1, 2}};
+  const std::vector<std::vector<VertexIndex>> loops{{0, 1, 2, 3}, {4, 7, 6, 5}};
+  const std::vector<Triangle> ends{{0, 1, 4}, {1, 2, 5}, {1, 5, 4}, {2, 3, 6}, {2, 6, 5}, {3, 0, 7}, {3, 7, 6}, {0, 4, 7}};
+  const auto n = static_cast<VertexIndex>(section.size());
+  std::vector<Vec3> positions;
+  for (const double y : {0.0, 3.0}) {
+    for (const Vec2& p : section) positions.push_back({p.x, y, p.y});
+  }
+  std::vector<Triangle> triangles;
+  for (const Triangle& t : ends) {
+    triangles.push_back(t);
+    triangles.push_back({t[0] + n, t[2] + n, t[1] + n});
+  }
+  for (const auto& loop : loops) {
+    for (std::size_t i = 0; i < loop.size(); ++i) {
+      const VertexIndex a = loop[i], b = loop[(i + 1) % loop.size()];
+      triangles.push_back({a, b + n, b});
+      triangles.push_back({a, a + n, b + n});
+    }
+  }
+  const fs::path dir = scratch("tunnel");
+  fs::create_directories(dir);
+  const Mesh tunnel = mesh_from(std::move(positions), std::move(triangles));
+  REQUIRE(validate_mesh(tunnel).summary() == "valid");
+  write_mesh(tunnel, dir / "tunnel.off", MeshFormat::off);
+  for (const std::string plane : {"0,0,1,-1", "0,0,-1,1"}) {
+    INFO(plane);
+    const fs::path out = dir / ("out" + plane);
+    const Run run = run_shatter("slice " + quoted(dir / "tunnel.off") + " --plane " + plane + " --json --out " + quoted(out));
+    REQUIRE(run.exit_code == 0);
+    const auto report = nlohmann::json::parse(run.out);
+    REQUIRE(report["pieces"].size() == 2);
+    REQUIRE(files_in(out) == 2);
+    for (const auto& entry : fs::directory_iterator(out)) {
+      INFO(entry.path().filename());
+      CHECK(validate_mesh(read_mesh(entry.path())).summary() == "valid");
+    }
+  }
 }
 
 TEST_CASE("slice says a volume is beyond the double range, not JSON null") {
