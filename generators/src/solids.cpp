@@ -24,6 +24,28 @@ Mesh mesh_from(std::vector<Vec3> positions, std::vector<Triangle> triangles) {
   return mesh;
 }
 
+Mesh prism(const std::vector<Vec2>& polygon, const std::vector<std::vector<VertexIndex>>& loops,
+           const std::vector<Triangle>& triangles, double length) {
+  const auto n = static_cast<VertexIndex>(polygon.size());
+  std::vector<Vec3> positions;
+  for (const double y : {0.0, length}) {
+    for (const Vec2& p : polygon) positions.push_back({p.x, y, p.y});
+  }
+  std::vector<Triangle> faces;
+  for (const Triangle& t : triangles) {
+    faces.push_back(t);                               // y = 0 faces -y
+    faces.push_back({t[0] + n, t[2] + n, t[1] + n});  // y = length faces +y
+  }
+  for (const auto& loop : loops) {
+    for (std::size_t i = 0; i < loop.size(); ++i) {
+      const VertexIndex a = loop[i], b = loop[(i + 1) % loop.size()];
+      faces.push_back({a, b + n, b});
+      faces.push_back({a, a + n, b + n});
+    }
+  }
+  return mesh_from(std::move(positions), std::move(faces));
+}
+
 Mesh unit_cube() {
   return mesh_from({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}},
                    {{0, 2, 1}, {0, 3, 2},    // z = 0

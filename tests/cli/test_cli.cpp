@@ -316,26 +316,9 @@ TEST_CASE("slice writes the piece that meets itself along an edge on the plane e
   const std::vector<Vec2> section{{0, 0}, {4, 0}, {4, 4}, {0, 4}, {2, 1}, {3, 2}, {2, 3}, {1, 2}};
   const std::vector<std::vector<VertexIndex>> loops{{0, 1, 2, 3}, {4, 7, 6, 5}};
   const std::vector<Triangle> ends{{0, 1, 4}, {1, 2, 5}, {1, 5, 4}, {2, 3, 6}, {2, 6, 5}, {3, 0, 7}, {3, 7, 6}, {0, 4, 7}};
-  const auto n = static_cast<VertexIndex>(section.size());
-  std::vector<Vec3> positions;
-  for (const double y : {0.0, 3.0}) {
-    for (const Vec2& p : section) positions.push_back({p.x, y, p.y});
-  }
-  std::vector<Triangle> triangles;
-  for (const Triangle& t : ends) {
-    triangles.push_back(t);
-    triangles.push_back({t[0] + n, t[2] + n, t[1] + n});
-  }
-  for (const auto& loop : loops) {
-    for (std::size_t i = 0; i < loop.size(); ++i) {
-      const VertexIndex a = loop[i], b = loop[(i + 1) % loop.size()];
-      triangles.push_back({a, b + n, b});
-      triangles.push_back({a, a + n, b + n});
-    }
-  }
   const fs::path dir = scratch("tunnel");
   fs::create_directories(dir);
-  const Mesh tunnel = mesh_from(std::move(positions), std::move(triangles));
+  const Mesh tunnel = prism(section, loops, ends, 3);
   REQUIRE(validate_mesh(tunnel).summary() == "valid");
   write_mesh(tunnel, dir / "tunnel.off", MeshFormat::off);
   for (const std::string plane : {"0,0,1,-1", "0,0,-1,1"}) {

@@ -109,31 +109,6 @@ std::vector<Plane> planes_through_vertices(const Mesh& mesh, std::size_t count, 
   return planes;
 }
 
-// A prism along y from 0 to `length` over a polygon in the (x, z) plane: its
-// loops (the outer one counter-clockwise in (x, z), holes clockwise) and a
-// triangulation of it, counter-clockwise.
-Mesh prism(const std::vector<Vec2>& polygon, const std::vector<std::vector<VertexIndex>>& loops,
-           const std::vector<Triangle>& triangles, double length) {
-  const auto n = static_cast<VertexIndex>(polygon.size());
-  std::vector<Vec3> positions;
-  for (const double y : {0.0, length}) {
-    for (const Vec2& p : polygon) positions.push_back({p.x, y, p.y});
-  }
-  std::vector<Triangle> faces;
-  for (const Triangle& t : triangles) {
-    faces.push_back(t);                                 // y = 0 faces -y
-    faces.push_back({t[0] + n, t[2] + n, t[1] + n});    // y = length faces +y
-  }
-  for (const auto& loop : loops) {
-    for (std::size_t i = 0; i < loop.size(); ++i) {
-      const VertexIndex a = loop[i], b = loop[(i + 1) % loop.size()];
-      faces.push_back({a, b + n, b});
-      faces.push_back({a, a + n, b + n});
-    }
-  }
-  return mesh_from(std::move(positions), std::move(faces));
-}
-
 }  // namespace
 
 TEST_CASE("a concave edge across the cap: each piece along it gets its own cap face", "[plane][cut]") {

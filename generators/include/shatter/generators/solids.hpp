@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/vec.hpp"
 
 namespace shatter::test {
 
@@ -19,6 +20,13 @@ namespace shatter::test {
 /// on the original surface. Nothing is checked or welded: a bad index or an open
 /// surface is the caller's to build on purpose (the validator tests do).
 Mesh mesh_from(std::vector<Vec3> positions, std::vector<Triangle> triangles);
+
+/// Makes a prism along y from 0 to `length` over a polygon in the (x, z) plane:
+/// `loops` index `polygon` (the outer loop counter-clockwise in (x, z), holes
+/// clockwise) and `triangles` triangulate it counter-clockwise. Closed and outward
+/// when they are; nothing is checked. (The cut tests' grooves and tunnels.)
+Mesh prism(const std::vector<Vec2>& polygon, const std::vector<std::vector<VertexIndex>>& loops,
+           const std::vector<Triangle>& triangles, double length);
 
 /// Makes the unit cube [0,1]^3, 12 triangles, outward, with the fixed numbering the
 /// validator tests refer to: vertices 0-3 are the z = 0 square counter-clockwise
