@@ -137,7 +137,15 @@ ExportSummary export_corpus(const MeshPool& pool, std::uint64_t seed, const std:
       if (file.empty()) {
         const std::string stem = file_stem(c.mesh_name);
         const std::size_t use = stem_uses[stem]++;
-        file = "meshes/" + stem + (use == 0 ? "" : "-" + std::to_string(use)) + ".obj";
+        // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on
+        // "-" + std::to_string(use) inlined here.
+        file = "meshes/";
+        file += stem;
+        if (use != 0) {
+          file += '-';
+          file += std::to_string(use);
+        }
+        file += ".obj";
         write_file_atomically(staging / file, bytes);
         files_by_hash.emplace(hash, file);
         summary.bytes += bytes.size();
