@@ -259,10 +259,10 @@ void separate_pinched_chords(const PlaneSet& set, Solid& solid, PlaneRef cut) {
     return a.vertex != b.vertex ? a.vertex < b.vertex : a.out < b.out;
   });
   const auto is_cap = [&](std::uint32_t corner) { return solid.faces[face_of[corner]].plane == cut; };
-  // Per corner: the vertex its edge leaves from and the vertex it comes to, and
-  // the corner after it, as the sectors make them.
-  std::vector<VertexIndex> from(corner_count), to(corner_count);
-  for (std::uint32_t c = 0; c < corner_count; ++c) from[c] = solid.corners[c].vertex, to[c] = solid.corners[next[c]].vertex;
+  // Per corner: the vertex its edge leaves from, and (next) the corner after
+  // it, as the sectors make them.
+  std::vector<VertexIndex> from(corner_count);
+  for (std::uint32_t c = 0; c < corner_count; ++c) from[c] = solid.corners[c].vertex;
   UnionFind fans;
   for (std::size_t begin = 0; begin < sectors.size();) {
     const VertexIndex v = sectors[begin].vertex;
@@ -292,7 +292,6 @@ void separate_pinched_chords(const PlaneSet& set, Solid& solid, PlaneRef cut) {
       }
       const Sector& s = sectors[begin + i];
       from[s.out] = copy;
-      to[s.in] = copy;
       next[s.in] = s.out;
     }
     begin = end;
