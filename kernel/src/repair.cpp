@@ -464,24 +464,23 @@ class Repairer {
     }
     std::size_t filled = 0, filled_edges = 0, new_triangles = 0;
     std::vector<std::size_t> too_large;
-    const auto cycle_at = [&](HalfedgeIndex h) {
-      std::vector<SmVertex> cycle;
-      HalfedgeIndex walk = h;
-      do {
-        cycle.push_back(sm_.source(walk));
-        walk = sm_.next(walk);
-      } while (walk != h);
-      return cycle;
-    };
-    // How often the borders of the holes to fill pass through each welded vertex.
+    // Each border's vertices, walked once (filling one hole leaves the others'
+    // border halfedges as they are), and how often the borders of the holes to
+    // fill pass through each welded vertex.
+    std::vector<std::vector<SmVertex>> borders(cycles.size());
     std::map<std::uint32_t, std::size_t> visits;
-    for (HalfedgeIndex h : cycles) {
-      const std::vector<SmVertex> cycle = cycle_at(h);
-      if (cycle.size() > options_.max_hole_edges) continue;
-      for (const SmVertex v : cycle) ++visits[welded_id(v)];
+    for (std::size_t k = 0; k < cycles.size(); ++k) {
+      HalfedgeIndex walk = cycles[k];
+      do {
+        borders[k].push_back(sm_.source(walk));
+        walk = sm_.next(walk);
+      } while (walk != cycles[k]);
+      if (borders[k].size() > options_.max_hole_edges) continue;
+      for (const SmVertex v : borders[k]) ++visits[welded_id(v)];
     }
-    for (HalfedgeIndex h : cycles) {
-      std::vector<SmVertex> cycle = cycle_at(h);
+    for (std::size_t k = 0; k < cycles.size(); ++k) {
+      const HalfedgeIndex h = cycles[k];
+      std::vector<SmVertex> cycle = std::move(borders[k]);
       const std::size_t edges = cycle.size();
       if (edges > options_.max_hole_edges) {
         too_large.push_back(edges);
