@@ -34,6 +34,7 @@
 #include "position_key.hpp"
 #include "repair_touching.hpp"
 #include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/self_intersections.hpp"
 #include "shatter/kernel/shells.hpp"
 #include "shatter/kernel/validate.hpp"
 
@@ -445,6 +446,62 @@ class Repairer {
     return true;
   }
 
+  // Whether a lid just added to the surface meets it, or itself, beyond the
+  // vertices and edges they share: each lid triangle is tested exactly
+  // (triangles_intersect) against every other triangle whose box meets its own,
+  // with vertices named by position (welded_id), so that CGAL's copies of one
+  // vertex count as one. Triangles with exactly collinear corners are left out
+  // (step 5 removes them; the predicate's precondition excludes them). Only a
+  // choice between lids rests on it: the repaired mesh is validated in full.
+  // Cost: a pass over the surface's boxes, plus the pairs whose boxes meet.
+  bool lid_crosses_surface(const std::vector<FaceIndex>& patch) {
+    std::vector<Vec3> positions;
+    std::unordered_map<std::uint32_t, VertexIndex> local;
+    const auto index_of = [&](SmVertex v) {
+      const auto [it, fresh] = local.try_emplace(welded_id(v), static_cast<VertexIndex>(positions.size()));
+      if (fresh) positions.push_back({sm_.point(v).x(), sm_.point(v).y(), sm_.point(v).z()});
+      return it->second;
+    };
+    const auto corners_of = [&](FaceIndex f) {
+      const HalfedgeIndex h = sm_.halfedge(f);
+      return std::array<SmVertex, 3>{sm_.source(h), sm_.target(h), sm_.target(sm_.next(h))};
+    };
+    const auto box_of = [&](const std::array<SmVertex, 3>& c) {
+      return sm_.point(c[0]).bbox() + sm_.point(c[1]).bbox() + sm_.point(c[2]).bbox();
+    };
+    const auto flat = [&](const std::array<SmVertex, 3>& c) {
+      return CGAL::collinear(sm_.point(c[0]), sm_.point(c[1]), sm_.point(c[2]));
+    };
+    std::vector<FaceIndex> sorted_patch = patch;
+    std::sort(sorted_patch.begin(), sorted_patch.end());
+    std::vector<Triangle> lid;
+    std::vector<CGAL::Bbox_3> lid_boxes;
+    CGAL::Bbox_3 lid_box;
+    for (FaceIndex f : patch) {
+      const auto c = corners_of(f);
+      if (flat(c)) continue;
+      lid.push_back({index_of(c[0]), index_of(c[1]), index_of(c[2])});
+      lid_boxes.push_back(box_of(c));
+      lid_box += lid_boxes.back();
+    }
+    for (std::size_t i = 0; i < lid.size(); ++i) {
+      for (std::size_t j = i + 1; j < lid.size(); ++j) {
+        if (CGAL::do_overlap(lid_boxes[i], lid_boxes[j]) && triangles_intersect(positions, lid[i], lid[j])) return true;
+      }
+    }
+    for (FaceIndex f : sm_.faces()) {
+      if (std::binary_search(sorted_patch.begin(), sorted_patch.end(), f)) continue;
+      const auto c = corners_of(f);
+      const CGAL::Bbox_3 box = box_of(c);
+      if (!CGAL::do_overlap(box, lid_box) || flat(c)) continue;
+      const Triangle other{index_of(c[0]), index_of(c[1]), index_of(c[2])};
+      for (std::size_t i = 0; i < lid.size(); ++i) {
+        if (CGAL::do_overlap(lid_boxes[i], box) && triangles_intersect(positions, lid[i], other)) return true;
+      }
+    }
+    return false;
+  }
+
   // Step 6 (before the zero-area step, so that flips can work on a closed surface).
   void fill_holes() {
     std::vector<HalfedgeIndex> cycles;
@@ -519,9 +576,27 @@ class Repairer {
       // main against 1.0 s at 400 edges, 0.22 against 7.1 s at 800): a larger
       // hole keeps the Delaunay search, deterministic unless two of its lids
       // weigh exactly the same (README, "Repair": a known limitation).
+      // The full search's lid is the least weight (worst dihedral angle, then
+      // area) over every triangulation, including lids that pass through the
+      // surface (a hole in a saddle, CGAL's demo meshes negative.off and
+      // fold.off, 5 of its 143 meshes refused for it); the Delaunay search keeps
+      // to triangles of the hole's 3D Delaunay triangulation, which rarely
+      // cross. So a lid that crosses the surface is replaced by the Delaunay
+      // search's when that one does not (its ties are then the limitation
+      // above), and kept otherwise (validation names the crossing).
       constexpr std::size_t kFullSearchHoleEdges = 200;
-      PMP::triangulate_hole(sm_, h, std::back_inserter(patch),
-                            CGAL::parameters::use_delaunay_triangulation(cycle.size() > kFullSearchHoleEdges));
+      const bool full_search = cycle.size() <= kFullSearchHoleEdges;
+      PMP::triangulate_hole(sm_, h, std::back_inserter(patch), CGAL::parameters::use_delaunay_triangulation(!full_search));
+      if (full_search && !patch.empty() && lid_crosses_surface(patch)) {
+        for (FaceIndex f : patch) CGAL::Euler::remove_face(sm_.halfedge(f), sm_);
+        patch.clear();
+        PMP::triangulate_hole(sm_, h, std::back_inserter(patch), CGAL::parameters::use_delaunay_triangulation(true));
+        if (patch.empty() || lid_crosses_surface(patch)) {
+          for (FaceIndex f : patch) CGAL::Euler::remove_face(sm_.halfedge(f), sm_);
+          patch.clear();
+          PMP::triangulate_hole(sm_, h, std::back_inserter(patch), CGAL::parameters::use_delaunay_triangulation(false));
+        }
+      }
       if (patch.empty()) {
         // CGAL found no lid (its search keeps to triangles it deems valid, e.g.
         // on a flat or folded border): the least-area lid tries all of them.
