@@ -340,4 +340,193 @@ std::vector<TrianglePair> self_intersecting_pairs_by_box_tree(std::span<const Ve
   return pairs;
 }
 
+std::vector<TrianglePair> intersecting_pairs_with(std::span<const Vec3> positions, std::span<const Triangle> triangles,
+                                                  std::span<const std::uint32_t> members,
+                                                  std::span<const std::uint8_t> tested) {
+  std::vector<TrianglePair> pairs;
+  const std::size_t count = members.size();
+  const auto is_tested = [&](std::size_t t) { return tested[t] != 0; };
+  if (count < 2 || std::none_of(members.begin(), members.end(), is_tested)) return pairs;
+  // Per member (by its position k in `members`): its float box and cell range.
+  std::vector<FloatBox> boxes(count);
+  double lowest[3] = {INFINITY, INFINITY, INFINITY};
+  double extent_sum = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    const Triangle& tri = triangles[members[k]];
+    const Vec3& p = positions[tri[0]];
+    const Vec3& q = positions[tri[1]];
+    const Vec3& r = positions[tri[2]];
+    double largest = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double lo = std::min({p[axis], q[axis], r[axis]}), hi = std::max({p[axis], q[axis], r[axis]});
+      boxes[k].lo[axis] = round_down(lo);
+      boxes[k].hi[axis] = round_up(hi);
+      lowest[axis] = std::min(lowest[axis], lo);
+      largest = std::max(largest, hi - lo);
+    }
+    extent_sum += largest;
+  }
+  Grid grid;
+  const double cell = 3 * extent_sum / static_cast<double>(count);
+  if (!(cell > 0) || !std::isfinite(cell) || !(1 / cell > 0) || !std::isfinite(1 / cell)) {
+    return intersecting_pairs_with_by_box_tree(positions, triangles, members, tested);
+  }
+  grid.inverse_cell = 1 / cell;
+  for (int axis = 0; axis < 3; ++axis) grid.origin[axis] = lowest[axis];
+
+  struct CellRange {
+    std::uint32_t lo[3], hi[3];
+  };
+  std::vector<CellRange> ranges(count);
+  std::vector<std::uint8_t> is_large(count, 0);
+  std::uint64_t entries = 0;
+  bool any_large = false;
+  for (std::size_t k = 0; k < count; ++k) {
+    std::uint64_t cells = 1;
+    for (int axis = 0; axis < 3; ++axis) {
+      ranges[k].lo[axis] = grid.cell_of(boxes[k].lo[axis], axis);
+      ranges[k].hi[axis] = grid.cell_of(boxes[k].hi[axis], axis);
+      cells *= ranges[k].hi[axis] - ranges[k].lo[axis] + 1;
+    }
+    if (cells > max_cells_per_box) {
+      is_large[k] = 1;
+      any_large = true;
+    } else {
+      entries += cells;
+    }
+  }
+  if (entries > std::numeric_limits<std::uint32_t>::max()) {
+    return intersecting_pairs_with_by_box_tree(positions, triangles, members, tested);
+  }
+  const std::uint64_t bucket_count = std::bit_ceil(std::max<std::uint64_t>(16, entries));
+  const std::uint64_t mask = bucket_count - 1;
+  const auto for_each_cell = [&](std::size_t k, auto&& visit) {
+    const CellRange& range = ranges[k];
+    for (std::uint32_t x = range.lo[0]; x <= range.hi[0]; ++x) {
+      for (std::uint32_t y = range.lo[1]; y <= range.hi[1]; ++y) {
+        for (std::uint32_t z = range.lo[2]; z <= range.hi[2]; ++z) visit(Grid::bucket_of(x, y, z, mask));
+      }
+    }
+  };
+  // The buckets the tested members occupy: an untested member is entered only
+  // there. A pair with a tested member is tested in the bucket of the low corner
+  // of the boxes' overlap, a cell inside both boxes, which the tested one marked.
+  std::vector<std::uint8_t> occupied(bucket_count, 0);
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!is_large[k] && is_tested(members[k])) for_each_cell(k, [&](std::uint64_t b) { occupied[b] = 1; });
+  }
+  // A counting sort of the entries by bucket, each member's entries together,
+  // so a member entered twice in one bucket appears twice in a row.
+  std::vector<std::uint32_t> start(bucket_count + 1, 0);
+  const auto entered = [&](std::size_t k, std::uint64_t b) { return is_tested(members[k]) || occupied[b]; };
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!is_large[k]) {
+      for_each_cell(k, [&](std::uint64_t b) {
+        if (entered(k, b)) ++start[b + 1];
+      });
+    }
+  }
+  for (std::uint64_t b = 0; b < bucket_count; ++b) start[b + 1] += start[b];
+  std::vector<std::uint32_t> slots(start[bucket_count]);
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t k = 0; k < count; ++k) {
+      if (!is_large[k]) {
+        for_each_cell(k, [&](std::uint64_t b) {
+          if (entered(k, b)) slots[fill[b]++] = static_cast<std::uint32_t>(k);
+        });
+      }
+    }
+  }
+  const auto report = [&](std::size_t i, std::size_t j) {
+    const std::size_t s = members[i], t = members[j];
+    if (triangles_intersect(positions, triangles[s], triangles[t])) pairs.emplace_back(std::min(s, t), std::max(s, t));
+  };
+  // Each tested member s walks its own cells; a member t in the cell's bucket
+  // whose box meets s's is tested when that cell holds the low corner of the
+  // boxes' overlap (one cell, which both boxes cover: the pair is found there
+  // and nowhere else), and, t tested as well, when s comes first.
+  for (std::size_t s = 0; s < count; ++s) {
+    if (is_large[s] || !is_tested(members[s])) continue;
+    const FloatBox& box_s = boxes[s];
+    const CellRange& range = ranges[s];
+    for (std::uint32_t x = range.lo[0]; x <= range.hi[0]; ++x) {
+      for (std::uint32_t y = range.lo[1]; y <= range.hi[1]; ++y) {
+        for (std::uint32_t z = range.lo[2]; z <= range.hi[2]; ++z) {
+          const std::uint64_t b = Grid::bucket_of(x, y, z, mask);
+          const std::uint32_t begin = start[b], end = start[b + 1];
+          for (std::uint32_t j = begin; j < end; ++j) {
+            const std::uint32_t t = slots[j];
+            if (t == s || (j > begin && slots[j - 1] == t)) continue;  // s itself, or t entered twice
+            if (t < s && is_tested(members[t])) continue;               // that pair is s's turn at t
+            const FloatBox& box_t = boxes[t];
+            if (!boxes_meet(box_s, box_t)) continue;
+            if (grid.cell_of(std::max(box_s.lo[0], box_t.lo[0]), 0) != x ||
+                grid.cell_of(std::max(box_s.lo[1], box_t.lo[1]), 1) != y ||
+                grid.cell_of(std::max(box_s.lo[2], box_t.lo[2]), 2) != z) {
+              continue;
+            }
+            report(s, t);
+          }
+        }
+      }
+    }
+  }
+  // The long members with the box tree: a tested long one against every member
+  // (two tested long ones once), an untested long one against the tested members
+  // in the grid (the tested long ones found it already).
+  if (any_large) {
+    std::vector<TriangleBox> long_tested, long_untested, every, gridded_tested;
+    for (std::size_t k = 0; k < count; ++k) {
+      const TriangleBox box = box_of(positions, triangles[members[k]], k);
+      every.push_back(box);
+      if (is_large[k]) (is_tested(members[k]) ? long_tested : long_untested).push_back(box);
+      else if (is_tested(members[k])) gridded_tested.push_back(box);
+    }
+    if (!long_tested.empty()) {
+      CGAL::box_intersection_d(
+          long_tested.begin(), long_tested.end(), every.begin(), every.end(),
+          [&](const TriangleBox& a, const TriangleBox& c) {
+            const std::size_t i = a.handle(), j = c.handle();
+            if (i == j || (is_large[j] && is_tested(members[j]) && j < i)) return;
+            report(i, j);
+          },
+          std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
+    }
+    if (!long_untested.empty() && !gridded_tested.empty()) {
+      CGAL::box_intersection_d(
+          long_untested.begin(), long_untested.end(), gridded_tested.begin(), gridded_tested.end(),
+          [&](const TriangleBox& a, const TriangleBox& c) { report(a.handle(), c.handle()); }, std::ptrdiff_t{10},
+          CGAL::Box_intersection_d::CLOSED);
+    }
+  }
+  sort_unique(pairs);
+  return pairs;
+}
+
+std::vector<TrianglePair> intersecting_pairs_with_by_box_tree(std::span<const Vec3> positions,
+                                                              std::span<const Triangle> triangles,
+                                                              std::span<const std::uint32_t> members,
+                                                              std::span<const std::uint8_t> tested) {
+  std::vector<TriangleBox> tested_boxes, member_boxes;
+  member_boxes.reserve(members.size());
+  for (const std::uint32_t t : members) {
+    const TriangleBox box = box_of(positions, triangles[t], t);
+    member_boxes.push_back(box);
+    if (tested[t]) tested_boxes.push_back(box);
+  }
+  std::vector<TrianglePair> pairs;
+  if (tested_boxes.empty()) return pairs;
+  CGAL::box_intersection_d(
+      tested_boxes.begin(), tested_boxes.end(), member_boxes.begin(), member_boxes.end(),
+      [&](const TriangleBox& a, const TriangleBox& b) {
+        const std::size_t i = a.handle(), j = b.handle();
+        if (i == j || (tested[j] && j < i)) return;  // each pair of tested triangles once
+        if (triangles_intersect(positions, triangles[i], triangles[j])) pairs.emplace_back(std::min(i, j), std::max(i, j));
+      },
+      std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
+  sort_unique(pairs);
+  return pairs;
+}
+
 }  // namespace shatter

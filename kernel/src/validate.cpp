@@ -607,7 +607,7 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
   ValidationReport report = validate_masked(mesh, without, &is_new);
   if (!report.valid()) return report;
   if (trusted) untrust_shared_positions(mesh, is_new);
-  std::vector<TriangleBox> all, fresh;
+  std::vector<std::uint32_t> all;  // the triangles searched
   all.reserve(mesh.triangles.size());
   // With a plane the new triangles lie along, only triangles within the slab the
   // new ones span can meet them: each triangle's range of n·p + d, in doubles
@@ -635,31 +635,18 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
   }
   report.self_intersections_checked = true;
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
-  // Tests the triangles of `tested` against those of `against` whose boxes meet
-  // theirs, exactly; `in_tested` marks the triangles of `tested`, so that a pair
-  // of them is tested once.
-  const auto search = [&](std::vector<TriangleBox>& tested, std::vector<TriangleBox>& against,
-                          const std::vector<std::uint8_t>& in_tested) {
-    if (tested.empty()) return;
-    CGAL::box_intersection_d(
-        tested.begin(), tested.end(), against.begin(), against.end(),
-        [&](const TriangleBox& a, const TriangleBox& b) {
-          const std::size_t i = a.handle(), j = b.handle();
-          if (i == j || (in_tested[j] && j < i)) return;  // each pair within `tested` once
-          if (triangles_intersect(mesh.positions, mesh.triangles[i], mesh.triangles[j])) {
-            pairs.emplace_back(std::min(i, j), std::max(i, j));
-          }
-        },
-        std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
+  // Tests the triangles of `members` flagged in `tested` against every other
+  // member whose box meets theirs, exactly (intersecting_pairs_with: a hashed
+  // grid, the same pairs as CGAL's box intersection of the tested boxes against
+  // the members').
+  const auto search = [&](const std::vector<std::uint32_t>& members, const std::vector<std::uint8_t>& tested) {
+    const std::vector<TrianglePair> found = intersecting_pairs_with(mesh.positions, mesh.triangles, members, tested);
+    pairs.insert(pairs.end(), found.begin(), found.end());
   };
   if (!near) {
-    fresh.reserve(mesh.triangles.size());
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-      const TriangleBox box = box_of(mesh.positions, mesh.triangles[t], t);
-      all.push_back(box);
-      if (is_new[t]) fresh.push_back(box);
-    }
-    search(fresh, all, is_new);
+    all.resize(mesh.triangles.size());
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) all[t] = static_cast<std::uint32_t>(t);
+    search(all, is_new);
   } else {
     // The new triangles split in two: those flat along the plane (the cap, all
     // corners within a rounding's reach of it: their ranges inside [-flat, flat])
@@ -685,21 +672,18 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
       }
     }
     const auto meets = [&](std::size_t t, double lo, double hi) { return !(range[t][1] < lo || range[t][0] > hi); };
-    std::vector<TriangleBox> flat_boxes, near_flat;
+    std::vector<std::uint32_t> near_flat;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       const bool side_reach = meets(t, side_lo, side_hi), flat_reach = meets(t, flat_lo, flat_hi);
       if (!side_reach && !flat_reach && !is_new[t]) continue;
-      const TriangleBox box = box_of(mesh.positions, mesh.triangles[t], t);
       // The side triangles against every triangle in their slab but the flat ones;
       // the flat ones against every triangle reaching Z, the side ones included
       // (most side triangles, those of a clipped face away from the cut, do not).
-      if ((side_reach || is_side[t]) && !is_flat[t]) all.push_back(box);
-      if (is_side[t]) fresh.push_back(box);
-      if (is_flat[t]) flat_boxes.push_back(box);
-      if (flat_reach || is_flat[t]) near_flat.push_back(box);
+      if ((side_reach || is_side[t]) && !is_flat[t]) all.push_back(static_cast<std::uint32_t>(t));
+      if (flat_reach || is_flat[t]) near_flat.push_back(static_cast<std::uint32_t>(t));
     }
-    search(fresh, all, is_side);
-    search(flat_boxes, near_flat, is_flat);
+    search(all, is_side);
+    search(near_flat, is_flat);
   }
   std::sort(pairs.begin(), pairs.end());
   append_self_intersections(report, pairs);

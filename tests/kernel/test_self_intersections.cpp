@@ -2,7 +2,8 @@
 // on small inputs, against every pair decided by CGAL alone (no filter): the same
 // pairs on seeded solids, intersecting pairs of solids, pinched copies, lattice
 // soups full of coplanar, touching and shared-vertex triangles, and meshes with a
-// few long triangles (the finder's box-tree side path).
+// few long triangles (the finder's box-tree side path). The same for the finder
+// of the pairs with a tested triangle among chosen members.
 
 #include <catch2/catch.hpp>
 
@@ -111,6 +112,34 @@ void check_same_pairs(const std::string& name, const Mesh& mesh, bool brute_forc
   if (brute_force) CHECK(grid == brute_force_pairs(mesh));
 }
 
+// intersecting_pairs_with against its box-tree reference and, on small meshes,
+// against the brute force's pairs restricted to the members with a tested one,
+// for a random choice of members and of tested triangles at the given densities.
+std::size_t check_same_pairs_with(const std::string& name, const Mesh& mesh, std::mt19937_64& random,
+                                  double member_share, double tested_share, bool brute_force) {
+  std::bernoulli_distribution member(member_share), test(tested_share);
+  std::vector<std::uint32_t> members;
+  std::vector<std::uint8_t> tested(mesh.triangles.size(), 0);
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    tested[t] = test(random);  // flags outside the members must be ignored
+    if (member(random)) members.push_back(t);
+  }
+  INFO(name << ": " << mesh.triangles.size() << " triangles, " << members.size() << " members, tested share "
+            << tested_share);
+  const std::vector<TrianglePair> grid = intersecting_pairs_with(mesh.positions, mesh.triangles, members, tested);
+  CHECK(grid == intersecting_pairs_with_by_box_tree(mesh.positions, mesh.triangles, members, tested));
+  if (brute_force) {
+    std::vector<std::uint8_t> is_member(mesh.triangles.size(), 0);
+    for (const std::uint32_t t : members) is_member[t] = 1;
+    std::vector<TrianglePair> expected;
+    for (const TrianglePair& p : brute_force_pairs(mesh)) {
+      if (is_member[p.first] && is_member[p.second] && (tested[p.first] || tested[p.second])) expected.push_back(p);
+    }
+    CHECK(grid == expected);
+  }
+  return grid.size();
+}
+
 }  // namespace
 
 TEST_CASE("the grid finder finds the box tree's pairs, and every pair CGAL alone finds, on seeded meshes",
@@ -183,6 +212,73 @@ TEST_CASE("the grid finder agrees with the box tree on the corpus", "[validate][
       const Mesh mesh = read_mesh(path);
       if (has_collinear_triangle(mesh)) continue;
       check_same_pairs(path.filename().string(), mesh, false);
+      ++meshes;
+    }
+  }
+  CHECK(meshes >= 10);
+}
+
+TEST_CASE("the grid finder of pairs with a tested triangle finds the box tree's pairs, on seeded meshes",
+          "[validate][self-intersection]") {
+  std::mt19937_64 random(20261204);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  std::size_t meshes_with_pairs = 0, pairs_found = 0, checked = 0;
+  const auto run = [&](const std::string& name, const Mesh& mesh, bool brute_force) {
+    if (has_collinear_triangle(mesh)) return;  // outside the precondition
+    // Every member tested, a few tested (validate_mesh_against's case: a cut's
+    // new triangles among the trusted ones), a subset of members, none tested.
+    for (const auto& [member_share, tested_share] :
+         {std::pair{1.0, 1.0}, std::pair{1.0, 0.1}, std::pair{0.7, 0.3}, std::pair{1.0, 0.02}, std::pair{0.8, 0.0}}) {
+      const std::size_t found = check_same_pairs_with(name, mesh, random, member_share, tested_share, brute_force);
+      pairs_found += found;
+      meshes_with_pairs += found > 0;
+      ++checked;
+    }
+  };
+  for (int seed = 0; seed < 30; ++seed) {
+    const std::string tag = " #" + std::to_string(seed);
+    const Mesh a = test::ellipsoid({0, 0, 0}, {1, 0.8 + 0.2 * unit(random), 0.7}, 8 + seed % 5, 6 + seed % 3);
+    const Mesh b = test::torus(0.9, 0.3 + 0.1 * unit(random), 9 + seed % 4, 6);
+    const Vec3 shift{unit(random), unit(random), unit(random)};
+    run("ellipsoid and torus" + tag, test::merge({a, test::transformed(b, 1.0, shift)}), seed % 4 == 0);
+    const double s = 0.5 + 0.5 * (seed % 3);
+    run("boxes on shared planes" + tag,
+        test::merge({test::grid_box({0, 0, 0}, {1, 1, 1}, 1 + seed % 3), test::box({s, 0, 0}, {s + 1, 1, 1}),
+                     test::box({0.25, 0.25, 1}, {0.75, 0.75, 1.5})}),
+        true);
+    run("snapped ellipsoid" + tag, snapped(test::ellipsoid({0.1, 0, 0}, {1, 1, 1}, 12, 9), 1.0 / (4 + seed % 8)),
+        seed % 4 == 0);
+    run("lattice soup" + tag, lattice_soup(random, 12 + seed, 40 + 5 * seed, 3, 1.0), true);
+    run("fine lattice soup" + tag, lattice_soup(random, 60, 150, 6 + seed % 5, 0.125), true);
+    // Long triangles (the box-tree side path), tested or not as the draw falls.
+    {
+      Mesh crossed = test::ellipsoid({0, 0, 0}, {1, 1, 1}, 30, 20);
+      const auto base = static_cast<VertexIndex>(crossed.positions.size());
+      for (int k = 0; k < 4; ++k) {
+        for (int c = 0; c < 3; ++c) crossed.positions.push_back({2 * unit(random), 2 * unit(random), 2 * unit(random)});
+        crossed.triangles.push_back({base + 3 * k, base + 3 * k + 1, base + 3 * k + 2});
+      }
+      crossed.triangles.push_back({0, base, base + 4});  // long, and sharing a vertex with the solid
+      crossed.surfaces.resize(crossed.triangles.size(), 0);
+      run("long triangles" + tag, crossed, false);
+    }
+  }
+  // Real intersections were found (860 draws, 540 with pairs, 286,403 pairs).
+  CHECK(checked >= 800);
+  CHECK(meshes_with_pairs > 400);
+  CHECK(pairs_found > 100000);
+}
+
+TEST_CASE("the grid finder of pairs with a tested triangle agrees with the box tree on the corpus",
+          "[validate][self-intersection][corpus]") {
+  std::mt19937_64 random(7);
+  std::size_t meshes = 0;
+  for (const auto& list : {test::valid_meshes(), test::self_intersecting_meshes()}) {
+    for (const auto& path : list) {
+      const Mesh mesh = read_mesh(path);
+      if (has_collinear_triangle(mesh)) continue;
+      check_same_pairs_with(path.filename().string(), mesh, random, 1.0, 0.05, false);
+      check_same_pairs_with(path.filename().string(), mesh, random, 0.5, 0.5, false);
       ++meshes;
     }
   }

@@ -10,6 +10,7 @@
 // meet: a pair that intersects is never missed by either.
 
 #include <cstddef>
+#include <cstdint>
 #include <span>
 #include <utility>
 #include <vector>
@@ -52,5 +53,31 @@ std::vector<TrianglePair> self_intersecting_pairs(std::span<const Vec3> position
 /// constant. For tests and benchmarks.
 std::vector<TrianglePair> self_intersecting_pairs_by_box_tree(std::span<const Vec3> positions,
                                                               std::span<const Triangle> triangles);
+
+/// The pairs of triangles among `members` (indices into `triangles`, each once)
+/// that intersect (triangles_intersect) and of which at least one is tested
+/// (`tested[t] != 0`; one flag per triangle of `triangles`), sorted as
+/// self_intersecting_pairs sorts them: the search of a mesh most of whose
+/// triangles are known not to meet each other (validate_mesh_against tests only
+/// the triangles a cut made). Candidates come from the same hashed uniform grid
+/// (cells three times the members' mean box size, a pair tested once, in the cell
+/// holding the low corner of the overlap of their float boxes rounded outward); a
+/// triangle that is not tested is entered only in the buckets a tested one
+/// occupies, and pairs of two untested triangles are never looked at. Members whose
+/// boxes span more than 64 cells go to CGAL's box intersection, as there.
+/// Preconditions: as triangles_intersect, for every member.
+/// Guarantees: the same pairs as intersecting_pairs_with_by_box_tree;
+/// deterministic. Failure: none (std::bad_alloc aside).
+std::vector<TrianglePair> intersecting_pairs_with(std::span<const Vec3> positions, std::span<const Triangle> triangles,
+                                                  std::span<const std::uint32_t> members,
+                                                  std::span<const std::uint8_t> tested);
+
+/// The reference for intersecting_pairs_with: CGAL's box_intersection_d of the
+/// tested members' closed boxes against all members' (what validate_mesh_against
+/// ran before the grid). Same preconditions and result; for tests and benchmarks.
+std::vector<TrianglePair> intersecting_pairs_with_by_box_tree(std::span<const Vec3> positions,
+                                                              std::span<const Triangle> triangles,
+                                                              std::span<const std::uint32_t> members,
+                                                              std::span<const std::uint8_t> tested);
 
 }  // namespace shatter
