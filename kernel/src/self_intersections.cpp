@@ -438,7 +438,57 @@ std::vector<TrianglePair> intersecting_pairs_with(std::span<const Vec3> position
       }
     }
   }
+  // Each tested member's plane, as a separating direction: n (the cross product
+  // of two edges, in doubles; any direction would be sound) and the range of
+  // n·x over its corners, widened by a bound on the rounding of every n·x taken
+  // here. With |x_i| <= bound[i] for every corner and box corner (each lies in a
+  // member's float box), a dot product of three terms errs by at most
+  // 3.001u·sum |n_i| bound[i]; the range and a box's extreme each err by that, so
+  // 8u·sum |n_i| bound[i] (plus 2^-1000 for products that underflow) covers both
+  // and the rounding of the widening itself. A box whose extremes along n lie
+  // past the widened range on one side holds no point of the plane's triangle:
+  // its triangle cannot meet the tested one (not even at a shared vertex, which
+  // would lie in both ranges), so triangles_intersect is not asked. Overflow
+  // gives an infinite or NaN bound, and a comparison with it never separates.
+  double bound[3] = {0, 0, 0};
+  for (std::size_t k = 0; k < count; ++k) {
+    for (int axis = 0; axis < 3; ++axis) {
+      bound[axis] = std::max({bound[axis], std::fabs(static_cast<double>(boxes[k].lo[axis])),
+                              std::fabs(static_cast<double>(boxes[k].hi[axis]))});
+    }
+  }
+  struct Separator {
+    double n[3], lo, hi;
+  };
+  std::vector<Separator> separators(count);
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!is_tested(members[k])) continue;
+    const Triangle& tri = triangles[members[k]];
+    const Vec3 n = cross(positions[tri[1]] - positions[tri[0]], positions[tri[2]] - positions[tri[0]]);
+    const double slack =
+        8 * 0x1p-53 * (std::fabs(n.x) * bound[0] + std::fabs(n.y) * bound[1] + std::fabs(n.z) * bound[2]) + 0x1p-1000;
+    double lo = INFINITY, hi = -INFINITY;
+    for (const VertexIndex v : tri) {
+      const double value = n.x * positions[v].x + n.y * positions[v].y + n.z * positions[v].z;
+      lo = std::min(lo, value);
+      hi = std::max(hi, value);
+    }
+    separators[k] = {{n.x, n.y, n.z}, lo - slack, hi + slack};
+  }
+  // Whether member k's box lies strictly beyond tested member s's plane range.
+  const auto separated = [&](std::size_t s, std::size_t k) {
+    const Separator& sep = separators[s];
+    const FloatBox& box = boxes[k];
+    double least = 0, most = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double lo = sep.n[axis] * box.lo[axis], hi = sep.n[axis] * box.hi[axis];
+      least += std::min(lo, hi);
+      most += std::max(lo, hi);
+    }
+    return least > sep.hi || most < sep.lo;
+  };
   const auto report = [&](std::size_t i, std::size_t j) {
+    if (is_tested(members[i]) ? separated(i, j) : separated(j, i)) return;
     const std::size_t s = members[i], t = members[j];
     if (triangles_intersect(positions, triangles[s], triangles[t])) pairs.emplace_back(std::min(s, t), std::max(s, t));
   };

@@ -64,7 +64,9 @@ std::vector<TrianglePair> self_intersecting_pairs_by_box_tree(std::span<const Ve
 /// holding the low corner of the overlap of their float boxes rounded outward); a
 /// triangle that is not tested is entered only in the buckets a tested one
 /// occupies, and pairs of two untested triangles are never looked at. Members whose
-/// boxes span more than 64 cells go to CGAL's box intersection, as there.
+/// boxes span more than 64 cells go to CGAL's box intersection, as there. A
+/// candidate whose box lies beyond the tested triangle's plane (in doubles, past a
+/// bound on their rounding) is dropped before the exact test: it cannot meet it.
 /// Preconditions: as triangles_intersect, for every member.
 /// Guarantees: the same pairs as intersecting_pairs_with_by_box_tree;
 /// deterministic. Failure: none (std::bad_alloc aside).
