@@ -342,7 +342,8 @@ std::vector<TrianglePair> self_intersecting_pairs_by_box_tree(std::span<const Ve
 
 std::vector<TrianglePair> intersecting_pairs_with(std::span<const Vec3> positions, std::span<const Triangle> triangles,
                                                   std::span<const std::uint32_t> members,
-                                                  std::span<const std::uint8_t> tested) {
+                                                  std::span<const std::uint8_t> tested,
+                                                  std::span<const std::uint32_t> embedded) {
   std::vector<TrianglePair> pairs;
   const std::size_t count = members.size();
   const auto is_tested = [&](std::size_t t) { return tested[t] != 0; };
@@ -369,7 +370,7 @@ std::vector<TrianglePair> intersecting_pairs_with(std::span<const Vec3> position
   Grid grid;
   const double cell = 3 * extent_sum / static_cast<double>(count);
   if (!(cell > 0) || !std::isfinite(cell) || !(1 / cell > 0) || !std::isfinite(1 / cell)) {
-    return intersecting_pairs_with_by_box_tree(positions, triangles, members, tested);
+    return intersecting_pairs_with_by_box_tree(positions, triangles, members, tested, embedded);
   }
   grid.inverse_cell = 1 / cell;
   for (int axis = 0; axis < 3; ++axis) grid.origin[axis] = lowest[axis];
@@ -396,7 +397,7 @@ std::vector<TrianglePair> intersecting_pairs_with(std::span<const Vec3> position
     }
   }
   if (entries > std::numeric_limits<std::uint32_t>::max()) {
-    return intersecting_pairs_with_by_box_tree(positions, triangles, members, tested);
+    return intersecting_pairs_with_by_box_tree(positions, triangles, members, tested, embedded);
   }
   const std::uint64_t bucket_count = std::bit_ceil(std::max<std::uint64_t>(16, entries));
   const std::uint64_t mask = bucket_count - 1;
@@ -488,16 +489,25 @@ std::vector<TrianglePair> intersecting_pairs_with(std::span<const Vec3> position
     return least > sep.hi || most < sep.lo;
   };
   const auto report = [&](std::size_t i, std::size_t j) {
-    if (is_tested(members[i]) ? separated(i, j) : separated(j, i)) return;
     const std::size_t s = members[i], t = members[j];
+    if (!embedded.empty() && embedded[s] == embedded[t] && embedded[s] != no_embedded_group) return;
+    if (is_tested(s) ? separated(i, j) : separated(j, i)) return;
     if (triangles_intersect(positions, triangles[s], triangles[t])) pairs.emplace_back(std::min(s, t), std::max(s, t));
   };
   // Each tested member s walks its own cells; a member t in the cell's bucket
   // whose box meets s's is tested when that cell holds the low corner of the
   // boxes' overlap (one cell, which both boxes cover: the pair is found there
   // and nowhere else), and, t tested as well, when s comes first.
+  // Per member, in the order the inner loop reads them: tested, and its group.
+  std::vector<std::uint8_t> member_tested(count);
+  std::vector<std::uint32_t> member_group(count, no_embedded_group);
+  for (std::size_t k = 0; k < count; ++k) {
+    member_tested[k] = is_tested(members[k]);
+    if (!embedded.empty()) member_group[k] = embedded[members[k]];
+  }
   for (std::size_t s = 0; s < count; ++s) {
-    if (is_large[s] || !is_tested(members[s])) continue;
+    if (is_large[s] || !member_tested[s]) continue;
+    const std::uint32_t group_s = member_group[s];
     const FloatBox& box_s = boxes[s];
     const CellRange& range = ranges[s];
     for (std::uint32_t x = range.lo[0]; x <= range.hi[0]; ++x) {
@@ -508,7 +518,8 @@ std::vector<TrianglePair> intersecting_pairs_with(std::span<const Vec3> position
           for (std::uint32_t j = begin; j < end; ++j) {
             const std::uint32_t t = slots[j];
             if (t == s || (j > begin && slots[j - 1] == t)) continue;  // s itself, or t entered twice
-            if (t < s && is_tested(members[t])) continue;               // that pair is s's turn at t
+            if (t < s && member_tested[t]) continue;                    // that pair is s's turn at t
+            if (group_s != no_embedded_group && member_group[t] == group_s) continue;  // certified apart
             const FloatBox& box_t = boxes[t];
             if (!boxes_meet(box_s, box_t)) continue;
             if (grid.cell_of(std::max(box_s.lo[0], box_t.lo[0]), 0) != x ||
@@ -557,7 +568,8 @@ std::vector<TrianglePair> intersecting_pairs_with(std::span<const Vec3> position
 std::vector<TrianglePair> intersecting_pairs_with_by_box_tree(std::span<const Vec3> positions,
                                                               std::span<const Triangle> triangles,
                                                               std::span<const std::uint32_t> members,
-                                                              std::span<const std::uint8_t> tested) {
+                                                              std::span<const std::uint8_t> tested,
+                                                              std::span<const std::uint32_t> embedded) {
   std::vector<TriangleBox> tested_boxes, member_boxes;
   member_boxes.reserve(members.size());
   for (const std::uint32_t t : members) {
@@ -572,11 +584,150 @@ std::vector<TrianglePair> intersecting_pairs_with_by_box_tree(std::span<const Ve
       [&](const TriangleBox& a, const TriangleBox& b) {
         const std::size_t i = a.handle(), j = b.handle();
         if (i == j || (tested[j] && j < i)) return;  // each pair of tested triangles once
+        if (!embedded.empty() && embedded[i] == embedded[j] && embedded[i] != no_embedded_group) return;
         if (triangles_intersect(positions, triangles[i], triangles[j])) pairs.emplace_back(std::min(i, j), std::max(i, j));
       },
       std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
   sort_unique(pairs);
   return pairs;
+}
+
+namespace {
+
+using SegmentBox = CGAL::Box_intersection_d::Box_with_handle_d<double, 2, std::size_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
+
+// Whether q lies on the closed segment ab, given that a, b, q are collinear:
+// exact coordinate comparisons.
+bool on_collinear_segment(const Vec2& a, const Vec2& b, const Vec2& q) {
+  return std::min(a.x, b.x) <= q.x && q.x <= std::max(a.x, b.x) && std::min(a.y, b.y) <= q.y && q.y <= std::max(a.y, b.y);
+}
+
+// Whether the closed segments ab and cd share a point, exactly.
+bool segments_meet(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
+  const Sign o1 = orient2d(a, b, c), o2 = orient2d(a, b, d), o3 = orient2d(c, d, a), o4 = orient2d(c, d, b);
+  if (o1 != Sign::zero && o2 != Sign::zero && o1 != o2 && o3 != Sign::zero && o4 != Sign::zero && o3 != o4) return true;
+  return (o1 == Sign::zero && on_collinear_segment(a, b, c)) || (o2 == Sign::zero && on_collinear_segment(a, b, d)) ||
+         (o3 == Sign::zero && on_collinear_segment(c, d, a)) || (o4 == Sign::zero && on_collinear_segment(c, d, b));
+}
+
+}  // namespace
+
+bool triangles_embed_in_projection(std::span<const Vec3> positions, std::span<const Triangle> triangles,
+                                   std::span<const std::uint32_t> group, int axis) {
+  if (group.empty()) return false;
+  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+  const auto project = [&](VertexIndex v) { return Vec2{positions[v][i], positions[v][j]}; };
+  // Every triangle strictly turning one way.
+  Sign turn = Sign::zero;
+  for (const std::uint32_t t : group) {
+    const Triangle& tri = triangles[t];
+    const Sign s = orient2d(project(tri[0]), project(tri[1]), project(tri[2]));
+    if (s == Sign::zero || (turn != Sign::zero && s != turn)) return false;
+    turn = s;
+  }
+  // The boundary: directed edges not matched by their reverse within the group.
+  struct HalfEdge {
+    VertexIndex low, high;
+    bool forward;  // low -> high
+  };
+  std::vector<HalfEdge> edges;
+  edges.reserve(3 * group.size());
+  for (const std::uint32_t t : group) {
+    const Triangle& tri = triangles[t];
+    for (int c = 0; c < 3; ++c) {
+      const VertexIndex u = tri[c], v = tri[(c + 1) % 3];
+      edges.push_back({std::min(u, v), std::max(u, v), u < v});
+    }
+  }
+  std::sort(edges.begin(), edges.end(), [](const HalfEdge& a, const HalfEdge& b) {
+    return std::tie(a.low, a.high, a.forward) < std::tie(b.low, b.high, b.forward);
+  });
+  std::vector<std::pair<VertexIndex, VertexIndex>> boundary;  // from, to
+  for (std::size_t k = 0; k < edges.size();) {
+    std::size_t end = k + 1;
+    while (end < edges.size() && edges[end].low == edges[k].low && edges[end].high == edges[k].high) ++end;
+    if (end - k == 1) {
+      const HalfEdge& e = edges[k];
+      boundary.emplace_back(e.forward ? e.low : e.high, e.forward ? e.high : e.low);
+    } else if (end - k != 2 || edges[k].forward == edges[k + 1].forward) {
+      return false;  // an edge used twice one way, or by three triangles: not a surface
+    }
+    k = end;
+  }
+  if (boundary.empty()) return false;
+  // Each vertex left at most once: the boundary is vertex-disjoint cycles.
+  std::sort(boundary.begin(), boundary.end());
+  for (std::size_t k = 1; k < boundary.size(); ++k) {
+    if (boundary[k].first == boundary[k - 1].first) return false;
+  }
+  const auto next_of = [&](VertexIndex from) {
+    const auto it = std::lower_bound(boundary.begin(), boundary.end(), std::pair<VertexIndex, VertexIndex>{from, 0});
+    return it != boundary.end() && it->first == from ? std::optional<std::size_t>(it - boundary.begin()) : std::nullopt;
+  };
+  // The boundary's projections meet only where consecutive edges share their vertex.
+  std::vector<SegmentBox> boxes;
+  boxes.reserve(boundary.size());
+  for (std::size_t k = 0; k < boundary.size(); ++k) {
+    const Vec2 a = project(boundary[k].first), b = project(boundary[k].second);
+    double lo[2] = {std::min(a.x, b.x), std::min(a.y, b.y)}, hi[2] = {std::max(a.x, b.x), std::max(a.y, b.y)};
+    boxes.emplace_back(SegmentBox(lo, hi, k));
+  }
+  bool simple = true;
+  CGAL::box_self_intersection_d(
+      boxes.begin(), boxes.end(),
+      [&](const SegmentBox& x, const SegmentBox& y) {
+        if (!simple) return;
+        auto [p, q] = boundary[x.handle()];
+        auto [r, s] = boundary[y.handle()];
+        if (q == r || s == p) {
+          // Consecutive (p -> q -> s, or r -> s -> q): they meet only at the shared
+          // vertex unless the far ends lie along one ray from it.
+          if (s == p) std::swap(p, r), std::swap(q, s);  // now p -> q, q -> s
+          if (q != r || p == s) {
+            simple = false;  // a cycle of two edges, or not consecutive after all
+            return;
+          }
+          const Vec2 a = project(p), b = project(q), c = project(s);
+          if (orient2d(a, b, c) != Sign::zero) return;
+          // Collinear: apart only when a and c lie on opposite sides of b.
+          const bool a_low = a.x < b.x || (a.x == b.x && a.y < b.y), c_low = c.x < b.x || (c.x == b.x && c.y < b.y);
+          if (a_low == c_low) simple = false;
+          return;
+        }
+        if (p == r || q == s) {
+          simple = false;  // not vertex-disjoint cycles (excluded above; kept for safety)
+          return;
+        }
+        if (segments_meet(project(p), project(q), project(r), project(s))) simple = false;
+      },
+      std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
+  if (!simple) return false;
+  // The cycles: exactly one turns the triangles' way, decided at its
+  // lexicographically least vertex (a strictly convex corner of a simple polygon).
+  std::vector<std::uint8_t> seen(boundary.size(), 0);
+  std::vector<std::size_t> cycle;
+  std::size_t turning = 0;
+  for (std::size_t start = 0; start < boundary.size(); ++start) {
+    if (seen[start]) continue;
+    cycle.clear();
+    std::size_t least = 0;  // position in `cycle` of the edge leaving the least vertex
+    std::size_t k = start;
+    while (!seen[k]) {
+      seen[k] = 1;
+      const Vec2 here = project(boundary[k].first), best = project(boundary[cycle.empty() ? k : cycle[least]].first);
+      if (here.x < best.x || (here.x == best.x && here.y < best.y)) least = cycle.size();
+      cycle.push_back(k);
+      const std::optional<std::size_t> next = next_of(boundary[k].second);
+      if (!next) return false;  // not closed (cannot happen for a chain's boundary)
+      k = *next;
+    }
+    if (k != start) return false;  // ran into another cycle (cannot happen: each vertex is entered once)
+    const std::size_t into = cycle[(least + cycle.size() - 1) % cycle.size()], out = cycle[least];
+    const Sign s = orient2d(project(boundary[into].first), project(boundary[out].first), project(boundary[out].second));
+    if (s == Sign::zero) return false;
+    if (s == turn) ++turning;
+  }
+  return turning == 1;
 }
 
 }  // namespace shatter
