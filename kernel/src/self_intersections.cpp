@@ -340,4 +340,394 @@ std::vector<TrianglePair> self_intersecting_pairs_by_box_tree(std::span<const Ve
   return pairs;
 }
 
+std::vector<TrianglePair> intersecting_pairs_with(std::span<const Vec3> positions, std::span<const Triangle> triangles,
+                                                  std::span<const std::uint32_t> members,
+                                                  std::span<const std::uint8_t> tested,
+                                                  std::span<const std::uint32_t> embedded) {
+  std::vector<TrianglePair> pairs;
+  const std::size_t count = members.size();
+  const auto is_tested = [&](std::size_t t) { return tested[t] != 0; };
+  if (count < 2 || std::none_of(members.begin(), members.end(), is_tested)) return pairs;
+  // Per member (by its position k in `members`): its float box and cell range.
+  std::vector<FloatBox> boxes(count);
+  double lowest[3] = {INFINITY, INFINITY, INFINITY};
+  double extent_sum = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    const Triangle& tri = triangles[members[k]];
+    const Vec3& p = positions[tri[0]];
+    const Vec3& q = positions[tri[1]];
+    const Vec3& r = positions[tri[2]];
+    double largest = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double lo = std::min({p[axis], q[axis], r[axis]}), hi = std::max({p[axis], q[axis], r[axis]});
+      boxes[k].lo[axis] = round_down(lo);
+      boxes[k].hi[axis] = round_up(hi);
+      lowest[axis] = std::min(lowest[axis], lo);
+      largest = std::max(largest, hi - lo);
+    }
+    extent_sum += largest;
+  }
+  Grid grid;
+  const double cell = 3 * extent_sum / static_cast<double>(count);
+  if (!(cell > 0) || !std::isfinite(cell) || !(1 / cell > 0) || !std::isfinite(1 / cell)) {
+    return intersecting_pairs_with_by_box_tree(positions, triangles, members, tested, embedded);
+  }
+  grid.inverse_cell = 1 / cell;
+  for (int axis = 0; axis < 3; ++axis) grid.origin[axis] = lowest[axis];
+
+  struct CellRange {
+    std::uint32_t lo[3], hi[3];
+  };
+  std::vector<CellRange> ranges(count);
+  std::vector<std::uint8_t> is_large(count, 0);
+  std::uint64_t entries = 0;
+  bool any_large = false;
+  for (std::size_t k = 0; k < count; ++k) {
+    std::uint64_t cells = 1;
+    for (int axis = 0; axis < 3; ++axis) {
+      ranges[k].lo[axis] = grid.cell_of(boxes[k].lo[axis], axis);
+      ranges[k].hi[axis] = grid.cell_of(boxes[k].hi[axis], axis);
+      cells *= ranges[k].hi[axis] - ranges[k].lo[axis] + 1;
+    }
+    if (cells > max_cells_per_box) {
+      is_large[k] = 1;
+      any_large = true;
+    } else {
+      entries += cells;
+    }
+  }
+  if (entries > std::numeric_limits<std::uint32_t>::max()) {
+    return intersecting_pairs_with_by_box_tree(positions, triangles, members, tested, embedded);
+  }
+  const std::uint64_t bucket_count = std::bit_ceil(std::max<std::uint64_t>(16, entries));
+  const std::uint64_t mask = bucket_count - 1;
+  const auto for_each_cell = [&](std::size_t k, auto&& visit) {
+    const CellRange& range = ranges[k];
+    for (std::uint32_t x = range.lo[0]; x <= range.hi[0]; ++x) {
+      for (std::uint32_t y = range.lo[1]; y <= range.hi[1]; ++y) {
+        for (std::uint32_t z = range.lo[2]; z <= range.hi[2]; ++z) visit(Grid::bucket_of(x, y, z, mask));
+      }
+    }
+  };
+  // The buckets the tested members occupy: an untested member is entered only
+  // there. A pair with a tested member is tested in the bucket of the low corner
+  // of the boxes' overlap, a cell inside both boxes, which the tested one marked.
+  std::vector<std::uint8_t> occupied(bucket_count, 0);
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!is_large[k] && is_tested(members[k])) for_each_cell(k, [&](std::uint64_t b) { occupied[b] = 1; });
+  }
+  // A counting sort of the entries by bucket, each member's entries together,
+  // so a member entered twice in one bucket appears twice in a row.
+  std::vector<std::uint32_t> start(bucket_count + 1, 0);
+  const auto entered = [&](std::size_t k, std::uint64_t b) { return is_tested(members[k]) || occupied[b]; };
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!is_large[k]) {
+      for_each_cell(k, [&](std::uint64_t b) {
+        if (entered(k, b)) ++start[b + 1];
+      });
+    }
+  }
+  for (std::uint64_t b = 0; b < bucket_count; ++b) start[b + 1] += start[b];
+  std::vector<std::uint32_t> slots(start[bucket_count]);
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t k = 0; k < count; ++k) {
+      if (!is_large[k]) {
+        for_each_cell(k, [&](std::uint64_t b) {
+          if (entered(k, b)) slots[fill[b]++] = static_cast<std::uint32_t>(k);
+        });
+      }
+    }
+  }
+  // Each tested member's plane, as a separating direction: n (the cross product
+  // of two edges, in doubles; any direction would be sound) and the range of
+  // n·x over its corners, widened by a bound on the rounding of every n·x taken
+  // here. With |x_i| <= bound[i] for every corner and box corner (each lies in a
+  // member's float box), a dot product of three terms errs by at most
+  // 3.001u·sum |n_i| bound[i]; the range and a box's extreme each err by that, so
+  // 8u·sum |n_i| bound[i] (plus 2^-1000 for products that underflow) covers both
+  // and the rounding of the widening itself. A box whose extremes along n lie
+  // past the widened range on one side holds no point of the plane's triangle:
+  // its triangle cannot meet the tested one (not even at a shared vertex, which
+  // would lie in both ranges), so triangles_intersect is not asked. Overflow
+  // gives an infinite or NaN bound, and a comparison with it never separates.
+  double bound[3] = {0, 0, 0};
+  for (std::size_t k = 0; k < count; ++k) {
+    for (int axis = 0; axis < 3; ++axis) {
+      bound[axis] = std::max({bound[axis], std::fabs(static_cast<double>(boxes[k].lo[axis])),
+                              std::fabs(static_cast<double>(boxes[k].hi[axis]))});
+    }
+  }
+  struct Separator {
+    double n[3], lo, hi;
+  };
+  std::vector<Separator> separators(count);
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!is_tested(members[k])) continue;
+    const Triangle& tri = triangles[members[k]];
+    const Vec3 n = cross(positions[tri[1]] - positions[tri[0]], positions[tri[2]] - positions[tri[0]]);
+    const double slack =
+        8 * 0x1p-53 * (std::fabs(n.x) * bound[0] + std::fabs(n.y) * bound[1] + std::fabs(n.z) * bound[2]) + 0x1p-1000;
+    double lo = INFINITY, hi = -INFINITY;
+    for (const VertexIndex v : tri) {
+      const double value = n.x * positions[v].x + n.y * positions[v].y + n.z * positions[v].z;
+      lo = std::min(lo, value);
+      hi = std::max(hi, value);
+    }
+    separators[k] = {{n.x, n.y, n.z}, lo - slack, hi + slack};
+  }
+  // Whether member k's box lies strictly beyond tested member s's plane range.
+  const auto separated = [&](std::size_t s, std::size_t k) {
+    const Separator& sep = separators[s];
+    const FloatBox& box = boxes[k];
+    double least = 0, most = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double lo = sep.n[axis] * box.lo[axis], hi = sep.n[axis] * box.hi[axis];
+      least += std::min(lo, hi);
+      most += std::max(lo, hi);
+    }
+    return least > sep.hi || most < sep.lo;
+  };
+  const auto report = [&](std::size_t i, std::size_t j) {
+    const std::size_t s = members[i], t = members[j];
+    if (!embedded.empty() && embedded[s] == embedded[t] && embedded[s] != no_embedded_group) return;
+    if (is_tested(s) ? separated(i, j) : separated(j, i)) return;
+    if (triangles_intersect(positions, triangles[s], triangles[t])) pairs.emplace_back(std::min(s, t), std::max(s, t));
+  };
+  // Each tested member s walks its own cells; a member t in the cell's bucket
+  // whose box meets s's is tested when that cell holds the low corner of the
+  // boxes' overlap (one cell, which both boxes cover: the pair is found there
+  // and nowhere else), and, t tested as well, when s comes first.
+  // Per member, in the order the inner loop reads them: tested, and its group.
+  std::vector<std::uint8_t> member_tested(count);
+  std::vector<std::uint32_t> member_group(count, no_embedded_group);
+  for (std::size_t k = 0; k < count; ++k) {
+    member_tested[k] = is_tested(members[k]);
+    if (!embedded.empty()) member_group[k] = embedded[members[k]];
+  }
+  for (std::size_t s = 0; s < count; ++s) {
+    if (is_large[s] || !member_tested[s]) continue;
+    const std::uint32_t group_s = member_group[s];
+    const FloatBox& box_s = boxes[s];
+    const CellRange& range = ranges[s];
+    for (std::uint32_t x = range.lo[0]; x <= range.hi[0]; ++x) {
+      for (std::uint32_t y = range.lo[1]; y <= range.hi[1]; ++y) {
+        for (std::uint32_t z = range.lo[2]; z <= range.hi[2]; ++z) {
+          const std::uint64_t b = Grid::bucket_of(x, y, z, mask);
+          const std::uint32_t begin = start[b], end = start[b + 1];
+          for (std::uint32_t j = begin; j < end; ++j) {
+            const std::uint32_t t = slots[j];
+            if (t == s || (j > begin && slots[j - 1] == t)) continue;  // s itself, or t entered twice
+            if (t < s && member_tested[t]) continue;                    // that pair is s's turn at t
+            if (group_s != no_embedded_group && member_group[t] == group_s) continue;  // certified apart
+            const FloatBox& box_t = boxes[t];
+            if (!boxes_meet(box_s, box_t)) continue;
+            if (grid.cell_of(std::max(box_s.lo[0], box_t.lo[0]), 0) != x ||
+                grid.cell_of(std::max(box_s.lo[1], box_t.lo[1]), 1) != y ||
+                grid.cell_of(std::max(box_s.lo[2], box_t.lo[2]), 2) != z) {
+              continue;
+            }
+            report(s, t);
+          }
+        }
+      }
+    }
+  }
+  // The long members with the box tree: a tested long one against every member
+  // (two tested long ones once), an untested long one against the tested members
+  // in the grid (the tested long ones found it already).
+  if (any_large) {
+    std::vector<TriangleBox> long_tested, long_untested, every, gridded_tested;
+    for (std::size_t k = 0; k < count; ++k) {
+      const TriangleBox box = box_of(positions, triangles[members[k]], k);
+      every.push_back(box);
+      if (is_large[k]) (is_tested(members[k]) ? long_tested : long_untested).push_back(box);
+      else if (is_tested(members[k])) gridded_tested.push_back(box);
+    }
+    if (!long_tested.empty()) {
+      CGAL::box_intersection_d(
+          long_tested.begin(), long_tested.end(), every.begin(), every.end(),
+          [&](const TriangleBox& a, const TriangleBox& c) {
+            const std::size_t i = a.handle(), j = c.handle();
+            if (i == j || (is_large[j] && is_tested(members[j]) && j < i)) return;
+            report(i, j);
+          },
+          std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
+    }
+    if (!long_untested.empty() && !gridded_tested.empty()) {
+      CGAL::box_intersection_d(
+          long_untested.begin(), long_untested.end(), gridded_tested.begin(), gridded_tested.end(),
+          [&](const TriangleBox& a, const TriangleBox& c) { report(a.handle(), c.handle()); }, std::ptrdiff_t{10},
+          CGAL::Box_intersection_d::CLOSED);
+    }
+  }
+  sort_unique(pairs);
+  return pairs;
+}
+
+std::vector<TrianglePair> intersecting_pairs_with_by_box_tree(std::span<const Vec3> positions,
+                                                              std::span<const Triangle> triangles,
+                                                              std::span<const std::uint32_t> members,
+                                                              std::span<const std::uint8_t> tested,
+                                                              std::span<const std::uint32_t> embedded) {
+  std::vector<TriangleBox> tested_boxes, member_boxes;
+  member_boxes.reserve(members.size());
+  for (const std::uint32_t t : members) {
+    const TriangleBox box = box_of(positions, triangles[t], t);
+    member_boxes.push_back(box);
+    if (tested[t]) tested_boxes.push_back(box);
+  }
+  std::vector<TrianglePair> pairs;
+  if (tested_boxes.empty()) return pairs;
+  CGAL::box_intersection_d(
+      tested_boxes.begin(), tested_boxes.end(), member_boxes.begin(), member_boxes.end(),
+      [&](const TriangleBox& a, const TriangleBox& b) {
+        const std::size_t i = a.handle(), j = b.handle();
+        if (i == j || (tested[j] && j < i)) return;  // each pair of tested triangles once
+        if (!embedded.empty() && embedded[i] == embedded[j] && embedded[i] != no_embedded_group) return;
+        if (triangles_intersect(positions, triangles[i], triangles[j])) pairs.emplace_back(std::min(i, j), std::max(i, j));
+      },
+      std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
+  sort_unique(pairs);
+  return pairs;
+}
+
+namespace {
+
+using SegmentBox = CGAL::Box_intersection_d::Box_with_handle_d<double, 2, std::size_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
+
+// Whether q lies on the closed segment ab, given that a, b, q are collinear:
+// exact coordinate comparisons.
+bool on_collinear_segment(const Vec2& a, const Vec2& b, const Vec2& q) {
+  return std::min(a.x, b.x) <= q.x && q.x <= std::max(a.x, b.x) && std::min(a.y, b.y) <= q.y && q.y <= std::max(a.y, b.y);
+}
+
+// Whether the closed segments ab and cd share a point, exactly.
+bool segments_meet(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
+  const Sign o1 = orient2d(a, b, c), o2 = orient2d(a, b, d), o3 = orient2d(c, d, a), o4 = orient2d(c, d, b);
+  if (o1 != Sign::zero && o2 != Sign::zero && o1 != o2 && o3 != Sign::zero && o4 != Sign::zero && o3 != o4) return true;
+  return (o1 == Sign::zero && on_collinear_segment(a, b, c)) || (o2 == Sign::zero && on_collinear_segment(a, b, d)) ||
+         (o3 == Sign::zero && on_collinear_segment(c, d, a)) || (o4 == Sign::zero && on_collinear_segment(c, d, b));
+}
+
+}  // namespace
+
+bool triangles_embed_in_projection(std::span<const Vec3> positions, std::span<const Triangle> triangles,
+                                   std::span<const std::uint32_t> group, int axis) {
+  if (group.empty()) return false;
+  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+  const auto project = [&](VertexIndex v) { return Vec2{positions[v][i], positions[v][j]}; };
+  // Every triangle strictly turning one way.
+  Sign turn = Sign::zero;
+  for (const std::uint32_t t : group) {
+    const Triangle& tri = triangles[t];
+    const Sign s = orient2d(project(tri[0]), project(tri[1]), project(tri[2]));
+    if (s == Sign::zero || (turn != Sign::zero && s != turn)) return false;
+    turn = s;
+  }
+  // The boundary: directed edges not matched by their reverse within the group.
+  struct HalfEdge {
+    VertexIndex low, high;
+    bool forward;  // low -> high
+  };
+  std::vector<HalfEdge> edges;
+  edges.reserve(3 * group.size());
+  for (const std::uint32_t t : group) {
+    const Triangle& tri = triangles[t];
+    for (int c = 0; c < 3; ++c) {
+      const VertexIndex u = tri[c], v = tri[(c + 1) % 3];
+      edges.push_back({std::min(u, v), std::max(u, v), u < v});
+    }
+  }
+  std::sort(edges.begin(), edges.end(), [](const HalfEdge& a, const HalfEdge& b) {
+    return std::tie(a.low, a.high, a.forward) < std::tie(b.low, b.high, b.forward);
+  });
+  std::vector<std::pair<VertexIndex, VertexIndex>> boundary;  // from, to
+  for (std::size_t k = 0; k < edges.size();) {
+    std::size_t end = k + 1;
+    while (end < edges.size() && edges[end].low == edges[k].low && edges[end].high == edges[k].high) ++end;
+    if (end - k == 1) {
+      const HalfEdge& e = edges[k];
+      boundary.emplace_back(e.forward ? e.low : e.high, e.forward ? e.high : e.low);
+    } else if (end - k != 2 || edges[k].forward == edges[k + 1].forward) {
+      return false;  // an edge used twice one way, or by three triangles: not a surface
+    }
+    k = end;
+  }
+  if (boundary.empty()) return false;
+  // Each vertex left at most once: the boundary is vertex-disjoint cycles.
+  std::sort(boundary.begin(), boundary.end());
+  for (std::size_t k = 1; k < boundary.size(); ++k) {
+    if (boundary[k].first == boundary[k - 1].first) return false;
+  }
+  const auto next_of = [&](VertexIndex from) {
+    const auto it = std::lower_bound(boundary.begin(), boundary.end(), std::pair<VertexIndex, VertexIndex>{from, 0});
+    return it != boundary.end() && it->first == from ? std::optional<std::size_t>(it - boundary.begin()) : std::nullopt;
+  };
+  // The boundary's projections meet only where consecutive edges share their vertex.
+  std::vector<SegmentBox> boxes;
+  boxes.reserve(boundary.size());
+  for (std::size_t k = 0; k < boundary.size(); ++k) {
+    const Vec2 a = project(boundary[k].first), b = project(boundary[k].second);
+    double lo[2] = {std::min(a.x, b.x), std::min(a.y, b.y)}, hi[2] = {std::max(a.x, b.x), std::max(a.y, b.y)};
+    boxes.emplace_back(SegmentBox(lo, hi, k));
+  }
+  bool simple = true;
+  CGAL::box_self_intersection_d(
+      boxes.begin(), boxes.end(),
+      [&](const SegmentBox& x, const SegmentBox& y) {
+        if (!simple) return;
+        auto [p, q] = boundary[x.handle()];
+        auto [r, s] = boundary[y.handle()];
+        if (q == r || s == p) {
+          // Consecutive (p -> q -> s, or r -> s -> q): they meet only at the shared
+          // vertex unless the far ends lie along one ray from it.
+          if (s == p) std::swap(p, r), std::swap(q, s);  // now p -> q, q -> s
+          if (q != r || p == s) {
+            simple = false;  // a cycle of two edges, or not consecutive after all
+            return;
+          }
+          const Vec2 a = project(p), b = project(q), c = project(s);
+          if (orient2d(a, b, c) != Sign::zero) return;
+          // Collinear: apart only when a and c lie on opposite sides of b.
+          const bool a_low = a.x < b.x || (a.x == b.x && a.y < b.y), c_low = c.x < b.x || (c.x == b.x && c.y < b.y);
+          if (a_low == c_low) simple = false;
+          return;
+        }
+        if (p == r || q == s) {
+          simple = false;  // not vertex-disjoint cycles (excluded above; kept for safety)
+          return;
+        }
+        if (segments_meet(project(p), project(q), project(r), project(s))) simple = false;
+      },
+      std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
+  if (!simple) return false;
+  // The cycles: exactly one turns the triangles' way, decided at its
+  // lexicographically least vertex (a strictly convex corner of a simple polygon).
+  std::vector<std::uint8_t> seen(boundary.size(), 0);
+  std::vector<std::size_t> cycle;
+  std::size_t turning = 0;
+  for (std::size_t start = 0; start < boundary.size(); ++start) {
+    if (seen[start]) continue;
+    cycle.clear();
+    std::size_t least = 0;  // position in `cycle` of the edge leaving the least vertex
+    std::size_t k = start;
+    while (!seen[k]) {
+      seen[k] = 1;
+      const Vec2 here = project(boundary[k].first), best = project(boundary[cycle.empty() ? k : cycle[least]].first);
+      if (here.x < best.x || (here.x == best.x && here.y < best.y)) least = cycle.size();
+      cycle.push_back(k);
+      const std::optional<std::size_t> next = next_of(boundary[k].second);
+      if (!next) return false;  // not closed (cannot happen for a chain's boundary)
+      k = *next;
+    }
+    if (k != start) return false;  // ran into another cycle (cannot happen: each vertex is entered once)
+    const std::size_t into = cycle[(least + cycle.size() - 1) % cycle.size()], out = cycle[least];
+    const Sign s = orient2d(project(boundary[into].first), project(boundary[out].first), project(boundary[out].second));
+    if (s == Sign::zero) return false;
+    if (s == turn) ++turning;
+  }
+  return turning == 1;
+}
+
 }  // namespace shatter

@@ -584,6 +584,81 @@ void untrust_shared_positions(const Mesh& mesh, std::vector<std::uint8_t>& is_ne
   }
 }
 
+// Groups of the new triangles whose pairs need no test: edge-connected new
+// triangles with nearly parallel normals (a face the cut clipped and triangulated
+// anew, a cap), each group kept only when triangles_embed_in_projection certifies,
+// exactly, that no two of its triangles meet beyond what they share. The grouping
+// is a guess in doubles and may be anything: only the certificate is trusted.
+// One entry per triangle, no_embedded_group for a triangle in no certified group;
+// empty when there is none.
+std::vector<std::uint32_t> embedded_groups(const Mesh& mesh, const std::vector<std::uint8_t>& is_new) {
+  constexpr std::size_t smallest_group = 3;  // a group of two saves one pair
+  std::vector<Vec3> normal(mesh.triangles.size());
+  std::vector<std::uint8_t> grouped(mesh.triangles.size(), 0);  // new, with a usable normal
+  struct EdgeUse {
+    VertexIndex low, high;
+    std::uint32_t triangle;
+  };
+  std::vector<EdgeUse> uses;
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (!is_new[t]) continue;
+    const Triangle& tri = mesh.triangles[t];
+    const Vec3 n = cross(mesh.positions[tri[1]] - mesh.positions[tri[0]], mesh.positions[tri[2]] - mesh.positions[tri[0]]);
+    const double length = std::sqrt(dot(n, n));
+    if (!(length > 0) || !std::isfinite(length)) continue;
+    normal[t] = n * (1 / length);
+    grouped[t] = 1;
+    for (int c = 0; c < 3; ++c) {
+      const VertexIndex u = tri[c], v = tri[(c + 1) % 3];
+      uses.push_back({std::min(u, v), std::max(u, v), t});
+    }
+  }
+  if (uses.size() < 3 * smallest_group) return {};
+  std::sort(uses.begin(), uses.end(), [](const EdgeUse& a, const EdgeUse& b) {
+    return std::tie(a.low, a.high, a.triangle) < std::tie(b.low, b.high, b.triangle);
+  });
+  UnionFind sets(mesh.triangles.size());
+  for (std::size_t k = 1; k < uses.size(); ++k) {
+    const EdgeUse &a = uses[k - 1], &b = uses[k];
+    if (a.low == b.low && a.high == b.high && dot(normal[a.triangle], normal[b.triangle]) > 1 - 1e-9) {
+      sets.unite(a.triangle, b.triangle);
+    }
+  }
+  // Each group's triangles, by a counting sort on the representative.
+  std::vector<std::uint32_t> size(mesh.triangles.size(), 0);
+  std::vector<std::uint32_t> root(mesh.triangles.size(), no_embedded_group);
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (grouped[t]) ++size[root[t] = sets.find(t)];
+  }
+  std::vector<std::uint32_t> start(mesh.triangles.size() + 1, 0);
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    start[t + 1] = start[t] + (size[t] >= smallest_group ? size[t] : 0);
+  }
+  if (start.back() == 0) return {};
+  std::vector<std::uint32_t> members(start.back());
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+      if (root[t] != no_embedded_group && size[root[t]] >= smallest_group) members[fill[root[t]]++] = t;
+    }
+  }
+  std::vector<std::uint32_t> embedded(mesh.triangles.size(), no_embedded_group);
+  bool any = false;
+  for (std::uint32_t r = 0; r < mesh.triangles.size(); ++r) {
+    if (start[r + 1] == start[r]) continue;
+    const std::span<const std::uint32_t> group(members.data() + start[r], start[r + 1] - start[r]);
+    Vec3 sum;
+    for (const std::uint32_t t : group) sum = sum + normal[t];
+    const double ax = std::fabs(sum.x), ay = std::fabs(sum.y), az = std::fabs(sum.z);
+    const int axis = ax >= ay && ax >= az ? 0 : ay >= az ? 1 : 2;
+    if (!triangles_embed_in_projection(mesh.positions, mesh.triangles, group, axis)) continue;
+    for (const std::uint32_t t : group) embedded[t] = r;
+    any = true;
+  }
+  if (!any) return {};
+  return embedded;
+}
+
 }  // namespace
 
 ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near) {
@@ -607,7 +682,7 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
   ValidationReport report = validate_masked(mesh, without, &is_new);
   if (!report.valid()) return report;
   if (trusted) untrust_shared_positions(mesh, is_new);
-  std::vector<TriangleBox> all, fresh;
+  std::vector<std::uint32_t> all;  // the triangles searched
   all.reserve(mesh.triangles.size());
   // With a plane the new triangles lie along, only triangles within the slab the
   // new ones span can meet them: each triangle's range of n·p + d, in doubles
@@ -635,31 +710,20 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
   }
   report.self_intersections_checked = true;
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
-  // Tests the triangles of `tested` against those of `against` whose boxes meet
-  // theirs, exactly; `in_tested` marks the triangles of `tested`, so that a pair
-  // of them is tested once.
-  const auto search = [&](std::vector<TriangleBox>& tested, std::vector<TriangleBox>& against,
-                          const std::vector<std::uint8_t>& in_tested) {
-    if (tested.empty()) return;
-    CGAL::box_intersection_d(
-        tested.begin(), tested.end(), against.begin(), against.end(),
-        [&](const TriangleBox& a, const TriangleBox& b) {
-          const std::size_t i = a.handle(), j = b.handle();
-          if (i == j || (in_tested[j] && j < i)) return;  // each pair within `tested` once
-          if (triangles_intersect(mesh.positions, mesh.triangles[i], mesh.triangles[j])) {
-            pairs.emplace_back(std::min(i, j), std::max(i, j));
-          }
-        },
-        std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
+  // Tests the triangles of `members` flagged in `tested` against every other
+  // member whose box meets theirs, exactly (intersecting_pairs_with: a hashed
+  // grid, the same pairs as CGAL's box intersection of the tested boxes against
+  // the members').
+  const std::vector<std::uint32_t> embedded = embedded_groups(mesh, is_new);
+  const auto search = [&](const std::vector<std::uint32_t>& members, const std::vector<std::uint8_t>& tested) {
+    const std::vector<TrianglePair> found =
+        intersecting_pairs_with(mesh.positions, mesh.triangles, members, tested, embedded);
+    pairs.insert(pairs.end(), found.begin(), found.end());
   };
   if (!near) {
-    fresh.reserve(mesh.triangles.size());
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-      const TriangleBox box = box_of(mesh.positions, mesh.triangles[t], t);
-      all.push_back(box);
-      if (is_new[t]) fresh.push_back(box);
-    }
-    search(fresh, all, is_new);
+    all.resize(mesh.triangles.size());
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) all[t] = static_cast<std::uint32_t>(t);
+    search(all, is_new);
   } else {
     // The new triangles split in two: those flat along the plane (the cap, all
     // corners within a rounding's reach of it: their ranges inside [-flat, flat])
@@ -685,21 +749,18 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, co
       }
     }
     const auto meets = [&](std::size_t t, double lo, double hi) { return !(range[t][1] < lo || range[t][0] > hi); };
-    std::vector<TriangleBox> flat_boxes, near_flat;
+    std::vector<std::uint32_t> near_flat;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       const bool side_reach = meets(t, side_lo, side_hi), flat_reach = meets(t, flat_lo, flat_hi);
       if (!side_reach && !flat_reach && !is_new[t]) continue;
-      const TriangleBox box = box_of(mesh.positions, mesh.triangles[t], t);
       // The side triangles against every triangle in their slab but the flat ones;
       // the flat ones against every triangle reaching Z, the side ones included
       // (most side triangles, those of a clipped face away from the cut, do not).
-      if ((side_reach || is_side[t]) && !is_flat[t]) all.push_back(box);
-      if (is_side[t]) fresh.push_back(box);
-      if (is_flat[t]) flat_boxes.push_back(box);
-      if (flat_reach || is_flat[t]) near_flat.push_back(box);
+      if ((side_reach || is_side[t]) && !is_flat[t]) all.push_back(static_cast<std::uint32_t>(t));
+      if (flat_reach || is_flat[t]) near_flat.push_back(static_cast<std::uint32_t>(t));
     }
-    search(fresh, all, is_side);
-    search(flat_boxes, near_flat, is_flat);
+    search(all, is_side);
+    search(near_flat, is_flat);
   }
   std::sort(pairs.begin(), pairs.end());
   append_self_intersections(report, pairs);

@@ -89,12 +89,17 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
 /// it was cut from). Every check is made in full except the self-intersection
 /// test, which skips pairs of triangles that both appear in `trusted` (the same
 /// three corner positions, turning the same way): two such triangles do not
-/// intersect there, so they do not here. Every other pair whose boxes meet is
-/// tested exactly: first whether their projections along the largest normal
-/// component of one are apart (exact 2D orientations, which settle the nearly
-/// coplanar triangles of a flat face without exact arithmetic), then as CGAL's
-/// self_intersections tests them. Same report as validate_mesh (the
-/// self-intersection count counts only the pairs tested).
+/// intersect there, so they do not here. Nor are pairs within a group of new
+/// triangles (edge-connected, normals nearly parallel: a face triangulated anew, a
+/// cap) that triangles_embed_in_projection certifies exactly: none of them meet
+/// beyond what they share. Every other pair whose boxes meet (found on a hashed
+/// grid, intersecting_pairs_with) is tested exactly, unless its box lies beyond
+/// the new triangle's plane by more than a bound on the rounding: first whether
+/// their projections along the largest normal component of one are apart (exact 2D
+/// orientations, which settle the nearly coplanar triangles of a flat face without
+/// exact arithmetic), then as CGAL's self_intersections tests them. Same report as
+/// validate_mesh (the self-intersection count counts only the pairs tested, and a
+/// skipped pair never intersects).
 /// `near`: a plane the triangles not in `trusted` are known to lie along (a cut);
 /// only triangles within the slab of n·x + d values those span are then tested
 /// against them (a prefilter in doubles, widened by a bound on its rounding). The
@@ -102,7 +107,8 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
 /// largest |n_x x| + |n_y y| + |n_z z| + |d|) span a slab a few ulps thick, and
 /// are tested only against the triangles reaching that slab; the other new ones
 /// against their own slab.
-/// Cost: O(T log T) plus the pairs of boxes that meet a tested triangle's box.
+/// Cost: O(T log T) plus the pairs of boxes that meet a tested triangle's box
+/// (about linear on the grid for triangles of similar size).
 ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near = nullptr);
 
 /// validate_mesh for a mesh made of the triangles of several valid meshes
