@@ -634,7 +634,7 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
     in.set_record("node " + str(k));
     MeshTreeNode& node = nodes[k];
     path.enter(static_cast<NodeIndex>(k), node.depth);
-    Solid& solid = node.solid;
+    Solid& solid = *node.solid;
     read_solid_flags(in, node);
     const std::uint32_t vertex_count = in.varint32("vertex count");
     const std::uint32_t face_count = in.varint32("face count");
@@ -747,7 +747,7 @@ void read_version3_meshes(const Section& section, MeshTree& tree, bool hulls, Ve
     record_offsets[k] = in.offset();
     in.set_record("node " + str(k));
     path.enter(static_cast<NodeIndex>(k), nodes[k].depth);
-    const std::size_t source_count = hulls ? nodes[k].mesh.positions.size() : nodes[k].solid.defs.size();
+    const std::size_t source_count = hulls ? nodes[k].mesh->positions.size() : nodes[k].solid->defs.size();
     Mesh mesh = read_mesh(in, source_count, sources[k], path);
     if (!hulls) {
       nodes[k].mesh = std::move(mesh);
@@ -837,11 +837,11 @@ void finish_version3(MeshTree& tree, const Version3Pending& pending) {
     MeshTreeNode& node = tree.nodes[k];
     const std::vector<std::uint32_t>& mesh_sources = pending.mesh_sources[k];
     for (std::size_t v = 0; v < mesh_sources.size(); ++v) {
-      if (const std::uint32_t s = mesh_sources[v]; s != no_index) node.mesh.positions[v] = output_position(set, node.solid.defs[s], node.solid.approx[s]);
+      if (const std::uint32_t s = mesh_sources[v]; s != no_index) node.mesh->positions[v] = output_position(set, node.solid->defs[s], node.solid->approx[s]);
     }
     const std::vector<std::uint32_t>& hull_sources = pending.hull_sources[k];
     for (std::size_t v = 0; v < hull_sources.size(); ++v) {
-      if (const std::uint32_t s = hull_sources[v]; s != no_index) node.hull->positions[v] = node.mesh.positions[s];
+      if (const std::uint32_t s = hull_sources[v]; s != no_index) node.hull->positions[v] = node.mesh->positions[s];
     }
     if (pending.masses_derived) node.mass = mass_properties(node.mesh);
   }

@@ -604,11 +604,11 @@ void number_tree(std::unique_ptr<BuildNode> root, MeshTree& tree) {
     } else {
       node.mesh = std::move(built.mesh);
       node.solid = std::move(built.solid);
-      node.convex = node.solid.convex;
+      node.convex = node.solid->convex;
       // Caps were labelled by the depth of their cut, and the plane kernel's
       // cut planes referred to by depth (BuildNode::solid says why); now that
       // every node has its index, each becomes that ancestor's.
-      rename_by_path(path, node.mesh, node.solid);
+      rename_by_path(path, *node.mesh, *node.solid);
     }
     node.mass = built.mass;
     node.parent = pending.parent;

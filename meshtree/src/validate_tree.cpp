@@ -587,7 +587,7 @@ std::optional<TreeDefect> packed_defect(const MeshTree& tree) {
       return TreeDefect{TreePart::mesh, k,
                         "node " + str(k) + " has a packed mesh and solid, but the tree has no exact representation"};
     }
-    if (!node.mesh.positions.empty() || !node.mesh.triangles.empty() || !solid_is_empty(node.solid)) {
+    if (!node.mesh->positions.empty() || !node.mesh->triangles.empty() || !solid_is_empty(node.solid)) {
       return TreeDefect{TreePart::mesh, k, "node " + str(k) + " has a packed mesh and solid and keeps others of its own"};
     }
   }
@@ -652,7 +652,7 @@ std::optional<TreeDefect> caches_defect(const MeshTree& tree, MeshTree* fill) {
   NodeShapes shapes(tree);  // fill_tree_caches unpacks every node first
   for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
     const Solid& solid = shapes(static_cast<NodeIndex>(k)).solid;
-    if (fill) fill->nodes[k].solid.approx.resize(solid.defs.size());
+    if (fill) fill->nodes[k].solid->approx.resize(solid.defs.size());
     for (std::size_t v = 0; v < solid.defs.size(); ++v) {
       const auto vertex = [&] {
         return "the solid of node " + str(k) + " vertex " + str(v) + " (" + point_kind_name(solid.defs[v].kind) + ")";
@@ -664,7 +664,7 @@ std::optional<TreeDefect> caches_defect(const MeshTree& tree, MeshTree* fill) {
         return TreeDefect{TreePart::solid, k, vertex() + ": " + error.what()};
       }
       if (fill) {
-        fill->nodes[k].solid.approx[v] = approx;
+        fill->nodes[k].solid->approx[v] = approx;
       } else if (!solid.approx.empty() && std::memcmp(&approx, &solid.approx[v], sizeof approx) != 0) {
         return TreeDefect{TreePart::solid, k,
                           vertex() + ": approx is not approximate() of its definition (a stale cache)"};
@@ -824,7 +824,7 @@ static_assert(sizeof(SolidFace) == 24, "a new SolidFace field: add it to hash_so
 static_assert(sizeof(Solid) == 128, "a new Solid field: add it to hash_solid");
 static_assert(sizeof(Mesh) == 144, "a new Mesh field: add it to hash_mesh");
 static_assert(sizeof(Bond) == 72, "a new Bond field: add it to TreeCertifier::digest");
-static_assert(sizeof(MeshTreeNode) == 440, "a new MeshTreeNode field: add it to TreeCertifier::digest");
+static_assert(sizeof(MeshTreeNode) == 184, "a new MeshTreeNode field: add it to TreeCertifier::digest");
 static_assert(sizeof(InputGeometry) == 72, "a new InputGeometry field: add it to TreeCertifier::digest");
 static_assert(sizeof(TreeRecipe) == 72, "a new TreeRecipe field: add it to TreeCertifier::digest");
 #endif

@@ -254,7 +254,7 @@ class Problems {
     if (node < tree_.nodes.size()) {
       const MeshTreeNode& n = tree_.nodes[node];
       out << " (depth " << n.depth << ", " << (n.is_leaf() ? "leaf " + std::to_string(n.first_leaf) : "internal")
-          << ", " << n.mesh.triangle_count() << " triangles, parent "
+          << ", " << n.mesh->triangle_count() << " triangles, parent "
           << (n.parent == no_node ? std::string("none") : std::to_string(n.parent)) << ")";
     }
     out << ": " << text;
@@ -613,7 +613,7 @@ void check_nodes(const MeshTree& tree, const Mesh& input, Level level) {
       // A convex node (plane kernel) is its own hull: convex exactly as a solid,
       // which rounding keeps up to the flat edges inside its faces.
       if (!node.hull->positions.empty()) out.add(hull, "a convex node stores a separate hull");
-      if (&tree.hull_of(v) != &node.mesh) out.add(hull, "hull_of a convex node is not its mesh");
+      if (&tree.hull_of(v) != &*node.mesh) out.add(hull, "hull_of a convex node is not its mesh");
       if (!solid_is_convex(tree.plane_set(), node.solid)) out.add(hull, "marked convex, but its solid is not");
     } else if (!node.is_leaf()) {
       if (level == Level::full) {
@@ -752,14 +752,14 @@ void check_plane(const MeshTree& tree, const Mesh& input, bool exact_volumes, co
     }
     for (NodeIndex child = v, a = node.parent; a != no_node; child = a, a = tree.nodes[a].parent) {
       const Sign wrong = tree.nodes[child].above_parent_plane ? Sign::negative : Sign::positive;
-      for (std::size_t i = 0; i < node.solid.defs.size(); ++i) {
-        if (side(set, PlaneRef::cut(a), node.solid.defs[i], node.solid.approx[i]) == wrong) {
+      for (std::size_t i = 0; i < node.solid->defs.size(); ++i) {
+        if (side(set, PlaneRef::cut(a), node.solid->defs[i], node.solid->approx[i]) == wrong) {
           out.emplace_back(1, "vertex " + std::to_string(i) + " on the wrong side of ancestor " + std::to_string(a));
           break;
         }
       }
     }
-    for (const SolidFace& face : node.solid.faces) {
+    for (const SolidFace& face : node.solid->faces) {
       if (face.surface == original_surface) continue;
       if (!face.plane.is_cut() || cap_surface_of(face.plane.index()) != face.surface) {
         out.emplace_back(2, "a cap face (surface " + std::to_string(face.surface) + ") not on its cut's plane");
@@ -770,7 +770,7 @@ void check_plane(const MeshTree& tree, const Mesh& input, bool exact_volumes, co
       SolidMeshOptions meshing;
       meshing.attributes = nullptr;
       const RoundedSolid again = round_solid(set, node.solid, meshing);
-      if (!again.valid || again.mesh.positions != node.mesh.positions || again.mesh.triangles != node.mesh.triangles) {
+      if (!again.valid || again.mesh.positions != node.mesh->positions || again.mesh.triangles != node.mesh->triangles) {
         out.emplace_back(3, again.valid ? "rounding again gives another mesh" : "rounding again fails: " + again.defect);
       }
     }
@@ -1243,16 +1243,16 @@ TEST_CASE("a lean build keeps no approximations and gives the same tree otherwis
         for (std::size_t k = 0; k < full.nodes.size(); ++k) {
           INFO("node " << k);
           // Else there would be nothing to release, nor to compare below.
-          REQUIRE(full.nodes[k].solid.approx.size() == full.nodes[k].solid.defs.size());
-          REQUIRE(!full.nodes[k].solid.defs.empty());
-          CHECK(lean.nodes[k].solid.approx.empty());
+          REQUIRE(full.nodes[k].solid->approx.size() == full.nodes[k].solid->defs.size());
+          REQUIRE(!full.nodes[k].solid->defs.empty());
+          CHECK(lean.nodes[k].solid->approx.empty());
           // Every node is packed, but for a leaf whose cut was undone (a surplus).
           if (!full.nodes[k].is_leaf()) CHECK(lean.is_packed(static_cast<NodeIndex>(k)));
           packed_leaves += full.nodes[k].is_leaf() && lean.is_packed(static_cast<NodeIndex>(k)) ? 1 : 0;
           CHECK(lean.nodes[k].convex == full.nodes[k].convex);
           if (lean.is_packed(static_cast<NodeIndex>(k))) {
-            CHECK(lean.nodes[k].mesh.triangles.empty());
-            CHECK(lean.nodes[k].solid.defs.empty());
+            CHECK(lean.nodes[k].mesh->triangles.empty());
+            CHECK(lean.nodes[k].solid->defs.empty());
           }
         }
         // Leaves are packed as they finish; only an undone cut (never in a
@@ -1299,8 +1299,8 @@ TEST_CASE("a lean build keeps no approximations and gives the same tree otherwis
         for (std::size_t k = 0; k < full.nodes.size(); ++k) {
           INFO("node " << k);
           CHECK(shape_difference(lean.nodes[k].mesh, lean.nodes[k].solid, full.nodes[k].mesh, full.nodes[k].solid).empty());
-          const std::vector<ApproxPoint>& a = lean.nodes[k].solid.approx;
-          const std::vector<ApproxPoint>& b = full.nodes[k].solid.approx;
+          const std::vector<ApproxPoint>& a = lean.nodes[k].solid->approx;
+          const std::vector<ApproxPoint>& b = full.nodes[k].solid->approx;
           REQUIRE(a.size() == b.size());
           CHECK(std::memcmp(a.data(), b.data(), a.size() * sizeof(ApproxPoint)) == 0);
         }
@@ -1515,17 +1515,17 @@ TEST_CASE("corner attributes survive the tree, and caps get the plane normal", "
     Problems problems(tree, "cap corner normals are not the plane normal, outward");
     for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
       const MeshTreeNode& node = tree.nodes[v];
-      REQUIRE(node.mesh.corners.normals.size() == 3 * node.mesh.triangle_count());
-      REQUIRE(node.mesh.corners.uvs.size() == 3 * node.mesh.triangle_count());
+      REQUIRE(node.mesh->corners.normals.size() == 3 * node.mesh->triangle_count());
+      REQUIRE(node.mesh->corners.uvs.size() == 3 * node.mesh->triangle_count());
       if (node.parent == no_node) continue;
       const Vec3 outward = normalized(tree.cut_planes[node.parent].normal) * (node.above_parent_plane ? -1.0 : 1.0);
-      for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
-        if (node.mesh.surfaces[t] != cap_surface_of(node.parent)) continue;
+      for (std::size_t t = 0; t < node.mesh->triangle_count(); ++t) {
+        if (node.mesh->surfaces[t] != cap_surface_of(node.parent)) continue;
         for (int corner = 0; corner < 3; ++corner) {
-          const Vec3 normal = node.mesh.corners.normals[3 * t + corner];
+          const Vec3 normal = node.mesh->corners.normals[3 * t + corner];
           if (dot(normal, outward) < 1 - 1e-12) {
             problems.add(v, "cap triangle " + std::to_string(t) + " normal " + vec_text(normal));
-            t = node.mesh.triangle_count() - 1;
+            t = node.mesh->triangle_count() - 1;
             break;
           }
         }

@@ -27,7 +27,11 @@ struct MeshTreeNode {
   /// The closed solid, a valid one (validate_mesh finds no defect; with
   /// allow_self_intersections only topology is promised). Cap triangles of the cut
   /// at node k carry cap_surface_of(k) = k + 1; the input's triangles keep surface 0.
-  Mesh mesh;
+  /// Boxed, as `hull` is (read it as `*node.mesh` or `node.mesh->positions`):
+  /// a lean tree packs every node's mesh (MeshTree::packed_shapes) and leaves
+  /// this absent, so its two million records of a million-fragment tree carry
+  /// a pointer instead of 144 bytes of empty arrays.
+  Boxed<Mesh> mesh;
   MassProperties mass;  ///< of `mesh`, unit density
   /// The convex hull of `mesh` (outward triangles over its own positions; every
   /// surface id 0, no attributes), for colliders. Boxed: held on the heap only
@@ -39,8 +43,9 @@ struct MeshTreeNode {
   /// Empty otherwise. Its vertices' cached approximations (Solid::approx) are
   /// there unless the tree was built lean (BuildRunOptions::lean): then every
   /// node's approx is empty, and fill_tree_caches (validate_tree.hpp) computes
-  /// them for code that needs them.
-  Solid solid;
+  /// them for code that needs them. Boxed, as `mesh` is, and for the same reason
+  /// (128 bytes of empty arrays in a lean tree's packed node).
+  Boxed<Solid> solid;
   /// Plane kernel: the solid is convex (decided exactly), so `mesh` is its own
   /// hull and `hull` is left empty. Use MeshTree::hull_of.
   bool convex = false;
@@ -130,7 +135,7 @@ struct MeshTree {
   PlaneSet plane_set() const { return geometry.plane_set(cut_planes); }
   /// A node's convex hull: its own mesh when it is convex, else `hull`. (A
   /// packed node's mesh is empty: read a lean tree's through NodeShapes.)
-  const Mesh& hull_of(NodeIndex node) const { return nodes[node].convex ? nodes[node].mesh : *nodes[node].hull; }
+  const Mesh& hull_of(NodeIndex node) const { return nodes[node].convex ? *nodes[node].mesh : *nodes[node].hull; }
   /// Whether a lean build packed the node's mesh and solid (packed_shapes).
   bool is_packed(NodeIndex node) const { return node < packed_shapes.size() && !packed_shapes[node].empty(); }
 };
