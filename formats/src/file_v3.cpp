@@ -371,16 +371,18 @@ Vec3 derived_normal(const MeshTree& tree, const Bond& bond) {
 
 void bonds_payload(const MeshTree& tree, ByteWriter& out) {
   std::uint8_t flags = 0;
-  for (const Bond& bond : tree.bonds) {
+  for (std::size_t i = 0; i < tree.bond_count(); ++i) {
+    const Bond bond = tree.bond(i);
     if (zero_normal(tree.cut_planes[bond.cut_node]) || !same_bits(bond.normal, derived_normal(tree, bond))) {
       flags |= bond_normals_stored_bit;
       break;
     }
   }
-  out.u64(tree.bonds.size());
+  out.u64(tree.bond_count());
   out.u8(flags);
   LeafIndex previous_first = 0;
-  for (const Bond& bond : tree.bonds) {
+  for (std::size_t i = 0; i < tree.bond_count(); ++i) {
+    const Bond bond = tree.bond(i);
     const Plane& plane = tree.cut_planes[bond.cut_node];
     // The largest normal component first: the projection the bonds were measured in.
     std::array<int, 3> axes = {0, 1, 2};

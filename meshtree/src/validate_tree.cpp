@@ -267,8 +267,19 @@ NodeIndex child_holding(const std::vector<MeshTreeNode>& nodes, NodeIndex node, 
 /// children). Requires a valid structure.
 std::optional<TreeDefect> bonds_defect(const MeshTree& tree) {
   const std::size_t leaf_count = tree.leaf_nodes.size();
-  for (std::size_t i = 0; i < tree.bonds.size(); ++i) {
-    const Bond& bond = tree.bonds[i];
+  // Packed bonds (a lean build's) are checked as what they unpack to, once
+  // unpack_bond's precondition holds.
+  if (!tree.bonds.empty() && !tree.packed_bonds.empty()) {
+    return TreeDefect{TreePart::bond, 0, "the tree keeps bonds both packed and not"};
+  }
+  for (std::size_t i = 0; i < tree.packed_bonds.size(); ++i) {
+    const PackedBond& packed = tree.packed_bonds[i];
+    if (packed.cut_node >= tree.cut_planes.size() || packed.axis > 2) {
+      return TreeDefect{TreePart::bond, i, "packed bond " + str(i) + " names no cut plane or no axis"};
+    }
+  }
+  for (std::size_t i = 0; i < tree.bond_count(); ++i) {
+    const Bond bond = tree.bond(i);
     const std::string name = "bond " + str(i) + " (" + str(bond.first) + ", " + str(bond.second) + ", cut node " +
                              (bond.cut_node == no_node ? std::string("none") : str(bond.cut_node)) + ")";
     if (bond.first >= bond.second) return TreeDefect{TreePart::bond, i, name + " does not have first < second"};
@@ -283,7 +294,7 @@ std::optional<TreeDefect> bonds_defect(const MeshTree& tree) {
       return TreeDefect{TreePart::bond, i, name + " joins leaves that the cut of its cut node does not separate"};
     }
     if (i > 0) {
-      const Bond& previous = tree.bonds[i - 1];
+      const Bond previous = tree.bond(i - 1);
       if (std::tie(previous.first, previous.second, previous.cut_node) >
           std::tie(bond.first, bond.second, bond.cut_node)) {
         return TreeDefect{TreePart::bond, i, name + " is out of order (bonds are sorted by first, second, cut node)"};
@@ -883,8 +894,10 @@ std::array<std::uint64_t, 2> TreeCertifier::digest(const MeshTree& tree) {
     digest.word(node.seed);
   }
   digest.values(tree.leaf_nodes);
-  digest.word(tree.bonds.size());
-  for (const Bond& bond : tree.bonds) {
+  // The bonds as Bonds, whether kept packed or not: packing changes no value.
+  digest.word(tree.bond_count());
+  for (std::size_t i = 0; i < tree.bond_count(); ++i) {
+    const Bond bond = tree.bond(i);
     digest.word(pair_of(bond.first, bond.second));
     digest.word(bond.cut_node);
     digest.real(bond.area);
@@ -938,6 +951,12 @@ std::optional<TreeDefect> fill_tree_caches(MeshTree& tree) {
       tree.nodes[k].solid = shape.solid;
     }
     std::vector<std::vector<std::uint8_t>>().swap(tree.packed_shapes);
+  }
+  // And its packed bonds theirs (a tree keeps them one way: `bonds` is empty).
+  if (!tree.packed_bonds.empty() && tree.bonds.empty()) {
+    tree.bonds.reserve(tree.packed_bonds.size());
+    for (const PackedBond& packed : tree.packed_bonds) tree.bonds.push_back(unpack_bond(tree, packed));
+    std::vector<PackedBond>().swap(tree.packed_bonds);
   }
   return detail::caches_defect(tree, &tree);
 }

@@ -1227,6 +1227,16 @@ TEST_CASE("a packed node shape unpacks to the same mesh and solid", "[tree][pack
   }
 }
 
+namespace {
+// Two bonds alike bit for bit, field by field (Bond has padding).
+bool same_bond_bits(const Bond& a, const Bond& b) {
+  return a.first == b.first && a.second == b.second && a.cut_node == b.cut_node &&
+         std::memcmp(&a.area, &b.area, sizeof a.area) == 0 &&
+         std::memcmp(&a.centroid, &b.centroid, sizeof a.centroid) == 0 &&
+         std::memcmp(&a.normal, &b.normal, sizeof a.normal) == 0;
+}
+}  // namespace
+
 TEST_CASE("a lean build keeps no approximations and gives the same tree otherwise", "[tree][build][property]") {
   // Concave meshes, so cuts leave three or more pieces (the surplus cuts are
   // undone) and caps have non-convex faces (the bonds triangulate them); every
@@ -1277,6 +1287,32 @@ TEST_CASE("a lean build keeps no approximations and gives the same tree otherwis
         // The bonds were found on approximations computed as needed: the same
         // bonds, bit for bit (the file stores them, so equal bytes say so too).
         CHECK(byte_difference(encode_shatter(lean), encode_shatter(full)) == "equal");
+        // And kept packed (PackedBond), each unpacking to the full build's bond
+        // bit for bit, in its place; a packed bond naming no plane or axis, or
+        // bonds kept both ways, are defects; a packed bond changed breaks the
+        // certificate.
+        CHECK(lean.bonds.empty());
+        REQUIRE(lean.packed_bonds.size() == full.bonds.size());
+        REQUIRE(lean.bond_count() == full.bond_count());
+        for (std::size_t i = 0; i < full.bonds.size(); ++i) {
+          INFO("bond " << i);
+          CHECK(same_bond_bits(lean.bond(i), full.bonds[i]));
+        }
+        if (!lean.packed_bonds.empty()) {
+          MeshTree broken = lean;
+          broken.packed_bonds.back().axis = 3;
+          CHECK_THAT(validate_tree(broken).summary(), Catch::Contains("names no cut plane or no axis"));
+          broken = lean;
+          broken.packed_bonds.back().cut_node = static_cast<NodeIndex>(broken.cut_planes.size());
+          CHECK_THAT(validate_tree(broken).summary(), Catch::Contains("names no cut plane or no axis"));
+          broken = lean;
+          broken.bonds.push_back(full.bonds.front());
+          CHECK_THAT(validate_tree(broken).summary(), Catch::Contains("both packed and not"));
+          REQUIRE(certificate_holds(lean));
+          broken = lean;
+          broken.packed_bonds.back().u = std::nextafter(broken.packed_bonds.back().u, 1e9);
+          CHECK_FALSE(certificate_holds(broken));
+        }
         {
           // Its leaves packed as well (what `fracture` does before writing):
           // still valid, the same bytes and statistics, and unpacked back.
@@ -1296,6 +1332,9 @@ TEST_CASE("a lean build keeps no approximations and gives the same tree otherwis
         }
         REQUIRE(!fill_tree_caches(lean));
         CHECK(lean.packed_shapes.empty());
+        CHECK(lean.packed_bonds.empty());
+        REQUIRE(lean.bonds.size() == full.bonds.size());
+        for (std::size_t i = 0; i < full.bonds.size(); ++i) CHECK(same_bond_bits(lean.bonds[i], full.bonds[i]));
         for (std::size_t k = 0; k < full.nodes.size(); ++k) {
           INFO("node " << k);
           CHECK(shape_difference(lean.nodes[k].mesh, lean.nodes[k].solid, full.nodes[k].mesh, full.nodes[k].solid).empty());

@@ -103,7 +103,14 @@ struct MeshTree {
   RepairReport input_repair;
   std::vector<MeshTreeNode> nodes;   ///< depth-first preorder; nodes[0] is the root
   std::vector<NodeIndex> leaf_nodes; ///< leaf i is nodes[leaf_nodes[i]]
-  std::vector<Bond> bonds;           ///< sorted by (first, second, cut_node)
+  /// Sorted by (first, second, cut_node). Empty in a lean build's tree, which
+  /// keeps them in packed_bonds: read a tree's bonds through bond_count() and
+  /// bond(i), which see either.
+  std::vector<Bond> bonds;
+  /// A lean build's bonds (BuildRunOptions::lean), packed (PackedBond), in the
+  /// order `bonds` would have them; empty in every other tree (a tree has its
+  /// bonds in one of the two). fill_tree_caches unpacks them into `bonds`.
+  std::vector<PackedBond> packed_bonds;
   /// Plane kernel: the input points and input planes the nodes' solids are
   /// defined over. Empty otherwise.
   InputGeometry geometry;
@@ -125,6 +132,11 @@ struct MeshTree {
   TreeCertificate certificate;
 
   std::size_t leaf_count() const { return leaf_nodes.size(); }
+  /// The number of bonds, packed or not.
+  std::size_t bond_count() const { return bonds.size() + packed_bonds.size(); }
+  /// Bond i (< bond_count()) of the sorted list, unpacked when the tree keeps
+  /// its bonds packed (unpack_bond's precondition holds for what a build packed).
+  Bond bond(std::size_t i) const { return i < bonds.size() ? bonds[i] : unpack_bond(*this, packed_bonds[i - bonds.size()]); }
   const MeshTreeNode& leaf(LeafIndex i) const { return nodes[leaf_nodes[i]]; }
   /// The tree keeps the plane kernel's exact representation (geometry and every
   /// node's solid): every tree this version builds; not those of the retired
