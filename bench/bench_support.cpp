@@ -176,7 +176,7 @@ std::vector<std::size_t> match_by_centroid(const std::vector<CgalMesh>& componen
     std::size_t component, child;
   };
   std::vector<shatter::Vec3> child_centroids;
-  for (const NodeIndex child : children) child_centroids.push_back(surface_centroid(tree.nodes[child].mesh));
+  for (const NodeIndex child : children) child_centroids.push_back(surface_centroid(*tree.nodes[child].mesh));
   std::vector<Pair> pairs;
   for (std::size_t i = 0; i < components.size(); ++i) {
     const shatter::Vec3 c = surface_centroid(components[i]);

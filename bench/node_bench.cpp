@@ -83,8 +83,8 @@ int main(int argc, char** argv) {
     std::vector<const shatter::Mesh*> leaves;
     std::size_t triangles = 0;
     for (const shatter::NodeIndex node : tree.leaf_nodes) {
-      leaves.push_back(&tree.nodes[node].mesh);
-      triangles += tree.nodes[node].mesh.triangles.size();
+      leaves.push_back(&*tree.nodes[node].mesh);
+      triangles += tree.nodes[node].mesh->triangles.size();
     }
     shatter::ValidationOptions without_self_intersections;
     without_self_intersections.check_self_intersections = false;

@@ -355,8 +355,8 @@ Json build_in_child(const shatter::Mesh& mesh, const shatter::TreeRecipe& recipe
 
   std::uint64_t node_triangles = 0, leaf_triangles = 0;
   for (const auto& node : tree.nodes) {
-    node_triangles += node.mesh.triangle_count();
-    if (node.is_leaf()) leaf_triangles += node.mesh.triangle_count();
+    node_triangles += node.mesh->triangle_count();
+    if (node.is_leaf()) leaf_triangles += node.mesh->triangle_count();
   }
   std::uint32_t max_depth = 0;
   for (const auto& node : tree.nodes) max_depth = std::max(max_depth, node.depth);

@@ -192,9 +192,9 @@ std::uint64_t tree_fingerprint(const MeshTree& tree) {
   f.add(tree.nodes.size());
   for (NodeIndex k = 0; k < tree.nodes.size(); ++k) {
     const shatter::MeshTreeNode& node = tree.nodes[k];
-    f.add_vector(node.mesh.positions);
-    f.add_vector(node.mesh.triangles);
-    f.add_vector(node.mesh.surfaces);
+    f.add_vector(node.mesh->positions);
+    f.add_vector(node.mesh->triangles);
+    f.add_vector(node.mesh->surfaces);
     f.add(node.parent);
     f.add(tree.cut_planes[k]);
   }

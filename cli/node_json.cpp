@@ -37,9 +37,9 @@ json nodes_json(const MeshTree& tree, std::span<const NodeIndex> nodes) {
     entry["leaf_count"] = node.leaf_count;
     entry["volume"] = node.mass.volume;
     entry["centroid"] = {node.mass.centroid.x, node.mass.centroid.y, node.mass.centroid.z};
-    entry["triangles"] = node.mesh.triangle_count();
+    entry["triangles"] = node.mesh->triangle_count();
     entry["cap_triangles"] = static_cast<std::size_t>(std::count_if(
-        node.mesh.surfaces.begin(), node.mesh.surfaces.end(), [](SurfaceId s) { return s != original_surface; }));
+        node.mesh->surfaces.begin(), node.mesh->surfaces.end(), [](SurfaceId s) { return s != original_surface; }));
     json bonds = json::array();
     for (std::size_t b : crossing[index]) {
       const Bond& bond = tree.bonds[b];

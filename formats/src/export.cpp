@@ -450,7 +450,7 @@ tinygltf::Value extras_of(const MeshTree& tree, NodeIndex index) {
   extras["leaf_count"] = count_value(node.leaf_count);
   extras["volume"] = tinygltf::Value(node.mass.volume);
   extras["centroid"] = vec3_value(node.mass.centroid);
-  extras["triangles"] = count_value(node.mesh.triangle_count());
+  extras["triangles"] = count_value(node.mesh->triangle_count());
   extras["cap_triangles"] = count_value(cap_triangle_count(node.mesh));
   if (node.is_leaf()) {
     extras["leaf"] = count_value(node.first_leaf);

@@ -297,7 +297,7 @@ void read_solids(const Section& section, std::vector<MeshTreeNode>& nodes, bool 
     record_offsets[k] = in.offset();
     in.set_record("node " + str(k));
     MeshTreeNode& node = nodes[k];
-    Solid& solid = node.solid;
+    Solid& solid = *node.solid;
     read_solid_flags(in, node);
     const std::uint32_t vertex_count = in.u32("vertex count");
     const std::uint32_t face_count = in.u32("face count");

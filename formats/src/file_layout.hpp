@@ -469,7 +469,7 @@ inline void read_solid_flags(PayloadReader& in, MeshTreeNode& node) {
   const std::uint8_t flags = in.u8("solid flags");
   if ((flags & ~(node_convex_bit | solid_convex_bit)) != 0) in.fail_at(at, "unknown solid flag bits " + hex(flags, 2));
   node.convex = (flags & node_convex_bit) != 0;
-  node.solid.convex = (flags & solid_convex_bit) != 0;
+  node.solid->convex = (flags & solid_convex_bit) != 0;
 }
 
 /// Reads vertex `vertex`'s kind byte, refusing an unknown kind.

@@ -371,16 +371,18 @@ Vec3 derived_normal(const MeshTree& tree, const Bond& bond) {
 
 void bonds_payload(const MeshTree& tree, ByteWriter& out) {
   std::uint8_t flags = 0;
-  for (const Bond& bond : tree.bonds) {
+  for (std::size_t i = 0; i < tree.bond_count(); ++i) {
+    const Bond bond = tree.bond(i);
     if (zero_normal(tree.cut_planes[bond.cut_node]) || !same_bits(bond.normal, derived_normal(tree, bond))) {
       flags |= bond_normals_stored_bit;
       break;
     }
   }
-  out.u64(tree.bonds.size());
+  out.u64(tree.bond_count());
   out.u8(flags);
   LeafIndex previous_first = 0;
-  for (const Bond& bond : tree.bonds) {
+  for (std::size_t i = 0; i < tree.bond_count(); ++i) {
+    const Bond bond = tree.bond(i);
     const Plane& plane = tree.cut_planes[bond.cut_node];
     // The largest normal component first: the projection the bonds were measured in.
     std::array<int, 3> axes = {0, 1, 2};
@@ -634,7 +636,7 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
     in.set_record("node " + str(k));
     MeshTreeNode& node = nodes[k];
     path.enter(static_cast<NodeIndex>(k), node.depth);
-    Solid& solid = node.solid;
+    Solid& solid = *node.solid;
     read_solid_flags(in, node);
     const std::uint32_t vertex_count = in.varint32("vertex count");
     const std::uint32_t face_count = in.varint32("face count");
@@ -747,7 +749,7 @@ void read_version3_meshes(const Section& section, MeshTree& tree, bool hulls, Ve
     record_offsets[k] = in.offset();
     in.set_record("node " + str(k));
     path.enter(static_cast<NodeIndex>(k), nodes[k].depth);
-    const std::size_t source_count = hulls ? nodes[k].mesh.positions.size() : nodes[k].solid.defs.size();
+    const std::size_t source_count = hulls ? nodes[k].mesh->positions.size() : nodes[k].solid->defs.size();
     Mesh mesh = read_mesh(in, source_count, sources[k], path);
     if (!hulls) {
       nodes[k].mesh = std::move(mesh);
@@ -837,11 +839,11 @@ void finish_version3(MeshTree& tree, const Version3Pending& pending) {
     MeshTreeNode& node = tree.nodes[k];
     const std::vector<std::uint32_t>& mesh_sources = pending.mesh_sources[k];
     for (std::size_t v = 0; v < mesh_sources.size(); ++v) {
-      if (const std::uint32_t s = mesh_sources[v]; s != no_index) node.mesh.positions[v] = output_position(set, node.solid.defs[s], node.solid.approx[s]);
+      if (const std::uint32_t s = mesh_sources[v]; s != no_index) node.mesh->positions[v] = output_position(set, node.solid->defs[s], node.solid->approx[s]);
     }
     const std::vector<std::uint32_t>& hull_sources = pending.hull_sources[k];
     for (std::size_t v = 0; v < hull_sources.size(); ++v) {
-      if (const std::uint32_t s = hull_sources[v]; s != no_index) node.hull->positions[v] = node.mesh.positions[s];
+      if (const std::uint32_t s = hull_sources[v]; s != no_index) node.hull->positions[v] = node.mesh->positions[s];
     }
     if (pending.masses_derived) node.mass = mass_properties(node.mesh);
   }

@@ -205,13 +205,18 @@ struct BuildNode {
   static void operator delete(void* node) noexcept { OpenNodeBlock::free(node); }
 #endif
 
-  Mesh mesh;    // the solid rounded to doubles, certified valid (round_solid); empty when packed
+  // The solid rounded to doubles, certified valid (round_solid); absent when
+  // packed. Boxed (mesh and solid both), as MeshTreeNode's are: a lean build
+  // packs every node, and two million records of a million-fragment build
+  // would otherwise hold 272 bytes of empty arrays each (0.54 GB, most of the
+  // build's own peak) until number_tree frees them.
+  Boxed<Mesh> mesh;
   // The exact solid; its vertices refer to the cut plane of the ancestor at
   // depth k as PlaneRef::cut(k). A node's index in the tree is its place in
   // depth-first preorder, unknown until every subtree before it is finished
   // (they grow in parallel, and cuts may be undone), so the depth names the
   // plane until number_tree gives the node its index.
-  Solid solid;
+  Boxed<Solid> solid;
   const BuildNode* parent = nullptr;
   MassProperties mass;
   Plane plane;  // the plane that cut this node; zero while it is a leaf
@@ -240,17 +245,17 @@ void fit(std::vector<T>& values) {
 }
 
 void fit_to_size(BuildNode& node) {
-  fit(node.mesh.positions);
-  fit(node.mesh.triangles);
-  fit(node.mesh.surfaces);
-  fit(node.mesh.corners.normals);
-  fit(node.mesh.corners.uvs);
-  fit(node.mesh.corners.tangents);
-  fit(node.solid.defs);
-  fit(node.solid.approx);
-  fit(node.solid.faces);
-  fit(node.solid.loops);
-  fit(node.solid.corners);
+  fit(node.mesh->positions);
+  fit(node.mesh->triangles);
+  fit(node.mesh->surfaces);
+  fit(node.mesh->corners.normals);
+  fit(node.mesh->corners.uvs);
+  fit(node.mesh->corners.tangents);
+  fit(node.solid->defs);
+  fit(node.solid->approx);
+  fit(node.solid->faces);
+  fit(node.solid->loops);
+  fit(node.solid->corners);
 }
 
 // A lean build's release of a node's cached approximations (BuildRunOptions::lean):
@@ -305,7 +310,7 @@ class Builder {
     for (std::uint32_t attempt = 0; attempt < recipe_.max_plane_tries; ++attempt) {
       path.back() = draw_plane(recipe_.strategy, box, node.mass.centroid, random);
       // node.mesh is certified (the root: the validated input). A pinch throws.
-      PlaneCut result = cut_by_plane(*plane_input_, set, node.solid, &node.mesh, cut, cutting);
+      PlaneCut result = cut_by_plane(*plane_input_, set, *node.solid, &*node.mesh, cut, cutting);
       if (result.plane_missed) {
         ++missed;
         continue;
@@ -344,7 +349,7 @@ class Builder {
       }
       node.plane = path.back();
       // Cut once and for all (an undone cut leaves it a leaf, never cut again).
-      if (lean_) release_approximations(node.solid);
+      if (lean_) release_approximations(*node.solid);
       node.vanished_pieces = vanished;
       node.vanished_volume = vanished_volume;
       node.vanished_volume_bound = vanished_bound;
@@ -372,7 +377,7 @@ class Builder {
   /// `node`'s cut is undone: a packed node gets its mesh and solid back.
   static void cut_undone(BuildNode& node) {
     if (node.packed.empty()) return;
-    unpack_node_shape(node.packed, {}, node.mesh, node.solid);
+    unpack_node_shape(node.packed, {}, *node.mesh, *node.solid);
     std::vector<std::uint8_t>().swap(node.packed);
   }
 
@@ -390,10 +395,10 @@ class Builder {
 
   // A lean build's packing of `node`'s mesh and solid (its approximations go).
   static void pack(BuildNode& node) {
-    node.packed_convex = node.solid.convex;
+    node.packed_convex = node.solid->convex;
     node.packed = pack_node_shape(node.mesh, node.solid);
-    node.mesh = Mesh();
-    node.solid = Solid();
+    node.mesh.reset();
+    node.solid.reset();
   }
 
   const TreeRecipe& recipe() const { return recipe_; }
@@ -604,11 +609,11 @@ void number_tree(std::unique_ptr<BuildNode> root, MeshTree& tree) {
     } else {
       node.mesh = std::move(built.mesh);
       node.solid = std::move(built.solid);
-      node.convex = node.solid.convex;
+      node.convex = node.solid->convex;
       // Caps were labelled by the depth of their cut, and the plane kernel's
       // cut planes referred to by depth (BuildNode::solid says why); now that
       // every node has its index, each becomes that ancestor's.
-      rename_by_path(path, node.mesh, node.solid);
+      rename_by_path(path, *node.mesh, *node.solid);
     }
     node.mass = built.mass;
     node.parent = pending.parent;
@@ -741,7 +746,13 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
   plane_hulls(arena, tree);
   timing.hull_seconds = seconds_since(phase_start);
   phase_start = std::chrono::steady_clock::now();
-  tree.bonds = find_bonds(tree);
+  // A lean build keeps its bonds packed, found so (40 bytes a bond instead of
+  // 72: 0.3 GB of a million-fragment cube's peak, which is here).
+  if (builder.lean()) {
+    tree.packed_bonds = find_packed_plane_bonds(tree);
+  } else {
+    tree.bonds = find_bonds(tree);
+  }
   timing.bond_seconds = seconds_since(phase_start);
   // The tree passes validate_tree, caches included, by construction (README
   // "Certificates carried, not re-checked"): number_tree made the links, depths,

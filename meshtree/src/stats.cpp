@@ -73,8 +73,8 @@ TreeStats tree_stats(const MeshTree& tree) {
   }
   stats.fragment_volume = spread_of(std::move(volumes));
 
-  stats.bond_count = tree.bonds.size();
-  for (const Bond& bond : tree.bonds) stats.total_bond_area += bond.area;
+  stats.bond_count = tree.bond_count();
+  for (std::size_t i = 0; i < tree.bond_count(); ++i) stats.total_bond_area += tree.bond(i).area;
   return stats;
 }
 

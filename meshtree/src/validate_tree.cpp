@@ -267,8 +267,19 @@ NodeIndex child_holding(const std::vector<MeshTreeNode>& nodes, NodeIndex node, 
 /// children). Requires a valid structure.
 std::optional<TreeDefect> bonds_defect(const MeshTree& tree) {
   const std::size_t leaf_count = tree.leaf_nodes.size();
-  for (std::size_t i = 0; i < tree.bonds.size(); ++i) {
-    const Bond& bond = tree.bonds[i];
+  // Packed bonds (a lean build's) are checked as what they unpack to, once
+  // unpack_bond's precondition holds.
+  if (!tree.bonds.empty() && !tree.packed_bonds.empty()) {
+    return TreeDefect{TreePart::bond, 0, "the tree keeps bonds both packed and not"};
+  }
+  for (std::size_t i = 0; i < tree.packed_bonds.size(); ++i) {
+    const PackedBond& packed = tree.packed_bonds[i];
+    if (packed.cut_node >= tree.cut_planes.size() || packed.axis > 2) {
+      return TreeDefect{TreePart::bond, i, "packed bond " + str(i) + " names no cut plane or no axis"};
+    }
+  }
+  for (std::size_t i = 0; i < tree.bond_count(); ++i) {
+    const Bond bond = tree.bond(i);
     const std::string name = "bond " + str(i) + " (" + str(bond.first) + ", " + str(bond.second) + ", cut node " +
                              (bond.cut_node == no_node ? std::string("none") : str(bond.cut_node)) + ")";
     if (bond.first >= bond.second) return TreeDefect{TreePart::bond, i, name + " does not have first < second"};
@@ -283,7 +294,7 @@ std::optional<TreeDefect> bonds_defect(const MeshTree& tree) {
       return TreeDefect{TreePart::bond, i, name + " joins leaves that the cut of its cut node does not separate"};
     }
     if (i > 0) {
-      const Bond& previous = tree.bonds[i - 1];
+      const Bond previous = tree.bond(i - 1);
       if (std::tie(previous.first, previous.second, previous.cut_node) >
           std::tie(bond.first, bond.second, bond.cut_node)) {
         return TreeDefect{TreePart::bond, i, name + " is out of order (bonds are sorted by first, second, cut node)"};
@@ -587,7 +598,7 @@ std::optional<TreeDefect> packed_defect(const MeshTree& tree) {
       return TreeDefect{TreePart::mesh, k,
                         "node " + str(k) + " has a packed mesh and solid, but the tree has no exact representation"};
     }
-    if (!node.mesh.positions.empty() || !node.mesh.triangles.empty() || !solid_is_empty(node.solid)) {
+    if (!node.mesh->positions.empty() || !node.mesh->triangles.empty() || !solid_is_empty(node.solid)) {
       return TreeDefect{TreePart::mesh, k, "node " + str(k) + " has a packed mesh and solid and keeps others of its own"};
     }
   }
@@ -652,7 +663,7 @@ std::optional<TreeDefect> caches_defect(const MeshTree& tree, MeshTree* fill) {
   NodeShapes shapes(tree);  // fill_tree_caches unpacks every node first
   for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
     const Solid& solid = shapes(static_cast<NodeIndex>(k)).solid;
-    if (fill) fill->nodes[k].solid.approx.resize(solid.defs.size());
+    if (fill) fill->nodes[k].solid->approx.resize(solid.defs.size());
     for (std::size_t v = 0; v < solid.defs.size(); ++v) {
       const auto vertex = [&] {
         return "the solid of node " + str(k) + " vertex " + str(v) + " (" + point_kind_name(solid.defs[v].kind) + ")";
@@ -664,7 +675,7 @@ std::optional<TreeDefect> caches_defect(const MeshTree& tree, MeshTree* fill) {
         return TreeDefect{TreePart::solid, k, vertex() + ": " + error.what()};
       }
       if (fill) {
-        fill->nodes[k].solid.approx[v] = approx;
+        fill->nodes[k].solid->approx[v] = approx;
       } else if (!solid.approx.empty() && std::memcmp(&approx, &solid.approx[v], sizeof approx) != 0) {
         return TreeDefect{TreePart::solid, k,
                           vertex() + ": approx is not approximate() of its definition (a stale cache)"};
@@ -824,7 +835,7 @@ static_assert(sizeof(SolidFace) == 24, "a new SolidFace field: add it to hash_so
 static_assert(sizeof(Solid) == 128, "a new Solid field: add it to hash_solid");
 static_assert(sizeof(Mesh) == 144, "a new Mesh field: add it to hash_mesh");
 static_assert(sizeof(Bond) == 72, "a new Bond field: add it to TreeCertifier::digest");
-static_assert(sizeof(MeshTreeNode) == 440, "a new MeshTreeNode field: add it to TreeCertifier::digest");
+static_assert(sizeof(MeshTreeNode) == 184, "a new MeshTreeNode field: add it to TreeCertifier::digest");
 static_assert(sizeof(InputGeometry) == 72, "a new InputGeometry field: add it to TreeCertifier::digest");
 static_assert(sizeof(TreeRecipe) == 72, "a new TreeRecipe field: add it to TreeCertifier::digest");
 #endif
@@ -883,8 +894,10 @@ std::array<std::uint64_t, 2> TreeCertifier::digest(const MeshTree& tree) {
     digest.word(node.seed);
   }
   digest.values(tree.leaf_nodes);
-  digest.word(tree.bonds.size());
-  for (const Bond& bond : tree.bonds) {
+  // The bonds as Bonds, whether kept packed or not: packing changes no value.
+  digest.word(tree.bond_count());
+  for (std::size_t i = 0; i < tree.bond_count(); ++i) {
+    const Bond bond = tree.bond(i);
     digest.word(pair_of(bond.first, bond.second));
     digest.word(bond.cut_node);
     digest.real(bond.area);
@@ -938,6 +951,12 @@ std::optional<TreeDefect> fill_tree_caches(MeshTree& tree) {
       tree.nodes[k].solid = shape.solid;
     }
     std::vector<std::vector<std::uint8_t>>().swap(tree.packed_shapes);
+  }
+  // And its packed bonds theirs (a tree keeps them one way: `bonds` is empty).
+  if (!tree.packed_bonds.empty() && tree.bonds.empty()) {
+    tree.bonds.reserve(tree.packed_bonds.size());
+    for (const PackedBond& packed : tree.packed_bonds) tree.bonds.push_back(unpack_bond(tree, packed));
+    std::vector<PackedBond>().swap(tree.packed_bonds);
   }
   return detail::caches_defect(tree, &tree);
 }

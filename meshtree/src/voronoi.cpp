@@ -805,7 +805,7 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
   root.mesh = mesh;
   root.mass = mass_properties(root.mesh);
   root.solid = input.solid;
-  root.convex = root.solid.convex;
+  root.convex = root.solid->convex;
   root.seed = root_node_seed(recipe.seed);
   root.first_leaf = 0;
   root.leaf_count = 1;
@@ -858,19 +858,19 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
       const auto k = static_cast<NodeIndex>(tree.nodes.size());
       MeshTreeNode node;
       node.solid = std::move(part.solid);
-      for (SolidFace& face : node.solid.faces) {
+      for (SolidFace& face : node.solid->faces) {
         remap(face.plane);
         remap_surface(face.surface);
       }
-      for (SolidCorner& corner : node.solid.corners) remap(corner.line.other);
-      for (PointDef& def : node.solid.defs) {
+      for (SolidCorner& corner : node.solid->corners) remap(corner.line.other);
+      for (PointDef& def : node.solid->defs) {
         const int count = def.kind == PointKind::segment_plane ? 1 : def.kind == PointKind::three_planes ? 3 : 0;
         for (int c = 0; c < count; ++c) remap(def.planes[c]);
       }
       node.mesh = std::move(part.mesh);
-      for (SurfaceId& surface : node.mesh.surfaces) remap_surface(surface);
+      for (SurfaceId& surface : node.mesh->surfaces) remap_surface(surface);
       node.mass = mass_properties(node.mesh);
-      node.convex = node.solid.convex;
+      node.convex = node.solid->convex;
       node.parent = parent;
       node.depth = tree.nodes[parent].depth + 1;
       node.first_leaf = static_cast<LeafIndex>(tree.leaf_nodes.size());
@@ -910,7 +910,7 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
   tree.bonds = find_bonds(tree);
   report.seconds_bonds = seconds_since(phase);
   if (run.lean) {
-    for (MeshTreeNode& node : tree.nodes) std::vector<ApproxPoint>().swap(node.solid.approx);
+    for (MeshTreeNode& node : tree.nodes) std::vector<ApproxPoint>().swap(node.solid->approx);
   }
   if (run.report) {
     run.report->cutting_seconds = report.seconds_cells + report.seconds_glue;

@@ -274,16 +274,16 @@ TEST_CASE("convex hulls of the non-convex nodes of trees, and of convex meshes")
     recipe.seed = 7;
     const MeshTree tree = build_mesh_tree(read_mesh(mesh_dir() / name), recipe, {.threads = 2});
     for (const MeshTreeNode& node : tree.nodes) {
-      INFO(name << ", a node of " << node.mesh.positions.size() << " vertices");
+      INFO(name << ", a node of " << node.mesh->positions.size() << " vertices");
       if (node.convex) {
         // A convex node's mesh is its own hull; the point hull finds the same one.
         const Mesh own = convex_hull_of(node.mesh);
-        const Mesh of_points = convex_hull_of_points(node.mesh.positions);
+        const Mesh of_points = convex_hull_of_points(node.mesh->positions);
         REQUIRE(own.positions == of_points.positions);
         REQUIRE(own.triangles == of_points.triangles);
         continue;
       }
-      require_hull(node.mesh.positions);
+      require_hull(node.mesh->positions);
       ++checked;
     }
   }

@@ -92,8 +92,8 @@ struct TreeBuilder {
     {
       MeshTreeNode& node = tree.nodes.back();
       node.mesh = test::box(lo, hi);
-      if (parent != no_node) mark_caps(node.mesh, parent);
-      if (with_attributes) add_attributes(node.mesh);
+      if (parent != no_node) mark_caps(*node.mesh, parent);
+      if (with_attributes) add_attributes(*node.mesh);
       node.mass = mass_properties(node.mesh);
       node.parent = parent;
       node.depth = depth;
@@ -452,7 +452,7 @@ TEST_CASE("depth and all selections write files named by node index") {
   CHECK(file_names_in(folder) ==
         std::vector<std::string>{"node-00002.off", "node-00003.off", "node-00006.off", "node-00008.off",
                                  "node-00009.off"});
-  CHECK(read_mesh(folder / "node-00003.off").triangle_count() == tree.nodes[3].mesh.triangle_count());
+  CHECK(read_mesh(folder / "node-00003.off").triangle_count() == tree.nodes[3].mesh->triangle_count());
 
   // A selection that by_leaf cannot name is refused before anything is written.
   const fs::path refused = scratch_folder("refused");
@@ -555,7 +555,7 @@ TEST_CASE("GLB edge cases: empty selection, duplicates, bad indices, bad meshes"
   CHECK_THROWS_AS(encode_glb(tree, out_of_range), std::invalid_argument);
 
   MeshTree broken = tree;
-  broken.nodes[2].mesh.triangles[0][1] = 1000;
+  broken.nodes[2].mesh->triangles[0][1] = 1000;
   const std::vector<NodeIndex> second_node{2};
   CHECK_THROWS_AS(encode_glb(broken, second_node), InvalidMeshError);
   CHECK_NOTHROW(encode_glb(broken, std::vector<NodeIndex>{3}));

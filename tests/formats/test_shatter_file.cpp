@@ -293,10 +293,10 @@ MeshTree two_leaf_tree() {
   right.seed = 13;
   // The faces on x = 1 are the cap of the root's cut.
   for (MeshTreeNode* leaf : {&left, &right}) {
-    for (std::size_t t = 0; t < leaf->mesh.triangle_count(); ++t) {
+    for (std::size_t t = 0; t < leaf->mesh->triangle_count(); ++t) {
       bool on_cap = true;
-      for (const VertexIndex v : leaf->mesh.triangles[t]) on_cap = on_cap && leaf->mesh.positions[v].x == 1;
-      if (on_cap) leaf->mesh.surfaces[t] = cap_surface_of(0);
+      for (const VertexIndex v : leaf->mesh->triangles[t]) on_cap = on_cap && leaf->mesh->positions[v].x == 1;
+      if (on_cap) leaf->mesh->surfaces[t] = cap_surface_of(0);
     }
   }
   tree.nodes = {root, left, right};
@@ -351,11 +351,11 @@ MeshTree deep_tree() {
     node.above_parent_plane = k % 2 == 1;
     if (!node.is_leaf()) tree.cut_planes[k] = {{special_doubles[k], 1, -0.0}, special_doubles[k + 1]};
     node.mass.inertia[k] = special_doubles[k];
-    add_attributes(node.mesh, static_cast<unsigned>(k + 2) % 8, cursor);
+    add_attributes(*node.mesh, static_cast<unsigned>(k + 2) % 8, cursor);
     add_attributes(*node.hull, static_cast<unsigned>(k) % 8, cursor);
   }
-  tree.nodes[2].mesh.positions[0] = {special_doubles[0], special_doubles[2], special_doubles[3]};
-  tree.nodes[3].mesh.surfaces[0] = 0xFFFFFFFFu;
+  tree.nodes[2].mesh->positions[0] = {special_doubles[0], special_doubles[2], special_doubles[3]};
+  tree.nodes[3].mesh->surfaces[0] = 0xFFFFFFFFu;
   tree.nodes[5].mesh = Mesh{};  // an empty mesh is stored as it is
   tree.leaf_nodes = {2, 3, 4, 5};
   tree.bonds = {Bond{0, 1, 1, special_doubles[0], {1, 2, 3}, {0, 0, 1}}, Bond{0, 2, 0, 0.25, {}, {}},
@@ -466,7 +466,7 @@ std::string mesh_record(const Mesh& m) {
 
 std::string meshes_payload(const std::vector<MeshTreeNode>& nodes, bool hulls) {
   std::string out = Bytes{}.u32(static_cast<std::uint32_t>(nodes.size())).data;
-  for (const MeshTreeNode& n : nodes) out += mesh_record(hulls ? *n.hull : n.mesh);
+  for (const MeshTreeNode& n : nodes) out += mesh_record(hulls ? *n.hull : *n.mesh);
   return out;
 }
 
@@ -728,12 +728,12 @@ std::string meshes_payload_v3(const MeshTree& tree, bool hulls) {
   const PlaneSet set = tree.plane_set();
   for (NodeIndex k = 0; k < tree.nodes.size(); ++k) {
     const MeshTreeNode& n = tree.nodes[k];
-    std::vector<Vec3> sources = n.mesh.positions;
+    std::vector<Vec3> sources = n.mesh->positions;
     if (!hulls) {
       sources.clear();
-      for (std::size_t v = 0; v < n.solid.defs.size(); ++v) sources.push_back(output_position(set, n.solid.defs[v], n.solid.approx[v]));
+      for (std::size_t v = 0; v < n.solid->defs.size(); ++v) sources.push_back(output_position(set, n.solid->defs[v], n.solid->approx[v]));
     }
-    mesh_record_v3(out, hulls ? *n.hull : n.mesh, sources, path_to(tree, k));
+    mesh_record_v3(out, hulls ? *n.hull : *n.mesh, sources, path_to(tree, k));
   }
   return out.data;
 }
@@ -878,9 +878,9 @@ TEST_CASE("hand-built trees round-trip field by field and bit for bit", "[shatte
     check_round_trip(tree);
     const MeshTree decoded = decode_shatter(encode_shatter(tree));
     // Spot checks that the comparison itself sees the special bit patterns.
-    CHECK(bits(decoded.nodes[2].mesh.positions[0].x) == 0x7FF0000000000001u);
+    CHECK(bits(decoded.nodes[2].mesh->positions[0].x) == 0x7FF0000000000001u);
     CHECK(bits(decoded.recipe.interior_uv_scale) == 0xFFF80000DEADBEEFu);
-    CHECK(bits(decoded.nodes[2].mesh.positions[0].y) == bits(-0.0));
+    CHECK(bits(decoded.nodes[2].mesh->positions[0].y) == bits(-0.0));
     CHECK(decoded.leaf_nodes == std::vector<NodeIndex>{2, 3, 4, 5});
   }
 }
@@ -906,9 +906,9 @@ TEST_CASE("built trees round-trip exactly", "[shatter_file][build]") {
         CHECK(test::tree_problem(tree) == "");
         check_round_trip(tree);
         if (input.name == "ellipsoid with attributes") {
-          CHECK(tree.nodes.back().mesh.corners.has_normals());
-          CHECK(tree.nodes.back().mesh.corners.has_uvs());
-          CHECK(tree.nodes.back().mesh.corners.has_tangents());
+          CHECK(tree.nodes.back().mesh->corners.has_normals());
+          CHECK(tree.nodes.back().mesh->corners.has_uvs());
+          CHECK(tree.nodes.back().mesh->corners.has_tangents());
         }
       }
     }
@@ -1308,7 +1308,7 @@ TEST_CASE("invalid trees with correct checksums are refused", "[shatter_file][ho
   };
   const MeshTree small = two_leaf_tree(), deep = deep_tree();
 
-  add("triangle index out of range", small, [](MeshTree& t) { t.nodes[1].mesh.triangles[3][2] = 8; },
+  add("triangle index out of range", small, [](MeshTree& t) { t.nodes[1].mesh->triangles[3][2] = 8; },
       "MESH section, byte 991: the mesh of node 1 triangle 3 corner 2 has vertex index 8, but there are only 8 vertices");
   add("hull triangle index out of range", deep, [](MeshTree& t) { t.nodes[4].hull->triangles.back()[0] = 0xFFFFFFFFu; },
       "the hull of node 4 triangle");
@@ -1359,7 +1359,7 @@ TEST_CASE("encode_shatter refuses trees a reader could not trust", "[shatter_fil
   tree.leaf_nodes = {2, 1};
   CHECK_THROWS_WITH(encode_shatter(tree), Catch::Contains("leaf_nodes[0] is node 2, but leaf 0 is node 1"));
   tree = two_leaf_tree();
-  tree.nodes[2].mesh.surfaces.pop_back();
+  tree.nodes[2].mesh->surfaces.pop_back();
   CHECK_THROWS_WITH(encode_shatter(tree), Catch::Contains("the mesh of node 2 has 11 surface ids for 12 triangles"));
   tree = two_leaf_tree();
   tree.nodes[1].hull->corners.uvs.resize(5);
@@ -1468,7 +1468,7 @@ TEST_CASE("version 1 files still read, as trees without an exact representation"
       CHECK(decoded.recipe.kernel != KernelKind::plane);
       CHECK(decoded.geometry.points.empty());
       CHECK(decoded.leaf_count() >= 2);
-      for (const MeshTreeNode& node : decoded.nodes) CHECK((node.solid.defs.empty() && !node.convex && !node.hull->positions.empty()));
+      for (const MeshTreeNode& node : decoded.nodes) CHECK((node.solid->defs.empty() && !node.convex && !node.hull->positions.empty()));
       check_round_trip(decoded);
       if (std::string_view(name) != "optional-section-before-end.shatter") {
         CHECK(tree_difference(decode_within_budget(converted_from_version_1(v1)), decoded).empty());
@@ -1515,7 +1515,7 @@ TEST_CASE("plane-kernel trees round-trip exactly, exact representation and cache
         REQUIRE(!tree.geometry.points.empty());
         REQUIRE(tree.cut_planes.size() == tree.nodes.size());
         for (const MeshTreeNode& node : tree.nodes) {
-          REQUIRE(!node.solid.defs.empty());
+          REQUIRE(!node.solid->defs.empty());
           (node.convex ? convex : non_convex) += 1;
           if (node.convex) REQUIRE(node.hull->positions.empty());
         }
@@ -1634,37 +1634,37 @@ TEST_CASE("invalid exact representations with correct checksums are refused", "[
   add("cut plane of an internal node infinite",
       [](MeshTree& t) { t.cut_planes[0].offset = std::numeric_limits<double>::infinity(); },
       "node 0 has a plane with a NaN or infinite coefficient", "NODE section");
-  add("input vertex beyond the points", [&](MeshTree& t) { t.nodes[0].solid.defs[2].a = static_cast<std::uint32_t>(P); },
+  add("input vertex beyond the points", [&](MeshTree& t) { t.nodes[0].solid->defs[2].a = static_cast<std::uint32_t>(P); },
       "the solid of node 0 vertex 2 (input) names input point " + std::to_string(P) + ", but there are only", "SOLD section, byte " + std::to_string(solids_at + 4) + ": ");
-  add("input vertex with a field its kind does not use", [](MeshTree& t) { t.nodes[0].solid.defs[0].b = 5; },
+  add("input vertex with a field its kind does not use", [](MeshTree& t) { t.nodes[0].solid->defs[0].b = 5; },
       "the solid of node 0 vertex 0 (input) has b = 5, a field its kind does not use (must be 0)", "SOLD section");
-  add("input vertex with a plane", [](MeshTree& t) { t.nodes[0].solid.defs[0].planes[0] = PlaneRef::input(1); },
+  add("input vertex with a plane", [](MeshTree& t) { t.nodes[0].solid->defs[0].planes[0] = PlaneRef::input(1); },
       "vertex 0 (input) has plane 0 = 0x00000001, a field its kind does not use", "SOLD section");
-  add("vertex of an unknown kind", [](MeshTree& t) { t.nodes[0].solid.defs[1].kind = static_cast<PointKind>(7); },
+  add("vertex of an unknown kind", [](MeshTree& t) { t.nodes[0].solid->defs[1].kind = static_cast<PointKind>(7); },
       "vertex 1 has unknown kind 7", "SOLD section");
-  add("face on its own node's cut plane", [&](MeshTree& t) { t.nodes[k].solid.faces[cut_face].plane = PlaneRef::cut(static_cast<std::uint32_t>(k)); },
+  add("face on its own node's cut plane", [&](MeshTree& t) { t.nodes[k].solid->faces[cut_face].plane = PlaneRef::cut(static_cast<std::uint32_t>(k)); },
       node_k + "face " + std::to_string(cut_face) + " names cut plane " + std::to_string(k), "SOLD section");
-  add("face on a sibling's cut plane", [&](MeshTree& t) { t.nodes[k].solid.faces[cut_face].plane = PlaneRef::cut(sibling); },
+  add("face on a sibling's cut plane", [&](MeshTree& t) { t.nodes[k].solid->faces[cut_face].plane = PlaneRef::cut(sibling); },
       "but node " + std::to_string(sibling) + " is not an ancestor of node " + std::to_string(k), "SOLD section");
-  add("root on a cut plane", [](MeshTree& t) { t.nodes[0].solid.faces[0].plane = PlaneRef::cut(0); },
+  add("root on a cut plane", [](MeshTree& t) { t.nodes[0].solid->faces[0].plane = PlaneRef::cut(0); },
       "the solid of node 0 face 0 names cut plane 0 (0x80000000), but node 0 is not an ancestor of node 0", "SOLD section");
-  add("face on an input plane beyond the planes", [&](MeshTree& t) { t.nodes[k].solid.faces[0].plane = PlaneRef::input(static_cast<std::uint32_t>(Q)); },
+  add("face on an input plane beyond the planes", [&](MeshTree& t) { t.nodes[k].solid->faces[0].plane = PlaneRef::input(static_cast<std::uint32_t>(Q)); },
       node_k + "face 0 names input plane " + std::to_string(Q) + ", but there are only " + std::to_string(Q) + " input planes", "SOLD section");
-  add("three_planes vertex on a node beyond the tree", [&](MeshTree& t) { t.nodes[k].solid.defs[three].planes[2] = PlaneRef::cut(1000); },
+  add("three_planes vertex on a node beyond the tree", [&](MeshTree& t) { t.nodes[k].solid->defs[three].planes[2] = PlaneRef::cut(1000); },
       node_k + "vertex " + std::to_string(three) + " (three_planes) plane 2 names cut plane 1000 (0x800003E8), but node 1000 is not an ancestor",
       "SOLD section");
-  add("three_planes vertex with the none sentinel", [&](MeshTree& t) { t.nodes[k].solid.defs[three].planes[0] = PlaneRef{no_index}; },
+  add("three_planes vertex with the none sentinel", [&](MeshTree& t) { t.nodes[k].solid->defs[three].planes[0] = PlaneRef{no_index}; },
       "plane 0 names cut plane 2147483647 (0xFFFFFFFF)", "SOLD section");
   add("corner line on an input plane beyond the planes",
-      [&](MeshTree& t) { t.nodes[k].solid.corners[1].line.other = PlaneRef::input(static_cast<std::uint32_t>(Q + 5)); },
+      [&](MeshTree& t) { t.nodes[k].solid->corners[1].line.other = PlaneRef::input(static_cast<std::uint32_t>(Q + 5)); },
       node_k + "corner 1 line names input plane " + std::to_string(Q + 5), "SOLD section");
-  add("corner segment not p < q", [&](MeshTree& t) { t.nodes[k].solid.corners[2].line = {PlaneRef{no_index}, 5, 3}; },
+  add("corner segment not p < q", [&](MeshTree& t) { t.nodes[k].solid->corners[2].line = {PlaneRef{no_index}, 5, 3}; },
       node_k + "corner 2 has segment (5, 3), not two input points p < q < " + std::to_string(P), "SOLD section");
-  add("corner segment beyond the points", [&](MeshTree& t) { t.nodes[k].solid.corners[0].line.p = 0; t.nodes[k].solid.corners[0].line.q = static_cast<std::uint32_t>(P); },
+  add("corner segment beyond the points", [&](MeshTree& t) { t.nodes[k].solid->corners[0].line.p = 0; t.nodes[k].solid->corners[0].line.q = static_cast<std::uint32_t>(P); },
       node_k + "corner 0 has segment (0, " + std::to_string(P) + ")", "SOLD section");
   add("face without a loop",
       [&](MeshTree& t) {
-        Solid& s = t.nodes[k].solid;
+        Solid& s = *t.nodes[k].solid;
         s.faces[1].loop_count += s.faces[0].loop_count;
         s.faces[1].first_loop = 0;
         s.faces[0].loop_count = 0;
@@ -1672,27 +1672,27 @@ TEST_CASE("invalid exact representations with correct checksums are refused", "[
       node_k + "face 0 has no loop", "SOLD section");
   add("loop of two corners",
       [&](MeshTree& t) {
-        Solid& s = t.nodes[k].solid;
+        Solid& s = *t.nodes[k].solid;
         s.loops[1].corner_count += s.loops[0].corner_count - 2;
         s.loops[1].first_corner = 2;
         s.loops[0].corner_count = 2;
       },
       node_k + "loop 0 has 2 corners (a loop has at least 3)", "SOLD section");
-  add("corner vertex beyond the vertices", [&](MeshTree& t) { t.nodes[k].solid.corners[3].vertex = static_cast<VertexIndex>(deep.defs.size()); },
+  add("corner vertex beyond the vertices", [&](MeshTree& t) { t.nodes[k].solid->corners[3].vertex = static_cast<VertexIndex>(deep.defs.size()); },
       node_k + "corner 3 has vertex " + std::to_string(deep.defs.size()) + ", but there are only " + std::to_string(deep.defs.size()) + " vertices",
       "SOLD section");
   add("corner repeating the next corner's vertex",
-      [&](MeshTree& t) { t.nodes[k].solid.corners[0].vertex = t.nodes[k].solid.corners[1].vertex; },
+      [&](MeshTree& t) { t.nodes[k].solid->corners[0].vertex = t.nodes[k].solid->corners[1].vertex; },
       node_k + "corner 0 repeats vertex " + std::to_string(deep.corners[1].vertex) + " of the corner after it", "SOLD section");
   add("a loop reversed: its edges used twice",
       [&](MeshTree& t) {
-        Solid& s = t.nodes[k].solid;
+        Solid& s = *t.nodes[k].solid;
         std::reverse(s.corners.begin(), s.corners.begin() + s.loops[0].corner_count);
       },
       "is used twice", "SOLD section");
   add("a vertex no corner uses",
       [&](MeshTree& t) {
-        Solid& s = t.nodes[k].solid;
+        Solid& s = *t.nodes[k].solid;
         s.defs.push_back(PointDef::input(0));
         s.approx.push_back(approximate(t.plane_set(), s.defs.back()));
       },
@@ -1706,7 +1706,7 @@ TEST_CASE("invalid exact representations with correct checksums are refused", "[
       "HULL section");
   add("a degenerate vertex (the same plane twice)",
       [&](MeshTree& t) {
-        PointDef& d = t.nodes[k].solid.defs[three];
+        PointDef& d = t.nodes[k].solid->defs[three];
         d.planes[1] = d.planes[0];
       },
       node_k + "vertex " + std::to_string(three) + " (three_planes): degenerate point definition", "SOLD section");
@@ -1731,7 +1731,7 @@ TEST_CASE("invalid exact representations with correct checksums are refused", "[
     }
     // The deep solid always has such a vertex; without one this case would test nothing.
     REQUIRE(moved);
-    add("an open solid", [&](MeshTree& t) { t.nodes[k].solid.corners[0].vertex = *moved; }, "has no reverse: the solid is open", "SOLD section");
+    add("an open solid", [&](MeshTree& t) { t.nodes[k].solid->corners[0].vertex = *moved; }, "has no reverse: the solid is open", "SOLD section");
   }
 
   for (const Case& c : cases) {
@@ -1748,36 +1748,36 @@ TEST_CASE("encode_shatter refuses exact representations a reader could not rebui
   // caches that would not come back as they are: the encoder's precondition.
   const MeshTree& base = small_plane_tree();
   const std::size_t k = deep_node(base);
-  const std::size_t three = std::find_if(base.nodes[k].solid.defs.begin(), base.nodes[k].solid.defs.end(),
+  const std::size_t three = std::find_if(base.nodes[k].solid->defs.begin(), base.nodes[k].solid->defs.end(),
                                          [](const PointDef& d) { return d.kind == PointKind::three_planes; }) -
-                            base.nodes[k].solid.defs.begin();
+                            base.nodes[k].solid->defs.begin();
   const auto refused = [&](auto&& change, const std::string& expected) {
     MeshTree tree = base;
     change(tree);
     INFO("expected: " << expected);
     CHECK_THROWS_WITH(encode_shatter(tree), Catch::Contains(expected));
   };
-  refused([&](MeshTree& t) { t.nodes[k].solid.approx[three].x.value += 1; },
+  refused([&](MeshTree& t) { t.nodes[k].solid->approx[three].x.value += 1; },
           "the solid of node " + std::to_string(k) + " vertex " + std::to_string(three) + " (three_planes): approx is not approximate()");
-  refused([&](MeshTree& t) { t.nodes[k].solid.approx[three].w.error = t.nodes[k].solid.approx[three].w.error * 2 + 1; },
+  refused([&](MeshTree& t) { t.nodes[k].solid->approx[three].w.error = t.nodes[k].solid->approx[three].w.error * 2 + 1; },
           "approx is not approximate() of its definition (a stale cache)");
-  refused([&](MeshTree& t) { t.nodes[k].solid.approx.pop_back(); }, "approx entries for");
+  refused([&](MeshTree& t) { t.nodes[k].solid->approx.pop_back(); }, "approx entries for");
   refused([](MeshTree& t) { t.geometry.plane_approx[2].d.value = -t.geometry.plane_approx[2].d.value - 1; },
           "geometry.plane_approx[2] is not approximate_input_plane of input plane 2 (a stale cache)");
   refused([](MeshTree& t) { t.geometry.plane_approx.pop_back(); }, "plane_approx entries for");
   refused([](MeshTree& t) { t.cut_planes.pop_back(); }, "cut_planes has");
-  refused([&](MeshTree& t) { t.nodes[k].solid.faces[1].first_loop += 1; }, "face 1 starts at loop");
-  refused([&](MeshTree& t) { t.nodes[k].solid.loops[1].first_corner -= 1; }, "loop 1 starts at corner");
-  refused([&](MeshTree& t) { t.nodes[k].solid.defs[three].a = 4; }, "(three_planes) has a = 4, a field its kind does not use");
+  refused([&](MeshTree& t) { t.nodes[k].solid->faces[1].first_loop += 1; }, "face 1 starts at loop");
+  refused([&](MeshTree& t) { t.nodes[k].solid->loops[1].first_corner -= 1; }, "loop 1 starts at corner");
+  refused([&](MeshTree& t) { t.nodes[k].solid->defs[three].a = 4; }, "(three_planes) has a = 4, a field its kind does not use");
   refused(
       [&](MeshTree& t) {
-        t.nodes[k].solid.corners[0].line.p = no_index;
-        t.nodes[k].solid.corners[0].line.q = 1;
+        t.nodes[k].solid->corners[0].line.p = no_index;
+        t.nodes[k].solid->corners[0].line.q = 1;
       },
       "corner 0 has segment (4294967295, 1), not two input points p < q");
   refused(
       [&](MeshTree& t) {
-        for (PointDef& d : t.nodes[k].solid.defs) {
+        for (PointDef& d : t.nodes[k].solid->defs) {
           if (d.kind == PointKind::three_planes) {
             d = PointDef::segment_plane(0, 1, d.planes[0]);
             d.planes[2] = PlaneRef::input(1);
@@ -1866,9 +1866,9 @@ TEST_CASE("solids without their approximations write the same bytes", "[shatter_
     MeshTree tree = base;
     std::size_t dropped = 0;
     for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
-      REQUIRE(!tree.nodes[k].solid.approx.empty());
+      REQUIRE(!tree.nodes[k].solid->approx.empty());
       if (keep(k)) continue;
-      tree.nodes[k].solid.approx.clear();
+      tree.nodes[k].solid->approx.clear();
       ++dropped;
     }
     REQUIRE(dropped > 0);
@@ -1880,7 +1880,7 @@ TEST_CASE("solids without their approximations write the same bytes", "[shatter_
   // degenerate one is refused as the reader would refuse it.
   MeshTree degenerate = base;
   const std::size_t k = deep_node(base);
-  Solid& solid = degenerate.nodes[k].solid;
+  Solid& solid = *degenerate.nodes[k].solid;
   solid.approx.clear();
   const auto three = std::find_if(solid.defs.begin(), solid.defs.end(),
                                   [](const PointDef& d) { return d.kind == PointKind::three_planes; });
@@ -1987,7 +1987,7 @@ TEST_CASE("version 3 derives what follows from the tree, and stores what does no
   // A centroid off its plane keeps its three coordinates; a moved position its own.
   CHECK(changed([](MeshTree& t) { t.bonds.back().centroid.x += 1; }).size() == bytes.size() + 8);
   CHECK(changed([](MeshTree& t) {
-          t.nodes[3].mesh.positions[1].y = std::nextafter(t.nodes[3].mesh.positions[1].y, 2.0);
+          t.nodes[3].mesh->positions[1].y = std::nextafter(t.nodes[3].mesh->positions[1].y, 2.0);
           t.nodes[3].mass = mass_properties(t.nodes[3].mesh);  // still the mesh's own
         }).size() == bytes.size() + 24);
 }

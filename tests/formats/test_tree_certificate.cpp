@@ -112,18 +112,18 @@ TEST_CASE("a change to any field validate_tree reads makes the certificate stop 
       {"recipe allow_self_intersections", [](MeshTree& t, NodeIndex) { t.recipe.allow_self_intersections ^= true; }},
       // (push_back: GCC 12 warns falsely, -Wrestrict, on assigning a literal here)
       {"recipe pattern", [](MeshTree& t, NodeIndex) { t.recipe.pattern.push_back('x'); }},
-      {"leaf mesh position", [](MeshTree& t, NodeIndex k) { t.nodes[k].mesh.positions[0].x = std::nextafter(t.nodes[k].mesh.positions[0].x, 1e9); }},
-      {"leaf mesh triangle", [](MeshTree& t, NodeIndex k) { t.nodes[k].mesh.triangles[0][1] ^= 1; }},
-      {"leaf mesh surface", [](MeshTree& t, NodeIndex k) { t.nodes[k].mesh.surfaces[0] ^= 1; }},
-      {"leaf mesh normals", [](MeshTree& t, NodeIndex k) { t.nodes[k].mesh.corners.normals.resize(3 * t.nodes[k].mesh.triangles.size()); }},
+      {"leaf mesh position", [](MeshTree& t, NodeIndex k) { t.nodes[k].mesh->positions[0].x = std::nextafter(t.nodes[k].mesh->positions[0].x, 1e9); }},
+      {"leaf mesh triangle", [](MeshTree& t, NodeIndex k) { t.nodes[k].mesh->triangles[0][1] ^= 1; }},
+      {"leaf mesh surface", [](MeshTree& t, NodeIndex k) { t.nodes[k].mesh->surfaces[0] ^= 1; }},
+      {"leaf mesh normals", [](MeshTree& t, NodeIndex k) { t.nodes[k].mesh->corners.normals.resize(3 * t.nodes[k].mesh->triangles.size()); }},
       {"leaf mass", [](MeshTree& t, NodeIndex k) { t.nodes[k].mass.inertia[8] = -t.nodes[k].mass.inertia[8]; }},
       {"root hull", [](MeshTree& t, NodeIndex) { t.nodes[0].hull->positions.push_back({}); }},
-      {"leaf solid definition", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid.defs[0].b ^= 1; }},
-      {"leaf solid approximation", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid.approx.pop_back(); }},
-      {"leaf solid face", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid.faces[0].reversed ^= true; }},
-      {"leaf solid loop", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid.loops[0].corner_count ^= 1; }},
-      {"leaf solid corner", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid.corners[0].line.other.bits ^= 1; }},
-      {"leaf solid convex", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid.convex ^= true; }},
+      {"leaf solid definition", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid->defs[0].b ^= 1; }},
+      {"leaf solid approximation", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid->approx.pop_back(); }},
+      {"leaf solid face", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid->faces[0].reversed ^= true; }},
+      {"leaf solid loop", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid->loops[0].corner_count ^= 1; }},
+      {"leaf solid corner", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid->corners[0].line.other.bits ^= 1; }},
+      {"leaf solid convex", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid->convex ^= true; }},
       {"leaf convex", [](MeshTree& t, NodeIndex k) { t.nodes[k].convex ^= true; }},
       {"leaf parent", [](MeshTree& t, NodeIndex k) { t.nodes[k].parent ^= 1; }},
       {"root children", [](MeshTree& t, NodeIndex) { std::swap(t.nodes[0].children.front(), t.nodes[0].children.back()); }},
@@ -169,13 +169,13 @@ TEST_CASE("the writer refuses a tree whose leaf was corrupted after the build, c
   using Corruption = std::function<void(MeshTree&, NodeIndex leaf)>;
   const std::vector<std::pair<std::string, Corruption>> corruptions = {
       {"a triangle index past the leaf's vertices",
-       [](MeshTree& t, NodeIndex k) { t.nodes[k].mesh.triangles.back()[2] = static_cast<VertexIndex>(t.nodes[k].mesh.positions.size()); }},
-      {"a surface id missing", [](MeshTree& t, NodeIndex k) { t.nodes[k].mesh.surfaces.pop_back(); }},
+       [](MeshTree& t, NodeIndex k) { t.nodes[k].mesh->triangles.back()[2] = static_cast<VertexIndex>(t.nodes[k].mesh->positions.size()); }},
+      {"a surface id missing", [](MeshTree& t, NodeIndex k) { t.nodes[k].mesh->surfaces.pop_back(); }},
       {"a solid corner past the solid's vertices",
-       [](MeshTree& t, NodeIndex k) { t.nodes[k].solid.corners[1].vertex = static_cast<VertexIndex>(t.nodes[k].solid.defs.size()); }},
-      {"a solid vertex used by no corner", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid.defs.push_back(t.nodes[k].solid.defs[0]); }},
+       [](MeshTree& t, NodeIndex k) { t.nodes[k].solid->corners[1].vertex = static_cast<VertexIndex>(t.nodes[k].solid->defs.size()); }},
+      {"a solid vertex used by no corner", [](MeshTree& t, NodeIndex k) { t.nodes[k].solid->defs.push_back(t.nodes[k].solid->defs[0]); }},
       {"a stale approximation",
-       [](MeshTree& t, NodeIndex k) { t.nodes[k].solid.approx[0].x.value = t.nodes[k].solid.approx[0].x.value * 2 + 1; }},
+       [](MeshTree& t, NodeIndex k) { t.nodes[k].solid->approx[0].x.value = t.nodes[k].solid->approx[0].x.value * 2 + 1; }},
       {"a hull on a convex leaf", [](MeshTree& t, NodeIndex k) {
          t.nodes[k].convex = true;
          t.nodes[k].hull = t.nodes[k].mesh;
@@ -191,7 +191,7 @@ TEST_CASE("the writer refuses a tree whose leaf was corrupted after the build, c
       // of the tree as built is kept.
       tree.certificate = built.tree.certificate;
       const NodeIndex leaf = some_leaf(tree, salt++);
-      if (name == std::string("a stale approximation") && tree.nodes[leaf].solid.approx.empty()) continue;
+      if (name == std::string("a stale approximation") && tree.nodes[leaf].solid->approx.empty()) continue;
       corrupt(tree, leaf);
       REQUIRE_FALSE(validate_tree(tree).valid());
       CHECK(tree.certificate.present());
@@ -220,7 +220,7 @@ TEST_CASE("a tree changed but still valid is checked in full and written", "[cer
     const std::string before = encode_shatter(tree);
     // One ulp off a leaf's vertex: the position no longer derives from the
     // solid, so the file stores it; the tree is as valid as before.
-    Vec3& position = tree.nodes[some_leaf(tree, salt++)].mesh.positions[0];
+    Vec3& position = tree.nodes[some_leaf(tree, salt++)].mesh->positions[0];
     position.x = std::nextafter(position.x, 1e9);
     CHECK_FALSE(certificate_holds(tree));
     const std::string after = encode_shatter(tree);
@@ -235,7 +235,7 @@ TEST_CASE("certify_tree certifies a valid hand-made tree and nothing else", "[ce
   CHECK_FALSE(certificate_holds(tree));
   CHECK(certify_tree(tree).valid());
   CHECK(certificate_holds(tree));
-  tree.nodes[tree.leaf_nodes[0]].mesh.triangles[0][0] = 1u << 30;
+  tree.nodes[tree.leaf_nodes[0]].mesh->triangles[0][0] = 1u << 30;
   CHECK_FALSE(certificate_holds(tree));
   CHECK_FALSE(certify_tree(tree).valid());
   CHECK_FALSE(tree.certificate.present());

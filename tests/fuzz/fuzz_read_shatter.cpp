@@ -64,7 +64,7 @@ void check_exact_invariants(const shatter::MeshTree& tree) {
   if (geometry.points.empty()) {
     require(geometry.planes.empty(), "decoded exact representation without input points");
     for (const shatter::MeshTreeNode& node : tree.nodes) {
-      require(node.solid.defs.empty() && node.solid.faces.empty() && !node.convex, "decoded solid without input points");
+      require(node.solid->defs.empty() && node.solid->faces.empty() && !node.convex, "decoded solid without input points");
     }
     return;
   }
@@ -115,7 +115,7 @@ void check_tree_invariants(const shatter::MeshTree& tree) {
     for (const shatter::NodeIndex child : node.children) {
       require(child < tree.nodes.size() && tree.nodes[child].parent == n, "decoded child link broken at node " + std::to_string(n));
     }
-    for (const shatter::Mesh* mesh : {&node.mesh, &*node.hull}) {
+    for (const shatter::Mesh* mesh : {&*node.mesh, &*node.hull}) {
       require(mesh->surfaces.size() == mesh->triangles.size(), "decoded surfaces size");
       for (const shatter::Triangle& triangle : mesh->triangles) {
         for (const shatter::VertexIndex v : triangle) require(v < mesh->positions.size(), "decoded triangle index out of range");

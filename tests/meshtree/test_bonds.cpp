@@ -208,7 +208,7 @@ const char* representation_name(Representation representation) {
 MeshTree meshes_only(MeshTree tree) {
   tree.geometry = {};
   for (MeshTreeNode& node : tree.nodes) {
-    node.solid = {};
+    node.solid.reset();
     if (node.convex) node.hull = convex_hull_of(node.mesh);
     node.convex = false;
   }
@@ -869,7 +869,7 @@ TEST_CASE("the plane-bond brute force catches planted errors", "[bonds][plane]")
   // a cut changes it, and the unchanged bonds no longer match.
   MeshTree broken = tree;
   const LeafIndex leaf = bonds.front().first;
-  Solid& solid = broken.nodes[broken.leaf_nodes[leaf]].solid;
+  Solid& solid = *broken.nodes[broken.leaf_nodes[leaf]].solid;
   const auto cap = std::find_if(solid.faces.begin(), solid.faces.end(), [&](const SolidFace& f) {
     return f.plane == PlaneRef::cut(bonds.front().cut_node);
   });
@@ -904,7 +904,7 @@ TEST_CASE("find_bonds on 65,536 fragments of a cube", "[.][bench]") {
   }
   std::size_t cap_triangles = 0;
   for (LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) {
-    for (const SurfaceId surface : tree.leaf(leaf).mesh.surfaces) cap_triangles += surface != original_surface;
+    for (const SurfaceId surface : tree.leaf(leaf).mesh->surfaces) cap_triangles += surface != original_surface;
   }
   const auto start = std::chrono::steady_clock::now();
   const std::vector<Bond> bonds = find_bonds(tree);

@@ -254,7 +254,7 @@ class Problems {
     if (node < tree_.nodes.size()) {
       const MeshTreeNode& n = tree_.nodes[node];
       out << " (depth " << n.depth << ", " << (n.is_leaf() ? "leaf " + std::to_string(n.first_leaf) : "internal")
-          << ", " << n.mesh.triangle_count() << " triangles, parent "
+          << ", " << n.mesh->triangle_count() << " triangles, parent "
           << (n.parent == no_node ? std::string("none") : std::to_string(n.parent)) << ")";
     }
     out << ": " << text;
@@ -613,7 +613,7 @@ void check_nodes(const MeshTree& tree, const Mesh& input, Level level) {
       // A convex node (plane kernel) is its own hull: convex exactly as a solid,
       // which rounding keeps up to the flat edges inside its faces.
       if (!node.hull->positions.empty()) out.add(hull, "a convex node stores a separate hull");
-      if (&tree.hull_of(v) != &node.mesh) out.add(hull, "hull_of a convex node is not its mesh");
+      if (&tree.hull_of(v) != &*node.mesh) out.add(hull, "hull_of a convex node is not its mesh");
       if (!solid_is_convex(tree.plane_set(), node.solid)) out.add(hull, "marked convex, but its solid is not");
     } else if (!node.is_leaf()) {
       if (level == Level::full) {
@@ -752,14 +752,14 @@ void check_plane(const MeshTree& tree, const Mesh& input, bool exact_volumes, co
     }
     for (NodeIndex child = v, a = node.parent; a != no_node; child = a, a = tree.nodes[a].parent) {
       const Sign wrong = tree.nodes[child].above_parent_plane ? Sign::negative : Sign::positive;
-      for (std::size_t i = 0; i < node.solid.defs.size(); ++i) {
-        if (side(set, PlaneRef::cut(a), node.solid.defs[i], node.solid.approx[i]) == wrong) {
+      for (std::size_t i = 0; i < node.solid->defs.size(); ++i) {
+        if (side(set, PlaneRef::cut(a), node.solid->defs[i], node.solid->approx[i]) == wrong) {
           out.emplace_back(1, "vertex " + std::to_string(i) + " on the wrong side of ancestor " + std::to_string(a));
           break;
         }
       }
     }
-    for (const SolidFace& face : node.solid.faces) {
+    for (const SolidFace& face : node.solid->faces) {
       if (face.surface == original_surface) continue;
       if (!face.plane.is_cut() || cap_surface_of(face.plane.index()) != face.surface) {
         out.emplace_back(2, "a cap face (surface " + std::to_string(face.surface) + ") not on its cut's plane");
@@ -770,7 +770,7 @@ void check_plane(const MeshTree& tree, const Mesh& input, bool exact_volumes, co
       SolidMeshOptions meshing;
       meshing.attributes = nullptr;
       const RoundedSolid again = round_solid(set, node.solid, meshing);
-      if (!again.valid || again.mesh.positions != node.mesh.positions || again.mesh.triangles != node.mesh.triangles) {
+      if (!again.valid || again.mesh.positions != node.mesh->positions || again.mesh.triangles != node.mesh->triangles) {
         out.emplace_back(3, again.valid ? "rounding again gives another mesh" : "rounding again fails: " + again.defect);
       }
     }
@@ -1227,6 +1227,16 @@ TEST_CASE("a packed node shape unpacks to the same mesh and solid", "[tree][pack
   }
 }
 
+namespace {
+// Two bonds alike bit for bit, field by field (Bond has padding).
+bool same_bond_bits(const Bond& a, const Bond& b) {
+  return a.first == b.first && a.second == b.second && a.cut_node == b.cut_node &&
+         std::memcmp(&a.area, &b.area, sizeof a.area) == 0 &&
+         std::memcmp(&a.centroid, &b.centroid, sizeof a.centroid) == 0 &&
+         std::memcmp(&a.normal, &b.normal, sizeof a.normal) == 0;
+}
+}  // namespace
+
 TEST_CASE("a lean build keeps no approximations and gives the same tree otherwise", "[tree][build][property]") {
   // Concave meshes, so cuts leave three or more pieces (the surplus cuts are
   // undone) and caps have non-convex faces (the bonds triangulate them); every
@@ -1243,16 +1253,16 @@ TEST_CASE("a lean build keeps no approximations and gives the same tree otherwis
         for (std::size_t k = 0; k < full.nodes.size(); ++k) {
           INFO("node " << k);
           // Else there would be nothing to release, nor to compare below.
-          REQUIRE(full.nodes[k].solid.approx.size() == full.nodes[k].solid.defs.size());
-          REQUIRE(!full.nodes[k].solid.defs.empty());
-          CHECK(lean.nodes[k].solid.approx.empty());
+          REQUIRE(full.nodes[k].solid->approx.size() == full.nodes[k].solid->defs.size());
+          REQUIRE(!full.nodes[k].solid->defs.empty());
+          CHECK(lean.nodes[k].solid->approx.empty());
           // Every node is packed, but for a leaf whose cut was undone (a surplus).
           if (!full.nodes[k].is_leaf()) CHECK(lean.is_packed(static_cast<NodeIndex>(k)));
           packed_leaves += full.nodes[k].is_leaf() && lean.is_packed(static_cast<NodeIndex>(k)) ? 1 : 0;
           CHECK(lean.nodes[k].convex == full.nodes[k].convex);
           if (lean.is_packed(static_cast<NodeIndex>(k))) {
-            CHECK(lean.nodes[k].mesh.triangles.empty());
-            CHECK(lean.nodes[k].solid.defs.empty());
+            CHECK(lean.nodes[k].mesh->triangles.empty());
+            CHECK(lean.nodes[k].solid->defs.empty());
           }
         }
         // Leaves are packed as they finish; only an undone cut (never in a
@@ -1277,6 +1287,32 @@ TEST_CASE("a lean build keeps no approximations and gives the same tree otherwis
         // The bonds were found on approximations computed as needed: the same
         // bonds, bit for bit (the file stores them, so equal bytes say so too).
         CHECK(byte_difference(encode_shatter(lean), encode_shatter(full)) == "equal");
+        // And kept packed (PackedBond), each unpacking to the full build's bond
+        // bit for bit, in its place; a packed bond naming no plane or axis, or
+        // bonds kept both ways, are defects; a packed bond changed breaks the
+        // certificate.
+        CHECK(lean.bonds.empty());
+        REQUIRE(lean.packed_bonds.size() == full.bonds.size());
+        REQUIRE(lean.bond_count() == full.bond_count());
+        for (std::size_t i = 0; i < full.bonds.size(); ++i) {
+          INFO("bond " << i);
+          CHECK(same_bond_bits(lean.bond(i), full.bonds[i]));
+        }
+        if (!lean.packed_bonds.empty()) {
+          MeshTree broken = lean;
+          broken.packed_bonds.back().axis = 3;
+          CHECK_THAT(validate_tree(broken).summary(), Catch::Contains("names no cut plane or no axis"));
+          broken = lean;
+          broken.packed_bonds.back().cut_node = static_cast<NodeIndex>(broken.cut_planes.size());
+          CHECK_THAT(validate_tree(broken).summary(), Catch::Contains("names no cut plane or no axis"));
+          broken = lean;
+          broken.bonds.push_back(full.bonds.front());
+          CHECK_THAT(validate_tree(broken).summary(), Catch::Contains("both packed and not"));
+          REQUIRE(certificate_holds(lean));
+          broken = lean;
+          broken.packed_bonds.back().u = std::nextafter(broken.packed_bonds.back().u, 1e9);
+          CHECK_FALSE(certificate_holds(broken));
+        }
         {
           // Its leaves packed as well (what `fracture` does before writing):
           // still valid, the same bytes and statistics, and unpacked back.
@@ -1296,11 +1332,14 @@ TEST_CASE("a lean build keeps no approximations and gives the same tree otherwis
         }
         REQUIRE(!fill_tree_caches(lean));
         CHECK(lean.packed_shapes.empty());
+        CHECK(lean.packed_bonds.empty());
+        REQUIRE(lean.bonds.size() == full.bonds.size());
+        for (std::size_t i = 0; i < full.bonds.size(); ++i) CHECK(same_bond_bits(lean.bonds[i], full.bonds[i]));
         for (std::size_t k = 0; k < full.nodes.size(); ++k) {
           INFO("node " << k);
           CHECK(shape_difference(lean.nodes[k].mesh, lean.nodes[k].solid, full.nodes[k].mesh, full.nodes[k].solid).empty());
-          const std::vector<ApproxPoint>& a = lean.nodes[k].solid.approx;
-          const std::vector<ApproxPoint>& b = full.nodes[k].solid.approx;
+          const std::vector<ApproxPoint>& a = lean.nodes[k].solid->approx;
+          const std::vector<ApproxPoint>& b = full.nodes[k].solid->approx;
           REQUIRE(a.size() == b.size());
           CHECK(std::memcmp(a.data(), b.data(), a.size() * sizeof(ApproxPoint)) == 0);
         }
@@ -1515,17 +1554,17 @@ TEST_CASE("corner attributes survive the tree, and caps get the plane normal", "
     Problems problems(tree, "cap corner normals are not the plane normal, outward");
     for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
       const MeshTreeNode& node = tree.nodes[v];
-      REQUIRE(node.mesh.corners.normals.size() == 3 * node.mesh.triangle_count());
-      REQUIRE(node.mesh.corners.uvs.size() == 3 * node.mesh.triangle_count());
+      REQUIRE(node.mesh->corners.normals.size() == 3 * node.mesh->triangle_count());
+      REQUIRE(node.mesh->corners.uvs.size() == 3 * node.mesh->triangle_count());
       if (node.parent == no_node) continue;
       const Vec3 outward = normalized(tree.cut_planes[node.parent].normal) * (node.above_parent_plane ? -1.0 : 1.0);
-      for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
-        if (node.mesh.surfaces[t] != cap_surface_of(node.parent)) continue;
+      for (std::size_t t = 0; t < node.mesh->triangle_count(); ++t) {
+        if (node.mesh->surfaces[t] != cap_surface_of(node.parent)) continue;
         for (int corner = 0; corner < 3; ++corner) {
-          const Vec3 normal = node.mesh.corners.normals[3 * t + corner];
+          const Vec3 normal = node.mesh->corners.normals[3 * t + corner];
           if (dot(normal, outward) < 1 - 1e-12) {
             problems.add(v, "cap triangle " + std::to_string(t) + " normal " + vec_text(normal));
-            t = node.mesh.triangle_count() - 1;
+            t = node.mesh->triangle_count() - 1;
             break;
           }
         }

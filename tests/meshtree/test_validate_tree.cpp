@@ -213,18 +213,18 @@ std::vector<Injector> injectors() {
   });
   add("mesh: a vertex index out of range", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
     const auto k = draw_node(t, r, any_node);
-    Mesh& mesh = t.nodes[*k].mesh;
+    Mesh& mesh = *t.nodes[*k].mesh;
     mesh.triangles[r.index(mesh.triangles.size())][r.index(3)] = static_cast<VertexIndex>(mesh.positions.size());
     return Place{TreePart::mesh, *k};
   });
   add("mesh: a surface id missing", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
     const auto k = draw_node(t, r, any_node);
-    t.nodes[*k].mesh.surfaces.pop_back();
+    t.nodes[*k].mesh->surfaces.pop_back();
     return Place{TreePart::mesh, *k};
   });
   add("mesh: an attribute channel not three per triangle", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
     const auto k = draw_node(t, r, any_node);
-    t.nodes[*k].mesh.corners.uvs.resize(1);
+    t.nodes[*k].mesh->corners.uvs.resize(1);
     return Place{TreePart::mesh, *k};
   });
   add("hull: a vertex index out of range", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
@@ -283,14 +283,14 @@ std::vector<Injector> injectors() {
   add("solid: a corner's vertex out of range", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
     if (!exact(t)) return std::nullopt;
     const auto k = draw_node(t, r, any_node);
-    Solid& solid = t.nodes[*k].solid;
+    Solid& solid = *t.nodes[*k].solid;
     solid.corners[r.index(solid.corners.size())].vertex = static_cast<VertexIndex>(solid.defs.size());
     return Place{TreePart::solid, *k};
   });
   add("solid: a face on the node's own cut plane", structure, [](MeshTree& t, R& r) -> std::optional<Place> {
     if (!exact(t)) return std::nullopt;
     const auto k = draw_node(t, r, any_node);
-    Solid& solid = t.nodes[*k].solid;
+    Solid& solid = *t.nodes[*k].solid;
     solid.faces[r.index(solid.faces.size())].plane = PlaneRef::cut(*k);
     return Place{TreePart::solid, *k};
   });
@@ -312,7 +312,7 @@ std::vector<Injector> injectors() {
   add("solid: a stale vertex approximation", caches, [](MeshTree& t, R& r) -> std::optional<Place> {
     if (!exact(t)) return std::nullopt;
     const auto k = draw_node(t, r, any_node);
-    Solid& solid = t.nodes[*k].solid;
+    Solid& solid = *t.nodes[*k].solid;
     Estimate& x = solid.approx[r.index(solid.approx.size())].x;
     x.error = x.error * 2 + 1;  // differs whatever its magnitude
     return Place{TreePart::solid, *k};
@@ -327,12 +327,12 @@ std::vector<Injector> injectors() {
   add("solid: a vertex of three planes, two of them the same", caches, [](MeshTree& t, R& r) -> std::optional<Place> {
     if (!exact(t)) return std::nullopt;
     const auto has_three = [](const MeshTreeNode& node, NodeIndex) {
-      return std::any_of(node.solid.defs.begin(), node.solid.defs.end(),
+      return std::any_of(node.solid->defs.begin(), node.solid->defs.end(),
                          [](const PointDef& def) { return def.kind == PointKind::three_planes; });
     };
     const auto k = draw_node(t, r, has_three);
     if (!k) return std::nullopt;
-    for (PointDef& def : t.nodes[*k].solid.defs) {
+    for (PointDef& def : t.nodes[*k].solid->defs) {
       if (def.kind != PointKind::three_planes) continue;
       def.planes[1] = def.planes[0];
       break;
@@ -366,19 +366,19 @@ std::vector<Injector> injectors() {
   });
   add("mesh: a triangle turned over", geometry, [](MeshTree& t, R& r) -> std::optional<Place> {
     const auto k = draw_node(t, r, any_node);
-    Triangle& triangle = t.nodes[*k].mesh.triangles[r.index(t.nodes[*k].mesh.triangles.size())];
+    Triangle& triangle = t.nodes[*k].mesh->triangles[r.index(t.nodes[*k].mesh->triangles.size())];
     std::swap(triangle[1], triangle[2]);
     return Place{TreePart::mesh, *k};
   });
   add("mesh: a triangle missing", geometry, [](MeshTree& t, R& r) -> std::optional<Place> {
     const auto k = draw_node(t, r, any_node);
-    remove_triangle(t.nodes[*k].mesh, r.index(t.nodes[*k].mesh.triangles.size()));
+    remove_triangle(*t.nodes[*k].mesh, r.index(t.nodes[*k].mesh->triangles.size()));
     return Place{TreePart::mesh, *k};
   });
   add("mesh: a second shell through the first", geometry, [](MeshTree& t, R& r) -> std::optional<Place> {
     if (t.recipe.allow_self_intersections) return std::nullopt;  // held to its topology only
     const auto k = draw_node(t, r, any_node);
-    add_shifted_copy(t.nodes[*k].mesh);
+    add_shifted_copy(*t.nodes[*k].mesh);
     return Place{TreePart::mesh, *k};
   });
   add("mesh: emptied", geometry, [](MeshTree& t, R& r) -> std::optional<Place> {
@@ -501,7 +501,7 @@ TEST_CASE("a tree built with self-intersections allowed is held to its topology"
   REQUIRE(elk.tree.recipe.allow_self_intersections);
   for (NodeIndex k : {NodeIndex{0}, elk.tree.leaf_nodes.back()}) {
     MeshTree tree = elk.tree;
-    add_shifted_copy(tree.nodes[k].mesh);
+    add_shifted_copy(*tree.nodes[k].mesh);
     INFO("a shell through node " << k << "'s mesh");
     CHECK(validate_tree(tree, {.geometry = true}).valid());
     // Held to everything, the tree fails at its root: the elk itself.

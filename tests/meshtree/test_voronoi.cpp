@@ -388,7 +388,7 @@ TEST_CASE("neighbouring fragments share their corners bit for bit", "[voronoi]")
   std::map<std::tuple<double, double, double>, int> leaves_at;
   for (LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) {
     std::set<std::tuple<double, double, double>> mine;
-    for (const Vec3& p : tree.leaf(leaf).mesh.positions) mine.insert({p.x, p.y, p.z});
+    for (const Vec3& p : tree.leaf(leaf).mesh->positions) mine.insert({p.x, p.y, p.z});
     for (const auto& p : mine) ++leaves_at[p];
   }
   std::size_t alone = 0;
@@ -434,7 +434,7 @@ TEST_CASE("the checker and the reader refuse broken cell trees", "[voronoi]") {
     // A zero plane on an internal node is a defect in a tree without cell planes.
     MeshTree broken = tree;
     broken.cut_planes.resize(tree.nodes.size());
-    for (MeshTreeNode& node : broken.nodes) node.solid = {}, node.convex = false;
+    for (MeshTreeNode& node : broken.nodes) node.solid.reset(), node.convex = false;
     broken.geometry = {};
     broken.bonds.clear();
     const auto defect = validate_tree(broken, {.geometry = true}).defect;
@@ -467,7 +467,7 @@ std::string parts_certification_problem(const MeshTree& tree, std::uint64_t seed
     const MeshTreeNode& node = tree.nodes[k];
     if (node.is_leaf()) continue;
     std::vector<const Mesh*> parts;
-    for (const NodeIndex c : node.children) parts.push_back(&tree.nodes[c].mesh);
+    for (const NodeIndex c : node.children) parts.push_back(&*tree.nodes[c].mesh);
     const auto compare = [&](const Mesh& mesh, std::span<const Mesh* const> given, const std::string& what) -> std::string {
       const ValidationReport full = validate_mesh(mesh);
       const ValidationReport fast = validate_mesh_of_parts(mesh, given);
@@ -484,19 +484,19 @@ std::string parts_certification_problem(const MeshTree& tree, std::uint64_t seed
     };
     if (std::string problem = compare(node.mesh, parts, "as built"); !problem.empty()) return problem;
     if (!validate_mesh(node.mesh).valid()) return "internal node " + std::to_string(k) + " is not valid";
-    Vec3 lo = node.mesh.positions[0], hi = lo;
-    for (const Vec3& p : node.mesh.positions) {
+    Vec3 lo = node.mesh->positions[0], hi = lo;
+    for (const Vec3& p : node.mesh->positions) {
       lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
       hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
     }
     const double size = norm(hi - lo);
-    std::uniform_int_distribution<std::size_t> vertex(0, node.mesh.positions.size() - 1);
+    std::uniform_int_distribution<std::size_t> vertex(0, node.mesh->positions.size() - 1);
     std::uniform_real_distribution<double> unit(-1, 1);
     for (const double reach : {1e-3, 0.3, 0.0}) {
       Mesh moved = node.mesh;
       const std::size_t v = vertex(random);
       if (reach == 0) {
-        moved.positions[v] = node.mesh.positions[vertex(random)];  // onto another vertex (or itself)
+        moved.positions[v] = node.mesh->positions[vertex(random)];  // onto another vertex (or itself)
       } else {
         moved.positions[v] = moved.positions[v] + Vec3{unit(random), unit(random), unit(random)} * (reach * size);
       }
@@ -581,7 +581,7 @@ TEST_CASE("gluing cells: twins cancel, a union touching along an edge only is re
   // Each leaf its own site; each cell plane bisects the two leaves with a face on it.
   std::vector<std::array<std::uint32_t, 2>> pairs(tree.cut_planes.size(), {no_index, no_index});
   for (LeafIndex leaf = 0; leaf < 4; ++leaf) {
-    for (const SolidFace& face : tree.leaf(leaf).solid.faces) {
+    for (const SolidFace& face : tree.leaf(leaf).solid->faces) {
       if (!face.plane.is_cut()) continue;
       auto& pair = pairs[face.plane.index()];
       if (pair[0] == no_index) pair = {leaf, no_index};
@@ -592,7 +592,7 @@ TEST_CASE("gluing cells: twins cancel, a union touching along an edge only is re
     if (pair[1] != no_index && pair[0] > pair[1]) std::swap(pair[0], pair[1]);
   }
   std::array<std::vector<std::uint32_t>, 4> sites{{{0}, {1}, {2}, {3}}};
-  const auto part = [&](LeafIndex leaf) { return detail::GluePart{&tree.leaf(leaf).solid, sites[leaf]}; };
+  const auto part = [&](LeafIndex leaf) { return detail::GluePart{&*tree.leaf(leaf).solid, sites[leaf]}; };
   // The diagonal neighbour of leaf 0: the leaf it shares no cell plane with.
   LeafIndex diagonal = 0;
   for (LeafIndex other = 1; other < 4; ++other) {

@@ -116,7 +116,7 @@ TEST_CASE("GLB normals: flat per face on a mesh without normals, flat and outwar
 
 TEST_CASE("GLB normals: the input's where it has them, the plane's on caps (smooth ellipsoid)") {
   const MeshTree tree = tree_of(ellipsoid_with_normals(), 9);
-  REQUIRE(tree.nodes[0].mesh.corners.has_normals());
+  REQUIRE(tree.nodes[0].mesh->corners.has_normals());
   CHECK(check_normals(tree) > 0);
 }
 
@@ -135,7 +135,7 @@ TEST_CASE("GLB normals: a cap never shares a vertex with the surface, so the cre
     for (const tinygltf::Primitive& primitive : mesh.primitives) {
       vertices += model.accessors.at(static_cast<std::size_t>(primitive.attributes.at("POSITION"))).count;
     }
-    CHECK(vertices > tree.nodes[node].mesh.positions.size());
+    CHECK(vertices > tree.nodes[node].mesh->positions.size());
   }
 }
 
@@ -151,9 +151,9 @@ TEST_CASE("GLB extras: every node's centroid and triangle counts, the tree's bon
     CHECK(centroid.Get(0).GetNumberAsDouble() == node.mass.centroid.x);
     CHECK(centroid.Get(1).GetNumberAsDouble() == node.mass.centroid.y);
     CHECK(centroid.Get(2).GetNumberAsDouble() == node.mass.centroid.z);
-    CHECK(extras.Get("triangles").GetNumberAsInt() == static_cast<int>(node.mesh.triangle_count()));
+    CHECK(extras.Get("triangles").GetNumberAsInt() == static_cast<int>(node.mesh->triangle_count()));
     std::size_t caps = 0;
-    for (SurfaceId s : node.mesh.surfaces) caps += s != original_surface;
+    for (SurfaceId s : node.mesh->surfaces) caps += s != original_surface;
     CHECK(extras.Get("cap_triangles").GetNumberAsInt() == static_cast<int>(caps));
   }
   const tinygltf::Value& scene = model.scenes.at(0).extras;

@@ -89,7 +89,7 @@ TEST_CASE("info --nodes describes each node as the viewer shows it, bonds crossi
     CHECK(d["leaf_count"] == node.leaf_count);
     CHECK(d["volume"].get<double>() == node.mass.volume);
     CHECK(d["centroid"][1].get<double>() == node.mass.centroid.y);
-    CHECK(d["triangles"] == node.mesh.triangle_count());
+    CHECK(d["triangles"] == node.mesh->triangle_count());
     // Brute force: every bond with exactly one leaf inside the node, in bond order.
     json expected = json::array();
     const auto inside = [&](LeafIndex leaf) { return leaf >= node.first_leaf && leaf < node.first_leaf + node.leaf_count; };

@@ -42,7 +42,7 @@ class FaceBuilder {
   Faces build(const MeshTree& tree, const std::vector<PlaneProjection>& projections) {
     Faces result;
     std::size_t triangle_count = 0;
-    for (LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) triangle_count += tree.leaf(leaf).mesh.triangle_count();
+    for (LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) triangle_count += tree.leaf(leaf).mesh->triangle_count();
     result.triangles.reserve(triangle_count);
     for (LeafIndex leaf = 0; leaf < tree.leaf_count(); ++leaf) {
       const Mesh& mesh = tree.leaf(leaf).mesh;

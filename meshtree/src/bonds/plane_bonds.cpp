@@ -27,6 +27,7 @@
 #include <array>
 #include <cmath>
 #include <span>
+#include <stdexcept>
 #include <vector>
 
 #include "clip2d.hpp"
@@ -70,6 +71,25 @@ class PlaneBonds {
   }
 
   std::vector<Bond> run() {
+    std::vector<Bond> bonds;
+    run_cuts(bonds);
+    return bonds;
+  }
+
+  // The bonds as find_packed_plane_bonds gives them: packed as they are found.
+  std::vector<PackedBond> run_packed() {
+    if (tree_.cut_planes.size() > tree_.nodes.size()) {
+      throw std::invalid_argument("find_packed_plane_bonds: a cell plane's bonds cannot be packed");
+    }
+    std::vector<PackedBond> bonds;
+    run_cuts(bonds);
+    return bonds;
+  }
+
+ private:
+  // Bond or PackedBond: the same cuts, the same order.
+  template <class Record>
+  void run_cuts(std::vector<Record>& bonds) {
     gather_faces_by_cut();
     // The array is the bonds' one copy, so it is sized ahead rather than grown
     // by doubling and shrunk to fit, which touched some three times its size at
@@ -79,21 +99,46 @@ class PlaneBonds {
     // 4,096, every strategy); a tree with more grows the array, as before. Capacity
     // reserved but never written is address space, not memory: its pages are
     // never touched.
-    std::vector<Bond> bonds;
     bonds.reserve(2 * refs_.size());
     for (std::uint32_t k = 0; k < tree_.cut_planes.size(); ++k) {
       if (start_[k + 1] - start_[k] < 2) continue;
       run_cut(k, bonds);
     }
-    std::sort(bonds.begin(), bonds.end(), [](const Bond& a, const Bond& b) {
+    // The same keys in the same order either way, so the same permutation.
+    std::sort(bonds.begin(), bonds.end(), [](const Record& a, const Record& b) {
       if (a.first != b.first) return a.first < b.first;
       if (a.second != b.second) return a.second < b.second;
       return a.cut_node < b.cut_node;
     });
-    return bonds;
   }
 
- private:
+  void add_bond(std::vector<Bond>& bonds, std::uint32_t k, LeafIndex below, LeafIndex above, double area, double u,
+                double v) const {
+    Bond bond;
+    bond.first = std::min(below, above);
+    bond.second = std::max(below, above);
+    bond.cut_node = k < tree_.nodes.size() ? k : separating_node(bond.first, bond.second);
+    bond.area = area;
+    bond.centroid = point_on_plane_over(plane_, axis_, u, v);
+    bond.normal = bond.first == below ? unit_ : -unit_;  // from below into above is +n
+    bonds.push_back(bond);
+  }
+
+  // What unpack_bond makes the Bond above from (run_packed: k is a node).
+  void add_bond(std::vector<PackedBond>& bonds, std::uint32_t k, LeafIndex below, LeafIndex above, double area,
+                double u, double v) const {
+    PackedBond bond;
+    bond.first = std::min(below, above);
+    bond.second = std::max(below, above);
+    bond.cut_node = k;
+    bond.axis = static_cast<std::uint8_t>(axis_);
+    bond.first_below = bond.first == below;
+    bond.area = area;
+    bond.u = u;
+    bond.v = v;
+    bonds.push_back(bond);
+  }
+
   struct FaceRef {
     std::uint32_t cut;  // a node's plane, or a cell plane after them (MeshTree::cut_planes)
     LeafIndex leaf;
@@ -276,7 +321,8 @@ class PlaneBonds {
     return node;
   }
 
-  void run_cut(std::uint32_t k, std::vector<Bond>& bonds) {
+  template <class Record>
+  void run_cut(std::uint32_t k, std::vector<Record>& bonds) {
     const Projection projection = projection_of(set_, PlaneRef::cut(k));
     axis_ = projection.axis;
     flipped_ = projection.flipped;
@@ -293,8 +339,8 @@ class PlaneBonds {
     const double n[3] = {plane.normal.x, plane.normal.y, plane.normal.z};
     area_scale_ = norm(plane.normal) / std::fabs(n[axis_]);
     plane_ = plane;
+    unit_ = normalized(plane.normal);
     reference_ = points_.front();
-    const Vec3 unit = normalized(plane.normal);
 
     // Sweep the faces by min u; each side keeps the faces still reaching the line.
     sweep_.resize(faces_.size());
@@ -353,14 +399,7 @@ class PlaneBonds {
           u = 0.5 * (box[0] + box[1]);
           v = 0.5 * (box[2] + box[3]);
         }
-        Bond bond;
-        bond.first = std::min(below, above);
-        bond.second = std::max(below, above);
-        bond.cut_node = k < tree_.nodes.size() ? k : separating_node(bond.first, bond.second);
-        bond.area = total.area * area_scale_;
-        bond.centroid = point_on_plane_over(plane_, axis_, u, v);
-        bond.normal = bond.first == below ? unit : -unit;  // from below into above is +n
-        bonds.push_back(bond);
+        add_bond(bonds, k, below, above, total.area * area_scale_, u, v);
       }
       i = j;
     }
@@ -485,11 +524,28 @@ class PlaneBonds {
   Clipper clipper_;
   double area_scale_ = 1;
   Plane plane_;
+  Vec3 unit_;  ///< plane_'s unit normal
   Vec2 reference_;
 };
 
 }  // namespace
 
 std::vector<Bond> find_plane_bonds(const MeshTree& tree) { return PlaneBonds(tree).run(); }
+
+std::vector<PackedBond> find_packed_plane_bonds(const MeshTree& tree) { return PlaneBonds(tree).run_packed(); }
+
+Bond unpack_bond(const MeshTree& tree, const PackedBond& packed) {
+  // add_bond's arithmetic for a Bond, on the values it packed.
+  const Plane& plane = tree.cut_planes[packed.cut_node];
+  Bond bond;
+  bond.first = packed.first;
+  bond.second = packed.second;
+  bond.cut_node = packed.cut_node;
+  bond.area = packed.area;
+  bond.centroid = point_on_plane_over(plane, packed.axis, packed.u, packed.v);
+  const Vec3 unit = normalized(plane.normal);
+  bond.normal = packed.first_below ? unit : -unit;
+  return bond;
+}
 
 }  // namespace shatter

@@ -5,6 +5,7 @@
 // kept beside it only to measure how many false bonds it makes.
 
 #include <cstddef>
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -26,9 +27,33 @@ struct Bond {
   Vec3 normal;                   ///< unit normal of the plane, from `first` into `second`
 };
 
+/// A bond of a plane-kernel tree as a lean build keeps it (BuildRunOptions::lean,
+/// MeshTree::packed_bonds): 40 bytes instead of Bond's 72, for the ten million
+/// bonds of a million-fragment cube. What it leaves out follows from the cut
+/// node's plane (MeshTree::cut_planes[cut_node]): the centroid lies on it,
+/// solved from its two other coordinates over `axis` (point_on_plane_over, as
+/// find_plane_bonds makes it), and the normal is the plane's unit normal, signed
+/// by the side `first` lies on. unpack_bond gives the Bond back bit for bit.
+struct PackedBond {
+  LeafIndex first = 0;   ///< first < second
+  LeafIndex second = 0;
+  NodeIndex cut_node = no_node;  ///< a node whose plane both caps lie on (a cell plane's bonds are never packed)
+  std::uint8_t axis = 0;         ///< the coordinate of the centroid solved from the plane (0-2)
+  bool first_below = false;      ///< first lies below the plane: Bond::normal is +unit, else -unit
+  double area = 0;               ///< Bond::area
+  double u = 0, v = 0;           ///< the centroid's coordinates (axis + 1) % 3 and (axis + 2) % 3
+};
+
 // tree.hpp includes this header (a tree holds its bonds): the functions below
 // take the tree by a forward declaration.
 struct MeshTree;
+
+/// The Bond a PackedBond stands for in `tree`.
+/// Precondition: bond.cut_node < tree.cut_planes.size() and bond.axis < 3 (so it
+/// is of every PackedBond find_packed_plane_bonds made for this tree).
+/// Guarantees: the Bond find_plane_bonds gives for the same leaves, bit for bit
+/// (the same arithmetic on the same values). Never throws.
+Bond unpack_bond(const MeshTree& tree, const PackedBond& bond);
 
 /// Every true bond of the tree's leaves: one Bond per (leaf pair, cut node).
 ///
@@ -80,6 +105,14 @@ std::vector<Bond> find_bonds(const MeshTree& tree);
 /// then per candidate pair O(corners) exact predicates when they overlap
 /// clearly, O(corners^2) when they only touch.
 std::vector<Bond> find_plane_bonds(const MeshTree& tree);
+
+/// find_plane_bonds' bonds as PackedBonds (unpack_bond of each gives them bit
+/// for bit, in the same order), made packed as they are found, so a lean build
+/// never holds them as Bonds (README "Lean memory").
+/// Preconditions: as find_plane_bonds, and every cut plane a node's (a tree of
+/// build_mesh_tree; a cell tree's planes after the nodes' throw
+/// std::invalid_argument).
+std::vector<PackedBond> find_packed_plane_bonds(const MeshTree& tree);
 
 /// The seed's bond rule: every pair of leaves whose closed axis-aligned bounding
 /// boxes (of the leaf meshes' positions) overlap, touching included.

@@ -69,7 +69,9 @@ struct BuildRunOptions {
   /// vertex, a quarter of a cube's tree) is released once the node is cut or is
   /// known to stay a leaf, so the returned tree has none (MeshTreeNode::solid),
   /// and its mesh and solid are packed then (MeshTree::packed_shapes; read them
-  /// through NodeShapes). Everything else is as without it: the same values,
+  /// through NodeShapes); the bonds are found packed (MeshTree::packed_bonds,
+  /// `bonds` left empty; read them through MeshTree::bond). Everything else is
+  /// as without it: the same values,
   /// bonds and .shatter bytes; fill_tree_caches restores the full tree. false:
   /// every node keeps its cache and its arrays.
   bool lean = false;
@@ -95,7 +97,8 @@ struct BuildRunOptions {
 /// neighbours across the cut, is at most what rounding their vertices can move,
 /// and is reported: BuildReport::pieces_vanished); every solid's approx
 /// cached, or none when run.lean; leaf ranges contiguous; cap triangles carry cap_surface_of(cut node);
-/// mass properties and hulls filled; bonds = find_bonds(tree); tree.recipe =
+/// mass properties and hulls filled; bonds = find_bonds(tree) (run.lean: packed
+/// as find_packed_plane_bonds packs them, in packed_bonds); tree.recipe =
 /// `recipe`; shatter_version this library's version_string (shatter/version.hpp).
 /// One version of shatter gives a result that depends only on the mesh and the
 /// recipe: byte-identical on any machine, whatever `run` is.

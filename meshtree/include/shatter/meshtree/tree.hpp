@@ -27,7 +27,11 @@ struct MeshTreeNode {
   /// The closed solid, a valid one (validate_mesh finds no defect; with
   /// allow_self_intersections only topology is promised). Cap triangles of the cut
   /// at node k carry cap_surface_of(k) = k + 1; the input's triangles keep surface 0.
-  Mesh mesh;
+  /// Boxed, as `hull` is (read it as `*node.mesh` or `node.mesh->positions`):
+  /// a lean tree packs every node's mesh (MeshTree::packed_shapes) and leaves
+  /// this absent, so its two million records of a million-fragment tree carry
+  /// a pointer instead of 144 bytes of empty arrays.
+  Boxed<Mesh> mesh;
   MassProperties mass;  ///< of `mesh`, unit density
   /// The convex hull of `mesh` (outward triangles over its own positions; every
   /// surface id 0, no attributes), for colliders. Boxed: held on the heap only
@@ -39,8 +43,9 @@ struct MeshTreeNode {
   /// Empty otherwise. Its vertices' cached approximations (Solid::approx) are
   /// there unless the tree was built lean (BuildRunOptions::lean): then every
   /// node's approx is empty, and fill_tree_caches (validate_tree.hpp) computes
-  /// them for code that needs them.
-  Solid solid;
+  /// them for code that needs them. Boxed, as `mesh` is, and for the same reason
+  /// (128 bytes of empty arrays in a lean tree's packed node).
+  Boxed<Solid> solid;
   /// Plane kernel: the solid is convex (decided exactly), so `mesh` is its own
   /// hull and `hull` is left empty. Use MeshTree::hull_of.
   bool convex = false;
@@ -98,7 +103,14 @@ struct MeshTree {
   RepairReport input_repair;
   std::vector<MeshTreeNode> nodes;   ///< depth-first preorder; nodes[0] is the root
   std::vector<NodeIndex> leaf_nodes; ///< leaf i is nodes[leaf_nodes[i]]
-  std::vector<Bond> bonds;           ///< sorted by (first, second, cut_node)
+  /// Sorted by (first, second, cut_node). Empty in a lean build's tree, which
+  /// keeps them in packed_bonds: read a tree's bonds through bond_count() and
+  /// bond(i), which see either.
+  std::vector<Bond> bonds;
+  /// A lean build's bonds (BuildRunOptions::lean), packed (PackedBond), in the
+  /// order `bonds` would have them; empty in every other tree (a tree has its
+  /// bonds in one of the two). fill_tree_caches unpacks them into `bonds`.
+  std::vector<PackedBond> packed_bonds;
   /// Plane kernel: the input points and input planes the nodes' solids are
   /// defined over. Empty otherwise.
   InputGeometry geometry;
@@ -120,6 +132,11 @@ struct MeshTree {
   TreeCertificate certificate;
 
   std::size_t leaf_count() const { return leaf_nodes.size(); }
+  /// The number of bonds, packed or not.
+  std::size_t bond_count() const { return bonds.size() + packed_bonds.size(); }
+  /// Bond i (< bond_count()) of the sorted list, unpacked when the tree keeps
+  /// its bonds packed (unpack_bond's precondition holds for what a build packed).
+  Bond bond(std::size_t i) const { return i < bonds.size() ? bonds[i] : unpack_bond(*this, packed_bonds[i - bonds.size()]); }
   const MeshTreeNode& leaf(LeafIndex i) const { return nodes[leaf_nodes[i]]; }
   /// The tree keeps the plane kernel's exact representation (geometry and every
   /// node's solid): every tree this version builds; not those of the retired
@@ -130,7 +147,7 @@ struct MeshTree {
   PlaneSet plane_set() const { return geometry.plane_set(cut_planes); }
   /// A node's convex hull: its own mesh when it is convex, else `hull`. (A
   /// packed node's mesh is empty: read a lean tree's through NodeShapes.)
-  const Mesh& hull_of(NodeIndex node) const { return nodes[node].convex ? nodes[node].mesh : *nodes[node].hull; }
+  const Mesh& hull_of(NodeIndex node) const { return nodes[node].convex ? *nodes[node].mesh : *nodes[node].hull; }
   /// Whether a lean build packed the node's mesh and solid (packed_shapes).
   bool is_packed(NodeIndex node) const { return node < packed_shapes.size() && !packed_shapes[node].empty(); }
 };
