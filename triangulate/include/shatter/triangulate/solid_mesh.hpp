@@ -50,6 +50,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/solid.hpp"
+#include "shatter/kernel/validate.hpp"
 
 namespace shatter {
 
@@ -64,6 +65,10 @@ struct SolidMeshOptions {
   /// one was cut from), or nullptr: certification then tests only the pairs of
   /// triangles not both found in it (validate_mesh_against).
   const Mesh* trusted = nullptr;
+  /// `trusted`'s triangles indexed (TrustedTriangles of that same mesh), or
+  /// nullptr to index them at each certification: a caller rounding many pieces
+  /// of one mesh indexes it once. Used only with `trusted`.
+  const TrustedTriangles* trusted_triangles = nullptr;
   /// The cut plane that made this solid from `trusted` (its new triangles lie
   /// along it), or nullptr: narrows the intersection tests to a slab around it.
   const Plane* cut = nullptr;
