@@ -24,6 +24,7 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_map>
 #include <utility>
 
 namespace shatter::bench {
@@ -419,5 +420,27 @@ PeerResult replay_with_cgal_isolated(const MeshTree& tree, const Mesh& input, co
   }
   return result;
 }
+
+Mesh subdivide_midpoints(const Mesh& mesh) {
+  Mesh out;
+  out.positions = mesh.positions;
+  std::unordered_map<std::uint64_t, VertexIndex> midpoint_of;
+  auto midpoint = [&](VertexIndex a, VertexIndex b) {
+    const std::uint64_t key = (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b);
+    const auto [it, inserted] = midpoint_of.try_emplace(key, static_cast<VertexIndex>(out.positions.size()));
+    if (inserted) out.positions.push_back((mesh.positions[a] + mesh.positions[b]) * 0.5);
+    return it->second;
+  };
+  for (const auto& [a, b, c] : mesh.triangles) {
+    const auto ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+    out.triangles.push_back({a, ab, ca});
+    out.triangles.push_back({ab, b, bc});
+    out.triangles.push_back({ca, bc, c});
+    out.triangles.push_back({ab, bc, ca});
+  }
+  out.surfaces.assign(out.triangles.size(), original_surface);
+  return out;
+}
+
 
 }  // namespace shatter::bench

@@ -118,6 +118,7 @@ using shatter::bench::PeerResult;
 using shatter::bench::ratio_text;
 using shatter::bench::seconds_between;
 using shatter::bench::seconds_text;
+using shatter::bench::subdivide_midpoints;
 using shatter::bench::wait_for_child;
 using shatter::bench::with_thousands;
 using shatter::bench::write_all;
@@ -201,29 +202,6 @@ std::string signal_text(int status) {
 
 // ---------------------------------------------------------------------------
 // Inputs.
-
-/// Each triangle into four by its edge midpoints (shared per edge, so the mesh
-/// stays closed and welded); flat: the new vertices are (a + b) / 2 in doubles.
-shatter::Mesh subdivide_midpoints(const shatter::Mesh& mesh) {
-  shatter::Mesh out;
-  out.positions = mesh.positions;
-  std::unordered_map<std::uint64_t, shatter::VertexIndex> midpoint_of;
-  auto midpoint = [&](shatter::VertexIndex a, shatter::VertexIndex b) {
-    const std::uint64_t key = (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b);
-    const auto [it, inserted] = midpoint_of.try_emplace(key, static_cast<shatter::VertexIndex>(out.positions.size()));
-    if (inserted) out.positions.push_back((mesh.positions[a] + mesh.positions[b]) * 0.5);
-    return it->second;
-  };
-  for (const auto& [a, b, c] : mesh.triangles) {
-    const auto ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
-    out.triangles.push_back({a, ab, ca});
-    out.triangles.push_back({ab, b, bc});
-    out.triangles.push_back({ca, bc, c});
-    out.triangles.push_back({ab, bc, ca});
-  }
-  out.surfaces.assign(out.triangles.size(), shatter::original_surface);
-  return out;
-}
 
 struct Input {
   std::string key;           ///< used in row ids: cube, knot1x16, fandiskx4

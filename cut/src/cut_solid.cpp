@@ -533,7 +533,7 @@ void find_chords(const PlaneSet& set, PlaneRef cut, const SplitSolid& split, con
 }  // namespace
 
 SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, SurfaceId cap_surface,
-                   const InputShells& shells) {
+                   const InputShells& shells, CutSides sides) {
   thread_local SplitSolid split;
   thread_local FaceSet below_cap, above_cap, side;
   SolidCut result;
@@ -553,6 +553,7 @@ SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, Surfac
               chords.below, chords.above);
   }
   for (const bool below : {true, false}) {
+    if (sides == (below ? CutSides::above : CutSides::below)) continue;
     side.clear();
     append_faces(below ? split.below : split.above, side);
     const std::size_t first_cap = side.faces.size();

@@ -130,7 +130,8 @@ struct GlueScratch {
 
 }  // namespace
 
-std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> parts, SitePairs pairs, std::string& why) {
+std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> parts, SitePairs pairs, std::string& why,
+                                std::vector<std::array<std::uint32_t, 2>>* face_origin) {
   const PartsOfSite parts_of(parts);
   thread_local GlueScratch scratch;
   // Plain references, not a structured binding: lambdas below capture them
@@ -317,6 +318,7 @@ std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> p
     glued.approx.reserve(owner.size());
   }
   number.assign(owner.size(), no_index);
+  if (face_origin != nullptr) face_origin->clear();
   for (std::uint32_t i = 0; i < parts.size(); ++i) {
     const Solid& solid = *parts[i].solid;
     for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
@@ -340,6 +342,7 @@ std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> p
         }
       }
       glued.faces.push_back(face);
+      if (face_origin != nullptr) face_origin->push_back({i, f});
     }
   }
 

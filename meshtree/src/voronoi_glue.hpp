@@ -53,8 +53,11 @@ std::vector<std::vector<std::uint32_t>> face_connected_groups(std::span<const Gl
 /// whose boundary edges do not cancel (a missing twin, as around a vanished
 /// sliver, or an edge subdivided on one side only), a directed edge used twice
 /// (parts touching along an edge only) or a vertex with several fans (parts
-/// touching at a point). Never throws on such input.
+/// touching at a point). Never throws on such input. `face_origin`, when given,
+/// receives for each face of the union the part and the face of it it was kept
+/// from.
 std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> parts, SitePairs pairs,
-                                std::string& why);
+                                std::string& why,
+                                std::vector<std::array<std::uint32_t, 2>>* face_origin = nullptr);
 
 }  // namespace shatter::detail

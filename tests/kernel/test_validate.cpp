@@ -423,6 +423,10 @@ TEST_CASE("self-intersecting corpus meshes report the known pair counts", "[vali
 
 // --- the plane kernel's certificates -------------------------------------------------
 
+namespace {
+bool same_defects(const ValidationReport& a, const ValidationReport& b);
+}  // namespace
+
 TEST_CASE("validate_mesh_against finds what validate_mesh finds, on its own and against a trusted mesh",
           "[validate][certify]") {
   std::vector<std::pair<std::string, Mesh>> meshes;
@@ -453,6 +457,47 @@ TEST_CASE("validate_mesh_against finds what validate_mesh finds, on its own and 
   const ValidationReport against = validate_mesh_against(pierced, &tetrahedron_only);
   REQUIRE(against.find(DefectKind::self_intersection) != nullptr);
   CHECK(against.find(DefectKind::self_intersection)->count == 3);
+  const ValidationReport indexed = validate_mesh_against(pierced, TrustedTriangles(tetrahedron_only));
+  REQUIRE(indexed.find(DefectKind::self_intersection) != nullptr);
+  CHECK(indexed.find(DefectKind::self_intersection)->count == 3);
+}
+
+TEST_CASE("TrustedTriangles finds a mesh's triangles in any rotation, not reversed, and serves validate_mesh_against alike",
+          "[validate][certify]") {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  for (auto& named : test::generated_meshes()) meshes.emplace_back(named.name, std::move(named.mesh));
+  for (const auto& path : test::valid_meshes()) {
+    Mesh mesh = read_mesh(path);
+    if (mesh.triangles.size() <= 20000) meshes.emplace_back(path.filename().string(), std::move(mesh));
+  }
+  std::mt19937_64 random(11);
+  for (const auto& [name, mesh] : meshes) {
+    INFO(name);
+    const TrustedTriangles index(mesh);
+    // Each triangle, rotated, is found; reversed, it is not (a valid mesh has no
+    // triangle over the same corners turning the other way).
+    std::size_t missing = 0, reversed_found = 0;
+    for (Triangle t : mesh.triangles) {
+      std::rotate(t.begin(), t.begin() + static_cast<std::ptrdiff_t>(random() % 3), t.end());
+      missing += !index.contains(mesh, t);
+      std::swap(t[1], t[2]);
+      reversed_found += index.contains(mesh, t);
+    }
+    CHECK(missing == 0);
+    if (validate_mesh(mesh).valid()) CHECK(reversed_found == 0);
+    // Against a part of itself, and with a vertex moved (its triangles are new):
+    // the same report as from the trusted mesh.
+    Mesh half = mesh;
+    half.triangles.resize(mesh.triangles.size() / 2);
+    half.surfaces.resize(half.triangles.size());
+    Mesh moved = mesh;
+    const std::size_t v = random() % moved.positions.size();
+    moved.positions[v] = moved.positions[v] * 0.5;
+    for (const Mesh* checked : std::array<const Mesh*, 2>{&mesh, &moved}) {
+      CHECK(same_defects(validate_mesh_against(*checked, TrustedTriangles(half)), validate_mesh_against(*checked, &half)));
+      CHECK(same_defects(validate_mesh_against(*checked, TrustedTriangles(half)), validate_mesh(*checked)));
+    }
+  }
 }
 
 namespace {

@@ -123,6 +123,33 @@ std::string num(double x) {
   return out.str();
 }
 
+// Whether two lists of solids are the same, field by field (the approximations
+// are functions of the definitions).
+bool same_solids(const std::vector<Solid>& a, const std::vector<Solid>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const Solid &x = a[i], &y = b[i];
+    if (x.defs != y.defs || x.convex != y.convex || x.faces.size() != y.faces.size() || x.loops.size() != y.loops.size() ||
+        x.corners.size() != y.corners.size()) {
+      return false;
+    }
+    for (std::size_t f = 0; f < x.faces.size(); ++f) {
+      const SolidFace &p = x.faces[f], &q = y.faces[f];
+      if (p.plane != q.plane || p.reversed != q.reversed || p.convex != q.convex || p.surface != q.surface ||
+          p.source != q.source || p.first_loop != q.first_loop || p.loop_count != q.loop_count) {
+        return false;
+      }
+    }
+    for (std::size_t l = 0; l < x.loops.size(); ++l) {
+      if (x.loops[l].first_corner != y.loops[l].first_corner || x.loops[l].corner_count != y.loops[l].corner_count) return false;
+    }
+    for (std::size_t c = 0; c < x.corners.size(); ++c) {
+      if (x.corners[c].vertex != y.corners[c].vertex || !(x.corners[c].line == y.corners[c].line)) return false;
+    }
+  }
+  return true;
+}
+
 // 64 successive cuts of one solid: each time the largest piece (by approximate
 // volume) is cut by a random plane through its vertex average. Every piece made
 // is checked: sound (check_solid), exact volumes of the two sides summing to the
@@ -161,6 +188,15 @@ void check_cut_chain(const std::string& name, const Mesh& mesh, std::uint64_t se
     const SolidCut cut = cut_solid(set, solid, cut_plane, static_cast<SurfaceId>(1 + cuts.size()), input.shells);
     if (cut.plane_missed) continue;
     ++made;
+    // One side alone (CutSides) is that side of the full cut, exactly.
+    for (const CutSides one_side : {CutSides::below, CutSides::above}) {
+      const SolidCut alone =
+          cut_solid(set, solid, cut_plane, static_cast<SurfaceId>(1 + cuts.size()), input.shells, one_side);
+      const bool below = one_side == CutSides::below;
+      CHECK_FALSE(alone.plane_missed);
+      CHECK((below ? alone.above : alone.below).empty());
+      CHECK(same_solids(below ? alone.below : alone.above, below ? cut.below : cut.above));
+    }
     mpq_class sum = 0;
     std::vector<Piece> made_pieces;
     // The two sides meet along the cap: the vertices on the cut plane must be

@@ -22,6 +22,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <stdexcept>
 #include <vector>
 
 #include "shatter/kernel/io.hpp"
@@ -262,7 +263,38 @@ namespace {
 // What round_solid did to the pieces of a family of cuts, counted by outcome.
 struct RoundingTally {
   std::size_t pieces = 0, plain = 0, collapsed = 0, flattened_parts = 0, separated = 0, folded = 0, inserted = 0, refused = 0;
+  std::size_t later_attempt = 0;  ///< certified as a plain triangulation at attempt 1 to 3
 };
+
+// RoundedSolid::attempt and SolidMeshOptions::face_attempts: a mesh certified
+// as a plain triangulation at some attempt is written again, bit for bit, at
+// the first attempt when every face is given that attempt (what a union of
+// pieces asks for its faces); faces given attempt 0 change nothing; a list of
+// the wrong length is refused.
+void check_face_attempts(const PlaneSet& set, const Solid& piece, const RoundedSolid& rounded, RoundingTally& tally) {
+  SolidMeshOptions zero;
+  const std::vector<std::uint8_t> zeros(piece.faces.size(), 0);
+  zero.face_attempts = zeros;
+  const RoundedSolid again = round_solid(set, piece, zero);
+  CHECK(again.valid == rounded.valid);
+  CHECK(again.attempt == rounded.attempt);
+  CHECK(again.mesh.positions == rounded.mesh.positions);
+  CHECK(again.mesh.triangles == rounded.mesh.triangles);
+  SolidMeshOptions short_list;
+  const std::vector<std::uint8_t> too_few(piece.faces.size() - 1, 0);
+  short_list.face_attempts = too_few;
+  CHECK_THROWS_AS(round_solid(set, piece, short_list), std::invalid_argument);
+  if (!rounded.valid || rounded.attempt <= 0) return;
+  ++tally.later_attempt;
+  SolidMeshOptions same;
+  const std::vector<std::uint8_t> attempts(piece.faces.size(), static_cast<std::uint8_t>(rounded.attempt));
+  same.face_attempts = attempts;
+  const RoundedSolid first = round_solid(set, piece, same);
+  CHECK(first.valid);
+  CHECK(first.attempt == 0);
+  CHECK(first.mesh.positions == rounded.mesh.positions);
+  CHECK(first.mesh.triangles == rounded.mesh.triangles);
+}
 
 // Six times the volume of a mesh of doubles, exactly.
 mpq_class six_volume_of(const Mesh& mesh) {
@@ -283,6 +315,7 @@ mpq_class six_volume_of(const Mesh& mesh) {
 void check_rounding(const PlaneSet& set, const Solid& piece, RoundingTally& tally) {
   const RoundedSolid rounded = round_solid(set, piece);
   ++tally.pieces;
+  check_face_attempts(set, piece, rounded, tally);
   const mpq_class six = exact_six_volume(set, piece);
   REQUIRE(six > 0);
   const double volume = mpq_class(six / 6).get_d();
@@ -328,6 +361,7 @@ void check_rounding(const PlaneSet& set, const Solid& piece, RoundingTally& tall
       CHECK(std::fabs(rounded.moved_volume - moved) <= 1e-12 * moved + 1e-300);
     }
     CHECK(rounded.moved_volume <= rounded.moved_volume_bound * (1 + 1e-12));
+    CHECK(rounded.attempt == -1);  // repaired: no plain triangulation
   } else {
     ++tally.plain;
   }
@@ -418,7 +452,7 @@ TEST_CASE("round_solid: parts rounding breaks are repaired, or the piece vanishe
     CHECK(f.pieces > 0);
     tally.pieces += f.pieces, tally.plain += f.plain, tally.collapsed += f.collapsed;
     tally.flattened_parts += f.flattened_parts, tally.separated += f.separated, tally.refused += f.refused;
-    tally.folded += f.folded, tally.inserted += f.inserted;
+    tally.folded += f.folded, tally.inserted += f.inserted, tally.later_attempt += f.later_attempt;
   }
   INFO("pieces " << tally.pieces << ", written as rounded " << tally.plain << ", vanished " << tally.collapsed
                  << ", written after parts rounded flat " << tally.flattened_parts << ", separated "
@@ -431,6 +465,7 @@ TEST_CASE("round_solid: parts rounding breaks are repaired, or the piece vanishe
   CHECK(tally.separated > 0);
   CHECK(tally.folded > 0);
   CHECK(tally.inserted > 0);
+  CHECK(tally.later_attempt > 0);  // face_attempts is met on pieces that need it
   // What is left unrepaired: folds of thick pieces against a nearly coplanar
   // face, a ceiling measured 2026-12-03, the same in the Release (GCC) and the
   // sanitized (Clang) builds since the near-parallel fans draw their random

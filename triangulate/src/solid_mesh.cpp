@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 #include <unordered_map>
 
 #include "shatter/kernel/certify.hpp"
@@ -1058,7 +1059,9 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
       }
     }
     if (!changed) {
-      triangulate_face(set, solid, f, positions, face_triangles, attempt);
+      const std::size_t face_attempt =
+          attempt == 0 && !options.face_attempts.empty() ? options.face_attempts[f] : attempt;
+      triangulate_face(set, solid, f, positions, face_triangles, face_attempt);
     } else if (!loops.empty()) {
       // A face that cannot be triangulated over its placed corners is left out.
       // If it had vanished in the rounding (seen: a thin annulus cap whose two
@@ -1824,6 +1827,9 @@ RoundedSolid copy_without_mesh(RoundedSolid& result) {
 // validate_mesh accepts (validate.hpp says why).
 ValidationReport validate_knowing(const Mesh& mesh, const SolidMeshOptions& options) {
   if (!options.parts.empty()) return validate_mesh_of_parts(mesh, options.parts);
+  if (options.trusted != nullptr && options.trusted_triangles != nullptr) {
+    return validate_mesh_against(mesh, *options.trusted_triangles, options.cut);
+  }
   return validate_mesh_against(mesh, options.trusted, options.cut);
 }
 
@@ -1854,6 +1860,9 @@ ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& optio
 }  // namespace
 
 RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options) {
+  if (!options.face_attempts.empty() && options.face_attempts.size() != solid.faces.size()) {
+    throw std::invalid_argument("round_solid: face_attempts must hold one attempt per face");
+  }
   RoundedSolid result;
   ValidationReport first_report;
   bool flattened_whole = false;    // every triangle was in a two-sided sheet
@@ -1988,6 +1997,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       result.mesh = std::move(mesh);
       result.merged_vertices = 0;
       result.retriangulated_faces = attempt == 0 ? 0 : solid.faces.size();
+      result.attempt = snapping ? -1 : static_cast<int>(attempt);
       result.valid = true;
       return result;
     } else {
@@ -2067,6 +2077,8 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
       const bool within = !(sheets_cancelled > 0 || folding || snapping) ||
                           report_moved_volume(measured_moved_volume(set, solid, written.mesh), written);
       if (within) {
+        const bool plain = merged == 0 && sheets_cancelled == 0 && inserted == 0 && !folding && !snapping;
+        written.attempt = plain ? static_cast<int>(attempt) : -1;
         written.valid = true;
         return written;
       }

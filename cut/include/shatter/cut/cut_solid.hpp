@@ -30,6 +30,9 @@ struct InputShells {
   std::vector<std::uint32_t> outer_of_shell;
 };
 
+/// Which sides of a cut cut_solid makes into solids.
+enum class CutSides : std::uint8_t { both, below, above };
+
 /// Cuts `solid` by the cut plane `cut` of `set` and closes both sides.
 /// Preconditions: as split_solid (a sound, embedded solid over `set`).
 /// Guarantees: every solid closed (every directed edge matched by its reverse),
@@ -52,7 +55,10 @@ struct InputShells {
 /// UnsupportedGeometryError as split_solid and make_caps.
 /// `shells` describes the input shells (InputShells) for the faces' `source`
 /// triangles; it matters only when a cut leaves a whole shell untouched.
+/// `sides`: below or above makes the solids of that side only (the other list
+/// stays empty; what is made is the same as with both), for a caller that
+/// keeps one side (a cell cut out of a solid plane by plane).
 SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, SurfaceId cap_surface,
-                   const InputShells& shells);
+                   const InputShells& shells, CutSides sides = CutSides::both);
 
 }  // namespace shatter

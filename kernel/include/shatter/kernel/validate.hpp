@@ -2,6 +2,7 @@
 // Validation of a mesh as a closed, oriented, 2-manifold solid. Every defect is
 // named with its count and the first element where it occurs.
 
+#include <array>
 #include <cstddef>
 #include <span>
 #include <string>
@@ -110,6 +111,28 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
 /// Cost: O(T log T) plus the pairs of boxes that meet a tested triangle's box
 /// (about linear on the grid for triangles of similar size).
 ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near = nullptr);
+
+/// The triangles of a mesh by their three corner positions, turning the same
+/// way (any rotation), sorted for lookup in O(log T): what validate_mesh_against
+/// finds its trusted triangles by. Built once, it serves every mesh checked
+/// against one trusted mesh (the fragments of one input), where building it per
+/// check would cost the whole trusted mesh each time. Coordinates compare as
+/// doubles (-0 equals 0); the mesh must have finite coordinates.
+class TrustedTriangles {
+ public:
+  TrustedTriangles() = default;
+  explicit TrustedTriangles(const Mesh& mesh);
+  /// Whether triangle `t` of `mesh` (indices in range) is one of them.
+  bool contains(const Mesh& mesh, const Triangle& t) const;
+  bool empty() const { return keys_.empty(); }
+
+ private:
+  std::vector<std::array<Vec3, 3>> keys_;  // each rotated to start at its least corner, sorted
+};
+
+/// validate_mesh_against with the trusted mesh's triangles indexed already; the
+/// same report.
+ValidationReport validate_mesh_against(const Mesh& mesh, const TrustedTriangles& trusted, const Plane* near = nullptr);
 
 /// validate_mesh for a mesh made of the triangles of several valid meshes
 /// (`parts`, each of which passed validate_mesh with the self-intersection

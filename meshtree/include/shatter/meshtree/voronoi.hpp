@@ -107,6 +107,11 @@ struct VoronoiReport {
   /// their union was no closed 2-manifold as glued or did not round validly
   /// (their parts then hang one level higher).
   std::size_t nodes_glued = 0, sets_unglued = 0;
+  /// Fragments whose first rounding did not certify (round_solid went on to a
+  /// later attempt or a repair), and glued nodes likewise: a node triangulates
+  /// each face as its part was certified (SolidMeshOptions::face_attempts), so
+  /// it needs a later attempt only where the union itself breaks something.
+  std::size_t fragments_retried = 0, nodes_retried = 0;
   double step = 0;                   ///< the site grid's spacing
   double seconds_cells = 0;          ///< quantizing, triangulating, cutting and rounding
   double seconds_glue = 0;           ///< gluing and rounding the internal nodes
@@ -122,7 +127,9 @@ struct VoronoiReport {
 /// every group below the root, the face-connected sets of its parts (its
 /// fragments, or its two halves' parts) are glued into one internal node each,
 /// without a Boolean (voronoi_glue.hpp): twin cell faces deleted, the rest
-/// joined by vertex identity, the union rounded and certified by round_solid.
+/// joined by vertex identity, the union rounded (each face triangulated at the
+/// attempt that certified its part: SolidMeshOptions::face_attempts) and
+/// certified by round_solid.
 /// A set whose union is not a closed 2-manifold as glued (parts touching along
 /// an edge or at a point only, twins that do not cancel edge for edge, as
 /// around a vanished sliver) or does not round validly is not glued: its parts

@@ -43,12 +43,14 @@
 //    within what rounding its vertices can move vanishes whole. What cannot be
 //    repaired is reported, never written as valid.
 
+#include <cstdint>
 #include <span>
 #include <string>
 
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/solid.hpp"
+#include "shatter/kernel/validate.hpp"
 
 namespace shatter {
 
@@ -63,6 +65,10 @@ struct SolidMeshOptions {
   /// one was cut from), or nullptr: certification then tests only the pairs of
   /// triangles not both found in it (validate_mesh_against).
   const Mesh* trusted = nullptr;
+  /// `trusted`'s triangles indexed (TrustedTriangles of that same mesh), or
+  /// nullptr to index them at each certification: a caller rounding many pieces
+  /// of one mesh indexes it once. Used only with `trusted`.
+  const TrustedTriangles* trusted_triangles = nullptr;
   /// The cut plane that made this solid from `trusted` (its new triangles lie
   /// along it), or nullptr: narrows the intersection tests to a slab around it.
   const Plane* cut = nullptr;
@@ -76,6 +82,15 @@ struct SolidMeshOptions {
   /// every triangle. The mesh written is the same as without it (the checks
   /// accept the same meshes); only the time differs.
   std::span<const Mesh* const> parts;
+  /// Per face of the solid, the attempt of triangulate_face its face takes on
+  /// round_solid's first attempt, or empty for attempt 0 everywhere. A union of
+  /// parts passes the attempt that certified each face's part
+  /// (RoundedSolid::attempt), so that it writes those faces as its parts wrote
+  /// them (and certification, knowing the parts, skips them) instead of failing
+  /// where a part's first attempt failed. Later attempts take one attempt for
+  /// every face, as without it. Throws std::invalid_argument (round_solid) when
+  /// not empty and not one per face.
+  std::span<const std::uint8_t> face_attempts;
   /// Certify without the self-intersection check, and accept vertices where the
   /// surface touches itself (a self-intersecting input was accepted on request:
   /// only the topology can be promised).
@@ -145,6 +160,12 @@ struct RoundedSolid {
   /// for a collapsed piece, that bound with each fan triangle's own furthest move.
   double moved_volume_bound = 0;
   std::string defect;       ///< when not valid: validate_mesh's summary of what is left
+  /// When valid and the mesh is the plain triangulation of the rounded vertices
+  /// (nothing merged, repaired, separated, snapped or vanished): the attempt every
+  /// face took in triangulate_face (0 to 3; 0 with SolidMeshOptions::face_attempts
+  /// given means each face took its own); -1 otherwise. A union with other solids
+  /// passes it on (face_attempts) to write this one's faces alike.
+  int attempt = -1;
 };
 
 /// Steps 1 to 3, and the separation of a piece that touches itself. A cut can
