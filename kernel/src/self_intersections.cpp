@@ -192,40 +192,52 @@ struct Grid {
 // instead: a few long triangles would otherwise fill thousands of cells.
 constexpr std::uint64_t max_cells_per_box = 64;
 
+// The float boxes of `count` triangles (triangle_at(k) is the k-th) and the grid
+// both searches use, anchored at their lowest corner, with cells three times the
+// mean box size: most boxes fall in one to eight cells, and a cell holds a few
+// triangles. On the benchmark sphere (1.3 M triangles) 1, 1.5, 2, 3, 4 and 6 times
+// took 1.50, 1.16, 0.97, 0.88, 0.87 and 0.83 us per triangle, fandisk 0.94 to
+// 0.87 with 3 the best there. nullopt when no cell size is usable (coordinates at
+// the extremes of double): the caller then searches with the box tree.
+template <class TriangleAt>
+std::optional<Grid> boxes_and_grid(std::span<const Vec3> positions, std::size_t count, TriangleAt&& triangle_at,
+                                   std::vector<FloatBox>& boxes) {
+  boxes.resize(count);
+  double lowest[3] = {INFINITY, INFINITY, INFINITY};
+  double extent_sum = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    const Triangle& tri = triangle_at(k);
+    const Vec3& p = positions[tri[0]];
+    const Vec3& q = positions[tri[1]];
+    const Vec3& r = positions[tri[2]];
+    double largest = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double lo = std::min({p[axis], q[axis], r[axis]}), hi = std::max({p[axis], q[axis], r[axis]});
+      boxes[k].lo[axis] = round_down(lo);
+      boxes[k].hi[axis] = round_up(hi);
+      lowest[axis] = std::min(lowest[axis], lo);
+      largest = std::max(largest, hi - lo);
+    }
+    extent_sum += largest;
+  }
+  const double cell = 3 * extent_sum / static_cast<double>(count);
+  if (!(cell > 0) || !std::isfinite(cell) || !(1 / cell > 0) || !std::isfinite(1 / cell)) return std::nullopt;
+  Grid grid;
+  grid.inverse_cell = 1 / cell;
+  for (int axis = 0; axis < 3; ++axis) grid.origin[axis] = lowest[axis];
+  return grid;
+}
+
 }  // namespace
 
 std::vector<TrianglePair> self_intersecting_pairs(std::span<const Vec3> positions, std::span<const Triangle> triangles) {
   std::vector<TrianglePair> pairs;
   const std::size_t count = triangles.size();
   if (count < 2) return pairs;
-  std::vector<FloatBox> boxes(count);
-  double lowest[3] = {INFINITY, INFINITY, INFINITY};
-  double extent_sum = 0;
-  for (std::size_t t = 0; t < count; ++t) {
-    const Vec3& p = positions[triangles[t][0]];
-    const Vec3& q = positions[triangles[t][1]];
-    const Vec3& r = positions[triangles[t][2]];
-    double largest = 0;
-    for (int axis = 0; axis < 3; ++axis) {
-      const double lo = std::min({p[axis], q[axis], r[axis]}), hi = std::max({p[axis], q[axis], r[axis]});
-      boxes[t].lo[axis] = round_down(lo);
-      boxes[t].hi[axis] = round_up(hi);
-      lowest[axis] = std::min(lowest[axis], lo);
-      largest = std::max(largest, hi - lo);
-    }
-    extent_sum += largest;
-  }
-  // Cells of three times the mean box size: most boxes fall in one to eight
-  // cells, and a cell holds a few triangles. On the benchmark sphere (1.3 M
-  // triangles) 1, 1.5, 2, 3, 4 and 6 times took 1.50, 1.16, 0.97, 0.88, 0.87 and
-  // 0.83 us per triangle, fandisk 0.94 to 0.87 with 3 the best there.
-  Grid grid;
-  const double cell = 3 * extent_sum / static_cast<double>(count);
-  if (!(cell > 0) || !std::isfinite(cell) || !(1 / cell > 0) || !std::isfinite(1 / cell)) {
-    return self_intersecting_pairs_by_box_tree(positions, triangles);  // no usable cell size: coordinates at the extremes
-  }
-  grid.inverse_cell = 1 / cell;
-  for (int axis = 0; axis < 3; ++axis) grid.origin[axis] = lowest[axis];
+  std::vector<FloatBox> boxes;
+  const std::optional<Grid> made = boxes_and_grid(positions, count, [&](std::size_t t) -> const Triangle& { return triangles[t]; }, boxes);
+  if (!made) return self_intersecting_pairs_by_box_tree(positions, triangles);
+  const Grid& grid = *made;
 
   // Each box's cell range; boxes spanning too many cells are set aside.
   struct CellRange {
@@ -349,31 +361,11 @@ std::vector<TrianglePair> intersecting_pairs_with(std::span<const Vec3> position
   const auto is_tested = [&](std::size_t t) { return tested[t] != 0; };
   if (count < 2 || std::none_of(members.begin(), members.end(), is_tested)) return pairs;
   // Per member (by its position k in `members`): its float box and cell range.
-  std::vector<FloatBox> boxes(count);
-  double lowest[3] = {INFINITY, INFINITY, INFINITY};
-  double extent_sum = 0;
-  for (std::size_t k = 0; k < count; ++k) {
-    const Triangle& tri = triangles[members[k]];
-    const Vec3& p = positions[tri[0]];
-    const Vec3& q = positions[tri[1]];
-    const Vec3& r = positions[tri[2]];
-    double largest = 0;
-    for (int axis = 0; axis < 3; ++axis) {
-      const double lo = std::min({p[axis], q[axis], r[axis]}), hi = std::max({p[axis], q[axis], r[axis]});
-      boxes[k].lo[axis] = round_down(lo);
-      boxes[k].hi[axis] = round_up(hi);
-      lowest[axis] = std::min(lowest[axis], lo);
-      largest = std::max(largest, hi - lo);
-    }
-    extent_sum += largest;
-  }
-  Grid grid;
-  const double cell = 3 * extent_sum / static_cast<double>(count);
-  if (!(cell > 0) || !std::isfinite(cell) || !(1 / cell > 0) || !std::isfinite(1 / cell)) {
-    return intersecting_pairs_with_by_box_tree(positions, triangles, members, tested, embedded);
-  }
-  grid.inverse_cell = 1 / cell;
-  for (int axis = 0; axis < 3; ++axis) grid.origin[axis] = lowest[axis];
+  std::vector<FloatBox> boxes;
+  const std::optional<Grid> made =
+      boxes_and_grid(positions, count, [&](std::size_t k) -> const Triangle& { return triangles[members[k]]; }, boxes);
+  if (!made) return intersecting_pairs_with_by_box_tree(positions, triangles, members, tested, embedded);
+  const Grid& grid = *made;
 
   struct CellRange {
     std::uint32_t lo[3], hi[3];
