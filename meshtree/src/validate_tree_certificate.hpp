@@ -21,9 +21,10 @@ struct TreeCertifier {
   /// bonds, the input geometry (caches included), the cut planes and the
   /// packed nodes; every array with its length. Not shatter_version nor
   /// input_repair, which validate_tree does not read (encode_shatter checks
-  /// their text rules on every call). Two lanes of a word-wise multiply-rotate
-  /// chain, each step a bijection of the lane for a fixed word and of the word
-  /// for a fixed lane: a change confined to one 64-bit word always changes the
+  /// their text rules on every call). Four lanes of word-wise multiply-rotate
+  /// chains (word k in lane k mod 4), each step a bijection of the lane for a
+  /// fixed word and of the word for a fixed lane, folded into two outputs by
+  /// bijections of each lane: a change confined to one 64-bit word always changes the
   /// digest, and any other change leaves it equal with probability about
   /// 2^-128 (a guard against accidents, not against a forger in the process,
   /// who could write the file's bytes directly anyway).
