@@ -149,6 +149,21 @@ std::size_t check_same_pairs_with(const std::string& name, const Mesh& mesh, std
   return grid.size();
 }
 
+// A fine solid crossed by `count` long random triangles, and one more long one
+// sharing a vertex with the solid: the side path for boxes spanning many cells.
+Mesh crossed_by_long_triangles(std::mt19937_64& random, int count) {
+  std::uniform_real_distribution<double> unit(-1, 1);
+  Mesh crossed = test::ellipsoid({0, 0, 0}, {1, 1, 1}, 30, 20);
+  const auto base = static_cast<VertexIndex>(crossed.positions.size());
+  for (int k = 0; k < count; ++k) {
+    for (int c = 0; c < 3; ++c) crossed.positions.push_back({2 * unit(random), 2 * unit(random), 2 * unit(random)});
+    crossed.triangles.push_back({base + 3 * k, base + 3 * k + 1, base + 3 * k + 2});
+  }
+  crossed.triangles.push_back({0, base, base + 4});
+  crossed.surfaces.resize(crossed.triangles.size(), 0);
+  return crossed;
+}
+
 }  // namespace
 
 TEST_CASE("the grid finder finds the box tree's pairs, and every pair CGAL alone finds, on seeded meshes",
@@ -195,19 +210,7 @@ TEST_CASE("the grid finder finds the box tree's pairs, and every pair CGAL alone
     // Lattice soups: every degenerate contact a small lattice allows.
     run("lattice soup" + tag, lattice_soup(random, 12 + seed, 40 + 5 * seed, 3, 1.0), true);
     run("fine lattice soup" + tag, lattice_soup(random, 60, 150, 6 + seed % 5, 0.125), true);
-    // A fine solid crossed by a few long triangles: the side path for boxes
-    // spanning many cells.
-    {
-      Mesh crossed = test::ellipsoid({0, 0, 0}, {1, 1, 1}, 30, 20);
-      const auto base = static_cast<VertexIndex>(crossed.positions.size());
-      for (int k = 0; k < 3; ++k) {
-        for (int c = 0; c < 3; ++c) crossed.positions.push_back({2 * unit(random), 2 * unit(random), 2 * unit(random)});
-        crossed.triangles.push_back({base + 3 * k, base + 3 * k + 1, base + 3 * k + 2});
-      }
-      crossed.triangles.push_back({0, base, base + 4});  // long, and sharing a vertex with the solid
-      crossed.surfaces.resize(crossed.triangles.size(), 0);
-      run("long triangles" + tag, crossed, seed % 8 == 0);
-    }
+    run("long triangles" + tag, crossed_by_long_triangles(random, 3), seed % 8 == 0);
   }
   // The properties were exercised on real intersections, not only on clean meshes.
   CHECK(meshes_with_pairs > 100);
@@ -260,17 +263,7 @@ TEST_CASE("the grid finder of pairs with a tested triangle finds the box tree's 
     run("lattice soup" + tag, lattice_soup(random, 12 + seed, 40 + 5 * seed, 3, 1.0), true);
     run("fine lattice soup" + tag, lattice_soup(random, 60, 150, 6 + seed % 5, 0.125), true);
     // Long triangles (the box-tree side path), tested or not as the draw falls.
-    {
-      Mesh crossed = test::ellipsoid({0, 0, 0}, {1, 1, 1}, 30, 20);
-      const auto base = static_cast<VertexIndex>(crossed.positions.size());
-      for (int k = 0; k < 4; ++k) {
-        for (int c = 0; c < 3; ++c) crossed.positions.push_back({2 * unit(random), 2 * unit(random), 2 * unit(random)});
-        crossed.triangles.push_back({base + 3 * k, base + 3 * k + 1, base + 3 * k + 2});
-      }
-      crossed.triangles.push_back({0, base, base + 4});  // long, and sharing a vertex with the solid
-      crossed.surfaces.resize(crossed.triangles.size(), 0);
-      run("long triangles" + tag, crossed, false);
-    }
+    run("long triangles" + tag, crossed_by_long_triangles(random, 4), false);
   }
   // Real intersections were found (860 draws, 540 with pairs, 286,403 pairs).
   CHECK(checked >= 800);
