@@ -228,6 +228,45 @@ std::optional<Grid> boxes_and_grid(std::span<const Vec3> positions, std::size_t 
   return grid;
 }
 
+// The cells a box spans along each axis.
+struct CellRange {
+  std::uint32_t lo[3], hi[3];
+};
+
+// Each box's cell range, and whether it spans more than max_cells_per_box cells
+// (set aside for the box tree); returns the cells of the others, counted with
+// multiplicity (the grid's entries).
+std::uint64_t cell_ranges(const Grid& grid, const std::vector<FloatBox>& boxes, std::vector<CellRange>& ranges,
+                          std::vector<std::uint8_t>& is_large) {
+  ranges.resize(boxes.size());
+  is_large.assign(boxes.size(), 0);
+  std::uint64_t entries = 0;
+  for (std::size_t k = 0; k < boxes.size(); ++k) {
+    std::uint64_t cells = 1;
+    for (int axis = 0; axis < 3; ++axis) {
+      ranges[k].lo[axis] = grid.cell_of(boxes[k].lo[axis], axis);
+      ranges[k].hi[axis] = grid.cell_of(boxes[k].hi[axis], axis);
+      cells *= ranges[k].hi[axis] - ranges[k].lo[axis] + 1;
+    }
+    if (cells > max_cells_per_box) {
+      is_large[k] = 1;
+    } else {
+      entries += cells;
+    }
+  }
+  return entries;
+}
+
+// Calls visit(bucket) for every cell of `range`.
+template <class Visit>
+void for_each_bucket(const CellRange& range, std::uint64_t mask, Visit&& visit) {
+  for (std::uint32_t x = range.lo[0]; x <= range.hi[0]; ++x) {
+    for (std::uint32_t y = range.lo[1]; y <= range.hi[1]; ++y) {
+      for (std::uint32_t z = range.lo[2]; z <= range.hi[2]; ++z) visit(Grid::bucket_of(x, y, z, mask));
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<TrianglePair> self_intersecting_pairs(std::span<const Vec3> positions, std::span<const Triangle> triangles) {
@@ -240,26 +279,12 @@ std::vector<TrianglePair> self_intersecting_pairs(std::span<const Vec3> position
   const Grid& grid = *made;
 
   // Each box's cell range; boxes spanning too many cells are set aside.
-  struct CellRange {
-    std::uint32_t lo[3], hi[3];
-  };
-  std::vector<CellRange> ranges(count);
-  std::vector<std::uint8_t> is_large(count, 0);
+  std::vector<CellRange> ranges;
+  std::vector<std::uint8_t> is_large;
+  const std::uint64_t entries = cell_ranges(grid, boxes, ranges, is_large);
   std::vector<std::size_t> large;
-  std::uint64_t entries = 0;
   for (std::size_t t = 0; t < count; ++t) {
-    std::uint64_t cells = 1;
-    for (int axis = 0; axis < 3; ++axis) {
-      ranges[t].lo[axis] = grid.cell_of(boxes[t].lo[axis], axis);
-      ranges[t].hi[axis] = grid.cell_of(boxes[t].hi[axis], axis);
-      cells *= ranges[t].hi[axis] - ranges[t].lo[axis] + 1;
-    }
-    if (cells > max_cells_per_box) {
-      is_large[t] = 1;
-      large.push_back(t);
-    } else {
-      entries += cells;
-    }
+    if (is_large[t]) large.push_back(t);
   }
 
   if (entries > std::numeric_limits<std::uint32_t>::max()) return self_intersecting_pairs_by_box_tree(positions, triangles);
@@ -270,14 +295,7 @@ std::vector<TrianglePair> self_intersecting_pairs(std::span<const Vec3> position
   const std::uint64_t bucket_count = std::bit_ceil(std::max<std::uint64_t>(16, entries));
   const std::uint64_t mask = bucket_count - 1;
   std::vector<std::uint32_t> start(bucket_count + 1, 0);
-  const auto for_each_cell = [&](std::size_t t, auto&& visit) {
-    const CellRange& range = ranges[t];
-    for (std::uint32_t x = range.lo[0]; x <= range.hi[0]; ++x) {
-      for (std::uint32_t y = range.lo[1]; y <= range.hi[1]; ++y) {
-        for (std::uint32_t z = range.lo[2]; z <= range.hi[2]; ++z) visit(Grid::bucket_of(x, y, z, mask));
-      }
-    }
-  };
+  const auto for_each_cell = [&](std::size_t t, auto&& visit) { for_each_bucket(ranges[t], mask, visit); };
   for (std::size_t t = 0; t < count; ++t) {
     if (!is_large[t]) for_each_cell(t, [&](std::uint64_t b) { ++start[b + 1]; });
   }
@@ -367,40 +385,16 @@ std::vector<TrianglePair> intersecting_pairs_with(std::span<const Vec3> position
   if (!made) return intersecting_pairs_with_by_box_tree(positions, triangles, members, tested, embedded);
   const Grid& grid = *made;
 
-  struct CellRange {
-    std::uint32_t lo[3], hi[3];
-  };
-  std::vector<CellRange> ranges(count);
-  std::vector<std::uint8_t> is_large(count, 0);
-  std::uint64_t entries = 0;
-  bool any_large = false;
-  for (std::size_t k = 0; k < count; ++k) {
-    std::uint64_t cells = 1;
-    for (int axis = 0; axis < 3; ++axis) {
-      ranges[k].lo[axis] = grid.cell_of(boxes[k].lo[axis], axis);
-      ranges[k].hi[axis] = grid.cell_of(boxes[k].hi[axis], axis);
-      cells *= ranges[k].hi[axis] - ranges[k].lo[axis] + 1;
-    }
-    if (cells > max_cells_per_box) {
-      is_large[k] = 1;
-      any_large = true;
-    } else {
-      entries += cells;
-    }
-  }
+  std::vector<CellRange> ranges;
+  std::vector<std::uint8_t> is_large;
+  const std::uint64_t entries = cell_ranges(grid, boxes, ranges, is_large);
+  const bool any_large = std::find(is_large.begin(), is_large.end(), 1) != is_large.end();
   if (entries > std::numeric_limits<std::uint32_t>::max()) {
     return intersecting_pairs_with_by_box_tree(positions, triangles, members, tested, embedded);
   }
   const std::uint64_t bucket_count = std::bit_ceil(std::max<std::uint64_t>(16, entries));
   const std::uint64_t mask = bucket_count - 1;
-  const auto for_each_cell = [&](std::size_t k, auto&& visit) {
-    const CellRange& range = ranges[k];
-    for (std::uint32_t x = range.lo[0]; x <= range.hi[0]; ++x) {
-      for (std::uint32_t y = range.lo[1]; y <= range.hi[1]; ++y) {
-        for (std::uint32_t z = range.lo[2]; z <= range.hi[2]; ++z) visit(Grid::bucket_of(x, y, z, mask));
-      }
-    }
-  };
+  const auto for_each_cell = [&](std::size_t k, auto&& visit) { for_each_bucket(ranges[k], mask, visit); };
   // The buckets the tested members occupy: an untested member is entered only
   // there. A pair with a tested member is tested in the bucket of the low corner
   // of the boxes' overlap, a cell inside both boxes, which the tested one marked.

@@ -659,10 +659,8 @@ std::vector<std::uint32_t> embedded_groups(const Mesh& mesh, const std::vector<s
   return embedded;
 }
 
-}  // namespace
-
-namespace {
-
+// TrustedTriangles' sort order: lexicographic over the corners' coordinates,
+// whose equivalence is TriangleKeyEqual's equality.
 bool key_less(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
   for (int i = 0; i < 3; ++i) {
     if (std::tie(a[i].x, a[i].y, a[i].z) < std::tie(b[i].x, b[i].y, b[i].z)) return true;
@@ -670,34 +668,6 @@ bool key_less(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
   }
   return false;
 }
-
-ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trusted, const Plane* near);
-
-}  // namespace
-
-TrustedTriangles::TrustedTriangles(const Mesh& mesh) {
-  keys_.reserve(mesh.triangles.size());
-  for (const Triangle& t : mesh.triangles) keys_.push_back(triangle_key(mesh, t));
-  std::sort(keys_.begin(), keys_.end(), key_less);
-}
-
-bool TrustedTriangles::contains(const Mesh& mesh, const Triangle& t) const {
-  const std::array<Vec3, 3> key = triangle_key(mesh, t);
-  const auto it = std::lower_bound(keys_.begin(), keys_.end(), key, key_less);
-  return it != keys_.end() && TriangleKeyEqual{}(*it, key);
-}
-
-ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near) {
-  if (!trusted) return validate_against(mesh, nullptr, near);
-  const TrustedTriangles index(*trusted);
-  return validate_against(mesh, &index, near);
-}
-
-ValidationReport validate_mesh_against(const Mesh& mesh, const TrustedTriangles& trusted, const Plane* near) {
-  return validate_against(mesh, &trusted, near);
-}
-
-namespace {
 
 ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trusted, const Plane* near) {
   // A triangle of the trusted mesh is not flat: only the new ones are tested.
@@ -804,6 +774,28 @@ ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trus
 }
 
 }  // namespace
+
+TrustedTriangles::TrustedTriangles(const Mesh& mesh) {
+  keys_.reserve(mesh.triangles.size());
+  for (const Triangle& t : mesh.triangles) keys_.push_back(triangle_key(mesh, t));
+  std::sort(keys_.begin(), keys_.end(), key_less);
+}
+
+bool TrustedTriangles::contains(const Mesh& mesh, const Triangle& t) const {
+  const std::array<Vec3, 3> key = triangle_key(mesh, t);
+  const auto it = std::lower_bound(keys_.begin(), keys_.end(), key, key_less);
+  return it != keys_.end() && TriangleKeyEqual{}(*it, key);
+}
+
+ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near) {
+  if (!trusted) return validate_against(mesh, nullptr, near);
+  const TrustedTriangles index(*trusted);
+  return validate_against(mesh, &index, near);
+}
+
+ValidationReport validate_mesh_against(const Mesh& mesh, const TrustedTriangles& trusted, const Plane* near) {
+  return validate_against(mesh, &trusted, near);
+}
 
 ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* const> parts) {
   constexpr std::uint32_t untrusted = std::numeric_limits<std::uint32_t>::max();

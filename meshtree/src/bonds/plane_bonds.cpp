@@ -40,6 +40,22 @@ namespace {
 
 using detail::Clipper;
 
+// The Bond on `plane` (`unit` its unit normal) whose centroid has coordinates
+// (u, v) at (axis + 1) % 3 and (axis + 2) % 3: find_plane_bonds makes each bond
+// with it, and unpack_bond makes it again from a PackedBond, so the two agree bit
+// for bit.
+Bond bond_on_plane(const Plane& plane, const Vec3& unit, int axis, LeafIndex first, LeafIndex second,
+                   NodeIndex cut_node, bool first_below, double area, double u, double v) {
+  Bond bond;
+  bond.first = first;
+  bond.second = second;
+  bond.cut_node = cut_node;
+  bond.area = area;
+  bond.centroid = point_on_plane_over(plane, axis, u, v);
+  bond.normal = first_below ? unit : -unit;  // from below into above is +n
+  return bond;
+}
+
 // One convex part of a cap face: corners counter-clockwise in the projection's
 // raw frame, as their vertices' definitions and as rounded 2D points.
 struct Part {
@@ -114,14 +130,9 @@ class PlaneBonds {
 
   void add_bond(std::vector<Bond>& bonds, std::uint32_t k, LeafIndex below, LeafIndex above, double area, double u,
                 double v) const {
-    Bond bond;
-    bond.first = std::min(below, above);
-    bond.second = std::max(below, above);
-    bond.cut_node = k < tree_.nodes.size() ? k : separating_node(bond.first, bond.second);
-    bond.area = area;
-    bond.centroid = point_on_plane_over(plane_, axis_, u, v);
-    bond.normal = bond.first == below ? unit_ : -unit_;  // from below into above is +n
-    bonds.push_back(bond);
+    const LeafIndex first = std::min(below, above), second = std::max(below, above);
+    const NodeIndex cut_node = k < tree_.nodes.size() ? k : separating_node(first, second);
+    bonds.push_back(bond_on_plane(plane_, unit_, axis_, first, second, cut_node, first == below, area, u, v));
   }
 
   // What unpack_bond makes the Bond above from (run_packed: k is a node).
@@ -535,17 +546,9 @@ std::vector<Bond> find_plane_bonds(const MeshTree& tree) { return PlaneBonds(tre
 std::vector<PackedBond> find_packed_plane_bonds(const MeshTree& tree) { return PlaneBonds(tree).run_packed(); }
 
 Bond unpack_bond(const MeshTree& tree, const PackedBond& packed) {
-  // add_bond's arithmetic for a Bond, on the values it packed.
   const Plane& plane = tree.cut_planes[packed.cut_node];
-  Bond bond;
-  bond.first = packed.first;
-  bond.second = packed.second;
-  bond.cut_node = packed.cut_node;
-  bond.area = packed.area;
-  bond.centroid = point_on_plane_over(plane, packed.axis, packed.u, packed.v);
-  const Vec3 unit = normalized(plane.normal);
-  bond.normal = packed.first_below ? unit : -unit;
-  return bond;
+  return bond_on_plane(plane, normalized(plane.normal), packed.axis, packed.first, packed.second, packed.cut_node,
+                       packed.first_below, packed.area, packed.u, packed.v);
 }
 
 }  // namespace shatter
