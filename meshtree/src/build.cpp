@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <new>
 #include <optional>
 #include <set>
@@ -228,9 +229,10 @@ struct BuildNode {
   // coordinates: no children), with their exact volume and its bound, summed.
   std::uint64_t vanished_pieces = 0;
   double vanished_volume = 0, vanished_volume_bound = 0;
-  // A lean build's cut node: its mesh and solid packed (packed_node.hpp), with
-  // the solid's convex flag, which the tree's node keeps (MeshTreeNode::convex).
-  std::vector<std::uint8_t> packed;
+  // A lean build's cut node: its mesh and solid packed (packed_node.hpp), in
+  // the builder's blocks (Builder::take_packed_bytes), with the solid's convex
+  // flag, which the tree's node keeps (MeshTreeNode::convex).
+  std::span<const std::uint8_t> packed;
   bool packed_convex = false;
 };
 
@@ -369,16 +371,17 @@ class Builder {
   /// a surplus cut is undone: unpack then restores it): its mesh and solid are
   /// packed, for nothing below it reads them (the cuts of its descendants need
   /// only its plane, depth and mass) and the writer unpacks them one at a time.
-  void cut_kept(BuildNode& node) const {
+  void cut_kept(BuildNode& node) {
     if (!lean_ || node.children.empty()) return;
     pack(node);
   }
 
-  /// `node`'s cut is undone: a packed node gets its mesh and solid back.
+  /// `node`'s cut is undone: a packed node gets its mesh and solid back (its
+  /// bytes stay in the blocks, unused: a few cuts of a build are undone).
   static void cut_undone(BuildNode& node) {
     if (node.packed.empty()) return;
     unpack_node_shape(node.packed, {}, *node.mesh, *node.solid);
-    std::vector<std::uint8_t>().swap(node.packed);
+    node.packed = {};
   }
 
   /// `node` is a leaf of the finished tree (a cut undone later leaves another).
@@ -393,13 +396,9 @@ class Builder {
 
   bool lean() const { return lean_; }
 
-  // A lean build's packing of `node`'s mesh and solid (its approximations go).
-  static void pack(BuildNode& node) {
-    node.packed_convex = node.solid->convex;
-    node.packed = pack_node_shape(node.mesh, node.solid);
-    node.mesh.reset();
-    node.solid.reset();
-  }
+  /// What a lean build packed (BuildNode::packed), for the tree's
+  /// PackedShapes; the builder's blocks are left empty.
+  ByteBlocks take_packed_bytes() { return std::move(packed_bytes_); }
 
   const TreeRecipe& recipe() const { return recipe_; }
   const PlaneInput& plane_input() const { return *plane_input_; }
@@ -407,10 +406,25 @@ class Builder {
   std::uint64_t planes_rejected() const { return planes_rejected_; }
 
  private:
+  // A lean build's packing of `node`'s mesh and solid (its approximations go),
+  // into the blocks every worker appends to.
+  void pack(BuildNode& node) {
+    node.packed_convex = node.solid->convex;
+    const std::vector<std::uint8_t> bytes = pack_node_shape(node.mesh, node.solid);
+    {
+      const std::lock_guard lock(packed_mutex_);
+      node.packed = packed_bytes_.append(bytes);
+    }
+    node.mesh.reset();
+    node.solid.reset();
+  }
+
   const TreeRecipe& recipe_;  // what to build
   std::optional<PlaneInput> plane_input_;
   const LeafProgressFn& progress_;
   const bool lean_;  // BuildRunOptions::lean
+  std::mutex packed_mutex_;  // guards packed_bytes_
+  ByteBlocks packed_bytes_;  // every BuildNode::packed
   std::atomic<std::size_t> leaves_done_{0};
   // Counted from every worker; cut() is const because it is a pure function of
   // its node, and these tallies never feed back into a decision.
@@ -576,8 +590,9 @@ std::size_t count_nodes(const BuildNode& root) {
 
 // Consumes the built tree: each node is freed as soon as its contents have moved
 // into `tree` (iteratively: a chain of cuts can be long), so its record's block
-// can leave the process while the tree's array fills (see the node blocks).
-void number_tree(std::unique_ptr<BuildNode> root, MeshTree& tree) {
+// can leave the process while the tree's array fills (see the node blocks). A
+// lean build's packed bytes stay where they are: `packed` holds them all.
+void number_tree(std::unique_ptr<BuildNode> root, ByteBlocks packed, MeshTree& tree) {
   struct Pending {
     std::unique_ptr<BuildNode> node;
     NodeIndex parent;
@@ -588,7 +603,7 @@ void number_tree(std::unique_ptr<BuildNode> root, MeshTree& tree) {
   tree.nodes.reserve(node_count);
   tree.cut_planes.reserve(node_count);
   // A lean build packed its cut nodes (the root first, when it was cut).
-  if (!root->packed.empty()) tree.packed_shapes.resize(node_count);
+  if (!root->packed.empty()) tree.packed_shapes = PackedShapes(std::move(packed), node_count);
   std::vector<Pending> stack;
   stack.push_back({std::move(root), no_node});
   std::vector<NodeIndex> path;  // path[d]: the node at depth d above the current one
@@ -605,7 +620,7 @@ void number_tree(std::unique_ptr<BuildNode> root, MeshTree& tree) {
       // Packed as the builder names planes and caps; NodeShapes renames them
       // by the node's path when it unpacks.
       node.convex = built.packed_convex;
-      tree.packed_shapes[index] = std::move(built.packed);
+      tree.packed_shapes.adopt(index, built.packed);
     } else {
       node.mesh = std::move(built.mesh);
       node.solid = std::move(built.solid);
@@ -735,7 +750,7 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
   tree.shatter_version = std::string(version_string);
   BuildReport timing;
   count_vanished(*root, timing);
-  number_tree(std::move(root), tree);
+  number_tree(std::move(root), builder.take_packed_bytes(), tree);
   timing.cutting_seconds = seconds_since(phase_start);
   timing.planes_missed = builder.planes_missed();
   timing.planes_rejected = builder.planes_rejected();

@@ -366,7 +366,7 @@ void pack_leaves(MeshTree& tree) {
   for (const NodeIndex k : tree.leaf_nodes) {
     MeshTreeNode& leaf = tree.nodes[k];
     if (tree.is_packed(k)) continue;
-    tree.packed_shapes[k] = pack_node_shape(leaf.mesh, leaf.solid, true);
+    tree.packed_shapes.assign(k, pack_node_shape(leaf.mesh, leaf.solid, true));
     leaf.mesh = Mesh();
     leaf.solid = Solid();
   }

@@ -924,7 +924,10 @@ std::array<std::uint64_t, 2> TreeCertifier::digest(const MeshTree& tree) {
   digest.values(tree.geometry.plane_approx);
   digest.values(tree.cut_planes);
   digest.word(tree.packed_shapes.size());
-  for (const std::vector<std::uint8_t>& packed : tree.packed_shapes) digest.values(packed);
+  for (std::size_t k = 0; k < tree.packed_shapes.size(); ++k) {
+    const std::span<const std::uint8_t> packed = tree.packed_shapes[k];
+    digest.bytes(packed.data(), packed.size());
+  }
   return digest.finish();
 }
 
@@ -965,7 +968,7 @@ std::optional<TreeDefect> fill_tree_caches(MeshTree& tree) {
       tree.nodes[k].mesh = shape.mesh;
       tree.nodes[k].solid = shape.solid;
     }
-    std::vector<std::vector<std::uint8_t>>().swap(tree.packed_shapes);
+    tree.packed_shapes = PackedShapes();
   }
   // And its packed bonds theirs (a tree keeps them one way: `bonds` is empty).
   if (!tree.packed_bonds.empty() && tree.bonds.empty()) {

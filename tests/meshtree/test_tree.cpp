@@ -1275,10 +1275,10 @@ TEST_CASE("a lean build keeps no approximations and gives the same tree otherwis
           // packed node with a mesh of its own are defects, never a crash.
           MeshTree broken = lean;
           REQUIRE(broken.is_packed(0));
-          broken.packed_shapes[0].pop_back();
+          broken.packed_shapes.assign(0, broken.packed_shapes[0].first(broken.packed_shapes[0].size() - 1));
           CHECK_THAT(validate_tree(broken).summary(), Catch::Contains("do not unpack"));
           broken = lean;
-          broken.packed_shapes.pop_back();
+          broken.packed_shapes.resize(broken.packed_shapes.size() - 1);
           CHECK_THAT(validate_tree(broken).summary(), Catch::Contains("packed node entries"));
           broken = lean;
           broken.nodes[0].mesh = full.nodes[0].mesh;

@@ -18,6 +18,7 @@
 #include "shatter/kernel/vec.hpp"
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/boxed.hpp"
+#include "shatter/meshtree/packed_shapes.hpp"
 #include "shatter/meshtree/recipe.hpp"
 #include "shatter/meshtree/tree_index.hpp"
 
@@ -125,8 +126,9 @@ struct MeshTree {
   /// entry for a node that keeps them (a leaf whose cut was undone, as a
   /// surplus). Empty in every other tree. Read a node's mesh and solid through
   /// NodeShapes, which unpacks them; fill_tree_caches (validate_tree.hpp)
-  /// unpacks them all into the nodes.
-  std::vector<std::vector<std::uint8_t>> packed_shapes;
+  /// unpacks them all into the nodes. The bytes are kept in blocks
+  /// (PackedShapes), not one array a node.
+  PackedShapes packed_shapes;
   /// What the code that made the tree certified of it (TreeCertificate): the
   /// writer's full check is replaced by a digest comparison while it holds.
   TreeCertificate certificate;

@@ -1,0 +1,59 @@
+#include "shatter/meshtree/packed_shapes.hpp"
+
+#include <cstring>
+
+namespace shatter {
+
+std::span<const std::uint8_t> ByteBlocks::append(std::span<const std::uint8_t> bytes) {
+  if (bytes.empty()) return {};
+  if (bytes.size() > room_) {
+    const bool own_block = bytes.size() > block_size / 4;
+    const std::size_t size = own_block ? bytes.size() : block_size;
+    // Left uninitialised: every byte handed out is written first, and a page
+    // never written is never touched.
+    blocks_.push_back(std::make_unique_for_overwrite<std::uint8_t[]>(size));
+    capacity_ += size;
+    if (own_block) {
+      // The open block stays open: it may have room for the next bytes.
+      std::uint8_t* at = blocks_.back().get();
+      std::memcpy(at, bytes.data(), bytes.size());
+      return {at, bytes.size()};
+    }
+    free_ = blocks_.back().get();
+    room_ = size;
+  }
+  std::uint8_t* at = free_;
+  std::memcpy(at, bytes.data(), bytes.size());
+  free_ += bytes.size();
+  room_ -= bytes.size();
+  return {at, bytes.size()};
+}
+
+ByteBlocks& ByteBlocks::operator=(ByteBlocks&& other) noexcept {
+  if (this == &other) return *this;
+  // The open block's free end goes with it (appending to the moved-from
+  // blocks must not write into the other's).
+  blocks_ = std::move(other.blocks_);
+  other.blocks_.clear();
+  free_ = std::exchange(other.free_, nullptr);
+  room_ = std::exchange(other.room_, 0);
+  capacity_ = std::exchange(other.capacity_, 0);
+  return *this;
+}
+
+PackedShapes::PackedShapes(ByteBlocks blocks, std::size_t count) : blocks_(std::move(blocks)), entries_(count) {}
+
+PackedShapes::PackedShapes(const PackedShapes& other) : entries_(other.entries_.size()) {
+  for (std::size_t k = 0; k < entries_.size(); ++k) entries_[k] = blocks_.append(other.entries_[k]);
+}
+
+PackedShapes& PackedShapes::operator=(const PackedShapes& other) {
+  if (this != &other) *this = PackedShapes(other);
+  return *this;
+}
+
+void PackedShapes::assign(std::size_t node, std::span<const std::uint8_t> bytes) {
+  entries_[node] = blocks_.append(bytes);
+}
+
+}  // namespace shatter
