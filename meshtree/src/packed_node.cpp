@@ -44,12 +44,9 @@ class Packer {
     }
   }
   void optional_index(std::uint32_t index) { varint(index == no_index ? 0 : std::uint64_t{index} + 1); }
-  /// The bytes, their array fitted to them: a node keeps them to the end of
-  /// the build, and growth by doubling would leave it nearly twice their size.
-  std::vector<std::uint8_t> take() {
-    bytes_.shrink_to_fit();
-    return std::move(bytes_);
-  }
+  /// The bytes. (Not fitted to their size: every caller copies them into
+  /// the blocks that keep them, PackedShapes.)
+  std::vector<std::uint8_t> take() { return std::move(bytes_); }
 
  private:
   std::vector<std::uint8_t> bytes_;
