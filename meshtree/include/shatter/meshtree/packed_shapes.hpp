@@ -3,7 +3,7 @@
 // solids (packed_node.hpp): the bytes of every node in a few large blocks, and
 // one view per node into them. Two million small arrays of a million-fragment
 // tree cost a 24-byte header each and the allocator's rounding of each size up
-// to its class (about 0.2 GB at cube -> 2^20, README "Lean memory"); blocks
+// to its class (some 0.12 GB at cube -> 2^20, README "Lean memory"); blocks
 // cost neither.
 
 #include <cstddef>
@@ -48,9 +48,9 @@ class ByteBlocks {
 
 /// The packed shape of each node of a tree (MeshTree::packed_shapes): entry k
 /// is node k's bytes, as pack_node_shape made them, or empty for a node that
-/// keeps its own mesh and solid. A copy holds copies of the bytes (its blocks
-/// hold only the entries' bytes, one after another); bytes an entry no longer
-/// names stay in the blocks until the whole is freed.
+/// keeps its own mesh and solid. A copy holds copies of the bytes (and its
+/// blocks only the entries' bytes); bytes an entry no longer names stay in the
+/// blocks until the whole is freed.
 class PackedShapes {
  public:
   PackedShapes() = default;
@@ -64,8 +64,8 @@ class PackedShapes {
   /// The number of entries: 0, or the tree's node count.
   std::size_t size() const { return entries_.size(); }
   bool empty() const { return entries_.empty(); }
-  /// Entry `node`'s bytes (precondition: node < size()), valid until the
-  /// entry is assigned again or this is destroyed, moved from or assigned to.
+  /// Entry `node`'s bytes (precondition: node < size()), valid until this is
+  /// destroyed or assigned to (a move hands the bytes on, unmoved).
   std::span<const std::uint8_t> operator[](std::size_t node) const { return entries_[node]; }
   /// Keeps the first `count` entries, adding empty ones.
   void resize(std::size_t count) { entries_.resize(count); }
