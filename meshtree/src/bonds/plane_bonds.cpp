@@ -19,9 +19,11 @@
 //
 // A lean tree's leaves are packed (packed_node.hpp): their solids are unpacked
 // as the cuts meet them, into a small cache by leaf (the cuts go in preorder,
-// so a subtree's cuts, which meet the same few leaves, come one after the
-// other), and each cap corner's definition is kept beside its approximation,
-// so the pairs are tested without the leaves' solids.
+// or in postorder for packed bonds, so a subtree's cuts, which meet the same
+// few leaves, come one after the other; in postorder a cut of at most 256
+// leaves finds all of them there, read last), and each cap corner's definition
+// is kept beside its approximation, so the pairs are tested without the
+// leaves' solids.
 
 #include <algorithm>
 #include <array>
