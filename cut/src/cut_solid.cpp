@@ -537,7 +537,8 @@ SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, Surfac
   thread_local SplitSolid split;
   thread_local FaceSet below_cap, above_cap, side;
   SolidCut result;
-  split_solid(set, solid, cut, split);
+  split_solid(set, solid, cut, split,
+              sides == CutSides::both ? SplitSides::both : sides == CutSides::below ? SplitSides::below : SplitSides::above);
   if (split.plane_misses) {
     result.plane_missed = true;
     result.all_below = split.all_below;
@@ -546,6 +547,19 @@ SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, Surfac
   make_caps(set, cut, split.defs, split.approx, split.border, solid.convex, cap_surface, below_cap, above_cap);
   result.cap_faces = below_cap.faces.size();
   result.cap_loops = below_cap.loops.size();
+  if (split.other_side_partial) {
+    // One side, and no vertex of the solid on the plane: no edge of the surface
+    // lies on the cut but the border edges, so there is no chord (find_chords
+    // would find none), and the kept side's faces take its cap in place, not
+    // copied again; the same faces in the same order as below.
+    const bool below = sides == CutSides::below;
+    FaceSet& kept = below ? split.below : split.above;
+    const std::size_t first_cap = kept.faces.size();
+    append_faces(below ? below_cap : above_cap, kept);
+    separate_side(set, cut, split.defs, split.approx, kept, first_cap, solid.convex, shells, {},
+                  below ? result.below : result.above);
+    return result;
+  }
   thread_local Chords chords;
   find_chords(set, cut, split, below_cap, chords);
   if (!chords.empty()) {
