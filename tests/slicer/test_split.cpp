@@ -429,6 +429,10 @@ bool check_one_side(const PlaneSet& set, const Solid& solid, PlaneRef plane, con
     CHECK((below ? one.above : one.below).empty());
     CHECK(same_solids(below ? one.below : one.above, below ? both.below : both.above));
   }
+  // The pieces' convexity, decided while separating them, is solid_is_convex's.
+  for (const auto* side_solids : {&both.below, &both.above}) {
+    for (const Solid& piece : *side_solids) CHECK(piece.convex == solid_is_convex(set, piece));
+  }
   return partial;
 }
 
