@@ -36,7 +36,11 @@ Solid extract(std::span<const PointDef> defs, std::span<const ApproxPoint> appro
               std::span<const std::uint32_t> chosen, std::vector<VertexIndex>& local) {
   Solid solid;
   local.assign(defs.size(), no_index);
-  std::size_t loop_count = 0, corner_count = 0, vertex_count = 0;
+  // The vertices in order of first use, so that each is copied once (a vertex
+  // has several corners).
+  thread_local std::vector<VertexIndex> used;
+  used.clear();
+  std::size_t loop_count = 0, corner_count = 0;
   for (std::uint32_t f : chosen) {
     const SolidFace& face = faces.faces[f];
     loop_count += face.loop_count;
@@ -44,16 +48,24 @@ Solid extract(std::span<const PointDef> defs, std::span<const ApproxPoint> appro
       const SolidLoop& loop = faces.loops[l];
       corner_count += loop.corner_count;
       for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
-        VertexIndex& number = local[faces.corners[loop.first_corner + i].vertex];
-        if (number == no_index) number = static_cast<VertexIndex>(vertex_count++);
+        const VertexIndex vertex = faces.corners[loop.first_corner + i].vertex;
+        VertexIndex& number = local[vertex];
+        if (number == no_index) {
+          number = static_cast<VertexIndex>(used.size());
+          used.push_back(vertex);
+        }
       }
     }
   }
   solid.faces.reserve(chosen.size());
   solid.loops.reserve(loop_count);
   solid.corners.reserve(corner_count);
-  solid.defs.resize(vertex_count);
-  solid.approx.resize(vertex_count);
+  solid.defs.reserve(used.size());
+  solid.approx.reserve(used.size());
+  for (const VertexIndex vertex : used) {
+    solid.defs.push_back(defs[vertex]);
+    solid.approx.push_back(approx[vertex]);
+  }
   for (std::uint32_t f : chosen) {
     SolidFace face = faces.faces[f];
     const std::uint32_t first_loop = face.first_loop;
@@ -63,10 +75,7 @@ Solid extract(std::span<const PointDef> defs, std::span<const ApproxPoint> appro
       solid.loops.push_back({static_cast<std::uint32_t>(solid.corners.size()), loop.corner_count});
       for (std::uint32_t i = 0; i < loop.corner_count; ++i) {
         SolidCorner corner = faces.corners[loop.first_corner + i];
-        const VertexIndex number = local[corner.vertex];
-        solid.defs[number] = defs[corner.vertex];
-        solid.approx[number] = approx[corner.vertex];
-        corner.vertex = number;
+        corner.vertex = local[corner.vertex];
         solid.corners.push_back(corner);
       }
     }
@@ -359,16 +368,26 @@ void separate_side(const PlaneSet& set, PlaneRef cut, std::span<const PointDef> 
   };
   thread_local std::vector<ChordUse> chord_uses;
   chord_uses.clear();
+  // Per corner, its face and the face across its edge (no_index while unmatched),
+  // for deciding the pieces' convexity (solid_convex) from this one pass.
+  thread_local std::vector<std::uint32_t> face_of_corner, across;
+  face_of_corner.resize(faces.corners.size());
+  across.assign(faces.corners.size(), no_index);
   for (std::uint32_t f = 0; f < faces.faces.size(); ++f) {
     const SolidFace& face = faces.faces[f];
     for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
       for (const CornerEdge& edge : loop_edges(faces.corners, faces.loops[l])) {
+        face_of_corner[edge.corner] = f;
         const std::uint64_t key = undirected_edge_key(edge.from, edge.to);
         if (!chord_keys.empty() && std::find(chord_keys.begin(), chord_keys.end(), key) != chord_keys.end()) {
           chord_uses.push_back({key, f, edge.from, f >= first_cap_face});
           continue;
         }
-        const std::uint32_t other = face_of_edge.insert(key, f);
+        const std::uint32_t first = face_of_edge.insert(key, edge.corner);
+        if (first == edge.corner) continue;
+        const std::uint32_t other = face_of_corner[first];
+        across[edge.corner] = other;
+        across[first] = f;
         if (other != f) components.unite(f, other);
       }
     }
@@ -424,6 +443,47 @@ void separate_side(const PlaneSet& set, PlaneRef cut, std::span<const PointDef> 
     whole_outer_shell.push_back(group_touched[g] ? no_index : input_shell_of(groups[g]));
   }
   const std::size_t piece_count = out.size() - first;
+  // Whether the piece of group g is convex, as solid_is_convex decides it on
+  // the extracted piece (which keeps the group's faces in order, each face's
+  // loops and corners in order, over the same points): each edge once, from
+  // the face that comes first, against the first vertex of the face across off
+  // its plane. The group is one edge-connected shell.
+  const auto group_convex = [&](const std::vector<std::uint32_t>& group) {
+    for (const std::uint32_t f : group) {
+      const SolidFace& face = faces.faces[f];
+      for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+        const SolidLoop& loop = faces.loops[l];
+        for (std::uint32_t c = loop.first_corner; c < loop.first_corner + loop.corner_count; ++c) {
+          const std::uint32_t g = across[c];
+          if (g == no_index) return false;
+          if (g < f) continue;
+          const SolidFace& other = faces.faces[g];
+          Sign s = Sign::zero;
+          for (std::uint32_t m = other.first_loop; m < other.first_loop + other.loop_count && s == Sign::zero; ++m) {
+            const SolidLoop& other_loop = faces.loops[m];
+            for (std::uint32_t k = 0; k < other_loop.corner_count && s == Sign::zero; ++k) {
+              const VertexIndex x = faces.corners[other_loop.first_corner + k].vertex;
+              s = outward_side(set, face, defs[x], approx[x]);
+            }
+          }
+          if (s == Sign::positive) return false;
+        }
+      }
+    }
+    return true;
+  };
+  // Decided on the group unless the piece was changed after extraction (chords'
+  // copies) or takes a cavity below (then it has two shells: not convex).
+  std::vector<std::uint8_t> decided(piece_count, 0);
+  if (chord_keys.empty()) {
+    for (std::size_t g = 0, k = 0; g < groups.size(); ++g) {
+      const bool is_piece =
+          group_touched[g] || shells.outer_of_shell[input_shell_of(groups[g])] == input_shell_of(groups[g]);
+      if (!is_piece) continue;
+      out[first + k].convex = group_convex(groups[g]);
+      decided[k++] = 1;
+    }
+  }
   for (std::size_t g = 0; g < groups.size(); ++g) {
     if (group_touched[g]) continue;
     const std::uint32_t shell = input_shell_of(groups[g]);
@@ -453,8 +513,11 @@ void separate_side(const PlaneSet& set, PlaneRef cut, std::span<const PointDef> 
       if (owner == out.size()) throw UnsupportedGeometryError("cannot place a cavity: no piece contains it");
     }
     absorb(out[owner], extract(defs, approx, faces, groups[g], local));
+    decided[owner - first] = 0;
   }
-  for (std::size_t k = first; k < out.size(); ++k) out[k].convex = solid_is_convex(set, out[k]);
+  for (std::size_t k = first; k < out.size(); ++k) {
+    if (!decided[k - first]) out[k].convex = solid_is_convex(set, out[k]);
+  }
 }
 
 // Whether segment u -> v starts into the interior of a cap region at u, where
@@ -537,7 +600,8 @@ SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, Surfac
   thread_local SplitSolid split;
   thread_local FaceSet below_cap, above_cap, side;
   SolidCut result;
-  split_solid(set, solid, cut, split);
+  split_solid(set, solid, cut, split,
+              sides == CutSides::both ? SplitSides::both : sides == CutSides::below ? SplitSides::below : SplitSides::above);
   if (split.plane_misses) {
     result.plane_missed = true;
     result.all_below = split.all_below;
@@ -546,6 +610,19 @@ SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, Surfac
   make_caps(set, cut, split.defs, split.approx, split.border, solid.convex, cap_surface, below_cap, above_cap);
   result.cap_faces = below_cap.faces.size();
   result.cap_loops = below_cap.loops.size();
+  if (split.other_side_partial) {
+    // One side, and no vertex of the solid on the plane: no edge of the surface
+    // lies on the cut but the border edges, so there is no chord (find_chords
+    // would find none), and the kept side's faces take its cap in place, not
+    // copied again; the same faces in the same order as below.
+    const bool below = sides == CutSides::below;
+    FaceSet& kept = below ? split.below : split.above;
+    const std::size_t first_cap = kept.faces.size();
+    append_faces(below ? below_cap : above_cap, kept);
+    separate_side(set, cut, split.defs, split.approx, kept, first_cap, solid.convex, shells, {},
+                  below ? result.below : result.above);
+    return result;
+  }
   thread_local Chords chords;
   find_chords(set, cut, split, below_cap, chords);
   if (!chords.empty()) {

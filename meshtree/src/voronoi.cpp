@@ -252,6 +252,24 @@ void clip(const PlaneSet& set, const InputShells& shells, std::vector<Solid>& pi
   pieces = std::move(kept);
 }
 
+// The same for pieces that stay as they are (shared with another group or cell):
+// the kept pieces, a piece the plane misses copied.
+std::vector<Solid> clipped(const PlaneSet& set, const InputShells& shells, const std::vector<Solid>& pieces,
+                           std::uint32_t plane, bool keep_below) {
+  std::vector<Solid> kept;
+  kept.reserve(pieces.size());
+  for (const Solid& piece : pieces) {
+    SolidCut cut =
+        cut_solid(set, piece, PlaneRef::cut(plane), plane + 1, shells, keep_below ? CutSides::below : CutSides::above);
+    if (cut.plane_missed) {
+      if (cut.all_below == keep_below) kept.push_back(piece);
+      continue;
+    }
+    for (Solid& side : keep_below ? cut.below : cut.above) kept.push_back(std::move(side));
+  }
+  return kept;
+}
+
 struct Group {
   std::uint32_t begin = 0, end = 0;  // into the site order
   std::int32_t left = -1, right = -1;
@@ -295,8 +313,8 @@ class VoronoiCutter {
   std::vector<std::vector<Solid>> run(const PlaneSet& set) {
     set_ = &set;
     if (!groups_.empty()) {
-      std::vector<Solid> whole{input_.solid};
-      process(0, std::move(whole), groups_[0].box);
+      const std::vector<Solid> whole{input_.solid};
+      process(0, whole, groups_[0].box);
     }
     return std::move(pieces_);
   }
@@ -329,14 +347,26 @@ class VoronoiCutter {
     return index;
   }
 
-  void process(std::uint32_t g, std::vector<Solid> pieces, const Box& parent_box) {
+  // Group g's container: `parent` (its parent group's container, shared with the
+  // sibling, so read, not copied) cut by the planes of the group's box that are
+  // inside the parent's box.
+  void process(std::uint32_t g, const std::vector<Solid>& parent, const Box& parent_box) {
     const Group& group = groups_[g];
-    for (int a = 0; a < 3 && !pieces.empty(); ++a) {
-      if (axis_of(group.box.lo, a) > axis_of(parent_box.lo, a)) clip(*set_, input_.shells, pieces, box_base_ + 6 * g + 2 * a, true);
-      if (!pieces.empty() && axis_of(group.box.hi, a) < axis_of(parent_box.hi, a)) {
-        clip(*set_, input_.shells, pieces, box_base_ + 6 * g + 2 * a + 1, true);
+    std::vector<Solid> pieces;
+    bool cut = false;
+    const auto cut_by = [&](std::uint32_t plane) {
+      if (!cut) {
+        pieces = clipped(*set_, input_.shells, parent, plane, true);
+        cut = true;
+      } else if (!pieces.empty()) {
+        clip(*set_, input_.shells, pieces, plane, true);
       }
+    };
+    for (int a = 0; a < 3; ++a) {
+      if (axis_of(group.box.lo, a) > axis_of(parent_box.lo, a)) cut_by(box_base_ + 6 * g + 2 * a);
+      if (axis_of(group.box.hi, a) < axis_of(parent_box.hi, a)) cut_by(box_base_ + 6 * g + 2 * a + 1);
     }
+    if (!cut) pieces = parent;
     if (group.left < 0) {
       for (std::uint32_t i = group.begin; i < group.end; ++i) {
         const std::uint32_t site = order_[i];
@@ -351,18 +381,19 @@ class VoronoiCutter {
       }
       return;
     }
-    std::vector<Solid> copy = pieces;
-    tbb::parallel_invoke([&] { process(static_cast<std::uint32_t>(group.left), std::move(copy), group.box); },
-                         [&] { process(static_cast<std::uint32_t>(group.right), std::move(pieces), group.box); });
+    tbb::parallel_invoke([&] { process(static_cast<std::uint32_t>(group.left), pieces, group.box); },
+                         [&] { process(static_cast<std::uint32_t>(group.right), pieces, group.box); });
   }
 
   // The site's part of `container`: cut by its bisectors, nearest neighbour first
   // (the pieces shrink fastest), keeping the site's side.
+  // The first cut reads the container, which the group's other cells share.
   std::vector<Solid> cell(std::uint32_t site, const std::vector<Solid>& container) const {
-    std::vector<Solid> pieces = container;
-    for (const std::uint32_t plane : bisectors_of_[site]) {
-      if (pieces.empty()) break;
-      clip(*set_, input_.shells, pieces, plane, plane_pairs_[plane][0] == site);
+    const std::vector<std::uint32_t>& planes = bisectors_of_[site];
+    if (planes.empty()) return container;
+    std::vector<Solid> pieces = clipped(*set_, input_.shells, container, planes[0], plane_pairs_[planes[0]][0] == site);
+    for (std::size_t k = 1; k < planes.size() && !pieces.empty(); ++k) {
+      clip(*set_, input_.shells, pieces, planes[k], plane_pairs_[planes[k]][0] == site);
     }
     return pieces;
   }

@@ -16,26 +16,28 @@ bool both_zero(Sign a, Sign b) { return a == Sign::zero && b == Sign::zero; }
 // from it to the next augmented corner lies on `line`.
 class Splitter {
  public:
-  Splitter(const PlaneSet& set, const Solid& solid, PlaneRef cut, SplitSolid& out)
-      : set_(set), solid_(solid), cut_(cut), out_(out) {}
+  Splitter(const PlaneSet& set, const Solid& solid, PlaneRef cut, SplitSolid& out, SplitSides sides)
+      : set_(set), solid_(solid), cut_(cut), out_(out), sides_(sides) {}
 
   void run() {
     const std::size_t n = solid_.defs.size();
     out_.defs.assign(solid_.defs.begin(), solid_.defs.end());
     out_.approx.assign(solid_.approx.begin(), solid_.approx.end());
     out_.sides.resize(n);
-    bool any_below = false, any_above = false;
+    bool any_below = false, any_above = false, any_on = false;
     for (std::size_t v = 0; v < n; ++v) {
       const Sign s = side(set_, cut_, out_.defs[v], out_.approx[v]);
       out_.sides[v] = s;
       any_below |= s == Sign::negative;
       any_above |= s == Sign::positive;
+      any_on |= s == Sign::zero;
     }
     out_.below.clear();
     out_.above.clear();
     out_.border.clear();
     out_.plane_misses = !(any_below && any_above);
     out_.all_below = !any_above;
+    out_.other_side_partial = sides_ != SplitSides::both && !any_on;
     if (out_.plane_misses) return;
     out_.new_vertex_of_edge.reset(solid_.corners.size() / 4 + 8);
     zero_edges_below_.clear();
@@ -110,9 +112,10 @@ class Splitter {
       if (face.reversed) facing = flip(facing);
       copy_face(face, facing == Sign::positive ? out_.below : out_.above, facing == Sign::positive);
     } else if (!any_below) {
-      copy_face(face, out_.above, false);
+      // No vertex on the plane: the face has no edge there, so no border edge.
+      if (!(out_.other_side_partial && sides_ == SplitSides::below)) copy_face(face, out_.above, false);
     } else if (!any_above) {
-      copy_face(face, out_.below, true);
+      if (!(out_.other_side_partial && sides_ == SplitSides::above)) copy_face(face, out_.below, true);
     } else if (face.convex) {
       augment(face);
       emit_convex_part(face, Sign::negative, out_.below, true);
@@ -342,6 +345,7 @@ class Splitter {
   const Solid& solid_;
   PlaneRef cut_;
   SplitSolid& out_;
+  SplitSides sides_;
 
   std::vector<SolidCorner> augmented_;     // the face's corners with crossings inserted
   std::vector<SolidLoop> augmented_loops_;  // the face's loops over augmented_
@@ -354,8 +358,8 @@ class Splitter {
 
 }  // namespace
 
-void split_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, SplitSolid& out) {
-  Splitter(set, solid, cut, out).run();
+void split_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, SplitSolid& out, SplitSides sides) {
+  Splitter(set, solid, cut, out, sides).run();
 }
 
 }  // namespace shatter

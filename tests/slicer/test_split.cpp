@@ -25,6 +25,7 @@
 #include "shatter/kernel/solid.hpp"
 #include "shatter/cut/cut_solid.hpp"
 #include "shatter/cut/plane_input.hpp"
+#include "shatter/slicer/split.hpp"
 #include "support/checks.hpp"
 #include "support/sanitizers.hpp"
 #include "shatter/generators/corpus.hpp"
@@ -362,4 +363,135 @@ TEST_CASE("degenerate planes: every vertex, edge and face of the lattice solids"
   // pinching planes of 13,519 cuts before points where a piece touches itself were separated and
   // caps split along concave edges across them).
   check_degenerate_planes(1, 0);
+}
+
+namespace {
+
+bool same_faces(const FaceSet& a, const FaceSet& b) {
+  if (a.faces.size() != b.faces.size() || a.loops.size() != b.loops.size() || a.corners.size() != b.corners.size()) {
+    return false;
+  }
+  for (std::size_t f = 0; f < a.faces.size(); ++f) {
+    const SolidFace &p = a.faces[f], &q = b.faces[f];
+    if (p.plane != q.plane || p.reversed != q.reversed || p.convex != q.convex || p.surface != q.surface ||
+        p.source != q.source || p.first_loop != q.first_loop || p.loop_count != q.loop_count) {
+      return false;
+    }
+  }
+  for (std::size_t l = 0; l < a.loops.size(); ++l) {
+    if (a.loops[l].first_corner != b.loops[l].first_corner || a.loops[l].corner_count != b.loops[l].corner_count) return false;
+  }
+  for (std::size_t c = 0; c < a.corners.size(); ++c) {
+    if (a.corners[c].vertex != b.corners[c].vertex || !(a.corners[c].line == b.corners[c].line)) return false;
+  }
+  return true;
+}
+
+bool same_border(const std::vector<LoopEdge>& a, const std::vector<LoopEdge>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].from != b[i].from || a[i].to != b[i].to || !(a[i].line == b[i].line)) return false;
+  }
+  return true;
+}
+
+// The one-sided cut (CutSides below or above, which leaves out the faces lying
+// whole on the other side when no vertex is on the plane: split_solid's
+// SplitSides) against the full cut, on one piece and one plane: the split's kept
+// side, border, new vertices and sides, and the cut's pieces, field by field.
+// Returns whether the split left the other side's whole faces out.
+bool check_one_side(const PlaneSet& set, const Solid& solid, PlaneRef plane, const InputShells& shells) {
+  SplitSolid full, alone;
+  split_solid(set, solid, plane, full);
+  CHECK_FALSE(full.other_side_partial);
+  const SolidCut both = cut_solid(set, solid, plane, 7, shells);
+  bool partial = false;
+  for (const bool below : {true, false}) {
+    split_solid(set, solid, plane, alone, below ? SplitSides::below : SplitSides::above);
+    CHECK(alone.plane_misses == full.plane_misses);
+    CHECK(alone.all_below == full.all_below);
+    const bool any_on = std::find(full.sides.begin(), full.sides.begin() + static_cast<std::ptrdiff_t>(solid.vertex_count()),
+                                  Sign::zero) != full.sides.begin() + static_cast<std::ptrdiff_t>(solid.vertex_count());
+    CHECK(alone.other_side_partial == !any_on);
+    partial = partial || (alone.other_side_partial && !alone.plane_misses);
+    if (!full.plane_misses) {
+      CHECK(alone.defs == full.defs);
+      CHECK(alone.sides == full.sides);
+      CHECK(same_border(alone.border, full.border));
+      CHECK(same_faces(below ? alone.below : alone.above, below ? full.below : full.above));
+      if (!alone.other_side_partial) CHECK(same_faces(below ? alone.above : alone.below, below ? full.above : full.below));
+    }
+    const SolidCut one = cut_solid(set, solid, plane, 7, shells, below ? CutSides::below : CutSides::above);
+    CHECK(one.plane_missed == both.plane_missed);
+    CHECK(one.all_below == both.all_below);
+    CHECK(one.cap_faces == both.cap_faces);
+    CHECK(one.cap_loops == both.cap_loops);
+    CHECK((below ? one.above : one.below).empty());
+    CHECK(same_solids(below ? one.below : one.above, below ? both.below : both.above));
+  }
+  // The pieces' convexity, decided while separating them, is solid_is_convex's.
+  for (const auto* side_solids : {&both.below, &both.above}) {
+    for (const Solid& piece : *side_solids) CHECK(piece.convex == solid_is_convex(set, piece));
+  }
+  return partial;
+}
+
+}  // namespace
+
+// What a Voronoi cell's cuts do (meshtree/voronoi.cpp): chains of one-sided cuts,
+// each keeping one side, from the whole solid down to small convex pieces, by
+// random planes near the piece's vertex average and, every third cut, by an axis
+// plane through one of its input vertices (vertices on the plane: the full
+// split). Each cut is the full cut's side exactly.
+TEST_CASE("one side alone is that side of the full cut exactly, the other side's whole faces left out",
+          "[plane][cut]") {
+  std::vector<NamedMesh> meshes = generated_meshes();
+  for (const char* file : {"cube.off", "knot1.off", "fandisk.off", "elephant.off"}) {
+    meshes.push_back({file, read_mesh(mesh_dir() / file)});
+  }
+  meshes.push_back({"staircase", staircase(4)});
+  meshes.push_back({"grid-box", grid_box({0, 0, 0}, {4, 4, 4}, 4)});
+  std::size_t partial = 0, full = 0, convex_pieces = 0;
+  for (const NamedMesh& m : meshes) {
+    const PlaneInput input = prepare_plane_input(m.mesh);
+    for (const std::uint64_t seed : {1u, 2u, 3u}) {
+      INFO(m.name << " seed " << seed);
+      Random random(seed);
+      std::vector<Plane> cuts;
+      Solid piece = input.solid;
+      for (int k = 0; k < 24; ++k) {
+        Vec3 centre;
+        for (const ApproxPoint& a : piece.approx) {
+          centre = centre + Vec3{a.x.value / a.w.value, a.y.value / a.w.value, a.z.value / a.w.value};
+        }
+        centre = centre * (1.0 / static_cast<double>(piece.approx.size()));
+        std::uint32_t input_vertex = no_index;
+        for (std::size_t v = 0; v < piece.vertex_count() && input_vertex == no_index; ++v) {
+          const std::size_t at = (v + static_cast<std::size_t>(random.index(piece.vertex_count()))) % piece.vertex_count();
+          if (piece.defs[at].kind == PointKind::input) input_vertex = piece.defs[at].a;
+        }
+        if (k % 3 == 2 && input_vertex != no_index) {
+          cuts.push_back(axis_plane_through(m.mesh.positions[input_vertex], k % 3));
+        } else {
+          const Vec3 normal = random.direction();
+          cuts.push_back({normal, -dot(normal, centre + random.direction() * 1e-3)});
+        }
+        const PlaneSet set = input.geometry.plane_set(cuts);
+        const PlaneRef plane = PlaneRef::cut(static_cast<std::uint32_t>(cuts.size() - 1));
+        (check_one_side(set, piece, plane, input.shells) ? partial : full) += 1;
+        const bool below = random.index(2) == 0;
+        SolidCut cut = cut_solid(set, piece, plane, 7, input.shells, below ? CutSides::below : CutSides::above);
+        std::vector<Solid>& kept = below ? cut.below : cut.above;
+        if (cut.plane_missed || kept.empty()) continue;
+        piece = std::move(kept.front());
+        REQUIRE(check_solid(set, piece) == "");
+        convex_pieces += piece.convex;
+      }
+    }
+  }
+  INFO(partial << " cuts left the other side's faces out, " << full << " made both sides, " << convex_pieces
+               << " convex pieces kept");
+  CHECK(partial > 200);
+  CHECK(full > 50);
+  CHECK(convex_pieces > 50);
 }

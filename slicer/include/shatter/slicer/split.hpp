@@ -17,12 +17,16 @@
 //   (it is then the lid of the solid below), above otherwise. An edge along the
 //   plane is a border edge exactly when its two faces went to different sides.
 
+#include <cstdint>
 #include <vector>
 
 #include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/solid.hpp"
 
 namespace shatter {
+
+/// Which sides of a split split_solid must give in full.
+enum class SplitSides : std::uint8_t { both, below, above };
 
 /// The result of split_solid. Reused between calls to spare allocations.
 struct SplitSolid {
@@ -41,6 +45,11 @@ struct SplitSolid {
   /// or only touches the solid, which then lies whole on the other side.
   bool plane_misses = false;
   bool all_below = false;  ///< with plane_misses: the side the solid lies on
+  /// True when split_solid left out the faces of the side it was not asked for
+  /// that lie whole on that side (SplitSides below or above, and no vertex of
+  /// the solid on the plane): that side's FaceSet then holds only the parts of
+  /// the faces the plane crosses.
+  bool other_side_partial = false;
 
   // Work space.
   IndexMap new_vertex_of_edge;
@@ -59,6 +68,13 @@ struct SplitSolid {
 /// crossing the plane at k points when it is not convex. Throws
 /// UnsupportedGeometryError when a face part's hole cannot be placed (a face whose
 /// loops touch at every vertex of a hole; not made by cuts of a valid solid).
-void split_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, SplitSolid& out);
+/// `sides`: with below or above, when no vertex of the solid lies on the plane,
+/// the faces lying whole on the other side are not copied (other_side_partial):
+/// for a caller that keeps one side. Everything else is as with both, bit for
+/// bit (the kept side, `border`, the new vertices and their numbers): such faces
+/// hold no edge on the plane, so they add no border edge. With a vertex on the
+/// plane both sides are made in full (the chords of a cut need both).
+void split_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, SplitSolid& out,
+                 SplitSides sides = SplitSides::both);
 
 }  // namespace shatter
