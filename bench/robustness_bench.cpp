@@ -54,7 +54,9 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <array>
+#include <charconv>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -274,6 +276,35 @@ constexpr std::array<Tool, 5> all_tools = {Tool{"shatter", &cut_with_shatter},
                                            Tool{"cgal-epeck", &cut_with_cgal<CGAL::Epeck>},
                                            Tool{"seed", &cut_with_seed}, Tool{"manifold", nullptr}};
 
+// Where a refused cut is written as a reproducer (--refusal-reproducers), and
+// the case it belongs to; empty for none.
+struct RefusalSink {
+  fs::path dir;
+  std::uint64_t id = 0;
+  std::string kind, mesh;
+};
+RefusalSink refusal_sink;
+
+// The piece a tool refused and the plane it refused it for, as a
+// tests/regressions reproducer (a slice of that piece as written, the seed line
+// naming the corpus case), so that a refusal in a chain can be replayed alone.
+void write_refusal_reproducer(const Tool& tool, const Mesh& piece, const Plane& plane, const std::string& why) {
+  const auto hex = [](double v) {  // as the reproducer reader parses it (std::chars_format::hex)
+    char text[64];
+    return std::string(text, std::to_chars(text, text + sizeof text, v, std::chars_format::hex).ptr);
+  };
+  std::ostringstream out;
+  out << "shatter-reproducer 1\n# replay: shatter-fuzz --replay <this file>\nclass " << refusal_sink.kind
+      << "\nmesh-name " << refusal_sink.mesh << "-chain-piece\noperation slice\nformat off\nseed " << refusal_sink.id
+      << "\nfailure (before the fix) " << why.substr(0, why.find('\n')) << "\nplane " << hex(plane.normal.x) << ' '
+      << hex(plane.normal.y) << ' ' << hex(plane.normal.z) << ' ' << hex(plane.offset) << "\n";
+  const std::string mesh = write_mesh_to_bytes(piece, MeshFormat::obj);
+  out << "mesh-obj " << mesh.size() << "\n" << mesh;
+  fs::create_directories(refusal_sink.dir);
+  write_file_atomically(refusal_sink.dir / (std::string(tool.name) + "-corpus-" + std::to_string(refusal_sink.id) + ".repro"),
+                        out.str());
+}
+
 // The whole chain in this process: every cut judged as written.
 ToolResult run_chain(const Tool& tool, const Mesh& input, const std::vector<Plane>& planes) {
   ToolResult result;
@@ -283,7 +314,13 @@ ToolResult run_chain(const Tool& tool, const Mesh& input, const std::vector<Plan
     for (const Plane& plane : planes) {
       std::vector<Mesh> next;
       for (const Mesh& piece : pieces) {
-        SidedPieces cut = tool.cut(piece, plane);
+        SidedPieces cut;
+        try {
+          cut = tool.cut(piece, plane);
+        } catch (const std::exception& e) {
+          if (!refusal_sink.dir.empty()) write_refusal_reproducer(tool, piece, plane, e.what());
+          throw;
+        }
         if (!accept_cut(piece, plane, cut, next, result)) return result;
       }
       pieces = std::move(next);
@@ -552,7 +589,8 @@ class ManifoldWorker {
 };
 
 int run(const fs::path& corpus, const std::vector<std::string>& tool_names, double timeout, std::size_t max_cases,
-        const std::string& csv_path, const std::string& node, const std::string& manifold_script) {
+        const std::string& csv_path, const std::string& node, const std::string& manifold_script,
+        const std::vector<std::uint64_t>& only_ids) {
   std::ifstream in(corpus / "manifest.json");
   if (!in) throw IoError("cannot read " + (corpus / "manifest.json").string() + " (make one with shatter-fuzz --export-corpus)");
   const nlohmann::json manifest = nlohmann::json::parse(in);
@@ -579,6 +617,10 @@ int run(const fs::path& corpus, const std::vector<std::string>& tool_names, doub
   std::size_t cases = 0;
   for (const nlohmann::json& entry : manifest["cases"]) {
     if (entry["operation"] != "slice") continue;
+    if (!only_ids.empty() &&
+        std::find(only_ids.begin(), only_ids.end(), entry["id"].get<std::uint64_t>()) == only_ids.end()) {
+      continue;
+    }
     if (max_cases != 0 && cases == max_cases) break;
     ++cases;
     const Mesh mesh = read_mesh(corpus / entry["mesh"].get<std::string>());
@@ -589,6 +631,9 @@ int run(const fs::path& corpus, const std::vector<std::string>& tool_names, doub
       planes.push_back({{v[0], v[1], v[2]}, v[3]});
     }
     const std::string kind = entry["class"];
+    refusal_sink.id = entry["id"].get<std::uint64_t>();
+    refusal_sink.kind = kind;
+    refusal_sink.mesh = fs::path(entry["mesh"].get<std::string>()).stem().string();
     auto& row = tally[kind];
     row.resize(tools.size());
     for (std::size_t t = 0; t < tools.size(); ++t) {
@@ -653,9 +698,17 @@ int main(int argc, char** argv) {
   app.add_option("--timeout", timeout, "Seconds one tool may spend on one case (default 20)")->check(CLI::PositiveNumber);
   app.add_option("--max-cases", max_cases, "Stop after this many slice cases (default 0: all)");
   app.add_option("--csv", csv, "Also write one CSV row per case and tool to this file");
+  std::vector<std::uint64_t> only_ids;
+  app.add_option("--ids", only_ids, "Run only the slice cases with these ids (comma-separated; default all)")
+      ->delimiter(',');
+  std::string refusal_dir;
+  app.add_option("--refusal-reproducers", refusal_dir,
+                 "Write the piece and plane of each refused cut into this folder as a tests/regressions reproducer "
+                 "(TOOL-corpus-ID.repro: a slice of that piece as written)");
   CLI11_PARSE(app, argc, argv);
+  shatter::bench::refusal_sink.dir = refusal_dir;
   try {
-    return shatter::bench::run(corpus, tools, timeout, max_cases, csv, node, manifold_script);
+    return shatter::bench::run(corpus, tools, timeout, max_cases, csv, node, manifold_script, only_ids);
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;

@@ -845,12 +845,18 @@ struct RoundingReach {
 // before any merge, mapped through `home`). Decided by index; changes no
 // position. `thin_only`: merge only pairs whose wedge is thin by its corners
 // (within_rounding_reach), so that no fold that needs a wider merge drags a
-// thick wedge along. Returns how many faces were merged (each group counts its
-// members).
+// thick wedge along. `apart_too` (with `thin_only`): pairs whose loops share no
+// edge are merged as well when thin: a slab thinner than the rounding between a
+// cap and a face inside it (a cavity's face ulps from the cap's plane) rounds
+// into a fold that touches no edge of the cap; as 2-chains on the cap's plane
+// the face's loops, run the other way, add a hole to the cap, through which the
+// cavity opens (the slab vanishes). Returns how many faces were merged (each
+// group counts its members).
 std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::span<const Vec3> positions,
                         std::vector<std::vector<std::vector<VertexIndex>>>& loops, std::vector<std::uint8_t>& changed,
                         std::vector<std::uint32_t>& emit_as, std::vector<std::uint32_t>& home,
-                        std::span<const std::pair<std::uint32_t, std::uint32_t>> folds, bool thin_only) {
+                        std::span<const std::pair<std::uint32_t, std::uint32_t>> folds, bool thin_only,
+                        bool apart_too = false) {
   const auto count = static_cast<std::uint32_t>(loops.size());
   std::unordered_map<std::uint64_t, std::uint32_t> face_of_edge;
   const auto key = [](VertexIndex a, VertexIndex b) { return (std::uint64_t{a} << 32) | b; };
@@ -876,7 +882,7 @@ std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::spa
     if (f >= count || g >= count) continue;
     const std::uint32_t hf = home[f], hg = home[g];
     if (hf == no_index || hg == no_index || hf == hg || groups.find(hf) == groups.find(hg)) continue;
-    if (!share_edge(hf, hg)) continue;
+    if (!(apart_too && thin_only) && !share_edge(hf, hg)) continue;
     // Facing opposite ways (their outward normals' dot product negative,
     // exactly): the solid lies between them, in the wedge. Two faces facing one
     // way crowd an edge only beside such a wedge; merging them would fill
@@ -914,7 +920,8 @@ std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::spa
 // routed through crossed corners, faces rounded onto one plane merged).
 // `folds`: pairs of faces rounding folded against each other, merged
 // (merge_folded_faces, only with `route_crossed`; `thin_folds_only` as there);
-// `folded` receives how many faces that merged. `face_of_triangle`: when given,
+// `folded` receives how many faces that merged; `folds_apart_too`: as
+// merge_folded_faces' `apart_too`. `face_of_triangle`: when given,
 // the face (loop index) each triangle of `mesh` came from, in order.
 void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options, std::size_t attempt,
                  Mesh& mesh, std::size_t& merged, std::vector<VertexIndex>* mesh_vertex_of = nullptr,
@@ -922,7 +929,7 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
                  std::span<const std::pair<std::uint32_t, std::uint32_t>> folds = {},
                  std::vector<std::uint32_t>* face_of_triangle = nullptr, std::size_t* folded = nullptr,
                  bool thin_folds_only = false, std::span<const VertexIndex> snapped_to = {},
-                 const mpq_class* snap_within = nullptr) {
+                 const mpq_class* snap_within = nullptr, bool folds_apart_too = false) {
   const std::size_t n = solid.defs.size();
   thread_local std::vector<Vec3> positions;
   thread_local std::vector<PointDef> placed;
@@ -1031,7 +1038,8 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
       merge_coplanar_sheets(set, solid, positions, repaired, repaired_changed, emit_as, home);
       if (!folds.empty()) {
         const std::size_t count =
-            merge_folded_faces(set, solid, positions, repaired, repaired_changed, emit_as, home, folds, thin_folds_only);
+            merge_folded_faces(set, solid, positions, repaired, repaired_changed, emit_as, home, folds, thin_folds_only,
+                               folds_apart_too);
         if (folded != nullptr) *folded = count;
       }
     }
@@ -1917,13 +1925,26 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
   // 2^24: measured on the robustness corpus, 2026-12-03.)
   constexpr std::array<int, 6> snap_levels{1, 3, 6, 10, 16, 24};
   constexpr std::size_t snap_retries = 2, snap_steps = (attempts - 1) * snap_retries;
-  constexpr std::size_t all_steps = steps + snap_levels.size() * snap_steps;
+  // After it, tried only when every round above has failed (so that no piece
+  // written before it existed is written differently; a piece that vanished
+  // whole may now be written instead, when this certifies it), the folding round's
+  // thin phase again with pairs of faces whose loops share no edge merged too
+  // (merge_folded_faces' `apart_too`): a slab thinner than the rounding between
+  // a cap and a face it passes ulps from (a cavity's face in a plane that holds
+  // it up to rounding: issue 17's hollow-egg, corpus case 933) folds where no
+  // edge of the cap is near; the face's loops become a hole of the cap and the
+  // slab vanishes. Why it ends and why what it writes is valid: as the folding
+  // round (a fixed number of retries, each a finite pass; certified, and the
+  // volume moved held to the rounding's bound).
+  constexpr std::size_t snap_end = steps + snap_levels.size() * snap_steps;
+  constexpr std::size_t all_steps = snap_end + fold_steps;
   std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts> snap_folds;
   std::array<bool, attempts> snap_stalled{};
   std::vector<VertexIndex> snapped_to;
   mpq_class snap_pixel;
-  std::array<std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts>, 3> fold_pairs;
-  std::array<std::array<bool, attempts>, 3> fold_stalled{};
+  // Per phase of the folding round (0 to 2) and the round of pairs apart (3).
+  std::array<std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, attempts>, 4> fold_pairs;
+  std::array<std::array<bool, attempts>, 4> fold_stalled{};
   std::optional<RoundingReach> reach;
   std::vector<Vec3> output_positions;
   std::vector<std::uint32_t> face_of_triangle;
@@ -1935,13 +1956,15 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     return *thin_whole;
   };
   for (std::size_t step = 0; step < all_steps; ++step) {
-    const bool snapping = step >= steps;
-    const bool folding = step >= plain_steps && !snapping;
-    const std::size_t phase = folding ? (step - plain_steps) / fold_steps : 0;
+    const bool apart = step >= snap_end;
+    const bool snapping = step >= steps && !apart;
+    const bool folding = (step >= plain_steps && !snapping) || apart;
+    const std::size_t phase = apart ? 3 : folding ? (step - plain_steps) / fold_steps : 0;
     const bool thin_only = phase != 1 && !snapping;
     const bool inserting = folding && phase == 2;
     const std::size_t snap_retry = snapping ? (step - steps) % snap_retries : 0;
-    const std::size_t attempt = snapping  ? 1 + (step - steps) % snap_steps / snap_retries
+    const std::size_t attempt = snapping ? 1 + (step - steps) % snap_steps / snap_retries
+                                : apart  ? 1 + (step - snap_end) / fold_retries
                                 : folding ? 1 + (step - plain_steps) % fold_steps / fold_retries
                                           : step % attempts;
     if (snapping && attempt == 1 && snap_retry == 0) {
@@ -1979,7 +2002,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
                            : std::span<const std::pair<std::uint32_t, std::uint32_t>>(),
                 untangle_edges ? &face_of_triangle : nullptr, &folded_faces, thin_only,
                 snapping ? std::span<const VertexIndex>(snapped_to) : std::span<const VertexIndex>(),
-                snapping ? &snap_pixel : nullptr);
+                snapping ? &snap_pixel : nullptr, apart);
     std::size_t inserted = 0;
     if (inserting) {
       if (!reach) {
@@ -2059,7 +2082,7 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
     if (untangle_edges && attempt > 0 && !snapping && !report.valid() && !mesh.triangles.empty()) {
       const std::size_t before = folds[attempt].size();
       add_folded_face_pairs(mesh, face_of_triangle, folds[attempt]);
-      if (!folding) fold_pairs[1][attempt] = fold_pairs[2][attempt] = folds[attempt];
+      if (!folding) fold_pairs[1][attempt] = fold_pairs[2][attempt] = fold_pairs[3][attempt] = folds[attempt];
       if (folding && folds[attempt].size() == before) folds_stalled[attempt] = true;
     }
     if (report.valid()) {

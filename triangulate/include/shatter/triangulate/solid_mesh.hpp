@@ -39,7 +39,9 @@
 //    finds folded; then a rounded vertex that crossed a face within rounding's
 //    reach of its plane is inserted into the triangle it crossed, as 3D snap
 //    rounding inserts a hot pixel (while the volume moved stays within its
-//    bound). A piece that still fails and whose volume is
+//    bound); last, a face folded against a cap it shares no edge with, all
+//    within rounding's reach of the cap's plane (a cavity's face ulps from it),
+//    becomes a hole of the cap. A piece that still fails and whose volume is
 //    within what rounding its vertices can move vanishes whole. What cannot be
 //    repaired is reported, never written as valid.
 
@@ -134,7 +136,8 @@ struct RoundedSolid {
   /// (a part thinner than the rounding, flattened into a two-sided sheet).
   std::size_t vanished_triangles = 0;
   /// Faces merged into each other because rounding folded them against each other
-  /// (a wedge thinner than the rounding turned inside out; see round_solid).
+  /// (a wedge thinner than the rounding turned inside out, or a slab between a
+  /// cap and a face ulps from its plane; see round_solid).
   std::size_t folded_faces = 0;
   /// Rounded vertices inserted into a triangle of a face they crossed within
   /// rounding's reach of its plane (3D snap rounding's hot pixels; see round_solid).
@@ -218,6 +221,14 @@ struct RoundedSolid {
 /// volume moved, measured exactly against the exact piece (the signed volume
 /// difference), is within what rounding the piece's vertices can move (the sweep
 /// below), as for folds merged.
+/// After it, the thin pairs of folded faces are merged once more with pairs
+/// whose loops share no edge among them, when one face's corners all lie within
+/// the reach above of the other's plane: a slab thinner than the rounding
+/// between a cap and a face it passes ulps from (a cavity's face in a plane that
+/// holds it up to rounding) folds where no edge of the cap is near; the face's
+/// loops, run the other way, become a hole of the cap, the slab vanishes and the
+/// cavity opens through it (`folded_faces`; held to the same certificate and
+/// volume bound).
 /// A part thinner than the rounding that rounds flat (its triangles laid over each
 /// other once each way) vanishes into its neighbour (`vanished_triangles`); a piece
 /// that rounds flat whole, or that cannot be certified while its exact volume is
@@ -237,7 +248,7 @@ struct RoundedSolid {
 /// through it, merges of folded faces only remove loops, a hot pixel splits a
 /// triangle once per step, over a fixed set of four attempts, each tried again
 /// untangling edges, and three of them at most six times in each of three
-/// phases of folds and of six pixel sizes: a finite ladder of steps, each a
+/// phases of folds, of six pixel sizes and of the pairs apart: a finite ladder of steps, each a
 /// finite pass); deterministic. Failure: neither
 /// valid nor collapsed, `defect` names what the first rounding broke.
 RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options = {});
