@@ -28,7 +28,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <ranges>
 #include <span>
 #include <stdexcept>
 #include <vector>
@@ -135,7 +134,14 @@ class PlaneBonds {
         if (leaf + 1 != node.first_leaf + node.leaf_count) break;
         if (open.size() <= node.depth) continue;
         std::vector<FaceRef>& refs = open[node.depth];
-        if (refs.size() >= 2) run_cut(a, refs, bonds);
+        if (refs.size() >= 2) {
+          run_cut(
+              a,
+              [&](const auto& visit) {
+                for (const FaceRef& ref : refs) visit(ref);
+              },
+              bonds);
+        }
         refs.clear();
       }
     }
@@ -171,7 +177,12 @@ class PlaneBonds {
     for (std::uint32_t k = 0; k < tree_.cut_planes.size(); ++k) {
       if (start_[k + 1] - start_[k] < 2) continue;
       const std::span<const std::uint32_t> order(order_.data() + start_[k], start_[k + 1] - start_[k]);
-      run_cut(k, order | std::views::transform([this](std::uint32_t r) -> const FaceRef& { return refs_[r]; }), bonds);
+      run_cut(
+          k,
+          [&](const auto& visit) {
+            for (const std::uint32_t r : order) visit(refs_[r]);
+          },
+          bonds);
     }
     sort_bonds(bonds);
   }
@@ -380,10 +391,12 @@ class PlaneBonds {
     return node;
   }
 
-  // The bonds of cut `k` between the leaves of `refs`, its cap faces in leaf
-  // order (a range of FaceRef).
-  template <class Record, class Refs>
-  void run_cut(std::uint32_t k, const Refs& refs, std::vector<Record>& bonds) {
+  // The bonds of cut `k` between the leaves of its cap faces, which
+  // `for_each_ref(visit)` hands to `visit` in leaf order (a callable, not a
+  // range view: clang 14, the sanitized build's compiler, rejects libstdc++
+  // 12's std::views::transform over a span).
+  template <class Record, class ForEachRef>
+  void run_cut(std::uint32_t k, const ForEachRef& for_each_ref, std::vector<Record>& bonds) {
     const Projection projection = projection_of(set_, PlaneRef::cut(k));
     axis_ = projection.axis;
     flipped_ = projection.flipped;
@@ -395,7 +408,7 @@ class PlaneBonds {
     points_.clear();
     measure_points_.clear();
     errors_.clear();
-    for (const FaceRef& ref : refs) add_face(ref);
+    for_each_ref([this](const FaceRef& ref) { add_face(ref); });
     const Plane& plane = tree_.cut_planes[k];
     const double n[3] = {plane.normal.x, plane.normal.y, plane.normal.z};
     area_scale_ = norm(plane.normal) / std::fabs(n[axis_]);
