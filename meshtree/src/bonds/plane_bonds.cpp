@@ -120,9 +120,8 @@ class PlaneBonds {
     for (LeafIndex leaf = 0; leaf < tree_.leaf_count(); ++leaf) {
       const Solid& solid = leaf_solid(leaf);
       for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
-        const SurfaceId surface = solid.faces[f].surface;
-        if (surface == original_surface || surface - 1 >= tree_.cut_planes.size()) continue;
-        const std::uint32_t cut = surface - 1;
+        const std::uint32_t cut = cut_of(solid.faces[f]);
+        if (cut == no_cut) continue;
         const MeshTreeNode& node = tree_.nodes[cut];
         if (node.is_leaf() || leaf < node.first_leaf || leaf - node.first_leaf >= node.leaf_count) continue;
         if (open.size() <= node.depth) open.resize(std::size_t{node.depth} + 1);
@@ -232,9 +231,8 @@ class PlaneBonds {
     for (LeafIndex leaf = 0; leaf < tree_.leaf_count(); ++leaf) {
       const Solid& solid = leaf_solid(leaf);
       for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
-        const SurfaceId surface = solid.faces[f].surface;
-        if (surface == original_surface || surface - 1 >= tree_.cut_planes.size()) continue;
-        const std::uint32_t cut = surface - 1;
+        const std::uint32_t cut = cut_of(solid.faces[f]);
+        if (cut == no_cut) continue;
         // A cell plane's faces lie on it (a cell tree's caps carry their plane's id).
         if (cut >= tree_.nodes.size()) {
           if (solid.faces[f].plane == PlaneRef::cut(cut)) refs_.push_back({cut, leaf, f});
@@ -293,6 +291,14 @@ class PlaneBonds {
     }
     cap.part_count = static_cast<std::uint32_t>(parts_.size()) - cap.first_part;
     faces_.push_back(cap);
+  }
+
+  // The cut plane (an index into tree_.cut_planes) a face of a leaf lies on, or
+  // no_cut for a face of the input's surface or of a surface the tree did not cut.
+  std::uint32_t cut_of(const SolidFace& face) const {
+    const SurfaceId surface = face.surface;
+    if (surface == original_surface || surface - 1 >= tree_.cut_planes.size()) return no_cut;
+    return surface - 1;
   }
 
   // The solid of `leaf`: its own, or unpacked into the cache's slot for it
@@ -569,6 +575,7 @@ class PlaneBonds {
     const Solid* solid = nullptr;
   };
   static constexpr LeafIndex no_leaf = ~LeafIndex{0};
+  static constexpr std::uint32_t no_cut = ~std::uint32_t{0};
   static constexpr std::size_t cache_slots = 256;
 
   const MeshTree& tree_;
