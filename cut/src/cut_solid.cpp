@@ -457,16 +457,10 @@ void separate_side(const PlaneSet& set, PlaneRef cut, std::span<const PointDef> 
           const std::uint32_t g = across[c];
           if (g == no_index) return false;
           if (g < f) continue;
-          const SolidFace& other = faces.faces[g];
-          Sign s = Sign::zero;
-          for (std::uint32_t m = other.first_loop; m < other.first_loop + other.loop_count && s == Sign::zero; ++m) {
-            const SolidLoop& other_loop = faces.loops[m];
-            for (std::uint32_t k = 0; k < other_loop.corner_count && s == Sign::zero; ++k) {
-              const VertexIndex x = faces.corners[other_loop.first_corner + k].vertex;
-              s = outward_side(set, face, defs[x], approx[x]);
-            }
+          if (outward_side_of_face(set, face, faces.faces[g], faces.loops, faces.corners, defs, approx) ==
+              Sign::positive) {
+            return false;
           }
-          if (s == Sign::positive) return false;
         }
       }
     }

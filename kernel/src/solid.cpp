@@ -242,6 +242,20 @@ Sign outward_side(const PlaneSet& set, const SolidFace& face, const PointDef& po
   return face.reversed ? flip(s) : s;
 }
 
+Sign outward_side_of_face(const PlaneSet& set, const SolidFace& face, const SolidFace& across,
+                          std::span<const SolidLoop> loops, std::span<const SolidCorner> corners,
+                          std::span<const PointDef> defs, std::span<const ApproxPoint> approx) {
+  for (std::uint32_t m = across.first_loop; m < across.first_loop + across.loop_count; ++m) {
+    const SolidLoop& loop = loops[m];
+    for (std::uint32_t k = 0; k < loop.corner_count; ++k) {
+      const VertexIndex x = corners[loop.first_corner + k].vertex;
+      const Sign s = outward_side(set, face, defs[x], approx[x]);
+      if (s != Sign::zero) return s;
+    }
+  }
+  return Sign::zero;
+}
+
 namespace {
 
 // Directed edge (u -> v) -> the face whose loop runs it.
@@ -276,16 +290,10 @@ bool solid_is_convex(const PlaneSet& set, const Solid& solid) {
         shells.unite(f, g);
         if (g < f) continue;  // each edge once
         // A vertex of the face across, off this face's plane, decides the edge.
-        const SolidFace& across = solid.faces[g];
-        Sign s = Sign::zero;
-        for (std::uint32_t m = across.first_loop; m < across.first_loop + across.loop_count && s == Sign::zero; ++m) {
-          const SolidLoop& other = solid.loops[m];
-          for (std::uint32_t k = 0; k < other.corner_count && s == Sign::zero; ++k) {
-            const VertexIndex x = solid.corners[other.first_corner + k].vertex;
-            s = outward_side(set, face, solid.defs[x], solid.approx[x]);
-          }
+        if (outward_side_of_face(set, face, solid.faces[g], solid.loops, solid.corners, solid.defs, solid.approx) ==
+            Sign::positive) {
+          return false;
         }
-        if (s == Sign::positive) return false;
       }
     }
   }

@@ -51,6 +51,7 @@
 #include <map>
 #include <optional>
 #include <stdexcept>
+#include <span>
 #include <string>
 #include <utility>
 
@@ -235,12 +236,15 @@ Triangulated triangulate(std::span<const Vec3> points, std::uint32_t real_count,
 // --- cutting --------------------------------------------------------------------
 
 // Cuts every piece by cut plane `plane`, keeping the n.x + d < 0 side (or the
-// other): pieces the plane misses are kept or dropped whole.
-void clip(const PlaneSet& set, const InputShells& shells, std::vector<Solid>& pieces, std::uint32_t plane,
-          bool keep_below) {
+// other): pieces the plane misses are kept or dropped whole. `Piece` is Solid
+// for pieces that are spent (a piece kept whole is moved out) or const Solid
+// for pieces another group or cell shares (it is copied).
+template <class Piece>
+std::vector<Solid> clipped(const PlaneSet& set, const InputShells& shells, std::span<Piece> pieces,
+                           std::uint32_t plane, bool keep_below) {
   std::vector<Solid> kept;
   kept.reserve(pieces.size());
-  for (Solid& piece : pieces) {
+  for (Piece& piece : pieces) {
     SolidCut cut =
         cut_solid(set, piece, PlaneRef::cut(plane), plane + 1, shells, keep_below ? CutSides::below : CutSides::above);
     if (cut.plane_missed) {
@@ -249,25 +253,13 @@ void clip(const PlaneSet& set, const InputShells& shells, std::vector<Solid>& pi
     }
     for (Solid& side : keep_below ? cut.below : cut.above) kept.push_back(std::move(side));
   }
-  pieces = std::move(kept);
+  return kept;
 }
 
-// The same for pieces that stay as they are (shared with another group or cell):
-// the kept pieces, a piece the plane misses copied.
-std::vector<Solid> clipped(const PlaneSet& set, const InputShells& shells, const std::vector<Solid>& pieces,
-                           std::uint32_t plane, bool keep_below) {
-  std::vector<Solid> kept;
-  kept.reserve(pieces.size());
-  for (const Solid& piece : pieces) {
-    SolidCut cut =
-        cut_solid(set, piece, PlaneRef::cut(plane), plane + 1, shells, keep_below ? CutSides::below : CutSides::above);
-    if (cut.plane_missed) {
-      if (cut.all_below == keep_below) kept.push_back(piece);
-      continue;
-    }
-    for (Solid& side : keep_below ? cut.below : cut.above) kept.push_back(std::move(side));
-  }
-  return kept;
+// The same in place.
+void clip(const PlaneSet& set, const InputShells& shells, std::vector<Solid>& pieces, std::uint32_t plane,
+          bool keep_below) {
+  pieces = clipped(set, shells, std::span<Solid>(pieces), plane, keep_below);
 }
 
 struct Group {
@@ -356,7 +348,7 @@ class VoronoiCutter {
     bool cut = false;
     const auto cut_by = [&](std::uint32_t plane) {
       if (!cut) {
-        pieces = clipped(*set_, input_.shells, parent, plane, true);
+        pieces = clipped(*set_, input_.shells, std::span<const Solid>(parent), plane, true);
         cut = true;
       } else if (!pieces.empty()) {
         clip(*set_, input_.shells, pieces, plane, true);
@@ -391,7 +383,8 @@ class VoronoiCutter {
   std::vector<Solid> cell(std::uint32_t site, const std::vector<Solid>& container) const {
     const std::vector<std::uint32_t>& planes = bisectors_of_[site];
     if (planes.empty()) return container;
-    std::vector<Solid> pieces = clipped(*set_, input_.shells, container, planes[0], plane_pairs_[planes[0]][0] == site);
+    std::vector<Solid> pieces =
+        clipped(*set_, input_.shells, std::span<const Solid>(container), planes[0], plane_pairs_[planes[0]][0] == site);
     for (std::size_t k = 1; k < planes.size() && !pieces.empty(); ++k) {
       clip(*set_, input_.shells, pieces, planes[k], plane_pairs_[planes[k]][0] == site);
     }

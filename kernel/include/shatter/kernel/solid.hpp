@@ -218,6 +218,17 @@ bool solid_is_convex(const PlaneSet& set, const Solid& solid);
 /// the face is reversed, so negative means inside the face's half-space.
 Sign outward_side(const PlaneSet& set, const SolidFace& face, const PointDef& point, const ApproxPoint& approx);
 
+/// The outward side of `face`'s plane at the first vertex of `across` off it,
+/// its loops and corners walked in order (`loops` and `corners` are the ones
+/// `across` indexes; `defs` and `approx` its vertices'): zero when every vertex
+/// of `across` lies on the plane. At an edge the two faces share, positive means
+/// the edge is reflex, which is how convexity is decided (solid_is_convex, and
+/// the cut's pieces as it finds them). Preconditions: indices in range. Never
+/// throws; O(corners of `across`), exact.
+Sign outward_side_of_face(const PlaneSet& set, const SolidFace& face, const SolidFace& across,
+                          std::span<const SolidLoop> loops, std::span<const SolidCorner> corners,
+                          std::span<const PointDef> defs, std::span<const ApproxPoint> approx);
+
 /// Checks a solid's structure: every corner's vertex in range, every loop of at
 /// least 3 corners, every undirected edge used by exactly two corners in opposite
 /// directions, every vertex used, and every corner's vertex lying on its face's
