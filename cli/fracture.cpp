@@ -1,6 +1,7 @@
 #include "fracture.hpp"
 
 #include <nlohmann/json.hpp>
+#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -484,7 +485,21 @@ Command add_fracture_command(CLI::App& app) {
   return {command, [args] { return run_fracture(*args); }};
 }
 
+namespace {
+int run_fracture_here(const FractureArgs& args);
+}  // namespace
+
+// The whole command runs on --threads threads: the build makes its own arena
+// of as many, and what comes before and after it (the input's check, the
+// file's encoding) runs in parallel in this one, never on more.
 int run_fracture(const FractureArgs& args) {
+  tbb::task_arena arena(args.threads == 0 ? tbb::task_arena::automatic : static_cast<int>(args.threads));
+  return arena.execute([&] { return run_fracture_here(args); });
+}
+
+namespace {
+
+int run_fracture_here(const FractureArgs& args) {
   // Every usage check comes before reading the mesh and building.
   FractureOutcome outcome;
   outcome.export_format = leaf_export_format(args);
@@ -547,5 +562,7 @@ int run_fracture(const FractureArgs& args) {
   }
   return static_cast<int>(ExitCode::ok);
 }
+
+}  // namespace
 
 }  // namespace shatter::cli

@@ -208,6 +208,12 @@ class ByteWriter {
   }
   std::size_t size() const { return bytes_.size(); }
   void append(std::string_view bytes) { bytes_.append(bytes); }
+  /// Appends `bytes`, one or more whole records written elsewhere, and ends
+  /// the record (end_record) after them.
+  void append_record(std::string_view bytes) {
+    bytes_.append(bytes);
+    end_record();
+  }
   void reserve(std::size_t size) { bytes_.reserve(size); }
 
   /// The bytes written, whole. Pieces put aside by end_record are joined first.

@@ -7,7 +7,13 @@
 // each equality and stores the value where one fails, so every tree that
 // validates round-trips exactly, hand-made ones included.
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cfenv>
 #include <cstdint>
@@ -77,6 +83,77 @@ class HeldFloatingPointExceptions {
   std::fenv_t saved_;
 };
 
+// --- records encoded in parallel ------------------------------------------------
+// A section's records (a node's, a bond's) are each a function of the tree and
+// of the record's place alone, so runs of them can be encoded on any thread and
+// joined in order: the same bytes as one thread writing them one after the
+// other. The joining streams (ByteWriter's flush) as the runs finish, a few at
+// a time in flight, so a section is never held whole.
+
+/// Records per run: small enough for a few in flight to stay some megabytes
+/// (a node of a large tree writes about a kilobyte), large enough that a run's
+/// set-up (its ancestor path, its buffers) does not show.
+constexpr std::size_t records_per_run = 512;
+
+/// Whether the caller's task arena has more than one thread to lend.
+bool on_several_threads() { return tbb::this_task_arena::max_concurrency() > 1; }
+
+/// Writes records [0, count) to `out`: `encode(first, end, writer)` writes
+/// records first..end-1 to `writer`. On one thread `out` is handed over whole;
+/// on more, runs of `run` records are encoded in parallel and joined in order.
+/// Every run holds the floating-point exceptions on its own thread, as
+/// write_version3_sections does on the caller's.
+template <class Encode>
+void encode_records(std::size_t count, std::size_t run, ByteWriter& out, const Encode& encode) {
+  if (!on_several_threads() || count <= run) {
+    encode(std::size_t{0}, count, out);
+    return;
+  }
+  std::size_t next = 0;
+  const auto in_flight = static_cast<std::size_t>(4 * tbb::this_task_arena::max_concurrency());
+  tbb::parallel_pipeline(
+      in_flight,
+      tbb::make_filter<void, std::pair<std::size_t, std::size_t>>(
+          tbb::filter_mode::serial_in_order,
+          [&](tbb::flow_control& control) -> std::pair<std::size_t, std::size_t> {
+            if (next >= count) {
+              control.stop();
+              return {0, 0};
+            }
+            const std::size_t first = next;
+            next = std::min(count, next + run);
+            return {first, next};
+          }) &
+          tbb::make_filter<std::pair<std::size_t, std::size_t>, std::vector<std::string>>(
+              tbb::filter_mode::parallel,
+              [&](const std::pair<std::size_t, std::size_t>& records) {
+                const HeldFloatingPointExceptions held;
+                ByteWriter writer;
+                encode(records.first, records.second, writer);
+                return writer.take_pieces();
+              }) &
+          tbb::make_filter<std::vector<std::string>, void>(tbb::filter_mode::serial_in_order,
+                                                           [&](const std::vector<std::string>& pieces) {
+                                                             for (const std::string& piece : pieces) out.append_record(piece);
+                                                           }));
+}
+
+/// Calls `visit(first, end)` on runs of [0, count) covering it, in parallel
+/// when the caller's arena lends several threads, each run holding the
+/// floating-point exceptions on its thread. For passes whose results are
+/// joined by an order-free rule (or of flags).
+template <class Visit>
+void visit_runs(std::size_t count, std::size_t run, const Visit& visit) {
+  if (!on_several_threads() || count <= run) {
+    visit(std::size_t{0}, count);
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, run), [&](const tbb::blocked_range<std::size_t>& range) {
+    const HeldFloatingPointExceptions held;
+    visit(range.begin(), range.end());
+  });
+}
+
 double coordinate(Vec3 v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
 
 /// The nodes from the root to the node being written or read (preorder visits a
@@ -84,6 +161,12 @@ double coordinate(Vec3 v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y :
 /// up it is.
 class AncestorPath {
  public:
+  /// The path to `node` found by its parents, as entering every node before it
+  /// in preorder leaves it (a chunk of records can then start at any node).
+  void start_at(NodeIndex node, const std::vector<MeshTreeNode>& nodes) {
+    path_.assign(std::size_t{nodes[node].depth} + 1, 0);
+    for (NodeIndex a = node; a != no_node; a = nodes[a].parent) path_[nodes[a].depth] = a;
+  }
   void enter(NodeIndex node, std::uint32_t depth) {
     path_.resize(std::size_t{depth} + 1);
     path_[depth] = node;
@@ -213,19 +296,25 @@ void write_mesh(ByteWriter& out, const Mesh& mesh, std::span<const Vec3> sources
 
 void nodes_payload(const MeshTree& tree, ByteWriter& out) {
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
-  std::uint8_t flags = 0;
-  NodeShapes shapes(tree);
-  for (std::size_t k = 0; k < nodes.size(); ++k) {
-    const MeshTreeNode& node = nodes[k];
-    const std::uint64_t derived_seed =
-        k == 0 ? root_node_seed(tree.recipe.seed)
-               : child_node_seed(nodes[node.parent].seed, static_cast<std::size_t>(
-                                                              std::find(nodes[node.parent].children.begin(), nodes[node.parent].children.end(), k) -
-                                                              nodes[node.parent].children.begin()));
-    if (node.seed != derived_seed) flags |= seeds_stored_bit;
-    if (!same_bits(node.mass, mass_properties(shapes(static_cast<NodeIndex>(k)).mesh))) flags |= masses_stored_bit;
-    if (node.is_leaf() && !all_zero_bits(tree.cut_planes[k])) flags |= leaf_planes_stored_bit;
-  }
+  // Which derivations fail anywhere: an or over the nodes, in any order.
+  std::atomic<std::uint8_t> any_flags{0};
+  visit_runs(nodes.size(), records_per_run, [&](std::size_t first, std::size_t end) {
+    std::uint8_t found = 0;
+    NodeShapes shapes(tree);
+    for (std::size_t k = first; k < end; ++k) {
+      const MeshTreeNode& node = nodes[k];
+      const std::uint64_t derived_seed =
+          k == 0 ? root_node_seed(tree.recipe.seed)
+                 : child_node_seed(nodes[node.parent].seed, static_cast<std::size_t>(
+                                                                std::find(nodes[node.parent].children.begin(), nodes[node.parent].children.end(), k) -
+                                                                nodes[node.parent].children.begin()));
+      if (node.seed != derived_seed) found |= seeds_stored_bit;
+      if (!same_bits(node.mass, mass_properties(shapes(static_cast<NodeIndex>(k)).mesh))) found |= masses_stored_bit;
+      if (node.is_leaf() && !all_zero_bits(tree.cut_planes[k])) found |= leaf_planes_stored_bit;
+    }
+    any_flags.fetch_or(found, std::memory_order_relaxed);
+  });
+  const std::uint8_t flags = any_flags.load();
   out.count32(nodes.size());
   out.u8(flags);
   for (std::size_t k = 0; k < nodes.size(); ++k) {
@@ -245,15 +334,26 @@ void nodes_payload(const MeshTree& tree, ByteWriter& out) {
   }
 }
 
+void solid_records(const MeshTree& tree, std::size_t first, std::size_t end, ByteWriter& out);
+
 void solids_payload(const MeshTree& tree, ByteWriter& out) {
   const bool exact = tree.has_exact_representation();
   out.count32(exact ? tree.nodes.size() : 0);
   if (!exact) return;
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
+  encode_records(nodes.size(), records_per_run, out, [&](std::size_t first, std::size_t end, ByteWriter& writer) {
+    solid_records(tree, first, end, writer);
+  });
+}
+
+/// The SOLD records of nodes first..end-1.
+void solid_records(const MeshTree& tree, std::size_t first, std::size_t end, ByteWriter& out) {
+  const std::vector<MeshTreeNode>& nodes = tree.nodes;
   AncestorPath path;
+  if (first < end) path.start_at(static_cast<NodeIndex>(first), nodes);
   std::vector<std::pair<std::uint64_t, std::uint32_t>> face_of_edge;  // (from, to) -> face, sorted
   NodeShapes shapes(tree);
-  for (std::size_t k = 0; k < nodes.size(); ++k) {
+  for (std::size_t k = first; k < end; ++k) {
     const MeshTreeNode& node = nodes[k];
     const Solid& solid = shapes(static_cast<NodeIndex>(k)).solid;
     path.enter(static_cast<NodeIndex>(k), node.depth);
@@ -319,14 +419,24 @@ void solids_payload(const MeshTree& tree, ByteWriter& out) {
 
 /// Each mesh's positions coded against its solid's output positions (MESH) or
 /// each hull's against its node's mesh (HULL).
+void mesh_records(const MeshTree& tree, bool hulls, std::size_t first, std::size_t end, ByteWriter& out);
+
 void meshes_payload(const MeshTree& tree, bool hulls, ByteWriter& out) {
+  out.count32(tree.nodes.size());
+  encode_records(tree.nodes.size(), records_per_run, out, [&](std::size_t first, std::size_t end, ByteWriter& writer) {
+    mesh_records(tree, hulls, first, end, writer);
+  });
+}
+
+/// The MESH (or HULL) records of nodes first..end-1.
+void mesh_records(const MeshTree& tree, bool hulls, std::size_t first, std::size_t end, ByteWriter& out) {
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
   const PlaneSet set = tree.plane_set();
-  out.count32(nodes.size());
   AncestorPath path;
+  if (first < end) path.start_at(static_cast<NodeIndex>(first), nodes);
   std::vector<Vec3> solid_positions;
   NodeShapes shapes(tree);
-  for (std::size_t k = 0; k < nodes.size(); ++k) {
+  for (std::size_t k = first; k < end; ++k) {
     const MeshTreeNode& node = nodes[k];
     path.enter(static_cast<NodeIndex>(k), node.depth);
     if (hulls) {
@@ -369,19 +479,32 @@ Vec3 derived_normal(const MeshTree& tree, const Bond& bond) {
   return tree.nodes[side].above_parent_plane ? -unit : unit;
 }
 
+void bond_records(const MeshTree& tree, std::uint8_t flags, std::size_t first, std::size_t end, ByteWriter& out);
+
 void bonds_payload(const MeshTree& tree, ByteWriter& out) {
-  std::uint8_t flags = 0;
-  for (std::size_t i = 0; i < tree.bond_count(); ++i) {
-    const Bond bond = tree.bond(i);
-    if (zero_normal(tree.cut_planes[bond.cut_node]) || !same_bits(bond.normal, derived_normal(tree, bond))) {
-      flags |= bond_normals_stored_bit;
-      break;
+  constexpr std::size_t bonds_per_run = 8 * records_per_run;  // a bond's record is some 20 bytes
+  std::atomic<std::uint8_t> any_flags{0};
+  visit_runs(tree.bond_count(), bonds_per_run, [&](std::size_t first, std::size_t end) {
+    for (std::size_t i = first; i < end && any_flags.load(std::memory_order_relaxed) == 0; ++i) {
+      const Bond bond = tree.bond(i);
+      if (zero_normal(tree.cut_planes[bond.cut_node]) || !same_bits(bond.normal, derived_normal(tree, bond))) {
+        any_flags.fetch_or(bond_normals_stored_bit, std::memory_order_relaxed);
+      }
     }
-  }
+  });
+  const std::uint8_t flags = any_flags.load();
   out.u64(tree.bond_count());
   out.u8(flags);
-  LeafIndex previous_first = 0;
-  for (std::size_t i = 0; i < tree.bond_count(); ++i) {
+  encode_records(tree.bond_count(), bonds_per_run, out, [&](std::size_t first, std::size_t end, ByteWriter& writer) {
+    bond_records(tree, flags, first, end, writer);
+  });
+}
+
+/// The BOND records of bonds first..end-1 (each first leaf coded against the
+/// bond before it).
+void bond_records(const MeshTree& tree, std::uint8_t flags, std::size_t first, std::size_t end, ByteWriter& out) {
+  LeafIndex previous_first = first == 0 ? 0 : tree.bond(first - 1).first;
+  for (std::size_t i = first; i < end; ++i) {
     const Bond bond = tree.bond(i);
     const Plane& plane = tree.cut_planes[bond.cut_node];
     // The largest normal component first: the projection the bonds were measured in.

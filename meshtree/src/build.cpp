@@ -764,7 +764,8 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
   // A lean build keeps its bonds packed, found so (40 bytes a bond instead of
   // 72: 0.3 GB of a million-fragment cube's peak, which is here).
   if (builder.lean()) {
-    tree.packed_bonds = find_packed_plane_bonds(tree);
+    // On the build's threads: the same bonds on any number (bonds.hpp).
+    arena.execute([&] { tree.packed_bonds = find_packed_plane_bonds(tree); });
   } else {
     tree.bonds = find_bonds(tree);
   }

@@ -2,7 +2,11 @@
 
 #include "shatter/meshtree/stats.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <numeric>
 
@@ -58,19 +62,33 @@ TreeStats tree_stats(const MeshTree& tree) {
   std::vector<double> volumes;
   volumes.reserve(tree.leaf_count());
   stats.min_leaf_depth = tree.leaf_nodes.empty() ? 0 : stats.max_depth;
-  NodeShapes shapes(tree);  // a lean tree's leaves may be packed (pack_leaves)
   for (NodeIndex index : tree.leaf_nodes) {
     const MeshTreeNode& leaf = tree.nodes.at(index);
-    const Mesh& mesh = shapes(index).mesh;
     volumes.push_back(leaf.mass.volume);
-    stats.total_leaf_volume += leaf.mass.volume;
+    stats.total_leaf_volume += leaf.mass.volume;  // in leaf order: the same sum on any thread count
     stats.min_leaf_depth = std::min(stats.min_leaf_depth, leaf.depth);
-    stats.leaf_triangles += mesh.triangle_count();
-    stats.leaf_vertices += mesh.vertex_count();
-    stats.leaf_cap_triangles += static_cast<std::size_t>(
-        std::count_if(mesh.surfaces.begin(), mesh.surfaces.end(),
-                      [](SurfaceId surface) { return surface != original_surface; }));
   }
+  // The leaves' meshes, unpacked in runs on the caller's threads (a lean
+  // tree's leaves may be packed: pack_leaves): whole-number sums, in any order.
+  std::atomic<std::size_t> triangles{0}, vertices{0}, cap_triangles{0};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tree.leaf_nodes.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      NodeShapes shapes(tree);
+                      std::size_t t = 0, v = 0, c = 0;
+                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                        const Mesh& mesh = shapes(tree.leaf_nodes[i]).mesh;
+                        t += mesh.triangle_count();
+                        v += mesh.vertex_count();
+                        c += static_cast<std::size_t>(std::count_if(mesh.surfaces.begin(), mesh.surfaces.end(),
+                                                                    [](SurfaceId surface) { return surface != original_surface; }));
+                      }
+                      triangles += t;
+                      vertices += v;
+                      cap_triangles += c;
+                    });
+  stats.leaf_triangles = triangles;
+  stats.leaf_vertices = vertices;
+  stats.leaf_cap_triangles = cap_triangles;
   stats.fragment_volume = spread_of(std::move(volumes));
 
   stats.bond_count = tree.bond_count();

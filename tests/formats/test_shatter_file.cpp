@@ -8,6 +8,7 @@
 // counting every operator new).
 
 #include <catch2/catch.hpp>
+#include <tbb/task_arena.h>
 
 #include <unistd.h>
 
@@ -35,12 +36,16 @@
 #include "shatter/generators/random.hpp"
 #include "shatter/generators/solids.hpp"
 #include "shatter/kernel/error.hpp"
+#include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/formats/file.hpp"
 #include "shatter/meshtree/recipe.hpp"
+#include "shatter/meshtree/sites.hpp"
+#include "shatter/meshtree/stats.hpp"
 #include "shatter/meshtree/validate_tree.hpp"
+#include "shatter/meshtree/voronoi.hpp"
 #include "shatter/version.hpp"
 #include "support/checks.hpp"
 
@@ -2086,4 +2091,75 @@ TEST_CASE("version 3's relative codes and child counts are checked", "[shatter_f
     const std::uint64_t next_code = read_vu(sold, next);
     check_refused(v3_with(plane_tree, "SOLD", with_corner(next_code & ~std::uint64_t{3})), "SOLD section");
   }
+}
+
+// The sections' records are encoded in runs on the caller's threads (the
+// arena's) and joined in order: the file must be the one-thread file byte for
+// byte, streamed (encode_shatter) or held (write_shatter to a plain sink), for
+// trees of more nodes and bonds than a run holds, lean or not, plane and cell.
+TEST_CASE("the file encoded on 2 and 4 threads is the one-thread file byte for byte and its summary the same", "[file][property][threads]") {
+  struct Case {
+    std::string name;
+    MeshTree tree;
+  };
+  std::vector<Case> cases;
+  const auto plane_tree = [&](const std::string& name, const Mesh& mesh, Strategy strategy, std::uint32_t fragments,
+                              std::uint64_t seed, bool lean) {
+    TreeRecipe recipe;
+    recipe.fragments = fragments;
+    recipe.seed = seed;
+    recipe.strategy = strategy;
+    cases.push_back({name + " " + std::string(strategy_name(strategy)) + " -> " + std::to_string(fragments) + " seed " +
+                         std::to_string(seed) + (lean ? " lean" : ""),
+                     build_mesh_tree(mesh, recipe, {.threads = 1, .lean = lean})});
+  };
+  plane_tree("cube", test::unit_cube(), Strategy::thesis, 1100, 3, true);
+  plane_tree("cube", test::unit_cube(), Strategy::thesis, 700, 4, false);
+  plane_tree("torus", test::torus(2, 0.6, 24, 16), Strategy::axis, 700, 5, true);
+  plane_tree("hollow egg", test::hollow_egg(), Strategy::balanced, 600, 6, true);
+  plane_tree("elephant.off", read_mesh(test::mesh_dir() / "elephant.off"), Strategy::thesis, 600, 7, true);
+  for (const bool lean : {false, true}) {
+    const Mesh cube = test::unit_cube();
+    TreeRecipe recipe;
+    recipe.strategy = Strategy::voronoi;
+    recipe.seed = 8;
+    recipe.fragments = 1000;
+    cases.push_back({std::string("cube voronoi 1000 sites") + (lean ? " lean" : ""),
+                     build_voronoi_tree(cube, uniform_sites(cube, recipe.fragments, recipe.seed), recipe,
+                                        {.threads = 1, .lean = lean})});
+  }
+  for (const Case& c : cases) {
+    INFO(c.name << ": " << c.tree.nodes.size() << " nodes, " << c.tree.bond_count() << " bonds");
+    REQUIRE(c.tree.nodes.size() > 1024);  // more than two runs of records
+    const auto encoded = [&](int threads) {
+      tbb::task_arena arena(threads);
+      std::pair<std::string, std::string> bytes;
+      arena.execute([&] {
+        bytes.first = encode_shatter(c.tree);
+        write_shatter(c.tree, ByteSink([&](std::string_view piece) { bytes.second.append(piece); }));
+      });
+      return bytes;
+    };
+    const auto stats_on = [&](int threads) {
+      tbb::task_arena arena(threads);
+      return arena.execute([&] { return tree_stats(c.tree); });
+    };
+    const TreeStats stats_one = stats_on(1);
+    const auto one = encoded(1);
+    REQUIRE(one.first == one.second);
+    CHECK(decode_shatter(one.first).nodes.size() == c.tree.nodes.size());
+    for (const int threads : {2, 4}) {
+      INFO(threads << " threads");
+      const auto several = encoded(threads);
+      CHECK(several.first == one.first);
+      CHECK(several.second == one.first);
+      // The summary fracture prints, counted on as many threads.
+      const TreeStats stats = stats_on(threads);
+      CHECK(stats.leaf_triangles == stats_one.leaf_triangles);
+      CHECK(stats.leaf_vertices == stats_one.leaf_vertices);
+      CHECK(stats.leaf_cap_triangles == stats_one.leaf_cap_triangles);
+      CHECK(std::bit_cast<std::uint64_t>(stats.total_leaf_volume) == std::bit_cast<std::uint64_t>(stats_one.total_leaf_volume));
+    }
+  }
+  CHECK(cases.size() == 7);
 }

@@ -9,6 +9,7 @@
 // errors the brute force must catch.
 
 #include <catch2/catch.hpp>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
@@ -16,6 +17,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <functional>
 #include <map>
 #include <optional>
@@ -919,4 +921,76 @@ TEST_CASE("find_bonds on 65,536 fragments of a cube", "[.][bench]") {
   WARN("true pairs " << comparison.true_bonds << ", box pairs " << comparison.box_bonds << ", false box pairs "
                      << comparison.false_box_bonds << ", missed true pairs " << comparison.missed_true_bonds);
   CHECK(bonds.size() >= tree.leaf_count() - 1);
+}
+
+// --- the packed bonds on several threads ------------------------------------------
+
+namespace {
+
+bool same_packed_bits(const PackedBond& a, const PackedBond& b) {
+  return a.first == b.first && a.second == b.second && a.cut_node == b.cut_node && a.axis == b.axis &&
+         a.first_below == b.first_below && std::memcmp(&a.area, &b.area, sizeof a.area) == 0 &&
+         std::memcmp(&a.u, &b.u, sizeof a.u) == 0 && std::memcmp(&a.v, &b.v, sizeof a.v) == 0;
+}
+
+// Where two lists of packed bonds first differ, or "" when they are the same bits.
+std::string packed_mismatch(const std::vector<PackedBond>& expected, const std::vector<PackedBond>& got) {
+  if (expected.size() != got.size()) return std::to_string(got.size()) + " bonds, not " + std::to_string(expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    if (!same_packed_bits(expected[i], got[i])) return "bond " + std::to_string(i) + " differs";
+  }
+  return "";
+}
+
+}  // namespace
+
+// find_packed_plane_bonds splits the leaves into runs of subtrees read in
+// parallel and runs the cuts above them after: every split, and every thread
+// count, must give the one-thread reading's bonds bit for bit and in order.
+TEST_CASE("packed bonds split into runs of subtrees equal the one-thread reading bit for bit",
+          "[bonds][plane][property][threads]") {
+  struct Case {
+    std::string name;
+    Mesh mesh;
+    std::uint32_t fragments;
+  };
+  const std::vector<Case> cases{{"box", box({0, 0, 0}, {1, 1, 1}), 256},
+                                {"torus", torus(1.0, 0.35, 16, 10), 128},
+                                {"hollow-egg", hollow_egg(), 96},
+                                {"nested-islands", nested_islands(), 64},
+                                {"spool.off", read_mesh(mesh_dir() / "spool.off"), 128},
+                                {"elephant.off", read_mesh(mesh_dir() / "elephant.off"), 160}};
+  std::size_t compared = 0, bonds_seen = 0;
+  for (const Case& c : cases) {
+    for (const std::uint64_t seed : {1u, 5u, 9u}) {
+      for (const Strategy strategy : {Strategy::thesis, Strategy::axis}) {
+        TreeRecipe recipe;
+        recipe.fragments = c.fragments;
+        recipe.seed = seed;
+        recipe.strategy = strategy;
+        const MeshTree tree = build_mesh_tree(c.mesh, recipe, {.threads = 1, .lean = true});
+        INFO(c.name << " seed " << seed << " " << strategy_name(strategy) << ": " << tree.leaf_count() << " leaves");
+        REQUIRE(tree.leaf_count() >= c.fragments);
+        const std::vector<PackedBond> one = find_packed_plane_bonds(tree, 0);
+        REQUIRE(one.size() >= tree.leaf_count() - 1);
+        CHECK(packed_mismatch(tree.packed_bonds, one) == "");  // the build's, on one thread
+        bonds_seen += one.size();
+        for (const std::uint32_t run : {1u, 2u, 3u, 7u, 16u, 50u, 1000u}) {
+          INFO("runs of at most " << run << " leaves");
+          CHECK(packed_mismatch(one, find_packed_plane_bonds(tree, run)) == "");
+          ++compared;
+        }
+        for (const int threads : {2, 4}) {
+          INFO(threads << " threads");
+          tbb::task_arena arena(threads);
+          std::vector<PackedBond> got;
+          arena.execute([&] { got = find_packed_plane_bonds(tree); });
+          CHECK(packed_mismatch(one, got) == "");
+          ++compared;
+        }
+      }
+    }
+  }
+  CHECK(compared == 6 * 3 * 2 * 9);
+  CHECK(bonds_seen > 0);
 }

@@ -25,9 +25,18 @@
 // is kept beside its approximation, so the pairs are tested without the
 // leaves' solids.
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <mutex>
+#include <optional>
+#include <utility>
 #include <span>
 #include <stdexcept>
 #include <vector>
@@ -83,6 +92,12 @@ double quotient_error(const Estimate& x, const Estimate& w) {
 
 class PlaneBonds {
  public:
+  struct FaceRef {
+    std::uint32_t cut;  // a node's plane, or a cell plane after them (MeshTree::cut_planes)
+    LeafIndex leaf;
+    std::uint32_t face;
+  };
+
   explicit PlaneBonds(const MeshTree& tree) : tree_(tree), set_(tree.plane_set()) {
     cache_.reserve(cache_slots);
     for (std::size_t i = 0; i < cache_slots; ++i) cache_.push_back({no_leaf, NodeShapes(tree)});
@@ -105,9 +120,7 @@ class PlaneBonds {
   // current leaf's ancestors' planes: some thousands, where gathering them all
   // first held 0.14 GB at cube -> 2^20, beside the finished bonds at the peak.
   std::vector<PackedBond> run_packed() {
-    if (tree_.cut_planes.size() > tree_.nodes.size()) {
-      throw std::invalid_argument("find_packed_plane_bonds: a cell plane's bonds cannot be packed");
-    }
+    check_packable();
     std::vector<PackedBond> bonds;
     // The array is the bonds' one copy, so it is sized ahead rather than grown
     // by doubling (which touches the old and the new array at once). The faces
@@ -116,14 +129,118 @@ class PlaneBonds {
     // 2^20); a tree with more grows the array. Capacity never written is
     // address space, not memory: its pages are never touched.
     bonds.reserve(16 * tree_.leaf_count());
+    run_leaves(0, static_cast<LeafIndex>(tree_.leaf_count()), nullptr, nullptr, bonds);
+    sort_bonds(bonds);
+    return bonds;
+  }
+
+  // find_packed_plane_bonds split into runs of about `chunk_leaves` leaves
+  // (0: not split), each read by run_leaves on its own: a cut whose range lies
+  // within one run is that run's; the cuts whose range holds more leaves (the
+  // "outer" ones, the top of the tree) are run once every run has handed over
+  // their faces, joined in run order, so each cut sees its faces in leaf order
+  // as the unsplit reading does. Every cut's bonds are then the same, and the
+  // sort (of keys no two bonds share) orders them the same, on any split and
+  // any schedule.
+  static std::vector<PackedBond> run_packed_split(const MeshTree& tree, std::uint32_t chunk_leaves) {
+    const auto leaves = static_cast<LeafIndex>(tree.leaf_count());
+    if (chunk_leaves == 0 || leaves <= chunk_leaves) return PlaneBonds(tree).run_packed();
+    PlaneBonds(tree).check_packable();
+    std::vector<std::uint8_t> outer(tree.nodes.size(), 0);
+    std::vector<NodeIndex> outer_cuts;
+    std::vector<std::pair<LeafIndex, LeafIndex>> runs;  // [first, end) leaves
+    // Nodes are in preorder: the nodes below the outer ones come in leaf order,
+    // their ranges one after the other; neighbours are joined up to the size.
+    for (NodeIndex k = 0; k < tree.nodes.size(); ++k) {
+      const MeshTreeNode& node = tree.nodes[k];
+      if (!node.is_leaf() && node.leaf_count > chunk_leaves) {
+        outer[k] = 1;
+        outer_cuts.push_back(k);
+        continue;
+      }
+      if (node.parent == no_node || outer[node.parent] == 0) continue;
+      const LeafIndex end = node.first_leaf + node.leaf_count;
+      if (!runs.empty() && end - runs.back().first <= chunk_leaves) {
+        runs.back().second = end;
+      } else {
+        runs.emplace_back(node.first_leaf, end);
+      }
+    }
+    std::vector<PackedBond> bonds;
+    bonds.reserve(16 * std::size_t{leaves});  // as run_packed
+    std::mutex bonds_mutex;
+    const auto hand_over = [&](const std::vector<PackedBond>& found) {
+      const std::lock_guard lock(bonds_mutex);
+      bonds.insert(bonds.end(), found.begin(), found.end());
+    };
+    tbb::enumerable_thread_specific<std::optional<PlaneBonds>> workers;
+    const auto worker = [&]() -> PlaneBonds& {
+      std::optional<PlaneBonds>& mine = workers.local();
+      if (!mine) mine.emplace(tree);
+      return *mine;
+    };
+    std::vector<std::vector<FaceRef>> outer_refs(runs.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, runs.size(), 1), [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t r = range.begin(); r != range.end(); ++r) {
+        std::vector<PackedBond> found;
+        worker().run_leaves(runs[r].first, runs[r].second, &outer, &outer_refs[r], found);
+        hand_over(found);
+      }
+    });
+    // Each outer cut's faces, in run order (so in leaf order).
+    std::vector<std::uint32_t> slot(tree.nodes.size(), 0);
+    for (std::uint32_t i = 0; i < outer_cuts.size(); ++i) slot[outer_cuts[i]] = i;
+    std::vector<std::vector<FaceRef>> faces_of(outer_cuts.size());
+    for (std::vector<FaceRef>& refs : outer_refs) {
+      for (const FaceRef& ref : refs) faces_of[slot[ref.cut]].push_back(ref);
+      std::vector<FaceRef>().swap(refs);
+    }
+    // The largest cuts first, so the last to finish is a small one.
+    std::vector<std::uint32_t> order(outer_cuts.size());
+    for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::uint32_t a, std::uint32_t b) { return faces_of[a].size() > faces_of[b].size(); });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), 1), [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        std::vector<PackedBond> found;
+        worker().run_refs(outer_cuts[order[i]], faces_of[order[i]], found);
+        hand_over(found);
+      }
+    });
+    tbb::parallel_sort(bonds.begin(), bonds.end(), bond_before<PackedBond>);
+    return bonds;
+  }
+
+  void check_packable() const {
+    if (tree_.cut_planes.size() > tree_.nodes.size()) {
+      throw std::invalid_argument("find_packed_plane_bonds: a cell plane's bonds cannot be packed");
+    }
+  }
+
+  // Leaves lo..hi-1 read once, in order, each cut's faces gathered as they
+  // come and its bonds found as soon as its range ends (postorder, not
+  // preorder: a cut's bonds are a function of its faces in leaf order alone,
+  // and no two bonds share a sort key, as no leaf lies on both sides of a
+  // node's cut, so the sorted list is the same). Only the open cuts' faces are
+  // held, those on the current leaf's ancestors' planes: some thousands, where
+  // gathering them all first held 0.14 GB at cube -> 2^20, beside the finished
+  // bonds at the peak. A cut marked in `outer` (whose range reaches past these
+  // leaves: find_packed_plane_bonds' split) is not run: its faces go to
+  // `outer_refs`, in leaf order.
+  void run_leaves(LeafIndex lo, LeafIndex hi, const std::vector<std::uint8_t>* outer, std::vector<FaceRef>* outer_refs,
+                  std::vector<PackedBond>& bonds) {
     std::vector<std::vector<FaceRef>> open;  // by depth: the faces on the plane of the current leaf's ancestor there
-    for (LeafIndex leaf = 0; leaf < tree_.leaf_count(); ++leaf) {
+    for (LeafIndex leaf = lo; leaf < hi; ++leaf) {
       const Solid& solid = leaf_solid(leaf);
       for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
         const std::uint32_t cut = cut_of(solid.faces[f]);
         if (cut == no_cut) continue;
         const MeshTreeNode& node = tree_.nodes[cut];
         if (node.is_leaf() || leaf < node.first_leaf || leaf - node.first_leaf >= node.leaf_count) continue;
+        if (outer != nullptr && (*outer)[cut] != 0) {
+          outer_refs->push_back({cut, leaf, f});
+          continue;
+        }
         if (open.size() <= node.depth) open.resize(std::size_t{node.depth} + 1);
         open[node.depth].push_back({cut, leaf, f});
       }
@@ -131,35 +248,40 @@ class PlaneBonds {
       for (NodeIndex a = tree_.nodes[tree_.leaf_nodes[leaf]].parent; a != no_node; a = tree_.nodes[a].parent) {
         const MeshTreeNode& node = tree_.nodes[a];
         if (leaf + 1 != node.first_leaf + node.leaf_count) break;
+        if (outer != nullptr && (*outer)[a] != 0) break;  // and so are the ones above it
         if (open.size() <= node.depth) continue;
         std::vector<FaceRef>& refs = open[node.depth];
-        if (refs.size() >= 2) {
-          run_cut(
-              a,
-              [&](const auto& visit) {
-                for (const FaceRef& ref : refs) visit(ref);
-              },
-              bonds);
-        }
+        run_refs(a, refs, bonds);
         refs.clear();
       }
     }
-    sort_bonds(bonds);
-    return bonds;
   }
 
- private:
+  // The bonds of cut `k`, whose faces `refs` lists in leaf order.
+  void run_refs(std::uint32_t k, const std::vector<FaceRef>& refs, std::vector<PackedBond>& bonds) {
+    if (refs.size() < 2) return;
+    run_cut(
+        k,
+        [&](const auto& visit) {
+          for (const FaceRef& ref : refs) visit(ref);
+        },
+        bonds);
+  }
+
   // Bond or PackedBond: the same keys in the same order either way, so the
   // same permutation.
   template <class Record>
+  static bool bond_before(const Record& a, const Record& b) {
+    if (a.first != b.first) return a.first < b.first;
+    if (a.second != b.second) return a.second < b.second;
+    return a.cut_node < b.cut_node;
+  }
+  template <class Record>
   static void sort_bonds(std::vector<Record>& bonds) {
-    std::sort(bonds.begin(), bonds.end(), [](const Record& a, const Record& b) {
-      if (a.first != b.first) return a.first < b.first;
-      if (a.second != b.second) return a.second < b.second;
-      return a.cut_node < b.cut_node;
-    });
+    std::sort(bonds.begin(), bonds.end(), bond_before<Record>);
   }
 
+ private:
   // The cuts in order, every cut's faces gathered first (find_plane_bonds: a
   // cell plane's faces are all known only once every leaf is read).
   void run_cuts(std::vector<Bond>& bonds) {
@@ -207,12 +329,6 @@ class PlaneBonds {
     bond.v = v;
     bonds.push_back(bond);
   }
-
-  struct FaceRef {
-    std::uint32_t cut;  // a node's plane, or a cell plane after them (MeshTree::cut_planes)
-    LeafIndex leaf;
-    std::uint32_t face;
-  };
 
   // Which side of cut `k` a leaf lies on: the side of the child whose range holds
   // it; for a cell plane (no node's, see MeshTree::cut_planes), the side its
@@ -613,7 +729,18 @@ class PlaneBonds {
 
 std::vector<Bond> find_plane_bonds(const MeshTree& tree) { return PlaneBonds(tree).run(); }
 
-std::vector<PackedBond> find_packed_plane_bonds(const MeshTree& tree) { return PlaneBonds(tree).run_packed(); }
+std::vector<PackedBond> find_packed_plane_bonds(const MeshTree& tree) {
+  const auto threads = static_cast<std::uint32_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  if (threads == 1) return PlaneBonds(tree).run_packed();
+  // Eight runs a thread or more, so a few slow ones still leave the threads
+  // evenly loaded; none under 64 leaves, where a run's setup would show.
+  const auto per_run = static_cast<std::uint32_t>((tree.leaf_count() + 8 * threads - 1) / (8 * threads));
+  return PlaneBonds::run_packed_split(tree, std::max<std::uint32_t>(64, per_run));
+}
+
+std::vector<PackedBond> find_packed_plane_bonds(const MeshTree& tree, std::uint32_t run_leaves) {
+  return PlaneBonds::run_packed_split(tree, run_leaves);
+}
 
 Bond unpack_bond(const MeshTree& tree, const PackedBond& packed) {
   const Plane& plane = tree.cut_planes[packed.cut_node];

@@ -112,7 +112,19 @@ std::vector<Bond> find_plane_bonds(const MeshTree& tree);
 /// Preconditions: as find_plane_bonds, and every cut plane a node's (a tree of
 /// build_mesh_tree; a cell tree's planes after the nodes' throw
 /// std::invalid_argument).
+/// Threads: those of the task arena it is called in (tbb::this_task_arena; a
+/// caller outside any arena lends it every core). On one thread the leaves are
+/// read once, in order; on more, in runs of subtrees read in parallel (the
+/// overload below), and the bonds are the same, bit for bit and in order.
 std::vector<PackedBond> find_packed_plane_bonds(const MeshTree& tree);
+
+/// find_packed_plane_bonds with its leaves split into runs of whole subtrees of
+/// at most `run_leaves` leaves each (0: not split), read in parallel; the cuts
+/// whose range holds more leaves are run after, in parallel, each on its faces
+/// joined in leaf order. Guarantees: the bonds find_packed_plane_bonds(tree)
+/// gives, bit for bit and in the same order, for every `run_leaves` (the tests
+/// compare them). Preconditions and failure: as find_packed_plane_bonds.
+std::vector<PackedBond> find_packed_plane_bonds(const MeshTree& tree, std::uint32_t run_leaves);
 
 /// The seed's bond rule: every pair of leaves whose closed axis-aligned bounding
 /// boxes (of the leaf meshes' positions) overlap, touching included.
