@@ -2353,8 +2353,15 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
         // The piece lies behind the cap's outward normal: n.x + d < 0 when the cap
         // faces along +n, so the new plane n.x + d' = 0 with d' = d + h lies in
         // it; the doubles d' and h are whatever they round to, the plane exact.
-        const double h = mpq_class(times * reach->rho * largest).get_d();
-        const double offset = cap.reversed ? cut.offset - h : cut.offset + h;
+        // The offset is held to the reach exactly (|d' - d| <= times rho max |n_i|),
+        // stepping d' toward d while the rounding of d + h put it beyond: the
+        // strips' corners on the new plane must lie within the thin rounds' reach.
+        const mpq_class reach_offset = times * reach->rho * largest;
+        const double h = reach_offset.get_d();
+        double offset = cap.reversed ? cut.offset - h : cut.offset + h;
+        while (offset != cut.offset && abs(mpq_class(offset) - mpq_class(cut.offset)) > reach_offset) {
+          offset = std::nextafter(offset, cut.offset);
+        }
         if (!(offset != cut.offset)) continue;
         std::vector<Plane> cuts(set.cuts.begin(), set.cuts.end());
         cuts.push_back(Plane{cut.normal, offset});
