@@ -1865,9 +1865,127 @@ ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& optio
   return report;
 }
 
-}  // namespace
+// --- Wedges beyond rounding's reach ------------------------------------------------
+// The last repair, tried only when every round above has failed and the piece
+// could not vanish whole: a cap folded against faces that share an edge with it
+// and lie nearly in its plane, though not all of their corners lie within
+// rounding's reach of it (a chain of near-parallel cuts: the earlier cap's
+// clipped faces run from the wedge's tip, on the cap, to corners far off its
+// plane), so the thin round cannot merge them and merging them whole moves more
+// than rounding may. Such faces are split where they leave rounding's reach:
+// along their line with a new plane parallel to the cap's, offset into the
+// piece by a few times the rounding move (the cap's doubles with another
+// offset, a plane of the set like any cut, so every new vertex is defined
+// exactly, as split_solid defines one). The solid is the same point set, with
+// more faces: the strips between the cap and the new plane are thin by their
+// corners, and the rounds above, run again on the refined solid, merge them
+// into the cap (the thin part of the wedge vanishes) and certify the result.
+// The volume moved is held to the original piece's bound, measured against its
+// exact volume, which the refinement does not change.
 
-RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options) {
+// The solid with each face of `split` (convex, one loop, with corners strictly on
+// both sides of `plane`) split along its line with `plane`, the crossing vertices
+// inserted into the edges of the faces across. `set` must hold `plane`. Returns
+// false, leaving `out` undefined, when no face was split.
+bool split_faces_along(const PlaneSet& set, const Solid& solid, PlaneRef plane, std::span<const std::uint32_t> split,
+                       Solid& out) {
+  out = Solid{};
+  out.defs = solid.defs;
+  out.approx = solid.approx;
+  out.convex = solid.convex;
+  std::vector<std::uint8_t> splitting(solid.faces.size(), 0);
+  std::vector<Sign> sides(solid.defs.size(), Sign::zero);
+  std::vector<std::uint8_t> sided(solid.defs.size(), 0);
+  const auto side_of = [&](VertexIndex v) {
+    if (!sided[v]) sides[v] = side(set, plane, solid.defs[v], solid.approx[v]), sided[v] = 1;
+    return sides[v];
+  };
+  for (const std::uint32_t f : split) {
+    const SolidFace& face = solid.faces[f];
+    if (!face.convex || face.loop_count != 1) continue;
+    bool below = false, above = false;
+    for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[face.first_loop])) {
+      below |= side_of(edge.from) == Sign::negative;
+      above |= side_of(edge.from) == Sign::positive;
+    }
+    splitting[f] = below && above;
+  }
+  // The crossing vertex of each crossed edge of a face split, once per edge.
+  IndexMap crossing(64);
+  bool any = false;
+  for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+    if (!splitting[f]) continue;
+    any = true;
+    const SolidFace& face = solid.faces[f];
+    for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[face.first_loop])) {
+      const Sign a = side_of(edge.from), b = side_of(edge.to);
+      if (a == Sign::zero || b == Sign::zero || a == b) continue;
+      const auto candidate = static_cast<VertexIndex>(out.defs.size());
+      if (crossing.insert(undirected_edge_key(edge.from, edge.to), candidate) != candidate) continue;
+      const EdgeLine& line = solid.corners[edge.corner].line;
+      PointDef def;
+      if (line.is_segment()) {
+        def = PointDef::segment_plane(line.p, line.q, plane);
+      } else {
+        PlaneRef x = face.plane, y = line.other;
+        if (y.bits < x.bits) std::swap(x, y);
+        def = PointDef::three_planes(x, y, plane);
+      }
+      out.defs.push_back(def);
+      out.approx.push_back(approximate(set, def));
+    }
+  }
+  if (!any) return false;
+  std::vector<SolidCorner> augmented;
+  for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+    const SolidFace& face = solid.faces[f];
+    SolidFace copy = face;
+    copy.first_loop = static_cast<std::uint32_t>(out.loops.size());
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+      augmented.clear();
+      for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+        const EdgeLine& line = solid.corners[edge.corner].line;
+        augmented.push_back({edge.from, line});
+        const VertexIndex x = crossing.find(undirected_edge_key(edge.from, edge.to));
+        if (x != no_index) augmented.push_back({x, line});
+      }
+      if (!splitting[f]) {
+        out.loops.push_back({static_cast<std::uint32_t>(out.corners.size()), static_cast<std::uint32_t>(augmented.size())});
+        out.corners.insert(out.corners.end(), augmented.begin(), augmented.end());
+        continue;
+      }
+      // A convex loop with corners strictly on both sides meets the plane at
+      // exactly two of its (augmented) corners: the chord between them.
+      std::vector<std::size_t> on;
+      for (std::size_t i = 0; i < augmented.size(); ++i) {
+        const VertexIndex v = augmented[i].vertex;
+        if (v >= solid.defs.size() || side_of(v) == Sign::zero) on.push_back(i);
+      }
+      if (on.size() != 2) return false;
+      EdgeLine chord;
+      chord.other = plane;
+      for (const auto& [from, to] : {std::pair{on[0], on[1]}, std::pair{on[1], on[0]}}) {
+        if (from != on[0]) copy.first_loop = static_cast<std::uint32_t>(out.loops.size());
+        const auto first = static_cast<std::uint32_t>(out.corners.size());
+        for (std::size_t i = from; i != to; i = (i + 1) % augmented.size()) out.corners.push_back(augmented[i]);
+        out.corners.push_back({augmented[to].vertex, chord});
+        out.loops.push_back({first, static_cast<std::uint32_t>(out.corners.size()) - first});
+        copy.loop_count = 1;
+        out.faces.push_back(copy);
+      }
+    }
+    if (!splitting[f]) {
+      copy.loop_count = face.loop_count;
+      out.faces.push_back(copy);
+    }
+  }
+  return true;
+}
+
+// round_solid; `collapse_wedges`: also the last repair above (not when rounding a
+// solid it refined).
+RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options,
+                                bool collapse_wedges) {
   if (!options.face_attempts.empty() && options.face_attempts.size() != solid.faces.size()) {
     throw std::invalid_argument("round_solid: face_attempts must hold one attempt per face");
   }
@@ -2187,9 +2305,104 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
                                   "moves): " + first_report.summary();
     return result;
   }
+  // The wedges beyond rounding's reach (see split_faces_along): the faces folded
+  // against a cap, per cap plane, split along a plane offset from it into the
+  // piece by 2, 1 and 4 times the rounding move, each refined solid rounded
+  // again by every round above. Not for a union of parts (its caller keeps the
+  // parts when it fails) nor for a solid allowed to cross itself.
+  if (collapse_wedges && options.parts.empty() && !options.allow_self_intersections) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+    for (const auto& phase : fold_pairs) {
+      for (const auto& found : phase) pairs.insert(pairs.end(), found.begin(), found.end());
+    }
+    for (const auto& found : snap_folds) pairs.insert(pairs.end(), found.begin(), found.end());
+    // (cap face, face folded against it), the cap on a cut plane and the other
+    // face on another plane; in order of the cap plane, then the face.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> against;
+    for (const auto& [f, g] : pairs) {
+      for (const auto& [c, o] : {std::pair{f, g}, std::pair{g, f}}) {
+        if (c < solid.faces.size() && o < solid.faces.size() && solid.faces[c].plane.is_cut() &&
+            solid.faces[c].plane != solid.faces[o].plane) {
+          against.emplace_back(c, o);
+        }
+      }
+    }
+    const auto plane_bits = [&](std::uint32_t f) { return solid.faces[f].plane.bits; };
+    std::sort(against.begin(), against.end(), [&](const auto& x, const auto& y) {
+      return plane_bits(x.first) != plane_bits(y.first) ? plane_bits(x.first) < plane_bits(y.first) : x < y;
+    });
+    if (!against.empty() && !reach) {
+      for (VertexIndex v = 0; v < solid.defs.size(); ++v) {
+        output_positions.push_back(output_position(set, solid.defs[v], solid.approx[v]));
+      }
+      reach.emplace(set, solid, output_positions);
+    }
+    for (std::size_t i = 0; i < against.size();) {
+      std::size_t j = i;
+      std::vector<std::uint32_t> faces;
+      while (j < against.size() && plane_bits(against[j].first) == plane_bits(against[i].first)) {
+        faces.push_back(against[j++].second);
+      }
+      std::sort(faces.begin(), faces.end());
+      faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+      const SolidFace& cap = solid.faces[against[i].first];
+      i = j;
+      const Plane& cut = set.cuts[cap.plane.index()];
+      const double largest = std::max({std::fabs(cut.normal.x), std::fabs(cut.normal.y), std::fabs(cut.normal.z)});
+      for (const int times : {2, 1, 4}) {
+        // The piece lies behind the cap's outward normal: n.x + d < 0 when the cap
+        // faces along +n, so the new plane n.x + d' = 0 with d' = d + h lies in
+        // it; the doubles d' and h are whatever they round to, the plane exact.
+        // The offset is held to the reach exactly (|d' - d| <= times rho max |n_i|),
+        // stepping d' toward d while the rounding of d + h put it beyond: the
+        // strips' corners on the new plane must lie within the thin rounds' reach.
+        const mpq_class reach_offset = times * reach->rho * largest;
+        const double h = reach_offset.get_d();
+        double offset = cap.reversed ? cut.offset - h : cut.offset + h;
+        while (offset != cut.offset && abs(mpq_class(offset) - mpq_class(cut.offset)) > reach_offset) {
+          offset = std::nextafter(offset, cut.offset);
+        }
+        if (!(offset != cut.offset)) continue;
+        std::vector<Plane> cuts(set.cuts.begin(), set.cuts.end());
+        cuts.push_back(Plane{cut.normal, offset});
+        const PlaneSet refined_set{set.points, set.inputs, set.input_approx, cuts};
+        // A refinement that cannot be made or rounded (a definition found
+        // degenerate, a face that cannot be triangulated) leaves the refusal as it was.
+        Solid refined;
+        RoundedSolid written;
+        try {
+          if (!split_faces_along(refined_set, solid, PlaneRef::cut(static_cast<std::uint32_t>(cuts.size() - 1)), faces,
+                                 refined) ||
+              !check_solid(refined_set, refined).empty()) {
+            continue;
+          }
+          SolidMeshOptions refined_options = options;
+          refined_options.face_attempts = {};
+          written = round_solid_rounds(refined_set, refined, refined_options, false);
+        } catch (const UnsupportedGeometryError&) {
+          continue;
+        } catch (const std::domain_error&) {
+          continue;
+        }
+        if (!written.valid) continue;
+        // Held to the piece's own bound, against its exact volume (the refined
+        // solid's, the same point set).
+        if (!report_moved_volume(measured_moved_volume(set, solid, written.mesh), written)) continue;
+        written.attempt = -1;
+        written.wedge_faces_split = refined.faces.size() - solid.faces.size();
+        return written;
+      }
+    }
+  }
   result.defect = first_report.summary();
   result.collapsed = false;
   return result;
+}
+
+}  // namespace
+
+RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options) {
+  return round_solid_rounds(set, solid, options, true);
 }
 
 MassProperties solid_mass_properties(const Solid& solid) {

@@ -147,6 +147,10 @@ struct RoundedSolid {
   /// (snap rounding's hot pixels at a coarser pixel; see round_solid): the count
   /// of vertices so moved.
   std::size_t snapped_vertices = 0;
+  /// Faces split where they leave rounding's reach of a cap they folded
+  /// against, so that the thin part of the wedge between them could vanish (the
+  /// last repair; see round_solid): the count of faces added by the splits.
+  std::size_t wedge_faces_split = 0;
   /// |volume change| the repairs made: the separation's moves, the written mesh
   /// against the exact piece when parts of it vanished as sheets, the whole
   /// exact volume when the piece collapsed (exact values rounded toward zero to
@@ -229,6 +233,16 @@ struct RoundedSolid {
 /// loops, run the other way, become a hole of the cap, the slab vanishes and the
 /// cavity opens through it (`folded_faces`; held to the same certificate and
 /// volume bound).
+/// Last, only for a piece that would otherwise be refused (neither certified nor
+/// collapsed) and is no union of parts: the faces the rounds found folded against
+/// a cap (a face on a cut plane) that are convex and leave rounding's reach of it
+/// (a near-parallel chain's earlier cap, clipped) are split along a plane
+/// parallel to the cap's, offset into the piece by 2, 1 or 4 times the largest
+/// rounding move (an exact plane: the cap's doubles with another offset), the
+/// crossing points inserted into the edges of the faces across; every round above
+/// then runs once on the refined solid (the same point set), whose strips by the
+/// cap are thin by their corners and merge into it (`wedge_faces_split`); held to
+/// the certificate and to the original piece's volume bound, measured exactly.
 /// A part thinner than the rounding that rounds flat (its triangles laid over each
 /// other once each way) vanishes into its neighbour (`vanished_triangles`); a piece
 /// that rounds flat whole, or that cannot be certified while its exact volume is
@@ -248,8 +262,9 @@ struct RoundedSolid {
 /// through it, merges of folded faces only remove loops, a hot pixel splits a
 /// triangle once per step, over a fixed set of four attempts, each tried again
 /// untangling edges, and three of them at most six times in each of three
-/// phases of folds, of six pixel sizes and of the pairs apart: a finite ladder of steps, each a
-/// finite pass); deterministic. Failure: neither
+/// phases of folds, of six pixel sizes and of the pairs apart, and at most three
+/// refined solids per cap plane, each rounded by that ladder without refining
+/// again: a finite ladder of steps, each a finite pass); deterministic. Failure: neither
 /// valid nor collapsed, `defect` names what the first rounding broke.
 RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options = {});
 
