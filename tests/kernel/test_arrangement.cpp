@@ -1,0 +1,343 @@
+// The exact arrangement of intersecting triangles (arrange_triangles), judged
+// apart from the code that makes it: on the vertices' exact rational coordinates,
+// the pieces of every input triangle tile it (each inside it, turning its way,
+// their areas summing to its area exactly) and no two pieces cross (CGAL PMP's
+// pair semantics on exact points: they meet only in what they share by index).
+// Over seeded overlapping solids in general position, lattice solids whose
+// contacts are exact (vertices on faces and edges, edges through edges), three
+// solids whose surfaces meet at triple points, and the self-intersecting corpus.
+
+#include <CGAL/box_intersection_d.h>
+#include <gmpxx.h>
+
+#include <algorithm>
+#include <array>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
+#include "shatter/kernel/arrangement.hpp"
+#include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/io.hpp"
+#include "shatter/kernel/rationals.hpp"
+#include "shatter/kernel/self_intersections.hpp"
+#include "shatter/kernel/validate.hpp"
+
+using namespace shatter;
+
+namespace {
+
+using Q3 = std::array<mpq_class, 3>;
+using EK = ExactKernel;
+
+// The mesh turned by angles (a, b, c) about x, then y, then z, and shifted
+// (rounded as doubles round: only the input is made this way).
+Mesh turned(Mesh mesh, double a, double b, double c, Vec3 shift) {
+  for (Vec3& p : mesh.positions) {
+    Vec3 q{p.x, std::cos(a) * p.y - std::sin(a) * p.z, std::sin(a) * p.y + std::cos(a) * p.z};
+    q = {std::cos(b) * q.x + std::sin(b) * q.z, q.y, -std::sin(b) * q.x + std::cos(b) * q.z};
+    q = {std::cos(c) * q.x - std::sin(c) * q.y, std::sin(c) * q.x + std::cos(c) * q.y, q.z};
+    p = {q.x + shift.x, q.y + shift.y, q.z + shift.z};
+  }
+  return mesh;
+}
+
+// The octahedron |x - c| + |y - c| + |z - c| = r on integer points: its face
+// planes are never parallel to an axis box's, so against one only exact
+// contacts are degenerate, never coplanar faces.
+Mesh octahedron(Vec3 c, double r) {
+  std::vector<Vec3> p{{c.x + r, c.y, c.z}, {c.x - r, c.y, c.z}, {c.x, c.y + r, c.z},
+                      {c.x, c.y - r, c.z}, {c.x, c.y, c.z + r}, {c.x, c.y, c.z - r}};
+  return test::mesh_from(p, {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}});
+}
+
+EK::Point_3 ek(const Q3& c) { return {EK::FT(c[0]), EK::FT(c[1]), EK::FT(c[2])}; }
+
+// CGAL PMP's pair semantics on exact points (as tests/kernel's finder oracle).
+bool pieces_intersect(const std::vector<EK::Point_3>& points, const Triangle& a, const Triangle& b) {
+  int shared = 0, shared_a = -1, shared_b = -1;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      if (a[i] != b[j]) continue;
+      ++shared;
+      if (shared_a < 0) shared_a = i, shared_b = j;
+    }
+  }
+  const auto p = [&](VertexIndex v) { return points[v]; };
+  if (shared >= 3) return true;
+  if (shared == 2) {
+    int ia = 0, ib = 0;
+    for (int i = 0; i < 3; ++i) {
+      if (a[i] != b[0] && a[i] != b[1] && a[i] != b[2]) ia = i;
+      if (b[i] != a[0] && b[i] != a[1] && b[i] != a[2]) ib = i;
+    }
+    const EK::Point_3 u = p(a[(ia + 1) % 3]), v = p(a[(ia + 2) % 3]), x = p(a[ia]), y = p(b[ib]);
+    return CGAL::coplanar(u, v, x, y) && CGAL::coplanar_orientation(u, v, x, y) == CGAL::POSITIVE;
+  }
+  const EK::Triangle_3 ta(p(a[0]), p(a[1]), p(a[2])), tb(p(b[0]), p(b[1]), p(b[2]));
+  if (shared == 1) {
+    const EK::Segment_3 sa(p(a[(shared_a + 1) % 3]), p(a[(shared_a + 2) % 3]));
+    const EK::Segment_3 sb(p(b[(shared_b + 1) % 3]), p(b[(shared_b + 2) % 3]));
+    return CGAL::do_intersect(ta, sb) || CGAL::do_intersect(tb, sa);
+  }
+  return CGAL::do_intersect(ta, tb);
+}
+
+// The same semantics for two pieces of one source triangle, in its projection
+// dropping `axis` (one to one on its plane): exact and free of the coplanar
+// degeneracy that makes the 3D test slow on neighbours in one plane.
+bool pieces_intersect_in_plane(const std::vector<EK::Point_3>& points, const Triangle& a, const Triangle& b, int axis) {
+  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+  const auto p = [&](VertexIndex v) { return EK::Point_2(points[v][i], points[v][j]); };
+  int shared = 0, shared_a = -1, shared_b = -1;
+  for (int x = 0; x < 3; ++x) {
+    for (int y = 0; y < 3; ++y) {
+      if (a[x] != b[y]) continue;
+      ++shared;
+      if (shared_a < 0) shared_a = x, shared_b = y;
+    }
+  }
+  if (shared >= 3) return true;
+  if (shared == 2) {
+    int ia = 0, ib = 0;
+    for (int x = 0; x < 3; ++x) {
+      if (a[x] != b[0] && a[x] != b[1] && a[x] != b[2]) ia = x;
+      if (b[x] != a[0] && b[x] != a[1] && b[x] != a[2]) ib = x;
+    }
+    const EK::Point_2 u = p(a[(ia + 1) % 3]), v = p(a[(ia + 2) % 3]);
+    return CGAL::orientation(u, v, p(a[ia])) != CGAL::opposite(CGAL::orientation(u, v, p(b[ib])));
+  }
+  const EK::Triangle_2 ta(p(a[0]), p(a[1]), p(a[2])), tb(p(b[0]), p(b[1]), p(b[2]));
+  if (shared == 1) {
+    const EK::Segment_2 sa(p(a[(shared_a + 1) % 3]), p(a[(shared_a + 2) % 3]));
+    const EK::Segment_2 sb(p(b[(shared_b + 1) % 3]), p(b[(shared_b + 2) % 3]));
+    return CGAL::do_intersect(ta, sb) || CGAL::do_intersect(tb, sa);
+  }
+  return CGAL::do_intersect(ta, tb);
+}
+
+struct Tally {
+  std::size_t meshes = 0, split = 0, new_points = 0, triple_points = 0, pieces = 0, coplanar_pairs = 0;
+};
+
+// Twice the signed area of (a, b, c) in the projection dropping `axis`.
+mpq_class twice_area(const Q3& a, const Q3& b, const Q3& c, int axis) {
+  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+  return (b[i] - a[i]) * (c[j] - a[j]) - (b[j] - a[j]) * (c[i] - a[i]);
+}
+
+// Checks every promise of arrange_triangles on `mesh`; `coplanar_allowed`: the
+// mesh may have intersecting pairs on one plane (the corpus), whose pieces are
+// then exempt from the crossing check with each other.
+void check_arrangement(const std::string& name, const Mesh& mesh, Tally& tally, bool coplanar_allowed = false) {
+  INFO(name);
+  const MeshArrangement arrangement = arrange_triangles(mesh.positions, mesh.triangles);
+  if (!coplanar_allowed) REQUIRE(arrangement.coplanar_pairs.empty());
+  const PlaneSet set = arrangement.plane_set();
+  REQUIRE(arrangement.triangles.size() == arrangement.source.size());
+  REQUIRE(arrangement.defs.size() == arrangement.approx.size());
+  REQUIRE(arrangement.pairs == self_intersecting_pairs(mesh.positions, mesh.triangles));
+  for (VertexIndex v = 0; v < mesh.positions.size(); ++v) REQUIRE(arrangement.defs[v] == PointDef::input(v));
+
+  // Deterministic: a second run gives the same arrangement.
+  const MeshArrangement again = arrange_triangles(mesh.positions, mesh.triangles);
+  CHECK(again.triangles == arrangement.triangles);
+  CHECK(again.source == arrangement.source);
+  CHECK(again.defs == arrangement.defs);
+
+  std::vector<Q3> exact;
+  exact.reserve(arrangement.defs.size());
+  for (const PointDef& def : arrangement.defs) exact.push_back(exact_coordinates(set, def));
+  // No two vertices are one point, but for input positions repeated.
+  {
+    std::vector<std::size_t> order(exact.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    const auto less = [&](std::size_t a, std::size_t b) {
+      for (int k = 0; k < 3; ++k) {
+        if (exact[a][k] != exact[b][k]) return exact[a][k] < exact[b][k];
+      }
+      return false;
+    };
+    std::sort(order.begin(), order.end(), less);
+    for (std::size_t k = 1; k < order.size(); ++k) {
+      if (!less(order[k - 1], order[k])) {
+        CHECK(order[k - 1] < mesh.positions.size());
+        CHECK(order[k] < mesh.positions.size());
+      }
+    }
+  }
+
+  // Tiling: per source, pieces inside it, turning its way, areas summing to its area.
+  std::vector<mpq_class> covered(mesh.triangles.size(), 0);
+  std::vector<std::size_t> piece_count(mesh.triangles.size(), 0);
+  for (std::size_t k = 0; k < arrangement.triangles.size(); ++k) {
+    const std::uint32_t t = arrangement.source[k];
+    REQUIRE(t < mesh.triangles.size());
+    const Triangle& piece = arrangement.triangles[k];
+    const Triangle& tri = mesh.triangles[t];
+    const int axis = projection_of(set, PlaneRef::input(t)).axis;
+    const PlaneRef plane = PlaneRef::input(t);
+    for (VertexIndex v : piece) {
+      REQUIRE(v < arrangement.defs.size());
+      CHECK(side(set, plane, arrangement.defs[v], arrangement.approx[v]) == Sign::zero);
+    }
+    const Q3 a{mpq_class(mesh.positions[tri[0]].x), mpq_class(mesh.positions[tri[0]].y),
+               mpq_class(mesh.positions[tri[0]].z)};
+    const Q3 b{mpq_class(mesh.positions[tri[1]].x), mpq_class(mesh.positions[tri[1]].y),
+               mpq_class(mesh.positions[tri[1]].z)};
+    const Q3 c{mpq_class(mesh.positions[tri[2]].x), mpq_class(mesh.positions[tri[2]].y),
+               mpq_class(mesh.positions[tri[2]].z)};
+    const mpq_class whole = twice_area(a, b, c, axis);
+    const mpq_class area = twice_area(exact[piece[0]], exact[piece[1]], exact[piece[2]], axis);
+    CHECK(sgn(area) == sgn(whole));  // turning the source's way, and not flat
+    for (VertexIndex v : piece) {
+      // Inside the closed source triangle: on no edge's outer side.
+      CHECK(sgn(twice_area(a, b, exact[v], axis)) * sgn(whole) >= 0);
+      CHECK(sgn(twice_area(b, c, exact[v], axis)) * sgn(whole) >= 0);
+      CHECK(sgn(twice_area(c, a, exact[v], axis)) * sgn(whole) >= 0);
+    }
+    covered[t] += area;
+    ++piece_count[t];
+  }
+  std::size_t split = 0;
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    const int axis = projection_of(set, PlaneRef::input(t)).axis;
+    Q3 p[3];
+    for (int k = 0; k < 3; ++k)
+      p[k] = {mpq_class(mesh.positions[tri[k]].x), mpq_class(mesh.positions[tri[k]].y),
+              mpq_class(mesh.positions[tri[k]].z)};
+    CHECK(covered[t] == twice_area(p[0], p[1], p[2], axis));
+    CHECK(piece_count[t] >= 1);
+    split += piece_count[t] > 1;
+  }
+  CHECK(split == arrangement.split_triangles);
+
+  // No two pieces cross: every pair whose boxes meet, decided exactly.
+  std::vector<EK::Point_3> points;
+  points.reserve(exact.size());
+  for (const Q3& q : exact) points.push_back(ek(q));
+  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::size_t>;
+  std::vector<Box> boxes;
+  for (std::size_t k = 0; k < arrangement.triangles.size(); ++k) {
+    const Triangle& piece = arrangement.triangles[k];
+    const CGAL::Bbox_3 box = points[piece[0]].bbox() + points[piece[1]].bbox() + points[piece[2]].bbox();
+    boxes.emplace_back(box, k);
+  }
+  std::set<std::pair<std::size_t, std::size_t>> coplanar;
+  for (const TrianglePair& pair : arrangement.coplanar_pairs) coplanar.insert(pair);
+  std::size_t crossings = 0;
+  CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), [&](const Box& x, const Box& y) {
+    const std::size_t i = x.info(), j = y.info();
+    const std::uint32_t s = arrangement.source[i], u = arrangement.source[j];
+    if (coplanar.count({std::min(s, u), std::max(s, u)}) != 0) return;
+    const bool crossing = s == u ? pieces_intersect_in_plane(points, arrangement.triangles[i], arrangement.triangles[j],
+                                                             projection_of(set, PlaneRef::input(s)).axis)
+                                 : pieces_intersect(points, arrangement.triangles[i], arrangement.triangles[j]);
+    if (crossing) ++crossings;
+  });
+  CHECK(crossings == 0);
+
+  ++tally.meshes;
+  tally.split += arrangement.split_triangles;
+  tally.new_points += arrangement.defs.size() - mesh.positions.size();
+  for (const PointDef& def : arrangement.defs) tally.triple_points += def.kind == PointKind::three_planes;
+  tally.pieces += arrangement.triangles.size();
+  tally.coplanar_pairs += arrangement.coplanar_pairs.size();
+}
+
+}  // namespace
+
+TEST_CASE("a mesh whose triangles do not intersect is its own arrangement", "[arrangement]") {
+  for (const test::NamedMesh& named : test::generated_meshes()) {
+    INFO(named.name);
+    const MeshArrangement arrangement = arrange_triangles(named.mesh.positions, named.mesh.triangles);
+    CHECK(arrangement.pairs.empty());
+    CHECK(arrangement.triangles == named.mesh.triangles);
+    CHECK(arrangement.defs.size() == named.mesh.positions.size());
+    CHECK(arrangement.split_triangles == 0);
+    for (std::uint32_t t = 0; t < arrangement.source.size(); ++t) CHECK(arrangement.source[t] == t);
+  }
+}
+
+TEST_CASE("overlapping solids in general position: pieces tile their triangles and never cross", "[arrangement]") {
+  test::Random random(20261204);
+  Tally tally;
+  for (int seed = 0; seed < 8; ++seed) {
+    const std::string tag = " #" + std::to_string(seed);
+    const auto angle = [&] { return random.uniform(0, 6.283185307179586); };
+    const auto shift = [&](double reach) {
+      return Vec3{random.uniform(-reach, reach), random.uniform(-reach, reach), random.uniform(-reach, reach)};
+    };
+    // Two boxes overlapping at a random angle.
+    const Mesh box = test::box({-1, -1, -1}, {1, 1, 1});
+    check_arrangement("two boxes" + tag, test::merge({box, turned(box, angle(), angle(), angle(), shift(1.5))}), tally);
+    // Two spheres, and a third solid through both: triple points.
+    const Mesh sphere = test::ellipsoid({0, 0, 0}, {1, 1, 1}, 10 + seed % 4, 7 + seed % 3);
+    check_arrangement("two spheres" + tag,
+                      test::merge({turned(sphere, angle(), angle(), angle(), shift(0.2)),
+                                   turned(sphere, angle(), angle(), angle(), shift(1.2))}),
+                      tally);
+    const Mesh small = test::ellipsoid({0, 0, 0}, {1, 1, 1}, 8, 6);
+    check_arrangement("sphere, torus and box" + tag,
+                      test::merge({turned(small, angle(), angle(), angle(), shift(0.3)),
+                                   turned(test::torus(0.9, 0.3, 8, 5), angle(), angle(), angle(), shift(0.3)),
+                                   turned(box, angle(), angle(), angle(), shift(0.8))}),
+                      tally);
+  }
+  CHECK(tally.meshes == 24);
+  // The properties were checked on real intersections.
+  CHECK(tally.split > 1000);
+  CHECK(tally.triple_points > 20);
+}
+
+TEST_CASE("exact contacts on a lattice: vertices on faces and edges, edges through edges", "[arrangement]") {
+  test::Random random(7);
+  Tally tally;
+  for (int seed = 0; seed < 200; ++seed) {
+    // An axis box and an octahedron on integer points: the octahedron's corners
+    // land on the box's faces, edges and corners, its edges cross the box's
+    // edges and pass through its corners, and no two faces are coplanar.
+    const auto lattice = [&](int lo, int hi) {
+      return static_cast<double>(lo + static_cast<int>(random.index(hi - lo + 1)));
+    };
+    const Mesh box = test::grid_box({0, 0, 0}, {2, 2, 2}, 1 + seed % 2);
+    const Mesh octa = octahedron({lattice(-1, 3), lattice(-1, 3), lattice(-1, 3)}, lattice(1, 3));
+    check_arrangement("box and octahedron #" + std::to_string(seed), test::merge({box, octa}), tally);
+  }
+  CHECK(tally.meshes == 200);
+  CHECK(tally.split > 500);
+}
+
+TEST_CASE("the self-intersecting corpus: pieces tile their triangles and never cross", "[arrangement][corpus]") {
+  Tally tally;
+  for (const auto& path : test::self_intersecting_meshes()) {
+    const Mesh mesh = read_mesh(path);
+    check_arrangement(path.filename().string(), mesh, tally);
+  }
+  CHECK(tally.meshes >= 3);
+  CHECK(tally.split > 100);
+}
+
+TEST_CASE("overlaps on one plane are reported, not resolved; every other intersection is", "[arrangement]") {
+  // Axis boxes sharing face planes: faces that overlap on one plane, beside
+  // faces that cross. The tiling holds for every triangle; pieces cross only
+  // where their sources are a reported coplanar pair.
+  Tally tally;
+  for (int seed = 0; seed < 8; ++seed) {
+    const double s = 0.25 * (1 + seed % 4);
+    check_arrangement(
+        "boxes on shared planes #" + std::to_string(seed),
+        test::merge({test::grid_box({0, 0, 0}, {1, 1, 1}, 1 + seed % 2), test::box({s, s, 0}, {s + 1, s + 1, 1}),
+                     octahedron({0.5, 0.5, 0.5 + 0.25 * (seed % 3)}, 0.75)}),
+        tally, true);
+  }
+  CHECK(tally.meshes == 8);
+  CHECK(tally.coplanar_pairs > 0);
+  CHECK(tally.split > 50);
+}
