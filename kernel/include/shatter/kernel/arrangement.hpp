@@ -49,8 +49,10 @@ struct MeshArrangement {
   std::vector<Triangle> triangles;
   std::vector<std::uint32_t> source;  ///< per piece: the input triangle it lies in
   /// The intersecting pairs (self_intersecting_pairs), and of those the pairs on
-  /// one plane, which are not resolved: their overlap is left as it is (each
-  /// triangle is still split by its other intersections).
+  /// one plane, which are not resolved yet: their overlap is left as it is, and
+  /// the trace of a third triangle across them is cut where one of them ends
+  /// but not in the other, so pieces may then cross (each triangle is still
+  /// tiled by its pieces).
   std::vector<TrianglePair> pairs, coplanar_pairs;
   std::size_t split_triangles = 0;  ///< input triangles split into more than one piece
 
