@@ -23,6 +23,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -80,5 +81,19 @@ struct MeshArrangement {
 /// segments O(k^2) exact predicates to find crossings, O(k * vertices) to cut
 /// the segments, and a rational constrained triangulation of its vertices.
 MeshArrangement arrange_triangles(std::span<const Vec3> positions, std::span<const Triangle> triangles);
+
+/// The points `around` ordered by their angle about the oriented line from p to
+/// q, counter-clockwise seen from q looking at p (the right-hand turn about
+/// q - p), starting with around[0]: indices into `around`. order_around_line for
+/// plane-based points, decided on their exact rational coordinates, as the order
+/// of an arrangement's pieces around an edge they share is (the cells between
+/// consecutive pieces are where winding numbers propagate; Zhou et al. 2016,
+/// section 4). Returns nullopt when two points lie in one half-plane bounded by
+/// the line (equal angles: no strict order) or one lies on the line.
+/// Preconditions: sound definitions over `set`, p and q different points.
+/// Cost: the exact coordinates of the k + 2 points, then O(k log k) rational
+/// determinants. Failure: none beyond std::bad_alloc.
+std::optional<std::vector<std::size_t>> order_around_edge(const PlaneSet& set, const PointDef& p, const PointDef& q,
+                                                          std::span<const PointDef> around);
 
 }  // namespace shatter
