@@ -1,0 +1,99 @@
+#pragma once
+// The exact arrangement of a triangle mesh whose triangles may intersect: every
+// triangle that meets another one split along their intersection, so that the
+// pieces tile the input triangles exactly and no two pieces cross. The first
+// stage of resolving self-intersections as mesh arrangements do (Zhou,
+// Grinspun, Zorin & Jacobson 2016, "Mesh arrangements for solid geometry":
+// intersect, subdivide each triangle by a constrained triangulation in its own
+// plane, later label cells by winding number; Cherchi, Livesu, Scateni & Attene
+// 2020, "Fast and robust mesh arrangements using floating-point arithmetic":
+// the new points kept implicit, as meets of the input planes, and every decision
+// an exact predicate on them). Winding numbers and the solid they select are not
+// here yet (README, "Repair").
+//
+// Every vertex is a plane-based point (implicit.hpp) over the input points and
+// one input plane per triangle (input plane t is triangle t's plane): an input
+// vertex; an edge of one triangle met by another's plane (segment_plane); or the
+// meet of three triangles' planes, where two intersection segments cross inside
+// a third triangle (three_planes). No coordinate is constructed to decide
+// anything: where two segments meet and how each triangle's pieces are laid out
+// are decided by exact orientation and order predicates on these points; the
+// triangulation of a split triangle is a constrained Delaunay triangulation of
+// its points' exact rational coordinates in its projection.
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "shatter/kernel/implicit.hpp"
+#include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/self_intersections.hpp"
+#include "shatter/kernel/solid.hpp"
+
+namespace shatter {
+
+/// The arrangement of a triangle soup: triangles over plane-based vertices.
+struct MeshArrangement {
+  /// points: the input positions; input plane t: the plane of input triangle t
+  /// through its corners (so its front is the side the triangle faces).
+  InputGeometry geometry;
+  /// Per vertex. Vertex v < positions.size() is input vertex v
+  /// (PointDef::input(v)); new points follow, each once (no two vertices are
+  /// the same point, exactly, but for input positions the caller repeated).
+  std::vector<PointDef> defs;
+  std::vector<ApproxPoint> approx;  ///< per vertex, approximate(defs[v])
+  /// The pieces, over vertex indices, each in its source triangle's plane and
+  /// turning as that triangle does. Grouped by source in input order: a triangle
+  /// that meets no other (or only on its own plane) is copied as it is.
+  std::vector<Triangle> triangles;
+  std::vector<std::uint32_t> source;  ///< per piece: the input triangle it lies in
+  /// The intersecting pairs (self_intersecting_pairs), and of those the pairs on
+  /// one plane, which are not resolved yet: their overlap is left as it is, and
+  /// the trace of a third triangle across them is cut where one of them ends
+  /// but not in the other, so pieces may then cross (each triangle is still
+  /// tiled by its pieces).
+  std::vector<TrianglePair> pairs, coplanar_pairs;
+  std::size_t split_triangles = 0;  ///< input triangles split into more than one piece
+
+  /// The plane set the vertices are defined over (a view of `geometry`).
+  PlaneSet plane_set() const { return geometry.plane_set({}); }
+};
+
+/// The exact arrangement of `triangles` (see the file comment). For every pair
+/// the exact grid finder reports (self_intersecting_pairs) whose triangles are
+/// not on one plane, their intersection, a segment or a point on the line where
+/// their planes meet, is computed as plane-based points (ordered along that line
+/// exactly); in each triangle, the segments of its pairs are cut where they cross
+/// one another (three_planes points) and wherever a vertex lies on them, and the
+/// triangle is triangulated with those pieces as constraints.
+/// Guarantees, when `coplanar_pairs` is empty: the pieces of each input
+/// triangle tile it exactly (their union is the triangle, their interiors are
+/// disjoint, none is flat); any two pieces meet, if at all, in a vertex or an edge
+/// they share by index (no crossing, no vertex inside another piece's edge), so
+/// the pieces are a self-intersection-free triangle soup over the same surface.
+/// A mesh whose triangles do not intersect comes back as it is: the same
+/// triangles, no new vertex. Deterministic: a function of the input alone.
+/// Preconditions: indices in range, finite coordinates, no triangle with
+/// collinear corners (as self_intersecting_pairs). Failure: none beyond
+/// std::bad_alloc. Cost: the pair search, plus per split triangle with k
+/// segments O(k^2) exact predicates to find crossings, O(k * vertices) to cut
+/// the segments, and a rational constrained triangulation of its vertices.
+MeshArrangement arrange_triangles(std::span<const Vec3> positions, std::span<const Triangle> triangles);
+
+/// The points `around` ordered by their angle about the oriented line from p to
+/// q, counter-clockwise seen from q looking at p (the right-hand turn about
+/// q - p), starting with around[0]: indices into `around`. order_around_line for
+/// plane-based points, decided on their exact rational coordinates, as the order
+/// of an arrangement's pieces around an edge they share is (the cells between
+/// consecutive pieces are where winding numbers propagate; Zhou et al. 2016,
+/// section 4). Returns nullopt when two points lie in one half-plane bounded by
+/// the line (equal angles: no strict order) or one lies on the line.
+/// Preconditions: sound definitions over `set`, p and q different points.
+/// Cost: the exact coordinates of the k + 2 points, then O(k log k) rational
+/// determinants. Failure: none beyond std::bad_alloc.
+std::optional<std::vector<std::size_t>> order_around_edge(const PlaneSet& set, const PointDef& p, const PointDef& q,
+                                                          std::span<const PointDef> around);
+
+}  // namespace shatter

@@ -1,0 +1,370 @@
+#include "shatter/kernel/arrangement.hpp"
+
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+
+#include <algorithm>
+#include <array>
+#include <map>
+#include <optional>
+#include <utility>
+
+#include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/predicates.hpp"
+#include "shatter/kernel/rationals.hpp"
+
+namespace shatter {
+namespace {
+
+using ExactCoordinates = std::array<mpq_class, 3>;
+
+struct LessCoordinates {
+  bool operator()(const ExactCoordinates& a, const ExactCoordinates& b) const {
+    for (int k = 0; k < 3; ++k) {
+      const int c = cmp(a[k], b[k]);
+      if (c != 0) return c < 0;
+    }
+    return false;
+  }
+};
+
+// One intersection inside a triangle: the segment (or point, a == b) where it
+// meets another triangle, on the line where its plane meets `other`.
+struct Trace {
+  VertexIndex a = 0, b = 0;
+  PlaneRef other;
+};
+
+using VertexBase = CGAL::Triangulation_vertex_base_with_info_2<VertexIndex, ExactKernel>;
+using FaceBase = CGAL::Constrained_triangulation_face_base_2<ExactKernel>;
+using Tds = CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>;
+// Constraints are cut beforehand wherever they meet, so none crosses another:
+// the triangulation never constructs a point.
+using Cdt = CGAL::Constrained_Delaunay_triangulation_2<ExactKernel, Tds, CGAL::No_constraint_intersection_tag>;
+
+class Arranger {
+ public:
+  Arranger(std::span<const Vec3> positions, std::span<const Triangle> triangles)
+      : positions_(positions), triangles_(triangles) {
+    MeshArrangement& out = result_;
+    out.geometry.points.assign(positions.begin(), positions.end());
+    out.geometry.planes.reserve(triangles.size());
+    out.geometry.plane_approx.reserve(triangles.size());
+    for (const Triangle& t : triangles) {
+      out.geometry.planes.push_back(t);
+      out.geometry.plane_approx.push_back(approximate_input_plane(positions[t[0]], positions[t[1]], positions[t[2]]));
+    }
+    out.defs.reserve(positions.size());
+    out.approx.reserve(positions.size());
+    for (VertexIndex v = 0; v < positions.size(); ++v) {
+      out.defs.push_back(PointDef::input(v));
+      // An input point's approximation is exact: no plane is involved.
+      out.approx.push_back({{positions[v].x, 0}, {positions[v].y, 0}, {positions[v].z, 0}, {1, 0}});
+    }
+    set_ = out.geometry.plane_set({});
+  }
+
+  MeshArrangement run() {
+    MeshArrangement& out = result_;
+    out.pairs = self_intersecting_pairs(positions_, triangles_);
+    traces_.resize(triangles_.size());
+    // The corners of the triangles involved are known points before any new
+    // one is made, so a new point that is an input vertex exactly is that
+    // vertex (the lowest index of its position), never a copy of it.
+    std::vector<VertexIndex> corners;
+    for (const TrianglePair& pair : out.pairs) {
+      for (const std::size_t t : {pair.first, pair.second})
+        corners.insert(corners.end(), triangles_[t].begin(), triangles_[t].end());
+    }
+    std::sort(corners.begin(), corners.end());
+    corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+    for (VertexIndex v : corners) intern(PointDef::input(v));
+    for (const TrianglePair& pair : out.pairs) {
+      const auto t = static_cast<std::uint32_t>(pair.first), u = static_cast<std::uint32_t>(pair.second);
+      if (on_one_plane(t, u)) {
+        out.coplanar_pairs.push_back(pair);
+        continue;
+      }
+      intersect(t, u);
+    }
+    for (std::uint32_t t = 0; t < triangles_.size(); ++t) {
+      if (traces_[t].empty()) {
+        out.triangles.push_back(triangles_[t]);
+        out.source.push_back(t);
+      } else {
+        split(t);
+      }
+    }
+    return std::move(result_);
+  }
+
+ private:
+  PlaneRef plane(std::uint32_t t) const { return PlaneRef::input(t); }
+
+  Sign side_of(std::uint32_t t, VertexIndex v) const {
+    const Triangle& tri = triangles_[t];
+    return orient3d(positions_[tri[0]], positions_[tri[1]], positions_[tri[2]], positions_[v]);
+  }
+
+  bool on_one_plane(std::uint32_t t, std::uint32_t u) const {
+    for (VertexIndex v : triangles_[u]) {
+      if (side_of(t, v) != Sign::zero) return false;
+    }
+    return true;
+  }
+
+  // The vertex at `def`'s point: an existing one when some vertex is that point
+  // exactly (an input vertex included), else a new one.
+  VertexIndex intern(const PointDef& def) {
+    ExactCoordinates key = exact_coordinates(set_, def);
+    const auto candidate = static_cast<VertexIndex>(result_.defs.size());
+    const auto [it, inserted] = vertex_at_.emplace(std::move(key), def.kind == PointKind::input ? def.a : candidate);
+    if (inserted && def.kind != PointKind::input) {
+      result_.defs.push_back(def);
+      result_.approx.push_back(approximate(set_, def));
+    }
+    return it->second;
+  }
+
+  // The points where triangle t meets the plane of u (t not on it): its corners
+  // on that plane and the crossings of its edges with it; none, one or two, as a
+  // triangle meets a plane in nothing, a point or a segment.
+  std::vector<PointDef> section(std::uint32_t t, std::uint32_t u) const {
+    const Triangle& tri = triangles_[t];
+    std::array<Sign, 3> s{};
+    for (int k = 0; k < 3; ++k) s[k] = side_of(u, tri[k]);
+    std::vector<PointDef> points;
+    for (int k = 0; k < 3; ++k) {
+      const VertexIndex p = tri[k], q = tri[(k + 1) % 3];
+      if (s[k] == Sign::zero) points.push_back(PointDef::input(p));
+      const Sign next = s[(k + 1) % 3];
+      if (s[k] != Sign::zero && next != Sign::zero && s[k] != next) {
+        points.push_back(PointDef::segment_plane(std::min(p, q), std::max(p, q), plane(u)));
+      }
+    }
+    return points;
+  }
+
+  // Order along the line where the planes of t and u meet.
+  Sign along(std::uint32_t t, std::uint32_t u, const PointDef& p, const PointDef& q) const {
+    return compare_along(set_, plane(t), plane(u), p, approximate(set_, p), q, approximate(set_, q));
+  }
+
+  void intersect(std::uint32_t t, std::uint32_t u) {
+    std::vector<PointDef> in_t = section(t, u), in_u = section(u, t);
+    if (in_t.empty() || in_u.empty()) return;
+    const auto sort_pair = [&](std::vector<PointDef>& points) {
+      // points.front() the later end, points.back() the earlier.
+      if (points.size() == 2 && along(t, u, points[0], points[1]) == Sign::positive) std::swap(points[0], points[1]);
+    };
+    sort_pair(in_t);
+    sort_pair(in_u);
+    // The two sections lie on one line: their overlap runs from the later of
+    // their earlier ends to the earlier of their later ends.
+    const PointDef& low = along(t, u, in_t.back(), in_u.back()) == Sign::positive ? in_u.back() : in_t.back();
+    const PointDef& high = along(t, u, in_t.front(), in_u.front()) == Sign::negative ? in_u.front() : in_t.front();
+    if (along(t, u, low, high) == Sign::negative) return;  // they miss each other on the line
+    const VertexIndex a = intern(low), b = intern(high);
+    traces_[t].push_back({a, b, plane(u)});
+    traces_[u].push_back({a, b, plane(t)});
+  }
+
+  // Triangle t cut by its traces and triangulated.
+  void split(std::uint32_t t) {
+    const Triangle& tri = triangles_[t];
+    const Projection projection = projection_of(set_, plane(t));
+    const auto orient = [&](VertexIndex p, VertexIndex q, VertexIndex r) {
+      return orient_in_plane(set_, projection, result_.defs[p], result_.approx[p], result_.defs[q], result_.approx[q],
+                             result_.defs[r], result_.approx[r]);
+    };
+    std::vector<VertexIndex> vertices;
+    const auto add = [&](VertexIndex v) {
+      if (std::find(vertices.begin(), vertices.end(), v) == vertices.end()) vertices.push_back(v);
+    };
+    // A corner repeated elsewhere as the same position (an unwelded input) is
+    // the vertex the traces use for that point.
+    std::array<VertexIndex, 3> corner{};
+    for (int k = 0; k < 3; ++k) corner[k] = intern(PointDef::input(tri[k]));
+    for (VertexIndex v : corner) add(v);
+    const std::vector<Trace>& traces = traces_[t];
+    for (const Trace& trace : traces) {
+      add(trace.a);
+      add(trace.b);
+    }
+    // Two traces that cross each other strictly inside both: their lines' meet.
+    for (std::size_t i = 0; i < traces.size(); ++i) {
+      const Trace& x = traces[i];
+      if (x.a == x.b) continue;
+      for (std::size_t j = i + 1; j < traces.size(); ++j) {
+        const Trace& y = traces[j];
+        if (y.a == y.b) continue;
+        const Sign ya = orient(x.a, x.b, y.a), yb = orient(x.a, x.b, y.b);
+        if (ya == Sign::zero || yb == Sign::zero || ya == yb) continue;
+        const Sign xa = orient(y.a, y.b, x.a), xb = orient(y.a, y.b, x.b);
+        if (xa == Sign::zero || xb == Sign::zero || xa == xb) continue;
+        std::array<PlaneRef, 3> planes{plane(t), x.other, y.other};
+        std::sort(planes.begin(), planes.end(), [](PlaneRef p, PlaneRef q) { return p.bits < q.bits; });
+        add(intern(PointDef::three_planes(planes[0], planes[1], planes[2])));
+      }
+    }
+
+    // Every segment (the triangle's edges and the traces) cut at the vertices
+    // that lie inside it, in order along it.
+    std::vector<std::pair<VertexIndex, VertexIndex>> segments;
+    for (int k = 0; k < 3; ++k) segments.emplace_back(corner[k], corner[(k + 1) % 3]);
+    for (const Trace& trace : traces) {
+      if (trace.a != trace.b) segments.emplace_back(trace.a, trace.b);
+    }
+    const int kept[2] = {(projection.axis + 1) % 3, (projection.axis + 2) % 3};
+    std::vector<std::pair<VertexIndex, VertexIndex>> constraints;
+    std::vector<VertexIndex> inside;
+    for (const auto& [a, b] : segments) {
+      // An axis of the projection along which a and b differ orders the segment.
+      int axis = kept[0];
+      Sign ab = compare_coordinate(set_, axis, result_.defs[a], result_.approx[a], result_.defs[b], result_.approx[b]);
+      if (ab == Sign::zero) {
+        axis = kept[1];
+        ab = compare_coordinate(set_, axis, result_.defs[a], result_.approx[a], result_.defs[b], result_.approx[b]);
+      }
+      const auto before = [&](VertexIndex p, VertexIndex q) {  // p before q going from a to b
+        const Sign s =
+            compare_coordinate(set_, axis, result_.defs[p], result_.approx[p], result_.defs[q], result_.approx[q]);
+        return s == ab;
+      };
+      inside.clear();
+      for (VertexIndex v : vertices) {
+        if (v == a || v == b || orient(a, b, v) != Sign::zero) continue;
+        if (before(a, v) && before(v, b)) inside.push_back(v);
+      }
+      std::sort(inside.begin(), inside.end(), before);
+      VertexIndex from = a;
+      for (VertexIndex v : inside) {
+        constraints.emplace_back(from, v);
+        from = v;
+      }
+      constraints.emplace_back(from, b);
+    }
+
+    // A trace along an edge or along another trace gives the same pieces again,
+    // and CGAL 5.5's constrained triangulation refuses a constraint inserted
+    // twice ("Unauthorized intersections of constraints" under
+    // No_constraint_intersection_tag): each piece once.
+    for (auto& [a, b] : constraints) {
+      if (b < a) std::swap(a, b);
+    }
+    std::sort(constraints.begin(), constraints.end());
+    constraints.erase(std::unique(constraints.begin(), constraints.end()), constraints.end());
+    Cdt cdt;
+    std::vector<Cdt::Vertex_handle> handles;
+    handles.reserve(vertices.size());
+    for (VertexIndex v : vertices) {
+      const ExactCoordinates c = exact_coordinates(set_, result_.defs[v]);
+      const Cdt::Vertex_handle h =
+          cdt.insert(ExactKernel::Point_2(ExactKernel::FT(c[kept[0]]), ExactKernel::FT(c[kept[1]])));
+      h->info() = v;
+      handles.push_back(h);
+    }
+    const auto handle = [&](VertexIndex v) {
+      return handles[static_cast<std::size_t>(std::find(vertices.begin(), vertices.end(), v) - vertices.begin())];
+    };
+    for (const auto& [a, b] : constraints) cdt.insert_constraint(handle(a), handle(b));
+
+    // The triangulation covers the convex hull of the points, which is the
+    // triangle (every point lies in it). Its faces turn counter-clockwise in
+    // the projection, which is the triangle's turn unless the projection flips it.
+    std::vector<Triangle> pieces;
+    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+      Triangle piece{f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
+      if (projection.flipped) std::swap(piece[1], piece[2]);
+      // A fixed order of the pieces (the face list's order is the
+      // triangulation's own): each rotated to start at its least vertex.
+      std::rotate(piece.begin(), std::min_element(piece.begin(), piece.end()), piece.end());
+      pieces.push_back(piece);
+    }
+    std::sort(pieces.begin(), pieces.end());
+    for (const Triangle& piece : pieces) {
+      result_.triangles.push_back(piece);
+      result_.source.push_back(t);
+    }
+    result_.split_triangles += pieces.size() > 1;
+  }
+
+  std::span<const Vec3> positions_;
+  std::span<const Triangle> triangles_;
+  MeshArrangement result_;
+  PlaneSet set_;
+  std::vector<std::vector<Trace>> traces_;
+  std::map<ExactCoordinates, VertexIndex, LessCoordinates> vertex_at_;
+};
+
+}  // namespace
+
+MeshArrangement arrange_triangles(std::span<const Vec3> positions, std::span<const Triangle> triangles) {
+  return Arranger(positions, triangles).run();
+}
+
+std::optional<std::vector<std::size_t>> order_around_edge(const PlaneSet& set, const PointDef& p, const PointDef& q,
+                                                          std::span<const PointDef> around) {
+  const std::size_t k = around.size();
+  std::vector<std::size_t> order(k);
+  for (std::size_t i = 0; i < k; ++i) order[i] = i;
+  if (k == 0) return order;
+  const ExactCoordinates a = exact_coordinates(set, p), b = exact_coordinates(set, q);
+  const auto minus = [](const ExactCoordinates& x, const ExactCoordinates& y) {
+    return ExactCoordinates{x[0] - y[0], x[1] - y[1], x[2] - y[2]};
+  };
+  const auto dot = [](const ExactCoordinates& x, const ExactCoordinates& y) {
+    return mpq_class(x[0] * y[0] + x[1] * y[1] + x[2] * y[2]);
+  };
+  // det[d, u, v]: orient3d(a, b, a + u, a + v)'s value.
+  const auto turn = [](const ExactCoordinates& d, const ExactCoordinates& u, const ExactCoordinates& v) {
+    const mpq_class det =
+        d[0] * (u[1] * v[2] - u[2] * v[1]) - d[1] * (u[0] * v[2] - u[2] * v[0]) + d[2] * (u[0] * v[1] - u[1] * v[0]);
+    return sgn(det);
+  };
+  const ExactCoordinates d = minus(b, a);
+  const mpq_class dd = dot(d, d);
+  std::vector<ExactCoordinates> from(k);
+  for (std::size_t i = 0; i < k; ++i) from[i] = minus(exact_coordinates(set, around[i]), a);
+  // The component of u across the line, times d·d (a positive factor).
+  const auto across = [&](const ExactCoordinates& u) {
+    const mpq_class along = dot(u, d);
+    return ExactCoordinates{u[0] * dd - d[0] * along, u[1] * dd - d[1] * along, u[2] * dd - d[2] * along};
+  };
+  const ExactCoordinates first = across(from[0]);
+  if (sgn(dot(first, first)) == 0) return std::nullopt;
+  // Half-turns from around[0], as order_around_line: 0 on its own ray, 1 in the
+  // open half-space ahead, 2 on the opposite ray, 3 behind.
+  std::vector<int> half(k);
+  for (std::size_t i = 0; i < k; ++i) {
+    const int o = i == 0 ? 0 : turn(d, from[0], from[i]);
+    if (o > 0) {
+      half[i] = 1;
+    } else if (o < 0) {
+      half[i] = 3;
+    } else {
+      const int same = sgn(dot(first, across(from[i])));
+      if (same == 0) return std::nullopt;  // on the line
+      half[i] = same > 0 ? 0 : 2;
+    }
+  }
+  bool tie = false;
+  std::sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) {
+    if (half[i] != half[j]) return half[i] < half[j];
+    if (i == j) return false;
+    if (half[i] == 0 || half[i] == 2) {
+      tie = true;
+      return i < j;
+    }
+    const int o = turn(d, from[i], from[j]);
+    if (o == 0) {
+      tie = true;
+      return i < j;
+    }
+    return o > 0;
+  });
+  if (tie) return std::nullopt;
+  return order;
+}
+
+}  // namespace shatter
