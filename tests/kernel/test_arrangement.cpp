@@ -28,6 +28,7 @@
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/self_intersections.hpp"
+#include "support/pair_reference.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "support/sanitizers.hpp"
 
@@ -92,32 +93,7 @@ EK::Point_3 ek(const Q3& c) { return {EK::FT(c[0]), EK::FT(c[1]), EK::FT(c[2])};
 
 // CGAL PMP's pair semantics on exact points (as tests/kernel's finder oracle).
 bool pieces_intersect(const std::vector<EK::Point_3>& points, const Triangle& a, const Triangle& b) {
-  int shared = 0, shared_a = -1, shared_b = -1;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) {
-      if (a[i] != b[j]) continue;
-      ++shared;
-      if (shared_a < 0) shared_a = i, shared_b = j;
-    }
-  }
-  const auto p = [&](VertexIndex v) { return points[v]; };
-  if (shared >= 3) return true;
-  if (shared == 2) {
-    int ia = 0, ib = 0;
-    for (int i = 0; i < 3; ++i) {
-      if (a[i] != b[0] && a[i] != b[1] && a[i] != b[2]) ia = i;
-      if (b[i] != a[0] && b[i] != a[1] && b[i] != a[2]) ib = i;
-    }
-    const EK::Point_3 u = p(a[(ia + 1) % 3]), v = p(a[(ia + 2) % 3]), x = p(a[ia]), y = p(b[ib]);
-    return CGAL::coplanar(u, v, x, y) && CGAL::coplanar_orientation(u, v, x, y) == CGAL::POSITIVE;
-  }
-  const EK::Triangle_3 ta(p(a[0]), p(a[1]), p(a[2])), tb(p(b[0]), p(b[1]), p(b[2]));
-  if (shared == 1) {
-    const EK::Segment_3 sa(p(a[(shared_a + 1) % 3]), p(a[(shared_a + 2) % 3]));
-    const EK::Segment_3 sb(p(b[(shared_b + 1) % 3]), p(b[(shared_b + 2) % 3]));
-    return CGAL::do_intersect(ta, sb) || CGAL::do_intersect(tb, sa);
-  }
-  return CGAL::do_intersect(ta, tb);
+  return test::pmp_pair_intersects<EK>(a, b, [&](VertexIndex v) { return points[v]; });
 }
 
 // The same semantics for two pieces of one source triangle, in its projection
