@@ -42,6 +42,7 @@
 #include "support/bond_reference.hpp"
 #include "support/checks.hpp"
 #include "support/degenerate.hpp"
+#include "support/sanitizers.hpp"
 
 using namespace shatter;
 using namespace shatter::test;
@@ -961,8 +962,11 @@ TEST_CASE("packed bonds split into runs of subtrees equal the one-thread reading
                                 {"spool.off", read_mesh(mesh_dir() / "spool.off"), 128},
                                 {"elephant.off", read_mesh(mesh_dir() / "elephant.off"), 160}};
   std::size_t compared = 0, bonds_seen = 0;
+  // Under the sanitizers one seed of the three: the same splits and threads.
+  const std::vector<std::uint64_t> seeds = test::under_address_sanitizer ? std::vector<std::uint64_t>{5}
+                                                                         : std::vector<std::uint64_t>{1, 5, 9};
   for (const Case& c : cases) {
-    for (const std::uint64_t seed : {1u, 5u, 9u}) {
+    for (const std::uint64_t seed : seeds) {
       for (const Strategy strategy : {Strategy::thesis, Strategy::axis}) {
         TreeRecipe recipe;
         recipe.fragments = c.fragments;
@@ -991,6 +995,6 @@ TEST_CASE("packed bonds split into runs of subtrees equal the one-thread reading
       }
     }
   }
-  CHECK(compared == 6 * 3 * 2 * 9);
+  CHECK(compared == 6 * seeds.size() * 2 * 9);
   CHECK(bonds_seen > 0);
 }
