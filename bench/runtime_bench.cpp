@@ -22,7 +22,11 @@
 // clock). The three settings below run in three rounds of back-to-back batches,
 // each setting >= 7 repetitions and >= 0.5 s of timed impacts in all (at most
 // 2,100); medians, so a repetition the shared machine preempted does not count,
-// and a stretch of load falls on all three alike.
+// and a stretch of load falls on all three alike. --repetitions N runs exactly N
+// instead (rounded up to a multiple of 3): a fresh World costs about 30 ms of
+// zeroing Bullet's pools (page faults, most of it system time), so the default's
+// 2,100 repetitions of a 25 us impact take minutes, which a smoke run (papers/run
+// --quick) does not need.
 //   - incremental: BreakMethod::incremental, discrete bonds (the default).
 //   - incremental, accumulating: the same impact with accumulating bonds, which
 //     must damage every bond of the hit cluster, so it walks all of them.
@@ -188,6 +192,7 @@ int main(int argc, char** argv) {
   std::uint32_t step_fragments = 256;
   std::vector<double> radii{0.25, 0.35};
   bool incremental_only = false;
+  std::size_t repetitions = 0;
   app.add_flag("--quick", quick,
                "Smoke run: 64 and 256 fragments, few repetitions, 1 and 4 objects; fails (exit 2) if the two "
                "methods disagree or an impact breaks nothing");
@@ -200,6 +205,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--incremental-only", incremental_only,
                "Time only the incremental method (for profiling it); the seed column reads 0");
+  app.add_option("--repetitions", repetitions,
+                 "Repetitions of each impact setting, exactly (rounded up to a multiple of 3); by default at least "
+                 "7 and 0.5 s of timed impacts, at most 2,100")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{2100}));
   app.add_option("--step-fragments", step_fragments, "Fragments of each object in the step table")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
@@ -209,8 +218,8 @@ int main(int argc, char** argv) {
     counts = {1, 4};
     step_fragments = 64;
   }
-  const std::size_t min_runs = quick ? 2 : 7;
-  const double min_seconds = quick ? 0.0 : 0.5;
+  const std::size_t min_runs = repetitions > 0 ? repetitions : quick ? 2 : 7;
+  const double min_seconds = quick || repetitions > 0 ? 0.0 : 0.5;
   // The table is written at the end; the path is tried now, so a bad one fails before the long run.
   std::optional<CsvWriter> csv;
   if (!csv_path.empty()) {
