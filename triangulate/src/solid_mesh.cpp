@@ -1922,15 +1922,7 @@ bool split_faces_along(const PlaneSet& set, const Solid& solid, PlaneRef plane, 
       if (a == Sign::zero || b == Sign::zero || a == b) continue;
       const auto candidate = static_cast<VertexIndex>(out.defs.size());
       if (crossing.insert(undirected_edge_key(edge.from, edge.to), candidate) != candidate) continue;
-      const EdgeLine& line = solid.corners[edge.corner].line;
-      PointDef def;
-      if (line.is_segment()) {
-        def = PointDef::segment_plane(line.p, line.q, plane);
-      } else {
-        PlaneRef x = face.plane, y = line.other;
-        if (y.bits < x.bits) std::swap(x, y);
-        def = PointDef::three_planes(x, y, plane);
-      }
+      const PointDef def = edge_crossing_def(face, solid.corners[edge.corner].line, plane);
       out.defs.push_back(def);
       out.approx.push_back(approximate(set, def));
     }
