@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <numeric>
 #include <string>
+#include <utility>
 
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/index_map.hpp"
@@ -235,6 +236,13 @@ Solid solid_from_mesh(const Mesh& mesh, bool merge_coplanar, InputGeometry& geom
   }
   solid.convex = !reflex_edge && shell_count == 1;
   return solid;
+}
+
+PointDef edge_crossing_def(const SolidFace& face, const EdgeLine& line, PlaneRef plane) {
+  if (line.is_segment()) return PointDef::segment_plane(line.p, line.q, plane);
+  PlaneRef a = face.plane, b = line.other;
+  if (b.bits < a.bits) std::swap(a, b);
+  return PointDef::three_planes(a, b, plane);
 }
 
 Sign outward_side(const PlaneSet& set, const SolidFace& face, const PointDef& point, const ApproxPoint& approx) {

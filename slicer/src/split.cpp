@@ -55,14 +55,7 @@ class Splitter {
     const auto candidate = static_cast<VertexIndex>(out_.defs.size());
     const VertexIndex found = out_.new_vertex_of_edge.insert(undirected_edge_key(u, v), candidate);
     if (found != candidate) return found;
-    PointDef def;
-    if (line.is_segment()) {
-      def = PointDef::segment_plane(line.p, line.q, cut_);
-    } else {
-      PlaneRef a = face.plane, b = line.other;
-      if (b.bits < a.bits) std::swap(a, b);
-      def = PointDef::three_planes(a, b, cut_);
-    }
+    const PointDef def = edge_crossing_def(face, line, cut_);
     out_.defs.push_back(def);
     out_.approx.push_back(approximate(set_, def));
     out_.sides.push_back(Sign::zero);

@@ -572,3 +572,27 @@ TEST_CASE("round_solid: wedges beyond rounding's reach of a cap are split and co
   CHECK(tally.wedges > 0);  // the repair is met, so the test cannot pass by testing nothing
   CHECK(tally.refused == 0);
 }
+
+TEST_CASE("regression: a wedge split where no parallel plane of doubles lies within rounding's reach (corpus 908)",
+          "[plane][round][regression]") {
+  // A piece of a near-parallel chain on torus-800 as written (two earlier caps
+  // 3.7e-7 rad apart meeting at a tip edge), cut by the chain's next plane half an
+  // ulp over the tip: the cap folds against the clipped faces of the lower cap,
+  // which leave rounding's reach, but the cap's offset 1.15 has ulps of 2.2e-16,
+  // more than twice the rounding move, so no plane parallel to the cap in doubles
+  // lies within reach and the piece was refused. The cap's plane scaled and
+  // rounded (tilted by the rounding) splits them within reach, decided exactly.
+  const SliceCase c = read_slice_reproducer("unroundable-wedge-split-plane-tilted-near-parallel-chain-corpus-908.repro");
+  const PlaneInput input = prepare_plane_input(c.mesh);
+  const std::vector<Plane> cuts{c.plane};
+  const PlaneSet set = input.geometry.plane_set(cuts);
+  const SolidCut cut = cut_solid(set, input.solid, PlaneRef::cut(0), 1, input.shells);
+  RoundingTally tally;
+  for (const auto* side : {&cut.below, &cut.above}) {
+    for (const Solid& piece : *side) check_rounding(set, piece, tally);
+  }
+  CHECK(tally.pieces == 2);
+  CHECK(tally.wedges == 1);
+  CHECK(tally.refused == 0);
+  CHECK(tally.collapsed == 0);
+}

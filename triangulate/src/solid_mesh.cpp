@@ -1922,15 +1922,7 @@ bool split_faces_along(const PlaneSet& set, const Solid& solid, PlaneRef plane, 
       if (a == Sign::zero || b == Sign::zero || a == b) continue;
       const auto candidate = static_cast<VertexIndex>(out.defs.size());
       if (crossing.insert(undirected_edge_key(edge.from, edge.to), candidate) != candidate) continue;
-      const EdgeLine& line = solid.corners[edge.corner].line;
-      PointDef def;
-      if (line.is_segment()) {
-        def = PointDef::segment_plane(line.p, line.q, plane);
-      } else {
-        PlaneRef x = face.plane, y = line.other;
-        if (y.bits < x.bits) std::swap(x, y);
-        def = PointDef::three_planes(x, y, plane);
-      }
+      const PointDef def = edge_crossing_def(face, solid.corners[edge.corner].line, plane);
       out.defs.push_back(def);
       out.approx.push_back(approximate(set, def));
     }
@@ -2349,6 +2341,52 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
       i = j;
       const Plane& cut = set.cuts[cap.plane.index()];
       const double largest = std::max({std::fabs(cut.normal.x), std::fabs(cut.normal.y), std::fabs(cut.normal.z)});
+      // The piece refined along `split_plane` and rounded by every round above;
+      // `within`: only if every crossing vertex lies strictly inside the piece and
+      // at most that far from the cap's plane (|n.x + d|, exactly). A refinement
+      // that cannot be made or rounded (a definition found degenerate, a face that
+      // cannot be triangulated) leaves the refusal as it was.
+      const auto refine = [&](const Plane& split_plane, const mpq_class* within,
+                              bool* rounded = nullptr) -> std::optional<RoundedSolid> {
+        std::vector<Plane> cuts(set.cuts.begin(), set.cuts.end());
+        cuts.push_back(split_plane);
+        const PlaneSet refined_set{set.points, set.inputs, set.input_approx, cuts};
+        Solid refined;
+        RoundedSolid written;
+        try {
+          if (!split_faces_along(refined_set, solid, PlaneRef::cut(static_cast<std::uint32_t>(cuts.size() - 1)), faces,
+                                 refined)) {
+            return std::nullopt;
+          }
+          if (within != nullptr) {
+            const mpq_class n[3] = {mpq_class(cut.normal.x), mpq_class(cut.normal.y), mpq_class(cut.normal.z)};
+            const mpq_class d(cut.offset);
+            for (VertexIndex v = static_cast<VertexIndex>(solid.defs.size()); v < refined.defs.size(); ++v) {
+              const std::array<mpq_class, 3> x = exact_coordinates(refined_set, refined.defs[v]);
+              const mpq_class value = n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + d;
+              const mpq_class depth = cap.reversed ? value : mpq_class(-value);
+              if (sgn(depth) <= 0 || depth > *within) return std::nullopt;
+            }
+          }
+          if (!check_solid(refined_set, refined).empty()) return std::nullopt;
+          SolidMeshOptions refined_options = options;
+          refined_options.face_attempts = {};
+          if (rounded != nullptr) *rounded = true;
+          written = round_solid_rounds(refined_set, refined, refined_options, false);
+        } catch (const UnsupportedGeometryError&) {
+          return std::nullopt;
+        } catch (const std::domain_error&) {
+          return std::nullopt;
+        }
+        if (!written.valid) return std::nullopt;
+        // Held to the piece's own bound, against its exact volume (the refined
+        // solid's, the same point set).
+        if (!report_moved_volume(measured_moved_volume(set, solid, written.mesh), written)) return std::nullopt;
+        written.attempt = -1;
+        written.wedge_faces_split = refined.faces.size() - solid.faces.size();
+        return written;
+      };
+      std::array<bool, 5> unrepresentable{};
       for (const int times : {2, 1, 4}) {
         // The piece lies behind the cap's outward normal: n.x + d < 0 when the cap
         // faces along +n, so the new plane n.x + d' = 0 with d' = d + h lies in
@@ -2362,35 +2400,37 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
         while (offset != cut.offset && abs(mpq_class(offset) - mpq_class(cut.offset)) > reach_offset) {
           offset = std::nextafter(offset, cut.offset);
         }
-        if (!(offset != cut.offset)) continue;
-        std::vector<Plane> cuts(set.cuts.begin(), set.cuts.end());
-        cuts.push_back(Plane{cut.normal, offset});
-        const PlaneSet refined_set{set.points, set.inputs, set.input_approx, cuts};
-        // A refinement that cannot be made or rounded (a definition found
-        // degenerate, a face that cannot be triangulated) leaves the refusal as it was.
-        Solid refined;
-        RoundedSolid written;
-        try {
-          if (!split_faces_along(refined_set, solid, PlaneRef::cut(static_cast<std::uint32_t>(cuts.size() - 1)), faces,
-                                 refined) ||
-              !check_solid(refined_set, refined).empty()) {
-            continue;
-          }
-          SolidMeshOptions refined_options = options;
-          refined_options.face_attempts = {};
-          written = round_solid_rounds(refined_set, refined, refined_options, false);
-        } catch (const UnsupportedGeometryError&) {
-          continue;
-        } catch (const std::domain_error&) {
+        if (!(offset != cut.offset)) {
+          unrepresentable[times] = true;
           continue;
         }
-        if (!written.valid) continue;
-        // Held to the piece's own bound, against its exact volume (the refined
-        // solid's, the same point set).
-        if (!report_moved_volume(measured_moved_volume(set, solid, written.mesh), written)) continue;
-        written.attempt = -1;
-        written.wedge_faces_split = refined.faces.size() - solid.faces.size();
-        return written;
+        if (std::optional<RoundedSolid> written = refine(Plane{cut.normal, offset}, nullptr)) return std::move(*written);
+      }
+      // No double offset within reach (the cap's offset d is large beside the
+      // rounding of the corners: ulp(d) > times rho max |n_i|, corpus case 908):
+      // the same plane scaled by lambda = 9/8 to 15/8, its coefficients rounded
+      // to doubles and the offset stepped by 1 to 4 ulps into the piece, is tilted
+      // from the cap's by the rounding of lambda n and moved by that of lambda d,
+      // at a finer step than ulp(d). The first such plane whose crossing vertices
+      // all lie strictly inside the piece and within the reach of the cap's plane
+      // (decided exactly: the strips are thin by their corners, as above) is
+      // rounded, once per reach that had no parallel plane, so a piece this
+      // cannot repair costs at most two more rounds.
+      for (const int times : {2, 1}) {
+        if (!unrepresentable[times]) continue;
+        const mpq_class reach_offset = times * reach->rho * largest;
+        bool rounded = false;
+        for (int eighths = 9; eighths < 16 && !rounded; ++eighths) {
+          const double lambda = eighths / 8.0;
+          const Vec3 normal{lambda * cut.normal.x, lambda * cut.normal.y, lambda * cut.normal.z};
+          double offset = lambda * cut.offset;
+          for (int step = 0; step < 4 && !rounded; ++step) {
+            offset = std::nextafter(offset, cap.reversed ? -HUGE_VAL : HUGE_VAL);
+            if (std::optional<RoundedSolid> written = refine(Plane{normal, offset}, &reach_offset, &rounded)) {
+              return std::move(*written);
+            }
+          }
+        }
       }
     }
   }

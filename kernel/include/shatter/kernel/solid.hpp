@@ -214,6 +214,18 @@ Solid solid_from_mesh(const Mesh& mesh, bool merge_coplanar, InputGeometry& geom
 /// directed edge matched by its reverse). O(sum over edges of the face sizes).
 bool solid_is_convex(const PlaneSet& set, const Solid& solid);
 
+/// The point where `plane` meets the line of an edge of `face` (`line`, the
+/// edge's EdgeLine): the meet of the input segment and the plane when the edge
+/// lies on one, else of the face's plane, the plane across the edge and `plane`,
+/// the first two ordered by their bits so that the one edge, seen from either of
+/// its faces, gets one definition (and one set of predicate results). Defined
+/// from the edge's line, never its endpoints, which keeps every predicate's degree
+/// bounded however deep the cuts go. How a cut (split_solid) and a refinement
+/// (round_solid's wedge split) make each crossing vertex.
+/// Precondition: the edge crosses `plane` (its endpoints strictly on either
+/// side), so the point is defined. Never throws; O(1), constructs nothing exact.
+PointDef edge_crossing_def(const SolidFace& face, const EdgeLine& line, PlaneRef plane);
+
 /// The outward side of a face's plane at a point: side() of the plane, negated when
 /// the face is reversed, so negative means inside the face's half-space.
 Sign outward_side(const PlaneSet& set, const SolidFace& face, const PointDef& point, const ApproxPoint& approx);

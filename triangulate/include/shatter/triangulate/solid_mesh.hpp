@@ -243,6 +243,11 @@ struct RoundedSolid {
 /// then runs once on the refined solid (the same point set), whose strips by the
 /// cap are thin by their corners and merge into it (`wedge_faces_split`); held to
 /// the certificate and to the original piece's volume bound, measured exactly.
+/// When no double offset lies within that reach (ulp of the cap's offset larger
+/// than it), the cap's plane scaled by 9/8 to 15/8 and rounded, its offset
+/// stepped by ulps (a plane tilted by the rounding), is used instead, the first
+/// whose crossing points all lie strictly inside the piece and within reach of
+/// the cap's plane, decided exactly.
 /// A part thinner than the rounding that rounds flat (its triangles laid over each
 /// other once each way) vanishes into its neighbour (`vanished_triangles`); a piece
 /// that rounds flat whole, or that cannot be certified while its exact volume is
