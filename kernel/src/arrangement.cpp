@@ -9,6 +9,7 @@
 #include <optional>
 #include <utility>
 
+#include "order_around.hpp"
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/predicates.hpp"
 #include "shatter/kernel/rationals.hpp"
@@ -396,66 +397,10 @@ MeshArrangement arrange_triangles(std::span<const Vec3> positions, std::span<con
 
 std::optional<std::vector<std::size_t>> order_around_edge(const PlaneSet& set, const PointDef& p, const PointDef& q,
                                                           std::span<const PointDef> around) {
-  const std::size_t k = around.size();
-  std::vector<std::size_t> order(k);
-  for (std::size_t i = 0; i < k; ++i) order[i] = i;
-  if (k == 0) return order;
-  const ExactCoordinates a = exact_coordinates(set, p), b = exact_coordinates(set, q);
-  const auto minus = [](const ExactCoordinates& x, const ExactCoordinates& y) {
-    return ExactCoordinates{x[0] - y[0], x[1] - y[1], x[2] - y[2]};
-  };
-  const auto dot = [](const ExactCoordinates& x, const ExactCoordinates& y) {
-    return mpq_class(x[0] * y[0] + x[1] * y[1] + x[2] * y[2]);
-  };
-  // det[d, u, v]: orient3d(a, b, a + u, a + v)'s value.
-  const auto turn = [](const ExactCoordinates& d, const ExactCoordinates& u, const ExactCoordinates& v) {
-    const mpq_class det =
-        d[0] * (u[1] * v[2] - u[2] * v[1]) - d[1] * (u[0] * v[2] - u[2] * v[0]) + d[2] * (u[0] * v[1] - u[1] * v[0]);
-    return sgn(det);
-  };
-  const ExactCoordinates d = minus(b, a);
-  const mpq_class dd = dot(d, d);
-  std::vector<ExactCoordinates> from(k);
-  for (std::size_t i = 0; i < k; ++i) from[i] = minus(exact_coordinates(set, around[i]), a);
-  // The component of u across the line, times d·d (a positive factor).
-  const auto across = [&](const ExactCoordinates& u) {
-    const mpq_class along = dot(u, d);
-    return ExactCoordinates{u[0] * dd - d[0] * along, u[1] * dd - d[1] * along, u[2] * dd - d[2] * along};
-  };
-  const ExactCoordinates first = across(from[0]);
-  if (sgn(dot(first, first)) == 0) return std::nullopt;
-  // Half-turns from around[0], as order_around_line: 0 on its own ray, 1 in the
-  // open half-space ahead, 2 on the opposite ray, 3 behind.
-  std::vector<int> half(k);
-  for (std::size_t i = 0; i < k; ++i) {
-    const int o = i == 0 ? 0 : turn(d, from[0], from[i]);
-    if (o > 0) {
-      half[i] = 1;
-    } else if (o < 0) {
-      half[i] = 3;
-    } else {
-      const int same = sgn(dot(first, across(from[i])));
-      if (same == 0) return std::nullopt;  // on the line
-      half[i] = same > 0 ? 0 : 2;
-    }
-  }
-  bool tie = false;
-  std::sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) {
-    if (half[i] != half[j]) return half[i] < half[j];
-    if (i == j) return false;
-    if (half[i] == 0 || half[i] == 2) {
-      tie = true;
-      return i < j;
-    }
-    const int o = turn(d, from[i], from[j]);
-    if (o == 0) {
-      tie = true;
-      return i < j;
-    }
-    return o > 0;
-  });
-  if (tie) return std::nullopt;
-  return order;
+  std::vector<ExactCoordinates> points;
+  points.reserve(around.size());
+  for (const PointDef& def : around) points.push_back(exact_coordinates(set, def));
+  return kernel_detail::order_around_exact(exact_coordinates(set, p), exact_coordinates(set, q), points);
 }
 
 }  // namespace shatter
