@@ -148,12 +148,16 @@ class Arranger {
   // t's projection drops (its normal is not zero there). An input plane past
   // the triangles' own, made once per edge: the carrier that defines where
   // another segment of t's plane crosses the edge p q.
+  // The plane depends on the axis, not on t: one made for an edge of a
+  // triangle on another plane (an edge two planes share) serves t if it moved
+  // off along the same axis, which t's normal does not lie across.
   PlaneRef edge_plane(VertexIndex p, VertexIndex q, std::uint32_t t) {
     if (q < p) std::swap(p, q);
-    const auto found = edge_planes_.find({p, q});
+    const int axis = projection_of(set_, plane(t)).axis;
+    const std::array<VertexIndex, 3> key{p, q, static_cast<VertexIndex>(axis)};
+    const auto found = edge_planes_.find(key);
     if (found != edge_planes_.end()) return found->second;
     InputGeometry& geometry = result_.geometry;
-    const int axis = projection_of(set_, plane(t)).axis;
     Vec3 off = positions_[p];
     double& c = axis == 0 ? off.x : axis == 1 ? off.y : off.z;
     // Any other value moves the point off the plane; + 1 keeps it near the
@@ -166,7 +170,7 @@ class Arranger {
     geometry.plane_approx.push_back(approximate_input_plane(positions_[p], positions_[q], off));
     set_ = geometry.plane_set({});  // the arrays may have moved
     const PlaneRef made = PlaneRef::input(index);
-    edge_planes_.emplace(std::make_pair(p, q), made);
+    edge_planes_.emplace(key, made);
     return made;
   }
 
@@ -386,7 +390,7 @@ class Arranger {
   PlaneSet set_;
   std::vector<std::vector<Trace>> traces_;
   std::map<ExactCoordinates, VertexIndex, LessCoordinates> vertex_at_;
-  std::map<std::pair<VertexIndex, VertexIndex>, PlaneRef> edge_planes_;
+  std::map<std::array<VertexIndex, 3>, PlaneRef> edge_planes_;  // by (p, q, axis)
 };
 
 }  // namespace

@@ -405,12 +405,28 @@ TEST_CASE("overlaps on one plane: pieces tile, coincide where triangles overlap,
                                    test::grid_box({s - 0.5, s - 0.5, 1}, {s + 0.5, s + 0.5, 2}, 1 + seed / 4)}),
                       tally);
   }
+  // Lattice boxes, tessellated one way or another: faces on shared planes whose
+  // edges cross, and edges shared by two planes (an edge plane made for one
+  // face's plane once served the other's, where it could lie in that plane).
+  test::Random random(99);
+  for (int seed = 0; seed < 20; ++seed) {
+    std::vector<Mesh> boxes;
+    for (int b = 0; b < 4; ++b) {
+      std::array<double, 3> lo{}, hi{};
+      for (int c = 0; c < 3; ++c) {
+        lo[c] = static_cast<double>(random.index(4));
+        hi[c] = lo[c] + 1 + static_cast<double>(random.index(static_cast<std::size_t>(4 - lo[c])));
+      }
+      boxes.push_back(test::grid_box({lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, 1 + static_cast<int>(random.index(2))));
+    }
+    check_arrangement("lattice boxes #" + std::to_string(seed), test::merge(boxes), tally);
+  }
   Mesh inverted = test::box({0, 0, 0}, {1, 1, 1});
   for (Triangle& t : inverted.triangles) std::swap(t[1], t[2]);
   check_arrangement("a box and its copy",
                     test::merge({test::grid_box({0, 0, 0}, {1, 1, 1}, 2), test::box({0, 0, 0}, {1, 1, 1})}), tally);
   check_arrangement("a box and itself inside out", test::merge({test::box({0, 0, 0}, {1, 1, 1}), inverted}), tally);
-  CHECK(tally.meshes == 18);
+  CHECK(tally.meshes == 38);
   CHECK(tally.uncrossed == tally.meshes);
   CHECK(tally.coplanar_pairs > 100);
   CHECK(tally.coinciding > 20);

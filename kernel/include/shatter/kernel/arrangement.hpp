@@ -106,4 +106,56 @@ MeshArrangement arrange_triangles(std::span<const Vec3> positions, std::span<con
 std::optional<std::vector<std::size_t>> order_around_edge(const PlaneSet& set, const PointDef& p, const PointDef& q,
                                                           std::span<const PointDef> around);
 
+/// The boundary of the solid an arrangement's surface winds around at least
+/// once: the faces with winding number >= 1 on one side and <= 0 on the other,
+/// turned so that they face the side <= 0 (the union of the input's solids,
+/// for an input of closed shells; Zhou, Grinspun, Zorin & Jacobson 2016,
+/// section 3.2, "winding number labeling").
+struct WindingBoundary {
+  enum class Status : std::uint8_t {
+    ok,
+    /// The pieces do not close up: some edge is passed more times one way
+    /// than the other (counting each face as often as pieces cover it, with
+    /// their turns). Nothing is selected.
+    open,
+    /// No seed ray clear of every edge and vertex was found for some part
+    /// (64 fixed directions tried), or two faces around an edge could not be
+    /// ordered (not expected of an arrangement): nothing is selected.
+    undecided,
+  };
+  Status status = Status::ok;
+  /// Over the arrangement's vertices, each face once; closed and oriented (every
+  /// edge passed as often each way) when status is ok.
+  std::vector<Triangle> triangles;
+  std::vector<std::uint32_t> source;  ///< per triangle: an input triangle it lies in
+  std::size_t faces = 0;      ///< faces of the arrangement (pieces on the same three vertices counted once)
+  std::size_t cancelled = 0;  ///< of those, faces whose pieces cancel (as often one way round as the other)
+  std::size_t cells = 0;      ///< the face sides joined into cells around edges (a cell may count twice)
+  std::size_t seeds = 0;      ///< rays cast to fix a part's winding numbers
+  int max_winding = 0;        ///< the largest winding number of a cell next to a face
+};
+
+/// The faces of `arrangement` between winding number >= 1 and <= 0 (see
+/// WindingBoundary), decided exactly on its vertices' rational coordinates.
+/// Faces are the pieces' vertex triples; a face covered by several pieces
+/// counts each with its turn (a duplicated triangle twice, a triangle and its
+/// reverse not at all), and the winding number drops by that count crossing it
+/// to its front. Around every edge the faces are ordered exactly
+/// (order_around_edge's order), and the two face sides bounding each wedge
+/// between neighbours are one cell; each part of the surface (faces joined by
+/// edges and cells) has its winding numbers fixed by one ray from a face's
+/// centroid, counting the faces it crosses with their turns, in the first of a
+/// fixed list of directions that passes no edge or vertex.
+/// Guarantees when status is ok: the triangles are a subset of the faces, each
+/// once, turned to face out of the solid; every edge is passed as often one way
+/// as the other (closed and oriented, but not necessarily 2-manifold: solids
+/// touching along an edge give it four triangles), and two triangles meet only
+/// as the arrangement's pieces do. Deterministic.
+/// Preconditions: `arrangement` is arrange_triangles' result (pieces that meet
+/// only in shared vertices and edges or coincide). Failure: status (nothing
+/// selected), std::bad_alloc. Cost: the exact coordinates of the vertices; per
+/// edge with k > 2 faces O(k log k) rational determinants; per part one ray
+/// tested against every face (rational arithmetic).
+WindingBoundary winding_boundary(const MeshArrangement& arrangement);
+
 }  // namespace shatter
