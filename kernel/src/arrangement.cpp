@@ -9,9 +9,11 @@
 #include <optional>
 #include <utility>
 
+#include "order_around.hpp"
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/predicates.hpp"
 #include "shatter/kernel/rationals.hpp"
+#include "shatter/kernel/union_find.hpp"
 
 namespace shatter {
 namespace {
@@ -79,21 +81,36 @@ class Arranger {
     std::sort(corners.begin(), corners.end());
     corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
     for (VertexIndex v : corners) intern(PointDef::input(v));
+    // Triangles overlapping on one plane are triangulated together (one group
+    // per set of them joined by such overlaps), so that where they overlap
+    // their pieces are the same triangles, vertex for vertex.
+    UnionFind groups(triangles_.size());
     for (const TrianglePair& pair : out.pairs) {
       const auto t = static_cast<std::uint32_t>(pair.first), u = static_cast<std::uint32_t>(pair.second);
       if (on_one_plane(t, u)) {
         out.coplanar_pairs.push_back(pair);
+        groups.unite(t, u);
         continue;
       }
       intersect(t, u);
     }
+    std::vector<std::vector<std::uint32_t>> members(triangles_.size());
+    for (std::uint32_t t = 0; t < triangles_.size(); ++t) members[groups.find(t)].push_back(t);
+    std::vector<std::vector<Triangle>> pieces(triangles_.size());
     for (std::uint32_t t = 0; t < triangles_.size(); ++t) {
-      if (traces_[t].empty()) {
+      if (members[t].size() > 1 || (members[t].size() == 1 && !traces_[t].empty())) split(members[t], pieces);
+    }
+    for (std::uint32_t t = 0; t < triangles_.size(); ++t) {
+      if (pieces[t].empty()) {
         out.triangles.push_back(triangles_[t]);
         out.source.push_back(t);
-      } else {
-        split(t);
+        continue;
       }
+      for (const Triangle& piece : pieces[t]) {
+        out.triangles.push_back(piece);
+        out.source.push_back(t);
+      }
+      out.split_triangles += pieces[t].size() > 1;
     }
     return std::move(result_);
   }
@@ -124,6 +141,37 @@ class Arranger {
       result_.approx.push_back(approximate(set_, def));
     }
     return it->second;
+  }
+
+  // A plane through input points p and q across the plane of triangle t (which
+  // holds them both): through p, q and p moved off that plane along the axis
+  // t's projection drops (its normal is not zero there). An input plane past
+  // the triangles' own, made once per edge: the carrier that defines where
+  // another segment of t's plane crosses the edge p q.
+  // The plane depends on the axis, not on t: one made for an edge of a
+  // triangle on another plane (an edge two planes share) serves t if it moved
+  // off along the same axis, which t's normal does not lie across.
+  PlaneRef edge_plane(VertexIndex p, VertexIndex q, std::uint32_t t) {
+    if (q < p) std::swap(p, q);
+    const int axis = projection_of(set_, plane(t)).axis;
+    const std::array<VertexIndex, 3> key{p, q, static_cast<VertexIndex>(axis)};
+    const auto found = edge_planes_.find(key);
+    if (found != edge_planes_.end()) return found->second;
+    InputGeometry& geometry = result_.geometry;
+    Vec3 off = positions_[p];
+    double& c = axis == 0 ? off.x : axis == 1 ? off.y : off.z;
+    // Any other value moves the point off the plane; + 1 keeps it near the
+    // mesh where it can (not past 2^53, where it rounds back to c).
+    c = c + 1 != c ? c + 1 : c * 0.5;
+    const auto w = static_cast<VertexIndex>(geometry.points.size());
+    geometry.points.push_back(off);
+    const auto index = static_cast<std::uint32_t>(geometry.planes.size());
+    geometry.planes.push_back({p, q, w});
+    geometry.plane_approx.push_back(approximate_input_plane(positions_[p], positions_[q], off));
+    set_ = geometry.plane_set({});  // the arrays may have moved
+    const PlaneRef made = PlaneRef::input(index);
+    edge_planes_.emplace(key, made);
+    return made;
   }
 
   // The points where triangle t meets the plane of u (t not on it): its corners
@@ -169,10 +217,22 @@ class Arranger {
     traces_[u].push_back({a, b, plane(t)});
   }
 
-  // Triangle t cut by its traces and triangulated.
-  void split(std::uint32_t t) {
-    const Triangle& tri = triangles_[t];
-    const Projection projection = projection_of(set_, plane(t));
+  // A segment to triangulate along: an edge of a member of the group (a, b its
+  // interned corners, `edge` true, `owner` the member), or a trace in `owner`
+  // on the plane `other`.
+  struct Segment {
+    VertexIndex a = 0, b = 0;
+    std::uint32_t owner = 0;
+    bool edge = false;
+    PlaneRef other;
+  };
+
+  // The triangles of `group` (on one plane; one triangle, or triangles joined
+  // by overlaps on that plane) cut by their edges and traces and triangulated
+  // together; each member's pieces, the faces inside it, into pieces[member].
+  void split(const std::vector<std::uint32_t>& group, std::vector<std::vector<Triangle>>& pieces) {
+    const std::uint32_t first = group.front();
+    const Projection projection = projection_of(set_, plane(first));
     const auto orient = [&](VertexIndex p, VertexIndex q, VertexIndex r) {
       return orient_in_plane(set_, projection, result_.defs[p], result_.approx[p], result_.defs[q], result_.approx[q],
                              result_.defs[r], result_.approx[r]);
@@ -183,42 +243,56 @@ class Arranger {
     };
     // A corner repeated elsewhere as the same position (an unwelded input) is
     // the vertex the traces use for that point.
-    std::array<VertexIndex, 3> corner{};
-    for (int k = 0; k < 3; ++k) corner[k] = intern(PointDef::input(tri[k]));
-    for (VertexIndex v : corner) add(v);
-    const std::vector<Trace>& traces = traces_[t];
-    for (const Trace& trace : traces) {
-      add(trace.a);
-      add(trace.b);
+    std::vector<std::array<VertexIndex, 3>> corners;
+    std::vector<Segment> segments;
+    for (const std::uint32_t t : group) {
+      const Triangle& tri = triangles_[t];
+      std::array<VertexIndex, 3> corner{};
+      for (int k = 0; k < 3; ++k) corner[k] = intern(PointDef::input(tri[k]));
+      for (VertexIndex v : corner) add(v);
+      corners.push_back(corner);
+      for (int k = 0; k < 3; ++k) segments.push_back({corner[k], corner[(k + 1) % 3], t, true, {}});
     }
-    // Two traces that cross each other strictly inside both: their lines' meet.
-    for (std::size_t i = 0; i < traces.size(); ++i) {
-      const Trace& x = traces[i];
-      if (x.a == x.b) continue;
-      for (std::size_t j = i + 1; j < traces.size(); ++j) {
-        const Trace& y = traces[j];
-        if (y.a == y.b) continue;
+    for (const std::uint32_t t : group) {
+      for (const Trace& trace : traces_[t]) {
+        add(trace.a);
+        add(trace.b);
+        if (trace.a != trace.b) segments.push_back({trace.a, trace.b, t, false, trace.other});
+      }
+    }
+    // Two segments that cross each other strictly inside both: an edge's
+    // meet with the other's carrier plane (a trace's other plane, or a plane
+    // across the group's through another member's edge), or, for two traces,
+    // their planes' meet with this one. A member's own edges meet each other
+    // and its traces only at their ends.
+    for (std::size_t i = 0; i < segments.size(); ++i) {
+      const Segment& x = segments[i];
+      for (std::size_t j = i + 1; j < segments.size(); ++j) {
+        const Segment& y = segments[j];
+        if (x.owner == y.owner && (x.edge || y.edge)) continue;
         const Sign ya = orient(x.a, x.b, y.a), yb = orient(x.a, x.b, y.b);
         if (ya == Sign::zero || yb == Sign::zero || ya == yb) continue;
         const Sign xa = orient(y.a, y.b, x.a), xb = orient(y.a, y.b, x.b);
         if (xa == Sign::zero || xb == Sign::zero || xa == xb) continue;
-        std::array<PlaneRef, 3> planes{plane(t), x.other, y.other};
-        std::sort(planes.begin(), planes.end(), [](PlaneRef p, PlaneRef q) { return p.bits < q.bits; });
-        add(intern(PointDef::three_planes(planes[0], planes[1], planes[2])));
+        if (!x.edge && !y.edge) {
+          std::array<PlaneRef, 3> planes{plane(x.owner), x.other, y.other};
+          std::sort(planes.begin(), planes.end(), [](PlaneRef p, PlaneRef q) { return p.bits < q.bits; });
+          add(intern(PointDef::three_planes(planes[0], planes[1], planes[2])));
+          continue;
+        }
+        const Segment& e = x.edge ? x : y;
+        const Segment& o = x.edge ? y : x;
+        const PlaneRef carrier = o.edge ? edge_plane(o.a, o.b, o.owner) : o.other;
+        add(intern(PointDef::segment_plane(std::min(e.a, e.b), std::max(e.a, e.b), carrier)));
       }
     }
 
-    // Every segment (the triangle's edges and the traces) cut at the vertices
-    // that lie inside it, in order along it.
-    std::vector<std::pair<VertexIndex, VertexIndex>> segments;
-    for (int k = 0; k < 3; ++k) segments.emplace_back(corner[k], corner[(k + 1) % 3]);
-    for (const Trace& trace : traces) {
-      if (trace.a != trace.b) segments.emplace_back(trace.a, trace.b);
-    }
+    // Every segment cut at the vertices that lie inside it, in order along it.
     const int kept[2] = {(projection.axis + 1) % 3, (projection.axis + 2) % 3};
     std::vector<std::pair<VertexIndex, VertexIndex>> constraints;
     std::vector<VertexIndex> inside;
-    for (const auto& [a, b] : segments) {
+    for (const Segment& segment : segments) {
+      const VertexIndex a = segment.a, b = segment.b;
       // An axis of the projection along which a and b differ orders the segment.
       int axis = kept[0];
       Sign ab = compare_coordinate(set_, axis, result_.defs[a], result_.approx[a], result_.defs[b], result_.approx[b]);
@@ -264,29 +338,50 @@ class Arranger {
       h->info() = v;
       handles.push_back(h);
     }
-    const auto handle = [&](VertexIndex v) {
-      return handles[static_cast<std::size_t>(std::find(vertices.begin(), vertices.end(), v) - vertices.begin())];
+    const auto position = [&](VertexIndex v) {
+      return static_cast<std::size_t>(std::find(vertices.begin(), vertices.end(), v) - vertices.begin());
     };
-    for (const auto& [a, b] : constraints) cdt.insert_constraint(handle(a), handle(b));
+    for (const auto& [a, b] : constraints) cdt.insert_constraint(handles[position(a)], handles[position(b)]);
 
     // The triangulation covers the convex hull of the points, which is the
-    // triangle (every point lies in it). Its faces turn counter-clockwise in
-    // the projection, which is the triangle's turn unless the projection flips it.
-    std::vector<Triangle> pieces;
+    // union of the members' hulls; every member's edges are constraints, so
+    // each face lies inside a member or outside it, and inside exactly when its
+    // three corners lie in the closed member (a convex set). Faces turn
+    // counter-clockwise in the projection, which is the first member's turn
+    // unless the projection flips it, and a member's own unless it faces the
+    // other way.
+    std::vector<std::vector<char>> in(group.size());  // [member][position of vertex]
+    for (std::size_t m = 0; m < group.size(); ++m) {
+      in[m].assign(vertices.size(), 1);
+      if (group.size() == 1) continue;
+      const std::array<VertexIndex, 3>& c = corners[m];
+      const Sign turn = orient(c[0], c[1], c[2]);
+      for (std::size_t k = 0; k < vertices.size(); ++k) {
+        const VertexIndex v = vertices[k];
+        for (int e = 0; e < 3 && in[m][k]; ++e) {
+          const Sign s = orient(c[e], c[(e + 1) % 3], v);
+          if (s != Sign::zero && s != turn) in[m][k] = 0;
+        }
+      }
+    }
+    std::vector<bool> reversed(group.size());
+    for (std::size_t m = 0; m < group.size(); ++m) {
+      reversed[m] = projection.flipped != (m > 0 && compare_normals(set_, plane(group[m]), plane(first)) == Sign::negative);
+    }
     for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
-      Triangle piece{f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
-      if (projection.flipped) std::swap(piece[1], piece[2]);
-      // A fixed order of the pieces (the face list's order is the
-      // triangulation's own): each rotated to start at its least vertex.
-      std::rotate(piece.begin(), std::min_element(piece.begin(), piece.end()), piece.end());
-      pieces.push_back(piece);
+      const std::array<std::size_t, 3> at{position(f->vertex(0)->info()), position(f->vertex(1)->info()),
+                                          position(f->vertex(2)->info())};
+      for (std::size_t m = 0; m < group.size(); ++m) {
+        if (!in[m][at[0]] || !in[m][at[1]] || !in[m][at[2]]) continue;
+        Triangle piece{vertices[at[0]], vertices[at[1]], vertices[at[2]]};
+        if (reversed[m]) std::swap(piece[1], piece[2]);
+        // A fixed order of the pieces (the face list's order is the
+        // triangulation's own): each rotated to start at its least vertex.
+        std::rotate(piece.begin(), std::min_element(piece.begin(), piece.end()), piece.end());
+        pieces[group[m]].push_back(piece);
+      }
     }
-    std::sort(pieces.begin(), pieces.end());
-    for (const Triangle& piece : pieces) {
-      result_.triangles.push_back(piece);
-      result_.source.push_back(t);
-    }
-    result_.split_triangles += pieces.size() > 1;
+    for (const std::uint32_t t : group) std::sort(pieces[t].begin(), pieces[t].end());
   }
 
   std::span<const Vec3> positions_;
@@ -295,6 +390,7 @@ class Arranger {
   PlaneSet set_;
   std::vector<std::vector<Trace>> traces_;
   std::map<ExactCoordinates, VertexIndex, LessCoordinates> vertex_at_;
+  std::map<std::array<VertexIndex, 3>, PlaneRef> edge_planes_;  // by (p, q, axis)
 };
 
 }  // namespace
@@ -305,66 +401,10 @@ MeshArrangement arrange_triangles(std::span<const Vec3> positions, std::span<con
 
 std::optional<std::vector<std::size_t>> order_around_edge(const PlaneSet& set, const PointDef& p, const PointDef& q,
                                                           std::span<const PointDef> around) {
-  const std::size_t k = around.size();
-  std::vector<std::size_t> order(k);
-  for (std::size_t i = 0; i < k; ++i) order[i] = i;
-  if (k == 0) return order;
-  const ExactCoordinates a = exact_coordinates(set, p), b = exact_coordinates(set, q);
-  const auto minus = [](const ExactCoordinates& x, const ExactCoordinates& y) {
-    return ExactCoordinates{x[0] - y[0], x[1] - y[1], x[2] - y[2]};
-  };
-  const auto dot = [](const ExactCoordinates& x, const ExactCoordinates& y) {
-    return mpq_class(x[0] * y[0] + x[1] * y[1] + x[2] * y[2]);
-  };
-  // det[d, u, v]: orient3d(a, b, a + u, a + v)'s value.
-  const auto turn = [](const ExactCoordinates& d, const ExactCoordinates& u, const ExactCoordinates& v) {
-    const mpq_class det =
-        d[0] * (u[1] * v[2] - u[2] * v[1]) - d[1] * (u[0] * v[2] - u[2] * v[0]) + d[2] * (u[0] * v[1] - u[1] * v[0]);
-    return sgn(det);
-  };
-  const ExactCoordinates d = minus(b, a);
-  const mpq_class dd = dot(d, d);
-  std::vector<ExactCoordinates> from(k);
-  for (std::size_t i = 0; i < k; ++i) from[i] = minus(exact_coordinates(set, around[i]), a);
-  // The component of u across the line, times d·d (a positive factor).
-  const auto across = [&](const ExactCoordinates& u) {
-    const mpq_class along = dot(u, d);
-    return ExactCoordinates{u[0] * dd - d[0] * along, u[1] * dd - d[1] * along, u[2] * dd - d[2] * along};
-  };
-  const ExactCoordinates first = across(from[0]);
-  if (sgn(dot(first, first)) == 0) return std::nullopt;
-  // Half-turns from around[0], as order_around_line: 0 on its own ray, 1 in the
-  // open half-space ahead, 2 on the opposite ray, 3 behind.
-  std::vector<int> half(k);
-  for (std::size_t i = 0; i < k; ++i) {
-    const int o = i == 0 ? 0 : turn(d, from[0], from[i]);
-    if (o > 0) {
-      half[i] = 1;
-    } else if (o < 0) {
-      half[i] = 3;
-    } else {
-      const int same = sgn(dot(first, across(from[i])));
-      if (same == 0) return std::nullopt;  // on the line
-      half[i] = same > 0 ? 0 : 2;
-    }
-  }
-  bool tie = false;
-  std::sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) {
-    if (half[i] != half[j]) return half[i] < half[j];
-    if (i == j) return false;
-    if (half[i] == 0 || half[i] == 2) {
-      tie = true;
-      return i < j;
-    }
-    const int o = turn(d, from[i], from[j]);
-    if (o == 0) {
-      tie = true;
-      return i < j;
-    }
-    return o > 0;
-  });
-  if (tie) return std::nullopt;
-  return order;
+  std::vector<ExactCoordinates> points;
+  points.reserve(around.size());
+  for (const PointDef& def : around) points.push_back(exact_coordinates(set, def));
+  return kernel_detail::order_around_exact(exact_coordinates(set, p), exact_coordinates(set, q), points);
 }
 
 }  // namespace shatter

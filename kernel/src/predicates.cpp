@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "order_around.hpp"
 #include "shatter/kernel/fp_environment.hpp"
 
 namespace shatter {
@@ -408,47 +409,11 @@ Sign coplanar_orientation(Vec3 p, Vec3 q, Vec3 r, Vec3 s) {
 }
 
 std::optional<std::vector<std::size_t>> order_around_line(Vec3 a, Vec3 b, std::span<const Vec3> around) {
-  const std::size_t k = around.size();
-  std::vector<std::size_t> order(k);
-  for (std::size_t i = 0; i < k; ++i) order[i] = i;
-  if (k == 0) return order;
+  if (around.empty()) return std::vector<std::size_t>{};
   const Vec3 r = around[0];
-  // Half-turns from around[0]: 0 on its own ray, 1 in the open half-space ahead
-  // (orient3d(a, b, r, p) > 0: det[b - a, r - a, p - a] is (b - a) x (r - a), the
-  // direction the right-hand turn moves r, dotted with p - a), 2 on the opposite
-  // ray, 3 behind. A point on the line has no angle.
-  std::vector<int> half(k);
-  for (std::size_t i = 0; i < k; ++i) {
-    const Sign o = i == 0 ? Sign::zero : orient3d(a, b, r, around[i]);
-    if (o == Sign::positive) {
-      half[i] = 1;
-    } else if (o == Sign::negative) {
-      half[i] = 3;
-    } else {
-      const Sign same = coplanar_orientation(a, b, r, around[i]);
-      if (same == Sign::zero) return std::nullopt;
-      half[i] = same == Sign::positive ? 0 : 2;
-    }
-  }
-  // Within one open half-space every two angles differ by less than a half turn,
-  // so the orientation of the pair orders them; on a ray, all share one angle.
-  bool tie = false;
-  std::sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) {
-    if (half[i] != half[j]) return half[i] < half[j];
-    if (i == j) return false;
-    if (half[i] == 0 || half[i] == 2) {
-      tie = true;
-      return i < j;
-    }
-    const Sign o = orient3d(a, b, around[i], around[j]);
-    if (o == Sign::zero) {
-      tie = true;
-      return i < j;
-    }
-    return o == Sign::positive;
-  });
-  if (tie) return std::nullopt;
-  return order;
+  return kernel_detail::order_by_half_turns(
+      around.size(), [&](std::size_t i, std::size_t j) { return orient3d(a, b, around[i], around[j]); },
+      [&](std::size_t i) { return coplanar_orientation(a, b, r, around[i]); });
 }
 
 }  // namespace shatter

@@ -15,7 +15,10 @@
 // one input plane per triangle (input plane t is triangle t's plane): an input
 // vertex; an edge of one triangle met by another's plane (segment_plane); or the
 // meet of three triangles' planes, where two intersection segments cross inside
-// a third triangle (three_planes). No coordinate is constructed to decide
+// a third triangle (three_planes). Where two triangles overlap on one plane and
+// their edges cross, the crossing is an edge met by a plane across theirs
+// through the other edge (an input plane past the triangles' own, through the
+// edge's ends and a point added off the plane). No coordinate is constructed to decide
 // anything: where two segments meet and how each triangle's pieces are laid out
 // are decided by exact orientation and order predicates on these points; the
 // triangulation of a split triangle is a constrained Delaunay triangulation of
@@ -36,8 +39,10 @@ namespace shatter {
 
 /// The arrangement of a triangle soup: triangles over plane-based vertices.
 struct MeshArrangement {
-  /// points: the input positions; input plane t: the plane of input triangle t
-  /// through its corners (so its front is the side the triangle faces).
+  /// points: the input positions, then the points off the plane that carry
+  /// edge planes; input plane t < triangles.size(): the plane of input triangle
+  /// t through its corners (so its front is the side the triangle faces), then
+  /// the edge planes (see the file comment), none unless coplanar edges cross.
   InputGeometry geometry;
   /// Per vertex. Vertex v < positions.size() is input vertex v
   /// (PointDef::input(v)); new points follow, each once (no two vertices are
@@ -50,10 +55,7 @@ struct MeshArrangement {
   std::vector<Triangle> triangles;
   std::vector<std::uint32_t> source;  ///< per piece: the input triangle it lies in
   /// The intersecting pairs (self_intersecting_pairs), and of those the pairs on
-  /// one plane, which are not resolved yet: their overlap is left as it is, and
-  /// the trace of a third triangle across them is cut where one of them ends
-  /// but not in the other, so pieces may then cross (each triangle is still
-  /// tiled by its pieces).
+  /// one plane (resolved as the others are: see arrange_triangles).
   std::vector<TrianglePair> pairs, coplanar_pairs;
   std::size_t split_triangles = 0;  ///< input triangles split into more than one piece
 
@@ -67,19 +69,27 @@ struct MeshArrangement {
 /// their planes meet, is computed as plane-based points (ordered along that line
 /// exactly); in each triangle, the segments of its pairs are cut where they cross
 /// one another (three_planes points) and wherever a vertex lies on them, and the
-/// triangle is triangulated with those pieces as constraints.
-/// Guarantees, when `coplanar_pairs` is empty: the pieces of each input
-/// triangle tile it exactly (their union is the triangle, their interiors are
-/// disjoint, none is flat); any two pieces meet, if at all, in a vertex or an edge
-/// they share by index (no crossing, no vertex inside another piece's edge), so
-/// the pieces are a self-intersection-free triangle soup over the same surface.
+/// triangle is triangulated with those pieces as constraints. Triangles that
+/// overlap on one plane (and those overlapping them, transitively) are
+/// triangulated together, each with the others' edges and traces as
+/// constraints too, and each keeps the faces inside it.
+/// Guarantees: the pieces of each input triangle tile it exactly (their union
+/// is the triangle, their interiors are disjoint, none is flat); any two pieces
+/// meet, if at all, in a vertex or an edge they share by index (no crossing, no
+/// vertex inside another piece's edge), or, for pieces of two triangles that
+/// overlap on one plane, are the same three vertices (either way round: a
+/// face of the arrangement that several input triangles cover); so the pieces
+/// are a triangle soup over the same surface that intersects itself only in
+/// such repeated faces.
 /// A mesh whose triangles do not intersect comes back as it is: the same
 /// triangles, no new vertex. Deterministic: a function of the input alone.
 /// Preconditions: indices in range, finite coordinates, no triangle with
 /// collinear corners (as self_intersecting_pairs). Failure: none beyond
-/// std::bad_alloc. Cost: the pair search, plus per split triangle with k
-/// segments O(k^2) exact predicates to find crossings, O(k * vertices) to cut
-/// the segments, and a rational constrained triangulation of its vertices.
+/// std::bad_alloc. Cost: the pair search, plus per split triangle (or group of
+/// triangles on one plane) with k segments O(k^2) exact predicates to find
+/// crossings, O(k * vertices) to cut the segments, a rational constrained
+/// triangulation of its vertices, and for a group of m triangles O(m *
+/// vertices) exact orientations to give each its faces.
 MeshArrangement arrange_triangles(std::span<const Vec3> positions, std::span<const Triangle> triangles);
 
 /// The points `around` ordered by their angle about the oriented line from p to
@@ -95,5 +105,57 @@ MeshArrangement arrange_triangles(std::span<const Vec3> positions, std::span<con
 /// determinants. Failure: none beyond std::bad_alloc.
 std::optional<std::vector<std::size_t>> order_around_edge(const PlaneSet& set, const PointDef& p, const PointDef& q,
                                                           std::span<const PointDef> around);
+
+/// The boundary of the solid an arrangement's surface winds around at least
+/// once: the faces with winding number >= 1 on one side and <= 0 on the other,
+/// turned so that they face the side <= 0 (the union of the input's solids,
+/// for an input of closed shells; Zhou, Grinspun, Zorin & Jacobson 2016,
+/// section 3.2, "winding number labeling").
+struct WindingBoundary {
+  enum class Status : std::uint8_t {
+    ok,
+    /// The pieces do not close up: some edge is passed more times one way
+    /// than the other (counting each face as often as pieces cover it, with
+    /// their turns). Nothing is selected.
+    open,
+    /// No seed ray clear of every edge and vertex was found for some part
+    /// (64 fixed directions tried), or two faces around an edge could not be
+    /// ordered (not expected of an arrangement): nothing is selected.
+    undecided,
+  };
+  Status status = Status::ok;
+  /// Over the arrangement's vertices, each face once; closed and oriented (every
+  /// edge passed as often each way) when status is ok.
+  std::vector<Triangle> triangles;
+  std::vector<std::uint32_t> source;  ///< per triangle: an input triangle it lies in
+  std::size_t faces = 0;      ///< faces of the arrangement (pieces on the same three vertices counted once)
+  std::size_t cancelled = 0;  ///< of those, faces whose pieces cancel (as often one way round as the other)
+  std::size_t cells = 0;      ///< the face sides joined into cells around edges (a cell may count twice)
+  std::size_t seeds = 0;      ///< rays cast to fix a part's winding numbers
+  int max_winding = 0;        ///< the largest winding number of a cell next to a face
+};
+
+/// The faces of `arrangement` between winding number >= 1 and <= 0 (see
+/// WindingBoundary), decided exactly on its vertices' rational coordinates.
+/// Faces are the pieces' vertex triples; a face covered by several pieces
+/// counts each with its turn (a duplicated triangle twice, a triangle and its
+/// reverse not at all), and the winding number drops by that count crossing it
+/// to its front. Around every edge the faces are ordered exactly
+/// (order_around_edge's order), and the two face sides bounding each wedge
+/// between neighbours are one cell; each part of the surface (faces joined by
+/// edges and cells) has its winding numbers fixed by one ray from a face's
+/// centroid, counting the faces it crosses with their turns, in the first of a
+/// fixed list of directions that passes no edge or vertex.
+/// Guarantees when status is ok: the triangles are a subset of the faces, each
+/// once, turned to face out of the solid; every edge is passed as often one way
+/// as the other (closed and oriented, but not necessarily 2-manifold: solids
+/// touching along an edge give it four triangles), and two triangles meet only
+/// as the arrangement's pieces do. Deterministic.
+/// Preconditions: `arrangement` is arrange_triangles' result (pieces that meet
+/// only in shared vertices and edges or coincide). Failure: status (nothing
+/// selected), std::bad_alloc. Cost: the exact coordinates of the vertices; per
+/// edge with k > 2 faces O(k log k) rational determinants; per part one ray
+/// tested against every face (rational arithmetic).
+WindingBoundary winding_boundary(const MeshArrangement& arrangement);
 
 }  // namespace shatter

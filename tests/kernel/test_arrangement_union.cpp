@@ -1,0 +1,241 @@
+// The solid an arrangement winds around (winding_boundary), judged apart from
+// the code that makes it: the selected faces are closed and oriented (every
+// edge passed as often each way), each face once, and the volume they bound,
+// summed exactly on the vertices' rational coordinates, is the union's: for
+// lattice boxes the count of unit voxels any box covers, for solids at random
+// angles CGAL's corefinement union on exact constructions (Epeck) of the
+// separate shells. Where the result is also 2-manifold (no solids touching
+// along an edge or at a point), validate_mesh on its coordinates, exact for
+// lattice boxes, accepts it.
+
+#include <catch2/catch.hpp>
+
+#include <CGAL/Polygon_mesh_processing/corefinement.h>
+#include <CGAL/Polygon_mesh_processing/measure.h>
+#include <CGAL/Surface_mesh.h>
+#include <gmpxx.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
+#include "shatter/kernel/arrangement.hpp"
+#include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/io.hpp"
+#include "shatter/kernel/rationals.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "support/sanitizers.hpp"
+
+using namespace shatter;
+
+namespace {
+
+using Q3 = std::array<mpq_class, 3>;
+using EK = ExactKernel;
+using EpeckMesh = CGAL::Surface_mesh<EK::Point_3>;
+
+Mesh turned(Mesh mesh, double a, double b, double c, Vec3 shift) {
+  for (Vec3& p : mesh.positions) {
+    Vec3 q{p.x, std::cos(a) * p.y - std::sin(a) * p.z, std::sin(a) * p.y + std::cos(a) * p.z};
+    q = {std::cos(b) * q.x + std::sin(b) * q.z, q.y, -std::sin(b) * q.x + std::cos(b) * q.z};
+    q = {std::cos(c) * q.x - std::sin(c) * q.y, std::sin(c) * q.x + std::cos(c) * q.y, q.z};
+    p = {q.x + shift.x, q.y + shift.y, q.z + shift.z};
+  }
+  return mesh;
+}
+
+struct Checked {
+  WindingBoundary boundary;
+  mpq_class six_volume;
+  bool manifold = false;  ///< no edge with more than two triangles, no pinched vertex
+  bool valid = false;     ///< validate_mesh accepted it (asked only when manifold and exact in doubles)
+};
+
+// Arranges `mesh`, selects the boundary, and checks what holds for any input of
+// closed shells: status ok, each face once, closed and oriented.
+Checked check_union(const std::string& name, const Mesh& mesh) {
+  INFO(name);
+  const MeshArrangement arrangement = arrange_triangles(mesh.positions, mesh.triangles);
+  Checked checked;
+  checked.boundary = winding_boundary(arrangement);
+  const WindingBoundary& boundary = checked.boundary;
+  REQUIRE(boundary.status == WindingBoundary::Status::ok);
+  REQUIRE(boundary.triangles.size() == boundary.source.size());
+  CHECK(winding_boundary(arrangement).triangles == boundary.triangles);  // deterministic
+  const PlaneSet set = arrangement.plane_set();
+  std::map<VertexIndex, Q3> exact;
+  for (const Triangle& t : boundary.triangles) {
+    for (VertexIndex v : t) {
+      if (!exact.count(v)) exact.emplace(v, exact_coordinates(set, arrangement.defs[v]));
+    }
+  }
+  std::set<Triangle> seen;
+  std::map<std::pair<VertexIndex, VertexIndex>, long> passes;  // (u, v): u -> v minus v -> u
+  std::map<std::pair<VertexIndex, VertexIndex>, int> uses;
+  for (std::size_t k = 0; k < boundary.triangles.size(); ++k) {
+    Triangle t = boundary.triangles[k];
+    // Each face once, and in its source triangle's plane.
+    for (VertexIndex v : t) {
+      CHECK(side(set, PlaneRef::input(boundary.source[k]), arrangement.defs[v], arrangement.approx[v]) == Sign::zero);
+    }
+    Triangle key = t;
+    std::sort(key.begin(), key.end());
+    CHECK(seen.insert(key).second);
+    for (int e = 0; e < 3; ++e) {
+      const VertexIndex u = t[e], v = t[(e + 1) % 3];
+      passes[{std::min(u, v), std::max(u, v)}] += u < v ? 1 : -1;
+      ++uses[{std::min(u, v), std::max(u, v)}];
+    }
+    const Q3 &a = exact.at(t[0]), &b = exact.at(t[1]), &c = exact.at(t[2]);
+    checked.six_volume += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+                          a[2] * (b[0] * c[1] - b[1] * c[0]);
+  }
+  std::size_t unbalanced = 0, crowded = 0;
+  for (const auto& [edge, net] : passes) unbalanced += net != 0;
+  for (const auto& [edge, count] : uses) crowded += count > 2;
+  CHECK(unbalanced == 0);
+  // A compact mesh of the result, where its coordinates are exact in doubles.
+  bool exact_in_doubles = true;
+  Mesh out;
+  std::map<VertexIndex, VertexIndex> index;
+  for (const auto& [v, q] : exact) {
+    index[v] = static_cast<VertexIndex>(out.positions.size());
+    out.positions.push_back({q[0].get_d(), q[1].get_d(), q[2].get_d()});
+    exact_in_doubles = exact_in_doubles && mpq_class(q[0].get_d()) == q[0] && mpq_class(q[1].get_d()) == q[1] &&
+                       mpq_class(q[2].get_d()) == q[2];
+  }
+  for (const Triangle& t : boundary.triangles) out.triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
+  out.surfaces.assign(out.triangles.size(), 0);
+  if (exact_in_doubles && crowded == 0) {
+    const ValidationReport report = validate_mesh(out);
+    checked.manifold = true;
+    for (const Defect& defect : report.defects) {
+      // A vertex where solids touch at a point is pinched, and its fans meet there.
+      if (defect.kind == DefectKind::non_manifold_vertex) checked.manifold = false;
+    }
+    if (checked.manifold) {
+      INFO((report.defects.empty() ? std::string() : report.defects.front().first));
+      CHECK(report.valid());
+    }
+    checked.valid = report.valid();
+  }
+  return checked;
+}
+
+// Six times the volume of a closed Epeck surface mesh, exactly.
+EK::FT six_volume(const EpeckMesh& mesh) { return 6 * CGAL::Polygon_mesh_processing::volume(mesh); }
+
+EpeckMesh exact_mesh(const Mesh& mesh) {
+  EpeckMesh out;
+  std::vector<EpeckMesh::Vertex_index> vertices;
+  for (const Vec3& p : mesh.positions) vertices.push_back(out.add_vertex(EK::Point_3(p.x, p.y, p.z)));
+  for (const Triangle& t : mesh.triangles) out.add_face(vertices[t[0]], vertices[t[1]], vertices[t[2]]);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("unions of lattice boxes: closed, oriented, the voxels' volume", "[arrangement][union]") {
+  // Two to five boxes on integer corners in [0, 4]^3, some tessellated finer
+  // (half-integer vertices), some repeated: faces shared, overlapping on one
+  // plane either way round, edges along edges, boxes inside boxes, boxes
+  // touching along an edge or at a corner.
+  test::Random random(20261207);
+  const std::size_t seeds = test::sized(60, 12);
+  std::size_t valid = 0, touching = 0, cancelled = 0;
+  for (std::size_t seed = 0; seed < seeds; ++seed) {
+    const int count = 2 + static_cast<int>(random.index(4));
+    std::vector<Mesh> boxes;
+    std::set<std::array<int, 3>> voxels;
+    for (int b = 0; b < count; ++b) {
+      std::array<int, 3> lo{}, hi{};
+      for (int c = 0; c < 3; ++c) {
+        lo[c] = static_cast<int>(random.index(4));
+        hi[c] = lo[c] + 1 + static_cast<int>(random.index(static_cast<std::size_t>(4 - lo[c])));
+      }
+      const Vec3 l{double(lo[0]), double(lo[1]), double(lo[2])}, h{double(hi[0]), double(hi[1]), double(hi[2])};
+      boxes.push_back(test::grid_box(l, h, 1 + static_cast<int>(random.index(2))));
+      if (random.index(6) == 0) boxes.push_back(test::box(l, h));  // the same box again
+      for (int x = lo[0]; x < hi[0]; ++x)
+        for (int y = lo[1]; y < hi[1]; ++y)
+          for (int z = lo[2]; z < hi[2]; ++z) voxels.insert({x, y, z});
+    }
+    const Checked checked = check_union("lattice boxes #" + std::to_string(seed), test::merge(boxes));
+    INFO("lattice boxes #" << seed);
+    CHECK(checked.six_volume == mpq_class(6 * static_cast<long>(voxels.size())));
+    valid += checked.valid;
+    touching += !checked.manifold;
+    cancelled += checked.boundary.cancelled;
+  }
+  INFO("valid " << valid << ", touching " << touching);
+  CHECK(valid + touching == seeds);  // every result validates unless solids touch
+  CHECK(valid > seeds / 8);
+  CHECK(touching > 0);
+  CHECK(cancelled > 0);  // faces shared by two boxes, one each way
+}
+
+TEST_CASE("unions of solids at random angles: closed, oriented, CGAL's exact union volume", "[arrangement][union]") {
+  // A box, a sphere and a torus (and a second box) turned and shifted at
+  // random so that they overlap, and a solid inside another one.
+  test::Random random(20261208);
+  const std::size_t seeds = test::sized(6, 2);
+  for (std::size_t seed = 0; seed < seeds; ++seed) {
+    const auto angle = [&] { return random.uniform(0, 6.283185307179586); };
+    const auto shift = [&](double reach) {
+      return Vec3{random.uniform(-reach, reach), random.uniform(-reach, reach), random.uniform(-reach, reach)};
+    };
+    std::vector<Mesh> shells{
+        turned(test::box({-1, -1, -1}, {1, 1, 1}), angle(), angle(), angle(), shift(0.8)),
+        turned(test::ellipsoid({0, 0, 0}, {1, 1, 1}, 10, 7), angle(), angle(), angle(), shift(0.8)),
+        turned(test::torus(1.0, 0.3, 10, 6), angle(), angle(), angle(), shift(0.5)),
+    };
+    if (seed % 2 == 1) shells.push_back(turned(test::box({-0.2, -0.2, -0.2}, {0.2, 0.2, 0.2}), angle(), angle(), angle(), {0, 0, 0}));
+    const std::string name = "solids at random angles #" + std::to_string(seed);
+    const Checked checked = check_union(name, test::merge(shells));
+    EpeckMesh united = exact_mesh(shells[0]);
+    for (std::size_t s = 1; s < shells.size(); ++s) {
+      EpeckMesh next = exact_mesh(shells[s]), result;
+      REQUIRE(CGAL::Polygon_mesh_processing::corefine_and_compute_union(united, next, result));
+      united = std::move(result);
+    }
+    INFO(name);
+    CHECK(EK::FT(checked.six_volume) == six_volume(united));
+    CHECK(checked.boundary.triangles.size() > 100);
+  }
+}
+
+TEST_CASE("a solid and its copy, and a solid and itself inside out", "[arrangement][union]") {
+  const Mesh sphere = test::ellipsoid({0, 0, 0}, {1, 1, 1}, 8, 6);
+  const Checked twice = check_union("a sphere twice", test::merge({sphere, sphere}));
+  CHECK(twice.boundary.triangles.size() == sphere.triangles.size());
+  CHECK(twice.boundary.max_winding == 2);
+  CHECK(twice.valid);
+  const Checked gone = check_union("a sphere and its inverse", test::merge({sphere, test::flipped(sphere)}));
+  CHECK(gone.boundary.triangles.empty());
+  CHECK(gone.boundary.cancelled == sphere.triangles.size());
+  // Nested: the inner sphere adds nothing; a cavity (inverted inner sphere) is
+  // kept.
+  const Mesh inner = test::ellipsoid({0, 0, 0}, {0.5, 0.5, 0.5}, 8, 6);
+  const Checked nested = check_union("nested spheres", test::merge({sphere, inner}));
+  CHECK(nested.boundary.triangles.size() == sphere.triangles.size());
+  const Checked hollow = check_union("a sphere with a cavity", test::merge({sphere, test::flipped(inner)}));
+  CHECK(hollow.boundary.triangles.size() == sphere.triangles.size() + inner.triangles.size());
+}
+
+TEST_CASE("the self-intersecting corpus: the union is closed and oriented", "[arrangement][union][corpus]") {
+  std::size_t meshes = 0;
+  for (const auto& path : test::self_intersecting_meshes()) {
+    const Mesh mesh = read_mesh(path);
+    const Checked checked = check_union(path.filename().string(), mesh);
+    CHECK(checked.six_volume > 0);
+    ++meshes;
+  }
+  CHECK(meshes >= 3);
+}
