@@ -5,13 +5,21 @@
 #include <CGAL/box_intersection_d.h>
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <utility>
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "shatter/kernel/predicates.hpp"
+#include "shatter/kernel/self_intersections_detail.hpp"
 #include "triangle_boxes.hpp"
 
 namespace shatter {
@@ -269,72 +277,315 @@ void for_each_bucket(const CellRange& range, std::uint64_t mask, Visit&& visit) 
 
 }  // namespace
 
+namespace {
+
+// Runs body(begin, end) over [0, count): on the calling thread alone when the
+// enclosing arena has one thread or the range is one grain, else in blocks of at
+// least `grain` on the arena's threads. Callers make their result independent of
+// how the range is split.
+template <class Body>
+void for_blocks(std::size_t count, std::size_t grain, Body&& body) {
+  if (count <= grain || tbb::this_task_arena::max_concurrency() <= 1) {
+    if (count > 0) body(std::size_t{0}, count);
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, grain),
+                    [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+}
+
+// Reductions whose result must not depend on the thread count (a sum of
+// doubles) are made per block of this many triangles, then over the blocks in
+// order.
+constexpr std::size_t reduction_block = std::size_t{1} << 14;
+
+// The low 10 bits of v spread to every third bit: one coordinate's part of a
+// Morton code.
+std::uint32_t spread_bits(std::uint32_t v) {
+  v &= 0x3FF;
+  v = (v | v << 16) & 0x030000FF;
+  v = (v | v << 8) & 0x0300F00F;
+  v = (v | v << 4) & 0x030C30C3;
+  v = (v | v << 2) & 0x09249249;
+  return v;
+}
+
+// The bits of each cell coordinate a triangle's Morton key keeps (its top ones):
+// 2^18 keys, a counting sort's table of 1 MiB.
+constexpr int key_bits_per_axis = 6;
+
+// A bucket's triangles, copied out for its pair search: their float boxes and
+// low cells side by side (structure of arrays, so the box test of one against
+// the rest vectorizes), and their triangle indices.
+struct BucketScratch {
+  std::vector<float> lo[3], hi[3];
+  std::vector<std::uint32_t> cell[3], triangle;
+  std::vector<std::uint8_t> meet;
+
+  void resize(std::size_t size) {
+    if (triangle.size() >= size) return;
+    for (int axis = 0; axis < 3; ++axis) {
+      lo[axis].resize(size);
+      hi[axis].resize(size);
+      cell[axis].resize(size);
+    }
+    triangle.resize(size);
+    meet.resize(size);
+  }
+};
+
+}  // namespace
+
 std::vector<TrianglePair> self_intersecting_pairs(std::span<const Vec3> positions, std::span<const Triangle> triangles) {
+  return detail::self_intersecting_pairs_in_blocks(positions, triangles, reduction_block);
+}
+
+std::vector<TrianglePair> detail::self_intersecting_pairs_in_blocks(std::span<const Vec3> positions,
+                                                                    std::span<const Triangle> triangles,
+                                                                    std::size_t block) {
   std::vector<TrianglePair> pairs;
   const std::size_t count = triangles.size();
+  block = std::max<std::size_t>(block, 1);
   if (count < 2) return pairs;
-  std::vector<FloatBox> boxes;
-  const std::optional<Grid> made = boxes_and_grid(positions, count, [&](std::size_t t) -> const Triangle& { return triangles[t]; }, boxes);
-  if (!made) return self_intersecting_pairs_by_box_tree(positions, triangles);
-  const Grid& grid = *made;
+  if (count > std::numeric_limits<std::uint32_t>::max()) return self_intersecting_pairs_by_box_tree(positions, triangles);
+  const auto box_of_triangle = [&](std::size_t t) {
+    const Triangle& tri = triangles[t];
+    const Vec3& p = positions[tri[0]];
+    const Vec3& q = positions[tri[1]];
+    const Vec3& r = positions[tri[2]];
+    FloatBox box;
+    for (int axis = 0; axis < 3; ++axis) {
+      box.lo[axis] = round_down(std::min({p[axis], q[axis], r[axis]}));
+      box.hi[axis] = round_up(std::max({p[axis], q[axis], r[axis]}));
+    }
+    return box;
+  };
 
-  // Each box's cell range; boxes spanning too many cells are set aside.
-  std::vector<CellRange> ranges;
-  std::vector<std::uint8_t> is_large;
-  const std::uint64_t entries = cell_ranges(grid, boxes, ranges, is_large);
-  std::vector<std::size_t> large;
-  for (std::size_t t = 0; t < count; ++t) {
-    if (is_large[t]) large.push_back(t);
+  // The grid: anchored at the lowest corner, cells three times the mean largest
+  // extent of a triangle's box. The extents are summed per fixed block, then the
+  // blocks in order, so the cell size does not depend on the thread count (nor
+  // would the pairs: any cell size finds the same ones).
+  const std::size_t blocks = (count + block - 1) / block;
+  struct Extent {
+    double lowest[3], highest[3], sum;
+  };
+  std::vector<Extent> extents(blocks);
+  for_blocks(blocks, 1, [&](std::size_t first, std::size_t last) {
+    for (std::size_t k = first; k < last; ++k) {
+      Extent part{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}, 0};
+      for (std::size_t t = k * block; t < std::min(count, (k + 1) * block); ++t) {
+        const Triangle& tri = triangles[t];
+        const Vec3& p = positions[tri[0]];
+        const Vec3& q = positions[tri[1]];
+        const Vec3& r = positions[tri[2]];
+        double largest = 0;
+        for (int axis = 0; axis < 3; ++axis) {
+          const double lo = std::min({p[axis], q[axis], r[axis]}), hi = std::max({p[axis], q[axis], r[axis]});
+          part.lowest[axis] = std::min(part.lowest[axis], lo);
+          part.highest[axis] = std::max(part.highest[axis], hi);
+          largest = std::max(largest, hi - lo);
+        }
+        part.sum += largest;
+      }
+      extents[k] = part;
+    }
+  });
+  Extent all{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}, 0};
+  for (const Extent& part : extents) {
+    for (int axis = 0; axis < 3; ++axis) {
+      all.lowest[axis] = std::min(all.lowest[axis], part.lowest[axis]);
+      all.highest[axis] = std::max(all.highest[axis], part.highest[axis]);
+    }
+    all.sum += part.sum;
   }
+  const double cell = 3 * all.sum / static_cast<double>(count);
+  if (!(cell > 0) || !std::isfinite(cell) || !(1 / cell > 0) || !std::isfinite(1 / cell)) {
+    return self_intersecting_pairs_by_box_tree(positions, triangles);
+  }
+  Grid grid;
+  grid.inverse_cell = 1 / cell;
+  for (int axis = 0; axis < 3; ++axis) grid.origin[axis] = all.lowest[axis];
+  const auto range_of = [&](const FloatBox& box) {
+    CellRange range;
+    for (int axis = 0; axis < 3; ++axis) {
+      range.lo[axis] = grid.cell_of(box.lo[axis], axis);
+      range.hi[axis] = grid.cell_of(box.hi[axis], axis);
+    }
+    return range;
+  };
 
+  // The triangles ranked along a Morton curve through the cells of their boxes'
+  // low corners (the cell coordinates cut to their top key_bits_per_axis bits; a
+  // stable counting sort): triangles near each other in space come near each
+  // other in the arrays below, and the buckets are searched in that order.
+  // Only the speed depends on the order: pairs are reported by triangle index.
+  int shift = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::uint32_t top = grid.cell_of(round_up(all.highest[axis]), axis);
+    shift = std::max(shift, static_cast<int>(std::bit_width(top)) - key_bits_per_axis);
+  }
+  std::vector<std::uint32_t> keys(count);
+  for_blocks(count, block, [&](std::size_t first, std::size_t last) {
+    for (std::size_t t = first; t < last; ++t) {
+      const CellRange range = range_of(box_of_triangle(t));
+      keys[t] = spread_bits(range.lo[0] >> shift) | spread_bits(range.lo[1] >> shift) << 1 |
+                spread_bits(range.lo[2] >> shift) << 2;
+    }
+  });
+  std::vector<std::uint32_t> triangle_of(count);
+  {
+    std::vector<std::uint32_t> next(std::size_t{1} << 3 * key_bits_per_axis, 0);
+    for (const std::uint32_t key : keys) ++next[key];
+    std::uint32_t running = 0;
+    for (std::uint32_t& n : next) running += std::exchange(n, running);
+    for (std::size_t t = 0; t < count; ++t) triangle_of[next[keys[t]]++] = static_cast<std::uint32_t>(t);
+  }
+  std::vector<std::uint32_t>().swap(keys);
+
+  // By rank: the box, and whether it spans more than max_cells_per_box cells (set
+  // aside for the box tree); the entries (cells of the others) counted per block.
+  std::vector<FloatBox> boxes(count);
+  std::vector<std::uint8_t> is_large(count);
+  std::vector<std::uint64_t> block_entries(blocks);
+  for_blocks(blocks, 1, [&](std::size_t first, std::size_t last) {
+    for (std::size_t k = first; k < last; ++k) {
+      std::uint64_t entries = 0;
+      for (std::size_t r = k * block; r < std::min(count, (k + 1) * block); ++r) {
+        boxes[r] = box_of_triangle(triangle_of[r]);
+        const CellRange range = range_of(boxes[r]);
+        std::uint64_t cells = 1;
+        for (int axis = 0; axis < 3; ++axis) cells *= range.hi[axis] - range.lo[axis] + 1;
+        is_large[r] = cells > max_cells_per_box;
+        if (!is_large[r]) entries += cells;
+      }
+      block_entries[k] = entries;
+    }
+  });
+  std::uint64_t entries = 0;
+  for (const std::uint64_t e : block_entries) entries += e;
   if (entries > std::numeric_limits<std::uint32_t>::max()) return self_intersecting_pairs_by_box_tree(positions, triangles);
 
-  // Bucket the (cell, triangle) entries by a counting sort: each bucket's
-  // triangles in increasing order, so a triangle entered twice in one bucket
-  // (two of its cells share it) appears twice in a row.
-  const std::uint64_t bucket_count = std::bit_ceil(std::max<std::uint64_t>(16, entries));
+  // Bucket the (cell, rank) entries by a counting sort, each bucket's ranks in
+  // increasing order: its first is its least, and a triangle entered twice in
+  // one bucket (two of its cells hash there) appears twice in a row. Bucket b is
+  // members[start[b] .. start[b + 1]).
+  const std::uint64_t bucket_count = std::bit_ceil(std::max<std::uint64_t>(16, entries / 2));
   const std::uint64_t mask = bucket_count - 1;
   std::vector<std::uint32_t> start(bucket_count + 1, 0);
-  const auto for_each_cell = [&](std::size_t t, auto&& visit) { for_each_bucket(ranges[t], mask, visit); };
-  for (std::size_t t = 0; t < count; ++t) {
-    if (!is_large[t]) for_each_cell(t, [&](std::uint64_t b) { ++start[b + 1]; });
-  }
-  for (std::uint64_t b = 0; b < bucket_count; ++b) start[b + 1] += start[b];
   std::vector<std::uint32_t> members(entries);
-  {
-    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t t = 0; t < count; ++t) {
-      if (!is_large[t]) for_each_cell(t, [&](std::uint64_t b) { members[fill[b]++] = static_cast<std::uint32_t>(t); });
+  const bool parallel = tbb::this_task_arena::max_concurrency() > 1 && count > block;
+  if (!parallel) {
+    for (std::size_t r = 0; r < count; ++r) {
+      if (!is_large[r]) for_each_bucket(range_of(boxes[r]), mask, [&](std::uint64_t b) { ++start[b]; });
     }
-  }
-
-  // Each pair of distinct triangles in a bucket whose boxes meet is tested in
-  // the bucket of the cell holding the low corner of their boxes' overlap: one
-  // cell, entered by both, so exactly one bucket tests the pair.
-  for (std::uint64_t b = 0; b < bucket_count; ++b) {
-    const std::uint32_t begin = start[b], end = start[b + 1];
-    for (std::uint32_t i = begin; i < end; ++i) {
-      const std::uint32_t s = members[i];
-      if (i > begin && members[i - 1] == s) continue;
-      const FloatBox& box_s = boxes[s];
-      for (std::uint32_t j = i + 1; j < end; ++j) {
-        const std::uint32_t t = members[j];
-        if (t == members[j - 1]) continue;  // t itself, or t entered twice
-        const FloatBox& box_t = boxes[t];
-        if (!boxes_meet(box_s, box_t)) continue;
-        const std::uint32_t x = grid.cell_of(std::max(box_s.lo[0], box_t.lo[0]), 0);
-        const std::uint32_t y = grid.cell_of(std::max(box_s.lo[1], box_t.lo[1]), 1);
-        const std::uint32_t z = grid.cell_of(std::max(box_s.lo[2], box_t.lo[2]), 2);
-        if (Grid::bucket_of(x, y, z, mask) != b) continue;
-        if (triangles_intersect(positions, triangles[s], triangles[t])) pairs.emplace_back(s, t);
+    for (std::uint64_t b = 1; b < bucket_count; ++b) start[b] += start[b - 1];
+    // From the highest rank down, each bucket filled from its end: increasing.
+    for (std::size_t r = count; r-- > 0;) {
+      if (!is_large[r]) {
+        for_each_bucket(range_of(boxes[r]), mask, [&](std::uint64_t b) { members[--start[b]] = static_cast<std::uint32_t>(r); });
       }
     }
+  } else {
+    for_blocks(count, block, [&](std::size_t first, std::size_t last) {
+      for (std::size_t r = first; r < last; ++r) {
+        if (is_large[r]) continue;
+        for_each_bucket(range_of(boxes[r]), mask, [&](std::uint64_t b) {
+          std::atomic_ref<std::uint32_t>(start[b]).fetch_add(1, std::memory_order_relaxed);
+        });
+      }
+    });
+    for (std::uint64_t b = 1; b < bucket_count; ++b) start[b] += start[b - 1];
+    for_blocks(count, block, [&](std::size_t first, std::size_t last) {
+      for (std::size_t r = first; r < last; ++r) {
+        if (is_large[r]) continue;
+        for_each_bucket(range_of(boxes[r]), mask, [&](std::uint64_t b) {
+          members[std::atomic_ref<std::uint32_t>(start[b]).fetch_sub(1, std::memory_order_relaxed) - 1] =
+              static_cast<std::uint32_t>(r);
+        });
+      }
+    });
+    // The threads filled each bucket in no particular order: sorted, it is what
+    // the one-thread fill gives.
+    for_blocks(bucket_count, block, [&](std::size_t first, std::size_t last) {
+      for (std::size_t b = first; b < last; ++b) {
+        const std::uint32_t end = b + 1 < bucket_count ? start[b + 1] : static_cast<std::uint32_t>(entries);
+        if (end - start[b] > 1) std::sort(members.begin() + start[b], members.begin() + end);
+      }
+    });
+  }
+  start[bucket_count] = static_cast<std::uint32_t>(entries);
+
+  // Each bucket is searched once, by its least rank, when the ranks come to it.
+  // A pair of distinct triangles in it whose boxes meet is tested there if it is
+  // the bucket of the cell holding the low corner of their boxes' overlap: one
+  // cell, entered by both, so exactly one bucket tests the pair. That cell is,
+  // axis by axis, the larger of the two boxes' low cells (cell_of is monotone).
+  const auto search_bucket = [&](std::uint64_t b, BucketScratch& local, std::vector<TrianglePair>& found) {
+    const std::uint32_t begin = start[b], end = start[b + 1];
+    local.resize(end - begin);
+    std::size_t size = 0;
+    for (std::uint32_t i = begin; i < end; ++i) {
+      const std::uint32_t r = members[i];
+      if (i > begin && members[i - 1] == r) continue;  // entered twice
+      const FloatBox& box = boxes[r];
+      for (int axis = 0; axis < 3; ++axis) {
+        local.lo[axis][size] = box.lo[axis];
+        local.hi[axis][size] = box.hi[axis];
+        local.cell[axis][size] = grid.cell_of(box.lo[axis], axis);
+      }
+      local.triangle[size++] = triangle_of[r];
+    }
+    const float* lo[3] = {local.lo[0].data(), local.lo[1].data(), local.lo[2].data()};
+    const float* hi[3] = {local.hi[0].data(), local.hi[1].data(), local.hi[2].data()};
+    std::uint8_t* meet = local.meet.data();
+    for (std::size_t i = 0; i + 1 < size; ++i) {
+      const float lo_x = lo[0][i], lo_y = lo[1][i], lo_z = lo[2][i], hi_x = hi[0][i], hi_y = hi[1][i], hi_z = hi[2][i];
+      for (std::size_t j = i + 1; j < size; ++j) {
+        meet[j] = (lo_x <= hi[0][j]) & (lo[0][j] <= hi_x) & (lo_y <= hi[1][j]) & (lo[1][j] <= hi_y) &
+                  (lo_z <= hi[2][j]) & (lo[2][j] <= hi_z);
+      }
+      for (std::size_t j = i + 1; j < size; ++j) {
+        if (!meet[j]) continue;
+        const std::uint32_t x = std::max(local.cell[0][i], local.cell[0][j]);
+        const std::uint32_t y = std::max(local.cell[1][i], local.cell[1][j]);
+        const std::uint32_t z = std::max(local.cell[2][i], local.cell[2][j]);
+        if (Grid::bucket_of(x, y, z, mask) != b) continue;
+        const std::uint32_t s = local.triangle[i], t = local.triangle[j];
+        if (triangles_intersect(positions, triangles[s], triangles[t])) found.emplace_back(std::min(s, t), std::max(s, t));
+      }
+    }
+  };
+  const auto search_ranks = [&](std::size_t first, std::size_t last, std::vector<TrianglePair>& found) {
+    BucketScratch local;
+    std::uint64_t searched[max_cells_per_box];
+    for (std::size_t r = first; r < last; ++r) {
+      if (is_large[r]) continue;
+      std::size_t done = 0;
+      for_each_bucket(range_of(boxes[r]), mask, [&](std::uint64_t b) {
+        if (members[start[b]] != r || std::find(searched, searched + done, b) != searched + done) return;
+        searched[done++] = b;
+        search_bucket(b, local, found);
+      });
+    }
+  };
+  if (!parallel) {
+    search_ranks(0, count, pairs);
+  } else {
+    tbb::enumerable_thread_specific<std::vector<TrianglePair>> found;
+    for_blocks(count, std::min<std::size_t>(block, 1024),
+               [&](std::size_t first, std::size_t last) { search_ranks(first, last, found.local()); });
+    for (const std::vector<TrianglePair>& some : found) pairs.insert(pairs.end(), some.begin(), some.end());
   }
 
   // The long triangles against every triangle, with the box tree: each pair of
   // a long and a gridded triangle once, each pair of long ones twice (once per
   // order), kept once.
+  std::vector<std::size_t> large;
+  for (std::size_t r = 0; r < count; ++r) {
+    if (is_large[r]) large.push_back(triangle_of[r]);
+  }
   if (!large.empty()) {
+    std::vector<std::uint8_t> long_triangle(count, 0);
+    for (const std::size_t t : large) long_triangle[t] = 1;
     std::vector<TriangleBox> long_boxes, all_boxes;
     long_boxes.reserve(large.size());
     for (const std::size_t t : large) long_boxes.push_back(box_of(positions, triangles[t], t));
@@ -344,7 +595,7 @@ std::vector<TrianglePair> self_intersecting_pairs(std::span<const Vec3> position
         long_boxes.begin(), long_boxes.end(), all_boxes.begin(), all_boxes.end(),
         [&](const TriangleBox& a, const TriangleBox& c) {
           const std::size_t i = a.handle(), j = c.handle();
-          if (i == j || (is_large[j] && j < i)) return;
+          if (i == j || (long_triangle[j] && j < i)) return;
           if (triangles_intersect(positions, triangles[i], triangles[j])) pairs.emplace_back(std::min(i, j), std::max(i, j));
         },
         std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);

@@ -42,9 +42,14 @@ bool triangles_intersect(std::span<const Vec3> positions, const Triangle& a, con
 /// so once): for a mesh of triangles of similar size, linear time. Triangles whose boxes span
 /// many cells are tested against the others with CGAL's box intersection instead,
 /// so a few long triangles cost O(T log T), not a crowded grid.
+/// The triangles are ranked along a Morton curve of their boxes' low cells and
+/// each bucket is searched once, by its least-ranked triangle, so that a search
+/// finds the boxes it compares in cache. Threads: a mesh of more than 16,384
+/// triangles is searched on the threads of the enclosing tbb::task_arena (the
+/// default one outside any), one thread when it has one.
 /// Preconditions: as triangles_intersect, for every triangle.
-/// Guarantees: the same pairs as self_intersecting_pairs_by_box_tree; deterministic.
-/// Failure: none (std::bad_alloc aside).
+/// Guarantees: the same pairs as self_intersecting_pairs_by_box_tree, whatever
+/// the thread count; deterministic. Failure: none (std::bad_alloc aside).
 std::vector<TrianglePair> self_intersecting_pairs(std::span<const Vec3> positions, std::span<const Triangle> triangles);
 
 /// The reference finder: CGAL's box_self_intersection_d over closed bounding boxes,
