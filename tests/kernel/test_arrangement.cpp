@@ -31,6 +31,7 @@
 #include "support/pair_reference.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "support/sanitizers.hpp"
+#include "support/turned.hpp"
 
 using namespace shatter;
 
@@ -39,17 +40,7 @@ namespace {
 using Q3 = std::array<mpq_class, 3>;
 using EK = ExactKernel;
 
-// The mesh turned by angles (a, b, c) about x, then y, then z, and shifted
-// (rounded as doubles round: only the input is made this way).
-Mesh turned(Mesh mesh, double a, double b, double c, Vec3 shift) {
-  for (Vec3& p : mesh.positions) {
-    Vec3 q{p.x, std::cos(a) * p.y - std::sin(a) * p.z, std::sin(a) * p.y + std::cos(a) * p.z};
-    q = {std::cos(b) * q.x + std::sin(b) * q.z, q.y, -std::sin(b) * q.x + std::cos(b) * q.z};
-    q = {std::cos(c) * q.x - std::sin(c) * q.y, std::sin(c) * q.x + std::cos(c) * q.y, q.z};
-    p = {q.x + shift.x, q.y + shift.y, q.z + shift.z};
-  }
-  return mesh;
-}
+using test::turned;
 
 // The octahedron |x - c| + |y - c| + |z - c| = r on integer points: its face
 // planes are never parallel to an axis box's, so against one only exact
