@@ -200,6 +200,26 @@ struct Grid {
 // instead: a few long triangles would otherwise fill thousands of cells.
 constexpr std::uint64_t max_cells_per_box = 64;
 
+// A triangle's bounds along each axis in doubles, and its largest extent (the
+// grid's cell is a multiple of the mean of these): what the serial and the
+// blocked passes over the triangles both read.
+struct TriangleBounds {
+  double lo[3], hi[3], largest;
+};
+
+TriangleBounds triangle_bounds(std::span<const Vec3> positions, const Triangle& tri) {
+  const Vec3& p = positions[tri[0]];
+  const Vec3& q = positions[tri[1]];
+  const Vec3& r = positions[tri[2]];
+  TriangleBounds bounds{{}, {}, 0};
+  for (int axis = 0; axis < 3; ++axis) {
+    bounds.lo[axis] = std::min({p[axis], q[axis], r[axis]});
+    bounds.hi[axis] = std::max({p[axis], q[axis], r[axis]});
+    bounds.largest = std::max(bounds.largest, bounds.hi[axis] - bounds.lo[axis]);
+  }
+  return bounds;
+}
+
 // The float boxes of `count` triangles (triangle_at(k) is the k-th) and the grid
 // both searches use, anchored at their lowest corner, with cells three times the
 // mean box size: most boxes fall in one to eight cells, and a cell holds a few
@@ -214,19 +234,13 @@ std::optional<Grid> boxes_and_grid(std::span<const Vec3> positions, std::size_t 
   double lowest[3] = {INFINITY, INFINITY, INFINITY};
   double extent_sum = 0;
   for (std::size_t k = 0; k < count; ++k) {
-    const Triangle& tri = triangle_at(k);
-    const Vec3& p = positions[tri[0]];
-    const Vec3& q = positions[tri[1]];
-    const Vec3& r = positions[tri[2]];
-    double largest = 0;
+    const TriangleBounds bounds = triangle_bounds(positions, triangle_at(k));
     for (int axis = 0; axis < 3; ++axis) {
-      const double lo = std::min({p[axis], q[axis], r[axis]}), hi = std::max({p[axis], q[axis], r[axis]});
-      boxes[k].lo[axis] = round_down(lo);
-      boxes[k].hi[axis] = round_up(hi);
-      lowest[axis] = std::min(lowest[axis], lo);
-      largest = std::max(largest, hi - lo);
+      boxes[k].lo[axis] = round_down(bounds.lo[axis]);
+      boxes[k].hi[axis] = round_up(bounds.hi[axis]);
+      lowest[axis] = std::min(lowest[axis], bounds.lo[axis]);
     }
-    extent_sum += largest;
+    extent_sum += bounds.largest;
   }
   const double cell = 3 * extent_sum / static_cast<double>(count);
   if (!(cell > 0) || !std::isfinite(cell) || !(1 / cell > 0) || !std::isfinite(1 / cell)) return std::nullopt;
@@ -373,18 +387,12 @@ std::vector<TrianglePair> detail::self_intersecting_pairs_in_blocks(std::span<co
     for (std::size_t k = first; k < last; ++k) {
       Extent part{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}, 0};
       for (std::size_t t = k * block; t < std::min(count, (k + 1) * block); ++t) {
-        const Triangle& tri = triangles[t];
-        const Vec3& p = positions[tri[0]];
-        const Vec3& q = positions[tri[1]];
-        const Vec3& r = positions[tri[2]];
-        double largest = 0;
+        const TriangleBounds bounds = triangle_bounds(positions, triangles[t]);
         for (int axis = 0; axis < 3; ++axis) {
-          const double lo = std::min({p[axis], q[axis], r[axis]}), hi = std::max({p[axis], q[axis], r[axis]});
-          part.lowest[axis] = std::min(part.lowest[axis], lo);
-          part.highest[axis] = std::max(part.highest[axis], hi);
-          largest = std::max(largest, hi - lo);
+          part.lowest[axis] = std::min(part.lowest[axis], bounds.lo[axis]);
+          part.highest[axis] = std::max(part.highest[axis], bounds.hi[axis]);
         }
-        part.sum += largest;
+        part.sum += bounds.largest;
       }
       extents[k] = part;
     }
