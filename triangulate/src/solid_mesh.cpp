@@ -624,11 +624,12 @@ bool route_edges_through_crossed_corners(const PlaneSet& set, const Solid& solid
 // is held by the group's first face and written as that member; when nothing
 // is left (or nothing turns one way) the group vanishes whole. `home[f]`: the
 // face holding f's loops afterwards (the group's first, or no_index when it
-// vanished). Changes no position.
+// vanished). `caps_first`: a member on a cut plane that sees the loops
+// counter-clockwise is preferred to the group's order. Changes no position.
 void merge_face_group(const PlaneSet& set, const Solid& solid, std::span<const Vec3> positions,
                       std::span<const std::uint32_t> group, std::vector<std::vector<std::vector<VertexIndex>>>& loops,
                       std::vector<std::uint8_t>& changed, std::vector<std::uint32_t>& emit_as,
-                      std::vector<std::uint32_t>& home) {
+                      std::vector<std::uint32_t>& home, bool caps_first = false) {
   std::vector<std::vector<VertexIndex>> sum;
   for (const std::uint32_t f : group) sum.insert(sum.end(), loops[f].begin(), loops[f].end());
   for (bool again = true; again;) {
@@ -649,13 +650,18 @@ void merge_face_group(const PlaneSet& set, const Solid& solid, std::span<const V
     }
     return (projection.flipped != solid.faces[f].reversed) ? mpq_class(-twice) : twice;
   };
-  std::uint32_t as = no_index;
-  for (const std::uint32_t f : group) {
-    if (sgn(area_seen_from(emit_as[f])) > 0) {
-      as = emit_as[f];
-      break;
+  // The first member (of those on a cut plane when `caps_only`) that sees the
+  // loops counter-clockwise, or no_index.
+  const auto first_seeing = [&](bool caps_only) {
+    for (const std::uint32_t f : group) {
+      if ((!caps_only || solid.faces[emit_as[f]].plane.is_cut()) && sgn(area_seen_from(emit_as[f])) > 0) {
+        return emit_as[f];
+      }
     }
-  }
+    return no_index;
+  };
+  std::uint32_t as = caps_first ? first_seeing(true) : no_index;
+  if (as == no_index) as = first_seeing(false);
   const std::uint32_t first = group.front();
   for (const std::uint32_t f : group) {
     emit_as[f] = no_index;
@@ -832,6 +838,21 @@ struct RoundingReach {
   }
 };
 
+// How merge_folded_faces joins the pairs of folded faces it is given: `pairs`,
+// each pair on its own merits (every round of round_solid); `groups`, a pair
+// joins when any face of one side's group so far may merge with any face of the
+// other's, repeated until no pair joins, so that what a fold merges does not
+// depend on the order the pairs come in, and the merged face is written on a
+// cap's plane when a cap of the group sees its loops counter-clockwise (a
+// refined wedge's strips, merged into the cap through a sliver that reaches the
+// cap first, stay on the cap's plane instead of taking the sliver's);
+// `groups_one_way`, the same, and two faces facing one way merge as well when
+// one's corners all lie within rounding's reach of the other's plane (the
+// sliver of space between them that the merge fills is thinner than the
+// rounding, as a wedge that vanishes is). Only the last repair's refined solids
+// take the latter two (see round_solid_rounds).
+enum class FoldMerge { pairs, groups, groups_one_way };
+
 // Faces that rounding folded against each other (see round_solid): a pair of
 // faces whose rounded triangles certification found crossing, or sharing an
 // edge with other triangles (a fold: the wedge between them is thinner than
@@ -850,13 +871,14 @@ struct RoundingReach {
 // cap and a face inside it (a cavity's face ulps from the cap's plane) rounds
 // into a fold that touches no edge of the cap; as 2-chains on the cap's plane
 // the face's loops, run the other way, add a hole to the cap, through which the
-// cavity opens (the slab vanishes). Returns how many faces were merged (each
-// group counts its members).
+// cavity opens (the slab vanishes). `mode`: see FoldMerge. Returns how many
+// faces were merged (each group counts its members).
 std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::span<const Vec3> positions,
                         std::vector<std::vector<std::vector<VertexIndex>>>& loops, std::vector<std::uint8_t>& changed,
                         std::vector<std::uint32_t>& emit_as, std::vector<std::uint32_t>& home,
                         std::span<const std::pair<std::uint32_t, std::uint32_t>> folds, bool thin_only,
-                        bool apart_too = false) {
+                        bool apart_too = false, FoldMerge mode = FoldMerge::pairs) {
+  const bool by_members = mode != FoldMerge::pairs;
   const auto count = static_cast<std::uint32_t>(loops.size());
   std::unordered_map<std::uint64_t, std::uint32_t> face_of_edge;
   const auto key = [](VertexIndex a, VertexIndex b) { return (std::uint64_t{a} << 32) | b; };
@@ -878,7 +900,48 @@ std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::spa
   groups.reset(count);
   bool any = false;
   std::optional<RoundingReach> reach;
-  for (const auto& [f, g] : folds) {
+  if (by_members) {
+    // Whether faces x and y (holding loops) may merge: as below, pair by pair,
+    // but for faces facing one way (groups_one_way, thin only).
+    const auto mergeable = [&](std::uint32_t x, std::uint32_t y) {
+      if (!(apart_too && thin_only) && !share_edge(x, y)) return false;
+      const SolidFace &a = solid.faces[emit_as[x]], &b = solid.faces[emit_as[y]];
+      const Sign normals = compare_normals(set, a.plane, b.plane);
+      if (normals == Sign::zero) return false;
+      const bool one_way = (normals == Sign::positive) == (a.reversed == b.reversed);
+      if (one_way && mode != FoldMerge::groups_one_way) return false;
+      if (!thin_only && !one_way) return true;
+      if (!reach) reach.emplace(set, solid, positions);
+      return reach->within(loops[y], a.plane) || reach->within(loops[x], b.plane);
+    };
+    std::vector<std::uint32_t> in_f, in_g;
+    for (bool progress = true; progress;) {
+      progress = false;
+      for (const auto& [f, g] : folds) {
+        if (f >= count || g >= count) continue;
+        const std::uint32_t hf = home[f], hg = home[g];
+        if (hf == no_index || hg == no_index || hf == hg) continue;
+        const std::uint32_t rf = groups.find(hf), rg = groups.find(hg);
+        if (rf == rg) continue;
+        in_f.clear();
+        in_g.clear();
+        for (std::uint32_t x = 0; x < count; ++x) {
+          if (loops[x].empty()) continue;
+          const std::uint32_t r = groups.find(x);
+          if (r == rf) in_f.push_back(x);
+          if (r == rg) in_g.push_back(x);
+        }
+        bool joined = false;
+        for (std::size_t i = 0; i < in_f.size() && !joined; ++i) {
+          for (std::size_t j = 0; j < in_g.size() && !joined; ++j) joined = mergeable(in_f[i], in_g[j]);
+        }
+        if (!joined) continue;
+        groups.unite(rf, rg);
+        any = progress = true;
+      }
+    }
+  }
+  for (const auto& [f, g] : by_members ? std::span<const std::pair<std::uint32_t, std::uint32_t>>() : folds) {
     if (f >= count || g >= count) continue;
     const std::uint32_t hf = home[f], hg = home[g];
     if (hf == no_index || hg == no_index || hf == hg || groups.find(hf) == groups.find(hg)) continue;
@@ -905,7 +968,7 @@ std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::spa
   std::size_t merged = 0;
   for (const std::vector<std::uint32_t>& group : members) {
     if (group.size() < 2) continue;
-    merge_face_group(set, solid, positions, group, loops, changed, emit_as, home);
+    merge_face_group(set, solid, positions, group, loops, changed, emit_as, home, by_members);
     merged += group.size();
   }
   return merged;
@@ -929,7 +992,8 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
                  std::span<const std::pair<std::uint32_t, std::uint32_t>> folds = {},
                  std::vector<std::uint32_t>* face_of_triangle = nullptr, std::size_t* folded = nullptr,
                  bool thin_folds_only = false, std::span<const VertexIndex> snapped_to = {},
-                 const mpq_class* snap_within = nullptr, bool folds_apart_too = false) {
+                 const mpq_class* snap_within = nullptr, bool folds_apart_too = false,
+                 FoldMerge fold_merge = FoldMerge::pairs) {
   const std::size_t n = solid.defs.size();
   thread_local std::vector<Vec3> positions;
   thread_local std::vector<PointDef> placed;
@@ -1039,7 +1103,7 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
       if (!folds.empty()) {
         const std::size_t count =
             merge_folded_faces(set, solid, positions, repaired, repaired_changed, emit_as, home, folds, thin_folds_only,
-                               folds_apart_too);
+                               folds_apart_too, fold_merge);
         if (folded != nullptr) *folded = count;
       }
     }
@@ -1975,9 +2039,10 @@ bool split_faces_along(const PlaneSet& set, const Solid& solid, PlaneRef plane, 
 }
 
 // round_solid; `collapse_wedges`: also the last repair above (not when rounding a
-// solid it refined).
+// solid it refined); `fold_merge`: how the folding rounds merge (FoldMerge; a
+// refined solid of the widened split takes `groups` or `groups_one_way`).
 RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options,
-                                bool collapse_wedges) {
+                                bool collapse_wedges, FoldMerge fold_merge = FoldMerge::pairs) {
   if (!options.face_attempts.empty() && options.face_attempts.size() != solid.faces.size()) {
     throw std::invalid_argument("round_solid: face_attempts must hold one attempt per face");
   }
@@ -2112,7 +2177,7 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
                            : std::span<const std::pair<std::uint32_t, std::uint32_t>>(),
                 untangle_edges ? &face_of_triangle : nullptr, &folded_faces, thin_only,
                 snapping ? std::span<const VertexIndex>(snapped_to) : std::span<const VertexIndex>(),
-                snapping ? &snap_pixel : nullptr, apart);
+                snapping ? &snap_pixel : nullptr, apart, fold_merge);
     std::size_t inserted = 0;
     if (inserting) {
       if (!reach) {
@@ -2341,6 +2406,38 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
       i = j;
       const Plane& cut = set.cuts[cap.plane.index()];
       const double largest = std::max({std::fabs(cut.normal.x), std::fabs(cut.normal.y), std::fabs(cut.normal.z)});
+      // When every plane has failed on the faces found folded (corpus cases 364
+      // and 988: the cap passes a fraction of the rounding move over the tip of
+      // a wedge between two earlier caps, or along a fan of an earlier cap
+      // whose corners lie ulps from it, and faces the certification never
+      // reached fold once the first ones merged), the split takes every face
+      // with a corner strictly inside the piece within reach of the cap's plane
+      // (exactly), so that all the strips by the cap are thin by their
+      // corners, and the refined solid is rounded with its folds merged by
+      // groups (FoldMerge::groups), then by groups with faces facing one way
+      // too (groups_one_way). Adds the faces to `split` (kept sorted).
+      FoldMerge refined_merge = FoldMerge::pairs;
+      const auto widen_to_near_faces = [&](const SolidFace& c, std::vector<std::uint32_t>& split) {
+        const std::array<mpq_class, 4> n = reach->coefficients(c.plane);
+        const mpq_class limit =
+            2 * reach->rho * std::max({mpq_class(abs(n[0])), mpq_class(abs(n[1])), mpq_class(abs(n[2]))});
+        const std::size_t before = split.size();
+        for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+          const SolidFace& face = solid.faces[f];
+          if (face.plane == c.plane || !face.convex || face.loop_count != 1) continue;
+          if (std::binary_search(split.begin(), split.begin() + static_cast<std::ptrdiff_t>(before), f)) continue;
+          for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[face.first_loop])) {
+            const auto& x = reach->point(edge.from);
+            const mpq_class value = n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + n[3];
+            const mpq_class depth = c.reversed ? value : mpq_class(-value);
+            if (sgn(depth) > 0 && depth <= limit) {
+              split.push_back(f);
+              break;
+            }
+          }
+        }
+        std::sort(split.begin(), split.end());
+      };
       // The piece refined along `split_plane` and rounded by every round above;
       // `within`: only if every crossing vertex lies strictly inside the piece and
       // at most that far from the cap's plane (|n.x + d|, exactly). A refinement
@@ -2372,7 +2469,7 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
           SolidMeshOptions refined_options = options;
           refined_options.face_attempts = {};
           if (rounded != nullptr) *rounded = true;
-          written = round_solid_rounds(refined_set, refined, refined_options, false);
+          written = round_solid_rounds(refined_set, refined, refined_options, false, refined_merge);
         } catch (const UnsupportedGeometryError&) {
           return std::nullopt;
         } catch (const std::domain_error&) {
@@ -2386,48 +2483,54 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
         written.wedge_faces_split = refined.faces.size() - solid.faces.size();
         return written;
       };
-      std::array<bool, 5> unrepresentable{};
-      for (const int times : {2, 1, 4}) {
-        // The piece lies behind the cap's outward normal: n.x + d < 0 when the cap
-        // faces along +n, so the new plane n.x + d' = 0 with d' = d + h lies in
-        // it; the doubles d' and h are whatever they round to, the plane exact.
-        // The offset is held to the reach exactly (|d' - d| <= times rho max |n_i|),
-        // stepping d' toward d while the rounding of d + h put it beyond: the
-        // strips' corners on the new plane must lie within the thin rounds' reach.
-        const mpq_class reach_offset = times * reach->rho * largest;
-        const double h = reach_offset.get_d();
-        double offset = cap.reversed ? cut.offset - h : cut.offset + h;
-        while (offset != cut.offset && abs(mpq_class(offset) - mpq_class(cut.offset)) > reach_offset) {
-          offset = std::nextafter(offset, cut.offset);
+      for (const FoldMerge merge : {FoldMerge::pairs, FoldMerge::groups, FoldMerge::groups_one_way}) {
+        if (merge == FoldMerge::groups) widen_to_near_faces(cap, faces);
+        refined_merge = merge;
+        std::array<bool, 5> unrepresentable{};
+        for (const int times : {2, 1, 4}) {
+          // The piece lies behind the cap's outward normal: n.x + d < 0 when the cap
+          // faces along +n, so the new plane n.x + d' = 0 with d' = d + h lies in
+          // it; the doubles d' and h are whatever they round to, the plane exact.
+          // The offset is held to the reach exactly (|d' - d| <= times rho max |n_i|),
+          // stepping d' toward d while the rounding of d + h put it beyond: the
+          // strips' corners on the new plane must lie within the thin rounds' reach.
+          const mpq_class reach_offset = times * reach->rho * largest;
+          const double h = reach_offset.get_d();
+          double offset = cap.reversed ? cut.offset - h : cut.offset + h;
+          while (offset != cut.offset && abs(mpq_class(offset) - mpq_class(cut.offset)) > reach_offset) {
+            offset = std::nextafter(offset, cut.offset);
+          }
+          if (!(offset != cut.offset)) {
+            unrepresentable[times] = true;
+            continue;
+          }
+          if (std::optional<RoundedSolid> written = refine(Plane{cut.normal, offset}, nullptr)) {
+            return std::move(*written);
+          }
         }
-        if (!(offset != cut.offset)) {
-          unrepresentable[times] = true;
-          continue;
-        }
-        if (std::optional<RoundedSolid> written = refine(Plane{cut.normal, offset}, nullptr)) return std::move(*written);
-      }
-      // No double offset within reach (the cap's offset d is large beside the
-      // rounding of the corners: ulp(d) > times rho max |n_i|, corpus case 908):
-      // the same plane scaled by lambda = 9/8 to 15/8, its coefficients rounded
-      // to doubles and the offset stepped by 1 to 4 ulps into the piece, is tilted
-      // from the cap's by the rounding of lambda n and moved by that of lambda d,
-      // at a finer step than ulp(d). The first such plane whose crossing vertices
-      // all lie strictly inside the piece and within the reach of the cap's plane
-      // (decided exactly: the strips are thin by their corners, as above) is
-      // rounded, once per reach that had no parallel plane, so a piece this
-      // cannot repair costs at most two more rounds.
-      for (const int times : {2, 1}) {
-        if (!unrepresentable[times]) continue;
-        const mpq_class reach_offset = times * reach->rho * largest;
-        bool rounded = false;
-        for (int eighths = 9; eighths < 16 && !rounded; ++eighths) {
-          const double lambda = eighths / 8.0;
-          const Vec3 normal{lambda * cut.normal.x, lambda * cut.normal.y, lambda * cut.normal.z};
-          double offset = lambda * cut.offset;
-          for (int step = 0; step < 4 && !rounded; ++step) {
-            offset = std::nextafter(offset, cap.reversed ? -HUGE_VAL : HUGE_VAL);
-            if (std::optional<RoundedSolid> written = refine(Plane{normal, offset}, &reach_offset, &rounded)) {
-              return std::move(*written);
+        // No double offset within reach (the cap's offset d is large beside the
+        // rounding of the corners: ulp(d) > times rho max |n_i|, corpus case 908):
+        // the same plane scaled by lambda = 9/8 to 15/8, its coefficients rounded
+        // to doubles and the offset stepped by 1 to 4 ulps into the piece, is tilted
+        // from the cap's by the rounding of lambda n and moved by that of lambda d,
+        // at a finer step than ulp(d). The first such plane whose crossing vertices
+        // all lie strictly inside the piece and within the reach of the cap's plane
+        // (decided exactly: the strips are thin by their corners, as above) is
+        // rounded, once per reach that had no parallel plane, so a piece this
+        // cannot repair costs at most two more rounds.
+        for (const int times : {2, 1}) {
+          if (!unrepresentable[times]) continue;
+          const mpq_class reach_offset = times * reach->rho * largest;
+          bool rounded = false;
+          for (int eighths = 9; eighths < 16 && !rounded; ++eighths) {
+            const double lambda = eighths / 8.0;
+            const Vec3 normal{lambda * cut.normal.x, lambda * cut.normal.y, lambda * cut.normal.z};
+            double offset = lambda * cut.offset;
+            for (int step = 0; step < 4 && !rounded; ++step) {
+              offset = std::nextafter(offset, cap.reversed ? -HUGE_VAL : HUGE_VAL);
+              if (std::optional<RoundedSolid> written = refine(Plane{normal, offset}, &reach_offset, &rounded)) {
+                return std::move(*written);
+              }
             }
           }
         }

@@ -248,6 +248,16 @@ struct RoundedSolid {
 /// stepped by ulps (a plane tilted by the rounding), is used instead, the first
 /// whose crossing points all lie strictly inside the piece and within reach of
 /// the cap's plane, decided exactly.
+/// When those fail too, the same planes split every convex face with a corner
+/// strictly inside the piece within rounding's reach of the cap's plane (the
+/// tip of a wedge between earlier caps a fraction of the rounding under the
+/// cap, a fan of an earlier cap whose corners lie ulps from it), and the
+/// refined solid's folds are merged by groups (a pair joins when any face of
+/// one side's group may merge with any of the other's, until none joins; the
+/// merged face on the cap's plane when the cap sees it counter-clockwise), then
+/// by groups with faces facing one way merged too when one's corners all lie
+/// within reach of the other's plane (the sliver of space the merge fills is
+/// thinner than the rounding); held to the same certificate and volume bound.
 /// A part thinner than the rounding that rounds flat (its triangles laid over each
 /// other once each way) vanishes into its neighbour (`vanished_triangles`); a piece
 /// that rounds flat whole, or that cannot be certified while its exact volume is
@@ -267,9 +277,12 @@ struct RoundedSolid {
 /// through it, merges of folded faces only remove loops, a hot pixel splits a
 /// triangle once per step, over a fixed set of four attempts, each tried again
 /// untangling edges, and three of them at most six times in each of three
-/// phases of folds, of six pixel sizes and of the pairs apart, and at most three
-/// refined solids per cap plane, each rounded by that ladder without refining
-/// again: a finite ladder of steps, each a finite pass); deterministic. Failure: neither
+/// phases of folds, of six pixel sizes and of the pairs apart, and at most nine
+/// refined solids per cap plane (three planes, each with the faces found folded,
+/// then widened, merged two ways), each rounded by that ladder without refining
+/// again; merging by groups passes over a fixed list of pairs again only after a
+/// union, and there are fewer unions than faces:
+/// a finite ladder of steps, each a finite pass); deterministic. Failure: neither
 /// valid nor collapsed, `defect` names what the first rounding broke.
 RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options = {});
 
