@@ -382,6 +382,16 @@ void check_rounding(const PlaneSet& set, const Solid& piece, RoundingTally& tall
   }
 }
 
+// Cuts the prepared input by one plane and checks every piece's rounding.
+void check_cut_rounding(const PlaneInput& input, const Plane& plane, RoundingTally& tally) {
+  const std::vector<Plane> cuts{plane};
+  const PlaneSet set = input.geometry.plane_set(cuts);
+  const SolidCut cut = cut_solid(set, input.solid, PlaneRef::cut(0), 1, input.shells);
+  for (const auto* side : {&cut.below, &cut.above}) {
+    for (const Solid& piece : *side) check_rounding(set, piece, tally);
+  }
+}
+
 }  // namespace
 
 TEST_CASE("round_solid: parts rounding breaks are repaired, or the piece vanishes within its bound, over 96 seeds",
@@ -557,13 +567,7 @@ TEST_CASE("round_solid: wedges beyond rounding's reach of a cap are split and co
     const SliceCase& c = cases[seed % 3];
     const int ulps = static_cast<int>(seed / 3) - 4;
     INFO(files[seed % 3] << ", plane offset by " << ulps << " ulps");
-    const PlaneInput input = prepare_plane_input(c.mesh);
-    const std::vector<Plane> cuts{offset_by_ulps(c.plane, ulps)};
-    const PlaneSet set = input.geometry.plane_set(cuts);
-    const SolidCut cut = cut_solid(set, input.solid, PlaneRef::cut(0), 1, input.shells);
-    for (const auto* side : {&cut.below, &cut.above}) {
-      for (const Solid& piece : *side) check_rounding(set, piece, tally);
-    }
+    check_cut_rounding(prepare_plane_input(c.mesh), offset_by_ulps(c.plane, ulps), tally);
   }
   INFO("pieces " << tally.pieces << ", written as rounded " << tally.plain << ", vanished " << tally.collapsed
                  << ", folds merged " << tally.folded << ", wedges split " << tally.wedges << ", refused "
@@ -583,14 +587,8 @@ TEST_CASE("regression: a wedge split where no parallel plane of doubles lies wit
   // lies within reach and the piece was refused. The cap's plane scaled and
   // rounded (tilted by the rounding) splits them within reach, decided exactly.
   const SliceCase c = read_slice_reproducer("unroundable-wedge-split-plane-tilted-near-parallel-chain-corpus-908.repro");
-  const PlaneInput input = prepare_plane_input(c.mesh);
-  const std::vector<Plane> cuts{c.plane};
-  const PlaneSet set = input.geometry.plane_set(cuts);
-  const SolidCut cut = cut_solid(set, input.solid, PlaneRef::cut(0), 1, input.shells);
   RoundingTally tally;
-  for (const auto* side : {&cut.below, &cut.above}) {
-    for (const Solid& piece : *side) check_rounding(set, piece, tally);
-  }
+  check_cut_rounding(prepare_plane_input(c.mesh), c.plane, tally);
   CHECK(tally.pieces == 2);
   CHECK(tally.wedges == 1);
   CHECK(tally.refused == 0);
@@ -602,14 +600,8 @@ namespace {
 // The slice of a reproducer's piece by its plane, every piece rounded.
 RoundingTally round_reproducer_pieces(const std::string& name) {
   const SliceCase c = read_slice_reproducer(name);
-  const PlaneInput input = prepare_plane_input(c.mesh);
-  const std::vector<Plane> cuts{c.plane};
-  const PlaneSet set = input.geometry.plane_set(cuts);
-  const SolidCut cut = cut_solid(set, input.solid, PlaneRef::cut(0), 1, input.shells);
   RoundingTally tally;
-  for (const auto* side : {&cut.below, &cut.above}) {
-    for (const Solid& piece : *side) check_rounding(set, piece, tally);
-  }
+  check_cut_rounding(prepare_plane_input(c.mesh), c.plane, tally);
   return tally;
 }
 
@@ -662,12 +654,7 @@ TEST_CASE("round_solid: the widened wedge split certifies cuts ulps over a wedge
     const PlaneInput input = prepare_plane_input(c.mesh);
     for (int ulps = -4; ulps <= 4; ++ulps) {
       INFO(file << ", plane offset by " << ulps << " ulps");
-      const std::vector<Plane> cuts{offset_by_ulps(c.plane, ulps)};
-      const PlaneSet set = input.geometry.plane_set(cuts);
-      const SolidCut cut = cut_solid(set, input.solid, PlaneRef::cut(0), 1, input.shells);
-      for (const auto* side : {&cut.below, &cut.above}) {
-        for (const Solid& piece : *side) check_rounding(set, piece, tally);
-      }
+      check_cut_rounding(input, offset_by_ulps(c.plane, ulps), tally);
     }
   }
   INFO("pieces " << tally.pieces << ", vanished " << tally.collapsed << ", wedges split " << tally.wedges
