@@ -914,7 +914,12 @@ std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::spa
       if (!reach) reach.emplace(set, solid, positions);
       return reach->within(loops[y], a.plane) || reach->within(loops[x], b.plane);
     };
-    std::vector<std::uint32_t> in_f, in_g;
+    // The faces holding loops in each group, kept by the group's representative
+    // (the union-find's smallest index), so a pair looks only at its two groups.
+    std::vector<std::vector<std::uint32_t>> holding(count);
+    for (std::uint32_t x = 0; x < count; ++x) {
+      if (!loops[x].empty()) holding[x].push_back(x);
+    }
     for (bool progress = true; progress;) {
       progress = false;
       for (const auto& [f, g] : folds) {
@@ -923,20 +928,17 @@ std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::spa
         if (hf == no_index || hg == no_index || hf == hg) continue;
         const std::uint32_t rf = groups.find(hf), rg = groups.find(hg);
         if (rf == rg) continue;
-        in_f.clear();
-        in_g.clear();
-        for (std::uint32_t x = 0; x < count; ++x) {
-          if (loops[x].empty()) continue;
-          const std::uint32_t r = groups.find(x);
-          if (r == rf) in_f.push_back(x);
-          if (r == rg) in_g.push_back(x);
-        }
         bool joined = false;
-        for (std::size_t i = 0; i < in_f.size() && !joined; ++i) {
-          for (std::size_t j = 0; j < in_g.size() && !joined; ++j) joined = mergeable(in_f[i], in_g[j]);
+        for (std::size_t i = 0; i < holding[rf].size() && !joined; ++i) {
+          for (std::size_t j = 0; j < holding[rg].size() && !joined; ++j) {
+            joined = mergeable(holding[rf][i], holding[rg][j]);
+          }
         }
         if (!joined) continue;
         groups.unite(rf, rg);
+        const std::uint32_t kept = std::min(rf, rg), gone = std::max(rf, rg);
+        holding[kept].insert(holding[kept].end(), holding[gone].begin(), holding[gone].end());
+        holding[gone].clear();
         any = progress = true;
       }
     }
