@@ -1178,11 +1178,16 @@ class Repairer {
 // shell that crosses another (or itself) must face the way it is meant to.
 // Steps 3 and 7 cannot tell that way where shells cross: orient_to_bound_a_volume
 // decides by nesting, which crossing shells do not have (it turned whole
-// overlapping spheres into cavities of each other). Such a shell is taken as a
-// solid of its own and turned to bound a positive volume (exact sign); a shell
-// that crosses nothing keeps the orientation its nesting gave it. Returns the
-// triangles reversed.
-std::size_t turn_crossing_shells_outward(Mesh& mesh, std::span<const TrianglePair> pairs) {
+// overlapping spheres into cavities of each other). So a crossing shell whose
+// triangles the input held all one way round (every one of them found in the
+// input as it is, or every one reversed; `input` as repair_mesh received it)
+// faces the way the input had it: a cavity of a solid that crosses a copy of it
+// stays a cavity. Any other crossing shell, or every one when
+// `own_volume_only`, is taken as a solid of its own and turned to bound a
+// positive volume (exact sign). A shell that crosses nothing keeps the
+// orientation its nesting gave it. Returns the triangles reversed.
+std::size_t orient_crossing_shells(Mesh& mesh, std::span<const TrianglePair> pairs, const Mesh& input,
+                                   bool own_volume_only) {
   const std::size_t n = mesh.triangles.size();
   UnionFind shells(n);
   std::unordered_map<std::uint64_t, std::uint32_t> first_at_edge;
@@ -1194,10 +1199,27 @@ std::size_t turn_crossing_shells_outward(Mesh& mesh, std::span<const TrianglePai
     }
   }
   std::vector<std::uint8_t> crossing(n, 0);
-  for (const TrianglePair& pair : pairs) crossing[shells.find(static_cast<std::uint32_t>(pair.first))] = crossing[shells.find(static_cast<std::uint32_t>(pair.second))] = 1;
+  for (const TrianglePair& pair : pairs) {
+    crossing[shells.find(static_cast<std::uint32_t>(pair.first))] = 1;
+    crossing[shells.find(static_cast<std::uint32_t>(pair.second))] = 1;
+  }
   std::vector<std::vector<std::uint32_t>> members(n);
   for (std::uint32_t t = 0; t < n; ++t) {
     if (crossing[shells.find(t)]) members[shells.find(t)].push_back(t);
+  }
+  // The input's triangles over its positions welded (first index per exact
+  // position), each rotated to start at its least vertex.
+  std::unordered_map<PositionKey, VertexIndex, PositionKeyHash> welded;
+  const auto id_of = [&](const Vec3& p) {
+    return welded.try_emplace(key_of(p), static_cast<VertexIndex>(welded.size())).first->second;
+  };
+  std::set<Triangle> input_triangles;
+  if (!own_volume_only) {
+    for (const Triangle& t : input.triangles) {
+      if (t[0] >= input.positions.size() || t[1] >= input.positions.size() || t[2] >= input.positions.size()) continue;
+      input_triangles.insert(canonical_rotation({id_of(input.positions[t[0]]), id_of(input.positions[t[1]]),
+                                                 id_of(input.positions[t[2]])}));
+    }
   }
   Mesh shell;
   shell.positions = mesh.positions;
@@ -1205,9 +1227,25 @@ std::size_t turn_crossing_shells_outward(Mesh& mesh, std::span<const TrianglePai
   const bool normals = mesh.corners.has_normals(), uvs = mesh.corners.has_uvs(), tangents = mesh.corners.has_tangents();
   for (const std::vector<std::uint32_t>& triangles : members) {
     if (triangles.empty()) continue;
-    shell.triangles.clear();
-    for (const std::uint32_t t : triangles) shell.triangles.push_back(mesh.triangles[t]);
-    if (signed_volume_sign(shell) != Sign::negative) continue;
+    std::size_t as_read = 0, against = 0;
+    for (const std::uint32_t t : triangles) {
+      if (own_volume_only) break;
+      const Triangle& tri = mesh.triangles[t];
+      const Triangle ids{id_of(mesh.positions[tri[0]]), id_of(mesh.positions[tri[1]]), id_of(mesh.positions[tri[2]])};
+      as_read += input_triangles.count(canonical_rotation(ids));
+      against += input_triangles.count(canonical_rotation({ids[0], ids[2], ids[1]}));
+    }
+    bool turn = false;
+    if (as_read > 0 && against == 0) {
+      turn = false;
+    } else if (against > 0 && as_read == 0) {
+      turn = true;
+    } else {
+      shell.triangles.clear();
+      for (const std::uint32_t t : triangles) shell.triangles.push_back(mesh.triangles[t]);
+      turn = signed_volume_sign(shell) == Sign::negative;
+    }
+    if (!turn) continue;
     for (const std::uint32_t t : triangles) {
       std::swap(mesh.triangles[t][1], mesh.triangles[t][2]);
       if (normals) std::swap(mesh.corners.normals[3 * t + 1], mesh.corners.normals[3 * t + 2]);
@@ -1224,7 +1262,8 @@ std::size_t turn_crossing_shells_outward(Mesh& mesh, std::span<const TrianglePai
 // winds around at least once, that boundary as a plane-based solid, rounded and
 // certified by the hook. Taken only when the rounded mesh is valid; otherwise
 // the mesh stays as it was and a note says why.
-void resolve_self_intersections_exactly(Mesh& mesh, const RepairOptions& options, RepairReport& report) {
+void resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const RepairOptions& options,
+                                        RepairReport& report) {
   if (!options.round_solid || mesh.triangles.empty()) return;
   // Validation names self-intersections only on a surface whose topology passes,
   // so the pairs are found here; their finder needs finite, in-range, non-flat
@@ -1244,10 +1283,19 @@ void resolve_self_intersections_exactly(Mesh& mesh, const RepairOptions& options
   }
   const std::vector<TrianglePair> pairs = self_intersecting_pairs(mesh.positions, mesh.triangles);
   if (pairs.empty()) return;
+  // The input's orientation where it is one, else each shell's own volume; when
+  // that leaves nothing wound around (an input turned inside out as a whole),
+  // every crossing shell by its own volume.
   Mesh oriented = mesh;
-  const std::size_t turned = turn_crossing_shells_outward(oriented, pairs);
-  const MeshArrangement arrangement = arrange_triangles(oriented.positions, oriented.triangles);
-  const WindingBoundary boundary = winding_boundary(arrangement);
+  std::size_t turned = orient_crossing_shells(oriented, pairs, input, false);
+  MeshArrangement arrangement = arrange_triangles(oriented.positions, oriented.triangles);
+  WindingBoundary boundary = winding_boundary(arrangement);
+  if (boundary.status == WindingBoundary::Status::ok && boundary.triangles.empty()) {
+    oriented = mesh;
+    turned = orient_crossing_shells(oriented, pairs, input, true);
+    arrangement = arrange_triangles(oriented.positions, oriented.triangles);
+    boundary = winding_boundary(arrangement);
+  }
   if (boundary.status == WindingBoundary::Status::open) {
     not_done("the surface is open (its pieces do not close up), so it winds around no solid");
     return;
@@ -1285,7 +1333,7 @@ void resolve_self_intersections_exactly(Mesh& mesh, const RepairOptions& options
                                           "self-intersecting triangle pairs") +
                      " exactly (" +
                      (turned > 0 ? plural(turned, "triangle", "triangles") +
-                                       " of shells that cross turned to bound their own volume; "
+                                       " of crossing shells turned to face as in the input or out of their own volume; "
                                  : std::string()) +
                      "mesh arrangement: " + plural(arrangement.split_triangles, "triangle", "triangles") +
                      " split, " + plural(arrangement.triangles.size(), "piece", "pieces") + "; kept " +
@@ -1321,7 +1369,7 @@ RepairReport repair_mesh(Mesh& mesh, const RepairOptions& options) {
     return report;
   }
   Mesh repaired = Repairer(mesh, options, report).run();
-  resolve_self_intersections_exactly(repaired, options, report);
+  resolve_self_intersections_exactly(repaired, mesh, options, report);
   mesh = std::move(repaired);
   return report;
 }
