@@ -27,38 +27,77 @@ class SolidBuilder {
   ArrangementSolid run() {
     ArrangementSolid out;
     const std::vector<Triangle>& tris = boundary_.triangles;
+    const auto fail = [](ArrangementSolid::Status status) {
+      ArrangementSolid failed;
+      failed.status = status;
+      return failed;
+    };
     if (boundary_.status != WindingBoundary::Status::ok || tris.empty()) {
       out.status = ArrangementSolid::Status::not_selected;
       return out;
     }
     const auto n = static_cast<std::uint32_t>(tris.size());
-    // Half-edge 3t + c runs from corner c of triangle t to corner c + 1.
-    std::unordered_map<std::uint64_t, std::uint32_t> half_edge_at;
-    half_edge_at.reserve(3 * n);
-    for (std::uint32_t t = 0; t < n; ++t) {
-      for (std::uint32_t c = 0; c < 3; ++c) {
-        if (!half_edge_at.emplace(directed_key(tris[t][c], tris[t][(c + 1) % 3]), 3 * t + c).second) {
-          out.status = ArrangementSolid::Status::crowded_edge;  // two triangles pass it one way
-          return out;
+    tris_ = tris;
+    origin_.resize(arrangement_.defs.size());
+    for (VertexIndex v = 0; v < origin_.size(); ++v) origin_[v] = v;
+    // Half-edge 3t + c runs from corner c of triangle t to corner c + 1. The
+    // boundary is closed and oriented: every edge is passed as often each way.
+    // An edge with two triangles joins them; one with more (solids touching
+    // along it) pairs each triangle passing it against the turn with the next
+    // one around it (exact angular order): the two bound one wedge of the solid.
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> by_edge;
+    by_edge.reserve(3 * n);
+    for (std::uint32_t h = 0; h < 3 * n; ++h) by_edge.emplace_back(undirected_key(from(h), to(h)), h);
+    std::sort(by_edge.begin(), by_edge.end());
+    std::vector<std::uint32_t> twin(3 * n, no_index);
+    std::vector<VertexIndex> crowded_vertices;
+    std::vector<PointDef> around;
+    for (std::size_t i = 0; i < by_edge.size();) {
+      std::size_t j = i;
+      while (j < by_edge.size() && by_edge[j].first == by_edge[i].first) ++j;
+      const auto a = static_cast<VertexIndex>(by_edge[i].first >> 32);
+      const auto b = static_cast<VertexIndex>(by_edge[i].first & 0xffffffffu);
+      const std::size_t k = j - i;
+      std::vector<std::size_t> order;
+      if (k == 2) {
+        order = {0, 1};
+      } else if (k > 2 && k % 2 == 0) {
+        around.clear();
+        for (std::size_t m = i; m < j; ++m) {
+          const Triangle& t = tris_[by_edge[m].second / 3];
+          for (const VertexIndex v : t) {
+            if (v != a && v != b) around.push_back(arrangement_.defs[v]);
+          }
         }
+        std::optional<std::vector<std::size_t>> sorted =
+            order_around_edge(set_, arrangement_.defs[a], arrangement_.defs[b], around);
+        if (!sorted) return fail(ArrangementSolid::Status::crowded_edge);
+        order = std::move(*sorted);
+        crowded_vertices.push_back(a);
+        crowded_vertices.push_back(b);
+      } else {
+        return fail(ArrangementSolid::Status::crowded_edge);
       }
+      for (std::size_t m = 0; m < k; ++m) {
+        const std::uint32_t h = by_edge[i + order[m]].second;
+        if (from(h) == a) continue;  // passes a -> b: the outside of the solid lies ahead
+        const std::uint32_t g = by_edge[i + order[(m + 1) % k]].second;
+        if (from(g) != a || twin[h] != no_index || twin[g] != no_index) return fail(ArrangementSolid::Status::crowded_edge);
+        twin[h] = g;
+        twin[g] = h;
+      }
+      i = j;
     }
-    // Closed and oriented (the boundary's guarantee) with each directed edge once:
-    // every edge has its reverse, and exactly two triangles.
-    std::vector<std::uint32_t> twin(3 * n);
     for (std::uint32_t h = 0; h < 3 * n; ++h) {
-      const auto found = half_edge_at.find(directed_key(to(h), from(h)));
-      if (found == half_edge_at.end()) {
-        out.status = ArrangementSolid::Status::crowded_edge;
-        return out;
-      }
-      twin[h] = found->second;
+      if (twin[h] == no_index) return fail(ArrangementSolid::Status::crowded_edge);
     }
+    split_crowded_vertices(crowded_vertices, twin);
+    out.vertex_copies = origin_.size() - arrangement_.defs.size();
 
     // Which way each triangle faces its source's plane (exact).
     std::vector<std::uint8_t> front(n);
     for (std::uint32_t t = 0; t < n; ++t) {
-      const Triangle& tri = tris[t];
+      const Triangle& tri = boundary_.triangles[t];  // the arrangement's vertices
       const PointDef *a = &arrangement_.defs[tri[0]], *b = &arrangement_.defs[tri[1]], *c = &arrangement_.defs[tri[2]];
       front[t] = orient_in_plane(set_, projection(boundary_.source[t]), *a, arrangement_.approx[tri[0]], *b,
                                  arrangement_.approx[tri[1]], *c, arrangement_.approx[tri[2]]) == Sign::positive;
@@ -94,7 +133,7 @@ class SolidBuilder {
     collect_edge_sources(boundary_of);
 
     Solid& solid = out.solid;
-    std::vector<VertexIndex> local(arrangement_.defs.size(), no_index);
+    std::vector<VertexIndex> local(origin_.size(), no_index);
     std::unordered_map<VertexIndex, std::uint32_t> next_of;  // start vertex -> position in the group's boundary
     std::vector<std::uint8_t> used;
     for (std::uint32_t g = 0; g < group_count; ++g) {
@@ -131,8 +170,8 @@ class SolidBuilder {
           const VertexIndex v = from(h);
           if (local[v] == no_index) {
             local[v] = static_cast<VertexIndex>(solid.defs.size());
-            solid.defs.push_back(arrangement_.defs[v]);
-            solid.approx.push_back(arrangement_.approx[v]);
+            solid.defs.push_back(arrangement_.defs[origin_[v]]);
+            solid.approx.push_back(arrangement_.approx[origin_[v]]);
           }
           solid.corners.push_back({local[v], *line});
           ++loop.corner_count;
@@ -148,8 +187,49 @@ class SolidBuilder {
   }
 
  private:
-  VertexIndex from(std::uint32_t h) const { return boundary_.triangles[h / 3][h % 3]; }
-  VertexIndex to(std::uint32_t h) const { return boundary_.triangles[h / 3][(h % 3 + 1) % 3]; }
+  // Over the vertices as split (tris_); origin_ maps them to the arrangement's.
+  VertexIndex from(std::uint32_t h) const { return tris_[h / 3][h % 3]; }
+  VertexIndex to(std::uint32_t h) const { return tris_[h / 3][(h % 3 + 1) % 3]; }
+
+  // Where solids touch along an edge, each end of it gets one copy per fan of
+  // triangles around it (triangles joined across their edges at the vertex as
+  // `twin` pairs them): the copies are the same point, kept apart by index, as
+  // a cut keeps the two sides of a pinch; round_solid moves them apart when it
+  // writes the solid. The first fan keeps the vertex.
+  void split_crowded_vertices(std::vector<VertexIndex> vertices, const std::vector<std::uint32_t>& twin) {
+    if (vertices.empty()) return;
+    std::sort(vertices.begin(), vertices.end());
+    vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+    std::unordered_map<VertexIndex, std::vector<std::uint32_t>> corners;  // vertex -> its corners 3t + c
+    for (const VertexIndex v : vertices) corners.try_emplace(v);
+    for (std::uint32_t t = 0; t < tris_.size(); ++t) {
+      for (std::uint32_t c = 0; c < 3; ++c) {
+        const auto found = corners.find(tris_[t][c]);
+        if (found != corners.end()) found->second.push_back(3 * t + c);
+      }
+    }
+    for (const VertexIndex v : vertices) {
+      const std::vector<std::uint32_t>& at = corners.at(v);
+      std::unordered_map<std::uint32_t, std::uint32_t> slot;  // triangle -> its position in `at`
+      for (std::uint32_t k = 0; k < at.size(); ++k) slot.emplace(at[k] / 3, k);
+      UnionFind fans(at.size());
+      for (std::uint32_t k = 0; k < at.size(); ++k) {
+        const std::uint32_t t = at[k] / 3, c = at[k] % 3;
+        // The two half-edges of t at v: from v, and into v.
+        for (const std::uint32_t h : {3 * t + c, 3 * t + (c + 2) % 3}) fans.unite(k, slot.at(twin[h] / 3));
+      }
+      std::unordered_map<std::uint32_t, VertexIndex> copy_of;  // fan root -> vertex
+      for (std::uint32_t k = 0; k < at.size(); ++k) {
+        const std::uint32_t root = fans.find(k);
+        auto [it, inserted] = copy_of.try_emplace(root, v);
+        if (inserted && copy_of.size() > 1) {
+          it->second = static_cast<VertexIndex>(origin_.size());
+          origin_.push_back(v);
+        }
+        tris_[at[k] / 3][at[k] % 3] = it->second;
+      }
+    }
+  }
 
   Projection projection(std::uint32_t source) {
     std::optional<Projection>& p = projection_[source];
@@ -178,7 +258,7 @@ class SolidBuilder {
   // that have it, ascending: the planes and segments it may be said to lie on.
   void collect_edge_sources(const std::vector<std::vector<std::uint32_t>>& boundary_of) {
     for (const std::vector<std::uint32_t>& edges : boundary_of) {
-      for (const std::uint32_t h : edges) edge_sources_.try_emplace(undirected_key(from(h), to(h)));
+      for (const std::uint32_t h : edges) edge_sources_.try_emplace(undirected_key(origin_[from(h)], origin_[to(h)]));
     }
     for (std::size_t k = 0; k < arrangement_.triangles.size(); ++k) {
       const Triangle& t = arrangement_.triangles[k];
@@ -196,7 +276,7 @@ class SolidBuilder {
   // The line of the edge of half-edge h (twin: the same edge in the face across),
   // the same from either side: see solid_from_winding_boundary.
   std::optional<EdgeLine> edge_line(std::uint32_t h, std::uint32_t twin) {
-    const VertexIndex a = from(h), b = to(h);
+    const VertexIndex a = origin_[from(h)], b = origin_[to(h)];
     const std::uint32_t source = boundary_.source[h / 3], across = boundary_.source[twin / 3];
     const std::vector<std::uint32_t>& candidates = edge_sources_.at(undirected_key(a, b));
     EdgeLine line;
@@ -255,6 +335,8 @@ class SolidBuilder {
   std::vector<std::optional<Projection>> projection_;
   std::unordered_map<VertexIndex, ApproxPoint> input_approx_;
   std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> edge_sources_;
+  std::vector<Triangle> tris_;       // the boundary's triangles over the split vertices
+  std::vector<VertexIndex> origin_;  // per split vertex, the arrangement's vertex it is
 };
 
 }  // namespace

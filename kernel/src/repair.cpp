@@ -1313,14 +1313,24 @@ void resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const Rep
     case ArrangementSolid::Status::ok: break;
     case ArrangementSolid::Status::not_selected: not_done("nothing selected"); return;
     case ArrangementSolid::Status::crowded_edge:
-      not_done("the solid it winds around touches itself along an edge (more than two faces there)");
+      not_done("the solid it winds around touches itself along an edge whose faces cannot be paired into wedges");
       return;
     case ArrangementSolid::Status::pinched_face:
       not_done("a face of the solid it winds around touches itself at a vertex");
       return;
     case ArrangementSolid::Status::no_edge_line: not_done("an edge of the result lies on no known line"); return;
   }
-  RepairRounding rounded = options.round_solid(arrangement.plane_set(), made.solid, oriented);
+  RepairRounding rounded;
+  try {
+    rounded = options.round_solid(arrangement.plane_set(), made.solid, oriented);
+  } catch (const std::bad_alloc&) {
+    throw;
+  } catch (const std::exception& e) {
+    // The rounding refused the solid (e.g. UnsupportedGeometryError): the mesh
+    // stays as it was, as for a rounding that is not valid.
+    rounded.valid = false;
+    rounded.defect = e.what();
+  }
   if (!rounded.valid) {
     not_done("the solid it winds around did not round to a valid mesh (" + rounded.defect + ")");
     return;

@@ -16,6 +16,7 @@
 #include <gmpxx.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <set>
@@ -162,19 +163,23 @@ TEST_CASE("unions of lattice boxes: a sound Solid of the voxels' volume, repaire
     INFO("lattice boxes #" << seed);
     const mpq_class expected(6 * static_cast<long>(voxels.size()));
     const Resolved resolved = resolve(merged);
-    if (resolved.made.status == ArrangementSolid::Status::crowded_edge) {
-      ++touching;  // boxes touching along an edge: no Solid
-      continue;
-    }
     REQUIRE(resolved.made.status == ArrangementSolid::Status::ok);
     CHECK(resolved.exact_six_volume == expected);
 
     const Repaired result = repair(merged);
     if (!validate_mesh(merged).find(DefectKind::self_intersection)) continue;
-    ++self_intersecting;
     INFO(report_text(result.report));
-    CHECK(result.valid);
-    if (!result.valid) continue;
+    if (resolved.made.vertex_copies > 0) {
+      // Boxes touching along an edge: the Solid pairs its faces into wedges,
+      // but the steps before the exact one (CGAL's orientation and hole
+      // filling on a soup with crowded edges) may leave the mesh open. Counted.
+      ++touching;
+      if (!result.valid) continue;
+    } else {
+      ++self_intersecting;
+      CHECK(result.valid);
+      if (!result.valid) continue;
+    }
     ++repaired;
     // Boxes that only touch at a corner are separated by step 9 instead.
     if (const RepairChange* change = result.report.find(RepairKind::resolved_self_intersections_exactly)) {
@@ -186,8 +191,10 @@ TEST_CASE("unions of lattice boxes: a sound Solid of the voxels' volume, repaire
     const double volume = mpq_class(six_volume(result.mesh) / 6).get_d();
     CHECK(std::abs(volume - mpq_class(expected / 6).get_d()) <= 1e-4 * mpq_class(expected / 6).get_d());
   }
-  INFO("repaired " << repaired << " of " << self_intersecting << ", touching along an edge " << touching);
-  CHECK(repaired > seeds / 4);
+  INFO("repaired " << repaired << ", of them " << self_intersecting << " without solids touching along an edge; "
+                    << touching << " touching along an edge");
+  CHECK(repaired >= self_intersecting);
+  CHECK(self_intersecting > seeds / 4);
 }
 
 TEST_CASE("unions of solids at random angles: CGAL's exact union volume, repaired within one rounding",

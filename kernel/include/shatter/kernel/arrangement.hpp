@@ -166,7 +166,8 @@ struct ArrangementSolid {
     /// a volume): no solid.
     not_selected,
     /// An edge of the boundary has more than two triangles (solids touching along
-    /// an edge): a Solid passes each edge exactly twice. No solid.
+    /// it) that cannot be paired into wedges: two tie in angle around it, or they
+    /// do not alternate in direction. No solid.
     crowded_edge,
     /// The pieces of one source triangle kept on one side form a region whose
     /// boundary passes a vertex twice (a hole touching its outer loop, or two
@@ -177,10 +178,12 @@ struct ArrangementSolid {
     no_edge_line,
   };
   Status status = Status::ok;
-  /// Over arrangement.plane_set(): vertices the boundary uses, in first use;
+  /// Over arrangement.plane_set(): vertices the boundary uses (and copies of those
+  /// on edges where solids touch), in first use;
   /// faces in the order of their first triangle in the boundary.
   Solid solid;
   std::size_t merged_triangles = 0;  ///< boundary triangles merged into faces of more than one triangle
+  std::size_t vertex_copies = 0;     ///< copies made at the ends of edges where solids touch
 };
 
 /// The boundary's triangles as the kernel's Solid, stage 3 of resolving
@@ -195,7 +198,11 @@ struct ArrangementSolid {
 /// face across lies on the same plane, the plane of the lowest such triangle that
 /// lies on another. A face's source is its source triangle, its surface id
 /// `surfaces[source]`; convexity per face decided exactly, the solid not claimed
-/// convex.
+/// convex. Where solids touch along an edge (2k triangles on it), the triangles
+/// are paired in exact angular order into the k wedges of the solid and each end
+/// of the edge gets one vertex per fan of triangles around it: copies of one
+/// point, apart by index (round_solid moves them apart when it writes the solid,
+/// as at a pinch).
 /// Guarantees when status is ok: check_solid(arrangement.plane_set(), solid) is
 /// empty, and the solid bounds what the boundary's triangles bound (the same
 /// region; its exact volume is theirs). Deterministic.
