@@ -306,4 +306,5 @@ TEST_CASE("the self-intersecting corpus: resolved into valid solids", "[arrangem
     ++meshes;
   }
   CHECK(meshes >= 3);
+  CHECK(valid == meshes);
 }
