@@ -5,6 +5,7 @@
 
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
+#include "shatter/triangulate/solid_mesh.hpp"
 
 namespace shatter::cli {
 
@@ -13,7 +14,9 @@ namespace {
 // The lines go to stderr in every mode, JSON included, so a run that then
 // refuses the mesh (and prints no JSON) still shows what was done.
 RepairReport repair_and_print(Mesh& mesh, const std::string& name) {
-  const RepairReport report = repair_mesh(mesh);
+  RepairOptions options;
+  options.round_solid = round_repaired_solid;
+  const RepairReport report = repair_mesh(mesh, options);
   if (!report.changed() && report.notes.empty()) std::cerr << "repair: " << name << ": no change\n";
   for (const RepairChange& change : report.changes) std::cerr << "repair: " << change.text << '\n';
   for (const RepairNote& note : report.notes) std::cerr << "repair: not done: " << note.text << '\n';
@@ -34,7 +37,9 @@ InputMesh read_input(const std::string& path) {
 std::string repair_flag_help(const std::string& then) {
   return "Repair the mesh before using it, printing each change on stderr (`repair: ...`): merge vertices at "
          "equal positions, remove repeated-vertex, duplicate and zero-area triangles, orient consistently and "
-         "outward, stitch and fill every hole (over its own vertices, whatever its size); self-intersections are named, not resolved. A mesh still invalid after repair is refused as "
+         "outward, stitch and fill every hole (over its own vertices, whatever its size), then resolve "
+         "self-intersections exactly (the surface split along its intersections, the solid it winds around at "
+         "least once kept, rounded and certified once). A mesh still invalid after repair is refused as "
          "without the flag. " +
          then;
 }

@@ -33,7 +33,8 @@ struct InputMesh {
 
 /// The input of slice and fracture: reads `path` (printing the reader's warnings
 /// on stderr); with `repair`, repairs it
-/// (repair_mesh with the default options), printing one "repair: ..." line per
+/// (repair_mesh with the default options and the exact self-intersection step,
+/// RepairOptions::round_solid = round_repaired_solid), printing one "repair: ..." line per
 /// change and per step not done on stderr; then refuses it unless it is a valid
 /// solid, as require_valid_solid(mesh, path, allow_self_intersections) decides.
 /// Guarantees: the returned mesh passed that check, so a caller may tell the

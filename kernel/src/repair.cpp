@@ -25,6 +25,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -33,6 +34,8 @@
 
 #include "position_key.hpp"
 #include "repair_touching.hpp"
+#include "shatter/kernel/arrangement.hpp"
+#include "shatter/kernel/union_find.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/self_intersections.hpp"
 #include "shatter/kernel/shells.hpp"
@@ -1171,6 +1174,194 @@ class Repairer {
   std::unordered_map<std::uint64_t, std::size_t> corner_at_surface_;
 };
 
+// Step 11's orientation: winding numbers count each shell with its turn, so a
+// shell that crosses another (or itself) must face the way it is meant to.
+// Steps 3 and 7 cannot tell that way where shells cross: orient_to_bound_a_volume
+// decides by nesting, which crossing shells do not have (it turned whole
+// overlapping spheres into cavities of each other). So a crossing shell whose
+// triangles the input held all one way round (every one of them found in the
+// input as it is, or every one reversed; `input` as repair_mesh received it)
+// faces the way the input had it: a cavity of a solid that crosses a copy of it
+// stays a cavity. Any other crossing shell, or every one when
+// `own_volume_only`, is taken as a solid of its own and turned to bound a
+// positive volume (exact sign). A shell that crosses nothing keeps the
+// orientation its nesting gave it. Returns the triangles reversed.
+std::size_t orient_crossing_shells(Mesh& mesh, std::span<const TrianglePair> pairs, const Mesh& input,
+                                   bool own_volume_only) {
+  const std::size_t n = mesh.triangles.size();
+  UnionFind shells(n);
+  std::unordered_map<std::uint64_t, std::uint32_t> first_at_edge;
+  for (std::uint32_t t = 0; t < n; ++t) {
+    for (int c = 0; c < 3; ++c) {
+      const VertexIndex u = mesh.triangles[t][c], v = mesh.triangles[t][(c + 1) % 3];
+      const auto [it, inserted] = first_at_edge.try_emplace((std::uint64_t{std::min(u, v)} << 32) | std::max(u, v), t);
+      if (!inserted) shells.unite(it->second, t);
+    }
+  }
+  std::vector<std::uint8_t> crossing(n, 0);
+  for (const TrianglePair& pair : pairs) {
+    crossing[shells.find(static_cast<std::uint32_t>(pair.first))] = 1;
+    crossing[shells.find(static_cast<std::uint32_t>(pair.second))] = 1;
+  }
+  std::vector<std::vector<std::uint32_t>> members(n);
+  for (std::uint32_t t = 0; t < n; ++t) {
+    if (crossing[shells.find(t)]) members[shells.find(t)].push_back(t);
+  }
+  // The input's triangles over its positions welded (first index per exact
+  // position), each rotated to start at its least vertex.
+  std::unordered_map<PositionKey, VertexIndex, PositionKeyHash> welded;
+  const auto id_of = [&](const Vec3& p) {
+    return welded.try_emplace(key_of(p), static_cast<VertexIndex>(welded.size())).first->second;
+  };
+  std::set<Triangle> input_triangles;
+  if (!own_volume_only) {
+    for (const Triangle& t : input.triangles) {
+      if (t[0] >= input.positions.size() || t[1] >= input.positions.size() || t[2] >= input.positions.size()) continue;
+      input_triangles.insert(canonical_rotation({id_of(input.positions[t[0]]), id_of(input.positions[t[1]]),
+                                                 id_of(input.positions[t[2]])}));
+    }
+  }
+  Mesh shell;
+  shell.positions = mesh.positions;
+  std::size_t reversed = 0;
+  const bool normals = mesh.corners.has_normals(), uvs = mesh.corners.has_uvs(), tangents = mesh.corners.has_tangents();
+  for (const std::vector<std::uint32_t>& triangles : members) {
+    if (triangles.empty()) continue;
+    std::size_t as_read = 0, against = 0;
+    for (const std::uint32_t t : triangles) {
+      if (own_volume_only) break;
+      const Triangle& tri = mesh.triangles[t];
+      const Triangle ids{id_of(mesh.positions[tri[0]]), id_of(mesh.positions[tri[1]]), id_of(mesh.positions[tri[2]])};
+      as_read += input_triangles.count(canonical_rotation(ids));
+      against += input_triangles.count(canonical_rotation({ids[0], ids[2], ids[1]}));
+    }
+    bool turn = false;
+    if (as_read > 0 && against == 0) {
+      turn = false;
+    } else if (against > 0 && as_read == 0) {
+      turn = true;
+    } else {
+      shell.triangles.clear();
+      for (const std::uint32_t t : triangles) shell.triangles.push_back(mesh.triangles[t]);
+      turn = signed_volume_sign(shell) == Sign::negative;
+    }
+    if (!turn) continue;
+    for (const std::uint32_t t : triangles) {
+      std::swap(mesh.triangles[t][1], mesh.triangles[t][2]);
+      if (normals) std::swap(mesh.corners.normals[3 * t + 1], mesh.corners.normals[3 * t + 2]);
+      if (uvs) std::swap(mesh.corners.uvs[3 * t + 1], mesh.corners.uvs[3 * t + 2]);
+      if (tangents) std::swap(mesh.corners.tangents[3 * t + 1], mesh.corners.tangents[3 * t + 2]);
+    }
+    reversed += triangles.size();
+  }
+  return reversed;
+}
+
+// Step 11 (RepairOptions::round_solid): a mesh the other steps left closed but
+// self-intersecting, resolved exactly: its arrangement, the boundary of what it
+// winds around at least once, that boundary as a plane-based solid, rounded and
+// certified by the hook. Taken only when the rounded mesh is valid; otherwise
+// the mesh stays as it was and a note says why.
+void resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const RepairOptions& options,
+                                        RepairReport& report) {
+  if (!options.round_solid || mesh.triangles.empty()) return;
+  // Validation names self-intersections only on a surface whose topology passes,
+  // so the pairs are found here; their finder needs finite, in-range, non-flat
+  // triangles.
+  ValidationOptions topology_only;
+  topology_only.check_self_intersections = false;
+  const ValidationReport check = validate_mesh(mesh, topology_only);
+  const auto not_done = [&](const std::string& why) {
+    report.notes.push_back({"did not resolve self-intersections exactly: " + why});
+  };
+  for (const DefectKind blocking :
+       {DefectKind::nonfinite_coordinate, DefectKind::index_out_of_range, DefectKind::zero_area_triangle}) {
+    if (const Defect* defect = check.find(blocking)) {
+      not_done("the surface still has " + std::string(defect_name(blocking)) + " (" + std::to_string(defect->count) + ")");
+      return;
+    }
+  }
+  const std::vector<TrianglePair> pairs = self_intersecting_pairs(mesh.positions, mesh.triangles);
+  if (pairs.empty()) return;
+  // The input's orientation where it is one, else each shell's own volume; when
+  // that leaves nothing wound around (an input turned inside out as a whole),
+  // every crossing shell by its own volume.
+  Mesh oriented = mesh;
+  std::size_t turned = orient_crossing_shells(oriented, pairs, input, false);
+  MeshArrangement arrangement = arrange_triangles(oriented.positions, oriented.triangles);
+  WindingBoundary boundary = winding_boundary(arrangement);
+  if (boundary.status == WindingBoundary::Status::ok && boundary.triangles.empty()) {
+    oriented = mesh;
+    turned = orient_crossing_shells(oriented, pairs, input, true);
+    arrangement = arrange_triangles(oriented.positions, oriented.triangles);
+    boundary = winding_boundary(arrangement);
+  }
+  if (boundary.status == WindingBoundary::Status::open) {
+    not_done("the surface is open (its pieces do not close up), so it winds around no solid");
+    return;
+  }
+  if (boundary.status != WindingBoundary::Status::ok) {
+    not_done("the winding numbers of its cells could not be decided");
+    return;
+  }
+  if (boundary.triangles.empty()) {
+    not_done("the surface winds around no volume (every cell has winding number <= 0)");
+    return;
+  }
+  const ArrangementSolid made = solid_from_winding_boundary(arrangement, boundary, oriented.surfaces);
+  switch (made.status) {
+    case ArrangementSolid::Status::ok: break;
+    case ArrangementSolid::Status::not_selected: not_done("nothing selected"); return;
+    case ArrangementSolid::Status::crowded_edge:
+      not_done("the solid it winds around touches itself along an edge whose faces cannot be paired into wedges");
+      return;
+    case ArrangementSolid::Status::pinched_face:
+      not_done("a face of the solid it winds around touches itself at a vertex");
+      return;
+    case ArrangementSolid::Status::no_edge_line: not_done("an edge of the result lies on no known line"); return;
+  }
+  RepairRounding rounded;
+  try {
+    rounded = options.round_solid(arrangement.plane_set(), made.solid, oriented);
+  } catch (const std::bad_alloc&) {
+    throw;
+  } catch (const std::exception& e) {
+    // The rounding refused the solid (e.g. UnsupportedGeometryError): the mesh
+    // stays as it was, as for a rounding that is not valid.
+    rounded.valid = false;
+    rounded.defect = e.what();
+  }
+  if (!rounded.valid) {
+    not_done("the solid it winds around did not round to a valid mesh (" + rounded.defect + ")");
+    return;
+  }
+  const double before = signed_volume(mesh), after = signed_volume(rounded.mesh);
+  char volume[160];
+  std::snprintf(volume, sizeof volume, "volume %.9g -> %.9g (change %.3g, overlaps counted once; rounding moved %.3g, bound %.3g)",
+                before, after, after - before, rounded.moved_volume, rounded.moved_volume_bound);
+  std::string text = "resolved " + plural(arrangement.pairs.size(), "self-intersecting triangle pair",
+                                          "self-intersecting triangle pairs") +
+                     " exactly (" +
+                     (turned > 0 ? plural(turned, "triangle", "triangles") +
+                                       " of crossing shells turned to face as in the input or out of their own volume; "
+                                 : std::string()) +
+                     "mesh arrangement: " + plural(arrangement.split_triangles, "triangle", "triangles") +
+                     " split, " + plural(arrangement.triangles.size(), "piece", "pieces") + "; kept " +
+                     plural(boundary.triangles.size(), "face", "faces") + " of " + std::to_string(boundary.faces) +
+                     " bounding winding number >= 1 (at most " + std::to_string(boundary.max_winding) + "), merged into " +
+                     plural(made.solid.faces.size(), "polygon face", "polygon faces") + ", rounded to " +
+                     plural(rounded.mesh.triangles.size(), "triangle", "triangles") +
+                     (rounded.separated_vertices > 0
+                          ? " with " + plural(rounded.separated_vertices, "vertex copy", "vertex copies") +
+                                " moved apart where the solid touches itself"
+                          : std::string()) +
+                     "); " + volume;
+  report.changes.push_back({RepairKind::resolved_self_intersections_exactly, arrangement.pairs.size(), std::move(text)});
+  mesh = std::move(rounded.mesh);
+  report.vertices_after = mesh.vertex_count();
+  report.triangles_after = mesh.triangle_count();
+}
+
 }  // namespace
 
 RepairReport repair_mesh(Mesh& mesh, const RepairOptions& options) {
@@ -1188,6 +1379,7 @@ RepairReport repair_mesh(Mesh& mesh, const RepairOptions& options) {
     return report;
   }
   Mesh repaired = Repairer(mesh, options, report).run();
+  resolve_self_intersections_exactly(repaired, mesh, options, report);
   mesh = std::move(repaired);
   return report;
 }

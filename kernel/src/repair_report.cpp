@@ -35,6 +35,7 @@ std::string_view repair_kind_name(RepairKind kind) {
     case RepairKind::resolved_self_intersections: return "resolved_self_intersections";
     case RepairKind::removed_unused_vertices: return "removed_unused_vertices";
     case RepairKind::separated_touching_parts: return "separated_touching_parts";
+    case RepairKind::resolved_self_intersections_exactly: return "resolved_self_intersections_exactly";
   }
   return "unknown";
 }

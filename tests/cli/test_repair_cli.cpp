@@ -132,3 +132,30 @@ TEST_CASE("validate --repair separates two cubes sharing an edge, says so, and -
   for (const auto& change : json["repair"]) named = named || (change["change"] == "separated_touching_parts" && change["count"] == 2);
   CHECK(named);
 }
+
+TEST_CASE("validate and fracture --repair resolve self-intersections exactly", "[repair][cli]") {
+  // The corpus elk (7 intersecting pairs) was refused after --repair
+  // ("self-intersections remain") until the exact step; two overlapping boxes
+  // come back as their union.
+  const fs::path elk = mesh_dir() / "self-intersecting" / "elk.off";
+  const fs::path out = scratch("elk-repaired.off");
+  const Run run = run_shatter("validate " + quoted(elk) + " --repair --json --out " + quoted(out));
+  CHECK(run.exit_code == 0);
+  const auto json = nlohmann::json::parse(run.out);
+  CHECK(json["valid"] == true);
+  bool named = false;
+  for (const auto& change : json["repair"]) named = named || change["change"] == "resolved_self_intersections_exactly";
+  CHECK(named);
+  CHECK(solid_problem(read_mesh(out)).empty());
+
+  const fs::path boxes = scratch("two-boxes.off");
+  write_mesh(merge({box({0, 0, 0}, {2, 2, 2}), box({1, 1, 1}, {3, 3, 3})}), boxes, MeshFormat::off);
+  const fs::path united = scratch("two-boxes-united.off");
+  const Run union_run = run_shatter("validate " + quoted(boxes) + " --repair --out " + quoted(united));
+  CHECK(union_run.exit_code == 0);
+  CHECK(union_run.err.find("repair: resolved ") != std::string::npos);
+  CHECK(exact_six_volume(read_mesh(united)) == 6 * 15);  // 8 + 8 - 1
+  const Run fracture = run_shatter("fracture " + quoted(boxes) + " --repair --fragments 4 --out " +
+                                   quoted(scratch("two-boxes.shatter")));
+  CHECK(fracture.exit_code == 0);
+}

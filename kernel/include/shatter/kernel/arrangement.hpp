@@ -158,4 +158,59 @@ struct WindingBoundary {
 /// tested against every face (rational arithmetic).
 WindingBoundary winding_boundary(const MeshArrangement& arrangement);
 
+/// The plane-based solid a winding boundary bounds (solid_from_winding_boundary).
+struct ArrangementSolid {
+  enum class Status : std::uint8_t {
+    ok,
+    /// The boundary's status is not ok, or it selected no face (nothing encloses
+    /// a volume): no solid.
+    not_selected,
+    /// An edge of the boundary has more than two triangles (solids touching along
+    /// it) that cannot be paired into wedges: two tie in angle around it, or they
+    /// do not alternate in direction. No solid.
+    crowded_edge,
+    /// The pieces of one source triangle kept on one side form a region whose
+    /// boundary passes a vertex twice (a hole touching its outer loop, or two
+    /// holes touching): a face's loops must be simple. No solid.
+    pinched_face,
+    /// An edge lies on no input segment and on no plane but its faces' own (not
+    /// expected of an arrangement). No solid.
+    no_edge_line,
+  };
+  Status status = Status::ok;
+  /// Over arrangement.plane_set(): vertices the boundary uses (and copies of those
+  /// on edges where solids touch), in first use;
+  /// faces in the order of their first triangle in the boundary.
+  Solid solid;
+  std::size_t merged_triangles = 0;  ///< boundary triangles merged into faces of more than one triangle
+  std::size_t vertex_copies = 0;     ///< copies made at the ends of edges where solids touch
+};
+
+/// The boundary's triangles as the kernel's Solid, stage 3 of resolving
+/// self-intersections: the triangles of one source triangle that face one way
+/// and are joined by edges become one polygon face on that triangle's input
+/// plane (reversed where they face its back), the edges between them and the
+/// vertices inside dropped, so that no face edge is a diagonal of a piece's
+/// triangulation. Each remaining edge gets its known line (EdgeLine): the input
+/// segment of a triangle holding the edge whose line it lies on (decided exactly,
+/// among the triangles of the arrangement's pieces on the edge, the lowest first),
+/// and the plane of the face across when that plane is another; else, where the
+/// face across lies on the same plane, the plane of the lowest such triangle that
+/// lies on another. A face's source is its source triangle, its surface id
+/// `surfaces[source]`; convexity per face decided exactly, the solid not claimed
+/// convex. Where solids touch along an edge (2k triangles on it), the triangles
+/// are paired in exact angular order into the k wedges of the solid and each end
+/// of the edge gets one vertex per fan of triangles around it: copies of one
+/// point, apart by index (round_solid moves them apart when it writes the solid,
+/// as at a pinch).
+/// Guarantees when status is ok: check_solid(arrangement.plane_set(), solid) is
+/// empty, and the solid bounds what the boundary's triangles bound (the same
+/// region; its exact volume is theirs). Deterministic.
+/// Preconditions: `boundary` is winding_boundary(arrangement); `surfaces` has one
+/// entry per input triangle. Failure: status (empty solid), std::bad_alloc.
+/// Cost: O(T log T) over the boundary's T triangles, plus one exact orientation
+/// per triangle and per boundary edge and input edge tried.
+ArrangementSolid solid_from_winding_boundary(const MeshArrangement& arrangement, const WindingBoundary& boundary,
+                                             std::span<const SurfaceId> surfaces);
+
 }  // namespace shatter

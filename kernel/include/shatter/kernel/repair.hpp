@@ -11,12 +11,15 @@
 
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <limits>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/solid.hpp"
 
 namespace shatter {
 
@@ -38,18 +41,21 @@ enum class RepairKind {
   separated_touching_parts,      ///< parts of a closed surface touching at a vertex or along an edge (non-manifold
                                  ///< vertices and edges) split apart and moved a hair into their own wedges; runs
                                  ///< before removed_unused_vertices (appended here: the position is the file's number)
+  resolved_self_intersections_exactly,  ///< intersecting triangles split along their intersections exactly (mesh
+                                        ///< arrangement), the faces bounding winding number >= 1 kept, rounded and
+                                        ///< certified once (RepairOptions::round_solid); runs last
 };
 
 /// Every RepairKind (in step order, but for the last); a kind's position is the number the
 /// .shatter file stores for it (formats/file.hpp, section `rpar`), so new kinds
 /// are appended, never inserted.
-inline constexpr std::array<RepairKind, 11> all_repair_kinds = {
+inline constexpr std::array<RepairKind, 12> all_repair_kinds = {
     RepairKind::merged_duplicate_vertices,       RepairKind::removed_repeated_index_triangles,
     RepairKind::removed_duplicate_triangles,     RepairKind::removed_opposite_triangle_pairs,
     RepairKind::reversed_triangles,              RepairKind::stitched_border_edges,
     RepairKind::fixed_zero_area_triangles,       RepairKind::filled_holes,
     RepairKind::resolved_self_intersections,     RepairKind::removed_unused_vertices,
-    RepairKind::separated_touching_parts};
+    RepairKind::separated_touching_parts,        RepairKind::resolved_self_intersections_exactly};
 
 /// The kind's name as the CLI's JSON prints it, e.g. "filled_holes".
 std::string_view repair_kind_name(RepairKind kind);
@@ -65,6 +71,21 @@ struct RepairChange {
 struct RepairNote {
   std::string text;
 };
+
+/// A plane-based solid rounded to doubles and certified, as every output is
+/// (round_solid in the triangulate layer, which the kernel does not depend on:
+/// see RepairOptions::round_solid).
+struct RepairRounding {
+  Mesh mesh;
+  bool valid = false;  ///< the mesh passed validate_mesh (self-intersections included)
+  std::string defect;  ///< when not valid: what the rounding left
+  double moved_volume = 0, moved_volume_bound = 0;  ///< |volume change| rounding's repairs made, and its bound
+  std::size_t separated_vertices = 0;  ///< vertex copies moved apart where the exact solid touches itself
+};
+
+/// Rounds `solid` (over `set`) to a certified mesh, interpolating per-corner
+/// attributes from `attributes`, whose triangles the faces' sources name.
+using RepairRoundingHook = std::function<RepairRounding(const PlaneSet& set, const Solid& solid, const Mesh& attributes)>;
 
 struct RepairOptions {
   /// Fill a boundary cycle (hole) only when it has at most this many edges;
@@ -95,6 +116,16 @@ struct RepairOptions {
   /// coordinate near the copy's edges, so every later exact decision and rounding
   /// sees the parts apart. 0 < value < 1.
   double touching_separation = 0x1p-20;
+  /// Exact resolution of self-intersections (step 11): when set and the mesh is
+  /// still self-intersecting after the other steps, its mesh arrangement is
+  /// computed on plane-based points (arrange_triangles), the faces between
+  /// winding number >= 1 and <= 0 kept (winding_boundary), merged per source
+  /// triangle into a plane-based Solid (solid_from_winding_boundary) and rounded
+  /// and certified by this hook. The kernel cannot round a Solid itself (that is
+  /// the triangulate layer's round_solid), so a caller above it passes it:
+  /// the CLI passes round_repaired_solid (triangulate/solid_mesh.hpp). Empty by
+  /// default: self-intersections are then named by validation, not resolved.
+  RepairRoundingHook round_solid = nullptr;
 };
 
 struct RepairReport {
@@ -156,7 +187,25 @@ struct RepairReport {
 ///     noted. The report gives the largest move and the exact volume change
 ///     with a bound (distance x area / 3 summed over the moves); then each
 ///     shell is oriented by its nesting, as after welded lids;
-///  10. drop vertices no triangle uses.
+///  10. drop vertices no triangle uses;
+///  11. when `round_solid` is set and the result is still self-intersecting
+///     (but has no zero-area triangle): resolve the intersections exactly, as
+///     mesh arrangements do (Zhou, Grinspun, Zorin & Jacobson 2016; Cherchi et
+///     al. 2020): arrange_triangles splits every triangle along its
+///     intersections on plane-based points, winding_boundary keeps the faces
+///     between winding number >= 1 and <= 0 (for overlapping closed shells,
+///     their union; for a cavity, what it carves), solid_from_winding_boundary
+///     merges them into polygon faces of a plane-based Solid, and the hook rounds
+///     it once and certifies it as every cut piece is. Taken only when the hook
+///     returns a valid mesh (which replaces the whole mesh: vertices renumbered,
+///     attributes interpolated from each face's source triangle); else the mesh
+///     stays as steps 1-10 left it and a note says why (an open surface, faces
+///     around an edge that cannot be paired into wedges, a face whose kept part
+///     touches itself at a vertex, a rounding that failed). Before it, every
+///     shell that crosses another faces as the input held it where the input
+///     held all its triangles one way round, else out of its own volume (steps
+///     3 and 7 orient by nesting, which crossing shells do not have). The change
+///     names the pairs resolved, the pieces, the faces kept and the volume change.
 ///
 /// Attributes: a surviving triangle keeps its corners' attributes (they follow the
 /// vertex when it is reversed or rotated; normals are not negated on reversal, as

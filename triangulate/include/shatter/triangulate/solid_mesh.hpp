@@ -51,6 +51,7 @@
 
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/mesh.hpp"
+#include "shatter/kernel/repair.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/validate.hpp"
 
@@ -291,5 +292,12 @@ RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMes
 /// vertex: volume, centroid and inertia carry a relative error of order 1e-15 times
 /// (surface area x size / volume), the conditioning of the divergence theorem.
 MassProperties solid_mass_properties(const Solid& solid);
+
+/// The rounding of a solid that repair made (RepairOptions::round_solid, which
+/// the CLI sets to this): round_solid with `attributes` as the mesh whose
+/// triangles the faces' sources name, its result as the kernel's repair takes it.
+/// A collapsed solid (thinner than its rounding) is not valid. Failure: as
+/// round_solid's (not valid, with its defect); std::bad_alloc.
+RepairRounding round_repaired_solid(const PlaneSet& set, const Solid& solid, const Mesh& attributes);
 
 }  // namespace shatter

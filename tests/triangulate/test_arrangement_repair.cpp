@@ -1,0 +1,310 @@
+// Stage 3 of the exact self-intersection repair (issue 21, item 1): the faces
+// an arrangement winds around, merged into a plane-based Solid
+// (solid_from_winding_boundary), rounded and certified (round_repaired_solid),
+// and the whole step as repair_mesh runs it with the hook the CLI passes. Judged
+// apart from the code: the Solid is sound (check_solid) and its exact volume is
+// the union's (lattice voxels, or CGAL's corefinement union on exact
+// constructions, Epeck); the repaired mesh validates, reads back valid, keeps
+// that volume within the bound of one rounding of its vertices, and is the same
+// bytes whatever the thread count.
+
+#include <catch2/catch.hpp>
+
+#include <CGAL/Polygon_mesh_processing/corefinement.h>
+#include <CGAL/Polygon_mesh_processing/measure.h>
+#include <CGAL/Surface_mesh.h>
+#include <gmpxx.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "shatter/generators/corpus.hpp"
+#include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
+#include "shatter/kernel/arrangement.hpp"
+#include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/io.hpp"
+#include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/rationals.hpp"
+#include "shatter/kernel/repair.hpp"
+#include "shatter/kernel/validate.hpp"
+#include "shatter/triangulate/solid_mesh.hpp"
+#include "support/sanitizers.hpp"
+#include "support/turned.hpp"
+
+using namespace shatter;
+
+namespace {
+
+using EK = ExactKernel;
+using EpeckMesh = CGAL::Surface_mesh<EK::Point_3>;
+
+EpeckMesh exact_mesh(const Mesh& mesh) {
+  EpeckMesh out;
+  std::vector<EpeckMesh::Vertex_index> vertices;
+  for (const Vec3& p : mesh.positions) vertices.push_back(out.add_vertex(EK::Point_3(p.x, p.y, p.z)));
+  for (const Triangle& t : mesh.triangles) out.add_face(vertices[t[0]], vertices[t[1]], vertices[t[2]]);
+  return out;
+}
+
+// Six times the signed volume of a mesh, exactly, on its doubles.
+mpq_class six_volume(const Mesh& mesh) {
+  mpq_class sum;
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
+    const mpq_class ax(a.x), ay(a.y), az(a.z), bx(b.x), by(b.y), bz(b.z), cx(c.x), cy(c.y), cz(c.z);
+    sum += ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
+  }
+  return sum;
+}
+
+// What rounding every vertex of `mesh` to doubles can move its volume by: each
+// triangle swept by its corners' moves, at most half an ulp of the largest
+// coordinate per axis (L1: 3 half-ulps), over twice its area plus the moves'
+// own terms (Steiner's bound, as round_solid states it), summed.
+double rounding_bound(const Mesh& mesh) {
+  double largest = 0, area = 0, perimeter = 0;
+  for (const Vec3& p : mesh.positions) largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
+    area += 0.5 * norm(cross(b - a, c - a));
+    perimeter += norm(b - a) + norm(c - b) + norm(a - c);
+  }
+  const double d = 3 * 0.5 * std::nextafter(largest, INFINITY) - 3 * 0.5 * largest + 3 * std::ldexp(largest, -53);
+  return 2 * d * area + 4 * d * d * perimeter + 5 * d * d * d * static_cast<double>(mesh.triangles.size());
+}
+
+struct Resolved {
+  ArrangementSolid made;
+  mpq_class exact_six_volume;  ///< of the Solid, exactly
+};
+
+// The Solid of `mesh`'s union; requires it sound when made.
+Resolved resolve(const Mesh& mesh) {
+  const MeshArrangement arrangement = arrange_triangles(mesh.positions, mesh.triangles);
+  const WindingBoundary boundary = winding_boundary(arrangement);
+  REQUIRE(boundary.status == WindingBoundary::Status::ok);
+  Resolved out{solid_from_winding_boundary(arrangement, boundary, mesh.surfaces), 0};
+  if (out.made.status != ArrangementSolid::Status::ok) return out;
+  const PlaneSet set = arrangement.plane_set();
+  INFO(check_solid(set, out.made.solid));
+  REQUIRE(check_solid(set, out.made.solid).empty());
+  out.exact_six_volume = exact_six_volume(set, out.made.solid);
+  // Faces merged: no more faces than the boundary's triangles.
+  CHECK(out.made.solid.faces.size() <= boundary.triangles.size());
+  return out;
+}
+
+std::string report_text(const RepairReport& report) {
+  std::string text = report.summary();
+  for (const RepairNote& note : report.notes) text += "; not done: " + note.text;
+  return text;
+}
+
+RepairOptions exact_options() {
+  RepairOptions options;
+  options.round_solid = round_repaired_solid;
+  return options;
+}
+
+struct Repaired {
+  Mesh mesh;
+  RepairReport report;
+  bool valid = false;
+};
+
+// repair_mesh with the exact step; the result validated, written as OFF, read
+// back and validated again, and repaired again on one thread: the same bytes.
+Repaired repair(const Mesh& damaged) {
+  Repaired out{damaged, {}, false};
+  out.report = repair_mesh(out.mesh, exact_options());
+  out.valid = validate_mesh(out.mesh).valid();
+  if (!out.valid) return out;
+  const std::string bytes = write_mesh_to_bytes(out.mesh, MeshFormat::off);
+  const Mesh read = read_mesh_from_bytes(bytes, MeshFormat::off);
+  CHECK(validate_mesh(read).valid());
+  Mesh serial = damaged;
+  tbb::task_arena(1).execute([&] { repair_mesh(serial, exact_options()); });
+  CHECK(write_mesh_to_bytes(serial, MeshFormat::off) == bytes);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("unions of lattice boxes: a sound Solid of the voxels' volume, repaired into a valid mesh",
+          "[arrangement][repair]") {
+  // As test_arrangement_union's lattice boxes: overlapping, sharing faces,
+  // inside each other, touching along an edge or at a corner.
+  test::Random random(20261209);
+  const std::size_t seeds = test::sized(40, 8);
+  std::size_t repaired = 0, touching = 0, self_intersecting = 0;
+  for (std::size_t seed = 0; seed < seeds; ++seed) {
+    const int count = 2 + static_cast<int>(random.index(3));
+    std::vector<Mesh> boxes;
+    std::set<std::array<int, 3>> voxels;
+    for (int b = 0; b < count; ++b) {
+      std::array<int, 3> lo{}, hi{};
+      for (int c = 0; c < 3; ++c) {
+        lo[c] = static_cast<int>(random.index(4));
+        hi[c] = lo[c] + 1 + static_cast<int>(random.index(static_cast<std::size_t>(4 - lo[c])));
+      }
+      const Vec3 l{double(lo[0]), double(lo[1]), double(lo[2])}, h{double(hi[0]), double(hi[1]), double(hi[2])};
+      boxes.push_back(test::grid_box(l, h, 1 + static_cast<int>(random.index(2))));
+      for (int x = lo[0]; x < hi[0]; ++x)
+        for (int y = lo[1]; y < hi[1]; ++y)
+          for (int z = lo[2]; z < hi[2]; ++z) voxels.insert({x, y, z});
+    }
+    const Mesh merged = test::merge(boxes);
+    INFO("lattice boxes #" << seed);
+    const mpq_class expected(6 * static_cast<long>(voxels.size()));
+    const Resolved resolved = resolve(merged);
+    REQUIRE(resolved.made.status == ArrangementSolid::Status::ok);
+    CHECK(resolved.exact_six_volume == expected);
+
+    const Repaired result = repair(merged);
+    if (!validate_mesh(merged).find(DefectKind::self_intersection)) continue;
+    INFO(report_text(result.report));
+    if (resolved.made.vertex_copies > 0) {
+      // Boxes touching along an edge: the Solid pairs its faces into wedges,
+      // but the steps before the exact one (CGAL's orientation and hole
+      // filling on a soup with crowded edges) may leave the mesh open. Counted.
+      ++touching;
+      if (!result.valid) continue;
+    } else {
+      ++self_intersecting;
+      CHECK(result.valid);
+      if (!result.valid) continue;
+    }
+    ++repaired;
+    // Boxes that only touch at a corner are separated by step 9 instead.
+    if (const RepairChange* change = result.report.find(RepairKind::resolved_self_intersections_exactly)) {
+      CHECK(change->count > 0);
+    }
+    // Integer corners round exactly: the volume is the voxels', but where boxes
+    // touch at a corner and the copies there moved apart (within the bound the
+    // report states, a hair of the edges).
+    const double volume = mpq_class(six_volume(result.mesh) / 6).get_d();
+    CHECK(std::abs(volume - mpq_class(expected / 6).get_d()) <= 1e-4 * mpq_class(expected / 6).get_d());
+  }
+  INFO("repaired " << repaired << ", of them " << self_intersecting << " without solids touching along an edge; "
+                    << touching << " touching along an edge");
+  CHECK(repaired >= self_intersecting);
+  CHECK(self_intersecting > seeds / 4);
+}
+
+TEST_CASE("unions of solids at random angles: CGAL's exact union volume, repaired within one rounding",
+          "[arrangement][repair]") {
+  test::Random random(20261210);
+  const std::size_t seeds = test::sized(6, 2);
+  for (std::size_t seed = 0; seed < seeds; ++seed) {
+    const auto angle = [&] { return random.uniform(0, 6.283185307179586); };
+    const auto shift = [&](double reach) {
+      return Vec3{random.uniform(-reach, reach), random.uniform(-reach, reach), random.uniform(-reach, reach)};
+    };
+    std::vector<Mesh> shells{
+        test::turned(test::box({-1, -1, -1}, {1, 1, 1}), angle(), angle(), angle(), shift(0.8)),
+        test::turned(test::ellipsoid({0, 0, 0}, {1, 1, 1}, 10, 7), angle(), angle(), angle(), shift(0.8)),
+        test::turned(test::torus(1.0, 0.3, 10, 6), angle(), angle(), angle(), shift(0.5)),
+    };
+    if (seed % 2 == 1) {
+      shells.push_back(test::turned(test::box({-0.3, -0.3, -0.3}, {0.3, 0.3, 0.3}), angle(), angle(), angle(), shift(1.2)));
+    }
+    const Mesh merged = test::merge(shells);
+    INFO("solids at random angles #" << seed);
+    EpeckMesh united = exact_mesh(shells[0]);
+    for (std::size_t s = 1; s < shells.size(); ++s) {
+      EpeckMesh next = exact_mesh(shells[s]), result;
+      REQUIRE(CGAL::Polygon_mesh_processing::corefine_and_compute_union(united, next, result));
+      united = std::move(result);
+    }
+    const EK::FT cgal_six = 6 * CGAL::Polygon_mesh_processing::volume(united);
+    const Resolved resolved = resolve(merged);
+    REQUIRE(resolved.made.status == ArrangementSolid::Status::ok);
+    CHECK(EK::FT(resolved.exact_six_volume) == cgal_six);
+
+    const Repaired result = repair(merged);
+    INFO(report_text(result.report));
+    REQUIRE(result.valid);
+    REQUIRE(result.report.find(RepairKind::resolved_self_intersections_exactly) != nullptr);
+    const double exact = CGAL::to_double(cgal_six) / 6;
+    const double volume = signed_volume(result.mesh);
+    INFO("volume " << volume << ", union " << exact << ", bound " << rounding_bound(result.mesh));
+    CHECK(std::abs(volume - exact) <= rounding_bound(result.mesh) + 1e-12 * std::abs(exact));
+  }
+}
+
+TEST_CASE("a solid and a shifted copy of it, as shatter-fuzz's overlapping class makes them",
+          "[arrangement][repair]") {
+  for (const Mesh& solid : {test::ellipsoid({0, 0, 0}, {1, 0.7, 0.5}, 12, 8), test::torus(1.0, 0.35, 12, 8)}) {
+    for (const double dx : {0.13, 0.41}) {
+      const Mesh shifted = test::transformed(solid, 1.0, {dx, 0.05, -0.02});
+      const Mesh merged = test::merge({solid, shifted});
+      const Repaired result = repair(merged);
+      INFO(report_text(result.report));
+      REQUIRE(result.valid);
+      // The union holds either solid and is at most both.
+      const double volume = signed_volume(result.mesh), one = signed_volume(solid);
+      CHECK(volume > one);
+      CHECK(volume < 2 * one);
+    }
+  }
+}
+
+TEST_CASE("a hollow solid and its shifted copy: the cavities stay cavities", "[arrangement][repair]") {
+  // shatter-fuzz's overlapping hollow-egg (seed fa6c99b8874c72dc): the copy's
+  // outer shell crosses the original's cavity, and orienting the crossing
+  // shells by their own volume filled both cavities (volume 7.3 for a union of
+  // two 2.1 solids). They face as the input has them; the volume is CGAL's
+  // union of the two hollow solids.
+  const Mesh hollow = test::merge({test::ellipsoid({0, 0, 0}, {1, 0.8, 0.7}, 14, 9),
+                                   test::flipped(test::ellipsoid({0, 0, 0}, {0.6, 0.5, 0.4}, 10, 7))});
+  for (const double dx : {0.3, 0.55}) {
+    const Mesh copy = test::transformed(hollow, 1.0, {dx, 0.07, -0.03});
+    const Mesh merged = test::merge({hollow, copy});
+    EpeckMesh a = exact_mesh(hollow), b = exact_mesh(copy), united;
+    REQUIRE(CGAL::Polygon_mesh_processing::corefine_and_compute_union(a, b, united));
+    const double exact = CGAL::to_double(CGAL::Polygon_mesh_processing::volume(united));
+    const Repaired result = repair(merged);
+    INFO("shift " << dx << ": " << report_text(result.report));
+    REQUIRE(result.valid);
+    REQUIRE(result.report.find(RepairKind::resolved_self_intersections_exactly) != nullptr);
+    const double volume = signed_volume(result.mesh);
+    INFO("volume " << volume << ", union " << exact);
+    CHECK(std::abs(volume - exact) <= rounding_bound(result.mesh) + 1e-12 * std::abs(exact));
+  }
+}
+
+TEST_CASE("the exact step changes nothing where nothing self-intersects", "[arrangement][repair]") {
+  // A valid mesh, and one the earlier steps repair (unwelded, a triangle
+  // reversed): the same bytes with the hook as without.
+  const Mesh sphere = test::ellipsoid({0, 0, 0}, {1, 1, 1}, 10, 7);
+  Mesh flipped = sphere;
+  std::swap(flipped.triangles[3][1], flipped.triangles[3][2]);
+  for (const Mesh& input : {sphere, flipped}) {
+    Mesh with = input, without = input;
+    const RepairReport a = repair_mesh(with, exact_options());
+    const RepairReport b = repair_mesh(without);
+    CHECK(a.summary() == b.summary());
+    CHECK(write_mesh_to_bytes(with, MeshFormat::off) == write_mesh_to_bytes(without, MeshFormat::off));
+    CHECK_FALSE(a.find(RepairKind::resolved_self_intersections_exactly));
+  }
+}
+
+TEST_CASE("the self-intersecting corpus: resolved into valid solids", "[arrangement][repair][corpus]") {
+  std::size_t meshes = 0, valid = 0;
+  for (const auto& path : test::self_intersecting_meshes()) {
+    const Mesh mesh = read_mesh(path);
+    const Repaired result = repair(mesh);
+    INFO(path.filename().string() << ": " << report_text(result.report));
+    CHECK(result.valid);
+    valid += result.valid;
+    ++meshes;
+  }
+  CHECK(meshes >= 3);
+  CHECK(valid == meshes);
+}
