@@ -798,40 +798,16 @@ struct RoundingReach {
     if (!exact[v]) exact[v] = exact_coordinates(set, solid.defs[v]);
     return *exact[v];
   }
-  // The plane's exact coefficients: a cut's doubles, or the input plane
-  // through its three points ((p1 - p0) x (p2 - p0), -n.p0).
-  std::array<mpq_class, 4> coefficients(PlaneRef plane) const {
-    if (plane.is_cut()) {
-      const Plane& c = set.cuts[plane.index()];
-      return {mpq_class(c.normal.x), mpq_class(c.normal.y), mpq_class(c.normal.z), mpq_class(c.offset)};
-    }
-    const auto& ids = set.inputs[plane.index()];
-    std::array<std::array<mpq_class, 3>, 3> p;
-    for (int i = 0; i < 3; ++i) {
-      const Vec3& q = set.points[ids[i]];
-      p[i] = {mpq_class(q.x), mpq_class(q.y), mpq_class(q.z)};
-    }
-    const mpq_class u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-    const mpq_class w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-    std::array<mpq_class, 4> n{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0], 0};
-    n[3] = -(n[0] * p[0][0] + n[1] * p[0][1] + n[2] * p[0][2]);
-    return n;
-  }
+  // The points within reach of `plane` (PlaneReach, exact).
+  PlaneReach near(PlaneRef plane) const { return PlaneReach(set, plane, 2 * rho); }
   // A rounded position within reach of `plane`.
-  bool within(const Vec3& p, PlaneRef plane) const {
-    const std::array<mpq_class, 4> n = coefficients(plane);
-    const mpq_class largest = std::max({mpq_class(abs(n[0])), mpq_class(abs(n[1])), mpq_class(abs(n[2]))});
-    return abs(n[0] * p.x + n[1] * p.y + n[2] * p.z + n[3]) <= 2 * rho * largest;
-  }
+  bool within(const Vec3& p, PlaneRef plane) const { return near(plane).locate(p).within; }
   // Every corner of `loops` within reach of `plane`.
   bool within(const std::vector<std::vector<VertexIndex>>& loops, PlaneRef plane) {
-    const std::array<mpq_class, 4> n = coefficients(plane);
-    const mpq_class largest = std::max({mpq_class(abs(n[0])), mpq_class(abs(n[1])), mpq_class(abs(n[2]))});
-    const mpq_class limit = 2 * rho * largest;
+    const PlaneReach reach = near(plane);
     for (const auto& loop : loops) {
       for (const VertexIndex v : loop) {
-        const auto& x = point(v);
-        if (abs(n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + n[3]) > limit) return false;
+        if (!reach.locate(point(v)).within) return false;
       }
     }
     return true;
@@ -2563,19 +2539,16 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
         // too (groups_one_way). Adds the faces to `split` (kept sorted).
         FoldMerge refined_merge = FoldMerge::pairs;
         const auto widen_to_near_faces = [&](const SolidFace& c, std::vector<std::uint32_t>& split) {
-          const std::array<mpq_class, 4> n = reach->coefficients(c.plane);
-          const mpq_class limit =
-              2 * reach->rho * std::max({mpq_class(abs(n[0])), mpq_class(abs(n[1])), mpq_class(abs(n[2]))});
+          const PlaneReach near = reach->near(c.plane);
+          const Sign inside = c.reversed ? Sign::positive : Sign::negative;
           const std::size_t before = split.size();
           for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
             const SolidFace& face = solid.faces[f];
             if (face.plane == c.plane || !face.convex || face.loop_count != 1) continue;
             if (std::binary_search(split.begin(), split.begin() + static_cast<std::ptrdiff_t>(before), f)) continue;
             for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[face.first_loop])) {
-              const auto& x = reach->point(edge.from);
-              const mpq_class value = n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + n[3];
-              const mpq_class depth = c.reversed ? value : mpq_class(-value);
-              if (sgn(depth) > 0 && depth <= limit) {
+              const PlaneReach::Where where = near.locate(reach->point(edge.from));
+              if (where.side == inside && where.within) {
                 split.push_back(f);
                 break;
               }
@@ -2585,7 +2558,7 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
         };
         // The piece refined along `split_plane` and rounded by every round above;
         // `within`: only if every crossing vertex lies strictly inside the piece and
-        // at most that far from the cap's plane (|n.x + d|, exactly). A refinement
+        // at most that far from the cap's plane (an L1 distance; PlaneReach). A refinement
         // that cannot be made or rounded (a definition found degenerate, a face that
         // cannot be triangulated) leaves the refusal as it was.
         const auto refine = [&](const Plane& split_plane, const mpq_class* within,
@@ -2601,13 +2574,11 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
               return std::nullopt;
             }
             if (within != nullptr) {
-              const mpq_class n[3] = {mpq_class(cut.normal.x), mpq_class(cut.normal.y), mpq_class(cut.normal.z)};
-              const mpq_class d(cut.offset);
+              const PlaneReach near(cut, *within);
+              const Sign inside = cap.reversed ? Sign::positive : Sign::negative;
               for (VertexIndex v = static_cast<VertexIndex>(solid.defs.size()); v < refined.defs.size(); ++v) {
-                const std::array<mpq_class, 3> x = exact_coordinates(refined_set, refined.defs[v]);
-                const mpq_class value = n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + d;
-                const mpq_class depth = cap.reversed ? value : mpq_class(-value);
-                if (sgn(depth) <= 0 || depth > *within) return std::nullopt;
+                const PlaneReach::Where where = near.locate(exact_coordinates(refined_set, refined.defs[v]));
+                if (where.side != inside || !where.within) return std::nullopt;
               }
             }
             if (!check_solid(refined_set, refined).empty()) return std::nullopt;
@@ -2679,7 +2650,7 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
           // cannot repair costs at most two more rounds.
           for (const int times : {2, 1}) {
             if (!unrepresentable[times]) continue;
-            const mpq_class reach_offset = times * reach->rho * largest;
+            const mpq_class within = times * reach->rho;
             bool rounded = false;
             for (int eighths = 9; eighths < 16 && !rounded; ++eighths) {
               const double lambda = eighths / 8.0;
@@ -2687,7 +2658,7 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
               double offset = lambda * cut.offset;
               for (int step = 0; step < 4 && !rounded; ++step) {
                 offset = std::nextafter(offset, cap.reversed ? -HUGE_VAL : HUGE_VAL);
-                if (std::optional<RoundedSolid> written = refine(Plane{normal, offset}, &reach_offset, &rounded)) {
+                if (std::optional<RoundedSolid> written = refine(Plane{normal, offset}, &within, &rounded)) {
                   return std::move(*written);
                 }
               }
