@@ -454,6 +454,33 @@ std::array<mpq_class, 3> exact_coordinates(const PlaneSet& set, const PointDef& 
   return {to_mpq(h.x) / w, to_mpq(h.y) / w, to_mpq(h.z) / w};
 }
 
+std::array<mpq_class, 4> exact_plane_coefficients(const PlaneSet& set, PlaneRef plane) {
+  const P4<Exact> p = plane_coefficients<Exact>(set, plane);
+  return {to_mpq(p.n.x), to_mpq(p.n.y), to_mpq(p.n.z), to_mpq(p.d)};
+}
+
+PlaneReach::PlaneReach(const std::array<mpq_class, 4>& plane, const mpq_class& reach) : plane_(plane) {
+  limit_ = reach * std::max({mpq_class(abs(plane[0])), mpq_class(abs(plane[1])), mpq_class(abs(plane[2]))});
+}
+
+PlaneReach::PlaneReach(const PlaneSet& set, PlaneRef plane, const mpq_class& reach)
+    : PlaneReach(exact_plane_coefficients(set, plane), reach) {}
+
+PlaneReach::PlaneReach(const Plane& plane, const mpq_class& reach)
+    : PlaneReach({mpq_class(plane.normal.x), mpq_class(plane.normal.y), mpq_class(plane.normal.z),
+                  mpq_class(plane.offset)},
+                 reach) {}
+
+PlaneReach::Where PlaneReach::locate(const std::array<mpq_class, 3>& x) const {
+  const mpq_class value = plane_[0] * x[0] + plane_[1] * x[1] + plane_[2] * x[2] + plane_[3];
+  const int s = sgn(value);
+  return {s > 0 ? Sign::positive : s < 0 ? Sign::negative : Sign::zero, abs(value) <= limit_};
+}
+
+PlaneReach::Where PlaneReach::locate(const Vec3& p) const {
+  return locate({mpq_class(p.x), mpq_class(p.y), mpq_class(p.z)});
+}
+
 std::array<mpq_class, 4> exact_homogeneous(const PlaneSet& set, const PointDef& point) {
   const H4<Exact> h = homogeneous<Exact>(set, point);
   return {to_mpq(h.x), to_mpq(h.y), to_mpq(h.z), to_mpq(h.w)};

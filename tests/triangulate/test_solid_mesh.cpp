@@ -642,6 +642,29 @@ TEST_CASE("regression: a wedge split widened to every face by the cap, folds mer
   CHECK(fan.refused == 0);
 }
 
+TEST_CASE("regression: corners rounded onto their own crossings with the cap, thin strips merged (smoke 7 case 28)",
+          "[plane][round][regression]") {
+  // A piece of a near-parallel chain on the hollow egg as written (about 2^-32
+  // of its size thick), cut by the chain's next plane. Two earlier-cap vertices
+  // lie 3e-17 and 5e-17 inside the piece from the new plane: their steep
+  // edges' crossings snap onto them (output_point), so each vertex lands on the
+  // cap's loop and the faces between it and the cap, thin by their corners, lie
+  // on the cap over its own triangles; certification never names them (their
+  // triangles cancel as sheets or overlap where thicker folds also cross), and
+  // the wedge split's widest merge certified only by moving 8.5e-11 against a
+  // bound of 3.6e-14. The strips found from the exact solid (every face reached
+  // from the cap whose corners all lie within rounding's reach of its plane),
+  // merged into the cap on the refined solid with crossings 2e-16 apart snapped
+  // together, certify within the bound.
+  const RoundingTally tally = round_reproducer_pieces(
+      "unroundable-corner-on-its-own-crossings-thin-strips-near-parallel-chain-smoke7-28.repro");
+  CHECK(tally.pieces == 2);
+  CHECK(tally.wedges == 1);
+  CHECK(tally.folded >= 1);
+  CHECK(tally.collapsed == 0);
+  CHECK(tally.refused == 0);
+}
+
 TEST_CASE("round_solid: the widened wedge split certifies cuts ulps over a wedge's tip and along a fan, -4 to 4 ulps",
           "[plane][round][heavy]") {
   // [heavy]: about a minute of CPU (18 cuts; the 7 refused before this repair

@@ -798,43 +798,29 @@ struct RoundingReach {
     if (!exact[v]) exact[v] = exact_coordinates(set, solid.defs[v]);
     return *exact[v];
   }
-  // The plane's exact coefficients: a cut's doubles, or the input plane
-  // through its three points ((p1 - p0) x (p2 - p0), -n.p0).
-  std::array<mpq_class, 4> coefficients(PlaneRef plane) const {
-    if (plane.is_cut()) {
-      const Plane& c = set.cuts[plane.index()];
-      return {mpq_class(c.normal.x), mpq_class(c.normal.y), mpq_class(c.normal.z), mpq_class(c.offset)};
-    }
-    const auto& ids = set.inputs[plane.index()];
-    std::array<std::array<mpq_class, 3>, 3> p;
-    for (int i = 0; i < 3; ++i) {
-      const Vec3& q = set.points[ids[i]];
-      p[i] = {mpq_class(q.x), mpq_class(q.y), mpq_class(q.z)};
-    }
-    const mpq_class u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-    const mpq_class w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-    std::array<mpq_class, 4> n{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0], 0};
-    n[3] = -(n[0] * p[0][0] + n[1] * p[0][1] + n[2] * p[0][2]);
-    return n;
-  }
+  // The points within reach of `plane` (PlaneReach, exact).
+  PlaneReach near(PlaneRef plane) const { return PlaneReach(set, plane, 2 * rho); }
   // A rounded position within reach of `plane`.
-  bool within(const Vec3& p, PlaneRef plane) const {
-    const std::array<mpq_class, 4> n = coefficients(plane);
-    const mpq_class largest = std::max({mpq_class(abs(n[0])), mpq_class(abs(n[1])), mpq_class(abs(n[2]))});
-    return abs(n[0] * p.x + n[1] * p.y + n[2] * p.z + n[3]) <= 2 * rho * largest;
-  }
+  bool within(const Vec3& p, PlaneRef plane) const { return near(plane).locate(p).within; }
   // Every corner of `loops` within reach of `plane`.
   bool within(const std::vector<std::vector<VertexIndex>>& loops, PlaneRef plane) {
-    const std::array<mpq_class, 4> n = coefficients(plane);
-    const mpq_class largest = std::max({mpq_class(abs(n[0])), mpq_class(abs(n[1])), mpq_class(abs(n[2]))});
-    const mpq_class limit = 2 * rho * largest;
+    const PlaneReach reach = near(plane);
     for (const auto& loop : loops) {
       for (const VertexIndex v : loop) {
-        const auto& x = point(v);
-        if (abs(n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + n[3]) > limit) return false;
+        if (!reach.locate(point(v)).within) return false;
       }
     }
     return true;
+  }
+  // Every corner of the solid's face `f` within reach of `plane`.
+  bool within(std::uint32_t f, PlaneRef plane) {
+    const SolidFace& face = solid.faces[f];
+    std::vector<std::vector<VertexIndex>> loops;
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+      std::vector<VertexIndex>& loop = loops.emplace_back();
+      for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) loop.push_back(edge.from);
+    }
+    return within(loops, plane);
   }
 };
 
@@ -2040,6 +2026,128 @@ bool split_faces_along(const PlaneSet& set, const Solid& solid, PlaneRef plane, 
   return true;
 }
 
+// --- Strips thin by their corners --------------------------------------------------
+// After the wedge split, tried only when it has failed too (so that every piece
+// written before is written as before): a corner strictly inside the piece a
+// fraction of an ulp from a cap's plane (an earlier cap's vertex, the new plane
+// through it up to rounding: smoke corpus seed 7 case 28) takes the position of
+// its own crossings with the cap (output_point snaps a crossing within 64 ulps
+// of its segment's end onto it), and the faces between it and the cap, thin by
+// their corners, then lie on the cap over triangles of the cap's own, laid
+// over them or crossing them. The folding rounds merge only the pairs
+// certification names, and it never names these: their triangles cancel as
+// sheets, or cross the cap's only where thicker folds cross it too, which it
+// names first. Such faces are found here from the exact solid instead.
+
+// For each cap (a face on a cut plane), the faces reached from it across shared
+// edges, face by face, whose corners all lie within rounding's reach of the
+// cap's plane (RoundingReach: exactly, in the L1 norm), not on its plane: the
+// strips between the cap and the corners by it, as pairs (cap, face), by cap,
+// then in the order they were reached. The wedge each bounds with the cap is
+// no thicker than the reach, so merging it moves at most the reach times its
+// area, as a fold's merge does.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> strips_thin_by_corners(const Solid& solid, RoundingReach& reach) {
+  const auto count = static_cast<std::uint32_t>(solid.faces.size());
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> faces_of_edge;
+  const auto key = [](VertexIndex a, VertexIndex b) {
+    return (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b);
+  };
+  for (std::uint32_t f = 0; f < count; ++f) {
+    const SolidFace& face = solid.faces[f];
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+      for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+        faces_of_edge[key(edge.from, edge.to)].push_back(f);
+      }
+    }
+  }
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  std::vector<std::uint8_t> visited(count);
+  std::vector<std::uint32_t> reached;
+  for (std::uint32_t c = 0; c < count; ++c) {
+    const SolidFace& cap = solid.faces[c];
+    if (!cap.plane.is_cut()) continue;
+    std::fill(visited.begin(), visited.end(), 0);
+    visited[c] = 1;
+    reached.assign(1, c);
+    for (std::size_t next = 0; next < reached.size(); ++next) {
+      const SolidFace& from = solid.faces[reached[next]];
+      for (std::uint32_t l = from.first_loop; l < from.first_loop + from.loop_count; ++l) {
+        for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+          for (const std::uint32_t g : faces_of_edge[key(edge.from, edge.to)]) {
+            if (visited[g]) continue;
+            visited[g] = 1;
+            if (solid.faces[g].plane == cap.plane || !reach.within(g, cap.plane)) continue;
+            pairs.emplace_back(c, g);
+            reached.push_back(g);
+          }
+        }
+      }
+    }
+  }
+  return pairs;
+}
+
+// Every cap's strips thin by their corners (strips_thin_by_corners) merged into
+// it as folds (merge_folded_faces, thin pairs: each face's group joins the cap's
+// only through faces within reach), with no snapping, then with snap rounding's
+// pixels (snap_levels, as the snapping round: a fold of the thicker faces along
+// an edge shorter than the rounding vanishes into a vertex), each by pairs, then
+// by groups (FoldMerge), over attempts 1 to 3, sheets cancelled; the first mesh
+// certified whose exact volume moved is within the piece's rounding bound
+// (measured_moved_volume). A finite pass: a fixed list of pairs, seven pixels,
+// two modes, three attempts, each one triangulation and certification.
+// `positions`: the output positions of the solid's vertices; `reach` over them.
+std::optional<RoundedSolid> round_merging_thin_strips(const PlaneSet& set, const Solid& solid,
+                                                      const SolidMeshOptions& options,
+                                                      std::span<const Vec3> positions, RoundingReach& reach,
+                                                      std::span<const int> snap_levels) {
+  const std::vector<std::pair<std::uint32_t, std::uint32_t>> strips = strips_thin_by_corners(solid, reach);
+  if (strips.empty()) return std::nullopt;
+  std::vector<VertexIndex> snapped_to, mesh_vertex_of, renumbered;
+  std::vector<std::uint32_t> face_of_triangle, kept;
+  mpq_class pixel;
+  for (std::size_t level = 0; level <= snap_levels.size(); ++level) {
+    const bool snapping = level > 0;
+    std::size_t snapped = 0;
+    if (snapping) {
+      pixel = reach.rho * mpq_class(mpz_class(1) << snap_levels[level - 1]);
+      snap_clusters(solid, positions, pixel, snapped_to);
+      for (VertexIndex v = 0; v < solid.defs.size(); ++v) snapped += snapped_to[v] != v;
+    }
+    for (const FoldMerge mode : {FoldMerge::pairs, FoldMerge::groups}) {
+      for (std::size_t attempt = 1; attempt < 4; ++attempt) {
+        Mesh mesh;
+        std::size_t merged = 0, folded = 0;
+        triangulate(set, solid, options, attempt, mesh, merged, &mesh_vertex_of, true, true, strips, &face_of_triangle,
+                    &folded, true, snapping ? std::span<const VertexIndex>(snapped_to) : std::span<const VertexIndex>(),
+                    snapping ? &pixel : nullptr, false, mode);
+        if (mesh.triangles.empty()) continue;
+        ValidationReport report = certify_rounded(mesh, options);
+        std::size_t gone = 0;
+        if (!report.valid()) {
+          Mesh sheetless = mesh;
+          gone = cancel_two_sided_sheets(sheetless, renumbered, true, &kept);
+          if (gone == 0 || sheetless.triangles.empty()) continue;
+          mesh = std::move(sheetless);
+          if (!certify_rounded(mesh, options).valid()) continue;
+        }
+        RoundedSolid written;
+        if (!report_moved_volume(measured_moved_volume(set, solid, mesh), written)) continue;
+        written.mesh = std::move(mesh);
+        written.valid = true;
+        written.merged_vertices = merged;
+        written.retriangulated_faces = solid.faces.size();
+        written.vanished_triangles = gone;
+        written.folded_faces = folded;
+        written.snapped_vertices = snapped;
+        written.attempt = -1;
+        return written;
+      }
+    }
+  }
+  return std::nullopt;
+}
+
 // round_solid; `collapse_wedges`: also the last repair above (not when rounding a
 // solid it refined); `fold_merge`: how the folding rounds merge (FoldMerge; a
 // refined solid of the widened split takes `groups` or `groups_one_way`).
@@ -2390,148 +2498,169 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
     std::sort(against.begin(), against.end(), [&](const auto& x, const auto& y) {
       return plane_bits(x.first) != plane_bits(y.first) ? plane_bits(x.first) < plane_bits(y.first) : x < y;
     });
-    if (!against.empty() && !reach) {
+    if (!reach) {
       for (VertexIndex v = 0; v < solid.defs.size(); ++v) {
         output_positions.push_back(output_position(set, solid.defs[v], solid.approx[v]));
       }
       reach.emplace(set, solid, output_positions);
     }
-    for (std::size_t i = 0; i < against.size();) {
-      std::size_t j = i;
-      std::vector<std::uint32_t> faces;
-      while (j < against.size() && plane_bits(against[j].first) == plane_bits(against[i].first)) {
-        faces.push_back(against[j++].second);
+    // Two passes: the wedge split as it was, then, when every plane has failed,
+    // the strips thin by their corners merged into the caps
+    // (round_merging_thin_strips), first on the piece itself, then on each
+    // refined solid of the first pass instead of the rounds above.
+    for (const bool strips : {false, true}) {
+      if (strips) {
+        if (std::optional<RoundedSolid> written =
+                round_merging_thin_strips(set, solid, options, output_positions, *reach, snap_levels)) {
+          return std::move(*written);
+        }
       }
-      std::sort(faces.begin(), faces.end());
-      faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
-      const SolidFace& cap = solid.faces[against[i].first];
-      i = j;
-      const Plane& cut = set.cuts[cap.plane.index()];
-      const double largest = std::max({std::fabs(cut.normal.x), std::fabs(cut.normal.y), std::fabs(cut.normal.z)});
-      // When every plane has failed on the faces found folded (corpus cases 364
-      // and 988: the cap passes a fraction of the rounding move over the tip of
-      // a wedge between two earlier caps, or along a fan of an earlier cap
-      // whose corners lie ulps from it, and faces the certification never
-      // reached fold once the first ones merged), the split takes every face
-      // with a corner strictly inside the piece within reach of the cap's plane
-      // (exactly), so that all the strips by the cap are thin by their
-      // corners, and the refined solid is rounded with its folds merged by
-      // groups (FoldMerge::groups), then by groups with faces facing one way
-      // too (groups_one_way). Adds the faces to `split` (kept sorted).
-      FoldMerge refined_merge = FoldMerge::pairs;
-      const auto widen_to_near_faces = [&](const SolidFace& c, std::vector<std::uint32_t>& split) {
-        const std::array<mpq_class, 4> n = reach->coefficients(c.plane);
-        const mpq_class limit =
-            2 * reach->rho * std::max({mpq_class(abs(n[0])), mpq_class(abs(n[1])), mpq_class(abs(n[2]))});
-        const std::size_t before = split.size();
-        for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
-          const SolidFace& face = solid.faces[f];
-          if (face.plane == c.plane || !face.convex || face.loop_count != 1) continue;
-          if (std::binary_search(split.begin(), split.begin() + static_cast<std::ptrdiff_t>(before), f)) continue;
-          for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[face.first_loop])) {
-            const auto& x = reach->point(edge.from);
-            const mpq_class value = n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + n[3];
-            const mpq_class depth = c.reversed ? value : mpq_class(-value);
-            if (sgn(depth) > 0 && depth <= limit) {
-              split.push_back(f);
-              break;
+      for (std::size_t i = 0; i < against.size();) {
+        std::size_t j = i;
+        std::vector<std::uint32_t> faces;
+        while (j < against.size() && plane_bits(against[j].first) == plane_bits(against[i].first)) {
+          faces.push_back(against[j++].second);
+        }
+        std::sort(faces.begin(), faces.end());
+        faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+        const SolidFace& cap = solid.faces[against[i].first];
+        i = j;
+        const Plane& cut = set.cuts[cap.plane.index()];
+        const double largest = std::max({std::fabs(cut.normal.x), std::fabs(cut.normal.y), std::fabs(cut.normal.z)});
+        // When every plane has failed on the faces found folded (corpus cases 364
+        // and 988: the cap passes a fraction of the rounding move over the tip of
+        // a wedge between two earlier caps, or along a fan of an earlier cap
+        // whose corners lie ulps from it, and faces the certification never
+        // reached fold once the first ones merged), the split takes every face
+        // with a corner strictly inside the piece within reach of the cap's plane
+        // (exactly), so that all the strips by the cap are thin by their
+        // corners, and the refined solid is rounded with its folds merged by
+        // groups (FoldMerge::groups), then by groups with faces facing one way
+        // too (groups_one_way). Adds the faces to `split` (kept sorted).
+        FoldMerge refined_merge = FoldMerge::pairs;
+        const auto widen_to_near_faces = [&](const SolidFace& c, std::vector<std::uint32_t>& split) {
+          const PlaneReach near = reach->near(c.plane);
+          const Sign inside = c.reversed ? Sign::positive : Sign::negative;
+          const std::size_t before = split.size();
+          for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+            const SolidFace& face = solid.faces[f];
+            if (face.plane == c.plane || !face.convex || face.loop_count != 1) continue;
+            if (std::binary_search(split.begin(), split.begin() + static_cast<std::ptrdiff_t>(before), f)) continue;
+            for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[face.first_loop])) {
+              const PlaneReach::Where where = near.locate(reach->point(edge.from));
+              if (where.side == inside && where.within) {
+                split.push_back(f);
+                break;
+              }
             }
           }
-        }
-        std::sort(split.begin(), split.end());
-      };
-      // The piece refined along `split_plane` and rounded by every round above;
-      // `within`: only if every crossing vertex lies strictly inside the piece and
-      // at most that far from the cap's plane (|n.x + d|, exactly). A refinement
-      // that cannot be made or rounded (a definition found degenerate, a face that
-      // cannot be triangulated) leaves the refusal as it was.
-      const auto refine = [&](const Plane& split_plane, const mpq_class* within,
-                              bool* rounded = nullptr) -> std::optional<RoundedSolid> {
-        std::vector<Plane> cuts(set.cuts.begin(), set.cuts.end());
-        cuts.push_back(split_plane);
-        const PlaneSet refined_set{set.points, set.inputs, set.input_approx, cuts};
-        Solid refined;
-        RoundedSolid written;
-        try {
-          if (!split_faces_along(refined_set, solid, PlaneRef::cut(static_cast<std::uint32_t>(cuts.size() - 1)), faces,
-                                 refined)) {
+          std::sort(split.begin(), split.end());
+        };
+        // The piece refined along `split_plane` and rounded by every round above;
+        // `within`: only if every crossing vertex lies strictly inside the piece and
+        // at most that far from the cap's plane (an L1 distance; PlaneReach). A refinement
+        // that cannot be made or rounded (a definition found degenerate, a face that
+        // cannot be triangulated) leaves the refusal as it was.
+        const auto refine = [&](const Plane& split_plane, const mpq_class* within,
+                                bool* rounded = nullptr) -> std::optional<RoundedSolid> {
+          std::vector<Plane> cuts(set.cuts.begin(), set.cuts.end());
+          cuts.push_back(split_plane);
+          const PlaneSet refined_set{set.points, set.inputs, set.input_approx, cuts};
+          Solid refined;
+          RoundedSolid written;
+          try {
+            const PlaneRef split_ref = PlaneRef::cut(static_cast<std::uint32_t>(cuts.size() - 1));
+            if (!split_faces_along(refined_set, solid, split_ref, faces, refined)) {
+              return std::nullopt;
+            }
+            if (within != nullptr) {
+              const PlaneReach near(cut, *within);
+              const Sign inside = cap.reversed ? Sign::positive : Sign::negative;
+              for (VertexIndex v = static_cast<VertexIndex>(solid.defs.size()); v < refined.defs.size(); ++v) {
+                const PlaneReach::Where where = near.locate(exact_coordinates(refined_set, refined.defs[v]));
+                if (where.side != inside || !where.within) return std::nullopt;
+              }
+            }
+            if (!check_solid(refined_set, refined).empty()) return std::nullopt;
+            SolidMeshOptions refined_options = options;
+            refined_options.face_attempts = {};
+            if (rounded != nullptr) *rounded = true;
+            if (strips) {
+              std::vector<Vec3> positions;
+              for (VertexIndex v = 0; v < refined.defs.size(); ++v) {
+                positions.push_back(output_position(refined_set, refined.defs[v], refined.approx[v]));
+              }
+              RoundingReach refined_reach(refined_set, refined, positions);
+              std::optional<RoundedSolid> merged = round_merging_thin_strips(
+                  refined_set, refined, refined_options, positions, refined_reach, snap_levels);
+              if (!merged) return std::nullopt;
+              written = std::move(*merged);
+            } else {
+              written = round_solid_rounds(refined_set, refined, refined_options, false, refined_merge);
+            }
+          } catch (const UnsupportedGeometryError&) {
+            return std::nullopt;
+          } catch (const std::domain_error&) {
             return std::nullopt;
           }
-          if (within != nullptr) {
-            const mpq_class n[3] = {mpq_class(cut.normal.x), mpq_class(cut.normal.y), mpq_class(cut.normal.z)};
-            const mpq_class d(cut.offset);
-            for (VertexIndex v = static_cast<VertexIndex>(solid.defs.size()); v < refined.defs.size(); ++v) {
-              const std::array<mpq_class, 3> x = exact_coordinates(refined_set, refined.defs[v]);
-              const mpq_class value = n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + d;
-              const mpq_class depth = cap.reversed ? value : mpq_class(-value);
-              if (sgn(depth) <= 0 || depth > *within) return std::nullopt;
+          if (!written.valid) return std::nullopt;
+          // Held to the piece's own bound, against its exact volume (the refined
+          // solid's, the same point set).
+          if (!report_moved_volume(measured_moved_volume(set, solid, written.mesh), written)) return std::nullopt;
+          written.attempt = -1;
+          written.wedge_faces_split = refined.faces.size() - solid.faces.size();
+          return written;
+        };
+        for (const FoldMerge merge : {FoldMerge::pairs, FoldMerge::groups, FoldMerge::groups_one_way}) {
+          // (The strips' pass merges its own way: the faces widened once are enough.)
+          if (strips && merge == FoldMerge::groups_one_way) break;
+          if (merge == FoldMerge::groups) widen_to_near_faces(cap, faces);
+          refined_merge = merge;
+          std::array<bool, 5> unrepresentable{};
+          for (const int times : {2, 1, 4}) {
+            // The piece lies behind the cap's outward normal: n.x + d < 0 when the cap
+            // faces along +n, so the new plane n.x + d' = 0 with d' = d + h lies in
+            // it; the doubles d' and h are whatever they round to, the plane exact.
+            // The offset is held to the reach exactly (|d' - d| <= times rho max |n_i|),
+            // stepping d' toward d while the rounding of d + h put it beyond: the
+            // strips' corners on the new plane must lie within the thin rounds' reach.
+            const mpq_class reach_offset = times * reach->rho * largest;
+            const double h = reach_offset.get_d();
+            double offset = cap.reversed ? cut.offset - h : cut.offset + h;
+            while (offset != cut.offset && abs(mpq_class(offset) - mpq_class(cut.offset)) > reach_offset) {
+              offset = std::nextafter(offset, cut.offset);
+            }
+            if (!(offset != cut.offset)) {
+              unrepresentable[times] = true;
+              continue;
+            }
+            if (std::optional<RoundedSolid> written = refine(Plane{cut.normal, offset}, nullptr)) {
+              return std::move(*written);
             }
           }
-          if (!check_solid(refined_set, refined).empty()) return std::nullopt;
-          SolidMeshOptions refined_options = options;
-          refined_options.face_attempts = {};
-          if (rounded != nullptr) *rounded = true;
-          written = round_solid_rounds(refined_set, refined, refined_options, false, refined_merge);
-        } catch (const UnsupportedGeometryError&) {
-          return std::nullopt;
-        } catch (const std::domain_error&) {
-          return std::nullopt;
-        }
-        if (!written.valid) return std::nullopt;
-        // Held to the piece's own bound, against its exact volume (the refined
-        // solid's, the same point set).
-        if (!report_moved_volume(measured_moved_volume(set, solid, written.mesh), written)) return std::nullopt;
-        written.attempt = -1;
-        written.wedge_faces_split = refined.faces.size() - solid.faces.size();
-        return written;
-      };
-      for (const FoldMerge merge : {FoldMerge::pairs, FoldMerge::groups, FoldMerge::groups_one_way}) {
-        if (merge == FoldMerge::groups) widen_to_near_faces(cap, faces);
-        refined_merge = merge;
-        std::array<bool, 5> unrepresentable{};
-        for (const int times : {2, 1, 4}) {
-          // The piece lies behind the cap's outward normal: n.x + d < 0 when the cap
-          // faces along +n, so the new plane n.x + d' = 0 with d' = d + h lies in
-          // it; the doubles d' and h are whatever they round to, the plane exact.
-          // The offset is held to the reach exactly (|d' - d| <= times rho max |n_i|),
-          // stepping d' toward d while the rounding of d + h put it beyond: the
-          // strips' corners on the new plane must lie within the thin rounds' reach.
-          const mpq_class reach_offset = times * reach->rho * largest;
-          const double h = reach_offset.get_d();
-          double offset = cap.reversed ? cut.offset - h : cut.offset + h;
-          while (offset != cut.offset && abs(mpq_class(offset) - mpq_class(cut.offset)) > reach_offset) {
-            offset = std::nextafter(offset, cut.offset);
-          }
-          if (!(offset != cut.offset)) {
-            unrepresentable[times] = true;
-            continue;
-          }
-          if (std::optional<RoundedSolid> written = refine(Plane{cut.normal, offset}, nullptr)) {
-            return std::move(*written);
-          }
-        }
-        // No double offset within reach (the cap's offset d is large beside the
-        // rounding of the corners: ulp(d) > times rho max |n_i|, corpus case 908):
-        // the same plane scaled by lambda = 9/8 to 15/8, its coefficients rounded
-        // to doubles and the offset stepped by 1 to 4 ulps into the piece, is tilted
-        // from the cap's by the rounding of lambda n and moved by that of lambda d,
-        // at a finer step than ulp(d). The first such plane whose crossing vertices
-        // all lie strictly inside the piece and within the reach of the cap's plane
-        // (decided exactly: the strips are thin by their corners, as above) is
-        // rounded, once per reach that had no parallel plane, so a piece this
-        // cannot repair costs at most two more rounds.
-        for (const int times : {2, 1}) {
-          if (!unrepresentable[times]) continue;
-          const mpq_class reach_offset = times * reach->rho * largest;
-          bool rounded = false;
-          for (int eighths = 9; eighths < 16 && !rounded; ++eighths) {
-            const double lambda = eighths / 8.0;
-            const Vec3 normal{lambda * cut.normal.x, lambda * cut.normal.y, lambda * cut.normal.z};
-            double offset = lambda * cut.offset;
-            for (int step = 0; step < 4 && !rounded; ++step) {
-              offset = std::nextafter(offset, cap.reversed ? -HUGE_VAL : HUGE_VAL);
-              if (std::optional<RoundedSolid> written = refine(Plane{normal, offset}, &reach_offset, &rounded)) {
-                return std::move(*written);
+          // No double offset within reach (the cap's offset d is large beside the
+          // rounding of the corners: ulp(d) > times rho max |n_i|, corpus case 908):
+          // the same plane scaled by lambda = 9/8 to 15/8, its coefficients rounded
+          // to doubles and the offset stepped by 1 to 4 ulps into the piece, is tilted
+          // from the cap's by the rounding of lambda n and moved by that of lambda d,
+          // at a finer step than ulp(d). The first such plane whose crossing vertices
+          // all lie strictly inside the piece and within the reach of the cap's plane
+          // (decided exactly: the strips are thin by their corners, as above) is
+          // rounded, once per reach that had no parallel plane, so a piece this
+          // cannot repair costs at most two more rounds.
+          for (const int times : {2, 1}) {
+            if (!unrepresentable[times]) continue;
+            const mpq_class within = times * reach->rho;
+            bool rounded = false;
+            for (int eighths = 9; eighths < 16 && !rounded; ++eighths) {
+              const double lambda = eighths / 8.0;
+              const Vec3 normal{lambda * cut.normal.x, lambda * cut.normal.y, lambda * cut.normal.z};
+              double offset = lambda * cut.offset;
+              for (int step = 0; step < 4 && !rounded; ++step) {
+                offset = std::nextafter(offset, cap.reversed ? -HUGE_VAL : HUGE_VAL);
+                if (std::optional<RoundedSolid> written = refine(Plane{normal, offset}, &within, &rounded)) {
+                  return std::move(*written);
+                }
               }
             }
           }

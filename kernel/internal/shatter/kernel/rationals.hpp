@@ -29,6 +29,43 @@ std::array<mpq_class, 3> exact_coordinates(const PlaneSet& set, const PointDef& 
 /// a degenerate definition gives w = 0 instead of throwing.
 std::array<mpq_class, 4> exact_homogeneous(const PlaneSet& set, const PointDef& point);
 
+/// The plane's exact coefficients (n_x, n_y, n_z, d): a cut's four doubles, or
+/// the input plane through its three points, n = (p1 - p0) × (p2 - p0),
+/// d = -n·p0 (implicit.hpp's file comment: the polynomials side() evaluates).
+/// Cost: multi-precision, a few products.
+std::array<mpq_class, 4> exact_plane_coefficients(const PlaneSet& set, PlaneRef plane);
+
+/// The points within L1 distance `reach` of a plane n·x + d = 0, decided exactly.
+/// A point's L1 distance to the plane is |n·x + d| / max |n_i| (the L1 norm's
+/// dual is the largest |n_i|: the plane's nearest point lies along that axis),
+/// so x lies within reach when |n·x + d| <= reach · max |n_i|. Rounding that
+/// moves every vertex by at most rho (L1) can put a point within 2 rho of a
+/// plane on its other side, and a face whose corners all lie within that reach
+/// of a neighbour's plane bounds with it a wedge no thicker than the reach
+/// (round_solid's thin folds, wedge split and strips ask this).
+class PlaneReach {
+ public:
+  /// Preconditions: the normal (n_x, n_y, n_z) is not zero; reach >= 0.
+  PlaneReach(const std::array<mpq_class, 4>& plane, const mpq_class& reach);
+  /// The plane of the set (exact_plane_coefficients).
+  PlaneReach(const PlaneSet& set, PlaneRef plane, const mpq_class& reach);
+  /// An explicit plane of doubles, taken exactly.
+  PlaneReach(const Plane& plane, const mpq_class& reach);
+
+  struct Where {
+    Sign side = Sign::zero;  ///< the exact sign of n·x + d
+    bool within = false;     ///< |n·x + d| <= reach · max |n_i|
+  };
+  /// Where the point lies against the plane and its reach. Exact.
+  Where locate(const std::array<mpq_class, 3>& x) const;
+  /// The same for a point of doubles, on the doubles' exact values.
+  Where locate(const Vec3& p) const;
+
+ private:
+  std::array<mpq_class, 4> plane_;
+  mpq_class limit_;  // reach · max |n_i|
+};
+
 /// Six times the solid's volume, exactly: the divergence theorem over fans of its
 /// faces, on the vertices' exact rational coordinates. Precondition: closed
 /// (check_solid). For tests and audits, and for pieces too thin for doubles,

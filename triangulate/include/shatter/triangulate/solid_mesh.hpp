@@ -259,6 +259,19 @@ struct RoundedSolid {
 /// by groups with faces facing one way merged too when one's corners all lie
 /// within reach of the other's plane (the sliver of space the merge fills is
 /// thinner than the rounding); held to the same certificate and volume bound.
+/// When every plane has failed, the strips thin by their corners: for each cap,
+/// the faces reached from it across shared edges whose corners all lie within
+/// that reach of its plane (decided exactly), found from the exact solid
+/// rather than from what certification names (a corner a fraction of an ulp
+/// inside the piece takes the position of its own crossings with the cap, and
+/// the faces between it and the cap lie on the cap over its own triangles,
+/// cancelled as sheets or crossing them where thicker folds cross too), are
+/// merged into the cap as thin folds (by pairs, then by groups), with no
+/// snapping and then with each pixel of the snapping round, attempts 1 to 3:
+/// first on the piece itself, then on each refined solid of the wedge split
+/// (its planes over the faces found folded, then widened) instead of the rounds
+/// above (`folded_faces`, `wedge_faces_split`); held to the same certificate
+/// and to the original piece's volume bound, measured exactly.
 /// A part thinner than the rounding that rounds flat (its triangles laid over each
 /// other once each way) vanishes into its neighbour (`vanished_triangles`); a piece
 /// that rounds flat whole, or that cannot be certified while its exact volume is
@@ -281,9 +294,12 @@ struct RoundedSolid {
 /// phases of folds, of six pixel sizes and of the pairs apart, and at most nine
 /// refined solids per cap plane (three planes, each with the faces found folded,
 /// then widened, merged two ways), each rounded by that ladder without refining
-/// again; merging by groups passes over a fixed list of pairs again only after a
-/// union, and there are fewer unions than faces:
-/// a finite ladder of steps, each a finite pass); deterministic. Failure: neither
+/// again; then the strips' pass, seven pixels by two ways of merging by three
+/// attempts, on the piece and on the refined solids of the first two face sets
+/// again (at most six per cap plane, and a tilted plane per reach and set);
+/// merging by groups passes over a fixed list of pairs again only after a union,
+/// and there are fewer unions than faces: a finite ladder of steps, each a
+/// finite pass); deterministic. Failure: neither
 /// valid nor collapsed, `defect` names what the first rounding broke.
 RoundedSolid round_solid(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options = {});
 
