@@ -91,8 +91,7 @@ class SolidBuilder {
     for (std::uint32_t h = 0; h < 3 * n; ++h) {
       if (twin[h] == no_index) return fail(ArrangementSolid::Status::crowded_edge);
     }
-    split_crowded_vertices(crowded_vertices, twin);
-    out.vertex_copies = origin_.size() - arrangement_.defs.size();
+    split_fans(crowded_vertices, twin);
 
     // Which way each triangle faces its source's plane (exact).
     std::vector<std::uint8_t> front(n);
@@ -130,22 +129,34 @@ class SolidBuilder {
       }
     }
     for (std::uint32_t g = 0; g < group_count; ++g) out.merged_triangles += size_of[g] > 1 ? size_of[g] : 0;
+    // A face whose boundary passes a vertex twice: where the solid is pinched
+    // there (its fans meet at one point, as where a saddle of one part dips into
+    // another), each fan gets its own copy of the vertex, as where solids touch
+    // along an edge; where the two passes lie in one fan (a hole of the face
+    // touching its outer loop), the loops are split there below.
+    split_fans(pinched_vertices(boundary_of), twin);
+    out.vertex_copies = origin_.size() - arrangement_.defs.size();
     collect_edge_sources(boundary_of);
 
+    // The boundary half-edge of group g that leaves the end of boundary
+    // half-edge h: turn about that vertex through g's triangles (across the
+    // edges `twin` pairs them by) until an edge leaves g. By index alone, so
+    // the loops follow the face's own corners wherever they touch.
+    const auto next_in_group = [&](std::uint32_t h, std::uint32_t g) {
+      std::uint32_t k = 3 * (h / 3) + (h % 3 + 1) % 3;
+      while (group_of[twin[k] / 3] == g) k = 3 * (twin[k] / 3) + (twin[k] % 3 + 1) % 3;
+      return k;
+    };
     Solid& solid = out.solid;
     std::vector<VertexIndex> local(origin_.size(), no_index);
-    std::unordered_map<VertexIndex, std::uint32_t> next_of;  // start vertex -> position in the group's boundary
+    std::unordered_map<std::uint32_t, std::uint32_t> position_of;  // half-edge -> position in the group's boundary
+    std::unordered_map<VertexIndex, std::uint32_t> on_path;        // start vertex -> position in `path`
     std::vector<std::uint8_t> used;
+    std::vector<std::uint32_t> cycle, path;
     for (std::uint32_t g = 0; g < group_count; ++g) {
       const std::vector<std::uint32_t>& edges = boundary_of[g];
-      next_of.clear();
-      for (std::uint32_t e = 0; e < edges.size(); ++e) {
-        if (!next_of.emplace(from(edges[e]), e).second) {
-          out = ArrangementSolid{};
-          out.status = ArrangementSolid::Status::pinched_face;
-          return out;
-        }
-      }
+      position_of.clear();
+      for (std::uint32_t e = 0; e < edges.size(); ++e) position_of.emplace(edges[e], e);
       const std::uint32_t t0 = first_of_group[g];
       const std::uint32_t source = boundary_.source[t0];
       SolidFace face;
@@ -154,19 +165,14 @@ class SolidBuilder {
       face.surface = surfaces_[source];
       face.source = source;
       face.first_loop = static_cast<std::uint32_t>(solid.loops.size());
-      used.assign(edges.size(), 0);
-      for (std::uint32_t e = 0; e < edges.size(); ++e) {
-        if (used[e]) continue;
+      // One loop: the group's boundary half-edges path[first..], in order.
+      const auto add_loop = [&](std::size_t first) -> std::optional<ArrangementSolid::Status> {
+        if (path.size() - first < 3) return ArrangementSolid::Status::pinched_face;
         SolidLoop loop{static_cast<std::uint32_t>(solid.corners.size()), 0};
-        for (std::uint32_t f = e; !used[f]; f = next_of.at(to(edges[f]))) {
-          used[f] = 1;
-          const std::uint32_t h = edges[f];
+        for (std::size_t k = first; k < path.size(); ++k) {
+          const std::uint32_t h = edges[path[k]];
           const std::optional<EdgeLine> line = edge_line(h, twin[h]);
-          if (!line) {
-            out = ArrangementSolid{};
-            out.status = ArrangementSolid::Status::no_edge_line;
-            return out;
-          }
+          if (!line) return ArrangementSolid::Status::no_edge_line;
           const VertexIndex v = from(h);
           if (local[v] == no_index) {
             local[v] = static_cast<VertexIndex>(solid.defs.size());
@@ -178,6 +184,36 @@ class SolidBuilder {
         }
         solid.loops.push_back(loop);
         ++face.loop_count;
+        return std::nullopt;
+      };
+      used.assign(edges.size(), 0);
+      for (std::uint32_t e = 0; e < edges.size(); ++e) {
+        if (used[e]) continue;
+        cycle.clear();
+        std::uint32_t f = e;
+        do {
+          used[f] = 1;
+          cycle.push_back(f);
+          f = position_of.at(next_in_group(edges[f], g));
+        } while (!used[f]);
+        if (f != e) return fail(ArrangementSolid::Status::pinched_face);  // not expected: turning is a permutation
+        // A cycle that passes a vertex twice is cut there into loops that each
+        // pass it once (a face's loops are simple; the same edges bound the
+        // same region).
+        path.clear();
+        on_path.clear();
+        for (const std::uint32_t c : cycle) {
+          const VertexIndex v = from(edges[c]);
+          if (const auto again = on_path.find(v); again != on_path.end()) {
+            const std::size_t first = again->second;
+            for (std::size_t k = first; k < path.size(); ++k) on_path.erase(from(edges[path[k]]));
+            if (const auto failed = add_loop(first)) return fail(*failed);
+            path.resize(first);
+          }
+          on_path.emplace(v, static_cast<std::uint32_t>(path.size()));
+          path.push_back(c);
+        }
+        if (const auto failed = add_loop(0)) return fail(*failed);
       }
       face.convex = convex(solid, face);
       solid.faces.push_back(face);
@@ -191,12 +227,30 @@ class SolidBuilder {
   VertexIndex from(std::uint32_t h) const { return tris_[h / 3][h % 3]; }
   VertexIndex to(std::uint32_t h) const { return tris_[h / 3][(h % 3 + 1) % 3]; }
 
-  // Where solids touch along an edge, each end of it gets one copy per fan of
-  // triangles around it (triangles joined across their edges at the vertex as
-  // `twin` pairs them): the copies are the same point, kept apart by index, as
-  // a cut keeps the two sides of a pinch; round_solid moves them apart when it
-  // writes the solid. The first fan keeps the vertex.
-  void split_crowded_vertices(std::vector<VertexIndex> vertices, const std::vector<std::uint32_t>& twin) {
+  // The vertices (as split) that some group's boundary passes more than once,
+  // ascending.
+  std::vector<VertexIndex> pinched_vertices(const std::vector<std::vector<std::uint32_t>>& boundary_of) const {
+    std::vector<VertexIndex> pinched, starts;
+    for (const std::vector<std::uint32_t>& edges : boundary_of) {
+      starts.clear();
+      for (const std::uint32_t h : edges) starts.push_back(from(h));
+      std::sort(starts.begin(), starts.end());
+      for (std::size_t k = 1; k < starts.size(); ++k) {
+        if (starts[k] == starts[k - 1]) pinched.push_back(starts[k]);
+      }
+    }
+    std::sort(pinched.begin(), pinched.end());
+    pinched.erase(std::unique(pinched.begin(), pinched.end()), pinched.end());
+    return pinched;
+  }
+
+  // Each of `vertices` (ends of edges where solids touch, vertices a face
+  // passes twice) gets one copy per fan of triangles around it (triangles
+  // joined across their edges at the vertex as `twin` pairs them), where it has
+  // more than one: the copies are the same point, kept apart by index, as a cut
+  // keeps the two sides of a pinch; round_solid moves them apart when it writes
+  // the solid. The first fan keeps the vertex.
+  void split_fans(std::vector<VertexIndex> vertices, const std::vector<std::uint32_t>& twin) {
     if (vertices.empty()) return;
     std::sort(vertices.begin(), vertices.end());
     vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());

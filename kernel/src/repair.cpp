@@ -1316,7 +1316,7 @@ void resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const Rep
       not_done("the solid it winds around touches itself along an edge whose faces cannot be paired into wedges");
       return;
     case ArrangementSolid::Status::pinched_face:
-      not_done("a face of the solid it winds around touches itself at a vertex");
+      not_done("a face of the solid it winds around does not close into simple loops");
       return;
     case ArrangementSolid::Status::no_edge_line: not_done("an edge of the result lies on no known line"); return;
   }

@@ -279,6 +279,82 @@ TEST_CASE("a hollow solid and its shifted copy: the cavities stay cavities", "[a
   }
 }
 
+// A prism of `height` over the convex polygon `base` (counter-clockwise seen
+// from +z) from z = z0, outward.
+Mesh prism_z(const std::vector<Vec2>& base, double z0, double height) {
+  const auto n = static_cast<VertexIndex>(base.size());
+  std::vector<Vec3> positions;
+  for (const double z : {z0, z0 + height}) {
+    for (const Vec2& p : base) positions.push_back({p.x, p.y, z});
+  }
+  std::vector<Triangle> triangles;
+  for (VertexIndex k = 1; k + 1 < n; ++k) {
+    triangles.push_back({0, k + 1, k});
+    triangles.push_back({n, n + k, n + k + 1});
+  }
+  for (VertexIndex k = 0; k < n; ++k) {
+    const VertexIndex next = (k + 1) % n;
+    triangles.push_back({k, next, n + next});
+    triangles.push_back({k, n + next, n + k});
+  }
+  return test::mesh_from(std::move(positions), std::move(triangles));
+}
+
+TEST_CASE("a face of the union that touches itself at a vertex: its loops split there", "[arrangement][repair]") {
+  // A diamond prism standing through the top of a box, one corner of the
+  // diamond on the box's top edge: the top face's triangle keeps a region
+  // whose boundary passes that corner twice (the diamond's hole touches the
+  // edge), in one fan of the solid. Union: 512 + 16 - 8.
+  const Mesh box = test::box({0, 0, 0}, {8, 8, 8});
+  const Mesh diamond = prism_z({{4, 0}, {5, 1}, {4, 2}, {3, 1}}, 4, 8);
+  const Mesh merged = test::merge({box, diamond});
+  const Resolved resolved = resolve(merged);
+  REQUIRE(resolved.made.status == ArrangementSolid::Status::ok);
+  CHECK(resolved.exact_six_volume == 6 * 520);
+  CHECK(resolved.made.vertex_copies == 0);
+  bool touching_loops = false;
+  for (const SolidFace& face : resolved.made.solid.faces) touching_loops |= face.loop_count > 1;
+  CHECK(touching_loops);
+
+  const Repaired result = repair(merged);
+  INFO(report_text(result.report));
+  REQUIRE(result.valid);
+  REQUIRE(result.report.find(RepairKind::resolved_self_intersections_exactly) != nullptr);
+  CHECK(six_volume(result.mesh) == 6 * 520);
+}
+
+TEST_CASE("a union pinched at a vertex inside a face: one vertex copy per fan", "[arrangement][repair]") {
+  // A block whose bottom is a saddle with its vertex v = (5, 2, 0) on the top
+  // of a box: the saddle dips into the box over two opposite quadrants around
+  // v and rises over the other two, so the top triangle keeps two wedges at v,
+  // each closed by the saddle above it into a fan of its own (the outside
+  // between them is pinched at v). Block: 2 x 2 x 2 less the saddle's zero
+  // mean, 8; in the box, 4 x (1.5 / 6): 1. Union: 512 + 8 - 1.
+  const Mesh box = test::box({0, 0, -8}, {8, 8, 0});
+  const double d = 1.5, top = 2;
+  const Mesh block = test::mesh_from(
+      {{5, 2, 0}, {6, 3, -d}, {4, 3, d}, {4, 1, -d}, {6, 1, d}, {6, 3, top}, {4, 3, top}, {4, 1, top}, {6, 1, top}},
+      {{0, 2, 1}, {0, 3, 2}, {0, 4, 3}, {0, 1, 4},                          // the saddle, facing down
+       {5, 6, 7}, {5, 7, 8},                                                // top
+       {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 4, 8}, {3, 8, 7},  // walls
+       {4, 1, 5}, {4, 5, 8}});
+  REQUIRE(validate_mesh(block).valid());
+  REQUIRE(six_volume(block) == 6 * 8);
+  const Mesh merged = test::merge({box, block});
+  const Resolved resolved = resolve(merged);
+  REQUIRE(resolved.made.status == ArrangementSolid::Status::ok);
+  CHECK(resolved.exact_six_volume == 6 * 519);
+  CHECK(resolved.made.vertex_copies == 1);
+
+  const Repaired result = repair(merged);
+  INFO(report_text(result.report));
+  REQUIRE(result.valid);
+  REQUIRE(result.report.find(RepairKind::resolved_self_intersections_exactly) != nullptr);
+  // The copies moved apart, a hair of the edges at v.
+  const double volume = mpq_class(six_volume(result.mesh) / 6).get_d();
+  CHECK(std::abs(volume - 519) <= 1e-9 * 519);
+}
+
 TEST_CASE("the exact step changes nothing where nothing self-intersects", "[arrangement][repair]") {
   // A valid mesh, and one the earlier steps repair (unwelded, a triangle
   // reversed): the same bytes with the hook as without.

@@ -169,9 +169,10 @@ struct ArrangementSolid {
     /// it) that cannot be paired into wedges: two tie in angle around it, or they
     /// do not alternate in direction. No solid.
     crowded_edge,
-    /// The pieces of one source triangle kept on one side form a region whose
-    /// boundary passes a vertex twice (a hole touching its outer loop, or two
-    /// holes touching): a face's loops must be simple. No solid.
+    /// A face's boundary, turned about its vertices through its own triangles,
+    /// does not close into loops of at least 3 corners each (not expected of
+    /// an arrangement: a boundary passing a vertex twice is split into simple
+    /// loops there). No solid.
     pinched_face,
     /// An edge lies on no input segment and on no plane but its faces' own (not
     /// expected of an arrangement). No solid.
@@ -179,11 +180,12 @@ struct ArrangementSolid {
   };
   Status status = Status::ok;
   /// Over arrangement.plane_set(): vertices the boundary uses (and copies of those
-  /// on edges where solids touch), in first use;
+  /// on edges where solids touch and where the solid is pinched at a vertex a
+  /// face passes twice), in first use;
   /// faces in the order of their first triangle in the boundary.
   Solid solid;
   std::size_t merged_triangles = 0;  ///< boundary triangles merged into faces of more than one triangle
-  std::size_t vertex_copies = 0;     ///< copies made at the ends of edges where solids touch
+  std::size_t vertex_copies = 0;     ///< copies made where solids touch (edge ends, pinched vertices)
 };
 
 /// The boundary's triangles as the kernel's Solid, stage 3 of resolving
@@ -202,7 +204,14 @@ struct ArrangementSolid {
 /// are paired in exact angular order into the k wedges of the solid and each end
 /// of the edge gets one vertex per fan of triangles around it: copies of one
 /// point, apart by index (round_solid moves them apart when it writes the solid,
-/// as at a pinch).
+/// as at a pinch). A face whose boundary passes a vertex twice is kept: where
+/// the solid is pinched there (its triangles around the vertex form several
+/// fans, e.g. a saddle of one part dipping into another's face), each fan gets
+/// its own copy of the vertex, as at an edge where solids touch; where the
+/// passes lie in one fan (a hole of the face touching its outer loop or another
+/// hole), the boundary is cut there into loops that each pass it once. A face's
+/// loops follow its triangles around each vertex (by index), so they are simple
+/// and may touch one another only at a vertex.
 /// Guarantees when status is ok: check_solid(arrangement.plane_set(), solid) is
 /// empty, and the solid bounds what the boundary's triangles bound (the same
 /// region; its exact volume is theirs). Deterministic.

@@ -200,8 +200,8 @@ struct RepairReport {
 ///     returns a valid mesh (which replaces the whole mesh: vertices renumbered,
 ///     attributes interpolated from each face's source triangle); else the mesh
 ///     stays as steps 1-10 left it and a note says why (an open surface, faces
-///     around an edge that cannot be paired into wedges, a face whose kept part
-///     touches itself at a vertex, a rounding that failed). Before it, every
+///     around an edge that cannot be paired into wedges, a rounding that
+///     failed). Before it, every
 ///     shell that crosses another faces as the input held it where the input
 ///     held all its triangles one way round, else out of its own volume (steps
 ///     3 and 7 orient by nesting, which crossing shells do not have). The change
