@@ -324,8 +324,15 @@ std::uint32_t spread_bits(std::uint32_t v) {
 }
 
 // The bits of each cell coordinate a triangle's Morton key keeps (its top ones):
-// 2^18 keys, a counting sort's table of 1 MiB.
-constexpr int key_bits_per_axis = 6;
+// at most 2^18 keys, a counting sort's table of 1 MiB. A mesh of n triangles
+// keeps about n keys (a table no larger than the mesh): the table is cleared and
+// scanned on every call, and the many small meshes certification checks (a cut
+// piece, a cap's neighbourhood) paid for 2^18 keys each.
+constexpr int max_key_bits_per_axis = 6;
+
+int key_bits_per_axis_for(std::size_t triangle_count) {
+  return std::clamp((static_cast<int>(std::bit_width(triangle_count)) + 2) / 3, 1, max_key_bits_per_axis);
+}
 
 // A bucket's triangles, copied out for its pair search: their float boxes and
 // low cells side by side (structure of arrays, so the box test of one against
@@ -426,6 +433,7 @@ std::vector<TrianglePair> detail::self_intersecting_pairs_in_blocks(std::span<co
   // stable counting sort): triangles near each other in space come near each
   // other in the arrays below, and the buckets are searched in that order.
   // Only the speed depends on the order: pairs are reported by triangle index.
+  const int key_bits_per_axis = key_bits_per_axis_for(count);
   int shift = 0;
   for (int axis = 0; axis < 3; ++axis) {
     const std::uint32_t top = grid.cell_of(round_up(all.highest[axis]), axis);
