@@ -1,6 +1,7 @@
 #include "shatter/meshtree/packed_shapes.hpp"
 
 #include <cstring>
+#include <utility>
 
 namespace shatter {
 
@@ -27,6 +28,20 @@ std::span<const std::uint8_t> ByteBlocks::append(std::span<const std::uint8_t> b
   free_ += bytes.size();
   room_ -= bytes.size();
   return {at, bytes.size()};
+}
+
+void ByteBlocks::splice(ByteBlocks&& other) {
+  if (this == &other || other.blocks_.empty()) return;
+  if (blocks_.empty()) {
+    *this = std::move(other);  // its open block stays open
+    return;
+  }
+  blocks_.reserve(blocks_.size() + other.blocks_.size());  // the only throw, before anything moves
+  for (auto& block : other.blocks_) blocks_.push_back(std::move(block));
+  capacity_ += std::exchange(other.capacity_, 0);
+  other.blocks_.clear();
+  other.free_ = nullptr;
+  other.room_ = 0;
 }
 
 ByteBlocks& ByteBlocks::operator=(ByteBlocks&& other) noexcept {

@@ -24,12 +24,15 @@ struct TreeCertifier {
   /// their text rules on every call). Four lanes of word-wise multiply-rotate
   /// chains (word k in lane k mod 4), each step a bijection of the lane for a
   /// fixed word and of the word for a fixed lane, folded into two outputs by
-  /// bijections of each lane: a change confined to one 64-bit word always changes the
-  /// digest, and any other change leaves it equal with probability about
-  /// 2^-128 (a guard against accidents, not against a forger in the process,
-  /// who could write the file's bytes directly anyway).
+  /// bijections of each lane; the nodes, the bonds and the packed nodes are
+  /// hashed in runs of a fixed length, each run by a chain of its own, whose
+  /// final state goes into the main chain as five words. A change confined to
+  /// one 64-bit word always changes the digest, and any other change leaves it
+  /// equal with probability about 2^-128 (a guard against accidents, not
+  /// against a forger in the process, who could write the file's bytes
+  /// directly anyway). The value does not depend on the threads.
   /// Cost: one pass over the tree's memory (a packed node's bytes, not
-  /// unpacked). Never throws.
+  /// unpacked), the runs in parallel on the caller's task arena. Never throws.
   static std::array<std::uint64_t, 2> digest(const MeshTree& tree);
 
   /// Certifies `tree` as it is now. Precondition: validate_tree(tree) passes

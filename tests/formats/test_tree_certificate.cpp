@@ -8,6 +8,7 @@
 // full check; the reader and validate_tree never consult it.
 
 #include <catch2/catch.hpp>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <cstdint>
@@ -179,6 +180,62 @@ TEST_CASE("a change to any field validate_tree reads makes the certificate stop 
   CHECK(certificate_holds(tree));
   tree.shatter_version = "not valid";
   CHECK_THROWS_WITH(encode_shatter(tree), Catch::Contains("shatter_version"));
+}
+
+TEST_CASE("the digest hashes nodes, bonds and packed nodes in runs: any run's change is seen, on any threads", "[certificate]") {
+  // Large enough for several runs of each (256 nodes, 4,096 bonds, 256 packed
+  // nodes a run): the trees above fit in one.
+  for (const bool lean : {false, true}) {
+    TreeRecipe recipe;
+    recipe.fragments = 700;
+    recipe.seed = 5;
+    MeshTree built = build_mesh_tree(test::unit_cube(), recipe, {.threads = 2, .lean = lean});
+    if (!lean) pack_leaves(built);  // packed leaves, as `shatter fracture` writes
+    INFO((lean ? "lean" : "packed leaves") << ", " << built.nodes.size() << " nodes, " << built.bond_count() << " bonds");
+    REQUIRE(built.nodes.size() > 4 * 256);
+    REQUIRE(built.bond_count() > 4096);
+    REQUIRE(built.packed_shapes.size() == built.nodes.size());
+    // The same verdict from an arena of one thread and of four.
+    const auto holds_on = [](const MeshTree& tree, int threads) {
+      return tbb::task_arena(threads).execute([&] { return certificate_holds(tree); });
+    };
+    CHECK(holds_on(built, 1));
+    CHECK(holds_on(built, 4));
+    // Item `which` (0: in the first run, 1: a middle one, 2: the last) of n.
+    const auto item = [](int which, std::size_t n) { return which == 0 ? std::size_t{3} : which == 1 ? n / 2 + 1 : n - 1; };
+    using Change = std::function<void(MeshTree&, int which)>;
+    const std::vector<std::pair<std::string, Change>> changes = {
+        {"node seed", [&](MeshTree& t, int which) { t.nodes[item(which, t.nodes.size())].seed ^= 1; }},
+        {"two nodes' seeds swapped across runs",
+         [&](MeshTree& t, int which) { std::swap(t.nodes[which].seed, t.nodes[item(which, t.nodes.size())].seed); }},
+        {"packed node byte",
+         [&](MeshTree& t, int which) {
+           // The first packed entry from there (pack_leaves packs leaves only;
+           // the last node in preorder is a leaf).
+           std::size_t k = item(which, t.packed_shapes.size());
+           while (t.packed_shapes[k].empty()) ++k;
+           std::vector<std::uint8_t> bytes(t.packed_shapes[k].begin(), t.packed_shapes[k].end());
+           REQUIRE_FALSE(bytes.empty());
+           bytes.back() ^= 1;
+           t.packed_shapes.assign(k, bytes);
+         }},
+        {"bond area",
+         [&](MeshTree& t, int which) {
+           double& area = t.packed_bonds.empty() ? t.bonds[item(which, t.bonds.size())].area
+                                                 : t.packed_bonds[item(which, t.packed_bonds.size())].area;
+           area = -area;
+         }},
+    };
+    for (const auto& [name, change] : changes) {
+      for (const int which : {0, 1, 2}) {
+        INFO(name << ", place " << which);
+        MeshTree tree = built;
+        change(tree, which);
+        CHECK_FALSE(holds_on(tree, 1));
+        CHECK_FALSE(holds_on(tree, 4));
+      }
+    }
+  }
 }
 
 TEST_CASE("the writer refuses a tree whose leaf was corrupted after the build, certificate or not", "[certificate]") {

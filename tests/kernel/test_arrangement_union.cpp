@@ -31,6 +31,7 @@
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/validate.hpp"
+#include "support/lattice_boxes.hpp"
 #include "support/sanitizers.hpp"
 #include "support/turned.hpp"
 
@@ -148,17 +149,9 @@ TEST_CASE("unions of lattice boxes: closed, oriented, the voxels' volume", "[arr
     std::vector<Mesh> boxes;
     std::set<std::array<int, 3>> voxels;
     for (int b = 0; b < count; ++b) {
-      std::array<int, 3> lo{}, hi{};
-      for (int c = 0; c < 3; ++c) {
-        lo[c] = static_cast<int>(random.index(4));
-        hi[c] = lo[c] + 1 + static_cast<int>(random.index(static_cast<std::size_t>(4 - lo[c])));
-      }
-      const Vec3 l{double(lo[0]), double(lo[1]), double(lo[2])}, h{double(hi[0]), double(hi[1]), double(hi[2])};
-      boxes.push_back(test::grid_box(l, h, 1 + static_cast<int>(random.index(2))));
-      if (random.index(6) == 0) boxes.push_back(test::box(l, h));  // the same box again
-      for (int x = lo[0]; x < hi[0]; ++x)
-        for (int y = lo[1]; y < hi[1]; ++y)
-          for (int z = lo[2]; z < hi[2]; ++z) voxels.insert({x, y, z});
+      test::LatticeBox drawn = test::random_lattice_box(random, voxels);
+      boxes.push_back(std::move(drawn.mesh));
+      if (random.index(6) == 0) boxes.push_back(test::box(drawn.lo, drawn.hi));  // the same box again
     }
     const Checked checked = check_union("lattice boxes #" + std::to_string(seed), test::merge(boxes));
     INFO("lattice boxes #" << seed);

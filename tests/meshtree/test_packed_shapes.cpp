@@ -71,6 +71,33 @@ TEST_CASE("byte blocks keep every string appended, moved or not", "[packed_shape
   }
 }
 
+TEST_CASE("spliced byte blocks keep every string of both, appending on", "[packed_shapes][property]") {
+  // As a lean build joins its threads' blocks (Builder::take_packed_bytes).
+  for (std::uint64_t seed = 1; seed <= test::sized(12, 4); ++seed) {
+    INFO("seed " << seed);
+    Random random(seed);
+    const auto strings = random_strings(random, 900);
+    ByteBlocks parts[3];
+    std::vector<std::span<const std::uint8_t>> copies;
+    for (const auto& s : strings) copies.push_back(parts[random.index(3)].append(s));
+    ByteBlocks all;
+    std::size_t capacity = 0;
+    for (ByteBlocks& part : parts) {
+      capacity += part.capacity();
+      all.splice(std::move(part));
+      CHECK(part.capacity() == 0);
+    }
+    CHECK(all.capacity() == capacity);
+    all.splice(std::move(parts[0]));  // empty: nothing changes
+    CHECK(all.capacity() == capacity);
+    // Appending on, to the joined blocks and to an emptied part, overwrites nothing.
+    const std::size_t i = random.index(strings.size());
+    CHECK(equal(all.append(strings[i]), strings[i]));
+    CHECK(equal(parts[1].append(strings[i]), strings[i]));
+    for (std::size_t k = 0; k < strings.size(); ++k) CHECK(equal(copies[k], strings[k]));
+  }
+}
+
 TEST_CASE("packed shapes are entries in blocks, copied with their bytes", "[packed_shapes][property]") {
   for (std::uint64_t seed = 1; seed <= test::sized(12, 4); ++seed) {
     INFO("seed " << seed);

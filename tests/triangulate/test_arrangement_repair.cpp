@@ -34,6 +34,7 @@
 #include "shatter/kernel/repair.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
+#include "support/lattice_boxes.hpp"
 #include "support/sanitizers.hpp"
 #include "support/turned.hpp"
 
@@ -147,18 +148,7 @@ TEST_CASE("unions of lattice boxes: a sound Solid of the voxels' volume, repaire
     const int count = 2 + static_cast<int>(random.index(3));
     std::vector<Mesh> boxes;
     std::set<std::array<int, 3>> voxels;
-    for (int b = 0; b < count; ++b) {
-      std::array<int, 3> lo{}, hi{};
-      for (int c = 0; c < 3; ++c) {
-        lo[c] = static_cast<int>(random.index(4));
-        hi[c] = lo[c] + 1 + static_cast<int>(random.index(static_cast<std::size_t>(4 - lo[c])));
-      }
-      const Vec3 l{double(lo[0]), double(lo[1]), double(lo[2])}, h{double(hi[0]), double(hi[1]), double(hi[2])};
-      boxes.push_back(test::grid_box(l, h, 1 + static_cast<int>(random.index(2))));
-      for (int x = lo[0]; x < hi[0]; ++x)
-        for (int y = lo[1]; y < hi[1]; ++y)
-          for (int z = lo[2]; z < hi[2]; ++z) voxels.insert({x, y, z});
-    }
+    for (int b = 0; b < count; ++b) boxes.push_back(test::random_lattice_box(random, voxels).mesh);
     const Mesh merged = test::merge(boxes);
     INFO("lattice boxes #" << seed);
     const mpq_class expected(6 * static_cast<long>(voxels.size()));

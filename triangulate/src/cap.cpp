@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <deque>
 #include <optional>
+#include <type_traits>
 
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/index_map.hpp"
@@ -235,6 +236,56 @@ std::vector<VertexIndex> distinct_vertices(std::span<const Edge> border) {
   return vertices;
 }
 
+// Exact points triangulated through their double approximations: the
+// triangulation of the doubles is taken when it certifies for the exact points,
+// and the exact triangulation is built only when it does not. Exact incircle
+// tests are what make the exact triangulation slow: a cap's corners lie close to
+// a conic (a plane section of a smooth surface), so the filter fails on many
+// quadruples; the certificate needs only orientations and distinctness, which
+// the filter decides almost always.
+//
+// Certificate: every triangle strictly counter-clockwise for the exact points,
+// no two vertices at one exact point, and the triangles' boundary is the border
+// (cap_boundary_is_border). The triangles then form a chain with that boundary,
+// so the number of triangles covering a point not on an edge is the border's
+// winding number around it; the exact triangulation accepts a border only
+// where that number is 0 or 1, and there the triangles cover the region once
+// and meet only along edges, so both are triangulations of the same polygon.
+// Where the two differ at all, they differ by diagonals of near-cocircular
+// corners, where rounding decided the Delaunay choice.
+std::optional<std::vector<Triangle>> triangulate_exact_points(std::span<const Edge> border,
+                                                              const std::vector<VertexIndex>& vertices,
+                                                              const std::vector<ExactKernel::Point_2>& points) {
+  std::vector<CGAL::Epick::Point_2> approximate;
+  approximate.reserve(points.size());
+  for (const auto& p : points) approximate.emplace_back(CGAL::to_double(p.x()), CGAL::to_double(p.y()));
+  if (auto candidate = triangulate_with_cdt<CGAL::Epick>(border, vertices, approximate)) {
+    bool certified = cap_boundary_is_border(*candidate, border);
+    if (certified) {
+      IndexMap slot_of_vertex(vertices.size());
+      for (std::uint32_t i = 0; i < vertices.size(); ++i) slot_of_vertex.insert(vertices[i], i);
+      for (const Triangle& t : *candidate) {
+        if (orientation_2d(points[slot_of_vertex.find(t[0])], points[slot_of_vertex.find(t[1])],
+                           points[slot_of_vertex.find(t[2])]) != Sign::positive) {
+          certified = false;
+          break;
+        }
+      }
+    }
+    if (certified) {
+      std::vector<std::uint32_t> order(points.size());
+      for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+      std::sort(order.begin(), order.end(),
+                [&](std::uint32_t a, std::uint32_t b) { return CGAL::compare_xy(points[a], points[b]) == CGAL::SMALLER; });
+      for (std::size_t i = 1; i < order.size() && certified; ++i) {
+        certified = CGAL::compare_xy(points[order[i - 1]], points[order[i]]) != CGAL::EQUAL;
+      }
+    }
+    if (certified) return candidate;
+  }
+  return triangulate_with_cdt<ExactKernel>(border, vertices, points);
+}
+
 template <class Point2, class Project>
 std::vector<Point2> project_all(const std::vector<VertexIndex>& vertices, Project&& project) {
   std::vector<Point2> points;
@@ -259,7 +310,12 @@ std::optional<Cap<Point>> fan_or_cdt(std::span<const Edge> border,
     }
   }
   const std::vector<VertexIndex> vertices = distinct_vertices(border);
-  auto triangles = triangulate_with_cdt<K>(border, vertices, project_all<Point2>(vertices, project));
+  std::optional<std::vector<Triangle>> triangles;
+  if constexpr (std::is_same_v<K, ExactKernel>) {
+    triangles = triangulate_exact_points(border, vertices, project_all<Point2>(vertices, project));
+  } else {
+    triangles = triangulate_with_cdt<K>(border, vertices, project_all<Point2>(vertices, project));
+  }
   if (!triangles || !cap_boundary_is_border(*triangles, border)) return std::nullopt;
   cap.triangles = std::move(*triangles);
   cap.method = CapMethod::cdt;
@@ -307,7 +363,7 @@ Cap<Vec3> triangulate_cap(std::span<const Vec3> positions, std::span<const Edge>
   }
   if (exact_position) {
     const std::vector<VertexIndex> vertices = distinct_vertices(border);
-    auto triangles = triangulate_with_cdt<ExactKernel>(
+    auto triangles = triangulate_exact_points(
         border, vertices, project_all<ExactKernel::Point_2>(vertices, [&](VertexIndex v) {
           return projection(exact_position(v));
         }));

@@ -1642,14 +1642,38 @@ struct MovedVolume {
   mpq_class change = 0, bound = 0;
 };
 
-MovedVolume measured_moved_volume(const PlaneSet& set, const Solid& solid, const Mesh& mesh) {
+// The piece's exact six-fold volume and its rounding bounds (rounding_sweep_bound,
+// per fan and for any triangulation), each computed at its first need and kept:
+// they depend on the piece alone, while the rounds measure mesh after mesh
+// against them (diplodocus.off's repair: the whole piece's exact volume, again
+// at every attempt, was an eighth of its time). `set` and `solid` must outlive it.
+class PieceVolumes {
+ public:
+  PieceVolumes(const PlaneSet& set, const Solid& solid) : set_(set), solid_(solid) {}
+  const mpq_class& six() {
+    if (!six_) six_ = exact_six_volume(set_, solid_);
+    return *six_;
+  }
+  const mpq_class& sweep(bool any_triangulation) {
+    std::optional<mpq_class>& kept = any_triangulation ? sweep_any_ : sweep_fan_;
+    if (!kept) kept = rounding_sweep_bound(set_, solid_, any_triangulation);
+    return *kept;
+  }
+
+ private:
+  const PlaneSet& set_;
+  const Solid& solid_;
+  std::optional<mpq_class> six_, sweep_fan_, sweep_any_;
+};
+
+MovedVolume measured_moved_volume(PieceVolumes& piece, const Mesh& mesh) {
   mpq_class mesh_six = 0;
   for (const Triangle& t : mesh.triangles) {
     const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
     const mpq_class ax(a.x), ay(a.y), az(a.z), bx(b.x), by(b.y), bz(b.z), cx(c.x), cy(c.y), cz(c.z);
     mesh_six += ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx);
   }
-  return {abs(mesh_six - exact_six_volume(set, solid)) / 6, rounding_sweep_bound(set, solid, /*any_triangulation=*/true)};
+  return {abs(mesh_six - piece.six()) / 6, piece.sweep(/*any_triangulation=*/true)};
 }
 
 // Reports `moved` in `result` (as doubles, each rounded toward zero, so the
@@ -2096,11 +2120,12 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> strips_thin_by_corners(cons
 // certified whose exact volume moved is within the piece's rounding bound
 // (measured_moved_volume). A finite pass: a fixed list of pairs, seven pixels,
 // two modes, three attempts, each one triangulation and certification.
-// `positions`: the output positions of the solid's vertices; `reach` over them.
+// `positions`: the output positions of the solid's vertices; `reach` over them;
+// `piece` the solid's volumes.
 std::optional<RoundedSolid> round_merging_thin_strips(const PlaneSet& set, const Solid& solid,
                                                       const SolidMeshOptions& options,
                                                       std::span<const Vec3> positions, RoundingReach& reach,
-                                                      std::span<const int> snap_levels) {
+                                                      std::span<const int> snap_levels, PieceVolumes& piece) {
   const std::vector<std::pair<std::uint32_t, std::uint32_t>> strips = strips_thin_by_corners(solid, reach);
   if (strips.empty()) return std::nullopt;
   std::vector<VertexIndex> snapped_to, mesh_vertex_of, renumbered;
@@ -2132,7 +2157,7 @@ std::optional<RoundedSolid> round_merging_thin_strips(const PlaneSet& set, const
           if (!certify_rounded(mesh, options).valid()) continue;
         }
         RoundedSolid written;
-        if (!report_moved_volume(measured_moved_volume(set, solid, mesh), written)) continue;
+        if (!report_moved_volume(measured_moved_volume(piece, mesh), written)) continue;
         written.mesh = std::move(mesh);
         written.valid = true;
         written.merged_vertices = merged;
@@ -2157,6 +2182,7 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
     throw std::invalid_argument("round_solid: face_attempts must hold one attempt per face");
   }
   RoundedSolid result;
+  PieceVolumes piece(set, solid);
   ValidationReport first_report;
   bool flattened_whole = false;    // every triangle was in a two-sided sheet
   std::size_t sheets_cancelled = 0;  // triangles of two-sided sheets removed at this attempt
@@ -2237,7 +2263,7 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
   // move (rounding_sweep_bound): then it may vanish whole (see below).
   std::optional<bool> thin_whole;
   const auto within_its_rounding = [&] {
-    if (!thin_whole) thin_whole = exact_six_volume(set, solid) <= 6 * rounding_sweep_bound(set, solid);
+    if (!thin_whole) thin_whole = piece.six() <= 6 * piece.sweep(false);
     return *thin_whole;
   };
   for (std::size_t step = 0; step < all_steps; ++step) {
@@ -2383,7 +2409,7 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
       // move, or the mesh is not taken (fuzz_slice corpus: cube-off-cap-routed-
       // through-vertex.bin, taken at the first round beyond the bound it reported).
       const bool within = !(sheets_cancelled > 0 || folding || snapping) ||
-                          report_moved_volume(measured_moved_volume(set, solid, written.mesh), written);
+                          report_moved_volume(measured_moved_volume(piece, written.mesh), written);
       if (within) {
         const bool plain = merged == 0 && sheets_cancelled == 0 && inserted == 0 && !folding && !snapping;
         written.attempt = plain ? static_cast<int>(attempt) : -1;
@@ -2438,7 +2464,7 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
         MovedVolume moved{separation.volume_change, separation.volume_bound};
         if (sheets_cancelled > 0 || folding || snapping) {
           // The sheets' or the folds' volume as well: measured against the exact piece.
-          moved = measured_moved_volume(set, solid, written.mesh);
+          moved = measured_moved_volume(piece, written.mesh);
           moved.bound += separation.volume_bound;
         }
         // Held to the bound, as above (a fold's wedge is thinner than the
@@ -2455,8 +2481,8 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
   // neighbours across the cut. A piece that rounded onto two-sided sheets or onto
   // a few points has no volume left, so it always qualifies, by the bound's
   // argument; the test is made all the same, exactly.
-  const mpq_class six = exact_six_volume(set, solid);
-  const mpq_class sweep = rounding_sweep_bound(set, solid);
+  const mpq_class six = piece.six();
+  const mpq_class sweep = piece.sweep(false);
   if (six <= 6 * sweep) {
     const bool was_empty = result.mesh.triangles.empty();
     result.mesh = Mesh{};
@@ -2511,7 +2537,7 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
     for (const bool strips : {false, true}) {
       if (strips) {
         if (std::optional<RoundedSolid> written =
-                round_merging_thin_strips(set, solid, options, output_positions, *reach, snap_levels)) {
+                round_merging_thin_strips(set, solid, options, output_positions, *reach, snap_levels, piece)) {
           return std::move(*written);
         }
       }
@@ -2591,8 +2617,9 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
                 positions.push_back(output_position(refined_set, refined.defs[v], refined.approx[v]));
               }
               RoundingReach refined_reach(refined_set, refined, positions);
+              PieceVolumes refined_piece(refined_set, refined);
               std::optional<RoundedSolid> merged = round_merging_thin_strips(
-                  refined_set, refined, refined_options, positions, refined_reach, snap_levels);
+                  refined_set, refined, refined_options, positions, refined_reach, snap_levels, refined_piece);
               if (!merged) return std::nullopt;
               written = std::move(*merged);
             } else {
@@ -2606,7 +2633,7 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
           if (!written.valid) return std::nullopt;
           // Held to the piece's own bound, against its exact volume (the refined
           // solid's, the same point set).
-          if (!report_moved_volume(measured_moved_volume(set, solid, written.mesh), written)) return std::nullopt;
+          if (!report_moved_volume(measured_moved_volume(piece, written.mesh), written)) return std::nullopt;
           written.attempt = -1;
           written.wedge_faces_split = refined.faces.size() - solid.faces.size();
           return written;

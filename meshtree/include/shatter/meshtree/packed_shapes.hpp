@@ -36,6 +36,11 @@ class ByteBlocks {
   /// `bytes` may lie in these blocks. Throws std::bad_alloc as new does,
   /// the blocks then unchanged.
   std::span<const std::uint8_t> append(std::span<const std::uint8_t> bytes);
+  /// Takes `other`'s blocks, whose bytes stay where they are (what append on
+  /// `other` returned stays valid, now owned here); `other` is left empty.
+  /// Appending here goes on in this one's open block: the rest of `other`'s
+  /// stays unused. Throws std::bad_alloc, both then unchanged.
+  void splice(ByteBlocks&& other);
   /// The bytes the blocks take, used or not.
   std::size_t capacity() const { return capacity_; }
 
