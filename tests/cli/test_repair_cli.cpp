@@ -161,7 +161,7 @@ TEST_CASE("validate and fracture --repair resolve self-intersections exactly", "
   CHECK(fracture.exit_code == 0);
 }
 
-TEST_CASE("--repair refuses a surface enclosing no volume in one line naming why, writing nothing", "[repair][cli]") {
+TEST_CASE("every command's --repair refuses a surface enclosing no volume in one line naming why, writing nothing", "[repair][cli]") {
   // A flat quad (its hole filled by a lid of crossing diagonals, back to back) and a
   // cross of two such coplanar sheets: the exact arrangement finds every cell wound
   // <= 0, so the refusal names that, not only the self-intersections left.
