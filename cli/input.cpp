@@ -44,6 +44,13 @@ std::string repair_flag_help(const std::string& then) {
          then;
 }
 
+const char* const no_volume_reason = "every cell of its exact arrangement has winding number <= 0";
+
+std::string no_volume_refusal(const std::string& path, const std::string& defects) {
+  return "invalid mesh " + path + " after --repair: encloses no volume: " + no_volume_reason + " (what is left: " +
+         defects + ")";
+}
+
 InputMesh read_valid_solid(const std::string& path, bool repair, bool allow_self_intersections) {
   InputMesh input = read_input(path);
   if (!repair) {
@@ -54,7 +61,15 @@ InputMesh read_valid_solid(const std::string& path, bool repair, bool allow_self
   try {
     require_valid_solid(input.mesh, path, allow_self_intersections);
   } catch (const InvalidMeshError& e) {
-    throw InvalidMeshError(std::string(e.what()) + " (after --repair)");
+    std::string message = e.what();
+    if (input.repair->encloses_no_volume) {
+      // require_valid_solid's line is "invalid mesh <path>: <defects>"; only the
+      // defects go into the parenthesis.
+      const std::string prefix = "invalid mesh " + path + ": ";
+      if (message.rfind(prefix, 0) == 0) message.erase(0, prefix.size());
+      throw InvalidMeshError(no_volume_refusal(path, message));
+    }
+    throw InvalidMeshError(message + " (after --repair)");
   }
   return input;
 }

@@ -43,8 +43,21 @@ struct InputMesh {
 /// repair_mesh does not report what its check found.)
 /// Throws IoError or InvalidMeshError from read_mesh; InvalidMeshError "invalid
 /// mesh <path>: <summary>" for a mesh that is not a valid solid, with
-/// " (after --repair)" appended when it was repaired.
+/// " (after --repair)" appended when it was repaired, or no_volume_refusal's line
+/// when repair found that it encloses no volume.
 InputMesh read_valid_solid(const std::string& path, bool repair, bool allow_self_intersections);
+
+/// Why --repair left a mesh that encloses no volume (RepairReport::encloses_no_volume)
+/// unusable, for the refusal and validate's report: "every cell of its exact
+/// arrangement has winding number <= 0".
+extern const char* const no_volume_reason;
+
+/// The one refusal of a repaired mesh that encloses no volume: "invalid mesh <path>
+/// after --repair: encloses no volume: <no_volume_reason> (what is left: <defects>)",
+/// `defects` being what validation names in the repaired mesh (the
+/// self-intersections the exact step could not resolve). Named first since no
+/// repair can make a solid of it, whatever else is wrong.
+std::string no_volume_refusal(const std::string& path, const std::string& defects);
 
 /// A mesh as a command received it, with its validation report.
 struct ValidatedMesh {

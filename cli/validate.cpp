@@ -25,6 +25,13 @@ using json = nlohmann::ordered_json;
 // only of degenerate triangles, or of triangles back to back with reversed copies).
 constexpr const char* empty_after_repair = "no triangle left after --repair (the input encloses no volume)";
 
+// The exact step of --repair found the surface encloses no volume (a flat or
+// back-to-back surface): that, not the self-intersections it leaves, is why no
+// repair makes a solid of it.
+bool encloses_no_volume(const ValidatedMesh& checked) {
+  return checked.input.repair && checked.input.repair->encloses_no_volume && !checked.report.valid();
+}
+
 bool is_valid_solid(const ValidatedMesh& checked) {
   return checked.report.valid() && !checked.input.mesh.triangles.empty();
 }
@@ -32,6 +39,7 @@ bool is_valid_solid(const ValidatedMesh& checked) {
 json defects_json(const ValidatedMesh& checked) {
   json defects = json::array();
   if (checked.input.mesh.triangles.empty()) defects.push_back({{"defect", "empty"}, {"count", 0}, {"first", empty_after_repair}});
+  if (encloses_no_volume(checked)) defects.push_back({{"defect", "no volume"}, {"count", 0}, {"first", no_volume_reason}});
   for (const Defect& d : checked.report.defects) {
     defects.push_back({{"defect", defect_name(d.kind)}, {"count", d.count}, {"first", d.first}});
   }
@@ -65,6 +73,7 @@ void print_text(const ValidateArgs& args, const ValidatedMesh& checked) {
   }
   std::cout << args.mesh << ": " << report.vertex_count << " vertices, " << report.triangle_count << " triangles\n";
   if (checked.input.mesh.triangles.empty()) std::cout << "  empty: " << empty_after_repair << '\n';
+  if (encloses_no_volume(checked)) std::cout << "  no volume: " << no_volume_reason << '\n';
   for (const Defect& d : report.defects) {
     std::cout << "  " << defect_name(d.kind) << ": " << d.count << ", first " << d.first << '\n';
   }
@@ -104,6 +113,7 @@ int run_validate(const ValidateArgs& args) {
   if (checked.input.mesh.triangles.empty()) {
     throw InvalidMeshError("invalid mesh " + args.mesh + ": empty: " + empty_after_repair);
   }
+  if (encloses_no_volume(checked)) throw InvalidMeshError(no_volume_refusal(args.mesh, checked.report.summary()));
   if (!checked.report.valid()) {
     throw InvalidMeshError("invalid mesh " + args.mesh + (checked.input.repair ? " after --repair: " : ": ") +
                            checked.report.summary());

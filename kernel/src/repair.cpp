@@ -1305,6 +1305,7 @@ void resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const Rep
     return;
   }
   if (boundary.triangles.empty()) {
+    report.encloses_no_volume = true;
     not_done("the surface winds around no volume (every cell has winding number <= 0)");
     return;
   }

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "shatter/generators/solids.hpp"
@@ -158,4 +159,48 @@ TEST_CASE("validate and fracture --repair resolve self-intersections exactly", "
   const Run fracture = run_shatter("fracture " + quoted(boxes) + " --repair --fragments 4 --out " +
                                    quoted(scratch("two-boxes.shatter")));
   CHECK(fracture.exit_code == 0);
+}
+
+TEST_CASE("every command's --repair refuses a surface enclosing no volume in one line naming why, writing nothing", "[repair][cli]") {
+  // A flat quad (its hole filled by a lid of crossing diagonals, back to back) and a
+  // cross of two such coplanar sheets: the exact arrangement finds every cell wound
+  // <= 0, so the refusal names that, not only the self-intersections left.
+  const fs::path quad = scratch("flat-quad.off"), cross = scratch("flat-cross.off");
+  std::ofstream(quad) << "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+  std::ofstream(cross) << "OFF\n8 8 0\n-2 -1 0\n2 -1 0\n2 1 0\n-2 1 0\n-1 -2 0\n1 -2 0\n1 2 0\n-1 2 0\n"
+                          "3 0 1 2\n3 0 2 3\n3 1 0 3\n3 1 3 2\n3 4 5 6\n3 4 6 7\n3 5 4 7\n3 5 7 6\n";
+  const std::string reason = "encloses no volume: every cell of its exact arrangement has winding number <= 0";
+  for (const fs::path& input : {quad, cross}) {
+    INFO(input.filename());
+    const std::string head = "error: invalid mesh " + input.string() + " after --repair: " + reason + " (what is left: self-intersecting: ";
+    const fs::path out = scratch("never.off");
+    const Run validate = run_shatter("validate " + quoted(input) + " --repair --out " + quoted(out));
+    CHECK(validate.exit_code == 3);
+    CHECK(validate.err.find("winds around no volume") != std::string::npos);
+    CHECK(last_line(validate.err).rfind(head, 0) == 0);
+    CHECK(validate.out.find("  no volume: ") != std::string::npos);
+    CHECK_FALSE(fs::exists(out));
+
+    const Run json_run = run_shatter("validate " + quoted(input) + " --repair --json");
+    CHECK(json_run.exit_code == 3);
+    CHECK(last_line(json_run.err).rfind(head, 0) == 0);
+    const auto report = nlohmann::json::parse(json_run.out);
+    CHECK(report["valid"] == false);
+    REQUIRE(report["defects"].size() >= 2);
+    CHECK(report["defects"][0]["defect"] == "no volume");
+    CHECK(report["defects"][1]["defect"] == "self-intersecting triangle pairs");
+
+    const fs::path pieces = scratch("no-pieces");
+    const Run slice = run_shatter("slice " + quoted(input) + " --plane 0,0,1,0 --repair --out " + quoted(pieces));
+    CHECK(slice.exit_code == 3);
+    CHECK(last_line(slice.err).rfind(head, 0) == 0);
+    CHECK_FALSE(fs::exists(pieces));
+    const fs::path tree = scratch("no.shatter");
+    const Run fracture =
+        run_shatter("fracture " + quoted(input) + " --fragments 2 --repair --json --out " + quoted(tree));
+    CHECK(fracture.exit_code == 3);
+    CHECK(fracture.out.empty());
+    CHECK(last_line(fracture.err).rfind(head, 0) == 0);
+    CHECK_FALSE(fs::exists(tree));
+  }
 }

@@ -133,6 +133,11 @@ struct RepairReport {
   std::vector<RepairNote> notes;      ///< what was attempted but not done
   std::size_t vertices_before = 0, triangles_before = 0;
   std::size_t vertices_after = 0, triangles_after = 0;
+  /// Step 11 arranged the surface exactly and found no cell of winding number >= 1:
+  /// the surface encloses no volume (a flat or back-to-back surface), so no repair
+  /// can make a solid of it. A caller refusing the mesh names this, not the
+  /// self-intersections left. Not stored in .shatter files (the note says it too).
+  bool encloses_no_volume = false;
 
   bool changed() const { return !changes.empty(); }
   /// Nothing changed and nothing noted: the report of a mesh used as read.
