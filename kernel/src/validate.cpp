@@ -806,7 +806,10 @@ ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* 
   thread_local std::vector<std::uint8_t> is_new;
   thread_local std::vector<TriangleBox> boxes, fresh, all, tested, against;
   thread_local std::vector<std::size_t> first, by_part, fill;
-  thread_local std::unordered_map<std::array<Vec3, 3>, std::uint32_t, TriangleKeyHash, TriangleKeyEqual> known;
+  // The parts' triangles by key: an open-addressed table of (part << 32 | triangle),
+  // the key recomputed from the part's mesh (a node-based map allocated a node
+  // per triangle: most of this function's own time at 10^4 Voronoi sites).
+  thread_local std::vector<std::uint64_t> known;
   struct Release {  // at every return
     ~Release() {
       constexpr std::size_t kept = std::size_t{1} << 16;  // triangles
@@ -816,30 +819,47 @@ ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* 
         first = {};
         by_part = {};
         fill = {};
-        known = {};
       }
       for (std::vector<TriangleBox>* v : {&boxes, &fresh, &all, &tested, &against}) {
         if (v->capacity() > kept) *v = {};
       }
+      if (known.capacity() > 4 * kept) known = {};
     }
   } release;
   // Each triangle's part: the first part whose mesh has it (same corner
   // positions, turning the same way).
   part_of.assign(mesh.triangles.size(), untrusted);
   {
-    known.clear();
     std::size_t total = 0;
     for (const Mesh* part : parts) total += part ? part->triangles.size() : 0;
-    known.reserve(total);
+    std::size_t capacity = 16;
+    while (capacity < 2 * total) capacity *= 2;  // at most half full
+    constexpr std::uint64_t empty = std::numeric_limits<std::uint64_t>::max();
+    known.assign(capacity, empty);
+    const TriangleKeyHash hash;
+    const TriangleKeyEqual equal;
+    const auto key_in = [&](std::uint64_t slot) {
+      const Mesh& part = *parts[slot >> 32];
+      return triangle_key(part, part.triangles[slot & 0xFFFFFFFFu]);
+    };
+    // The slot holding `key`, or the empty one where it would go.
+    const auto find = [&](const std::array<Vec3, 3>& key) {
+      std::size_t at = hash(key) & (capacity - 1);
+      while (known[at] != empty && !equal(key_in(known[at]), key)) at = (at + 1) & (capacity - 1);
+      return at;
+    };
     for (std::uint32_t k = 0; k < parts.size(); ++k) {
       if (!parts[k]) continue;
-      for (const Triangle& t : parts[k]->triangles) known.emplace(triangle_key(*parts[k], t), k);
+      for (std::uint32_t t = 0; t < parts[k]->triangles.size(); ++t) {
+        const std::size_t at = find(triangle_key(*parts[k], parts[k]->triangles[t]));
+        if (known[at] == empty) known[at] = (std::uint64_t{k} << 32) | t;  // the first part keeps it
+      }
     }
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       const Triangle& tri = mesh.triangles[t];
       if (tri[0] >= mesh.positions.size() || tri[1] >= mesh.positions.size() || tri[2] >= mesh.positions.size()) continue;
-      const auto found = known.find(triangle_key(mesh, tri));
-      if (found != known.end()) part_of[t] = found->second;
+      const std::size_t at = find(triangle_key(mesh, tri));
+      if (known[at] != empty) part_of[t] = static_cast<std::uint32_t>(known[at] >> 32);
     }
   }
   // A triangle of a valid part is not flat: only the new ones are tested.
