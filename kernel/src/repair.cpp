@@ -256,8 +256,9 @@ class Repairer {
   Mesh run() {
     merge_duplicate_vertices();
     clean_triangles();
+    remove_flat_pieces();
     if (working_.empty()) {
-      report_.notes.push_back({"no triangle left after removing degenerate and duplicate ones; nothing to repair"});
+      report_.notes.push_back({"no triangle left after removing degenerate, duplicate and flat ones; nothing to repair"});
       return output_from_working_only();
     }
     build_surface_mesh();
@@ -350,6 +351,72 @@ class Repairer {
              "removed " + plural(in_opposite_pairs, "triangle", "triangles") +
                  " lying back to back with a reversed copy of themselves");
     }
+  }
+
+  // Step 2, last: pieces (triangles joined through shared welded vertices) whose
+  // corners all lie in one plane, decided exactly. Closed by any lid over their
+  // own vertices or in their plane, such a piece bounds no volume: dropping it
+  // changes no winding number off its plane, so the solid the rest encloses
+  // stays the same. Kept, it blocks the rest: its holes have no lid but its own
+  // reverse, and it crosses what it pokes through (CGAL's
+  // tetra_intersected_by_triangle.off: a stray triangle through a tetrahedron;
+  // b9_mesh.off: 14 lone triangles). Pieces by vertex, not by edge: flat
+  // triangles that hang on to the rest by a corner (a planar quad of a torus
+  // whose neighbours were removed) are part of its surface, and hole filling
+  // joins them back.
+  void remove_flat_pieces() {
+    if (working_.empty()) return;
+    UnionFind pieces(working_.size());
+    std::unordered_map<VertexIndex, std::uint32_t> first_at_vertex;
+    for (std::size_t i = 0; i < working_.size(); ++i) {
+      for (const VertexIndex v : mapped(working_[i])) {
+        const auto [it, fresh] = first_at_vertex.try_emplace(v, static_cast<std::uint32_t>(i));
+        if (!fresh) pieces.unite(it->second, static_cast<std::uint32_t>(i));
+      }
+    }
+    // Per piece: a triangle of it with area (its plane), then whether every
+    // corner of the piece lies on that plane.
+    std::unordered_map<std::uint32_t, std::size_t> plane_of;  // piece root -> index into working_
+    const auto point = [&](VertexIndex v) { return to_cgal(input_.positions[v]); };
+    for (std::size_t i = 0; i < working_.size(); ++i) {
+      const Triangle tri = mapped(working_[i]);
+      if (CGAL::collinear(point(tri[0]), point(tri[1]), point(tri[2]))) continue;
+      plane_of.try_emplace(pieces.find(static_cast<std::uint32_t>(i)), i);
+    }
+    std::unordered_map<std::uint32_t, bool> flat;  // piece root -> all corners on its plane so far
+    for (std::size_t i = 0; i < working_.size(); ++i) {
+      const std::uint32_t root = pieces.find(static_cast<std::uint32_t>(i));
+      auto [it, fresh] = flat.try_emplace(root, true);
+      if (!it->second) continue;
+      const auto plane = plane_of.find(root);
+      if (plane == plane_of.end()) continue;  // every triangle of it collinear: flat
+      const Triangle base = mapped(working_[plane->second]), tri = mapped(working_[i]);
+      for (int c = 0; c < 3 && it->second; ++c) {
+        it->second = CGAL::orientation(point(base[0]), point(base[1]), point(base[2]), point(tri[c])) == CGAL::COPLANAR;
+      }
+    }
+    std::vector<std::size_t> kept;
+    std::size_t removed = 0;
+    std::set<std::uint32_t> removed_pieces;
+    for (std::size_t i = 0; i < working_.size(); ++i) {
+      const std::uint32_t root = pieces.find(static_cast<std::uint32_t>(i));
+      if (flat.at(root)) {
+        ++removed;
+        removed_pieces.insert(root);
+      } else {
+        kept.push_back(working_[i]);
+      }
+    }
+    if (removed == 0) return;
+    if (kept.empty()) {
+      report_.encloses_no_volume = true;
+      report_.no_volume_reason = "every piece of it is flat (all its corners in one plane)";
+    }
+    working_ = std::move(kept);
+    change(RepairKind::removed_flat_pieces, removed,
+           "removed " + plural(removed, "triangle", "triangles") + " in " +
+               plural(removed_pieces.size(), "flat piece", "flat pieces") +
+               " (all corners in one plane: closed in any way, they enclose no volume)");
   }
 
   // Step 3: the soup, oriented by CGAL, as a halfedge mesh. Each face remembers
@@ -1306,6 +1373,7 @@ void resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const Rep
   }
   if (boundary.triangles.empty()) {
     report.encloses_no_volume = true;
+    report.no_volume_reason = "every cell of its exact arrangement has winding number <= 0";
     not_done("the surface winds around no volume (every cell has winding number <= 0)");
     return;
   }
