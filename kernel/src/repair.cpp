@@ -936,7 +936,7 @@ class Repairer {
         for (std::size_t f = 0; f < faces.size(); ++f) enter(f);
       }
       const auto position = [&](VertexIndex v) { return v >= new_base ? new_positions[v - new_base] : input_.positions[v]; };
-      std::size_t lids = 0, lid_edges = 0, lid_triangles = 0;
+      std::size_t lids = 0, lid_edges = 0, lid_triangles = 0, fan_lids = 0;
       std::vector<std::size_t> unclosed;
       std::vector<std::vector<VertexIndex>> cycles;
       for (const std::vector<SmVertex>& cycle : welded_lid_cycles_) {
@@ -960,16 +960,45 @@ class Repairer {
           };
           const auto exists = [&](VertexIndex a, VertexIndex b, VertexIndex c) { return triples.count(sorted(a, b, c)) > 0; };
           const auto triangles = least_area_lid(loop_ids, points, joined, exists);
-          if (!triangles) {
+          if (triangles) {
+            for (const auto& [i, k, j] : *triangles) {
+              lid.push_back({loop_ids[i], loop_ids[k], loop_ids[j]});
+              for (const auto& [a, b] : {std::pair{i, k}, std::pair{k, j}, std::pair{i, j}}) {
+                drawn.insert(pair_key(loop_ids[a], loop_ids[b]));
+              }
+            }
+            continue;
+          }
+          // No triangulation over the hole's own corners is allowed: each one
+          // draws a diagonal the mesh has, or a triangle over three corners on
+          // one line. CGAL's patch-23.off: a flat rectangular border with its
+          // sides in many collinear corners, three of whose corners are ears of
+          // the patch (the ear's diagonal taken), leaves none. Then a fan from
+          // one new vertex at the mean of the corners: its edges are all new and
+          // its triangles are new, so it repeats nothing; taken when no fan
+          // triangle is exactly collinear and the new position is no vertex's.
+          // Whether the lid crosses the surface is left to step 11 and validation.
+          Vec3 sum{0, 0, 0};
+          for (const Vec3& q : points) sum = sum + q;
+          const Vec3 centre = sum * (1.0 / static_cast<double>(points.size()));
+          const PositionKey key = key_of(centre);
+          bool fan = std::isfinite(centre.x) && std::isfinite(centre.y) && std::isfinite(centre.z) &&
+                     !input_vertex_at.count(key) && !new_vertex_at.count(key);
+          for (std::size_t q = 0; q < points.size() && fan; ++q) {
+            fan = !CGAL::collinear(to_cgal(points[q]), to_cgal(points[(q + 1) % points.size()]), to_cgal(centre));
+          }
+          if (!fan) {
             closed = false;
             break;
           }
-          for (const auto& [i, k, j] : *triangles) {
-            lid.push_back({loop_ids[i], loop_ids[k], loop_ids[j]});
-            for (const auto& [a, b] : {std::pair{i, k}, std::pair{k, j}, std::pair{i, j}}) {
-              drawn.insert(pair_key(loop_ids[a], loop_ids[b]));
-            }
+          const VertexIndex hub = static_cast<VertexIndex>(new_base + new_positions.size());
+          new_vertex_at.emplace(key, hub);
+          new_positions.push_back(centre);
+          fan_corner_from_[hub] = loop_ids.front();
+          for (std::size_t q = 0; q < loop_ids.size(); ++q) {
+            lid.push_back({loop_ids[q], loop_ids[(q + 1) % loop_ids.size()], hub});
           }
+          ++fan_lids;
         }
         if (!closed) {
           unclosed.push_back(ids.size());
@@ -997,7 +1026,11 @@ class Repairer {
                                     (lids > 0 ? " (" + std::to_string(lids) +
                                                     " of them by the least-area lid over the welded vertices: holes "
                                                     "touching at a vertex, or where CGAL's lid failed)"
-                                              : std::string())};
+                                              : std::string()) +
+                                    (fan_lids > 0 ? " (" + plural(fan_lids, "part", "parts") +
+                                                        " of a hole no lid over its own corners closes by a fan from "
+                                                        "a new vertex at their mean)"
+                                                  : std::string())};
         report_.changes.insert(report_.changes.begin() + static_cast<std::ptrdiff_t>(holes_change_at_), fill);
       }
       if (!unclosed.empty()) {
@@ -1057,6 +1090,10 @@ class Repairer {
           }
         }
         if (!corner && v < new_base) corner = borrowed_corner(v, surface);
+        // A fan's hub borrows the attributes of a corner of its hole.
+        if (auto hub = fan_corner_from_.find(v); !corner && hub != fan_corner_from_.end()) {
+          corner = borrowed_corner(hub->second, surface);
+        }
         if (corner) {
           if (normals) out.corners.normals.push_back(in_corners.normals[*corner]);
           if (uvs) out.corners.uvs.push_back(in_corners.uvs[*corner]);
@@ -1230,6 +1267,9 @@ class Repairer {
   // Vertices orient_polygon_soup split to make the soup an oriented manifold.
   std::size_t split_vertices_ = 0;
   std::unordered_map<PositionKey, std::uint32_t, PositionKeyHash> welded_ids_;
+  // The new vertex at the centre of each fan lid (a to_mesh id, new_base + k) ->
+  // the hole corner whose attributes its corners borrow.
+  std::unordered_map<VertexIndex, VertexIndex> fan_corner_from_;
   // Holes CGAL's lid could not close without repeating an edge (holes touching at
   // a vertex), closed over the welded vertices when the mesh is written.
   std::vector<std::vector<SmVertex>> welded_lid_cycles_;

@@ -981,4 +981,33 @@ TEST_CASE("a flat fin joined to a solid by an edge is not a piece of its own and
   CHECK_FALSE(names(report, RepairKind::removed_flat_pieces));
 }
 
+TEST_CASE("a hole no lid over its own corners closes gets a fan from a new vertex (patch-23)", "[repair][holes]") {
+  // CGAL's patch-23.off in miniature: a tent over a flat rectangular border whose
+  // sides hold collinear corners, and three of whose four corners are ears of
+  // the tent (the ear's diagonal is a mesh edge). Every triangulation over the
+  // border's own corners then draws a taken diagonal or a triangle over one side's
+  // collinear corners: the least-area lid finds none. The fan from the corners'
+  // mean, (2, 1, 0), lies in the border's plane: the tent's volume, exactly.
+  const std::vector<Vec3> points = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}, {4, 0, 0}, {4, 1, 0},
+                                    {4, 2, 0}, {3, 2, 0}, {2, 2, 0}, {1, 2, 0}, {0, 2, 0}, {0, 1, 0},
+                                    {1, 1, 1}, {2, 1, 1}, {3, 1, 1}};
+  const std::vector<Triangle> triangles = {{0, 1, 12},  {0, 12, 11}, {1, 2, 13},  {1, 13, 12}, {2, 3, 14},  {2, 14, 13},
+                                           {3, 5, 14},  {11, 12, 9}, {12, 13, 8}, {12, 8, 9},  {13, 14, 7}, {13, 7, 8},
+                                           {14, 5, 7},  {3, 4, 5},   {5, 6, 7},   {9, 10, 11}};
+  Mesh mesh = mesh_from(points, triangles);
+  const RepairReport report = repair_mesh(mesh);
+  INFO(report.summary());
+  REQUIRE(names(report, RepairKind::filled_holes));
+  CHECK(report.find(RepairKind::filled_holes)->text.find("by a fan from a new vertex") != std::string::npos);
+  CHECK(report.notes.empty());
+  CHECK(problem_after_repair(mesh).empty());
+  CHECK(mesh.vertex_count() == 16);
+  CHECK(mesh.positions.back() == Vec3{2, 1, 0});
+  CHECK(exact_six_volume(mesh) == 17);
+  // Deterministic: the same bytes again.
+  Mesh again = mesh_from(points, triangles);
+  repair_mesh(again);
+  CHECK(canonical_bytes(again) == canonical_bytes(mesh));
+}
+
 // --- the command ------------------------------------------------------------------

@@ -182,8 +182,12 @@ struct RepairReport {
 ///     vertices instead: where two borders pass a vertex, each gap between its
 ///     two fans becomes one hole (from one fan's border to the other's), split
 ///     where a hole still passes a vertex twice, each part by its least-area
-///     triangulation that adds no edge or triangle the mesh has (none when every
-///     triangulation does: noted, the hole left);
+///     triangulation that adds no edge or triangle the mesh has; when every
+///     triangulation does (a flat border with collinear corners along its
+///     sides whose corners are ears of the surface: CGAL's patch-23.off), by a
+///     fan from one new vertex at the mean of the part's corners, which adds
+///     only new edges, taken when no fan triangle is exactly collinear and the
+///     mean is no vertex's position (else noted, the hole left);
 ///  7. when the mesh is closed, orient every shell to bound a volume, the outermost
 ///     outward (orient_to_bound_a_volume);
 ///  8. when closed and still self-intersecting and `resolve_self_intersections`,
