@@ -166,7 +166,7 @@ TEST_CASE("validate and fracture --repair resolve self-intersections exactly", "
   CHECK(fracture.exit_code == 0);
 }
 
-TEST_CASE("--repair refuses a surface enclosing no volume in one line naming why, writing nothing", "[repair][cli]") {
+TEST_CASE("a --repair that finds no volume enclosed refuses in one line naming why, writing nothing", "[repair][cli]") {
   // A flat quad and a cross of two coplanar sheets (each triangle with a back
   // side over the other diagonal): every piece lies in one plane, so repair
   // removes them whole and the refusal names that, not only the emptiness left.
