@@ -44,10 +44,13 @@ std::string repair_flag_help(const std::string& then) {
          then;
 }
 
-const char* const no_volume_reason = "every cell of its exact arrangement has winding number <= 0";
+std::string no_volume_reason(const RepairReport& report) {
+  return report.no_volume_reason.empty() ? "every cell of its exact arrangement has winding number <= 0"
+                                         : report.no_volume_reason;
+}
 
-std::string no_volume_refusal(const std::string& path, const std::string& defects) {
-  return "invalid mesh " + path + " after --repair: encloses no volume: " + no_volume_reason + " (what is left: " +
+std::string no_volume_refusal(const std::string& path, const RepairReport& report, const std::string& defects) {
+  return "invalid mesh " + path + " after --repair: encloses no volume: " + no_volume_reason(report) + " (what is left: " +
          defects + ")";
 }
 
@@ -67,7 +70,7 @@ InputMesh read_valid_solid(const std::string& path, bool repair, bool allow_self
       // defects go into the parenthesis.
       const std::string prefix = "invalid mesh " + path + ": ";
       if (message.rfind(prefix, 0) == 0) message.erase(0, prefix.size());
-      throw InvalidMeshError(no_volume_refusal(path, message));
+      throw InvalidMeshError(no_volume_refusal(path, *input.repair, message));
     }
     throw InvalidMeshError(message + " (after --repair)");
   }

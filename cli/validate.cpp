@@ -29,7 +29,8 @@ constexpr const char* empty_after_repair = "no triangle left after --repair (the
 // back-to-back surface): that, not the self-intersections it leaves, is why no
 // repair makes a solid of it.
 bool encloses_no_volume(const ValidatedMesh& checked) {
-  return checked.input.repair && checked.input.repair->encloses_no_volume && !checked.report.valid();
+  return checked.input.repair && checked.input.repair->encloses_no_volume &&
+         (!checked.report.valid() || checked.input.mesh.triangles.empty());
 }
 
 bool is_valid_solid(const ValidatedMesh& checked) {
@@ -39,7 +40,7 @@ bool is_valid_solid(const ValidatedMesh& checked) {
 json defects_json(const ValidatedMesh& checked) {
   json defects = json::array();
   if (checked.input.mesh.triangles.empty()) defects.push_back({{"defect", "empty"}, {"count", 0}, {"first", empty_after_repair}});
-  if (encloses_no_volume(checked)) defects.push_back({{"defect", "no volume"}, {"count", 0}, {"first", no_volume_reason}});
+  if (encloses_no_volume(checked)) defects.push_back({{"defect", "no volume"}, {"count", 0}, {"first", no_volume_reason(*checked.input.repair)}});
   for (const Defect& d : checked.report.defects) {
     defects.push_back({{"defect", defect_name(d.kind)}, {"count", d.count}, {"first", d.first}});
   }
@@ -73,7 +74,7 @@ void print_text(const ValidateArgs& args, const ValidatedMesh& checked) {
   }
   std::cout << args.mesh << ": " << report.vertex_count << " vertices, " << report.triangle_count << " triangles\n";
   if (checked.input.mesh.triangles.empty()) std::cout << "  empty: " << empty_after_repair << '\n';
-  if (encloses_no_volume(checked)) std::cout << "  no volume: " << no_volume_reason << '\n';
+  if (encloses_no_volume(checked)) std::cout << "  no volume: " << no_volume_reason(*checked.input.repair) << '\n';
   for (const Defect& d : report.defects) {
     std::cout << "  " << defect_name(d.kind) << ": " << d.count << ", first " << d.first << '\n';
   }
@@ -110,10 +111,15 @@ int run_validate(const ValidateArgs& args) {
   } else {
     print_text(args, checked);
   }
+  // Named first: no repair makes a solid of it, whatever else is wrong.
+  if (encloses_no_volume(checked)) {
+    throw InvalidMeshError(no_volume_refusal(args.mesh, *checked.input.repair,
+                                             checked.input.mesh.triangles.empty() ? std::string("no triangle")
+                                                                                  : checked.report.summary()));
+  }
   if (checked.input.mesh.triangles.empty()) {
     throw InvalidMeshError("invalid mesh " + args.mesh + ": empty: " + empty_after_repair);
   }
-  if (encloses_no_volume(checked)) throw InvalidMeshError(no_volume_refusal(args.mesh, checked.report.summary()));
   if (!checked.report.valid()) {
     throw InvalidMeshError("invalid mesh " + args.mesh + (checked.input.repair ? " after --repair: " : ": ") +
                            checked.report.summary());

@@ -225,7 +225,10 @@ Mesh read_obj(std::string_view bytes, std::vector<std::string>& warnings) {
       }
     }
     first_corner += face.corner_count;
-    fan_triangulate(face.corner_count, [&](std::size_t k) {
+    triangulate_polygon(
+        face.corner_count,
+        [&](std::size_t k) { return content.positions[static_cast<std::size_t>(corners[k].vertex_index)]; },
+        [&](std::size_t k) {
       soup.corner_positions.push_back(content.positions[static_cast<std::size_t>(corners[k].vertex_index)]);
       if (wants_uvs) soup.corners.uvs.push_back(content.uvs[static_cast<std::size_t>(corners[k].texcoord_index)]);
       if (wants_normals) soup.corners.normals.push_back(content.normals[static_cast<std::size_t>(corners[k].normal_index)]);

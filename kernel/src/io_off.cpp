@@ -138,7 +138,9 @@ Mesh read_off(std::string_view bytes) {
       }
       polygon.push_back(static_cast<std::size_t>(index));
     }
-    fan_triangulate(polygon.size(), [&](std::size_t k) { soup.corner_positions.push_back(positions[polygon[k]]); });
+    triangulate_polygon(
+        polygon.size(), [&](std::size_t k) { return positions[polygon[k]]; },
+        [&](std::size_t k) { soup.corner_positions.push_back(positions[polygon[k]]); });
   }
   if (lines.next(tokens)) refuse("unexpected content after the last face" + at_line(lines.line_number()));
   return weld(std::move(soup));

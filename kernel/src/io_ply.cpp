@@ -388,7 +388,7 @@ Mesh read_ply(std::string_view bytes, std::vector<std::string>& warnings) {
   for (const std::size_t corner_count : faces.corner_counts) {
     const std::size_t* polygon = faces.indices.data() + first;
     first += corner_count;
-    fan_triangulate(corner_count, [&](std::size_t k) {
+    triangulate_polygon(corner_count, [&](std::size_t k) { return positions[polygon[k]]; }, [&](std::size_t k) {
       const std::size_t vertex = polygon[k];
       soup.corner_positions.push_back(positions[vertex]);
       if (!normals.empty()) soup.corners.normals.push_back(normals[vertex]);

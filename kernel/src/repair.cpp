@@ -256,8 +256,9 @@ class Repairer {
   Mesh run() {
     merge_duplicate_vertices();
     clean_triangles();
+    remove_flat_pieces();
     if (working_.empty()) {
-      report_.notes.push_back({"no triangle left after removing degenerate and duplicate ones; nothing to repair"});
+      report_.notes.push_back({"no triangle left after removing degenerate, duplicate and flat ones; nothing to repair"});
       return output_from_working_only();
     }
     build_surface_mesh();
@@ -350,6 +351,72 @@ class Repairer {
              "removed " + plural(in_opposite_pairs, "triangle", "triangles") +
                  " lying back to back with a reversed copy of themselves");
     }
+  }
+
+  // Step 2, last: pieces (triangles joined through shared welded vertices) whose
+  // corners all lie in one plane, decided exactly. Closed by any lid over their
+  // own vertices or in their plane, such a piece bounds no volume: dropping it
+  // changes no winding number off its plane, so the solid the rest encloses
+  // stays the same. Kept, it blocks the rest: its holes have no lid but its own
+  // reverse, and it crosses what it pokes through (CGAL's
+  // tetra_intersected_by_triangle.off: a stray triangle through a tetrahedron;
+  // b9_mesh.off: 14 lone triangles). Pieces by vertex, not by edge: flat
+  // triangles that hang on to the rest by a corner (a planar quad of a torus
+  // whose neighbours were removed) are part of its surface, and hole filling
+  // joins them back.
+  void remove_flat_pieces() {
+    if (working_.empty()) return;
+    UnionFind pieces(working_.size());
+    std::unordered_map<VertexIndex, std::uint32_t> first_at_vertex;
+    for (std::size_t i = 0; i < working_.size(); ++i) {
+      for (const VertexIndex v : mapped(working_[i])) {
+        const auto [it, fresh] = first_at_vertex.try_emplace(v, static_cast<std::uint32_t>(i));
+        if (!fresh) pieces.unite(it->second, static_cast<std::uint32_t>(i));
+      }
+    }
+    // Per piece: a triangle of it with area (its plane), then whether every
+    // corner of the piece lies on that plane.
+    std::unordered_map<std::uint32_t, std::size_t> plane_of;  // piece root -> index into working_
+    const auto point = [&](VertexIndex v) { return to_cgal(input_.positions[v]); };
+    for (std::size_t i = 0; i < working_.size(); ++i) {
+      const Triangle tri = mapped(working_[i]);
+      if (CGAL::collinear(point(tri[0]), point(tri[1]), point(tri[2]))) continue;
+      plane_of.try_emplace(pieces.find(static_cast<std::uint32_t>(i)), i);
+    }
+    std::unordered_map<std::uint32_t, bool> flat;  // piece root -> all corners on its plane so far
+    for (std::size_t i = 0; i < working_.size(); ++i) {
+      const std::uint32_t root = pieces.find(static_cast<std::uint32_t>(i));
+      auto [it, fresh] = flat.try_emplace(root, true);
+      if (!it->second) continue;
+      const auto plane = plane_of.find(root);
+      if (plane == plane_of.end()) continue;  // every triangle of it collinear: flat
+      const Triangle base = mapped(working_[plane->second]), tri = mapped(working_[i]);
+      for (int c = 0; c < 3 && it->second; ++c) {
+        it->second = CGAL::orientation(point(base[0]), point(base[1]), point(base[2]), point(tri[c])) == CGAL::COPLANAR;
+      }
+    }
+    std::vector<std::size_t> kept;
+    std::size_t removed = 0;
+    std::set<std::uint32_t> removed_pieces;
+    for (std::size_t i = 0; i < working_.size(); ++i) {
+      const std::uint32_t root = pieces.find(static_cast<std::uint32_t>(i));
+      if (flat.at(root)) {
+        ++removed;
+        removed_pieces.insert(root);
+      } else {
+        kept.push_back(working_[i]);
+      }
+    }
+    if (removed == 0) return;
+    if (kept.empty()) {
+      report_.encloses_no_volume = true;
+      report_.no_volume_reason = "every piece of it is flat (all its corners in one plane)";
+    }
+    working_ = std::move(kept);
+    change(RepairKind::removed_flat_pieces, removed,
+           "removed " + plural(removed, "triangle", "triangles") + " in " +
+               plural(removed_pieces.size(), "flat piece", "flat pieces") +
+               " (all corners in one plane: closed in any way, they enclose no volume)");
   }
 
   // Step 3: the soup, oriented by CGAL, as a halfedge mesh. Each face remembers
@@ -869,7 +936,7 @@ class Repairer {
         for (std::size_t f = 0; f < faces.size(); ++f) enter(f);
       }
       const auto position = [&](VertexIndex v) { return v >= new_base ? new_positions[v - new_base] : input_.positions[v]; };
-      std::size_t lids = 0, lid_edges = 0, lid_triangles = 0;
+      std::size_t lids = 0, lid_edges = 0, lid_triangles = 0, fan_lids = 0;
       std::vector<std::size_t> unclosed;
       std::vector<std::vector<VertexIndex>> cycles;
       for (const std::vector<SmVertex>& cycle : welded_lid_cycles_) {
@@ -893,16 +960,45 @@ class Repairer {
           };
           const auto exists = [&](VertexIndex a, VertexIndex b, VertexIndex c) { return triples.count(sorted(a, b, c)) > 0; };
           const auto triangles = least_area_lid(loop_ids, points, joined, exists);
-          if (!triangles) {
+          if (triangles) {
+            for (const auto& [i, k, j] : *triangles) {
+              lid.push_back({loop_ids[i], loop_ids[k], loop_ids[j]});
+              for (const auto& [a, b] : {std::pair{i, k}, std::pair{k, j}, std::pair{i, j}}) {
+                drawn.insert(pair_key(loop_ids[a], loop_ids[b]));
+              }
+            }
+            continue;
+          }
+          // No triangulation over the hole's own corners is allowed: each one
+          // draws a diagonal the mesh has, or a triangle over three corners on
+          // one line. CGAL's patch-23.off: a flat rectangular border with its
+          // sides in many collinear corners, three of whose corners are ears of
+          // the patch (the ear's diagonal taken), leaves none. Then a fan from
+          // one new vertex at the mean of the corners: its edges are all new and
+          // its triangles are new, so it repeats nothing; taken when no fan
+          // triangle is exactly collinear and the new position is no vertex's.
+          // Whether the lid crosses the surface is left to step 11 and validation.
+          Vec3 sum{0, 0, 0};
+          for (const Vec3& q : points) sum = sum + q;
+          const Vec3 centre = sum * (1.0 / static_cast<double>(points.size()));
+          const PositionKey key = key_of(centre);
+          bool fan = std::isfinite(centre.x) && std::isfinite(centre.y) && std::isfinite(centre.z) &&
+                     !input_vertex_at.count(key) && !new_vertex_at.count(key);
+          for (std::size_t q = 0; q < points.size() && fan; ++q) {
+            fan = !CGAL::collinear(to_cgal(points[q]), to_cgal(points[(q + 1) % points.size()]), to_cgal(centre));
+          }
+          if (!fan) {
             closed = false;
             break;
           }
-          for (const auto& [i, k, j] : *triangles) {
-            lid.push_back({loop_ids[i], loop_ids[k], loop_ids[j]});
-            for (const auto& [a, b] : {std::pair{i, k}, std::pair{k, j}, std::pair{i, j}}) {
-              drawn.insert(pair_key(loop_ids[a], loop_ids[b]));
-            }
+          const VertexIndex hub = static_cast<VertexIndex>(new_base + new_positions.size());
+          new_vertex_at.emplace(key, hub);
+          new_positions.push_back(centre);
+          fan_corner_from_[hub] = loop_ids.front();
+          for (std::size_t q = 0; q < loop_ids.size(); ++q) {
+            lid.push_back({loop_ids[q], loop_ids[(q + 1) % loop_ids.size()], hub});
           }
+          ++fan_lids;
         }
         if (!closed) {
           unclosed.push_back(ids.size());
@@ -930,7 +1026,11 @@ class Repairer {
                                     (lids > 0 ? " (" + std::to_string(lids) +
                                                     " of them by the least-area lid over the welded vertices: holes "
                                                     "touching at a vertex, or where CGAL's lid failed)"
-                                              : std::string())};
+                                              : std::string()) +
+                                    (fan_lids > 0 ? " (" + plural(fan_lids, "part", "parts") +
+                                                        " of a hole no lid over its own corners closes by a fan from "
+                                                        "a new vertex at their mean)"
+                                                  : std::string())};
         report_.changes.insert(report_.changes.begin() + static_cast<std::ptrdiff_t>(holes_change_at_), fill);
       }
       if (!unclosed.empty()) {
@@ -990,6 +1090,10 @@ class Repairer {
           }
         }
         if (!corner && v < new_base) corner = borrowed_corner(v, surface);
+        // A fan's hub borrows the attributes of a corner of its hole.
+        if (auto hub = fan_corner_from_.find(v); !corner && hub != fan_corner_from_.end()) {
+          corner = borrowed_corner(hub->second, surface);
+        }
         if (corner) {
           if (normals) out.corners.normals.push_back(in_corners.normals[*corner]);
           if (uvs) out.corners.uvs.push_back(in_corners.uvs[*corner]);
@@ -1163,6 +1267,9 @@ class Repairer {
   // Vertices orient_polygon_soup split to make the soup an oriented manifold.
   std::size_t split_vertices_ = 0;
   std::unordered_map<PositionKey, std::uint32_t, PositionKeyHash> welded_ids_;
+  // The new vertex at the centre of each fan lid (a to_mesh id, new_base + k) ->
+  // the hole corner whose attributes its corners borrow.
+  std::unordered_map<VertexIndex, VertexIndex> fan_corner_from_;
   // Holes CGAL's lid could not close without repeating an edge (holes touching at
   // a vertex), closed over the welded vertices when the mesh is written.
   std::vector<std::vector<SmVertex>> welded_lid_cycles_;
@@ -1306,6 +1413,7 @@ void resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const Rep
   }
   if (boundary.triangles.empty()) {
     report.encloses_no_volume = true;
+    report.no_volume_reason = "every cell of its exact arrangement has winding number <= 0";
     not_done("the surface winds around no volume (every cell has winding number <= 0)");
     return;
   }

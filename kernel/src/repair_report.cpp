@@ -36,6 +36,7 @@ std::string_view repair_kind_name(RepairKind kind) {
     case RepairKind::removed_unused_vertices: return "removed_unused_vertices";
     case RepairKind::separated_touching_parts: return "separated_touching_parts";
     case RepairKind::resolved_self_intersections_exactly: return "resolved_self_intersections_exactly";
+    case RepairKind::removed_flat_pieces: return "removed_flat_pieces";
   }
   return "unknown";
 }

@@ -52,7 +52,10 @@ TEST_CASE("validate --repair refuses what repair cannot fix, after saying what i
   CHECK(run.exit_code == 3);
   CHECK(run.err.rfind("repair: ", 0) == 0);
   CHECK(last_line(run.err).rfind("error: invalid mesh ", 0) == 0);
-  CHECK(last_line(run.err).find("after --repair: degenerate mesh") != std::string::npos);
+  // All flat (CGAL's degtri_sliding.off): repair removes it whole, as a piece
+  // that encloses no volume, and the refusal says so.
+  CHECK(run.err.find("repair: removed 8 triangles in 1 flat piece") != std::string::npos);
+  CHECK(last_line(run.err).find("after --repair: encloses no volume: every piece of it is flat") != std::string::npos);
   CHECK_FALSE(fs::exists(out));
 }
 
@@ -105,10 +108,12 @@ TEST_CASE("slice and fracture --repair proceed with the repaired mesh", "[repair
   REQUIRE(run_shatter("fracture " + quoted(mesh_dir() / "cube.off") + " --fragments 4 --repair --out " + quoted(as_read)).exit_code == 0);
   CHECK(nlohmann::json::parse(run_shatter("info --json " + quoted(as_read)).out)["input_repair"].is_null());
 
-  const Run open = run_shatter("fracture " + quoted(bad("tetra_intersected_by_triangle.off")) +
-                               " --fragments 2 --out " + quoted(scratch("no.shatter")) + " --repair");
-  CHECK(open.exit_code == 3);
-  CHECK(last_line(open.err).find("(after --repair)") != std::string::npos);
+  // The stray flat triangle through the tetrahedron is removed: it encloses nothing.
+  const Run stray = run_shatter("fracture " + quoted(bad("tetra_intersected_by_triangle.off")) +
+                                " --fragments 2 --out " + quoted(scratch("tetra.shatter")) + " --repair");
+  CHECK(stray.exit_code == 0);
+  CHECK(stray.err.find("repair: removed 1 triangle in 1 flat piece") != std::string::npos);
+
 }
 
 TEST_CASE("validate --repair separates two cubes sharing an edge, says so, and --json names it", "[repair][cli]") {
@@ -161,23 +166,25 @@ TEST_CASE("validate and fracture --repair resolve self-intersections exactly", "
   CHECK(fracture.exit_code == 0);
 }
 
-TEST_CASE("every command's --repair refuses a surface enclosing no volume in one line naming why, writing nothing", "[repair][cli]") {
-  // A flat quad (its hole filled by a lid of crossing diagonals, back to back) and a
-  // cross of two such coplanar sheets: the exact arrangement finds every cell wound
-  // <= 0, so the refusal names that, not only the self-intersections left.
+TEST_CASE("a --repair that finds no volume enclosed refuses in one line naming why, writing nothing", "[repair][cli]") {
+  // A flat quad and a cross of two coplanar sheets (each triangle with a back
+  // side over the other diagonal): every piece lies in one plane, so repair
+  // removes them whole and the refusal names that, not only the emptiness left.
+  // (Before flat pieces were removed, the exact arrangement found every cell
+  // wound <= 0: the same refusal with that reason.)
   const fs::path quad = scratch("flat-quad.off"), cross = scratch("flat-cross.off");
   std::ofstream(quad) << "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
   std::ofstream(cross) << "OFF\n8 8 0\n-2 -1 0\n2 -1 0\n2 1 0\n-2 1 0\n-1 -2 0\n1 -2 0\n1 2 0\n-1 2 0\n"
                           "3 0 1 2\n3 0 2 3\n3 1 0 3\n3 1 3 2\n3 4 5 6\n3 4 6 7\n3 5 4 7\n3 5 7 6\n";
-  const std::string reason = "encloses no volume: every cell of its exact arrangement has winding number <= 0";
+  const std::string reason = "encloses no volume: every piece of it is flat (all its corners in one plane)";
   for (const fs::path& input : {quad, cross}) {
     INFO(input.filename());
-    const std::string head = "error: invalid mesh " + input.string() + " after --repair: " + reason + " (what is left: self-intersecting: ";
+    const std::string head = "error: invalid mesh " + input.string() + " after --repair: " + reason + " (what is left: ";
     const fs::path out = scratch("never.off");
     const Run validate = run_shatter("validate " + quoted(input) + " --repair --out " + quoted(out));
     CHECK(validate.exit_code == 3);
-    CHECK(validate.err.find("winds around no volume") != std::string::npos);
-    CHECK(last_line(validate.err).rfind(head, 0) == 0);
+    CHECK(validate.err.find(" flat piece") != std::string::npos);
+    CHECK(last_line(validate.err) == head + "no triangle)");
     CHECK(validate.out.find("  no volume: ") != std::string::npos);
     CHECK_FALSE(fs::exists(out));
 
@@ -187,8 +194,8 @@ TEST_CASE("every command's --repair refuses a surface enclosing no volume in one
     const auto report = nlohmann::json::parse(json_run.out);
     CHECK(report["valid"] == false);
     REQUIRE(report["defects"].size() >= 2);
-    CHECK(report["defects"][0]["defect"] == "no volume");
-    CHECK(report["defects"][1]["defect"] == "self-intersecting triangle pairs");
+    CHECK(report["defects"][0]["defect"] == "empty");
+    CHECK(report["defects"][1]["defect"] == "no volume");
 
     const fs::path pieces = scratch("no-pieces");
     const Run slice = run_shatter("slice " + quoted(input) + " --plane 0,0,1,0 --repair --out " + quoted(pieces));

@@ -572,6 +572,7 @@ TEST_CASE("every bad corpus mesh is repaired or refused as recorded", "[repair][
     DefectKind remaining{};             // when refused: the first defect left
     mpq_class six_volume = 0;           // when repaired: exactly, unless
     double near_volume = 0;             // ... this is set: within 0.1 % of it
+    bool emptied = false;               // repair removed every triangle: it encloses no volume
   };
   const std::map<std::string, Expected> expected{
       {"cube-ouvert.off", {true, {RepairKind::filled_holes}, {}, 48}},
@@ -579,15 +580,20 @@ TEST_CASE("every bad corpus mesh is repaired or refused as recorded", "[repair][
       {"tetrahedron.off", {true, {RepairKind::reversed_triangles}, {}, 1}},
       // The inner box reversed into a cavity: six times (512 - 8).
       {"box-in-box-both-outward.off", {true, {RepairKind::reversed_triangles}, {}, 3024}},
-      // Flat: every triangle lies in z = 0; no solid to recover.
-      {"degtri_sliding.off", {false, {}, DefectKind::zero_area_triangle}},
+      // Flat: every triangle lies in z = 0; no solid to recover. One flat piece,
+      // removed whole: the refusal says the input encloses no volume (before:
+      // its 4 zero-area triangles, which no flip removes, were named).
+      {"degtri_sliding.off", {false, {RepairKind::removed_flat_pieces}, {}, 0, 0, true}},
       // 106 holes, touching at 65 pinched vertices, one of 78 edges: all filled
       // (38 of them, touching others, over the welded vertices), a valid solid
       // whose volume is within 0.1 % of the corpus elephant's, which the holes
       // were cut from (0.0461837 against 0.0462012 measured).
       {"elephant-with-holes.off", {true, {RepairKind::filled_holes}, {}, 0, 0.0462012}},
-      // The stray triangle is an open piece: its lid would be its own reverse.
-      {"tetra_intersected_by_triangle.off", {false, {}, DefectKind::boundary_edge}},
+      // The stray triangle is a flat piece crossing the tetrahedron: it encloses
+      // nothing, is removed, and the tetrahedron is turned outward (before: its
+      // lid, its own reverse, was refused and the mesh stayed open).
+      {"tetra_intersected_by_triangle.off",
+       {true, {RepairKind::removed_flat_pieces, RepairKind::reversed_triangles}, {}, mpq_class("6369053643422139/4503599627370496")}},
   };
   std::size_t seen = 0;
   for (const fs::path& path : bad_meshes()) {
@@ -600,6 +606,10 @@ TEST_CASE("every bad corpus mesh is repaired or refused as recorded", "[repair][
     const RepairReport report = repair_mesh(mesh);
     CHECK((report.changed() || !report.notes.empty()));
     for (RepairKind kind : it->second.changes) CHECK(names(report, kind));
+    if (it->second.emptied) {
+      CHECK(mesh.triangles.empty());
+      continue;
+    }
     const ValidationReport after = validate_mesh(mesh);
     CHECK(after.valid() == it->second.valid);
     // A repair that ends valid has nothing to say it did not do (regression: the
@@ -870,6 +880,134 @@ TEST_CASE("an edge whose triangles cannot be paired into wedges is left, noted a
   CHECK(noted);
   CHECK_FALSE(validate_mesh(mesh).valid());
   CHECK_THROWS_AS(require_valid_solid(mesh, "two tetrahedra", false), InvalidMeshError);
+}
+
+namespace {
+
+// Appends a flat sheet to `mesh`: a fan over a pentagon p + a u + b v with small
+// integer a, b and dyadic p, u, v, so every corner lies exactly on one plane.
+// Sized like the mesh's box and placed in it, so the sheet mostly crosses the
+// solid (as the stray triangle of CGAL's tetra_intersected_by_triangle.off does).
+// Returns the number of triangles added.
+std::size_t add_flat_sheet(Mesh& mesh, Random& random) {
+  Vec3 lo = mesh.positions.front(), hi = lo;
+  for (const Vec3& p : mesh.positions) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  const double size = std::exp2(std::floor(std::log2(std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z})))) / 4;
+  const auto dyadic = [&](double from, double to) { return std::floor(random.uniform(from, to) * 64 / size) * size / 64; };
+  const Vec3 p{dyadic(lo.x, hi.x), dyadic(lo.y, hi.y), dyadic(lo.z, hi.z)};
+  Vec3 u, v, n;
+  do {
+    u = {dyadic(-size, size), dyadic(-size, size), dyadic(-size, size)};
+    v = {dyadic(-size, size), dyadic(-size, size), dyadic(-size, size)};
+    n = {u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
+  } while (n.x == 0 && n.y == 0 && n.z == 0);
+  const int pentagon[5][2] = {{-2, -1}, {2, -2}, {3, 1}, {0, 3}, {-2, 2}};
+  const VertexIndex first = static_cast<VertexIndex>(mesh.positions.size());
+  for (const auto& [a, b] : pentagon) mesh.positions.push_back(p + u * double(a) + v * double(b));
+  for (VertexIndex k = 1; k + 1 < 5; ++k) {
+    mesh.triangles.push_back({first, first + k, first + k + 1});
+    mesh.surfaces.push_back(original_surface);
+    for (int c = 0; c < 3; ++c) {
+      if (mesh.corners.has_normals()) mesh.corners.normals.push_back(n);
+      if (mesh.corners.has_uvs()) mesh.corners.uvs.push_back({0, 0});
+      if (mesh.corners.has_tangents()) mesh.corners.tangents.push_back(mesh.corners.tangents.front());
+    }
+  }
+  return 3;
+}
+
+}  // namespace
+
+TEST_CASE("a flat sheet through a solid is removed, giving the solid back (tetra_intersected_by_triangle)",
+          "[repair][flat]") {
+  std::size_t meshes = 0;
+  for (const NamedMesh& named : test_meshes()) {
+    for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+      INFO(named.name << " seed " << seed);
+      Random random(seed);
+      Mesh mesh = named.mesh;
+      const std::size_t added = add_flat_sheet(mesh, random);
+      const RepairReport report = repair_mesh(mesh);
+      CHECK(count_of(report, RepairKind::removed_flat_pieces) == added);
+      CHECK(report.notes.empty());
+      CHECK(problem_after_repair(mesh).empty());
+      // The solid itself is untouched: the sheet's vertices came last and go unused.
+      CHECK(canonical_bytes(mesh) == canonical_bytes(named.mesh));
+      ++meshes;
+    }
+  }
+  REQUIRE(meshes > 10);
+}
+
+TEST_CASE("a mesh that is all flat is emptied: it encloses no volume (mesh_with_colors, degtri_sliding)",
+          "[repair][flat]") {
+  // CGAL's degtri_sliding.off in miniature: a flat strip with zero-area triangles
+  // sliding along one line, which no flip or collapse removes; and a flat open sheet.
+  Mesh sliding;
+  sliding.positions = {{4, -2, 0}, {6, 0, 0}, {4, 0, 0}, {2, 0, 0}, {1, 0, 0}, {3, 0, 0}, {5, 0, 0}, {3, 2, 0}};
+  sliding.triangles = {{0, 1, 2}, {0, 2, 3}, {3, 2, 4}, {2, 1, 6}, {2, 6, 4}, {4, 6, 5}, {5, 6, 7}, {4, 5, 7}};
+  sliding.surfaces.assign(sliding.triangles.size(), original_surface);
+  Random random(7);
+  Mesh sheet;
+  sheet.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 1}};
+  add_flat_sheet(sheet, random);
+  sheet.positions.erase(sheet.positions.begin(), sheet.positions.begin() + 4);
+  for (Triangle& t : sheet.triangles) {
+    for (VertexIndex& v : t) v -= 4;
+  }
+  for (Mesh* mesh : {&sliding, &sheet}) {
+    const std::size_t triangles = mesh->triangle_count();
+    const RepairReport report = repair_mesh(*mesh);
+    CHECK(count_of(report, RepairKind::removed_flat_pieces) == triangles);
+    CHECK(mesh->triangles.empty());
+    CHECK(mesh->positions.empty());
+    REQUIRE(report.notes.size() == 1);
+    CHECK(report.notes[0].text.find("no triangle left") != std::string::npos);
+  }
+}
+
+TEST_CASE("a flat fin joined to a solid by an edge is not a piece of its own and is kept", "[repair][flat]") {
+  Mesh mesh = unit_cube();
+  // A triangle over an edge of the cube, sticking out in the plane of one face.
+  const Triangle& t = mesh.triangles[0];
+  const Vec3 a = mesh.positions[t[0]], b = mesh.positions[t[1]];
+  mesh.positions.push_back(a + (a - mesh.positions[t[2]]) + (b - a) * 0.5);
+  mesh.triangles.push_back({t[1], t[0], static_cast<VertexIndex>(mesh.positions.size() - 1)});
+  mesh.surfaces.push_back(original_surface);
+  const RepairReport report = repair_mesh(mesh);
+  CHECK_FALSE(names(report, RepairKind::removed_flat_pieces));
+}
+
+TEST_CASE("a hole no lid over its own corners closes gets a fan from a new vertex (patch-23)", "[repair][holes]") {
+  // CGAL's patch-23.off in miniature: a tent over a flat rectangular border whose
+  // sides hold collinear corners, and three of whose four corners are ears of
+  // the tent (the ear's diagonal is a mesh edge). Every triangulation over the
+  // border's own corners then draws a taken diagonal or a triangle over one side's
+  // collinear corners: the least-area lid finds none. The fan from the corners'
+  // mean, (2, 1, 0), lies in the border's plane: the tent's volume, exactly.
+  const std::vector<Vec3> points = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}, {4, 0, 0}, {4, 1, 0},
+                                    {4, 2, 0}, {3, 2, 0}, {2, 2, 0}, {1, 2, 0}, {0, 2, 0}, {0, 1, 0},
+                                    {1, 1, 1}, {2, 1, 1}, {3, 1, 1}};
+  const std::vector<Triangle> triangles = {{0, 1, 12},  {0, 12, 11}, {1, 2, 13},  {1, 13, 12}, {2, 3, 14},  {2, 14, 13},
+                                           {3, 5, 14},  {11, 12, 9}, {12, 13, 8}, {12, 8, 9},  {13, 14, 7}, {13, 7, 8},
+                                           {14, 5, 7},  {3, 4, 5},   {5, 6, 7},   {9, 10, 11}};
+  Mesh mesh = mesh_from(points, triangles);
+  const RepairReport report = repair_mesh(mesh);
+  INFO(report.summary());
+  REQUIRE(names(report, RepairKind::filled_holes));
+  CHECK(report.find(RepairKind::filled_holes)->text.find("by a fan from a new vertex") != std::string::npos);
+  CHECK(report.notes.empty());
+  CHECK(problem_after_repair(mesh).empty());
+  CHECK(mesh.vertex_count() == 16);
+  CHECK(mesh.positions.back() == Vec3{2, 1, 0});
+  CHECK(exact_six_volume(mesh) == 17);
+  // Deterministic: the same bytes again.
+  Mesh again = mesh_from(points, triangles);
+  repair_mesh(again);
+  CHECK(canonical_bytes(again) == canonical_bytes(mesh));
 }
 
 // --- the command ------------------------------------------------------------------

@@ -2,7 +2,9 @@
 // Mesh readers and writers: OFF, OBJ, PLY (ascii and binary), STL (ascii and binary).
 //
 // Readers never repair: they weld corners whose positions are equal (so -0.0 and
-// +0.0 weld, and nothing within a tolerance does), fan-triangulate polygons, keep
+// +0.0 weld, and nothing within a tolerance does), triangulate polygons (by the
+// fan from their first corner where its triangles all turn the polygon's way,
+// else by ear clipping decided exactly in a projection: io_internal.hpp), keep
 // every face as written (a degenerate face stays, for validation to name), drop
 // vertices no face uses, and throw on anything malformed, including a file with no
 // faces. Vertices are numbered in order of first use by the triangles. Writers print

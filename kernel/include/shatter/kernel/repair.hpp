@@ -44,18 +44,21 @@ enum class RepairKind {
   resolved_self_intersections_exactly,  ///< intersecting triangles split along their intersections exactly (mesh
                                         ///< arrangement), the faces bounding winding number >= 1 kept, rounded and
                                         ///< certified once (RepairOptions::round_solid); runs last
+  removed_flat_pieces,  ///< connected pieces (through shared vertices) whose corners all lie in one plane, exactly: however
+                        ///< they are closed they enclose no volume; runs after step 2 (appended: see above)
 };
 
-/// Every RepairKind (in step order, but for the last); a kind's position is the number the
+/// Every RepairKind (in step order, but for the last two); a kind's position is the number the
 /// .shatter file stores for it (formats/file.hpp, section `rpar`), so new kinds
 /// are appended, never inserted.
-inline constexpr std::array<RepairKind, 12> all_repair_kinds = {
+inline constexpr std::array<RepairKind, 13> all_repair_kinds = {
     RepairKind::merged_duplicate_vertices,       RepairKind::removed_repeated_index_triangles,
     RepairKind::removed_duplicate_triangles,     RepairKind::removed_opposite_triangle_pairs,
     RepairKind::reversed_triangles,              RepairKind::stitched_border_edges,
     RepairKind::fixed_zero_area_triangles,       RepairKind::filled_holes,
     RepairKind::resolved_self_intersections,     RepairKind::removed_unused_vertices,
-    RepairKind::separated_touching_parts,        RepairKind::resolved_self_intersections_exactly};
+    RepairKind::separated_touching_parts,        RepairKind::resolved_self_intersections_exactly,
+    RepairKind::removed_flat_pieces};
 
 /// The kind's name as the CLI's JSON prints it, e.g. "filled_holes".
 std::string_view repair_kind_name(RepairKind kind);
@@ -133,11 +136,15 @@ struct RepairReport {
   std::vector<RepairNote> notes;      ///< what was attempted but not done
   std::size_t vertices_before = 0, triangles_before = 0;
   std::size_t vertices_after = 0, triangles_after = 0;
-  /// Step 11 arranged the surface exactly and found no cell of winding number >= 1:
-  /// the surface encloses no volume (a flat or back-to-back surface), so no repair
-  /// can make a solid of it. A caller refusing the mesh names this, not the
+  /// Step 11 arranged the surface exactly and found no cell of winding number >= 1,
+  /// or step 2 found every piece flat: the surface encloses no volume (a flat or
+  /// back-to-back surface), so no repair can make a solid of it. A caller refusing the mesh names this, not the
   /// self-intersections left. Not stored in .shatter files (the note says it too).
   bool encloses_no_volume = false;
+  /// With encloses_no_volume: why, one phrase: "every cell of its exact arrangement
+  /// has winding number <= 0", or "every piece of it is flat (all its corners in one
+  /// plane)" when step 2 removed every triangle as flat (the mesh is left empty).
+  std::string no_volume_reason;
 
   bool changed() const { return !changes.empty(); }
   /// Nothing changed and nothing noted: the report of a mesh used as read.
@@ -152,7 +159,12 @@ struct RepairReport {
 /// defect is present:
 ///  1. merge vertices at exactly equal positions (a caller may pass an unwelded mesh);
 ///  2. remove triangles that use one vertex twice, extra copies of a triangle, and
-///     pairs of a triangle with its reverse;
+///     pairs of a triangle with its reverse; then every piece (triangles connected
+///     through shared vertices) whose corners all lie in one plane (exact tests):
+///     a flat sheet, e.g. a stray triangle crossing a solid, encloses no volume
+///     whatever lid closes it, so it cannot add to the solid, and its lid would
+///     only lie on it (the issue's item 6: such input encloses nothing). When
+///     that leaves no triangle, the mesh is left with none (callers refuse it);
 ///  3. orient each connected piece consistently (CGAL orient_polygon_soup; a vertex
 ///     or edge that cannot be made manifold is split for CGAL only and joined again
 ///     on output, since shatter's meshes are welded by position);
@@ -170,8 +182,12 @@ struct RepairReport {
 ///     vertices instead: where two borders pass a vertex, each gap between its
 ///     two fans becomes one hole (from one fan's border to the other's), split
 ///     where a hole still passes a vertex twice, each part by its least-area
-///     triangulation that adds no edge or triangle the mesh has (none when every
-///     triangulation does: noted, the hole left);
+///     triangulation that adds no edge or triangle the mesh has; when every
+///     triangulation does (a flat border with collinear corners along its
+///     sides whose corners are ears of the surface: CGAL's patch-23.off), by a
+///     fan from one new vertex at the mean of the part's corners, which adds
+///     only new edges, taken when no fan triangle is exactly collinear and the
+///     mean is no vertex's position (else noted, the hole left);
 ///  7. when the mesh is closed, orient every shell to bound a volume, the outermost
 ///     outward (orient_to_bound_a_volume);
 ///  8. when closed and still self-intersecting and `resolve_self_intersections`,
