@@ -44,13 +44,8 @@ std::string repair_flag_help(const std::string& then) {
          then;
 }
 
-std::string no_volume_reason(const RepairReport& report) {
-  return report.no_volume_reason.empty() ? "every cell of its exact arrangement has winding number <= 0"
-                                         : report.no_volume_reason;
-}
-
 std::string no_volume_refusal(const std::string& path, const RepairReport& report, const std::string& defects) {
-  return "invalid mesh " + path + " after --repair: encloses no volume: " + no_volume_reason(report) + " (what is left: " +
+  return "invalid mesh " + path + " after --repair: encloses no volume: " + report.no_volume_reason + " (what is left: " +
          defects + ")";
 }
 
@@ -65,7 +60,7 @@ InputMesh read_valid_solid(const std::string& path, bool repair, bool allow_self
     require_valid_solid(input.mesh, path, allow_self_intersections);
   } catch (const InvalidMeshError& e) {
     std::string message = e.what();
-    if (input.repair->encloses_no_volume) {
+    if (input.repair->encloses_no_volume()) {
       // require_valid_solid's line is "invalid mesh <path>: <defects>"; only the
       // defects go into the parenthesis.
       const std::string prefix = "invalid mesh " + path + ": ";

@@ -47,13 +47,8 @@ struct InputMesh {
 /// when repair found that it encloses no volume.
 InputMesh read_valid_solid(const std::string& path, bool repair, bool allow_self_intersections);
 
-/// Why --repair left a mesh that encloses no volume (RepairReport::encloses_no_volume)
-/// unusable, for the refusal and validate's report: the report's no_volume_reason,
-/// e.g. "every cell of its exact arrangement has winding number <= 0".
-std::string no_volume_reason(const RepairReport& report);
-
 /// The one refusal of a repaired mesh that encloses no volume: "invalid mesh <path>
-/// after --repair: encloses no volume: <no_volume_reason(report)> (what is left: <defects>)",
+/// after --repair: encloses no volume: <report.no_volume_reason> (what is left: <defects>)",
 /// `defects` being what validation names in the repaired mesh (the
 /// self-intersections the exact step could not resolve). Named first since no
 /// repair can make a solid of it, whatever else is wrong.

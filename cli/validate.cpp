@@ -29,7 +29,7 @@ constexpr const char* empty_after_repair = "no triangle left after --repair (the
 // back-to-back surface): that, not the self-intersections it leaves, is why no
 // repair makes a solid of it.
 bool encloses_no_volume(const ValidatedMesh& checked) {
-  return checked.input.repair && checked.input.repair->encloses_no_volume &&
+  return checked.input.repair && checked.input.repair->encloses_no_volume() &&
          (!checked.report.valid() || checked.input.mesh.triangles.empty());
 }
 
@@ -40,7 +40,7 @@ bool is_valid_solid(const ValidatedMesh& checked) {
 json defects_json(const ValidatedMesh& checked) {
   json defects = json::array();
   if (checked.input.mesh.triangles.empty()) defects.push_back({{"defect", "empty"}, {"count", 0}, {"first", empty_after_repair}});
-  if (encloses_no_volume(checked)) defects.push_back({{"defect", "no volume"}, {"count", 0}, {"first", no_volume_reason(*checked.input.repair)}});
+  if (encloses_no_volume(checked)) defects.push_back({{"defect", "no volume"}, {"count", 0}, {"first", checked.input.repair->no_volume_reason}});
   for (const Defect& d : checked.report.defects) {
     defects.push_back({{"defect", defect_name(d.kind)}, {"count", d.count}, {"first", d.first}});
   }
@@ -74,7 +74,7 @@ void print_text(const ValidateArgs& args, const ValidatedMesh& checked) {
   }
   std::cout << args.mesh << ": " << report.vertex_count << " vertices, " << report.triangle_count << " triangles\n";
   if (checked.input.mesh.triangles.empty()) std::cout << "  empty: " << empty_after_repair << '\n';
-  if (encloses_no_volume(checked)) std::cout << "  no volume: " << no_volume_reason(*checked.input.repair) << '\n';
+  if (encloses_no_volume(checked)) std::cout << "  no volume: " << checked.input.repair->no_volume_reason << '\n';
   for (const Defect& d : report.defects) {
     std::cout << "  " << defect_name(d.kind) << ": " << d.count << ", first " << d.first << '\n';
   }

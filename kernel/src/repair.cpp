@@ -374,48 +374,44 @@ class Repairer {
         if (!fresh) pieces.unite(it->second, static_cast<std::uint32_t>(i));
       }
     }
-    // Per piece: a triangle of it with area (its plane), then whether every
-    // corner of the piece lies on that plane.
-    std::unordered_map<std::uint32_t, std::size_t> plane_of;  // piece root -> index into working_
+    // Per piece (by its root): a triangle of it with area, whose plane every
+    // corner of the piece must lie on; none when all its triangles are collinear.
+    constexpr std::size_t no_plane = std::numeric_limits<std::size_t>::max();
+    std::vector<std::size_t> plane_of(working_.size(), no_plane);
     const auto point = [&](VertexIndex v) { return to_cgal(input_.positions[v]); };
     for (std::size_t i = 0; i < working_.size(); ++i) {
       const Triangle tri = mapped(working_[i]);
-      if (CGAL::collinear(point(tri[0]), point(tri[1]), point(tri[2]))) continue;
-      plane_of.try_emplace(pieces.find(static_cast<std::uint32_t>(i)), i);
+      std::size_t& plane = plane_of[pieces.find(static_cast<std::uint32_t>(i))];
+      if (plane == no_plane && !CGAL::collinear(point(tri[0]), point(tri[1]), point(tri[2]))) plane = i;
     }
-    std::unordered_map<std::uint32_t, bool> flat;  // piece root -> all corners on its plane so far
+    std::vector<std::uint8_t> flat(working_.size(), 1);  // by root: every corner so far on its plane
     for (std::size_t i = 0; i < working_.size(); ++i) {
       const std::uint32_t root = pieces.find(static_cast<std::uint32_t>(i));
-      auto [it, fresh] = flat.try_emplace(root, true);
-      if (!it->second) continue;
-      const auto plane = plane_of.find(root);
-      if (plane == plane_of.end()) continue;  // every triangle of it collinear: flat
-      const Triangle base = mapped(working_[plane->second]), tri = mapped(working_[i]);
-      for (int c = 0; c < 3 && it->second; ++c) {
-        it->second = CGAL::orientation(point(base[0]), point(base[1]), point(base[2]), point(tri[c])) == CGAL::COPLANAR;
+      if (!flat[root] || plane_of[root] == no_plane) continue;
+      const Triangle base = mapped(working_[plane_of[root]]), tri = mapped(working_[i]);
+      for (int c = 0; c < 3 && flat[root]; ++c) {
+        flat[root] = CGAL::orientation(point(base[0]), point(base[1]), point(base[2]), point(tri[c])) == CGAL::COPLANAR;
       }
     }
     std::vector<std::size_t> kept;
-    std::size_t removed = 0;
-    std::set<std::uint32_t> removed_pieces;
+    std::size_t removed = 0, removed_pieces = 0;
     for (std::size_t i = 0; i < working_.size(); ++i) {
       const std::uint32_t root = pieces.find(static_cast<std::uint32_t>(i));
-      if (flat.at(root)) {
-        ++removed;
-        removed_pieces.insert(root);
-      } else {
+      if (!flat[root]) {
         kept.push_back(working_[i]);
+        continue;
       }
+      ++removed;
+      if (root == i) ++removed_pieces;
     }
     if (removed == 0) return;
     if (kept.empty()) {
-      report_.encloses_no_volume = true;
       report_.no_volume_reason = "every piece of it is flat (all its corners in one plane)";
     }
     working_ = std::move(kept);
     change(RepairKind::removed_flat_pieces, removed,
            "removed " + plural(removed, "triangle", "triangles") + " in " +
-               plural(removed_pieces.size(), "flat piece", "flat pieces") +
+               plural(removed_pieces, "flat piece", "flat pieces") +
                " (all corners in one plane: closed in any way, they enclose no volume)");
   }
 
@@ -1412,7 +1408,6 @@ void resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const Rep
     return;
   }
   if (boundary.triangles.empty()) {
-    report.encloses_no_volume = true;
     report.no_volume_reason = "every cell of its exact arrangement has winding number <= 0";
     not_done("the surface winds around no volume (every cell has winding number <= 0)");
     return;

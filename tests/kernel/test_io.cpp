@@ -344,7 +344,7 @@ std::pair<std::string, std::string> star_prism(int points, double inner, double 
 
 TEST_CASE("a non-convex polygon face is ear-clipped where its fan folds, a convex one still fanned (mpi.off)",
           "[io]") {
-  // CGAL's mpi.off: 30 of its 52 polygon faces are not convex, and their fans
+  // CGAL's mpi.off: 23 of its 52 polygon faces are not convex, and their fans
   // from corner 0 folded over themselves: 141 pairs of intersecting triangles in
   // a mesh whose polygons bound a valid solid. Star prisms over seeds, corner 0
   // reflex: read as a valid solid by both readers; with the old fan, often not.

@@ -236,54 +236,55 @@ std::vector<VertexIndex> distinct_vertices(std::span<const Edge> border) {
   return vertices;
 }
 
+// The certificate that a triangulation made over approximations of the exact
+// points triangulates the polygon the exact points bound: every triangle strictly
+// counter-clockwise for the exact points, no two vertices at one exact point, and
+// the triangles' boundary is the border (cap_boundary_is_border). The triangles
+// then form a chain with that boundary, so the number of triangles covering a
+// point not on an edge is the border's winding number around it; the exact
+// triangulation accepts a border only where that number is 0 or 1, and there the
+// triangles cover the region once and meet only along edges.
+bool certifies_for_exact_points(const std::vector<Triangle>& triangles, std::span<const Edge> border,
+                                const std::vector<VertexIndex>& vertices,
+                                const std::vector<ExactKernel::Point_2>& points) {
+  if (!cap_boundary_is_border(triangles, border)) return false;
+  IndexMap slot_of_vertex(vertices.size());
+  for (std::uint32_t i = 0; i < vertices.size(); ++i) slot_of_vertex.insert(vertices[i], i);
+  const auto point = [&](VertexIndex v) -> const ExactKernel::Point_2& { return points[slot_of_vertex.find(v)]; };
+  for (const Triangle& t : triangles) {
+    if (orientation_2d(point(t[0]), point(t[1]), point(t[2])) != Sign::positive) return false;
+  }
+  std::vector<std::uint32_t> order(points.size());
+  for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(),
+            [&](std::uint32_t a, std::uint32_t b) { return CGAL::compare_xy(points[a], points[b]) == CGAL::SMALLER; });
+  for (std::size_t i = 1; i < order.size(); ++i) {
+    if (CGAL::compare_xy(points[order[i - 1]], points[order[i]]) == CGAL::EQUAL) return false;
+  }
+  return true;
+}
+
 // Exact points triangulated through their double approximations: the
-// triangulation of the doubles is taken when it certifies for the exact points,
-// and the exact triangulation is built only when it does not. Exact incircle
-// tests are what make the exact triangulation slow: a cap's corners lie close to
-// a conic (a plane section of a smooth surface), so the filter fails on many
-// quadruples; the certificate needs only orientations and distinctness, which
-// the filter decides almost always.
-//
-// Certificate: every triangle strictly counter-clockwise for the exact points,
-// no two vertices at one exact point, and the triangles' boundary is the border
-// (cap_boundary_is_border). The triangles then form a chain with that boundary,
-// so the number of triangles covering a point not on an edge is the border's
-// winding number around it; the exact triangulation accepts a border only
-// where that number is 0 or 1, and there the triangles cover the region once
-// and meet only along edges, so both are triangulations of the same polygon.
-// Where the two differ at all, they differ by diagonals of near-cocircular
-// corners, where rounding decided the Delaunay choice.
+// triangulation of the doubles is taken when it certifies for the exact points
+// (above), and the exact triangulation is built only when it does not. Exact
+// incircle tests are what make the exact triangulation slow: a cap's corners lie
+// close to a conic (a plane section of a smooth surface), so the filter fails on
+// many quadruples; the certificate needs only orientations and distinctness,
+// which the filter decides almost always. Where the two differ at all, they
+// differ by diagonals of near-cocircular corners, where rounding decided the
+// Delaunay choice. Returns only a triangulation whose boundary is the border;
+// nullopt where the exact triangulation fails or its boundary is not the border.
 std::optional<std::vector<Triangle>> triangulate_exact_points(std::span<const Edge> border,
                                                               const std::vector<VertexIndex>& vertices,
                                                               const std::vector<ExactKernel::Point_2>& points) {
   std::vector<CGAL::Epick::Point_2> approximate;
   approximate.reserve(points.size());
   for (const auto& p : points) approximate.emplace_back(CGAL::to_double(p.x()), CGAL::to_double(p.y()));
-  if (auto candidate = triangulate_with_cdt<CGAL::Epick>(border, vertices, approximate)) {
-    bool certified = cap_boundary_is_border(*candidate, border);
-    if (certified) {
-      IndexMap slot_of_vertex(vertices.size());
-      for (std::uint32_t i = 0; i < vertices.size(); ++i) slot_of_vertex.insert(vertices[i], i);
-      for (const Triangle& t : *candidate) {
-        if (orientation_2d(points[slot_of_vertex.find(t[0])], points[slot_of_vertex.find(t[1])],
-                           points[slot_of_vertex.find(t[2])]) != Sign::positive) {
-          certified = false;
-          break;
-        }
-      }
-    }
-    if (certified) {
-      std::vector<std::uint32_t> order(points.size());
-      for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-      std::sort(order.begin(), order.end(),
-                [&](std::uint32_t a, std::uint32_t b) { return CGAL::compare_xy(points[a], points[b]) == CGAL::SMALLER; });
-      for (std::size_t i = 1; i < order.size() && certified; ++i) {
-        certified = CGAL::compare_xy(points[order[i - 1]], points[order[i]]) != CGAL::EQUAL;
-      }
-    }
-    if (certified) return candidate;
-  }
-  return triangulate_with_cdt<ExactKernel>(border, vertices, points);
+  auto candidate = triangulate_with_cdt<CGAL::Epick>(border, vertices, approximate);
+  if (candidate && certifies_for_exact_points(*candidate, border, vertices, points)) return candidate;
+  auto exact = triangulate_with_cdt<ExactKernel>(border, vertices, points);
+  if (exact && !cap_boundary_is_border(*exact, border)) return std::nullopt;
+  return exact;
 }
 
 template <class Point2, class Project>
@@ -315,8 +316,9 @@ std::optional<Cap<Point>> fan_or_cdt(std::span<const Edge> border,
     triangles = triangulate_exact_points(border, vertices, project_all<Point2>(vertices, project));
   } else {
     triangles = triangulate_with_cdt<K>(border, vertices, project_all<Point2>(vertices, project));
+    if (triangles && !cap_boundary_is_border(*triangles, border)) triangles.reset();
   }
-  if (!triangles || !cap_boundary_is_border(*triangles, border)) return std::nullopt;
+  if (!triangles) return std::nullopt;
   cap.triangles = std::move(*triangles);
   cap.method = CapMethod::cdt;
   return cap;
@@ -367,7 +369,7 @@ Cap<Vec3> triangulate_cap(std::span<const Vec3> positions, std::span<const Edge>
         border, vertices, project_all<ExactKernel::Point_2>(vertices, [&](VertexIndex v) {
           return projection(exact_position(v));
         }));
-    if (triangles && cap_boundary_is_border(*triangles, border)) {
+    if (triangles) {
       Cap<Vec3> cap;
       cap.triangles = std::move(*triangles);
       cap.loop_count = loops.size();

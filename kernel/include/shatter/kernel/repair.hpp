@@ -136,17 +136,18 @@ struct RepairReport {
   std::vector<RepairNote> notes;      ///< what was attempted but not done
   std::size_t vertices_before = 0, triangles_before = 0;
   std::size_t vertices_after = 0, triangles_after = 0;
-  /// Step 11 arranged the surface exactly and found no cell of winding number >= 1,
-  /// or step 2 found every piece flat: the surface encloses no volume (a flat or
-  /// back-to-back surface), so no repair can make a solid of it. A caller refusing the mesh names this, not the
-  /// self-intersections left. Not stored in .shatter files (the note says it too).
-  bool encloses_no_volume = false;
-  /// With encloses_no_volume: why, one phrase: "every cell of its exact arrangement
-  /// has winding number <= 0", or "every piece of it is flat (all its corners in one
-  /// plane)" when step 2 removed every triangle as flat (the mesh is left empty).
+  /// Empty, or why the surface encloses no volume (a flat or back-to-back surface),
+  /// so that no repair can make a solid of it, in one phrase: "every piece of it is
+  /// flat (all its corners in one plane)" when step 2 removed every triangle as flat
+  /// (the mesh is left empty), or "every cell of its exact arrangement has winding
+  /// number <= 0" when step 11 found no cell of winding number >= 1. A caller
+  /// refusing the mesh names this, not the self-intersections left. Not stored in
+  /// .shatter files (the note says it too).
   std::string no_volume_reason;
 
   bool changed() const { return !changes.empty(); }
+  /// The surface encloses no volume: no_volume_reason says why.
+  bool encloses_no_volume() const { return !no_volume_reason.empty(); }
   /// Nothing changed and nothing noted: the report of a mesh used as read.
   bool empty() const { return changes.empty() && notes.empty(); }
   /// The change of this kind, or nullptr.
