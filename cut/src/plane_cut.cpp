@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include <tbb/parallel_for.h>
+
 #include "shatter/cut/cut_solid.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 
@@ -32,18 +34,42 @@ PlaneCut cut_by_plane(const PlaneInput& input, const PlaneSet& set, const Solid&
   // Against a trusted parent, the triangles to test are the new ones along the
   // cut: certification looks for what they may cross in a slab around it.
   if (solid_mesh != nullptr) meshing.cut = &set.cuts[cut.index()];
-  result.pieces.reserve(exact.below.size() + exact.above.size());
-  for (const bool above : {false, true}) {
-    for (Solid& piece : above ? exact.above : exact.below) {
-      // round_solid names validate_mesh's defects exactly when the mesh is not valid.
-      RoundedSolid rounded = round_solid(set, piece, meshing);
-      CutPiece& out = result.pieces.emplace_back(CutPiece{above, std::move(piece), std::move(rounded.mesh),
-                                                          std::move(rounded.defect), rounded.separated_vertices,
-                                                          rounded.moved_volume, rounded.moved_volume_bound});
-      // A collapsed piece's moved volume is its own (round_solid measured it
-      // exactly against the bound its rounding can move).
-      out.vanished = rounded.collapsed;
+  std::vector<Solid*> exact_pieces;
+  exact_pieces.reserve(exact.below.size() + exact.above.size());
+  std::size_t faces = 0;
+  for (std::vector<Solid>* side : {&exact.below, &exact.above}) {
+    for (Solid& piece : *side) {
+      exact_pieces.push_back(&piece);
+      faces += piece.faces.size();
     }
+  }
+  result.pieces.resize(exact_pieces.size());
+  const auto round_piece = [&](std::size_t i) {
+    Solid& piece = *exact_pieces[i];
+    // round_solid names validate_mesh's defects exactly when the mesh is not valid.
+    RoundedSolid rounded = round_solid(set, piece, meshing);
+    CutPiece& out = result.pieces[i];
+    out.above = i >= exact.below.size();
+    out.solid = std::move(piece);
+    out.mesh = std::move(rounded.mesh);
+    out.defect = std::move(rounded.defect);
+    out.separated_vertices = rounded.separated_vertices;
+    out.moved_volume = rounded.moved_volume;
+    out.moved_volume_bound = rounded.moved_volume_bound;
+    // A collapsed piece's moved volume is its own (round_solid measured it
+    // exactly against the bound its rounding can move).
+    out.vanished = rounded.collapsed;
+  };
+  // Each piece is rounded and certified on its own (round_solid is a pure
+  // function of it), so the pieces of a big cut go to idle threads: the first
+  // cuts of a build are its serial part (one node, then two). Small pieces are
+  // rounded in turn, where a task would cost more than it saves; either way the
+  // pieces are the same.
+  constexpr std::size_t parallel_faces = 1024;
+  if (exact_pieces.size() > 1 && faces >= parallel_faces) {
+    tbb::parallel_for(std::size_t{0}, exact_pieces.size(), round_piece, tbb::simple_partitioner());
+  } else {
+    for (std::size_t i = 0; i < exact_pieces.size(); ++i) round_piece(i);
   }
   return result;
 }
