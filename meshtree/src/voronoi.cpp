@@ -74,6 +74,7 @@
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/inside.hpp"
 #include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/predicates.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "shatter/version.hpp"
@@ -307,16 +308,23 @@ enum class CellPlace : std::uint8_t { surface, inside, outside };
 
 // Decides, exactly, which cells lie strictly inside or outside the solid. A cell
 // is the convex hull of its Voronoi vertices, so its box (cell_boxes, which
-// encloses their intervals) holds it; when that closed box meets no input
-// triangle's closed box, the surface misses the closed cell, which is connected
-// and so lies wholly inside the solid or wholly outside it. Two such cells that
+// encloses their intervals) holds it, and it is where each of its bisectors is
+// on its site's side (<= 0 for B_pq seen from p, the sentinels' included). An
+// input triangle misses the closed cell when its closed box misses the cell's
+// box, or when its three corners lie strictly beyond one of the cell's
+// bisectors (exact side_of_plane on the input doubles: the triangle is their
+// convex hull). When every triangle misses it, the surface misses the closed
+// cell, which is connected and so lies wholly inside the solid or wholly
+// outside it. Two such cells that
 // are Delaunay neighbours share a non-empty face, so their union is connected and
 // misses the surface too: one point-in-solid query (of a site, which lies in its
 // own cell) per connected set of them decides the lot. Every other cell is
 // `surface` (cut by the plane kernel as before). Deterministic (the answer is a
 // set, whatever order the box search reports pairs in).
 std::vector<CellPlace> place_cells(const Mesh& mesh, std::span<const Vec3> sites, std::span<const Box> cell_boxes,
-                                   std::span<const std::array<std::uint32_t, 2>> pairs) {
+                                   std::span<const std::array<std::uint32_t, 2>> pairs, std::span<const Plane> planes,
+                                   std::span<const std::array<std::uint32_t, 2>> plane_pairs,
+                                   std::span<const std::vector<std::uint32_t>> bisectors_of) {
   using IndexBox = CGAL::Box_intersection_d::Box_with_handle_d<double, 3, std::size_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
   const auto site_count = static_cast<std::uint32_t>(sites.size());
   std::vector<CellPlace> place(site_count, CellPlace::surface);
@@ -339,11 +347,42 @@ std::vector<CellPlace> place_cells(const Mesh& mesh, std::span<const Vec3> sites
   std::vector<char> clear(site_count, 0);
   for (const IndexBox& c : cells) clear[c.handle()] = 1;
   // Closed boxes (CGAL's default topology): touching counts as meeting.
+  std::vector<std::array<std::uint32_t, 2>> near;  // (cell, triangle) whose boxes meet
   CGAL::box_intersection_d(cells.begin(), cells.end(), triangles.begin(), triangles.end(),
                            [&](const IndexBox& a, const IndexBox& b) {
-                             const std::size_t cell = a.handle() < site_count ? a.handle() : b.handle();
-                             clear[cell] = 0;
+                             const bool first = a.handle() < site_count;
+                             const std::size_t cell = first ? a.handle() : b.handle();
+                             const std::size_t triangle = (first ? b.handle() : a.handle()) - site_count;
+                             near.push_back({static_cast<std::uint32_t>(cell), static_cast<std::uint32_t>(triangle)});
                            });
+  std::sort(near.begin(), near.end());
+  for (std::size_t k = 0; k < near.size();) {
+    const std::uint32_t cell = near[k][0];
+    std::size_t end = k;
+    while (end < near.size() && near[end][0] == cell) ++end;
+    const std::vector<std::uint32_t>& bisectors = bisectors_of[cell];
+    std::size_t last = 0;  // the plane that separated the last triangle, tried first
+    for (; k < end && clear[cell]; ++k) {
+      const Triangle& t = mesh.triangles[near[k][1]];
+      const auto beyond = [&](std::size_t b) {
+        const std::uint32_t plane = bisectors[b];
+        const Sign far = plane_pairs[plane][0] == cell ? Sign::positive : Sign::negative;
+        for (const VertexIndex v : t) {
+          if (side_of_plane(planes[plane], mesh.positions[v]) != far) return false;
+        }
+        return true;
+      };
+      bool separated = !bisectors.empty() && beyond(last);
+      for (std::size_t b = 0; b < bisectors.size() && !separated; ++b) {
+        if (b != last && beyond(b)) {
+          separated = true;
+          last = b;
+        }
+      }
+      if (!separated) clear[cell] = 0;
+    }
+    k = end;
+  }
   std::vector<std::vector<std::uint32_t>> neighbours(site_count);
   for (const auto& [a, b] : pairs) {
     if (b < site_count && clear[a] && clear[b]) {
@@ -988,7 +1027,7 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
   const std::vector<CellPlace> place =
       recipe.allow_self_intersections
           ? std::vector<CellPlace>(site_count, CellPlace::surface)
-          : place_cells(mesh, sites, triangulated.cell_boxes, triangulated.pairs);
+          : place_cells(mesh, sites, triangulated.cell_boxes, triangulated.pairs, planes, plane_pairs, bisectors_of);
   std::atomic<std::size_t> cells_assembled{0};
   std::vector<std::vector<std::array<std::uint32_t, 2>>> plane_to(site_count);
   for (std::uint32_t p = 0; p < plane_pairs.size(); ++p) plane_to[plane_pairs[p][0]].push_back({plane_pairs[p][1], p});
