@@ -460,6 +460,12 @@ std::optional<Solid> assemble_inner_cell(const Triangulated& tri, std::uint32_t 
   }
   std::sort(star.begin(), star.end(), [](const auto& a, const auto& b) { return a->info() < b->info(); });
   Solid solid;
+  // Sized for the cell at once (about 2 vertices and 6 corners per face).
+  solid.faces.reserve(bisectors.size());
+  solid.loops.reserve(bisectors.size());
+  solid.corners.reserve(6 * bisectors.size());
+  solid.defs.reserve(star.size());
+  solid.approx.reserve(star.size());
   thread_local std::vector<std::array<std::uint32_t, 2>> vertex_of_sphere;  // (sphere, vertex), in order of first use
   vertex_of_sphere.clear();
   thread_local std::vector<std::uint32_t> ring;
