@@ -583,6 +583,12 @@ std::optional<Solid> assemble_inner_cell(const Triangulated& tri, std::uint32_t 
     }
   }
   solid.convex = true;
+#ifndef NDEBUG
+  // Every corner on its face's plane and its edge's line, exactly (debug builds).
+  if (const std::string problem = check_solid(set, solid); !problem.empty()) {
+    throw std::logic_error("build_voronoi_tree: an assembled inner cell is not sound: " + problem);
+  }
+#endif
   return solid;
 }
 
