@@ -141,8 +141,8 @@ int main(int argc, char** argv) {
             : std::vector<std::string>{"cube.off", "elephant.off", "knot1.off", "fandisk.off", "fandiskx4.off"};
   const fs::path scratch = fs::temp_directory_path() / ("shatter-bench-voronoi-" + std::to_string(::getpid()));
   if (manifold) fs::create_directories(scratch);
-  std::printf("%-14s %9s %7s %9s %9s %10s %8s %14s %8s %8s %6s %8s", "mesh", "triangles", "sites", "fragments", "seconds",
-              "cells/s", "invalid", "volume error", "glue s", "internal", "depth", "unglued");
+  std::printf("%-14s %9s %7s %9s %9s %10s %8s %14s %8s %8s %6s %8s %9s", "mesh", "triangles", "sites", "fragments", "seconds",
+              "cells/s", "invalid", "volume error", "glue s", "internal", "depth", "unglued", "assembled");
   if (manifold) std::printf(" %10s %10s %10s %8s", "manifold s", "m. frags", "m. vol err", "ratio");
   std::printf("\n");
   for (const std::string& name : meshes) {
@@ -179,9 +179,10 @@ int main(int argc, char** argv) {
         volume += tree.leaf(leaf).mass.volume;
       }
       const double error = std::fabs(volume - tree.nodes[0].mass.volume) / tree.nodes[0].mass.volume;
-      std::printf("%-14s %9zu %7zu %9zu %9.3f %10.0f %8zu %14.3g %8.3f %8zu %6u %8zu", name.c_str(), mesh.triangles.size(),
+      std::printf("%-14s %9zu %7zu %9zu %9.3f %10.0f %8zu %14.3g %8.3f %8zu %6u %8zu %9zu", name.c_str(), mesh.triangles.size(),
                   sites_count, tree.leaf_count(), seconds, static_cast<double>(sites_count) / seconds, invalid, error,
-                  report.seconds_glue, tree.nodes.size() - tree.leaf_count(), depth, report.sets_unglued);
+                  report.seconds_glue, tree.nodes.size() - tree.leaf_count(), depth, report.sets_unglued,
+                  report.cells_assembled);
       if (manifold) {
         const fs::path cells_file = scratch / "cells.txt";
         write_cells(cells_file, voronoi_cell_planes(mesh, sites));

@@ -17,6 +17,16 @@
 // on). The assembly checks that last property and throws std::logic_error if a
 // box plane is left, so a wrong box could not pass unnoticed.
 //
+// Cells inside the solid are not cut at all. A cell whose box meets no input
+// triangle's box lies wholly inside or wholly outside the solid (place_cells
+// decides which, exactly); an inside cell's fragment is the whole cell, a
+// convex polyhedron the Delaunay triangulation already describes (its faces
+// the dual polygons of the site's Delaunay edges), so it is assembled from the
+// site's star (assemble_inner_cell) with the same planes, definitions and
+// orientation a cut gives it; an outside cell has no fragment. Only the cells
+// that may meet the surface are cut, and a group's box holds only those (a
+// group with none needs no container).
+//
 // Shared vertices, shared bits: a point where the cells of sites a, b, c (and
 // d) meet is defined, in each of their fragments, by whichever two (three) of
 // their bisectors that cell's cuts met there. Rounding is a function of the
@@ -36,7 +46,9 @@
 #include <CGAL/Delaunay_triangulation_cell_base_3.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Interval_nt.h>
+#include <CGAL/Triangulation_cell_base_with_info_3.h>
 #include <CGAL/Triangulation_vertex_base_with_info_3.h>
+#include <CGAL/box_intersection_d.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/info.h>
@@ -49,6 +61,7 @@
 #include <functional>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <span>
@@ -59,7 +72,9 @@
 #include "shatter/cut/hull.hpp"
 #include "shatter/cut/plane_input.hpp"
 #include "shatter/kernel/error.hpp"
+#include "shatter/kernel/inside.hpp"
 #include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/predicates.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "shatter/version.hpp"
@@ -141,7 +156,11 @@ std::int64_t grid_index(double coordinate, double step) {
 
 using Epick = CGAL::Exact_predicates_inexact_constructions_kernel;
 using VertexBase = CGAL::Triangulation_vertex_base_with_info_3<std::uint32_t, Epick>;
-using CellBase = CGAL::Delaunay_triangulation_cell_base_3<Epick>;
+// A finite tetrahedron's info is its number in the order finite_cells lists them
+// (deterministic: the insertion order is), which orders an inner cell's
+// vertices (assemble_inner_cell).
+using CellBase =
+    CGAL::Triangulation_cell_base_with_info_3<std::uint32_t, Epick, CGAL::Delaunay_triangulation_cell_base_3<Epick>>;
 using Tds = CGAL::Triangulation_data_structure_3<VertexBase, CellBase>;
 using Delaunay = CGAL::Delaunay_triangulation_3<Epick, Tds>;
 // Unprotected intervals, under one switch of the rounding mode for the whole
@@ -152,6 +171,16 @@ using Interval = CGAL::Interval_nt<false>;
 struct Triangulated {
   std::vector<std::array<std::uint32_t, 2>> pairs;  ///< Delaunay edges i < j with a real site, sorted
   std::vector<Box> cell_boxes;                      ///< per real site: its Voronoi vertices' box
+  /// The triangulation itself and each point's vertex in it, kept to assemble
+  /// the cells that lie inside the solid (assemble_inner_cell).
+  std::unique_ptr<Delaunay> dt;
+  std::vector<Delaunay::Vertex_handle> vertex_of;
+  /// Per finite tetrahedron (by its info), the first numbered tetrahedron with
+  /// the same circumcentre (co-spherical neighbours across facets, decided
+  /// exactly, joined), and that one's four points in increasing order: one
+  /// definition for each Voronoi vertex, whichever cell names it.
+  std::vector<std::uint32_t> sphere_of;
+  std::vector<std::array<std::uint32_t, 4>> points_of;
 };
 
 // Morton order of grid points, compared without forming the code (the axis with
@@ -183,15 +212,18 @@ Triangulated triangulate(std::span<const Vec3> points, std::uint32_t real_count,
   std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
     return morton_less(keys[a], keys[b]) || (keys[a] == keys[b] && a < b);
   });
-  Delaunay dt;
+  Triangulated out;
+  out.dt = std::make_unique<Delaunay>();
+  Delaunay& dt = *out.dt;
+  out.vertex_of.assign(points.size(), Delaunay::Vertex_handle());
   Delaunay::Vertex_handle hint;
   for (const std::uint32_t i : order) {
     const Vec3& p = points[i];
     hint = hint == Delaunay::Vertex_handle() ? dt.insert(Epick::Point_3(p.x, p.y, p.z))
                                               : dt.insert(Epick::Point_3(p.x, p.y, p.z), hint);
     hint->info() = i;
+    out.vertex_of[i] = hint;
   }
-  Triangulated out;
   for (auto e = dt.finite_edges_begin(); e != dt.finite_edges_end(); ++e) {
     std::uint32_t a = e->first->vertex(e->second)->info(), b = e->first->vertex(e->third)->info();
     if (a > b) std::swap(a, b);
@@ -204,6 +236,37 @@ Triangulated triangulate(std::span<const Vec3> points, std::uint32_t real_count,
     for (Box& box : out.cell_boxes) box = {{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}};
     return out;
   }
+  std::uint32_t cell_number = 0;
+  for (auto c = dt.finite_cells_begin(); c != dt.finite_cells_end(); ++c) {
+    c->info() = cell_number++;
+    std::array<std::uint32_t, 4> four;
+    for (int k = 0; k < 4; ++k) four[k] = c->vertex(k)->info();
+    std::sort(four.begin(), four.end());
+    out.points_of.push_back(four);
+  }
+  // Co-spherical neighbours joined (union-find, the root the first numbered): the
+  // tetrahedra with one circumcentre triangulate the hull of the sites on its
+  // sphere, so they are connected across facets.
+  std::vector<std::uint32_t>& sphere = out.sphere_of;
+  sphere.resize(cell_number);
+  for (std::uint32_t i = 0; i < cell_number; ++i) sphere[i] = i;
+  const auto find = [&](std::uint32_t i) {
+    while (sphere[i] != i) i = sphere[i] = sphere[sphere[i]];
+    return i;
+  };
+  for (auto c = dt.finite_cells_begin(); c != dt.finite_cells_end(); ++c) {
+    for (int k = 0; k < 4; ++k) {
+      const Delaunay::Cell_handle n = c->neighbor(k);
+      if (dt.is_infinite(n) || n->info() < c->info()) continue;
+      const auto& fifth = n->vertex(n->index(c))->point();
+      if (CGAL::side_of_oriented_sphere(c->vertex(0)->point(), c->vertex(1)->point(), c->vertex(2)->point(),
+                                        c->vertex(3)->point(), fifth) == CGAL::ON_ORIENTED_BOUNDARY) {
+        const std::uint32_t a = find(c->info()), b = find(n->info());
+        sphere[std::max(a, b)] = std::min(a, b);
+      }
+    }
+  }
+  for (std::uint32_t i = 0; i < cell_number; ++i) sphere[i] = find(i);
   const CGAL::Protect_FPU_rounding<true> rounding_upward;  // Interval_nt<false> needs it; restored on return
   for (auto c = dt.finite_cells_begin(); c != dt.finite_cells_end(); ++c) {
     std::array<std::array<Interval, 3>, 4> v;
@@ -235,6 +298,298 @@ Triangulated triangulate(std::span<const Vec3> points, std::uint32_t real_count,
     }
   }
   return out;
+}
+
+// --- cells inside the solid -------------------------------------------------------
+
+// Where a site's closed cell lies: meeting the solid's surface (or not known not
+// to), strictly inside the solid, or strictly outside it.
+enum class CellPlace : std::uint8_t { surface, inside, outside };
+
+// Decides, exactly, which cells lie strictly inside or outside the solid. A cell
+// is the convex hull of its Voronoi vertices, so its box (cell_boxes, which
+// encloses their intervals) holds it, and it is where each of its bisectors is
+// on its site's side (<= 0 for B_pq seen from p, the sentinels' included). An
+// input triangle misses the closed cell when its closed box misses the cell's
+// box, or when its three corners lie strictly beyond one of the cell's
+// bisectors (exact side_of_plane on the input doubles: the triangle is their
+// convex hull). When every triangle misses it, the surface misses the closed
+// cell, which is connected and so lies wholly inside the solid or wholly
+// outside it. Two such cells that
+// are Delaunay neighbours share a non-empty face, so their union is connected and
+// misses the surface too: one point-in-solid query (of a site, which lies in its
+// own cell) per connected set of them decides the lot. Every other cell is
+// `surface` (cut by the plane kernel as before). Deterministic (the answer is a
+// set, whatever order the box search reports pairs in).
+std::vector<CellPlace> place_cells(const Mesh& mesh, std::span<const Vec3> sites, std::span<const Box> cell_boxes,
+                                   std::span<const std::array<std::uint32_t, 2>> pairs, std::span<const Plane> planes,
+                                   std::span<const std::array<std::uint32_t, 2>> plane_pairs,
+                                   std::span<const std::vector<std::uint32_t>> bisectors_of) {
+  using IndexBox = CGAL::Box_intersection_d::Box_with_handle_d<double, 3, std::size_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
+  const auto site_count = static_cast<std::uint32_t>(sites.size());
+  std::vector<CellPlace> place(site_count, CellPlace::surface);
+  std::vector<IndexBox> cells, triangles;
+  for (std::uint32_t s = 0; s < site_count; ++s) {
+    const Box& b = cell_boxes[s];
+    if (b.empty() || !std::isfinite(b.lo.x) || !std::isfinite(b.lo.y) || !std::isfinite(b.lo.z) ||
+        !std::isfinite(b.hi.x) || !std::isfinite(b.hi.y) || !std::isfinite(b.hi.z)) {
+      continue;
+    }
+    cells.emplace_back(CGAL::Bbox_3(b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z), s);
+  }
+  if (cells.empty()) return place;
+  triangles.reserve(mesh.triangles.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    Box b;
+    for (const VertexIndex v : mesh.triangles[t]) b.add(mesh.positions[v]);
+    triangles.emplace_back(CGAL::Bbox_3(b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z), site_count + t);
+  }
+  std::vector<char> clear(site_count, 0);
+  for (const IndexBox& c : cells) clear[c.handle()] = 1;
+  // Closed boxes (CGAL's default topology): touching counts as meeting.
+  std::vector<std::array<std::uint32_t, 2>> near;  // (cell, triangle) whose boxes meet
+  CGAL::box_intersection_d(cells.begin(), cells.end(), triangles.begin(), triangles.end(),
+                           [&](const IndexBox& a, const IndexBox& b) {
+                             const bool first = a.handle() < site_count;
+                             const std::size_t cell = first ? a.handle() : b.handle();
+                             const std::size_t triangle = (first ? b.handle() : a.handle()) - site_count;
+                             near.push_back({static_cast<std::uint32_t>(cell), static_cast<std::uint32_t>(triangle)});
+                           });
+  std::sort(near.begin(), near.end());
+  for (std::size_t k = 0; k < near.size();) {
+    const std::uint32_t cell = near[k][0];
+    std::size_t end = k;
+    while (end < near.size() && near[end][0] == cell) ++end;
+    const std::vector<std::uint32_t>& bisectors = bisectors_of[cell];
+    std::size_t last = 0;  // the plane that separated the last triangle, tried first
+    for (; k < end && clear[cell]; ++k) {
+      const Triangle& t = mesh.triangles[near[k][1]];
+      const auto beyond = [&](std::size_t b) {
+        const std::uint32_t plane = bisectors[b];
+        const Sign far = plane_pairs[plane][0] == cell ? Sign::positive : Sign::negative;
+        for (const VertexIndex v : t) {
+          if (side_of_plane(planes[plane], mesh.positions[v]) != far) return false;
+        }
+        return true;
+      };
+      bool separated = !bisectors.empty() && beyond(last);
+      for (std::size_t b = 0; b < bisectors.size() && !separated; ++b) {
+        if (b != last && beyond(b)) {
+          separated = true;
+          last = b;
+        }
+      }
+      if (!separated) clear[cell] = 0;
+    }
+    k = end;
+  }
+  std::vector<std::vector<std::uint32_t>> neighbours(site_count);
+  for (const auto& [a, b] : pairs) {
+    if (b < site_count && clear[a] && clear[b]) {
+      neighbours[a].push_back(b);
+      neighbours[b].push_back(a);
+    }
+  }
+  std::unique_ptr<PointInSolid> inside;
+  std::vector<char> seen(site_count, 0);
+  std::vector<std::uint32_t> component;
+  for (std::uint32_t s = 0; s < site_count; ++s) {
+    if (!clear[s] || seen[s]) continue;
+    component.assign(1, s);
+    seen[s] = 1;
+    for (std::size_t k = 0; k < component.size(); ++k) {
+      for (const std::uint32_t t : neighbours[component[k]]) {
+        if (!seen[t]) {
+          seen[t] = 1;
+          component.push_back(t);
+        }
+      }
+    }
+    if (!inside) inside = std::make_unique<PointInSolid>(mesh);
+    const CellPlace where = inside->strictly_inside(sites[s]) ? CellPlace::inside : CellPlace::outside;
+    for (const std::uint32_t t : component) place[t] = where;
+  }
+  return place;
+}
+
+// Whether (p0, p1, p2, p3), a permutation of 0..3, is even.
+bool even_permutation(int p0, int p1, int p2, int p3) {
+  const int p[4] = {p0, p1, p2, p3};
+  int inversions = 0;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = i + 1; j < 4; ++j) inversions += p[i] > p[j];
+  }
+  return inversions % 2 == 0;
+}
+
+// The cell of `site`, one that lies inside the solid (place_cells), as a convex
+// solid made straight from the Delaunay triangulation instead of cut out of the
+// solid: the Voronoi cell is the dual of the site's star. Its vertices are the
+// circumcentres of the tetrahedra around the site, one per class of tetrahedra
+// with one circumcentre (Triangulated::sphere_of: co-spherical sites, decided
+// exactly); its face on the bisector with a Delaunay neighbour t is the
+// circumcentres of the tetrahedra around the edge (site, t) in their order
+// around it, repeats in a row dropped; a face left with fewer than three
+// vertices has no area and is no face (the other faces then meet along its
+// segment or point). Each vertex is the meet of the bisectors of the smallest
+// of its class's first tetrahedron's sites with the other three: the canonical
+// definition build_voronoi_tree gives cut vertices (so a cut neighbour writes
+// their shared corners alike), and one definition per point for all assembled
+// cells. The faces are those a cut of any box around the cell by its bisectors
+// leaves (caps, surface id plane + 1, reversed where the site is the
+// bisector's second), in another order; checked as made: every directed edge
+// matched by one reverse edge (whose face's plane is the edge's line), each face
+// turning the way its outward side says (exactly). Returns nothing when the
+// star is not as that argument expects (an infinite tetrahedron, a face through
+// one vertex twice, three corners in a row, an unmatched edge): the caller then
+// cuts the cell. Throws std::logic_error when a face turns the wrong way (a
+// bug, never a property of the input).
+// `plane_to`: per site, (neighbour, bisector plane) for its Delaunay neighbours
+// above it, sorted.
+std::optional<Solid> assemble_inner_cell(const Triangulated& tri, std::uint32_t site, std::span<const std::uint32_t> bisectors,
+                                         std::span<const std::array<std::uint32_t, 2>> plane_pairs,
+                                         std::span<const std::vector<std::array<std::uint32_t, 2>>> plane_to,
+                                         const PlaneSet& set) {
+  const Delaunay& dt = *tri.dt;
+  const Delaunay::Vertex_handle v = tri.vertex_of[site];
+  thread_local std::vector<Delaunay::Cell_handle> star;
+  star.clear();
+  dt.incident_cells(v, std::back_inserter(star));
+  for (const auto& c : star) {
+    if (dt.is_infinite(c)) return std::nullopt;
+  }
+  std::sort(star.begin(), star.end(), [](const auto& a, const auto& b) { return a->info() < b->info(); });
+  Solid solid;
+  // Sized for the cell at once (about 2 vertices and 6 corners per face).
+  solid.faces.reserve(bisectors.size());
+  solid.loops.reserve(bisectors.size());
+  solid.corners.reserve(6 * bisectors.size());
+  solid.defs.reserve(star.size());
+  solid.approx.reserve(star.size());
+  thread_local std::vector<std::array<std::uint32_t, 2>> vertex_of_sphere;  // (sphere, vertex), in order of first use
+  vertex_of_sphere.clear();
+  thread_local std::vector<std::uint32_t> ring;
+  for (const std::uint32_t plane : bisectors) {
+    const auto& pair = plane_pairs[plane];
+    const std::uint32_t other = pair[0] == site ? pair[1] : pair[0];
+    const Delaunay::Vertex_handle w = tri.vertex_of[other];
+    // The first numbered tetrahedron around the edge (site, other).
+    std::uint32_t start = no_index;
+    for (std::uint32_t i = 0; i < star.size() && start == no_index; ++i) {
+      if (star[i]->has_vertex(w)) start = i;
+    }
+    if (start == no_index) return std::nullopt;
+    // Around the edge counter-clockwise seen from `other` (outside the cell): in a
+    // positively oriented tetrahedron (site, other, a, b) the turn from a to b is
+    // counter-clockwise about other - site, so the next one is across from a.
+    ring.clear();
+    Delaunay::Cell_handle c = star[start];
+    do {
+      ring.push_back(tri.sphere_of[c->info()]);
+      const int is = c->index(v), io = c->index(w);
+      int a = -1, b = -1;
+      for (int k = 0; k < 4; ++k) {
+        if (k == is || k == io) continue;
+        (a < 0 ? a : b) = k;
+      }
+      if (!even_permutation(is, io, a, b)) std::swap(a, b);
+      c = c->neighbor(a);
+      if (ring.size() > star.size()) return std::nullopt;
+    } while (c != star[start]);
+    // Runs of one class are one vertex; start the loop where a run starts.
+    std::size_t first = ring.size();
+    for (std::size_t k = 0; k < ring.size(); ++k) {
+      if (ring[k] != ring[(k + ring.size() - 1) % ring.size()]) {
+        first = k;
+        break;
+      }
+    }
+    if (first == ring.size()) continue;  // one point: no area
+    thread_local std::vector<std::uint32_t> corners;
+    corners.clear();
+    for (std::size_t k = 0; k < ring.size(); ++k) {
+      const std::uint32_t cls = ring[(first + k) % ring.size()];
+      if (k == 0 || cls != corners.back()) corners.push_back(cls);
+    }
+    if (corners.size() < 3) continue;  // a segment: no area
+    for (std::size_t k = 0; k < corners.size(); ++k) {
+      for (std::size_t l = k + 1; l < corners.size(); ++l) {
+        if (corners[k] == corners[l]) return std::nullopt;
+      }
+    }
+    SolidFace face;
+    face.plane = PlaneRef::cut(plane);
+    face.reversed = pair[0] != site;  // the bisector is negative on pair[0]'s side
+    face.convex = true;
+    face.surface = static_cast<SurfaceId>(plane + 1);  // the cap id clipped gives a cut by this plane
+    face.first_loop = static_cast<std::uint32_t>(solid.loops.size());
+    face.loop_count = 1;
+    solid.loops.push_back({static_cast<std::uint32_t>(solid.corners.size()), static_cast<std::uint32_t>(corners.size())});
+    for (const std::uint32_t sphere : corners) {
+      std::uint32_t vertex = no_index;
+      for (const auto& [known, index] : vertex_of_sphere) {
+        if (known == sphere) vertex = index;
+      }
+      if (vertex == no_index) {
+        vertex = static_cast<std::uint32_t>(solid.defs.size());
+        vertex_of_sphere.push_back({sphere, vertex});
+        const std::array<std::uint32_t, 4>& four = tri.points_of[sphere];
+        std::array<PlaneRef, 3> planes;
+        for (int k = 0; k < 3; ++k) {
+          const auto& to = plane_to[four[0]];
+          const std::array<std::uint32_t, 2> key{four[k + 1], 0};
+          const auto found = std::lower_bound(to.begin(), to.end(), key);
+          if (found == to.end() || (*found)[0] != four[k + 1]) return std::nullopt;
+          planes[k] = PlaneRef::cut((*found)[1]);
+        }
+        solid.defs.push_back(PointDef::three_planes(planes[0], planes[1], planes[2]));
+        solid.approx.push_back(approximate(set, solid.defs.back()));
+      }
+      solid.corners.push_back({vertex, EdgeLine{}});
+    }
+    solid.faces.push_back(face);
+  }
+  if (solid.faces.size() < 4) return std::nullopt;
+  // Each edge's line: the plane of the face across it, found by its reverse edge.
+  thread_local std::vector<std::array<std::uint32_t, 3>> edges;  // from, to, face
+  edges.clear();
+  for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+    for (const CornerEdge& e : loop_edges(solid.corners, solid.loops[solid.faces[f].first_loop])) {
+      edges.push_back({e.from, e.to, f});
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  for (std::size_t k = 1; k < edges.size(); ++k) {
+    if (edges[k][0] == edges[k - 1][0] && edges[k][1] == edges[k - 1][1]) return std::nullopt;
+  }
+  for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+    const SolidLoop& loop = solid.loops[solid.faces[f].first_loop];
+    for (const CornerEdge& e : loop_edges(solid.corners, loop)) {
+      const std::array<std::uint32_t, 3> key{e.to, e.from, 0};
+      const auto found = std::lower_bound(edges.begin(), edges.end(), key);
+      if (found == edges.end() || (*found)[0] != e.to || (*found)[1] != e.from) return std::nullopt;
+      solid.corners[e.corner].line.other = solid.faces[(*found)[2]].plane;
+    }
+    // The face turns counter-clockwise seen from outside; its corners are in
+    // convex position with no three in a row.
+    const SolidFace& face = solid.faces[f];
+    const SolidCorner* c = &solid.corners[loop.first_corner];
+    const Sign turn = orient_in_plane(set, projection_of(set, face.plane), solid.defs[c[0].vertex], solid.approx[c[0].vertex],
+                                      solid.defs[c[1].vertex], solid.approx[c[1].vertex], solid.defs[c[2].vertex],
+                                      solid.approx[c[2].vertex]);
+    if (turn == Sign::zero) return std::nullopt;
+    if ((turn == Sign::positive) == face.reversed) {
+      throw std::logic_error("build_voronoi_tree: an inner cell's face turns the wrong way");
+    }
+  }
+  solid.convex = true;
+#ifndef NDEBUG
+  // Every corner on its face's plane and its edge's line, exactly (debug builds).
+  if (const std::string problem = check_solid(set, solid); !problem.empty()) {
+    throw std::logic_error("build_voronoi_tree: an assembled inner cell is not sound: " + problem);
+  }
+#endif
+  return solid;
 }
 
 // --- cutting --------------------------------------------------------------------
@@ -274,11 +629,16 @@ struct Group {
 
 class VoronoiCutter {
  public:
+  /// `place`: per site, where its cell lies (place_cells); `assemble` makes an
+  /// inside cell's solid over the set run() is given, or nothing (it is then cut).
   VoronoiCutter(const PlaneInput& input, std::span<const Vec3> sites, std::span<const Box> cell_boxes,
                 const Box& solid_box, double margin, std::span<const std::vector<std::uint32_t>> bisectors_of,
                 std::span<const std::array<std::uint32_t, 2>> plane_pairs, std::vector<Plane>& planes,
+                std::span<const CellPlace> place,
+                const std::function<std::optional<Solid>(std::uint32_t, const PlaneSet&)>& assemble,
                 const std::function<void()>& on_site)
-      : input_(input), sites_(sites), bisectors_of_(bisectors_of), plane_pairs_(plane_pairs), on_site_(on_site) {
+      : input_(input), sites_(sites), bisectors_of_(bisectors_of), plane_pairs_(plane_pairs), place_(place),
+        assemble_(assemble), on_site_(on_site) {
     for (std::uint32_t s = 0; s < sites.size(); ++s) {
       if (!intersection(cell_boxes[s], solid_box).empty()) order_.push_back(s);
     }
@@ -286,11 +646,12 @@ class VoronoiCutter {
     box_base_ = static_cast<std::uint32_t>(planes.size());
     for (const Group& g : groups_) {
       for (int a = 0; a < 3; ++a) {
+        // A group without a cell to cut has no box (its planes are never cut by).
         Vec3 n{0, 0, 0};
         axis_of(n, a) = -1;
-        planes.push_back({n, axis_of(g.box.lo, a)});  // -x + lo < 0: x > lo
+        planes.push_back({n, g.box.empty() ? 0.0 : axis_of(g.box.lo, a)});  // -x + lo < 0: x > lo
         axis_of(n, a) = 1;
-        planes.push_back({n, -axis_of(g.box.hi, a)});  // x - hi < 0: x < hi
+        planes.push_back({n, g.box.empty() ? 0.0 : -axis_of(g.box.hi, a)});  // x - hi < 0: x < hi
       }
     }
     box_end_ = static_cast<std::uint32_t>(planes.size());
@@ -320,12 +681,14 @@ class VoronoiCutter {
                             const Box& solid_box, double margin) {
     const auto index = static_cast<std::uint32_t>(groups_.size());
     groups_.push_back({begin, end, -1, -1, {}});
+    // The box holds the cells that are cut (those that may meet the surface);
+    // inside cells are assembled and outside ones dropped, needing no container.
     Box cells, spread;
     for (std::uint32_t i = begin; i < end; ++i) {
-      cells.add(cell_boxes[order_[i]]);
+      if (place_[order_[i]] == CellPlace::surface) cells.add(cell_boxes[order_[i]]);
       spread.add(sites_[order_[i]]);
     }
-    groups_[index].box = intersection(grown(cells, margin), solid_box);
+    if (!cells.empty()) groups_[index].box = intersection(grown(cells, margin), solid_box);
     if (end - begin > leaf_group_size) {
       const Vec3 extent = spread.hi - spread.lo;
       const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
@@ -348,6 +711,14 @@ class VoronoiCutter {
   // inside the parent's box.
   void process(std::uint32_t g, const std::vector<Solid>& parent, const Box& parent_box) {
     const Group& group = groups_[g];
+    if (group.box.empty()) {
+      // No cell here is cut: nothing needs the container.
+      for (std::uint32_t i = group.begin; i < group.end; ++i) {
+        uncut(order_[i]);
+        if (on_site_) on_site_();
+      }
+      return;
+    }
     std::vector<Solid> pieces;
     bool cut = false;
     const auto cut_by = [&](std::uint32_t plane) {
@@ -366,19 +737,38 @@ class VoronoiCutter {
     if (group.left < 0) {
       for (std::uint32_t i = group.begin; i < group.end; ++i) {
         const std::uint32_t site = order_[i];
-        if (!pieces.empty()) pieces_[site] = cell(site, pieces);
+        if (place_[site] != CellPlace::surface) {
+          uncut(site);
+        } else if (!pieces.empty()) {
+          pieces_[site] = cell(site, pieces);
+        }
         if (on_site_) on_site_();
       }
       return;
     }
     if (pieces.empty()) {
-      if (on_site_) {
-        for (std::uint32_t i = group.begin; i < group.end; ++i) on_site_();
+      for (std::uint32_t i = group.begin; i < group.end; ++i) {
+        uncut(order_[i]);
+        if (on_site_) on_site_();
       }
       return;
     }
     tbb::parallel_invoke([&] { process(static_cast<std::uint32_t>(group.left), pieces, group.box); },
                          [&] { process(static_cast<std::uint32_t>(group.right), pieces, group.box); });
+  }
+
+  // A cell that is not cut out of its group's container: an inside cell is
+  // assembled (or, when assemble_ declines it, cut out of the whole input,
+  // which its group's box need not hold), an outside cell has no part of the
+  // solid, and a surface cell whose container is empty neither.
+  void uncut(std::uint32_t site) {
+    if (place_[site] != CellPlace::inside) return;
+    std::optional<Solid> solid = assemble_(site, *set_);
+    if (solid) {
+      pieces_[site].push_back(std::move(*solid));
+    } else {
+      pieces_[site] = cell(site, std::vector<Solid>{input_.solid});
+    }
   }
 
   // The site's part of `container`: cut by its bisectors, nearest neighbour first
@@ -399,6 +789,8 @@ class VoronoiCutter {
   std::span<const Vec3> sites_;
   std::span<const std::vector<std::uint32_t>> bisectors_of_;
   std::span<const std::array<std::uint32_t, 2>> plane_pairs_;
+  std::span<const CellPlace> place_;
+  const std::function<std::optional<Solid>(std::uint32_t, const PlaneSet&)>& assemble_;
   const std::function<void()>& on_site_;
   std::vector<std::uint32_t> order_;
   std::vector<Group> groups_;
@@ -641,13 +1033,33 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
     const std::size_t done = ++sites_done;
     if (run.progress) run.progress(done);
   };
+  // Cells inside the solid are assembled from the triangulation, not cut
+  // (place_cells, assemble_inner_cell); not for a self-intersecting input
+  // accepted on request, whose inside no point query decides.
+  const std::vector<CellPlace> place =
+      recipe.allow_self_intersections
+          ? std::vector<CellPlace>(site_count, CellPlace::surface)
+          : place_cells(mesh, sites, triangulated.cell_boxes, triangulated.pairs, planes, plane_pairs, bisectors_of);
+  std::atomic<std::size_t> cells_assembled{0};
+  std::vector<std::vector<std::array<std::uint32_t, 2>>> plane_to(site_count);
+  for (std::uint32_t p = 0; p < plane_pairs.size(); ++p) plane_to[plane_pairs[p][0]].push_back({plane_pairs[p][1], p});
+  for (auto& to : plane_to) std::sort(to.begin(), to.end());
+  const std::function<std::optional<Solid>(std::uint32_t, const PlaneSet&)> assemble = [&](std::uint32_t s,
+                                                                                           const PlaneSet& set) {
+    std::optional<Solid> solid = assemble_inner_cell(triangulated, s, bisectors_of[s], plane_pairs, plane_to, set);
+    if (solid) ++cells_assembled;
+    return solid;
+  };
   VoronoiCutter cutter(input, sites, triangulated.cell_boxes, solid_box, margin, bisectors_of, plane_pairs, planes,
-                       on_site);
+                       place, assemble, on_site);
   std::vector<std::vector<Solid>> cells;
   {
     const PlaneSet set = input.geometry.plane_set(planes);
     arena.execute([&] { cells = cutter.run(set); });
   }
+  triangulated.dt.reset();  // only the assembly needed it
+  report.cells_inside = static_cast<std::size_t>(std::count(place.begin(), place.end(), CellPlace::inside));
+  report.cells_assembled = cells_assembled;
   const std::uint32_t box_base = cutter.box_base(), box_end = cutter.box_end();
   const auto is_bisector = [&](PlaneRef ref) {
     return ref.bits != no_index && ref.is_cut() && (ref.index() < box_base || ref.index() >= box_end);

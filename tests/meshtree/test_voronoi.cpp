@@ -374,6 +374,54 @@ TEST_CASE("a Voronoi build is the same at any thread count", "[voronoi]") {
   CHECK(encode_shatter(build(mesh, sites, report, 4)) == one);
 }
 
+// Cells inside the solid are assembled from the Delaunay triangulation instead of
+// cut out of it (voronoi.cpp, assemble_inner_cell): each must be the very cell
+// the plane kernel cuts. A build of a self-intersecting input accepted on request
+// assembles nothing (no point query decides its inside), so the same sites built
+// that way give every cell by cutting: leaf for leaf (the same k-d order), the
+// exact solids have equal exact volumes and the meshes the same corner positions.
+// Lattices make every inner cell's vertices co-spherical (8 sites on each
+// sphere), which the assembly must merge; none may fall back to cutting.
+TEST_CASE("cells inside the solid are assembled exactly as the kernel cuts them", "[voronoi]") {
+  struct Case {
+    const char* mesh;
+    std::vector<Vec3> sites;
+    bool all_assembled;
+  };
+  const Mesh cube = corpus("cube.off"), sphere = corpus("sphere.off");
+  std::vector<Case> cases{{"cube.off", uniform_sites(cube, 60, 3), true},
+                          {"sphere.off", uniform_sites(sphere, 60, 4), true},
+                          {"cube.off", grid_sites(cube, {4, 4, 4}, false, 0, 0, 1), true},
+                          {"cube.off", grid_sites(cube, {5, 4, 4}, true, 0.5, 0, 1), false}};
+  for (const Case& c : cases) {
+    const Mesh& mesh = std::string(c.mesh) == "cube.off" ? cube : sphere;
+    INFO(c.mesh << " with " << c.sites.size() << " sites");
+    VoronoiReport assembled_report, cut_report;
+    const MeshTree assembled = build(mesh, c.sites, assembled_report);
+    TreeRecipe cut_recipe = voronoi_recipe();
+    cut_recipe.allow_self_intersections = true;
+    BuildRunOptions run;
+    run.threads = 1;
+    const MeshTree cut = build_voronoi_tree(mesh, c.sites, cut_recipe, run, &cut_report);
+    CHECK(assembled_report.cells_inside > 0);
+    if (c.all_assembled) CHECK(assembled_report.cells_assembled == assembled_report.cells_inside);
+    CHECK(cut_report.cells_assembled == 0);
+    CHECK(voronoi_problem(assembled, assembled_report) == "");
+    REQUIRE(assembled.leaf_count() == cut.leaf_count());
+    const PlaneSet assembled_set = assembled.plane_set(), cut_set = cut.plane_set();
+    for (LeafIndex leaf = 0; leaf < assembled.leaf_count(); ++leaf) {
+      INFO("leaf " << leaf);
+      CHECK(exact_six_volume(assembled_set, assembled.leaf(leaf).solid) == exact_six_volume(cut_set, cut.leaf(leaf).solid));
+      std::vector<std::tuple<double, double, double>> mine, theirs;
+      for (const Vec3& p : assembled.leaf(leaf).mesh->positions) mine.emplace_back(p.x, p.y, p.z);
+      for (const Vec3& p : cut.leaf(leaf).mesh->positions) theirs.emplace_back(p.x, p.y, p.z);
+      std::sort(mine.begin(), mine.end());
+      std::sort(theirs.begin(), theirs.end());
+      CHECK(mine == theirs);
+    }
+  }
+}
+
 TEST_CASE("neighbouring fragments share their corners bit for bit", "[voronoi]") {
   // Canonical definitions (voronoi.cpp): every rounded corner of a leaf that lies
   // on another leaf's cell face is one of that leaf's corners too, where both

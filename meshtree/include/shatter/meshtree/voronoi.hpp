@@ -98,6 +98,11 @@ struct VoronoiReport {
   std::size_t cells_empty = 0;       ///< sites whose cell misses the solid
   std::size_t cells_split = 0;       ///< cells that meet the solid in several pieces
   std::size_t neighbour_pairs = 0;   ///< Delaunay edges between sites
+  /// Cells found to lie strictly inside the solid (their box meets no input
+  /// triangle's), and of those the ones assembled as convex solids from the
+  /// Delaunay triangulation instead of cut out of the solid (the others, whose
+  /// star the assembly does not take, are cut).
+  std::size_t cells_inside = 0, cells_assembled = 0;
   /// Fragments thinner than the rounding of their coordinates: they vanish
   /// (no leaf), their exact volume (summed as doubles) within the bound.
   std::size_t fragments_vanished = 0;
@@ -121,7 +126,10 @@ struct VoronoiReport {
 /// Cuts `mesh` into the Voronoi cells of `sites`: every cell's part of the solid
 /// is cut out by the plane kernel (several components give several fragments,
 /// a cell that misses the solid gives none), rounded and certified as every
-/// cut piece is (round_solid). The fragments are the leaves; the root is the
+/// cut piece is (round_solid). A cell whose box meets no input triangle's box
+/// and whose site lies inside the solid (decided exactly) is its own fragment
+/// whole: it is assembled as a convex solid from the Delaunay triangulation
+/// instead (the same exact solid, VoronoiReport::cells_assembled). The fragments are the leaves; the root is the
 /// input; between them, a hierarchy: the sites are split by a k-d tree
 /// (median along the longest axis, groups of at most 8 at the bottom), and at
 /// every group below the root, the face-connected sets of its parts (its
