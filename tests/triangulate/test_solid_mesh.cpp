@@ -688,6 +688,18 @@ TEST_CASE("regression: a wedge tip across the earlier cap, split at every face m
   CHECK(tally.refused == 0);
 }
 
+TEST_CASE("regression: a wedge tip across the earlier cap of a staircase, split at every face meeting the cap (corpus 4060)",
+          "[plane][round][regression]") {
+  // The same repair on a 16-triangle piece of a near-parallel chain on
+  // staircase-4 as written, cut by the chain's next plane (refused before:
+  // 2 self-intersecting pairs): the small case of the one above, which CI runs.
+  const RoundingTally tally = round_reproducer_pieces(
+      "unroundable-wedge-tip-across-the-earlier-cap-split-to-the-cap-near-parallel-chain-corpus-4060.repro");
+  CHECK(tally.pieces == 2);
+  CHECK(tally.wedges == 1);
+  CHECK(tally.refused == 0);
+}
+
 TEST_CASE("round_solid: the widened wedge split certifies cuts ulps over a wedge's tip and along a fan, -4 to 4 ulps",
           "[plane][round][heavy]") {
   // [heavy]: about a minute of CPU (18 cuts; the 7 refused before this repair
