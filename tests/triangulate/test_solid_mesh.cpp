@@ -665,6 +665,41 @@ TEST_CASE("regression: corners rounded onto their own crossings with the cap, th
   CHECK(tally.refused == 0);
 }
 
+TEST_CASE("regression: a wedge tip across the earlier cap, split at every face meeting the cap (smoke 7 case 28, piece 0)",
+          "[plane][round][regression][heavy]") {
+  // [heavy]: about 11 s of CPU (the piece reaches this repair only after every
+  // other round has failed, and check_rounding rounds it twice); the Release
+  // suite replays the reproducer (valid as written) in about 5.
+  // The same chain's other piece at that level (the hollow egg's, as written),
+  // cut by the same plane: below it lies a wedge 1e-9 rad thin between the cap
+  // and the earlier cap, whose tip line crosses the piece (four earlier-cap
+  // corners 0.05 to 0.08 rounding moves inside the piece, the far ones 1e5 to 5e5
+  // moves off). Every earlier-cap face crossing the cap is thin near its
+  // crossing line; splitting only the faces found folded, or those with a corner
+  // strictly inside within reach, left the others to fold once the first
+  // merged, and only pixels that moved 2e-11 (bound 7e-15) certified. Split at
+  // every face meeting the cap's plane as well, the band by the cap merges into
+  // it: certified, 1.6e-16 moved.
+  const RoundingTally tally = round_reproducer_pieces(
+      "unroundable-wedge-tip-across-the-earlier-cap-split-to-the-cap-near-parallel-chain-smoke7-28-piece0.repro");
+  CHECK(tally.pieces == 2);
+  CHECK(tally.wedges == 1);
+  CHECK(tally.collapsed == 0);
+  CHECK(tally.refused == 0);
+}
+
+TEST_CASE("regression: a wedge tip across the earlier cap of a staircase, split at every face meeting the cap (corpus 4060)",
+          "[plane][round][regression]") {
+  // The same repair on a 16-triangle piece of a near-parallel chain on
+  // staircase-4 as written, cut by the chain's next plane (refused before:
+  // 2 self-intersecting pairs): the small case of the one above, which CI runs.
+  const RoundingTally tally = round_reproducer_pieces(
+      "unroundable-wedge-tip-across-the-earlier-cap-split-to-the-cap-near-parallel-chain-corpus-4060.repro");
+  CHECK(tally.pieces == 2);
+  CHECK(tally.wedges == 1);
+  CHECK(tally.refused == 0);
+}
+
 TEST_CASE("round_solid: the widened wedge split certifies cuts ulps over a wedge's tip and along a fan, -4 to 4 ulps",
           "[plane][round][heavy]") {
   // [heavy]: about a minute of CPU (18 cuts; the 7 refused before this repair

@@ -2530,11 +2530,15 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
       }
       reach.emplace(set, solid, output_positions);
     }
-    // Two passes: the wedge split as it was, then, when every plane has failed,
+    // Three passes: the wedge split as it was, then, when every plane has failed,
     // the strips thin by their corners merged into the caps
     // (round_merging_thin_strips), first on the piece itself, then on each
-    // refined solid of the first pass instead of the rounds above.
-    for (const bool strips : {false, true}) {
+    // refined solid of the first pass instead of the rounds above; last, the
+    // split widened to every face that meets the cap's plane as well
+    // (`to_the_cap`, see widen_to_near_faces), rounded by the rounds above.
+    for (const int pass : {0, 1, 2}) {
+      const bool strips = pass == 1;
+      const bool to_the_cap = pass == 2;
       if (strips) {
         if (std::optional<RoundedSolid> written =
                 round_merging_thin_strips(set, solid, options, output_positions, *reach, snap_levels, piece)) {
@@ -2563,6 +2567,15 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
         // corners, and the refined solid is rounded with its folds merged by
         // groups (FoldMerge::groups), then by groups with faces facing one way
         // too (groups_one_way). Adds the faces to `split` (kept sorted).
+        // The last pass (`to_the_cap`) also takes every convex face with a corner
+        // on the cap's plane: along the tip of a wedge between the cap and an
+        // earlier cap nearly parallel to it (smoke corpus seed 7 case 28's other
+        // piece: the earlier cap's triangles cross the new plane at 1e-9 rad, their
+        // far corners 1e5 rounding moves off it), every face crossing the cap is
+        // thin near its crossing line and may fold there once the first folds
+        // merge, though none has a corner strictly inside within reach; split all
+        // along the offset plane, the whole band by the cap is strips thin by
+        // their corners, which the groups merge into the cap.
         FoldMerge refined_merge = FoldMerge::pairs;
         const auto widen_to_near_faces = [&](const SolidFace& c, std::vector<std::uint32_t>& split) {
           const PlaneReach near = reach->near(c.plane);
@@ -2574,7 +2587,7 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
             if (std::binary_search(split.begin(), split.begin() + static_cast<std::ptrdiff_t>(before), f)) continue;
             for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[face.first_loop])) {
               const PlaneReach::Where where = near.locate(reach->point(edge.from));
-              if (where.side == inside && where.within) {
+              if ((where.side == inside || (to_the_cap && where.side == Sign::zero)) && where.within) {
                 split.push_back(f);
                 break;
               }
@@ -2641,6 +2654,8 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
         for (const FoldMerge merge : {FoldMerge::pairs, FoldMerge::groups, FoldMerge::groups_one_way}) {
           // (The strips' pass merges its own way: the faces widened once are enough.)
           if (strips && merge == FoldMerge::groups_one_way) break;
+          // (The last pass widens at once: its pairs were the first pass's.)
+          if (to_the_cap && merge == FoldMerge::pairs) continue;
           if (merge == FoldMerge::groups) widen_to_near_faces(cap, faces);
           refined_merge = merge;
           std::array<bool, 5> unrepresentable{};

@@ -272,6 +272,13 @@ struct RoundedSolid {
 /// (its planes over the faces found folded, then widened) instead of the rounds
 /// above (`folded_faces`, `wedge_faces_split`); held to the same certificate
 /// and to the original piece's volume bound, measured exactly.
+/// When those fail as well, the split takes every convex face with a corner on
+/// the cap's plane too (the tip of a wedge between the cap and an earlier cap
+/// nearly parallel to it crosses the piece: every face crossing the cap is thin
+/// near its crossing line, though none has a corner strictly inside within
+/// reach), and the refined solid is rounded by the rounds above with its folds
+/// merged by groups, then by groups with faces facing one way too; held to the
+/// same certificate and bound.
 /// A part thinner than the rounding that rounds flat (its triangles laid over each
 /// other once each way) vanishes into its neighbour (`vanished_triangles`); a piece
 /// that rounds flat whole, or that cannot be certified while its exact volume is
@@ -297,6 +304,8 @@ struct RoundedSolid {
 /// again; then the strips' pass, seven pixels by two ways of merging by three
 /// attempts, on the piece and on the refined solids of the first two face sets
 /// again (at most six per cap plane, and a tilted plane per reach and set);
+/// then the split to the cap, two ways of merging by three offsets (and a
+/// tilted plane per reach), each rounded by the ladder without refining again;
 /// merging by groups passes over a fixed list of pairs again only after a union,
 /// and there are fewer unions than faces: a finite ladder of steps, each a
 /// finite pass); deterministic. Failure: neither
