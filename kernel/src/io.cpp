@@ -190,7 +190,7 @@ Mesh read_mesh_from_bytes(std::string_view bytes, MeshFormat format, std::vector
   };
   try {
     switch (format) {
-      case MeshFormat::off: return with_warnings(io_detail::read_off(bytes));
+      case MeshFormat::off: return with_warnings(io_detail::read_off(bytes, taken));
       case MeshFormat::obj: return with_warnings(io_detail::read_obj(bytes, taken));
       case MeshFormat::ply: return with_warnings(io_detail::read_ply(bytes, taken));
       case MeshFormat::stl: return with_warnings(io_detail::read_stl(bytes, taken));

@@ -213,9 +213,9 @@ inline std::size_t reserve_bound(std::uint64_t claimed, std::size_t byte_count, 
   return static_cast<std::size_t>(claimed < possible ? claimed : possible);
 }
 
-Mesh read_off(std::string_view bytes);
 // The readers that may take a liberty append one line per liberty to `warnings`
 // (io.hpp says which).
+Mesh read_off(std::string_view bytes, std::vector<std::string>& warnings);
 Mesh read_obj(std::string_view bytes, std::vector<std::string>& warnings);
 Mesh read_ply(std::string_view bytes, std::vector<std::string>& warnings);
 Mesh read_stl(std::string_view bytes, std::vector<std::string>& warnings);

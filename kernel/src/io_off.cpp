@@ -62,7 +62,7 @@ std::uint64_t parse_count(std::string_view token, const char* what, std::size_t 
 
 }  // namespace
 
-Mesh read_off(std::string_view bytes) {
+Mesh read_off(std::string_view bytes, std::vector<std::string>& warnings) {
   // OFF is text: a NUL byte means a binary file, and would cut a quoted token short.
   if (const std::size_t nul = bytes.find('\0'); nul != std::string_view::npos) {
     const std::size_t line = 1 + static_cast<std::size_t>(std::count(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(nul), '\n'));
@@ -142,7 +142,29 @@ Mesh read_off(std::string_view bytes) {
         polygon.size(), [&](std::size_t k) { return positions[polygon[k]]; },
         [&](std::size_t k) { soup.corner_positions.push_back(positions[polygon[k]]); });
   }
-  if (lines.next(tokens)) refuse("unexpected content after the last face" + at_line(lines.line_number()));
+  // Face lines past the header's count (CGAL's prim.off: 8 under a header of 7).
+  // The header's count is what the format defines and what other readers take
+  // (CGAL, Manifold, MeshLab stop at it), so the mesh read is the one they show;
+  // the extra lines are skipped with a warning. Anything else there means the
+  // file is not laid out as its header says, and is refused.
+  std::size_t extra_faces = 0, first_extra_line = 0;
+  while (lines.next(tokens)) {
+    const std::size_t line = lines.line_number();
+    std::int64_t corner_count = 0;
+    bool face_line = parse_integer(tokens[0], corner_count) && corner_count >= 3 &&
+                     static_cast<std::uint64_t>(corner_count) <= tokens.size() - 1;
+    for (std::size_t k = 1; face_line && k <= static_cast<std::size_t>(corner_count); ++k) {
+      std::int64_t index = 0;
+      face_line = parse_integer(tokens[k], index) && index >= 0 && static_cast<std::uint64_t>(index) < vertex_count;
+    }
+    if (!face_line) refuse("unexpected content after the last face" + at_line(line));
+    if (extra_faces++ == 0) first_extra_line = line;
+  }
+  if (extra_faces > 0) {
+    warnings.push_back("OFF: " + std::to_string(extra_faces) + (extra_faces == 1 ? " face line" : " face lines") +
+                       " after the header's " + std::to_string(face_count) + " faces skipped (from line " +
+                       std::to_string(first_extra_line) + "); the header's count is read, as other readers do");
+  }
   return weld(std::move(soup));
 }
 

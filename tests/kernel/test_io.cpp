@@ -767,7 +767,11 @@ TEST_CASE("malformed OFF is refused with the line at fault", "[io][off]") {
   CHECK_THAT(refusal_message(head + "3 0 1 3\n", MeshFormat::off), Catch::Contains("out of range"));
   CHECK_THAT(refusal_message(head + "3 0 -1 2\n", MeshFormat::off), Catch::Contains("out of range"));
   CHECK_THAT(refusal_message(head + "4 0 1 2\n", MeshFormat::off), Catch::Contains("lists 3 of its 4"));
-  CHECK_THAT(refusal_message(head + "3 0 1 2\n3 0 1 2\n", MeshFormat::off), Catch::Contains("line 7"));
+  // Past the header's faces only face lines are skipped (the next test case).
+  CHECK_THAT(refusal_message(head + "3 0 1 2\nOFF\n", MeshFormat::off), Catch::Contains("after the last face at line 7"));
+  CHECK_THAT(refusal_message(head + "3 0 1 2\n3 0 1 2\n3 0 1 3\n", MeshFormat::off), Catch::Contains("line 8"));
+  CHECK_THAT(refusal_message(head + "3 0 1 2\n2 0 1\n", MeshFormat::off), Catch::Contains("line 7"));
+  CHECK_THAT(refusal_message(head + "3 0 1 2\n4 0 1 2\n", MeshFormat::off), Catch::Contains("line 7"));
   CHECK_THAT(refusal_message("OFF\n3 1 0\n0 0 0\n1 0\n", MeshFormat::off), Catch::Contains("vertex 1 at line 4"));
   CHECK_THAT(refusal_message("4OFF\n3 1 0\n", MeshFormat::off), Catch::Contains("unsupported OFF variant"));
   CHECK_THAT(refusal_message("PLY\n3 1 0\n", MeshFormat::off), Catch::Contains("not an OFF file"));
@@ -775,6 +779,31 @@ TEST_CASE("malformed OFF is refused with the line at fault", "[io][off]") {
   CHECK(commented.triangle_count() == 1);
   const Mesh coloured = read_text("COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n3 0 1 2\n", MeshFormat::off);
   CHECK(coloured.vertex_count() == 3);
+}
+
+// CGAL's prim.off: a cube of 7 faces under its header, then an 8th face (a lone
+// triangle over 3 vertices no other face uses) that the header does not count.
+TEST_CASE("OFF face lines beyond the header's count are skipped with a warning, as other readers do", "[io][off]") {
+  const std::string tetrahedron = "OFF\n7 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n2 2 2\n3 2 2\n3 3 3\n";
+  const std::string faces = "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+  Mesh counted;
+  REQUIRE(warnings_of(tetrahedron + faces, MeshFormat::off, counted).empty());
+  REQUIRE(validate_mesh(counted).valid());
+  const std::array<std::string, 3> extras = {"3 4 5 6\n", "\n# more\n4 4 5 6 0 255 0 0\n", "3 6 5 4\n3 0 1 2\n"};
+  for (std::size_t k = 1; k <= extras.size(); ++k) {
+    std::string text = tetrahedron + faces;
+    for (std::size_t e = 0; e < k; ++e) text += extras[e];
+    INFO(text);
+    Mesh read;
+    const std::vector<std::string> warnings = warnings_of(text, MeshFormat::off, read);
+    // The header's mesh, bit for bit: the extra faces' vertices are unused and dropped.
+    CHECK(read.positions == counted.positions);
+    CHECK(read.triangles == counted.triangles);
+    const std::size_t skipped = k == 1 ? 1 : k == 2 ? 2 : 4;  // face lines in extras[0..k)
+    REQUIRE(warnings.size() == 1);
+    CHECK_THAT(warnings[0], Catch::StartsWith("OFF: " + std::to_string(skipped) + (skipped == 1 ? " face line" : " face lines") +
+                                              " after the header's 4 faces skipped (from line 14)"));
+  }
 }
 
 TEST_CASE("non-finite coordinates are refused, naming the vertex", "[io]") {

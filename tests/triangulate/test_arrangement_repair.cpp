@@ -345,6 +345,48 @@ TEST_CASE("a union pinched at a vertex inside a face: one vertex copy per fan", 
   CHECK(std::abs(volume - 519) <= 1e-9 * 519);
 }
 
+TEST_CASE("a cavity whose tip touches the top of the solid from below: only the cavity's copy moves",
+          "[arrangement][repair][touching]") {
+  // b9_mesh.off's union, shrunk: a solid under a low roof peaked at v = origin,
+  // and a narrow pyramid cavity whose apex is v. The union is pinched at v
+  // between the roof's fan and the cavity's. Both fans' edges point down, so
+  // moving each along its mean edge (round_solid's first separation) takes the
+  // roof's copy of v down into the cavity, further than the cavity's copy (its
+  // edges are longer): they cross at any scale. Keeping the roof's fan still and
+  // moving the cavity's copy separates them. Volume: a box of 8 x 8 x 3 under
+  // a roof of 8 x 8 x 1 / 3, less the cavity's 0.5 x 0.5 x 2 / 3.
+  const double w = 4, r = 0.25;
+  const Mesh solid = test::mesh_from(
+      {{0, 0, 0}, {-w, -w, -1}, {w, -w, -1}, {w, w, -1}, {-w, w, -1}, {-w, -w, -4}, {w, -w, -4}, {w, w, -4}, {-w, w, -4}},
+      {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {0, 4, 1},                          // roof
+       {5, 7, 6}, {5, 8, 7},                                                // bottom
+       {1, 5, 6}, {1, 6, 2}, {2, 6, 7}, {2, 7, 3}, {3, 7, 8}, {3, 8, 4},  // walls
+       {4, 8, 5}, {4, 5, 1}});
+  const Mesh cavity = test::mesh_from({{0, 0, 0}, {-r, -r, -2}, {r, -r, -2}, {r, r, -2}, {-r, r, -2}},
+                                      {{0, 2, 1}, {0, 3, 2}, {0, 4, 3}, {0, 1, 4}, {1, 2, 3}, {1, 3, 4}});
+  REQUIRE(validate_mesh(solid).valid());
+  REQUIRE(six_volume(solid) == 6 * (8 * 8 * 3) + 2 * (8 * 8));
+  REQUIRE(six_volume(cavity) == -2 * (0.5 * 0.5 * 2));
+  const Mesh merged = test::merge({solid, cavity});
+  const Resolved resolved = resolve(merged);
+  REQUIRE(resolved.made.status == ArrangementSolid::Status::ok);
+  CHECK(resolved.exact_six_volume == six_volume(solid) + six_volume(cavity));
+
+  const MeshArrangement arrangement = arrange_triangles(merged.positions, merged.triangles);
+  const RepairRounding rounded = round_repaired_solid(arrangement.plane_set(), resolved.made.solid, merged);
+  INFO(rounded.defect);
+  REQUIRE(rounded.valid);
+  CHECK(validate_mesh(rounded.mesh).valid());
+  CHECK(rounded.separated_vertices == 1);  // the cavity's copy only
+  const double volume = mpq_class(six_volume(rounded.mesh) / 6).get_d();
+  const double exact = mpq_class(resolved.exact_six_volume / 6).get_d();
+  CHECK(std::abs(volume - exact) <= 1e-9 * exact);
+  // The same bytes on one thread.
+  RepairRounding serial;
+  tbb::task_arena(1).execute([&] { serial = round_repaired_solid(arrangement.plane_set(), resolved.made.solid, merged); });
+  CHECK(write_mesh_to_bytes(serial.mesh, MeshFormat::off) == write_mesh_to_bytes(rounded.mesh, MeshFormat::off));
+}
+
 TEST_CASE("the exact step changes nothing where nothing self-intersects", "[arrangement][repair]") {
   // A valid mesh, and one the earlier steps repair (unwelded, a triangle
   // reversed): the same bytes with the hook as without.

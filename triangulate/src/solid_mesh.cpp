@@ -1491,10 +1491,15 @@ struct Separation {
 // non-manifold edge the triangle it is paired with (pair_around_non_manifold_edges):
 // triangles meet across such an edge only in their pairs, so the edge's
 // vertices fall into one fan per pair where nothing else joins them.
+// `held`: empty, or per vertex of the split mesh (split_vertex_fans numbers
+// the copies the same way for the same mesh) whether the fan that keeps that
+// vertex stays where it is, only the other fans' copies moving (see
+// round_solid_rounds: a nearly flat fan's mean edge can point into another
+// fan's wedge).
 // Preconditions: closed and consistently oriented (each edge run as often each
 // way), and every non-manifold edge paired in `partner`.
 Separation separate_touching(Mesh& mesh, std::span<const VertexIndex> touching, double scale,
-                             std::span<const std::uint32_t> partner = {}) {
+                             std::span<const std::uint32_t> partner = {}, std::span<const std::uint8_t> held = {}) {
   const std::size_t n = mesh.positions.size();
   const auto vertex_of = [&](std::uint32_t corner, std::uint32_t step) {
     return mesh.triangles[corner / 3][(corner % 3 + step) % 3];
@@ -1540,6 +1545,7 @@ Separation separate_touching(Mesh& mesh, std::span<const VertexIndex> touching, 
   };
   std::vector<Move> moves;
   for (const VertexFan& fan : to_move) {
+    if (fan.vertex == fan.split_from && fan.vertex < held.size() && held[fan.vertex]) continue;
     const Vec3 p = mesh.positions[fan.vertex];
     Vec3 direction, normal_sum;
     double nearest = INFINITY, area = 0;
@@ -2259,6 +2265,9 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
   std::optional<RoundingReach> reach;
   std::vector<Vec3> output_positions;
   std::vector<std::uint32_t> face_of_triangle;
+  // The first separation certified with some fans held still (see below), the
+  // last resort.
+  std::optional<RoundedSolid> held_fallback;
   // Whether the piece's exact volume is within what rounding its vertices can
   // move (rounding_sweep_bound): then it may vanish whole (see below).
   std::optional<bool> thin_whole;
@@ -2446,12 +2455,19 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
       if (mesh_vertex_of[v] != no_index) touching.push_back(mesh_vertex_of[v]);
     }
     // The smallest move that certifies: a few bits below the neighbours' distance
-    // first, then further.
-    for (const int bits : {40, 30, 20}) {
-      Mesh separated = mesh;
-      const Separation separation = separate_touching(separated, touching, std::ldexp(1.0, -bits), partner);
-      if (separation.moved == 0) break;
-      if (validate_knowing(separated, options).valid()) {
+    // first, then further. Returns the mesh separated with the fans `held` keep
+    // still when it certifies within the volume bound; else leaves in `crossed`
+    // the last separated mesh that failed validation (empty when none did).
+    const auto separate = [&](std::span<const std::uint8_t> held, Mesh& crossed) -> std::optional<RoundedSolid> {
+      crossed = Mesh{};
+      for (const int bits : {40, 30, 20}) {
+        Mesh separated = mesh;
+        const Separation separation = separate_touching(separated, touching, std::ldexp(1.0, -bits), partner, held);
+        if (separation.moved == 0) break;
+        if (!validate_knowing(separated, options).valid()) {
+          crossed = std::move(separated);
+          continue;
+        }
         RoundedSolid written = copy_without_mesh(result);
         written.mesh = std::move(separated);
         written.merged_vertices = merged;
@@ -2472,6 +2488,34 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
         if (!report_moved_volume(moved, written)) break;
         written.valid = true;
         return written;
+      }
+      return std::nullopt;
+    };
+    Mesh crossed;
+    if (std::optional<RoundedSolid> written = separate({}, crossed)) return std::move(*written);
+    // Every fan moving along its mean edge can push a fan into another's wedge:
+    // a nearly flat fan (b9_mesh's union: the top of a solid whose conical
+    // cavity touches it from below at a vertex) has a mean edge of no clear
+    // direction, here into the solid, where the cavity's copy moves too. The
+    // fans of the vertices of the triangles that crossed then keep their first
+    // fan still and move only the others' copies (as step 9 of the repair
+    // separates touching parts, repair_touching.hpp). Kept aside, and taken only
+    // when every round here and below has failed, so that no piece certified
+    // before it existed is written differently (not in the rounds of a refined
+    // solid, whose failure lets the wedge split try its next plane).
+    if (collapse_wedges && !held_fallback && !crossed.triangles.empty()) {
+      std::vector<Triangle> shaped;
+      std::vector<std::uint32_t> shaped_index;
+      shaped_triangles(crossed, shaped, shaped_index);
+      const std::vector<TrianglePair> pairs = self_intersecting_pairs(crossed.positions, shaped);
+      if (!pairs.empty()) {
+        std::vector<std::uint8_t> held(crossed.positions.size(), 0);
+        for (const TrianglePair& pair : pairs) {
+          for (const std::size_t t : {pair.first, pair.second}) {
+            for (const VertexIndex v : shaped[t]) held[v] = 1;
+          }
+        }
+        held_fallback = separate(held, crossed);
       }
     }
   }
@@ -2710,6 +2754,7 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
       }
     }
   }
+  if (held_fallback) return std::move(*held_fallback);
   result.defect = first_report.summary();
   result.collapsed = false;
   return result;

@@ -14,7 +14,11 @@
 //
 // Per format:
 // - OFF: plain OFF, and COFF/NOFF/CNOFF/ST* (extra vertex values ignored); face
-//   colours ignored; 4OFF, nOFF and binary OFF refused. Writes no attributes.
+//   colours ignored; 4OFF, nOFF and binary OFF refused. Face lines after the
+//   header's face count are skipped with a warning (the header's count is what
+//   the format defines and what CGAL, Manifold and MeshLab read; CGAL's prim.off
+//   holds 8 faces under a header of 7); other content there is refused. Writes
+//   no attributes.
 // - OBJ: v/vt/vn/f with negative indices; a channel (uv or normal) present on
 //   some corners but not on all of them is dropped, with a warning (other tools
 //   write such files: a face added without texture coordinates). Writes uvs and
@@ -32,8 +36,9 @@
 // Warnings: what a reader accepted that the format's letter does not allow, one
 // line each ("PLY: header line 3 starts with no PLY keyword, skipped: ..."),
 // appended to `warnings` when the caller passes a vector. Nothing is accepted
-// that changes the geometry: a warning only ever drops an attribute channel or
-// skips text that holds none.
+// that changes the geometry the format's letter defines: a warning only ever
+// drops an attribute channel, skips text that holds none, or skips OFF face
+// lines beyond the header's count.
 
 #include <filesystem>
 #include <optional>

@@ -131,7 +131,8 @@ struct RoundedSolid {
   std::size_t merged_vertices = 0;  ///< vertices merged because they rounded onto one point
   std::size_t retriangulated_faces = 0;  ///< faces whose triangulation was changed to undo a fold
   /// Vertex copies moved where the exact piece touches itself (see round_solid);
-  /// a vertex pinched between k fans counts k times.
+  /// a vertex pinched between k fans counts k times (k - 1 when its first fan
+  /// had to stay still: the last resort round_solid takes).
   std::size_t separated_vertices = 0;
   /// Triangles removed because rounding laid them over each other, once each way
   /// (a part thinner than the rounding, flattened into a two-sided sheet).
