@@ -387,6 +387,42 @@ TEST_CASE("a cavity whose tip touches the top of the solid from below: only the 
   CHECK(write_mesh_to_bytes(serial.mesh, MeshFormat::off) == write_mesh_to_bytes(rounded.mesh, MeshFormat::off));
 }
 
+TEST_CASE("a union's tetrahedron touching the rest at a vertex is kept, not cancelled as a sheet",
+          "[arrangement][repair][touching]") {
+  // diplodocus.off's union, shrunk: two boxes sharing an edge (their copies of
+  // the edge's ends merge when rounded, so only the rounds that untangle edges
+  // can write it) and a small tetrahedron touching one box at a corner. Those
+  // rounds also cancel two-sided sheets over four corners, whose four triangles
+  // bound a tetrahedron: they took the tetrahedron for one and lost its volume,
+  // which the volume bound (nothing here moves when rounded) then refused, in
+  // every round.
+  const Mesh left = test::box({0, 0, 0}, {2, 2, 2});
+  const Mesh right = test::box({2, 2, 0}, {4, 4, 2});
+  Mesh tetrahedron = test::mesh_from({{0, 0, 0}, {-2, -1, -1}, {-1, -2, -1}, {-1, -1, -2}},
+                                     {{0, 1, 2}, {0, 2, 3}, {0, 3, 1}, {1, 3, 2}});
+  if (six_volume(tetrahedron) < 0) {
+    for (Triangle& t : tetrahedron.triangles) std::swap(t[1], t[2]);
+  }
+  REQUIRE(validate_mesh(tetrahedron).valid());
+  REQUIRE(six_volume(tetrahedron) == 4);
+  const Mesh merged = test::merge({left, right, tetrahedron});
+  const Resolved resolved = resolve(merged);
+  REQUIRE(resolved.made.status == ArrangementSolid::Status::ok);
+  REQUIRE(resolved.exact_six_volume == 6 * 16 + 4);
+
+  const MeshArrangement arrangement = arrange_triangles(merged.positions, merged.triangles);
+  const RepairRounding rounded = round_repaired_solid(arrangement.plane_set(), resolved.made.solid, merged);
+  INFO(rounded.defect);
+  REQUIRE(rounded.valid);
+  CHECK(validate_mesh(rounded.mesh).valid());
+  CHECK(rounded.mesh.triangles.size() == merged.triangles.size());  // the tetrahedron's four kept
+  CHECK(rounded.moved_volume <= rounded.moved_volume_bound);
+  const double volume = mpq_class(six_volume(rounded.mesh) / 6).get_d();
+  CHECK(std::abs(volume - (16 + 4.0 / 6)) <= 1e-9 * 17);
+  const Mesh read = read_mesh_from_bytes(write_mesh_to_bytes(rounded.mesh, MeshFormat::off), MeshFormat::off);
+  CHECK(validate_mesh(read).valid());
+}
+
 TEST_CASE("the exact step changes nothing where nothing self-intersects", "[arrangement][repair]") {
   // A valid mesh, and one the earlier steps repair (unwelded, a triangle
   // reversed): the same bytes with the hook as without.

@@ -1233,6 +1233,9 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
 // triangulated across the other diagonal): the four bound only the thin
 // tetrahedron between the two triangulations, and removing them keeps every
 // directed edge matched (their boundaries are a -> b -> c -> d and its reverse).
+// Four such triangles always bound a tetrahedron: one that no other triangle
+// meets along an edge, its corners off one plane (exact), is a part of its own
+// (a union's tiny part touching the rest at a vertex), not a sheet, and stays.
 // `kept`: when given, the old index of each triangle left, in order.
 std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumbered, bool quads = false,
                                     std::vector<std::uint32_t>* kept_triangles = nullptr) {
@@ -1301,6 +1304,21 @@ std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumb
           const std::uint32_t q1 = unremoved({a, d, b});
           const std::uint32_t q2 = unremoved({b, d, cc});
           if (q1 == no_index || q2 == no_index || q1 == q2 || q1 == t || q1 == u || q2 == t || q2 == u) continue;
+          // The four always bound a tetrahedron. Where it meets the rest of the
+          // mesh along its outer edges it is a sheet laid between two parts; where
+          // no other triangle runs any of its edges and its corners are not on one
+          // plane (exact) it is a solid part of its own (a union's tiny part that
+          // touches the rest at a vertex: diplodocus.off), which separation keeps
+          // and the volume bound would refuse to lose.
+          const auto alone = [&](VertexIndex x, VertexIndex y) {
+            const auto there = running.find(edge(x, y)), back = running.find(edge(y, x));
+            return there != running.end() && there->second.size() == 1 && back != running.end() &&
+                   back->second.size() == 1;
+          };
+          if (alone(a, b) && alone(b, cc) && alone(cc, d) && alone(d, a) && alone(a, cc) && alone(b, d) &&
+              orient3d(mesh.positions[a], mesh.positions[b], mesh.positions[cc], mesh.positions[d]) != Sign::zero) {
+            continue;
+          }
           removed[t] = removed[u] = removed[q1] = removed[q2] = 1;
           gone += 4;
           break;
