@@ -73,6 +73,8 @@ struct Options {
   std::optional<int> sphere_subdivisions;
   bool quick = false;
   bool validate = true;
+  bool cgal = true;         ///< time CGAL's clip too
+  bool sphere_only = false;  ///< skip knot1 and fandisk
 };
 
 struct RepeatPolicy {
@@ -174,7 +176,8 @@ struct Row {
   std::string note;
 };
 
-Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatPolicy& policy, bool validate) {
+Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatPolicy& policy, bool validate,
+               bool cgal) {
   Row row;
   row.name = name;
   row.triangles = mesh.triangle_count();
@@ -223,6 +226,11 @@ Row bench_mesh(const std::string& name, const shatter::Mesh& mesh, const RepeatP
   std::cerr << " " << row.plane.median_ms << " ms (" << row.plane.runs << " runs, prepare_plane_input "
             << row.plane.setup_ms << " ms)\n";
 
+  if (!cgal) {
+    row.cgal.median_ms = not_measured;
+    row.note += "CGAL not timed (--no-cgal); ";
+    return row;
+  }
   // CGAL PMP clip, both sides: two copies made outside the clock.
   std::cerr << "  cgal clip ..." << std::flush;
   const CgalMesh cgal_input = to_cgal(mesh);
@@ -348,6 +356,9 @@ void add_options(CLI::App& app, Options& options) {
   app.add_flag("--quick", options.quick, "Smoke run (CI): 1 run per measurement, sphere 20 * 4^6");
   app.add_flag_callback("--no-validate", [&options] { options.validate = false; },
                         "Skip the validity checks of the outputs");
+  app.add_flag_callback("--no-cgal", [&options] { options.cgal = false; },
+                        "Skip CGAL's clip (shatter's check, preparation and cut only: for profiling)");
+  app.add_flag("--sphere-only", options.sphere_only, "Skip knot1.off and fandisk.off: the sphere's row only");
 }
 
 }  // namespace
@@ -367,11 +378,13 @@ int main(int argc, char** argv) {
 
     std::vector<Row> rows;
     for (const char* file : {"knot1.off", "fandisk.off"}) {
+      if (options.sphere_only) break;
       const auto path = options.mesh_dir / file;
       if (!std::filesystem::exists(path)) throw std::runtime_error("mesh not found: " + path.string());
-      rows.push_back(bench_mesh(file, shatter::read_mesh(path), policy, options.validate));
+      rows.push_back(bench_mesh(file, shatter::read_mesh(path), policy, options.validate, options.cgal));
     }
-    rows.push_back(bench_mesh("sphere 20*4^" + std::to_string(k), make_icosphere(k), policy, options.validate));
+    rows.push_back(
+        bench_mesh("sphere 20*4^" + std::to_string(k), make_icosphere(k), policy, options.validate, options.cgal));
 
     std::cout << "One cut through the volume centroid, normal normalised (0.3, 0.5, 0.8); median of "
               << (options.quick ? "1 run (--quick)" : ">= 3 runs and >= 0.3 s (1 run if > 60 s)")
