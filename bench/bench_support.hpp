@@ -31,7 +31,8 @@ CgalMesh to_cgal(const Mesh& mesh);
 /// CGAL 5.5 PMP::clip(clip_volume(true)) of `mesh` by `plane`: keeps the part on the
 /// plane's negative side, closed by a cap. Returns what clip returned (false: CGAL
 /// could not clip, the mesh is then unspecified). The one place the benchmarks
-/// instantiate clip, whose templates cost about two minutes of compilation.
+/// instantiate clip over Epick (its templates cost about a minute of compilation
+/// per kernel; the robustness benchmark alone instantiates it over Epeck too).
 bool cgal_clip_volume(CgalMesh& mesh, const Epick::Plane_3& plane);
 
 /// The number of connected components of `mesh` (0 when it has no face).

@@ -2,12 +2,10 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/border.h>
-#include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
-#include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/stitch_borders.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
@@ -230,23 +228,6 @@ std::vector<std::vector<VertexIndex>> holes_between_fans(const std::vector<std::
   return holes;
 }
 
-// Autorefinement splits faces; this records which input triangle every piece came
-// from, so attributes can be interpolated and surfaces kept. A face the refinement
-// keeps keeps its property; only new subfaces need it set.
-struct OriginTrackingVisitor : PMP::Corefinement::Default_visitor<SurfaceMesh> {
-  SurfaceMesh::Property_map<FaceIndex, std::int64_t>* origin = nullptr;
-  SurfaceMesh::Property_map<FaceIndex, bool>* split = nullptr;
-  std::int64_t current = no_origin;
-  void before_subface_creations(FaceIndex f_old, SurfaceMesh&) {
-    current = (*origin)[f_old];
-    (*split)[f_old] = true;
-  }
-  void after_subface_created(FaceIndex f_new, SurfaceMesh&) {
-    (*origin)[f_new] = current;
-    (*split)[f_new] = true;
-  }
-};
-
 // The whole repair works on this copy of the input plus CGAL's surface mesh.
 class Repairer {
  public:
@@ -266,7 +247,6 @@ class Repairer {
     fill_holes();
     remove_zero_area_triangles();
     orient_to_bound_volume();
-    if (options_.resolve_self_intersections) resolve_self_intersections();
     return to_mesh(sm_, /*record=*/true);
   }
 
@@ -441,7 +421,6 @@ class Repairer {
     PMP::polygon_soup_to_polygon_mesh(points, polygons, sm_);
     auto [origin, created] = sm_.add_property_map<FaceIndex, std::int64_t>("f:origin", no_origin);
     origin_ = origin;
-    split_ = sm_.add_property_map<FaceIndex, bool>("f:split", false).first;
     // A fresh Surface_mesh gets its faces in polygon order; checked, since the
     // attribute bookkeeping depends on it.
     if (sm_.number_of_faces() != polygons.size()) {
@@ -719,57 +698,6 @@ class Repairer {
   }
 
   // Step 8.
-  void resolve_self_intersections() {
-    if (!CGAL::is_closed(sm_) || count_collinear_faces(sm_) > 0) return;
-    if (!PMP::does_self_intersect(sm_)) return;
-    const std::size_t pairs_before = count_intersecting_pairs(sm_);
-    SurfaceMesh refined = sm_;
-    auto origin = refined.property_map<FaceIndex, std::int64_t>("f:origin").first;
-    auto split = refined.property_map<FaceIndex, bool>("f:split").first;
-    OriginTrackingVisitor visitor;
-    visitor.origin = &origin;
-    visitor.split = &split;
-    bool fixed = false;
-    std::string failure;
-    try {
-      fixed = PMP::experimental::autorefine_and_remove_self_intersections(refined, CGAL::parameters::visitor(visitor));
-    } catch (const std::exception& e) {
-      failure = e.what();
-    }
-    if (!failure.empty() || !fixed) {
-      report_.notes.push_back({"could not resolve " + plural(pairs_before, "self-intersecting pair", "self-intersecting pairs") +
-                               (failure.empty() ? std::string(" (CGAL autorefinement gave up)")
-                                                : " (CGAL failed: " + first_line(failure) + ")")});
-      return;
-    }
-    // The kept patches come out as CGAL builds them; orient them as step 7 did.
-    if (CGAL::is_closed(refined) && refined.number_of_faces() > 0) PMP::orient_to_bound_a_volume(refined);
-    refined.collect_garbage();
-    const Mesh candidate = to_mesh(refined, /*record=*/false);
-    const ValidationReport check = validate_mesh(candidate);
-    if (!check.valid() || candidate.triangles.empty()) {
-      report_.notes.push_back({"autorefinement of " + plural(pairs_before, "self-intersecting pair", "self-intersecting pairs") +
-                               " was undone: its result, rounded to doubles, is not valid (" + check.summary() + ")"});
-      return;
-    }
-    // CGAL keeps the patches it takes to be outside; on the corpus cow and elk it
-    // keeps a sliver instead. Resolving overlaps can only remove doubly covered
-    // volume, so a result with less than half the volume has cut away the wrong
-    // side. (A sanity bound on what to accept, not a geometric decision.)
-    const double volume_before = signed_volume(to_mesh(sm_, /*record=*/false));
-    const double volume_after = signed_volume(candidate);
-    if (!(volume_after >= 0.5 * volume_before)) {
-      report_.notes.push_back({"autorefinement of " + plural(pairs_before, "self-intersecting pair", "self-intersecting pairs") +
-                               " was undone: it kept volume " + number_text(volume_after) + " of " +
-                               number_text(volume_before) + " (less than half: the wrong side)"});
-      return;
-    }
-    sm_ = std::move(refined);
-    origin_ = sm_.property_map<FaceIndex, std::int64_t>("f:origin").first;
-    split_ = sm_.property_map<FaceIndex, bool>("f:split").first;
-    resolved_pairs_ = pairs_before;
-  }
-
   static std::string number_text(double value) {
     char text[32];
     std::snprintf(text, sizeof text, "%.6g", value);
@@ -781,17 +709,6 @@ class Repairer {
     int exponent = 0;
     if (share > 0 && std::frexp(share, &exponent) == 0.5) return "2^" + std::to_string(exponent - 1);
     return number_text(share);
-  }
-
-  static std::string first_line(const std::string& text) {
-    const std::size_t end = text.find_first_of("\r\n");
-    return end == std::string::npos ? text : text.substr(0, end);
-  }
-
-  static std::size_t count_intersecting_pairs(const SurfaceMesh& sm) {
-    std::vector<std::pair<FaceIndex, FaceIndex>> pairs;
-    PMP::self_intersections(sm, std::back_inserter(pairs));
-    return pairs.size();
   }
 
   Mesh output_from_working_only() {
@@ -824,10 +741,9 @@ class Repairer {
   // reversal, self-intersection and unused-vertex changes to the report.
   Mesh to_mesh(const SurfaceMesh& sm, bool record) {
     const auto origin = sm.property_map<FaceIndex, std::int64_t>("f:origin").first;
-    const auto split = sm.property_map<FaceIndex, bool>("f:split").first;
 
     // Vertices: existing positions keep their input (representative) index; new
-    // positions (autorefinement) get new ones. Welded by position, as always.
+    // positions (a filled hole's fan hub) get new ones. Welded by position, as always.
     std::unordered_map<PositionKey, VertexIndex, PositionKeyHash> input_vertex_at;
     for (std::size_t v = 0; v < input_.vertex_count(); ++v) {
       if (representative_[v] == v) input_vertex_at.emplace(key_of(input_.positions[v]), static_cast<VertexIndex>(v));
@@ -846,7 +762,6 @@ class Repairer {
     struct Face {
       Triangle vertices;
       std::int64_t origin;
-      bool split;
       std::optional<SurfaceId> surface;
       FaceIndex handle;
       int against_input = 0;  // the input triangle itself: +1 as read, -1 reversed; 0 otherwise
@@ -857,7 +772,7 @@ class Repairer {
     for (FaceIndex f : sm.faces()) {
       const HalfedgeIndex h = sm.halfedge(f);
       Triangle tri{vertex_id(sm.source(h)), vertex_id(sm.target(h)), vertex_id(sm.target(sm.next(h)))};
-      Face face{tri, origin[f], split[f], std::nullopt, f};
+      Face face{tri, origin[f], std::nullopt, f};
       if (face.origin != no_origin) {
         const std::size_t t = static_cast<std::size_t>(face.origin);
         const Triangle in = mapped(t);
@@ -1001,7 +916,7 @@ class Repairer {
           continue;
         }
         for (const Triangle& t : lid) {
-          Face face{t, no_origin, false, std::nullopt, SurfaceMesh::null_face()};
+          Face face{t, no_origin, std::nullopt, SurfaceMesh::null_face()};
           for (int c = 0; c < 3 && !face.surface; ++c) {
             const auto across = face_of_edge.find((std::uint64_t{t[(c + 1) % 3]} << 32) | t[c]);
             if (across != face_of_edge.end()) face.surface = faces[across->second].surface;
@@ -1080,10 +995,6 @@ class Repairer {
           for (std::size_t k = 0; k < 3; ++k) {
             if (in[k] == v) corner = 3 * t + k;
           }
-          if (!corner && face.split) {
-            interpolate_corner(out, static_cast<std::size_t>(face.origin), out.positions[tri[c]]);
-            continue;
-          }
         }
         if (!corner && v < new_base) corner = borrowed_corner(v, surface);
         // A fan's hub borrows the attributes of a corner of its hole.
@@ -1131,12 +1042,6 @@ class Repairer {
         change(RepairKind::reversed_triangles, reversed,
                "reversed " + plural(reversed, "triangle", "triangles") +
                    " to orient the surface consistently and outward");
-      }
-      if (resolved_pairs_ > 0) {
-        change(RepairKind::resolved_self_intersections, resolved_pairs_,
-               "resolved " + plural(resolved_pairs_, "self-intersecting triangle pair", "self-intersecting triangle pairs") +
-                   " (autorefinement: " + plural(created_vertices, "new vertex", "new vertices") +
-                   " rounded to doubles, inner parts removed)");
       }
       if (separation_change_) report_.changes.push_back(std::move(*separation_change_));
       // Step 9's copies are new vertices too, not input vertices kept.
@@ -1256,8 +1161,6 @@ class Repairer {
   std::vector<std::size_t> working_;  // input triangles kept after step 2, in input order
   SurfaceMesh sm_;
   SurfaceMesh::Property_map<FaceIndex, std::int64_t> origin_;
-  SurfaceMesh::Property_map<FaceIndex, bool> split_;
-  std::size_t resolved_pairs_ = 0;
   std::optional<RepairChange> separation_change_;  // step 9's, once it is done
   std::size_t separation_copies_ = 0;               // the vertex copies step 9 made
   // Vertices orient_polygon_soup split to make the soup an oriented manifold.

@@ -629,23 +629,15 @@ TEST_CASE("every bad corpus mesh is repaired or refused as recorded", "[repair][
   CHECK(seen == expected.size());
 }
 
-TEST_CASE("self-intersections: left and named by default, and the opt-in resolves the camel", "[repair][corpus]") {
-  // By default (and so on the CLI) self-intersections are not resolved: CGAL
-  // 5.5's experimental autorefinement gave build-dependent results on the cow
-  // (see RepairOptions::resolve_self_intersections).
+TEST_CASE("self-intersections: left and named when no exact rounding is passed", "[repair][corpus]") {
+  // The kernel cannot round a Solid (step 11 needs RepairOptions::round_solid,
+  // which the triangulate layer gives); without it self-intersections are named.
   for (const fs::path& path : self_intersecting_meshes()) {
-    const std::string name = path.filename().string();
-    INFO(name);
+    INFO(path.filename().string());
     Mesh mesh = read_mesh(path);
     const RepairReport report = repair_mesh(mesh);
-    CHECK_FALSE(names(report, RepairKind::resolved_self_intersections));
+    CHECK_FALSE(names(report, RepairKind::resolved_self_intersections_exactly));
     CHECK(validate_mesh(mesh).find(DefectKind::self_intersection) != nullptr);
-    if (name == "camel.off") {
-      Mesh opted = read_mesh(path);
-      const RepairReport resolved = repair_mesh(opted, {.resolve_self_intersections = true});
-      CHECK(names(resolved, RepairKind::resolved_self_intersections));
-      CHECK(validate_mesh(opted).valid());
-    }
   }
 }
 

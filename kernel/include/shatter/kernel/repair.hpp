@@ -35,8 +35,9 @@ enum class RepairKind {
   stitched_border_edges,         ///< pairs of boundary edges with exactly equal endpoints joined (stitch_borders)
   fixed_zero_area_triangles,     ///< exactly collinear triangles removed by edge flips/collapses (remove_degenerate_faces)
   filled_holes,                  ///< boundary cycles closed by new triangles over their own vertices (triangulate_hole)
-  resolved_self_intersections,   ///< intersecting triangles refined along their intersection and the inner
-                                 ///< patches removed (autorefine_and_remove_self_intersections)
+  resolved_self_intersections,   ///< retired, made by no repair now: CGAL 5.5's experimental autorefinement
+                                 ///< (an opt-in step 8 until 2026-12-05, replaced by the exact step 11); kept so
+                                 ///< a file naming it still reads and the kinds after it keep their numbers
   removed_unused_vertices,       ///< vertices no triangle uses any more
   separated_touching_parts,      ///< parts of a closed surface touching at a vertex or along an edge (non-manifold
                                  ///< vertices and edges) split apart and moved a hair into their own wedges; runs
@@ -98,17 +99,6 @@ struct RepairOptions {
   /// invented surface over the hole's own vertices; the report says how many
   /// holes and triangles it took.
   std::size_t max_hole_edges = std::numeric_limits<std::size_t>::max();
-  /// Try CGAL's autorefinement on a closed mesh that still self-intersects. This
-  /// constructs the intersection points (exactly, inside CGAL) and rounds them to
-  /// the nearest double; the rounded result is checked like any other (see
-  /// repair_mesh's guarantees), and the mesh is left as before this step when the
-  /// result is not a valid self-intersection-free solid.
-  /// Off by default: on the corpus cow, a Release build rejects the sliver CGAL
-  /// 5.5's experimental autorefinement keeps, while a -O1 ASan build of the same
-  /// code accepts it (the orientation of a self-intersecting input, on which the
-  /// acceptance test rests, is not reliable), so the outcome depends on the build.
-  /// Opt in from the library to study it; the CLI does not.
-  bool resolve_self_intersections = false;
   /// How far step 9 moves each copy of a vertex where parts of a closed surface
   /// touch (a non-manifold vertex, or the ends of an edge with more than two
   /// triangles), as a share of the distance to the copy's nearest neighbour. The
@@ -191,11 +181,8 @@ struct RepairReport {
 ///     mean is no vertex's position (else noted, the hole left);
 ///  7. when the mesh is closed, orient every shell to bound a volume, the outermost
 ///     outward (orient_to_bound_a_volume);
-///  8. when closed and still self-intersecting and `resolve_self_intersections`,
-///     autorefine and drop the inner patches (experimental in CGAL 5.5), kept only
-///     if the rounded result validates with no defect at all and keeps at least
-///     half the signed volume (resolving overlaps removes only doubly covered
-///     volume; CGAL sometimes keeps the wrong side, as on the corpus cow and elk);
+///  8. (none: CGAL's experimental autorefinement was here, an opt-in whose outcome
+///     depended on the build; step 11 resolves self-intersections exactly);
 ///  9. when the surface is closed and consistently oriented but touches itself
 ///     (parts sharing a vertex or an edge: non-manifold vertices and edges), split
 ///     every edge with more than two triangles into pairs, each bounding one wedge
