@@ -256,6 +256,11 @@ inline Reference plane_reference_bonds(const MeshTree& tree) {
     for (int a = 1; a < 3; ++a) {
       if (abs(n[a]) > abs(n[axis])) axis = a;
     }
+    // A Voronoi hierarchy's glued node was cut by no plane (voronoi.cpp pushes a
+    // zero one): nothing is bonded across it. Its scale below would be 0 / 0,
+    // which trapped once the test files compiled at -O0 under the sanitizers
+    // (at -O1 the unused division was never reached).
+    if (sgn(n[axis]) == 0) continue;
     const int iu = (axis + 1) % 3, iv = (axis + 2) % 3;
     const double scale = std::sqrt(mpq_class(h.a * h.a + h.b * h.b + h.c * h.c).get_d()) / std::fabs(n[axis].get_d());
     std::vector<CapFace> faces;
