@@ -1304,12 +1304,7 @@ std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumb
           const std::uint32_t q1 = unremoved({a, d, b});
           const std::uint32_t q2 = unremoved({b, d, cc});
           if (q1 == no_index || q2 == no_index || q1 == q2 || q1 == t || q1 == u || q2 == t || q2 == u) continue;
-          // The four always bound a tetrahedron. Where it meets the rest of the
-          // mesh along its outer edges it is a sheet laid between two parts; where
-          // no other triangle runs any of its edges and its corners are not on one
-          // plane (exact) it is a solid part of its own (a union's tiny part that
-          // touches the rest at a vertex: diplodocus.off), which separation keeps
-          // and the volume bound would refuse to lose.
+          // A tetrahedron of its own stays (see above; diplodocus.off).
           const auto alone = [&](VertexIndex x, VertexIndex y) {
             const auto there = running.find(edge(x, y)), back = running.find(edge(y, x));
             return there != running.end() && there->second.size() == 1 && back != running.end() &&
