@@ -20,18 +20,16 @@
 #include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/union_find.hpp"
 #include "shatter/kernel/self_intersections.hpp"
+#include "shatter/kernel/snap_predicates.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/triangulate/cap.hpp"
 
 namespace shatter {
 namespace {
 
-// Orientation of (a, b, c) on a face, seen from the face's outward side. Exact.
-Sign outward_orient(const PlaneSet& set, const SolidFace& face, Projection projection, const Solid& solid,
-                    VertexIndex a, VertexIndex b, VertexIndex c) {
-  const Sign s = orient_in_plane(set, projection, solid.defs[a], solid.approx[a], solid.defs[b], solid.approx[b],
-                                 solid.defs[c], solid.approx[c]);
-  return face.reversed ? flip(s) : s;
+// The face's plane and points, orientations seen from its outward side.
+FaceGeometry outward_geometry(const PlaneSet& set, const SolidFace& face, Projection projection, const Solid& solid) {
+  return {set, solid.defs, solid.approx, projection, face.reversed};
 }
 
 // A fan of a convex polygon (the face's one loop) from corner `apex` is a
@@ -41,8 +39,9 @@ bool fan_from(const PlaneSet& set, const SolidFace& face, Projection projection,
               const SolidLoop& loop, std::uint32_t apex, std::vector<Triangle>& out) {
   const VertexIndex a = solid.corners[apex].vertex;
   if (loop.corner_count > 3) {
+    const FaceGeometry outward = outward_geometry(set, face, projection, solid);
     for (const CornerEdge& edge : fan_edges(solid.corners, loop, apex)) {
-      if (outward_orient(set, face, projection, solid, a, edge.from, edge.to) != Sign::positive) return false;
+      if (outward.orient(a, edge.from, edge.to) != Sign::positive) return false;
     }
   }
   for (const CornerEdge& edge : fan_edges(solid.corners, loop, apex)) out.push_back({a, edge.from, edge.to});
@@ -133,10 +132,10 @@ void triangulate_region(const PlaneSet& set, const SolidFace& face, Projection p
   // exactly below, which also rules out exactly collinear ones.
   Cap<Vec3> cap;
   if (!exact_delaunay) cap = triangulate_cap(local_rounded, border, plane, {});
+  const FaceGeometry outward = outward_geometry(set, face, projection, solid);
   auto all_positive = [&](const std::vector<Triangle>& triangles) {
     return std::all_of(triangles.begin(), triangles.end(), [&](const Triangle& t) {
-      return outward_orient(set, face, projection, solid, vertices[t[0]], vertices[t[1]], vertices[t[2]]) ==
-             Sign::positive;
+      return outward.orient(vertices[t[0]], vertices[t[1]], vertices[t[2]]) == Sign::positive;
     });
   };
   if (exact_delaunay || !cap.added_points.empty() || !all_positive(cap.triangles)) {
@@ -260,11 +259,11 @@ bool triangulate_merged_face(const PlaneSet& set, const SolidFace& face,
   // the plane one to one, keeping or reversing orientation by that sign).
   std::vector<Projection> projections{projection};
   if (also_other_axes) {
-    const ApproxPlane a = set.approx(face.plane);
-    const Estimate components[3] = {a.a, a.b, a.c};
     for (int axis = 0; axis < 3; ++axis) {
-      const Estimate& c = components[axis];
-      if (axis != projection.axis && std::fabs(c.value) > 2 * c.error) projections.push_back({axis, c.value < 0});
+      if (axis == projection.axis) continue;
+      if (const std::optional<Projection> along = projection_along_if_clear(set, face.plane, axis)) {
+        projections.push_back(*along);
+      }
     }
   }
   for (const Projection& along : projections) {
@@ -300,22 +299,7 @@ bool triangulate_merged_face(const PlaneSet& set, const SolidFace& face,
 // Each step only removes corners, or inserts a vertex into an edge that passes
 // through it, so it ends; it changes no position.
 
-bool strictly_inside_segment(const Vec3& a, const Vec3& b, const Vec3& v) {
-  // Collinear: every coordinate projection of the three points is.
-  if (orient2d({a.x, a.y}, {b.x, b.y}, {v.x, v.y}) != Sign::zero ||
-      orient2d({a.y, a.z}, {b.y, b.z}, {v.y, v.z}) != Sign::zero ||
-      orient2d({a.z, a.x}, {b.z, b.x}, {v.z, v.x}) != Sign::zero) {
-    return false;
-  }
-  // Strictly between: along the first coordinate where the ends differ (on a
-  // line through two distinct points every such coordinate orders the points
-  // alike). Comparing the doubles themselves is exact.
-  for (const auto get : {&Vec3::x, &Vec3::y, &Vec3::z}) {
-    const double lo = std::min(a.*get, b.*get), hi = std::max(a.*get, b.*get);
-    if (lo < hi) return lo < v.*get && v.*get < hi;
-  }
-  return false;  // a == b
-}
+// (Step 1's test is the kernel's strictly_inside_segment.)
 
 // Step 2's spikes: x -> y -> x (an edge run forth and back) and repeated
 // corners, removed until none is left.
@@ -421,29 +405,15 @@ void insert_along_loop_edges(std::vector<std::vector<std::vector<VertexIndex>>>&
 // changed), tested against every edge with a bounding-box filter (exact: the
 // positions are doubles).
 // `near`: when given, a candidate within that distance of an edge's line (the
-// Euclidean distance, compared exactly on the doubles) whose projection onto
-// the line falls strictly between the edge's ends is inserted too: the last
+// Euclidean distance, SegmentReach) whose projection onto the line falls
+// strictly between the edge's ends is inserted too: the last
 // round's hot pixels in edges (snap_clusters), an edge passing within a pixel of
 // a vertex routed through it.
 void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vector<std::vector<VertexIndex>>>& loops,
                          std::span<const VertexIndex> candidates, const mpq_class* near = nullptr) {
   // Within `near` of the line of a -> b and strictly between a and b along it.
-  const double near_squared = near != nullptr ? near->get_d() * near->get_d() : 0;
-  const auto near_segment = [&](const Vec3& pa, const Vec3& pb, const Vec3& p) {
-    // Clearly farther than `near` from the line, in doubles (a relative error
-    // far below the factor 2 allowed for), before the exact test.
-    const Vec3 dab = pb - pa, dap = p - pa;
-    const Vec3 c = cross(dab, dap);
-    if (dot(c, c) > 2 * near_squared * dot(dab, dab)) return false;
-    mpq_class ab[3], ap[3];
-    for (int k = 0; k < 3; ++k) ab[k] = mpq_class(pb[k]) - pa[k], ap[k] = mpq_class(p[k]) - pa[k];
-    const mpq_class along = ab[0] * ap[0] + ab[1] * ap[1] + ab[2] * ap[2];
-    const mpq_class length2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
-    if (sgn(along) <= 0 || along >= length2) return false;
-    const mpq_class c0 = ab[1] * ap[2] - ab[2] * ap[1], c1 = ab[2] * ap[0] - ab[0] * ap[2],
-                    c2 = ab[0] * ap[1] - ab[1] * ap[0];
-    return c0 * c0 + c1 * c1 + c2 * c2 <= *near * *near * length2;
-  };
+  const std::optional<SegmentReach> near_segment =
+      near != nullptr ? std::optional<SegmentReach>(SegmentReach(*near)) : std::nullopt;
   const double margin = near != nullptr ? 2 * near->get_d() : 0;
   // The candidates by x, so that each edge visits only those within its box's x range.
   std::vector<VertexIndex> by_x(candidates.begin(), candidates.end());
@@ -464,7 +434,7 @@ void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vecto
       if (v == a || v == b || p.x < lo.x || p.x > hi.x || p.y < lo.y || p.y > hi.y || p.z < lo.z || p.z > hi.z) {
         continue;
       }
-      if (strictly_inside_segment(pa, pb, p) || (near != nullptr && near_segment(pa, pb, p))) inside.push_back(v);
+      if (strictly_inside_segment(pa, pb, p) || (near_segment && near_segment->within(pa, pb, p))) inside.push_back(v);
     }
     // In order from a to b, along the first coordinate where they differ
     // (exact comparisons of the doubles themselves); near the edge but off its
@@ -480,17 +450,11 @@ void repair_merged_loops(std::span<const Vec3> positions, std::vector<std::vecto
       // The projection from the edge's smaller end, so that both ways agree.
       const Vec3& from = a < b ? pa : pb;
       const Vec3& to = a < b ? pb : pa;
-      const auto along = [&](VertexIndex v) {
-        mpq_class t = 0;
-        for (int k = 0; k < 3; ++k) t += (mpq_class(positions[v][k]) - from[k]) * (mpq_class(to[k]) - from[k]);
-        return t;
-      };
-      std::vector<std::pair<mpq_class, VertexIndex>> keyed;
-      for (const VertexIndex v : inside) keyed.emplace_back(along(v), v);
-      std::sort(keyed.begin(), keyed.end());
-      if (b < a) std::reverse(keyed.begin(), keyed.end());
-      inside.clear();
-      for (const auto& [t, v] : keyed) inside.push_back(v);
+      std::sort(inside.begin(), inside.end(), [&](VertexIndex u, VertexIndex w) {
+        const Sign order = compare_along_direction(from, to, positions[u], positions[w]);
+        return order != Sign::zero ? order == Sign::negative : u < w;
+      });
+      if (b < a) std::reverse(inside.begin(), inside.end());
     }
     inside.erase(std::unique(inside.begin(), inside.end()), inside.end());
     return inside;
@@ -581,13 +545,8 @@ bool route_edges_through_crossed_corners(const PlaneSet& set, const Solid& solid
           if (rounded == Sign::zero) continue;  // on the line: step 1's case
           const Sign before = orientation_in_projection(kept, exact_of(a), exact_of(b), exact_of(v));
           if (before == Sign::zero || before == rounded) continue;
-          // Strictly between a and b along the edge: (v - a).(b - a) > 0 and (v - b).(a - b) > 0, exactly.
-          mpq_class along_a = 0, along_b = 0;
-          for (int k = 0; k < 3; ++k) {
-            along_a += (mpq_class(pv[k]) - pa[k]) * (mpq_class(pb[k]) - pa[k]);
-            along_b += (mpq_class(pv[k]) - pb[k]) * (mpq_class(pa[k]) - pb[k]);
-          }
-          if (sgn(along_a) > 0 && sgn(along_b) > 0) through[key(a, b)].push_back(v);
+          // Strictly between a and b along the edge, exactly.
+          if (projects_strictly_inside_segment(pa, pb, pv)) through[key(a, b)].push_back(v);
         }
       }
     }
@@ -604,12 +563,9 @@ bool route_edges_through_crossed_corners(const PlaneSet& set, const Solid& solid
     std::sort(inside.begin(), inside.end());
     inside.erase(std::unique(inside.begin(), inside.end()), inside.end());
     const Vec3& pa = positions[a];
-    const auto distance = [&](VertexIndex v) {
-      mpq_class d = 0;
-      for (int k = 0; k < 3; ++k) d += (mpq_class(positions[v][k]) - pa[k]) * (mpq_class(positions[v][k]) - pa[k]);
-      return d;
-    };
-    std::stable_sort(inside.begin(), inside.end(), [&](VertexIndex x, VertexIndex y) { return distance(x) < distance(y); });
+    std::stable_sort(inside.begin(), inside.end(), [&](VertexIndex x, VertexIndex y) {
+      return compare_distance_to(pa, positions[x], positions[y]) == Sign::negative;
+    });
     return inside;
   });
   return true;
@@ -637,24 +593,16 @@ void merge_face_group(const PlaneSet& set, const Solid& solid, std::span<const V
     std::erase_if(sum, [](const std::vector<VertexIndex>& loop) { return loop.size() < 3; });
     again = join_at_antiparallel_edge(sum) || split_at_antiparallel_edge(sum);
   }
-  // Twice the signed area of the loops in face f's projection, seen from its outside.
-  const auto area_seen_from = [&](std::uint32_t f) {
-    const Projection projection = projection_of(set, solid.faces[f].plane);
-    const int u = (projection.axis + 1) % 3, w = (projection.axis + 2) % 3;
-    mpq_class twice = 0;
-    for (const auto& loop : sum) {
-      for (std::size_t i = 0; i < loop.size(); ++i) {
-        const Vec3 &p = positions[loop[i]], &q = positions[loop[(i + 1) % loop.size()]];
-        twice += mpq_class(p[u]) * q[w] - mpq_class(q[u]) * p[w];
-      }
-    }
-    return (projection.flipped != solid.faces[f].reversed) ? mpq_class(-twice) : twice;
+  // Which way the loops turn in face f's projection, seen from its outside.
+  const auto turn_seen_from = [&](std::uint32_t f) {
+    const Sign s = loops_orientation(positions, sum, projection_of(set, solid.faces[f].plane));
+    return solid.faces[f].reversed ? flip(s) : s;
   };
   // The first member (of those on a cut plane when `caps_only`) that sees the
   // loops counter-clockwise, or no_index.
   const auto first_seeing = [&](bool caps_only) {
     for (const std::uint32_t f : group) {
-      if ((!caps_only || solid.faces[emit_as[f]].plane.is_cut()) && sgn(area_seen_from(emit_as[f])) > 0) {
+      if ((!caps_only || solid.faces[emit_as[f]].plane.is_cut()) && turn_seen_from(emit_as[f]) == Sign::positive) {
         return emit_as[f];
       }
     }
@@ -713,10 +661,7 @@ bool merge_coplanar_sheets(const PlaneSet& set, const Solid& solid, std::span<co
     const Vec3 &a = positions[corners[0]];
     for (std::size_t j = 1; j < corners.size(); ++j) {
       for (std::size_t k = j + 1; k < corners.size(); ++k) {
-        const Vec3 &b = positions[corners[j]], &c = positions[corners[k]];
-        if (orient2d({a.x, a.y}, {b.x, b.y}, {c.x, c.y}) != Sign::zero ||
-            orient2d({a.y, a.z}, {b.y, b.z}, {c.y, c.z}) != Sign::zero ||
-            orient2d({a.z, a.x}, {b.z, b.x}, {c.z, c.x}) != Sign::zero) {
+        if (!collinear(a, positions[corners[j]], positions[corners[k]])) {
           return std::array<VertexIndex, 3>{corners[0], corners[j], corners[k]};
         }
       }
@@ -892,9 +837,9 @@ std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::spa
     const auto mergeable = [&](std::uint32_t x, std::uint32_t y) {
       if (!(apart_too && thin_only) && !share_edge(x, y)) return false;
       const SolidFace &a = solid.faces[emit_as[x]], &b = solid.faces[emit_as[y]];
-      const Sign normals = compare_normals(set, a.plane, b.plane);
-      if (normals == Sign::zero) return false;
-      const bool one_way = (normals == Sign::positive) == (a.reversed == b.reversed);
+      const Sign facing = compare_outward_normals(set, a, b);
+      if (facing == Sign::zero) return false;
+      const bool one_way = facing == Sign::positive;
       if (one_way && mode != FoldMerge::groups_one_way) return false;
       if (!thin_only && !one_way) return true;
       if (!reach) reach.emplace(set, solid, positions);
@@ -939,8 +884,7 @@ std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::spa
     // way crowd an edge only beside such a wedge; merging them would fill
     // what lies outside the solid between them.
     const SolidFace &a = solid.faces[emit_as[hf]], &b = solid.faces[emit_as[hg]];
-    const Sign normals = compare_normals(set, a.plane, b.plane);
-    if (normals == Sign::zero || (normals == Sign::positive) == (a.reversed == b.reversed)) continue;
+    if (compare_outward_normals(set, a, b) != Sign::negative) continue;
     if (thin_only) {
       if (!reach) reach.emplace(set, solid, positions);
       if (!reach->within(loops[hg], a.plane) && !reach->within(loops[hf], b.plane)) continue;
@@ -1704,19 +1648,13 @@ bool report_moved_volume(const MovedVolume& moved, RoundedSolid& result) {
 }
 
 // The triangles of `mesh` with a shape (self_intersecting_pairs' precondition):
-// three distinct corners not on one line, decided exactly on the doubles (a line
-// in 3D projects onto a line in all three coordinate planes). `index[i]` is
-// shaped[i]'s place in mesh.triangles.
+// three distinct corners not on one line (collinear, exact on the doubles).
+// `index[i]` is shaped[i]'s place in mesh.triangles.
 void shaped_triangles(const Mesh& mesh, std::vector<Triangle>& shaped, std::vector<std::uint32_t>& index) {
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
     const Triangle& tri = mesh.triangles[t];
     if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) continue;
-    const Vec3 &a = mesh.positions[tri[0]], &b = mesh.positions[tri[1]], &c = mesh.positions[tri[2]];
-    if (orient2d({a.x, a.y}, {b.x, b.y}, {c.x, c.y}) == Sign::zero &&
-        orient2d({a.y, a.z}, {b.y, b.z}, {c.y, c.z}) == Sign::zero &&
-        orient2d({a.z, a.x}, {b.z, b.x}, {c.z, c.x}) == Sign::zero) {
-      continue;
-    }
+    if (collinear(mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]])) continue;
     shaped.push_back(tri);
     index.push_back(t);
   }
@@ -1752,10 +1690,10 @@ std::size_t insert_vertices_into_crossed_triangles(const PlaneSet& set, const So
     for (const VertexIndex v : mesh.triangles[u]) {
       if (v == tri[0] || v == tri[1] || v == tri[2]) continue;
       const Vec3& p = mesh.positions[v];
-      const Sign s0 = orient2d(kept(mesh.positions[tri[0]]), kept(mesh.positions[tri[1]]), kept(p));
-      const Sign s1 = orient2d(kept(mesh.positions[tri[1]]), kept(mesh.positions[tri[2]]), kept(p));
-      const Sign s2 = orient2d(kept(mesh.positions[tri[2]]), kept(mesh.positions[tri[0]]), kept(p));
-      if (s0 == Sign::zero || s0 != s1 || s1 != s2) continue;
+      if (!strictly_inside_triangle(kept(mesh.positions[tri[0]]), kept(mesh.positions[tri[1]]),
+                                    kept(mesh.positions[tri[2]]), kept(p))) {
+        continue;
+      }
       if (!reach.within(p, plane)) continue;
       insert[t] = v;
       return;
@@ -1832,14 +1770,10 @@ bool snap_clusters(const Solid& solid, std::span<const Vec3> positions, const mp
   std::sort(order.begin(), order.end(), [&](VertexIndex a, VertexIndex b) {
     return positions[a].x != positions[b].x ? positions[a].x < positions[b].x : a < b;
   });
-  // Decided in doubles when the difference is clearly apart from the pixel
-  // (the subtraction's relative error is at most 2^-53), else exactly.
-  const double pixel = within.get_d();
+  // Exactly (CoordinateReach: in doubles where they decide).
+  const CoordinateReach pixel(within);
   const auto close = [&](VertexIndex a, VertexIndex b, int axis) {
-    const double difference = std::fabs(positions[a][axis] - positions[b][axis]);
-    if (difference > pixel * (1 + 0x1p-40)) return false;
-    if (difference < pixel * (1 - 0x1p-40)) return true;
-    return abs(mpq_class(positions[a][axis]) - positions[b][axis]) <= within;
+    return pixel.within(positions[a][axis], positions[b][axis]);
   };
   UnionFind clusters;
   clusters.reset(n);
@@ -2726,7 +2660,8 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
             const mpq_class reach_offset = times * reach->rho * largest;
             const double h = reach_offset.get_d();
             double offset = cap.reversed ? cut.offset - h : cut.offset + h;
-            while (offset != cut.offset && abs(mpq_class(offset) - mpq_class(cut.offset)) > reach_offset) {
+            const CoordinateReach offset_reach(reach_offset);
+            while (offset != cut.offset && !offset_reach.within(offset, cut.offset)) {
               offset = std::nextafter(offset, cut.offset);
             }
             if (!(offset != cut.offset)) {
