@@ -97,8 +97,11 @@ TEST_CASE("CoordinateReach: within the reach exactly, at the reach, ulps around 
   CHECK(queries - within > queries / 4);
 }
 
-TEST_CASE("SegmentReach: accepts only points within reach of the open segment, and agrees where doubles see") {
-  std::size_t accepted = 0, agreed = 0, queries = 0;
+TEST_CASE("SegmentReach: exactly the points within reach of the open segment, a reach below an ulp included") {
+  // The reach goes down to 2^-55 of the scale while the coordinates reach 1e3
+  // times it, so the doubles' cross product often errs far beyond the reach:
+  // there the floating-point rejection must stand aside (it once did not).
+  std::size_t accepted = 0, accepted_beyond_doubles = 0, queries = 0;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     Random random(seed);
     for (int i = 0; i < 200; ++i) {
@@ -122,21 +125,34 @@ TEST_CASE("SegmentReach: accepts only points within reach of the open segment, a
         const bool answer = SegmentReach(reach).within(a, b, p);
         INFO("a " << a.x << ' ' << a.y << ' ' << a.z << ", b " << b.x << ' ' << b.y << ' ' << b.z << ", p " << p.x
                   << ' ' << p.y << ' ' << p.z << ", reach " << reach.get_d());
-        // Sound always: an accepted point is within reach.
-        if (answer) REQUIRE(expected);
-        // Complete where the doubles' cross product errs far below the reach.
+        REQUIRE(answer == expected);
         double far = 0;
         for (int k = 0; k < 3; ++k) far = std::max({far, std::fabs(p[k] - a[k]), std::fabs(b[k] - a[k])});
-        if (far <= r * 0x1p40) {
-          REQUIRE(answer == expected);
-          ++agreed;
-        }
+        accepted_beyond_doubles += answer && far > r * 0x1p49;
         accepted += answer, ++queries;
       }
+      // Points exactly on the line through a and b along (1, 3, 5), a near the
+      // origin and p, b far out (parameters of 50 bits, so every coordinate is a
+      // double): the differences round, each component its own way, and the
+      // doubles' cross product is far from the exact zero beside a small reach.
+      const auto fifty_bits = [](double x) {
+        const int e = std::ilogb(x);
+        return std::ldexp(std::round(std::ldexp(x, 49 - e)), e - 49);
+      };
+      const double s_near = fifty_bits(scale * random.uniform(1e-6, 1e-5)),
+                   s_mid = fifty_bits(scale * random.uniform(1, 2)), s_end = fifty_bits(scale * random.uniform(2.5, 4));
+      const Vec3 near{s_near, 3 * s_near, 5 * s_near}, mid{s_mid, 3 * s_mid, 5 * s_mid},
+          end{s_end, 3 * s_end, 5 * s_end};
+      const bool answer = SegmentReach(reach).within(near, end, mid);
+      INFO("exactly on the line at " << s_near << ", " << s_mid << ", " << s_end << " times (1, 3, 5), reach " << r);
+      REQUIRE(answer);
+      accepted_beyond_doubles += s_end > r * 0x1p49;
+      accepted += answer, ++queries;
     }
   }
   CHECK(accepted > queries / 20);
-  CHECK(agreed > queries / 4);
+  CHECK(queries - accepted > queries / 4);
+  CHECK(accepted_beyond_doubles >= 20);
 }
 
 TEST_CASE("projects_strictly_inside_segment, compare_along_direction and compare_distance_to are exact") {

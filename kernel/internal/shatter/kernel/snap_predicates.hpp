@@ -53,19 +53,17 @@ class SegmentReach {
   /// Whether p lies within reach of the line through a and b (|(b - a) x
   /// (p - a)|^2 <= reach^2 |b - a|^2) and projects strictly between a and b
   /// ((p - a).(b - a) > 0 and (p - b).(a - b) > 0), on rationals. False when a == b.
-  /// Before that, a floating-point pre-test rejects a point whose distance in
-  /// doubles exceeds the reach by a factor sqrt 2 (|c|^2 > 2 reach^2 |b - a|^2,
-  /// c the cross product of the rounded differences).
-  /// Preconditions: finite inputs. Guarantees: a point accepted is within reach,
-  /// exactly. Failure: the pre-test has no error bound: where the cross
-  /// product's rounding is large beside the reach (|p - a| above about
-  /// reach x 2^49, as when the reach is a fraction of an ulp of the
-  /// coordinates), a point within reach may be rejected too.
+  /// Before that, a floating-point pre-test with an error bound rejects a point
+  /// whose distance, less the bound, exceeds the reach by a factor 1.5.
+  /// Preconditions: finite inputs. Guarantees: exact, whatever the scale of the
+  /// coordinates beside the reach (a reach below an ulp of the coordinates
+  /// included). Failure: none.
   bool within(const Vec3& a, const Vec3& b, const Vec3& p) const;
 
  private:
   mpq_class reach_;
-  double approximate_reach_squared_;
+  double approximate_reach_;
+  bool reach_is_zero_;
 };
 
 /// Whether p's orthogonal projection onto the line through a and b falls
