@@ -37,6 +37,12 @@ struct RandomGeometry {
   InputGeometry input;
   std::vector<Plane> cuts;
   PlaneSet set() const { return input.plane_set(cuts); }
+  std::uint32_t plane_count() const { return static_cast<std::uint32_t>(input.planes.size() + cuts.size()); }
+  // Plane k of the set: the input's planes first, then the cuts.
+  PlaneRef plane(std::uint32_t k) const {
+    const auto inputs = static_cast<std::uint32_t>(input.planes.size());
+    return k < inputs ? PlaneRef::input(k) : PlaneRef::cut(k - inputs);
+  }
 };
 
 RandomGeometry random_geometry(Random& random, bool lattice) {
@@ -128,9 +134,8 @@ TEST_CASE("plane kernel predicates agree with an independent exact evaluation", 
     for (const PointDef& def : defs) approx.push_back(approximate(set, def));
     for (std::size_t i = 0; i < defs.size(); ++i) {
       // Sides against every plane of the set.
-      for (std::uint32_t k = 0; k < g.input.planes.size() + g.cuts.size(); ++k) {
-        const PlaneRef plane = k < g.input.planes.size() ? PlaneRef::input(k)
-                                                         : PlaneRef::cut(k - static_cast<std::uint32_t>(g.input.planes.size()));
+      for (std::uint32_t k = 0; k < g.plane_count(); ++k) {
+        const PlaneRef plane = g.plane(k);
         const Sign expected = reference_side(set, plane, defs[i]);
         INFO("seed " << seed << " point " << i << " plane " << k);
         CHECK(side(set, plane, defs[i], approx[i]) == expected);
@@ -252,10 +257,8 @@ TEST_CASE("projection_along_if_clear: a projection only along a normal component
           approximate_input_plane(g.input.points[idx[0]], g.input.points[idx[1]], g.input.points[idx[2]]));
     }
     const PlaneSet set = g.set();
-    for (std::uint32_t k = 0; k < g.input.planes.size() + g.cuts.size(); ++k) {
-      const PlaneRef plane = k < g.input.planes.size()
-                                 ? PlaneRef::input(k)
-                                 : PlaneRef::cut(k - static_cast<std::uint32_t>(g.input.planes.size()));
+    for (std::uint32_t k = 0; k < g.plane_count(); ++k) {
+      const PlaneRef plane = g.plane(k);
       const Q4 h = reference_plane(set, plane);
       const Sign component[3] = {sign_of(h.a), sign_of(h.b), sign_of(h.c)};
       for (int axis = 0; axis < 3; ++axis) {
@@ -289,10 +292,8 @@ TEST_CASE("PlaneReach: within a plane's L1 reach exactly when a move of that rea
     Random random(seed);
     const RandomGeometry g = random_geometry(random, seed % 2 == 0);
     const PlaneSet set = g.set();
-    for (std::uint32_t k = 0; k < g.input.planes.size() + g.cuts.size(); ++k) {
-      const PlaneRef plane = k < g.input.planes.size()
-                                 ? PlaneRef::input(k)
-                                 : PlaneRef::cut(k - static_cast<std::uint32_t>(g.input.planes.size()));
+    for (std::uint32_t k = 0; k < g.plane_count(); ++k) {
+      const PlaneRef plane = g.plane(k);
       const Q4 h = reference_plane(set, plane);
       const std::array<mpq_class, 4> coefficients = exact_plane_coefficients(set, plane);
       CHECK(coefficients[0] == h.a);
