@@ -307,6 +307,14 @@ Sign side(const PlaneSet& set, const Plane& plane, const PointDef& point, const 
   return to_sign(side_value(exact, exact_normalised(set, point)).sign());
 }
 
+std::optional<Projection> projection_along_if_clear(const PlaneSet& set, PlaneRef plane, int axis) {
+  const ApproxPlane a = set.approx(plane);
+  const Estimate components[3] = {a.a, a.b, a.c};
+  const Estimate& c = components[axis];
+  if (std::fabs(c.value) > 2 * c.error) return Projection{axis, c.value < 0};
+  return std::nullopt;
+}
+
 Projection projection_of(const PlaneSet& set, PlaneRef plane) {
   const ApproxPlane a = set.approx(plane);
   const Estimate components[3] = {a.a, a.b, a.c};

@@ -408,6 +408,30 @@ Sign coplanar_orientation(Vec3 p, Vec3 q, Vec3 r, Vec3 s) {
   return Sign::zero;  // p, q, r collinear: outside the precondition
 }
 
+bool collinear(Vec3 a, Vec3 b, Vec3 c) {
+  // A line in 3D projects onto a line (or a point) in all three coordinate
+  // planes, and three points off one line stay off it in at least one of them.
+  return orient2d({a.x, a.y}, {b.x, b.y}, {c.x, c.y}) == Sign::zero &&
+         orient2d({a.y, a.z}, {b.y, b.z}, {c.y, c.z}) == Sign::zero &&
+         orient2d({a.z, a.x}, {b.z, b.x}, {c.z, c.x}) == Sign::zero;
+}
+
+bool strictly_inside_segment(Vec3 a, Vec3 b, Vec3 p) {
+  if (!collinear(a, b, p)) return false;
+  for (const auto get : {&Vec3::x, &Vec3::y, &Vec3::z}) {
+    const double lo = std::min(a.*get, b.*get), hi = std::max(a.*get, b.*get);
+    if (lo < hi) return lo < p.*get && p.*get < hi;
+  }
+  return false;  // a == b
+}
+
+bool strictly_inside_triangle(Vec2 a, Vec2 b, Vec2 c, Vec2 p) {
+  const Sign s0 = orient2d(a, b, p);
+  const Sign s1 = orient2d(b, c, p);
+  const Sign s2 = orient2d(c, a, p);
+  return s0 != Sign::zero && s0 == s1 && s1 == s2;
+}
+
 std::optional<std::vector<std::size_t>> order_around_line(Vec3 a, Vec3 b, std::span<const Vec3> around) {
   if (around.empty()) return std::vector<std::size_t>{};
   const Vec3 r = around[0];

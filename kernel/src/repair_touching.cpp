@@ -37,14 +37,6 @@ std::size_t count_crowded_edges(const Mesh& mesh) {
   return crowded;
 }
 
-// Exactly collinear corners: a line in 3D projects onto a line in all three
-// coordinate planes, and three points not on a line do not in at least one.
-bool collinear(const Vec3& a, const Vec3& b, const Vec3& c) {
-  return orient2d({a.x, a.y}, {b.x, b.y}, {c.x, c.y}) == Sign::zero &&
-         orient2d({a.y, a.z}, {b.y, b.z}, {c.y, c.z}) == Sign::zero &&
-         orient2d({a.z, a.x}, {b.z, b.x}, {c.z, c.x}) == Sign::zero;
-}
-
 // Six times the signed volume of the tetrahedron (origin, a, b, c), exactly.
 mpq_class six_volume(const Vec3& a, const Vec3& b, const Vec3& c) {
   const mpq_class ax(a.x), ay(a.y), az(a.z), bx(b.x), by(b.y), bz(b.z), cx(c.x), cy(c.y), cz(c.z);

@@ -250,6 +250,11 @@ Sign outward_side(const PlaneSet& set, const SolidFace& face, const PointDef& po
   return face.reversed ? flip(s) : s;
 }
 
+Sign compare_outward_normals(const PlaneSet& set, const SolidFace& a, const SolidFace& b) {
+  const Sign s = compare_normals(set, a.plane, b.plane);
+  return a.reversed != b.reversed ? flip(s) : s;
+}
+
 Sign outward_side_of_face(const PlaneSet& set, const SolidFace& face, const SolidFace& across,
                           std::span<const SolidLoop> loops, std::span<const SolidCorner> corners,
                           std::span<const PointDef> defs, std::span<const ApproxPoint> approx) {

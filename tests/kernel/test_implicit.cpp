@@ -37,6 +37,12 @@ struct RandomGeometry {
   InputGeometry input;
   std::vector<Plane> cuts;
   PlaneSet set() const { return input.plane_set(cuts); }
+  std::uint32_t plane_count() const { return static_cast<std::uint32_t>(input.planes.size() + cuts.size()); }
+  // Plane k of the set: the input's planes first, then the cuts.
+  PlaneRef plane(std::uint32_t k) const {
+    const auto inputs = static_cast<std::uint32_t>(input.planes.size());
+    return k < inputs ? PlaneRef::input(k) : PlaneRef::cut(k - inputs);
+  }
 };
 
 RandomGeometry random_geometry(Random& random, bool lattice) {
@@ -128,9 +134,8 @@ TEST_CASE("plane kernel predicates agree with an independent exact evaluation", 
     for (const PointDef& def : defs) approx.push_back(approximate(set, def));
     for (std::size_t i = 0; i < defs.size(); ++i) {
       // Sides against every plane of the set.
-      for (std::uint32_t k = 0; k < g.input.planes.size() + g.cuts.size(); ++k) {
-        const PlaneRef plane = k < g.input.planes.size() ? PlaneRef::input(k)
-                                                         : PlaneRef::cut(k - static_cast<std::uint32_t>(g.input.planes.size()));
+      for (std::uint32_t k = 0; k < g.plane_count(); ++k) {
+        const PlaneRef plane = g.plane(k);
         const Sign expected = reference_side(set, plane, defs[i]);
         INFO("seed " << seed << " point " << i << " plane " << k);
         CHECK(side(set, plane, defs[i], approx[i]) == expected);
@@ -223,6 +228,58 @@ TEST_CASE("orientation in a plane agrees with an independent exact evaluation", 
   }
 }
 
+TEST_CASE("projection_along_if_clear: a projection only along a normal component of certain sign",
+          "[plane][predicates]") {
+  // Random and lattice planes (exact zero components are common on the
+  // lattice), and input planes through nearly collinear points, whose normal
+  // has components within rounding of zero: a projection returned must carry
+  // the exact component's sign; a zero component never gives one.
+  std::size_t given = 0, zero = 0, withheld = 0;
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    Random random(seed);
+    RandomGeometry g = random_geometry(random, seed % 2 == 0);
+    for (int i = 0; i < 4; ++i) {
+      const auto base = static_cast<VertexIndex>(random.index(12));
+      const Vec3 p0 = g.input.points[base];
+      const Vec3 u{random.uniform(-1, 1), random.uniform(-1, 1), random.uniform(-1, 1)};
+      const double s = 1 + std::ldexp(random.uniform(-1, 1), -50 + int(random.index(8)));
+      const int axis = int(random.index(3));
+      // p2 - p0 is about s (p1 - p0) in the two kept coordinates: the normal's
+      // component along `axis` is a rounding error or a few ulps of it.
+      Vec3 w = u * s;
+      (axis == 0 ? w.x : axis == 1 ? w.y : w.z) = random.uniform(-1, 1);
+      const auto n = static_cast<VertexIndex>(g.input.points.size());
+      g.input.points.push_back(p0 + u);
+      g.input.points.push_back(p0 + w);
+      const std::array<VertexIndex, 3> idx{base, n, n + 1};
+      g.input.planes.push_back(idx);
+      g.input.plane_approx.push_back(
+          approximate_input_plane(g.input.points[idx[0]], g.input.points[idx[1]], g.input.points[idx[2]]));
+    }
+    const PlaneSet set = g.set();
+    for (std::uint32_t k = 0; k < g.plane_count(); ++k) {
+      const PlaneRef plane = g.plane(k);
+      const Q4 h = reference_plane(set, plane);
+      const Sign component[3] = {sign_of(h.a), sign_of(h.b), sign_of(h.c)};
+      for (int axis = 0; axis < 3; ++axis) {
+        const std::optional<Projection> along = projection_along_if_clear(set, plane, axis);
+        INFO("seed " << seed << " plane " << k << " axis " << axis);
+        if (along) {
+          REQUIRE(component[axis] != Sign::zero);
+          REQUIRE(along->axis == axis);
+          REQUIRE(along->flipped == (component[axis] == Sign::negative));
+          ++given;
+        } else {
+          (component[axis] == Sign::zero ? zero : withheld) += 1;
+        }
+      }
+    }
+  }
+  INFO(given << " given, " << zero << " zero, " << withheld << " withheld");
+  CHECK(given > 500);
+  CHECK(zero > 50);
+}
+
 TEST_CASE("PlaneReach: within a plane's L1 reach exactly when a move of that reach along an axis reaches it",
           "[plane][predicates]") {
   // The L1 distance of x to n.x + d = 0 is |n.x + d| / max |n_i|; independently:
@@ -235,10 +292,8 @@ TEST_CASE("PlaneReach: within a plane's L1 reach exactly when a move of that rea
     Random random(seed);
     const RandomGeometry g = random_geometry(random, seed % 2 == 0);
     const PlaneSet set = g.set();
-    for (std::uint32_t k = 0; k < g.input.planes.size() + g.cuts.size(); ++k) {
-      const PlaneRef plane = k < g.input.planes.size()
-                                 ? PlaneRef::input(k)
-                                 : PlaneRef::cut(k - static_cast<std::uint32_t>(g.input.planes.size()));
+    for (std::uint32_t k = 0; k < g.plane_count(); ++k) {
+      const PlaneRef plane = g.plane(k);
       const Q4 h = reference_plane(set, plane);
       const std::array<mpq_class, 4> coefficients = exact_plane_coefficients(set, plane);
       CHECK(coefficients[0] == h.a);

@@ -5,8 +5,10 @@
 
 #include <gmpxx.h>
 
+#include <array>
 #include <cmath>
 #include <optional>
+#include <vector>
 
 #include "shatter/generators/random.hpp"
 #include "shatter/kernel/exact.hpp"
@@ -350,4 +352,107 @@ TEST_CASE("order_around_line orders points by their angle about a line, and refu
   }
   CHECK(ordered == 4000);
   CHECK(refused == 4000);
+}
+
+// --- collinear, strictly_inside_segment, strictly_inside_triangle ------------
+
+namespace {
+
+std::array<mpq_class, 3> exact_difference(Vec3 p, Vec3 q) {
+  return {mpq_class(p.x) - q.x, mpq_class(p.y) - q.y, mpq_class(p.z) - q.z};
+}
+
+// (b - a) x (c - a) = 0, in rationals.
+bool reference_collinear(Vec3 a, Vec3 b, Vec3 c) {
+  const auto u = exact_difference(b, a), w = exact_difference(c, a);
+  return u[1] * w[2] == u[2] * w[1] && u[2] * w[0] == u[0] * w[2] && u[0] * w[1] == u[1] * w[0];
+}
+
+// Collinear and strictly between along the line: (p - a).(b - a) > 0 and
+// (p - b).(a - b) > 0, in rationals (a different route from the predicate's).
+bool reference_inside_segment(Vec3 a, Vec3 b, Vec3 p) {
+  if (!reference_collinear(a, b, p)) return false;
+  const auto ap = exact_difference(p, a), ab = exact_difference(b, a), bp = exact_difference(p, b);
+  const mpq_class from_a = ap[0] * ab[0] + ap[1] * ab[1] + ap[2] * ab[2];
+  const mpq_class from_b = -(bp[0] * ab[0] + bp[1] * ab[1] + bp[2] * ab[2]);
+  return sgn(from_a) > 0 && sgn(from_b) > 0;
+}
+
+int reference_turn(Vec2 a, Vec2 b, Vec2 c) {
+  return sgn((mpq_class(b.x) - a.x) * (mpq_class(c.y) - a.y) - (mpq_class(b.y) - a.y) * (mpq_class(c.x) - a.x));
+}
+
+bool reference_inside_triangle(Vec2 a, Vec2 b, Vec2 c, Vec2 p) {
+  const int s0 = reference_turn(a, b, p), s1 = reference_turn(b, c, p), s2 = reference_turn(c, a, p);
+  return s0 != 0 && s0 == s1 && s1 == s2;
+}
+
+}  // namespace
+
+TEST_CASE("collinear and strictly_inside_segment agree with exact rationals on lines, near them and off them") {
+  std::size_t on_line = 0, inside = 0, queries = 0;
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    Random random(seed);
+    for (int i = 0; i < 250; ++i) {
+      const Frame f = lattice_frame(random);
+      const double scale = std::ldexp(1.0, int(random.index(80)) - 40);
+      // Points of one lattice line (exact: small integers times a power of two),
+      // some of them coinciding, and the same points a few ulps off it.
+      const auto on = [&] { return f.at(0, 0, double(random.index(9)) - 4, scale); };
+      const Vec3 a = on(), b = i % 16 == 0 ? a : on(), p = on();
+      const int k = int(random.index(5)) - 2;
+      const Vec3 near{ulps_away(p.x, k), ulps_away(p.y, -k), ulps_away(p.z, k)};
+      const Vec3 off = f.at(double(random.index(3)) - 1, double(random.index(3)) - 1, 1, scale);
+      // Unrelated points at any scale, far from the origin.
+      const Vec3 centre = random.direction() * (scale * random.uniform(0, 1e6));
+      const Vec3 r0 = centre + random.direction() * scale, r1 = centre + random.direction() * scale;
+      const std::vector<std::array<Vec3, 3>> cases{{a, b, p}, {a, b, near}, {a, b, off}, {r0, r1, centre},
+                                                   {a, p, b},  {p, a, a}, {r0, r1, r0}};
+      for (const auto& [x, y, z] : cases) {
+        INFO("a " << x.x << ' ' << x.y << ' ' << x.z << ", b " << y.x << ' ' << y.y << ' ' << y.z << ", p " << z.x
+                  << ' ' << z.y << ' ' << z.z);
+        const bool line = reference_collinear(x, y, z);
+        REQUIRE(collinear(x, y, z) == line);
+        REQUIRE(collinear(z, x, y) == line);
+        const bool between = reference_inside_segment(x, y, z);
+        REQUIRE(strictly_inside_segment(x, y, z) == between);
+        REQUIRE(strictly_inside_segment(y, x, z) == between);
+        on_line += line, inside += between, ++queries;
+      }
+    }
+  }
+  // Both answers occur often: the property cannot pass by testing one side.
+  CHECK(on_line > queries / 4);
+  CHECK(inside > queries / 20);
+  CHECK(queries - on_line > queries / 4);
+}
+
+TEST_CASE("strictly_inside_triangle agrees with exact rationals on edges, corners and ulps from them") {
+  std::size_t inside = 0, queries = 0;
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    Random random(seed);
+    for (int i = 0; i < 250; ++i) {
+      const double scale = std::ldexp(1.0, int(random.index(80)) - 40);
+      const auto lattice = [&] {
+        return Vec2{(double(random.index(17)) - 8) * scale, (double(random.index(17)) - 8) * scale};
+      };
+      const Vec2 a = lattice(), b = lattice(), c = lattice();
+      // On an edge's line (a midpoint when it is a lattice point), a corner,
+      // inside or not, and each a few ulps off.
+      const Vec2 mid{(a.x + b.x) / 2, (a.y + b.y) / 2};
+      const Vec2 candidates[] = {mid, a, lattice(), Vec2{(a.x + b.x + c.x) / 3, (a.y + b.y + c.y) / 3}};
+      for (Vec2 p : candidates) {
+        for (int k = -2; k <= 2; ++k) {
+          const Vec2 q{ulps_away(p.x, k), ulps_away(p.y, k / 2)};
+          const bool expected = reference_inside_triangle(a, b, c, q);
+          REQUIRE(strictly_inside_triangle(a, b, c, q) == expected);
+          REQUIRE(strictly_inside_triangle(b, c, a, q) == expected);
+          REQUIRE(strictly_inside_triangle(c, b, a, q) == expected);  // either turn
+          inside += expected, ++queries;
+        }
+      }
+    }
+  }
+  CHECK(inside > queries / 10);
+  CHECK(queries - inside > queries / 10);
 }

@@ -598,3 +598,56 @@ TEST_CASE("half_edge_twins pairs exactly what a map of directed edges pairs, on 
   }
   CHECK(broken > 20);
 }
+
+TEST_CASE("compare_outward_normals: the exact sign of two faces' outward normals' dot product", "[plane][solid]") {
+  // Cut planes with small integer normals (perpendicular and parallel pairs are
+  // common) and input planes through random and lattice points, each face
+  // either way round, against the planes' exact coefficients.
+  std::size_t same = 0, opposite = 0, perpendicular = 0;
+  Random random(17);
+  InputGeometry geometry;
+  std::vector<Plane> cuts;
+  for (int i = 0; i < 24; ++i) {
+    const auto small = [&] { return double(random.index(5)) - 2; };
+    const Vec3 n{small(), small(), small()};
+    cuts.push_back({n.x == 0 && n.y == 0 && n.z == 0 ? Vec3{0, 0, 1} : n, small()});
+    const bool lattice = i % 2 == 0;
+    const auto point = [&] {
+      return lattice ? Vec3{small(), small(), small()}
+                     : Vec3{random.uniform(-1, 1), random.uniform(-1, 1), random.uniform(-1, 1)};
+    };
+    const Vec3 p0 = point(), p1 = point(), p2 = point();
+    const Vec3 normal = cross(p1 - p0, p2 - p0);
+    if (normal.x == 0 && normal.y == 0 && normal.z == 0) continue;  // exact on these inputs: collinear
+    const auto first = static_cast<VertexIndex>(geometry.points.size());
+    geometry.points.insert(geometry.points.end(), {p0, p1, p2});
+    geometry.planes.push_back({first, first + 1, first + 2});
+    geometry.plane_approx.push_back(approximate_input_plane(p0, p1, p2));
+  }
+  const PlaneSet set = geometry.plane_set(cuts);
+  std::vector<PlaneRef> planes;
+  for (std::uint32_t k = 0; k < cuts.size(); ++k) planes.push_back(PlaneRef::cut(k));
+  for (std::uint32_t k = 0; k < geometry.planes.size(); ++k) planes.push_back(PlaneRef::input(k));
+  for (const PlaneRef a : planes) {
+    for (const PlaneRef b : planes) {
+      const std::array<mpq_class, 4> na = exact_plane_coefficients(set, a), nb = exact_plane_coefficients(set, b);
+      const int dot_product = sgn(na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2]);
+      const int dot_sign = (dot_product > 0) - (dot_product < 0);
+      for (const bool reversed_a : {false, true}) {
+        for (const bool reversed_b : {false, true}) {
+          SolidFace fa, fb;
+          fa.plane = a, fa.reversed = reversed_a;
+          fb.plane = b, fb.reversed = reversed_b;
+          const int expected = reversed_a != reversed_b ? -dot_sign : dot_sign;
+          const Sign answer = compare_outward_normals(set, fa, fb);
+          REQUIRE(static_cast<int>(answer) == expected);
+          REQUIRE(compare_outward_normals(set, fb, fa) == answer);
+          same += expected > 0, opposite += expected < 0, perpendicular += expected == 0;
+        }
+      }
+    }
+  }
+  CHECK(same > 100);
+  CHECK(opposite > 100);
+  CHECK(perpendicular > 20);
+}

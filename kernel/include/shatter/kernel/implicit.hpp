@@ -60,6 +60,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -173,6 +174,17 @@ struct Projection {
 };
 /// The projection of `plane`, decided exactly. Precondition: the normal is not zero.
 Projection projection_of(const PlaneSet& set, PlaneRef plane);
+
+/// The projection of `plane` that drops `axis` (any axis, not only the largest
+/// component's), when the normal's floating-point component there certifies its
+/// sign with a margin: |value| > 2 error (twice the bound the estimate carries).
+/// Its `flipped` is then the exact sign of that component, so orientations in it
+/// are seen from the plane's front as projection_of's are. For a fallback
+/// projection where the largest one fails on points off the plane by a hair.
+/// Preconditions: axis in 0..2. Guarantees: a returned projection is exact.
+/// Failure: nullopt when the component is zero, and also when it is non-zero but
+/// within twice its error bound (a one-sided filter: no exact fallback).
+std::optional<Projection> projection_along_if_clear(const PlaneSet& set, PlaneRef plane, int axis);
 
 /// Orientation of the triangle (p, q, r) of points on one plane, seen from the
 /// plane's front through `projection` (projection_of that plane): positive when

@@ -4,7 +4,7 @@
 // triangles meet (parts meeting at a point). Both are taken apart by index here,
 // the edge's triangles paired by the exact angular order around it; moving the
 // copies apart is the caller's (repair: repair.hpp; a rounded piece that touches
-// itself: triangulate/solid_mesh.cpp).
+// itself: triangulate/src/rounding_separation.cpp).
 
 #include <cstdint>
 #include <optional>

@@ -57,6 +57,24 @@ std::optional<Sign> orient3d_if_clear(Vec3 a, Vec3 b, Vec3 c, Vec3 d);
 /// which is outside the precondition).
 Sign coplanar_orientation(Vec3 p, Vec3 q, Vec3 r, Vec3 s);
 
+/// Whether a, b and c lie on one line (two or three of them may coincide):
+/// every coordinate projection of them is collinear, decided by orient2d.
+/// Preconditions: finite inputs. Guarantees: exact. Failure: none.
+bool collinear(Vec3 a, Vec3 b, Vec3 c);
+
+/// Whether p lies on the segment from a to b and is neither of its ends: collinear
+/// with them, and strictly between them along the first coordinate where a and b
+/// differ (on a line through two distinct points every such coordinate orders
+/// the points alike; comparing doubles is exact). False when a == b.
+/// Preconditions: finite inputs. Guarantees: exact. Failure: none.
+bool strictly_inside_segment(Vec3 a, Vec3 b, Vec3 p);
+
+/// Whether p lies strictly inside the triangle (a, b, c), whichever way the
+/// triangle turns: orient2d of p against its three edges has one non-zero sign.
+/// False for p on an edge or a corner, and for a flat triangle.
+/// Preconditions: finite inputs. Guarantees: exact. Failure: none.
+bool strictly_inside_triangle(Vec2 a, Vec2 b, Vec2 c, Vec2 p);
+
 /// The points `around` ordered by their angle about the oriented line from a to
 /// b, counter-clockwise seen from b looking at a (the right-hand turn about b - a),
 /// starting with around[0]: indices into `around`. Every comparison is an exact

@@ -230,6 +230,13 @@ PointDef edge_crossing_def(const SolidFace& face, const EdgeLine& line, PlaneRef
 /// the face is reversed, so negative means inside the face's half-space.
 Sign outward_side(const PlaneSet& set, const SolidFace& face, const PointDef& point, const ApproxPoint& approx);
 
+/// Whether two faces' outward normals point the same way: the exact sign of
+/// their dot product (compare_normals of their planes, negated when exactly one
+/// face is reversed). Positive: they face one way; negative: opposite ways, as
+/// the two faces of a wedge of the solid do; zero: perpendicular.
+/// Preconditions: both planes in `set`. Guarantees: exact. Failure: none.
+Sign compare_outward_normals(const PlaneSet& set, const SolidFace& a, const SolidFace& b);
+
 /// The outward side of `face`'s plane at the first vertex of `across` off it,
 /// its loops and corners walked in order (`loops` and `corners` are the ones
 /// `across` indexes; `defs` and `approx` its vertices'): zero when every vertex
