@@ -1011,11 +1011,23 @@ bool kernel_detail::winds_once_around(const Mesh& mesh, const Vec3& centre) {
       for (int k = 0; k < 3; ++k) out[fill[tri[k]]++] = (std::uint64_t{tri[(k + 1) % 3]} << 32) | t;
     }
   }
-  for (std::size_t v = 0; v < n; ++v) std::sort(out.begin() + first_out[v], out.begin() + first_out[v + 1]);
-  // The triangle holding the directed edge (v, w), or none.
+  // Each list is in triangle order (filled so); a long one is sorted for a
+  // binary search, a short one (a convex piece's vertices have a handful) is
+  // scanned, which finds the same triangle: the first holding the edge.
+  constexpr std::uint32_t scanned = 16;
+  for (std::size_t v = 0; v < n; ++v) {
+    if (first_out[v + 1] - first_out[v] > scanned) std::sort(out.begin() + first_out[v], out.begin() + first_out[v + 1]);
+  }
+  // The triangle holding the directed edge (v, w), the first if several, or none.
   constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
   const auto triangle_of_edge = [&](VertexIndex v, VertexIndex w) {
     const auto begin = out.begin() + first_out[v], end = out.begin() + first_out[v + 1];
+    if (end - begin <= scanned) {
+      for (auto it = begin; it != end; ++it) {
+        if ((*it >> 32) == w) return static_cast<std::uint32_t>(*it);
+      }
+      return none;
+    }
     const auto it = std::lower_bound(begin, end, std::uint64_t{w} << 32);
     return it != end && (*it >> 32) == w ? static_cast<std::uint32_t>(*it) : none;
   };

@@ -25,6 +25,7 @@
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/packed_node.hpp"
+#include "shatter/meshtree/packed_shapes.hpp"
 #include "shatter/cut/hull.hpp"
 #include "shatter/cut/plane_cut.hpp"
 #include "shatter/cut/plane_input.hpp"
@@ -139,6 +140,14 @@ Plane draw_plane(Strategy strategy, const BoundingBox& box, const Vec3& centroid
 
 #if SHATTER_NODE_BLOCKS
 constexpr std::size_t node_block_bytes = std::size_t{1} << 20;
+// A block's pages are populated with the mapping: a thread fills its block
+// node after node, and a page faulted in on first touch costs these virtual
+// machines about twice as much (ByteBlocks, packed_shapes.cpp, measured it).
+#ifdef MAP_POPULATE
+constexpr int node_block_populate = MAP_POPULATE;
+#else
+constexpr int node_block_populate = 0;
+#endif
 constexpr std::size_t node_align = alignof(std::max_align_t);
 constexpr std::size_t aligned(std::size_t bytes) { return (bytes + node_align - 1) / node_align * node_align; }
 
@@ -173,7 +182,8 @@ class OpenNodeBlock {
     const std::size_t need = node_slot_bytes + aligned(size);
     if (need > node_block_bytes - node_block_start) throw std::bad_alloc();
     if (block_ == nullptr || block_->used + need > node_block_bytes) {
-      void* memory = ::mmap(nullptr, node_block_bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      void* memory = ::mmap(nullptr, node_block_bytes, PROT_READ | PROT_WRITE,
+                            MAP_PRIVATE | MAP_ANONYMOUS | node_block_populate, -1, 0);
       if (memory == MAP_FAILED) throw std::bad_alloc();
       if (block_ != nullptr) drop_hold(block_);
       block_ = new (memory) NodeBlock();
@@ -342,7 +352,10 @@ class Builder {
         child->mesh = std::move(piece.mesh);
         child->mass = mass_properties(child->mesh);
         child->solid = std::move(piece.solid);
-        fit_to_size(*child);
+        // A lean build packs the child (its arrays go) as soon as it is cut or
+        // found a leaf, except the balanced strategy's leaves, which wait for
+        // the end: only arrays that stay are worth fitting.
+        if (!lean_ || recipe_.strategy == Strategy::balanced) fit_to_size(*child);
         child->parent = &node;
         child->above_parent_plane = piece.above;
         child->depth = node.depth + 1;
@@ -415,8 +428,13 @@ class Builder {
   // into the blocks every worker appends to.
   void pack(BuildNode& node) {
     node.packed_convex = node.solid->convex;
-    const std::vector<std::uint8_t> bytes = pack_node_shape(node.mesh, node.solid);
+    // One buffer a thread, the bytes copied on into the blocks (a fresh array
+    // a node grew by doubling, a dozen times for a small piece); one that a
+    // large node made large is not kept for the rest of the build.
+    thread_local std::vector<std::uint8_t> bytes;
+    pack_node_shape(node.mesh, node.solid, false, bytes);
     node.packed = packed_bytes_.local().append(bytes);
+    if (bytes.capacity() > ByteBlocks::block_size) std::vector<std::uint8_t>().swap(bytes);
     node.mesh.reset();
     node.solid.reset();
   }

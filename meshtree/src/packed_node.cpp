@@ -23,6 +23,8 @@ constexpr std::uint8_t face_convex_bit = 2;
 
 class Packer {
  public:
+  /// Appends to `bytes`.
+  explicit Packer(std::vector<std::uint8_t>& bytes) : bytes_(bytes) {}
   void varint(std::uint64_t value) {
     while (value >= 0x80) {
       bytes_.push_back(static_cast<std::uint8_t>(value | 0x80));
@@ -44,52 +46,53 @@ class Packer {
     }
   }
   void optional_index(std::uint32_t index) { varint(index == no_index ? 0 : std::uint64_t{index} + 1); }
-  /// The bytes. (Not fitted to their size: every caller copies them into
-  /// the blocks that keep them, PackedShapes.)
-  std::vector<std::uint8_t> take() { return std::move(bytes_); }
 
  private:
-  std::vector<std::uint8_t> bytes_;
+  std::vector<std::uint8_t>& bytes_;
 };
+
+// The unpacker's failures, out of line: the reads they guard are the writer's
+// and the bonds' inner loops (every node is unpacked again for each), and an
+// inline throw that builds its message kept the compiler from inlining them.
+[[noreturn, gnu::cold, gnu::noinline]] void fail_unpacking(const char* what) { throw std::invalid_argument(what); }
+[[noreturn, gnu::cold, gnu::noinline]] void fail_unpacking(const char* what, std::uint64_t value, const char* after = "") {
+  throw std::invalid_argument(what + std::to_string(value) + after);
+}
 
 class Unpacker {
  public:
   Unpacker(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path) : bytes_(bytes), path_(path) {}
 
   std::uint64_t varint() {
-    std::uint64_t value = 0;
-    for (int shift = 0; shift < 64; shift += 7) {
-      const std::uint8_t byte = u8();
-      value |= std::uint64_t{byte & 0x7fu} << shift;
-      if ((byte & 0x80) == 0) return value;
-    }
-    throw std::invalid_argument("packed node: a varint longer than 64 bits");
+    // Most values take one byte (indices of a small piece, plane codes).
+    if (at_ < bytes_.size() && bytes_[at_] < 0x80) return bytes_[at_++];
+    return long_varint();
   }
   std::uint32_t u32() {
     const std::uint64_t value = varint();
-    if (value > 0xffffffffu) throw std::invalid_argument("packed node: a 32-bit value of " + std::to_string(value));
+    if (value > 0xffffffffu) fail_unpacking("packed node: a 32-bit value of ", value);
     return static_cast<std::uint32_t>(value);
   }
   std::uint8_t u8() {
-    if (at_ >= bytes_.size()) throw std::invalid_argument("packed node: cut short");
+    if (at_ >= bytes_.size()) fail_unpacking("packed node: cut short");
     return bytes_[at_++];
   }
   /// A count of elements of `size` bytes each that the bytes left could hold.
   std::size_t count(std::size_t size) {
     const std::uint64_t value = varint();
-    if (value > (bytes_.size() - at_) / size) throw std::invalid_argument("packed node: a count beyond its bytes");
+    if (value > (bytes_.size() - at_) / size) fail_unpacking("packed node: a count beyond its bytes");
     return static_cast<std::size_t>(value);
   }
   template <class T>
   void raw(std::vector<T>& values, std::size_t count) {
-    if (count > (bytes_.size() - at_) / sizeof(T)) throw std::invalid_argument("packed node: cut short");
+    if (count > (bytes_.size() - at_) / sizeof(T)) fail_unpacking("packed node: cut short");
     values.resize(count);
     if (count != 0) std::memcpy(values.data(), bytes_.data() + at_, count * sizeof(T));
     at_ += count * sizeof(T);
   }
   /// Steps over `count` elements of `size` bytes.
   void skip(std::size_t count, std::size_t size) {
-    if (count > (bytes_.size() - at_) / size) throw std::invalid_argument("packed node: cut short");
+    if (count > (bytes_.size() - at_) / size) fail_unpacking("packed node: cut short");
     at_ += count * size;
   }
   PlaneRef plane() {
@@ -97,7 +100,7 @@ class Unpacker {
     if (code == 0) return PlaneRef{no_index};
     const std::uint64_t index = (code - 1) / 2;
     if ((code & 1) != 0) {
-      if (index >= PlaneRef::cut_bit) throw std::invalid_argument("packed node: input plane out of range");
+      if (index >= PlaneRef::cut_bit) fail_unpacking("packed node: input plane out of range");
       return PlaneRef::input(static_cast<std::uint32_t>(index));
     }
     return PlaneRef::cut(depth_to_node(index));
@@ -109,22 +112,30 @@ class Unpacker {
   }
   std::uint32_t optional_index() {
     const std::uint64_t code = varint();
-    if (code > 0xffffffffu) throw std::invalid_argument("packed node: an index of " + std::to_string(code));
+    if (code > 0xffffffffu) fail_unpacking("packed node: an index of ", code);
     return code == 0 ? no_index : static_cast<std::uint32_t>(code - 1);
   }
   void expect_end() const {
-    if (at_ != bytes_.size()) throw std::invalid_argument("packed node: bytes after its end");
+    if (at_ != bytes_.size()) fail_unpacking("packed node: bytes after its end");
   }
 
  private:
+  [[gnu::noinline]] std::uint64_t long_varint() {
+    std::uint64_t value = 0;
+    for (int shift = 0; shift < 64; shift += 7) {
+      const std::uint8_t byte = u8();
+      value |= std::uint64_t{byte & 0x7fu} << shift;
+      if ((byte & 0x80) == 0) return value;
+    }
+    fail_unpacking("packed node: a varint longer than 64 bits");
+  }
+
   std::uint32_t depth_to_node(std::uint64_t depth) const {
     if (path_.empty()) {
-      if (depth >= PlaneRef::cut_bit) throw std::invalid_argument("packed node: cut plane out of range");
+      if (depth >= PlaneRef::cut_bit) fail_unpacking("packed node: cut plane out of range");
       return static_cast<std::uint32_t>(depth);
     }
-    if (depth >= path_.size()) {
-      throw std::invalid_argument("packed node: depth " + std::to_string(depth) + " below the node's own");
-    }
+    if (depth >= path_.size()) fail_unpacking("packed node: depth ", depth, " below the node's own");
     return path_[depth];
   }
 
@@ -136,7 +147,14 @@ class Unpacker {
 }  // namespace
 
 std::vector<std::uint8_t> pack_node_shape(const Mesh& mesh, const Solid& solid, bool named_by_node) {
-  Packer out;
+  std::vector<std::uint8_t> bytes;
+  pack_node_shape(mesh, solid, named_by_node, bytes);
+  return bytes;
+}
+
+void pack_node_shape(const Mesh& mesh, const Solid& solid, bool named_by_node, std::vector<std::uint8_t>& bytes) {
+  bytes.clear();
+  Packer out(bytes);
   out.u8(static_cast<std::uint8_t>((solid.convex ? solid_convex_bit : 0) | (named_by_node ? named_by_node_bit : 0)));
   out.varint(mesh.positions.size());
   out.varint(mesh.triangles.size());
@@ -207,7 +225,6 @@ std::vector<std::uint8_t> pack_node_shape(const Mesh& mesh, const Solid& solid, 
     out.optional_index(corner.line.p);
     out.optional_index(corner.line.q);
   }
-  return out.take();
 }
 
 namespace {

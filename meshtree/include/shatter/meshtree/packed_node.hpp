@@ -26,6 +26,10 @@ namespace shatter {
 /// back exactly, but for an empty approx, provided the solid's definitions keep
 /// the PointDef convention (unused fields zero).
 std::vector<std::uint8_t> pack_node_shape(const Mesh& mesh, const Solid& solid, bool named_by_node = false);
+/// pack_node_shape into `bytes` (cleared first; its capacity kept), the same
+/// bytes: a caller that copies them on (the builder, into its blocks) reuses one
+/// buffer instead of growing a fresh array a node.
+void pack_node_shape(const Mesh& mesh, const Solid& solid, bool named_by_node, std::vector<std::uint8_t>& bytes);
 
 /// Unpacks what pack_node_shape packed into `mesh` and `solid` (their previous
 /// contents replaced; solid.approx left empty). With a non-empty `path`, each

@@ -45,7 +45,13 @@ class ByteBlocks {
   std::size_t capacity() const { return capacity_; }
 
  private:
-  std::vector<std::unique_ptr<std::uint8_t[]>> blocks_;
+  // A block is either mapped from the system (`mapped` its length) or an
+  // array from new[] (`mapped` zero): see append.
+  struct BlockRelease {
+    std::size_t mapped = 0;
+    void operator()(std::uint8_t* block) const noexcept;
+  };
+  std::vector<std::unique_ptr<std::uint8_t[], BlockRelease>> blocks_;
   std::uint8_t* free_ = nullptr;  // the rest of the last full-size block
   std::size_t room_ = 0;          // bytes at free_
   std::size_t capacity_ = 0;
