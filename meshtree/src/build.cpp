@@ -26,6 +26,7 @@
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/packed_node.hpp"
 #include "shatter/meshtree/packed_shapes.hpp"
+#include "address_sanitizer.hpp"
 #include "shatter/cut/hull.hpp"
 #include "shatter/cut/plane_cut.hpp"
 #include "shatter/cut/plane_input.hpp"
@@ -127,14 +128,9 @@ Plane draw_plane(Strategy strategy, const BoundingBox& box, const Vec3& centroid
 // node, unmaps it. Any thread may free a node. (Not under AddressSanitizer,
 // which checks BuildNodes only where malloc makes them.)
 
-#if defined(__SANITIZE_ADDRESS__)
+#if SHATTER_ADDRESS_SANITIZER
 #define SHATTER_NODE_BLOCKS 0
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define SHATTER_NODE_BLOCKS 0
-#endif
-#endif
-#ifndef SHATTER_NODE_BLOCKS
+#else
 #define SHATTER_NODE_BLOCKS 1
 #endif
 

@@ -6,6 +6,8 @@
 #include <new>
 #include <utility>
 
+#include "address_sanitizer.hpp"
+
 // Full-size blocks are mapped with their pages populated at once (Linux's
 // MAP_POPULATE): every byte of such a block is written (but the last open
 // block's rest), and on the virtual machines this runs on a page faulted in on
@@ -13,17 +15,9 @@
 // (96 MiB written in 1 MiB blocks a 1.5 KB copy at a time: 0.74 s faulted,
 // 0.40 s populated, 2026-12-05; cube -> 65,536 packs some 40 MB). Not under
 // AddressSanitizer, which checks only what malloc makes.
-#if defined(__SANITIZE_ADDRESS__)
-#define SHATTER_MAPPED_BLOCKS 0
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define SHATTER_MAPPED_BLOCKS 0
-#endif
-#endif
-#if !defined(SHATTER_MAPPED_BLOCKS) && defined(MAP_POPULATE)
+#if !SHATTER_ADDRESS_SANITIZER && defined(MAP_POPULATE)
 #define SHATTER_MAPPED_BLOCKS 1
-#endif
-#ifndef SHATTER_MAPPED_BLOCKS
+#else
 #define SHATTER_MAPPED_BLOCKS 0
 #endif
 
@@ -44,20 +38,16 @@ std::span<const std::uint8_t> ByteBlocks::append(std::span<const std::uint8_t> b
     const std::size_t size = own_block ? bytes.size() : block_size;
     // Left uninitialised: every byte handed out is written first, and a page
     // never written is never touched.
+    std::unique_ptr<std::uint8_t[], BlockRelease> block;
 #if SHATTER_MAPPED_BLOCKS
     if (!own_block) {
       void* memory = ::mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_POPULATE, -1, 0);
       if (memory == MAP_FAILED) throw std::bad_alloc();
-      std::unique_ptr<std::uint8_t[], BlockRelease> block(static_cast<std::uint8_t*>(memory), BlockRelease{size});
-      blocks_.push_back(std::move(block));
-    } else {
-      std::unique_ptr<std::uint8_t[], BlockRelease> block(new std::uint8_t[size]);
-      blocks_.push_back(std::move(block));
+      block = {static_cast<std::uint8_t*>(memory), BlockRelease{size}};
     }
-#else
-    std::unique_ptr<std::uint8_t[], BlockRelease> block(new std::uint8_t[size]);
-    blocks_.push_back(std::move(block));
 #endif
+    if (block == nullptr) block.reset(new std::uint8_t[size]);
+    blocks_.push_back(std::move(block));
     capacity_ += size;
     if (own_block) {
       // The open block stays open: it may have room for the next bytes.
