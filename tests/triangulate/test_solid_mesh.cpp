@@ -616,7 +616,12 @@ RoundingTally round_reproducer_pieces(const std::string& name) {
 }  // namespace
 
 TEST_CASE("regression: a wedge split widened to every face by the cap, folds merged by groups (corpus 364, 988)",
-          "[plane][round][regression]") {
+          "[plane][round][regression][not-sanitized]") {
+  // [not-sanitized]: 12 s of CPU in Release, 50 under the sanitizers, nearly all
+  // of it in the rational arithmetic of rounds that fail before the one that
+  // certifies. The widened split (split_faces_along) and the merge by groups
+  // (merge_folded_faces) run under the sanitizers in the 24-seed wedge property
+  // and the corpus 908 and 4060 cases (counted with gdb, 2026-12-05).
   // Pieces of near-parallel chains as written, cut by the chain's next plane. On
   // torus-huge-1e6 (364) the cap passes 0.16 of the rounding move over the tip
   // where the two earlier caps meet, nearly parallel to both: splitting only the
@@ -643,7 +648,10 @@ TEST_CASE("regression: a wedge split widened to every face by the cap, folds mer
 }
 
 TEST_CASE("regression: corners rounded onto their own crossings with the cap, thin strips merged (smoke 7 case 28)",
-          "[plane][round][regression]") {
+          "[plane][round][regression][not-sanitized]") {
+  // [not-sanitized]: 19 s of CPU in Release, 77 under the sanitizers (rational
+  // arithmetic of the failing rounds before the strips). The strips' merge runs
+  // under the sanitizers in the corpus 4060 case (ten merges).
   // A piece of a near-parallel chain on the hollow egg as written (about 2^-32
   // of its size thick), cut by the chain's next plane. Two earlier-cap vertices
   // lie 3e-17 and 5e-17 inside the piece from the new plane: their steep
