@@ -1,6 +1,6 @@
 #include "shatter/oracle/cut.hpp"
 
-#include "shatter/kernel/projection.hpp"
+#include "shatter/kernel/projection_exact.hpp"
 #include "shatter/cut/separate_exact.hpp"
 #include "shatter/oracle/slice.hpp"
 

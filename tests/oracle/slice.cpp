@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include "shatter/kernel/index_map.hpp"
-#include "shatter/kernel/projection.hpp"
+#include "shatter/kernel/projection_exact.hpp"
 
 namespace shatter::oracle {
 namespace {

@@ -10,9 +10,6 @@
 
 #include <catch2/catch.hpp>
 
-#include <CGAL/Polygon_mesh_processing/corefinement.h>
-#include <CGAL/Polygon_mesh_processing/measure.h>
-#include <CGAL/Surface_mesh.h>
 #include <gmpxx.h>
 #include <tbb/task_arena.h>
 
@@ -37,21 +34,13 @@
 #include "support/lattice_boxes.hpp"
 #include "support/sanitizers.hpp"
 #include "support/turned.hpp"
+#include "support/union_volume.hpp"
 
 using namespace shatter;
 
 namespace {
 
 using EK = ExactKernel;
-using EpeckMesh = CGAL::Surface_mesh<EK::Point_3>;
-
-EpeckMesh exact_mesh(const Mesh& mesh) {
-  EpeckMesh out;
-  std::vector<EpeckMesh::Vertex_index> vertices;
-  for (const Vec3& p : mesh.positions) vertices.push_back(out.add_vertex(EK::Point_3(p.x, p.y, p.z)));
-  for (const Triangle& t : mesh.triangles) out.add_face(vertices[t[0]], vertices[t[1]], vertices[t[2]]);
-  return out;
-}
 
 // Six times the signed volume of a mesh, exactly, on its doubles.
 mpq_class six_volume(const Mesh& mesh) {
@@ -206,13 +195,7 @@ TEST_CASE("unions of solids at random angles: CGAL's exact union volume, repaire
     }
     const Mesh merged = test::merge(shells);
     INFO("solids at random angles #" << seed);
-    EpeckMesh united = exact_mesh(shells[0]);
-    for (std::size_t s = 1; s < shells.size(); ++s) {
-      EpeckMesh next = exact_mesh(shells[s]), result;
-      REQUIRE(CGAL::Polygon_mesh_processing::corefine_and_compute_union(united, next, result));
-      united = std::move(result);
-    }
-    const EK::FT cgal_six = 6 * CGAL::Polygon_mesh_processing::volume(united);
+    const EK::FT cgal_six = test::six_volume_of_union(shells);
     const Resolved resolved = resolve(merged);
     REQUIRE(resolved.made.status == ArrangementSolid::Status::ok);
     CHECK(EK::FT(resolved.exact_six_volume) == cgal_six);
@@ -256,9 +239,7 @@ TEST_CASE("a hollow solid and its shifted copy: the cavities stay cavities", "[a
   for (const double dx : {0.3, 0.55}) {
     const Mesh copy = test::transformed(hollow, 1.0, {dx, 0.07, -0.03});
     const Mesh merged = test::merge({hollow, copy});
-    EpeckMesh a = exact_mesh(hollow), b = exact_mesh(copy), united;
-    REQUIRE(CGAL::Polygon_mesh_processing::corefine_and_compute_union(a, b, united));
-    const double exact = CGAL::to_double(CGAL::Polygon_mesh_processing::volume(united));
+    const double exact = CGAL::to_double(test::six_volume_of_union({hollow, copy}) / 6);
     const Repaired result = repair(merged);
     INFO("shift " << dx << ": " << report_text(result.report));
     REQUIRE(result.valid);

@@ -12,7 +12,7 @@
 
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/index_map.hpp"
-#include "shatter/kernel/projection.hpp"
+#include "shatter/kernel/projection_exact.hpp"
 
 namespace shatter {
 
@@ -337,7 +337,7 @@ bool joins_exactly_collinear_points(const std::vector<Triangle>& triangles, cons
   const auto exact_projected = [&](VertexIndex v) -> const ExactKernel::Point_2& {
     const auto slot = static_cast<std::uint32_t>(projected.size());
     const std::uint32_t found = slot_of_vertex.insert(v, slot);
-    if (found == slot) projected.push_back(projection(exact_position(v)));
+    if (found == slot) projected.push_back(project(projection, exact_position(v)));
     return projected[found];
   };
   projected.reserve(3 * triangles.size());
@@ -367,7 +367,7 @@ Cap<Vec3> triangulate_cap(std::span<const Vec3> positions, std::span<const Edge>
     const std::vector<VertexIndex> vertices = distinct_vertices(border);
     auto triangles = triangulate_exact_points(
         border, vertices, project_all<ExactKernel::Point_2>(vertices, [&](VertexIndex v) {
-          return projection(exact_position(v));
+          return project(projection, exact_position(v));
         }));
     if (triangles) {
       Cap<Vec3> cap;
@@ -386,7 +386,7 @@ Cap<ExactPoint> triangulate_cap(std::span<const ExactPoint> positions, std::span
   const PlaneProjection projection = PlaneProjection::of(plane);
   const auto loops = link_loops(border);
   auto exact = fan_or_cdt<ExactKernel, ExactPoint, ExactKernel::Point_2>(
-      border, loops, [&](VertexIndex v) { return projection(positions[v]); }, allow_fan);
+      border, loops, [&](VertexIndex v) { return project(projection, positions[v]); }, allow_fan);
   if (exact) return std::move(*exact);
   return steiner_fan<ExactPoint>(positions, loops);
 }

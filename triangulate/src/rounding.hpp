@@ -15,6 +15,7 @@
 //   rounding_volume.cpp      the volume rounding may move, and what a repair moved
 //   rounding_wedges.cpp      wedges beyond rounding's reach: faces split, strips merged
 //   round_solid.cpp          the rounds: round_solid's ladder of attempts and repairs
+//   (rounding_exact.hpp: exact_point, for the two sources that name CGAL points)
 
 #include <array>
 #include <cstddef>
@@ -26,7 +27,6 @@
 
 #include <gmpxx.h>
 
-#include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
@@ -34,9 +34,6 @@
 namespace shatter::rounding {
 
 // --- Faces (solid_mesh.cpp) --------------------------------------------------------------
-
-// The exact position a defined point stands for, as CGAL's exact point.
-ExactPoint exact_point(const PlaneSet& set, const PointDef& def);
 
 // A face whose boundary lost corners to merging: its loops over the merged
 // vertices (each standing for the point it was placed at: the input point it

@@ -1,13 +1,14 @@
 // Loops over merged vertices: snap rounding's repairs of a face's loops, and
 // faces rounded onto one plane or folded, merged. See rounding.hpp.
 #include "rounding.hpp"
+#include "rounding_exact.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
 
 #include "shatter/kernel/predicates.hpp"
-#include "shatter/kernel/projection.hpp"
+#include "shatter/kernel/projection_exact.hpp"
 #include "shatter/kernel/snap_predicates.hpp"
 #include "shatter/kernel/union_find.hpp"
 

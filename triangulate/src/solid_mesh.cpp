@@ -15,6 +15,7 @@
 #include "shatter/kernel/rationals.hpp"
 #include "shatter/triangulate/cap.hpp"
 #include "rounding.hpp"
+#include "rounding_exact.hpp"
 
 namespace shatter {
 

@@ -5,12 +5,13 @@
 // counter-clockwise in 2D: orientation tests in the projection are exact
 // orientation tests in the plane.
 //
-// Not installed (kernel/internal/): the projection of exact points is CGAL's, and
-// its users are the library's own sources (caps, bonds) and the tests.
+// Not installed (kernel/internal/): its users are the library's own sources
+// (caps, bonds, the rounding) and the tests. The projection of CGAL's exact
+// points is projection_exact.hpp's, apart so that a source projecting doubles
+// does not parse CGAL's Epeck headers.
 
 #include <cmath>
 
-#include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/predicates.hpp"
 
 namespace shatter {
@@ -45,9 +46,6 @@ struct PlaneProjection {
   }
 
   Vec2 operator()(const Vec3& p) const { return {p[u_axis], p[v_axis]}; }
-  ExactKernel::Point_2 operator()(const ExactPoint& p) const {
-    return {p.cartesian(u_axis), p.cartesian(v_axis)};
-  }
 };
 
 /// Orientation of triangle (a, b, c) seen from the +n side of the projection's
@@ -55,11 +53,6 @@ struct PlaneProjection {
 inline Sign orientation_in_projection(const PlaneProjection& proj, const Vec3& a, const Vec3& b,
                                       const Vec3& c) {
   return orient2d(proj(a), proj(b), proj(c));
-}
-inline Sign orientation_in_projection(const PlaneProjection& proj, const ExactPoint& a,
-                                      const ExactPoint& b, const ExactPoint& c) {
-  const CGAL::Orientation o = CGAL::orientation(proj(a), proj(b), proj(c));
-  return o == CGAL::LEFT_TURN ? Sign::positive : o == CGAL::RIGHT_TURN ? Sign::negative : Sign::zero;
 }
 
 }  // namespace shatter
