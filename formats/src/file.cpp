@@ -432,13 +432,17 @@ std::string read_whole_file(const std::filesystem::path& path) {
 namespace {
 
 /// Refuses, before any byte is written, a tree encode_shatter cannot write.
-void check_before_writing(const MeshTree& tree) {
+/// Returns whether every node's mass is known to be mass_properties of its
+/// mesh (a certificate that holds says so), which spares the writer
+/// recomputing them.
+bool check_before_writing(const MeshTree& tree) {
   // A tree whose certificate still holds (validate_tree.hpp, certificate_holds:
   // made by the code that built or checked it, and the tree's content digest
   // unchanged since) passes validate_tree by what that code established; any
   // other tree, one assembled by hand or changed since, is checked in full
   // here. Either way no file is written that the reader would refuse.
-  if (!certificate_holds(tree)) {
+  const bool certified = certificate_holds(tree);
+  if (!certified) {
     if (const TreeValidationReport report = validate_tree(tree); !report.valid()) {
       throw std::invalid_argument("encode_shatter: invalid tree: " + report.defect->message);
     }
@@ -463,6 +467,7 @@ void check_before_writing(const MeshTree& tree) {
       throw std::invalid_argument("encode_shatter: invalid tree: input_repair: " + *problem);
     }
   }
+  return certified && tree.certificate.masses_derived();
 }
 
 /// The file's bytes handed to `append`, a section at a time. With `overwrite`,
@@ -470,7 +475,8 @@ void check_before_writing(const MeshTree& tree) {
 /// header holding a zero length and checksum that is replaced once they are
 /// known: the file is then never held more than a piece at a time. Without it,
 /// each payload is held, in pieces, until its header is written.
-void write_checked_shatter(const MeshTree& tree, const ByteSink& append,
+/// `masses_derived`: what check_before_writing returned.
+void write_checked_shatter(const MeshTree& tree, bool masses_derived, const ByteSink& append,
                            const std::function<void(std::uint64_t, std::string_view)>& overwrite) {
   std::uint64_t written = 0;
   const auto out = [&](std::string_view bytes) {
@@ -488,7 +494,7 @@ void write_checked_shatter(const MeshTree& tree, const ByteSink& append,
     bytes.u32(crc);
     return bytes.take();
   };
-  write_version3_sections(tree, [&](Tag tag, const SectionPayload& payload) {
+  write_version3_sections(tree, masses_derived, [&](Tag tag, const SectionPayload& payload) {
     std::uint64_t size = 0;
     std::uint32_t crc = 0;
     if (overwrite) {
@@ -525,13 +531,13 @@ void write_checked_shatter(const MeshTree& tree, const ByteSink& append,
 }  // namespace
 
 void write_shatter(const MeshTree& tree, const ByteSink& sink) {
-  check_before_writing(tree);
-  write_checked_shatter(tree, sink, {});
+  const bool masses_derived = check_before_writing(tree);
+  write_checked_shatter(tree, masses_derived, sink, {});
 }
 
 void write_shatter(const MeshTree& tree, const RewritableSink& sink) {
-  check_before_writing(tree);
-  write_checked_shatter(tree, sink.append, sink.overwrite);
+  const bool masses_derived = check_before_writing(tree);
+  write_checked_shatter(tree, masses_derived, sink.append, sink.overwrite);
 }
 
 std::string encode_shatter(const MeshTree& tree) {

@@ -538,8 +538,13 @@ using SectionPayload = std::function<void(ByteWriter&)>;
 /// encode_shatter writes them, END last, each as the function that writes its
 /// payload, to be called once during `emit`'s call.
 /// Precondition: `tree` passes validate_tree with its caches (or none, as
-/// encode_shatter allows).
-void write_version3_sections(const MeshTree& tree, const std::function<void(Tag, const SectionPayload&)>& emit);
+/// encode_shatter allows); with `masses_derived`, every node's mass is also
+/// mass_properties of its mesh bit for bit (a certificate that says so holds,
+/// TreeCertificate::masses_derived), so the masses are left out without being
+/// recomputed. Without it each is recomputed and compared, and all are stored
+/// when any differs: the same bytes either way for such a tree.
+void write_version3_sections(const MeshTree& tree, bool masses_derived,
+                             const std::function<void(Tag, const SectionPayload&)>& emit);
 
 /// What a version 3 file leaves to compute once the tree's structure has passed
 /// validate_tree and its caches are filled: per node, per mesh (hull) vertex,

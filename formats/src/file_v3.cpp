@@ -294,13 +294,13 @@ void write_mesh(ByteWriter& out, const Mesh& mesh, std::span<const Vec3> sources
   write_corner_channels(out, mesh);
 }
 
-void nodes_payload(const MeshTree& tree, ByteWriter& out) {
+void nodes_payload(const MeshTree& tree, bool masses_derived, ByteWriter& out) {
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
   // Which derivations fail anywhere: an or over the nodes, in any order.
   std::atomic<std::uint8_t> any_flags{0};
   visit_runs(nodes.size(), records_per_run, [&](std::size_t first, std::size_t end) {
     std::uint8_t found = 0;
-    NodeShapes shapes(tree);
+    NodeShapes shapes(tree);  // a mass compared unpacks its node's mesh alone
     for (std::size_t k = first; k < end; ++k) {
       const MeshTreeNode& node = nodes[k];
       const std::uint64_t derived_seed =
@@ -309,7 +309,9 @@ void nodes_payload(const MeshTree& tree, ByteWriter& out) {
                                                                 std::find(nodes[node.parent].children.begin(), nodes[node.parent].children.end(), k) -
                                                                 nodes[node.parent].children.begin()));
       if (node.seed != derived_seed) found |= seeds_stored_bit;
-      if (!same_bits(node.mass, mass_properties(shapes(static_cast<NodeIndex>(k)).mesh))) found |= masses_stored_bit;
+      if (!masses_derived && !same_bits(node.mass, mass_properties(shapes.mesh(static_cast<NodeIndex>(k))))) {
+        found |= masses_stored_bit;
+      }
       if (node.is_leaf() && !all_zero_bits(tree.cut_planes[k])) found |= leaf_planes_stored_bit;
     }
     any_flags.fetch_or(found, std::memory_order_relaxed);
@@ -355,7 +357,7 @@ void solid_records(const MeshTree& tree, std::size_t first, std::size_t end, Byt
   NodeShapes shapes(tree);
   for (std::size_t k = first; k < end; ++k) {
     const MeshTreeNode& node = nodes[k];
-    const Solid& solid = shapes(static_cast<NodeIndex>(k)).solid;
+    const Solid& solid = shapes.solid(static_cast<NodeIndex>(k));
     path.enter(static_cast<NodeIndex>(k), node.depth);
     const auto plane = [&](PlaneRef ref) { out.varint(plane_code(ref, path, nodes)); };
     out.u8(static_cast<std::uint8_t>((node.convex ? node_convex_bit : 0) | (solid.convex ? solid_convex_bit : 0)));
@@ -442,7 +444,7 @@ void mesh_records(const MeshTree& tree, bool hulls, std::size_t first, std::size
     if (hulls) {
       // A convex node's hull is empty: it looks up no position (a packed node stays packed).
       std::span<const Vec3> sources;
-      if (!node.hull->positions.empty()) sources = shapes(static_cast<NodeIndex>(k)).mesh.positions;
+      if (!node.hull->positions.empty()) sources = shapes.mesh(static_cast<NodeIndex>(k)).positions;
       write_mesh(out, node.hull, sources, path, nodes);
       out.end_record();
       continue;
@@ -655,14 +657,15 @@ Mesh read_mesh(PayloadReader& in, std::size_t source_count, std::vector<std::uin
 
 }  // namespace
 
-void write_version3_sections(const MeshTree& tree, const std::function<void(Tag, const SectionPayload&)>& emit) {
+void write_version3_sections(const MeshTree& tree, bool masses_derived,
+                             const std::function<void(Tag, const SectionPayload&)>& emit) {
   const HeldFloatingPointExceptions held;
   const auto bytes = [](const std::string& text) { return [&text](ByteWriter& out) { out.append(text); }; };
   if (!tree.shatter_version.empty()) emit(version_tag, bytes(tree.shatter_version));
   if (!tree.input_repair.empty()) emit(repair_tag, [&](ByteWriter& out) { out.append(repair_payload(tree.input_repair)); });
   emit(recipe_tag, [&](ByteWriter& out) { recipe_payload(tree.recipe, out); });
   if (!tree.recipe.pattern.empty()) emit(pattern_tag, bytes(tree.recipe.pattern));
-  emit(nodes_tag, [&](ByteWriter& out) { nodes_payload(tree, out); });
+  emit(nodes_tag, [&](ByteWriter& out) { nodes_payload(tree, masses_derived, out); });
   if (tree.cut_planes.size() > tree.nodes.size()) emit(cell_planes_tag, [&](ByteWriter& out) { cell_planes_payload(tree, out); });
   emit(geometry_tag, [&](ByteWriter& out) { geometry_payload(tree.geometry, out); });
   emit(solids_tag, [&](ByteWriter& out) { solids_payload(tree, out); });

@@ -377,20 +377,14 @@ class Builder {
   }
 
   /// A lean build's `node`, whose cut is kept (its children are final, unless
-  /// a surplus cut is undone: unpack then restores it): its mesh and solid are
-  /// packed, for nothing below it reads them (the cuts of its descendants need
-  /// only its plane, depth and mass) and the writer unpacks them one at a time.
+  /// a surplus cut is undone: the node is then a leaf packed as leaf_finished
+  /// packs one, and its children's bytes stay in the blocks, unused): its mesh
+  /// and solid are packed, for nothing below it reads them (the cuts of its
+  /// descendants need only its plane, depth and mass) and the writer unpacks
+  /// them one at a time.
   void cut_kept(BuildNode& node) {
     if (!lean_ || node.children.empty()) return;
     pack(node);
-  }
-
-  /// `node`'s cut is undone: a packed node gets its mesh and solid back (its
-  /// bytes stay in the blocks, unused: a few cuts of a build are undone).
-  static void cut_undone(BuildNode& node) {
-    if (node.packed.empty()) return;
-    unpack_node_shape(node.packed, {}, *node.mesh, *node.solid);
-    node.packed = {};
   }
 
   /// `node` is a leaf of the finished tree (a cut undone later leaves another).
@@ -540,7 +534,6 @@ void undo_surplus_cuts(BuildNode& root, std::uint32_t target) {
     node.children.clear();
     node.plane = {};
     node.vanished_pieces = 0, node.vanished_volume = 0, node.vanished_volume_bound = 0;
-    Builder::cut_undone(node);
     leaves -= spent;
   }
 }
@@ -714,12 +707,12 @@ void plane_hulls(tbb::task_arena& arena, MeshTree& tree) {
         if (node.convex) return;
         NodeShapes shapes(tree);  // a lean build's nodes are packed
         if (node.is_leaf()) {
-          node.hull = convex_hull_of(shapes(level[i]).mesh);
+          node.hull = convex_hull_of(shapes.mesh(level[i]));
           return;
         }
         std::vector<Vec3> points;
         for (const NodeIndex c : node.children) {
-          const Mesh& child_hull = tree.nodes[c].convex ? shapes(c).mesh : *std::as_const(tree.nodes[c]).hull;
+          const Mesh& child_hull = tree.nodes[c].convex ? shapes.mesh(c) : *std::as_const(tree.nodes[c]).hull;
           points.insert(points.end(), child_hull.positions.begin(), child_hull.positions.end());
         }
         node.hull = convex_hull_of_points(points);
@@ -803,7 +796,10 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
   // renamed by path); the packed nodes unpack to what was packed. The writer
   // would re-check all of that; the certificate carries it there instead, bound
   // to the content by a digest, so any later change makes it check again.
-  detail::TreeCertifier::certify(tree);
+  // Every mass is mass_properties of the mesh its node keeps (Builder::root,
+  // Builder::cut; renaming caps moves no position), so the certificate says so
+  // too and the writer need not recompute each to leave them out of the file.
+  detail::TreeCertifier::certify(tree, true);
   if (run.report) *run.report = timing;
   return tree;
 }

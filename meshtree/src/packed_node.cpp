@@ -1,5 +1,6 @@
 #include "shatter/meshtree/packed_node.hpp"
 
+#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -230,15 +231,15 @@ void pack_node_shape(const Mesh& mesh, const Solid& solid, bool named_by_node, s
 namespace {
 
 // Unpacks into `mesh` and `solid`; a null `mesh` is read past (its bytes
-// checked as they are when unpacked) and left out.
-void unpack(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh* mesh, Solid& solid) {
+// checked as they are when unpacked) and left out; with a null `solid` the
+// reading stops after the mesh (the solid's bytes are neither read nor checked).
+void unpack(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh* mesh, Solid* solid_out) {
   if (bytes.empty()) throw std::invalid_argument("packed node: cut short");
   // Names that are already the tree's are kept whatever the path.
   const bool named_by_node = (bytes[0] & named_by_node_bit) != 0;
   Unpacker in(bytes, named_by_node ? std::span<const NodeIndex>() : path);
   const std::uint8_t flags = in.u8();
   if ((flags & ~(solid_convex_bit | named_by_node_bit)) != 0) throw std::invalid_argument("packed node: unknown flags");
-  solid.convex = (flags & solid_convex_bit) != 0;
   const std::size_t position_count = in.count(sizeof(Vec3));
   const std::size_t triangle_count = in.count(3);
   const std::size_t normal_count = in.count(sizeof(Vec3));
@@ -277,7 +278,10 @@ void unpack(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path
     in.raw(mesh->corners.uvs, uv_count);
     in.raw(mesh->corners.tangents, tangent_count);
   }
+  if (solid_out == nullptr) return;
 
+  Solid& solid = *solid_out;
+  solid.convex = (flags & solid_convex_bit) != 0;
   const std::size_t def_count = in.count(2);
   const std::size_t face_count = in.count(6);
   const std::size_t loop_count = in.count(2);
@@ -340,11 +344,15 @@ void unpack(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path
 
 void unpack_node_shape(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh,
                        Solid& solid) {
-  unpack(bytes, path, &mesh, solid);
+  unpack(bytes, path, &mesh, &solid);
 }
 
 void unpack_node_solid(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Solid& solid) {
-  unpack(bytes, path, nullptr, solid);
+  unpack(bytes, path, nullptr, &solid);
+}
+
+void unpack_node_mesh(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh) {
+  unpack(bytes, path, &mesh, nullptr);
 }
 
 void rename_by_path(std::span<const NodeIndex> path, Mesh& mesh, Solid& solid) {
@@ -370,11 +378,15 @@ void rename_by_path(std::span<const NodeIndex> path, Mesh& mesh, Solid& solid) {
 
 void pack_leaves(MeshTree& tree) {
   if (!tree.has_exact_representation()) return;
+  // A lean build packs every leaf itself: then nothing changes, and the
+  // certificate is left as it is rather than re-taken (two digests of the tree).
+  if (std::all_of(tree.leaf_nodes.begin(), tree.leaf_nodes.end(), [&](NodeIndex k) { return tree.is_packed(k); })) return;
   // Packing changes the representation, not the tree (NodeShapes gives back
   // the same meshes and solids, bit for bit; a packed leaf has no approx, which
   // validate_tree allows): a certificate that held before holds after, and is
   // carried across by taking the digest again. One that did not hold is dropped.
   const bool certified = detail::TreeCertifier::holds(tree);
+  const bool masses_derived = tree.certificate.masses_derived();
   detail::TreeCertifier::clear(tree);
   if (tree.packed_shapes.empty()) tree.packed_shapes.resize(tree.nodes.size());
   for (const NodeIndex k : tree.leaf_nodes) {
@@ -384,7 +396,7 @@ void pack_leaves(MeshTree& tree) {
     leaf.mesh = Mesh();
     leaf.solid = Solid();
   }
-  if (certified) detail::TreeCertifier::certify(tree);
+  if (certified) detail::TreeCertifier::certify(tree, masses_derived);
 }
 
 void NodeShapes::find_path(NodeIndex node) {
@@ -400,6 +412,14 @@ NodeShape NodeShapes::operator()(NodeIndex node) {
   find_path(node);
   unpack_node_shape(tree_.packed_shapes[node], path_, mesh_, solid_);
   return {mesh_, solid_};
+}
+
+const Mesh& NodeShapes::mesh(NodeIndex node) {
+  const MeshTreeNode& own = tree_.nodes[node];
+  if (!tree_.is_packed(node)) return own.mesh;
+  find_path(node);
+  unpack_node_mesh(tree_.packed_shapes[node], path_, mesh_);
+  return mesh_;
 }
 
 const Solid& NodeShapes::solid(NodeIndex node) {

@@ -76,7 +76,7 @@ TreeStats tree_stats(const MeshTree& tree) {
                       NodeShapes shapes(tree);
                       std::size_t t = 0, v = 0, c = 0;
                       for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                        const Mesh& mesh = shapes(tree.leaf_nodes[i]).mesh;
+                        const Mesh& mesh = shapes.mesh(tree.leaf_nodes[i]);
                         t += mesh.triangle_count();
                         v += mesh.vertex_count();
                         c += static_cast<std::size_t>(std::count_if(mesh.surfaces.begin(), mesh.surfaces.end(),

@@ -971,9 +971,10 @@ std::array<std::uint64_t, 2> TreeCertifier::digest(const MeshTree& tree) {
   return digest.finish();
 }
 
-void TreeCertifier::certify(MeshTree& tree) {
+void TreeCertifier::certify(MeshTree& tree, bool masses_derived) {
   const std::array<std::uint64_t, 2> value = digest(tree);
   tree.certificate.present_ = true;
+  tree.certificate.masses_derived_ = masses_derived;
   tree.certificate.digest_[0] = value[0];
   tree.certificate.digest_[1] = value[1];
 }
@@ -991,7 +992,7 @@ bool certificate_holds(const MeshTree& tree) { return detail::TreeCertifier::hol
 TreeValidationReport certify_tree(MeshTree& tree) {
   TreeValidationReport report = validate_tree(tree);
   if (report.valid()) {
-    detail::TreeCertifier::certify(tree);
+    detail::TreeCertifier::certify(tree, false);  // validate_tree does not compare masses
   } else {
     detail::TreeCertifier::clear(tree);
   }

@@ -36,8 +36,10 @@ struct TreeCertifier {
   static std::array<std::uint64_t, 2> digest(const MeshTree& tree);
 
   /// Certifies `tree` as it is now. Precondition: validate_tree(tree) passes
-  /// (caches on), established by the caller: checked, or true by construction.
-  static void certify(MeshTree& tree);
+  /// (caches on), established by the caller: checked, or true by construction;
+  /// with `masses_derived`, also that every node's mass is mass_properties of
+  /// its mesh bit for bit (TreeCertificate::masses_derived).
+  static void certify(MeshTree& tree, bool masses_derived);
 
   /// Whether `tree` has a certificate and its digest is the tree's now.
   static bool holds(const MeshTree& tree);

@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -20,6 +21,7 @@
 
 #include "shatter/formats/file.hpp"
 #include "shatter/generators/solids.hpp"
+#include "shatter/kernel/mass.hpp"
 #include "shatter/meshtree/build.hpp"
 #include "shatter/meshtree/packed_node.hpp"
 #include "shatter/meshtree/tree.hpp"
@@ -98,11 +100,21 @@ TEST_CASE("every built tree carries a certificate that holds, and validate_tree 
     CHECK(certificate_holds(built.tree));
     // The certificate never vouches for a tree the full check would refuse.
     CHECK(test::tree_problem(built.tree) == "");
+    // It says every mass is its mesh's, bit for bit (the writer then leaves
+    // them out without recomputing them): true of every node.
+    REQUIRE(built.tree.certificate.masses_derived());
+    NodeShapes shapes(built.tree);
+    for (std::size_t k = 0; k < built.tree.nodes.size(); ++k) {
+      INFO("node " << k);
+      const MassProperties derived = mass_properties(shapes.mesh(static_cast<NodeIndex>(k)));
+      CHECK(std::memcmp(&derived, &built.tree.nodes[k].mass, sizeof derived) == 0);
+    }
     // pack_leaves carries it (packing is lossless), and the bytes are those
-    // of the full check's path.
+    // of the full check's path, which recomputes and compares every mass.
     MeshTree packed = built.tree;
     pack_leaves(packed);
     CHECK(certificate_holds(packed));
+    CHECK(packed.certificate.masses_derived());
     CHECK(validate_tree(packed).valid());
     MeshTree uncertified = built.tree;
     uncertified.certificate = TreeCertificate();
@@ -110,6 +122,12 @@ TEST_CASE("every built tree carries a certificate that holds, and validate_tree 
     const std::string bytes = encode_shatter(uncertified);
     CHECK(encode_shatter(built.tree) == bytes);
     CHECK(encode_shatter(packed) == bytes);
+    // certify_tree vouches for validity alone: validate_tree compares no mass.
+    MeshTree recertified = uncertified;
+    REQUIRE(certify_tree(recertified).valid());
+    CHECK(certificate_holds(recertified));
+    CHECK_FALSE(recertified.certificate.masses_derived());
+    CHECK(encode_shatter(recertified) == bytes);
     // What the reader makes of the file it checked itself: no certificate,
     // and it writes the same bytes back.
     const MeshTree decoded = decode_shatter(bytes);

@@ -1216,6 +1216,14 @@ TEST_CASE("a packed node shape unpacks to the same mesh and solid", "[tree][pack
       rename_by_path(path, renamed_mesh, renamed_solid);
       unpack_node_shape(bytes, path, unpacked_mesh, unpacked_solid);
       CHECK(shape_difference(unpacked_mesh, unpacked_solid, renamed_mesh, renamed_solid).empty());
+      // Either part alone (the writer's and the bonds' readers), renamed alike.
+      Mesh mesh_alone;
+      unpack_node_mesh(bytes, path, mesh_alone);
+      CHECK(shape_difference(mesh_alone, renamed_solid, renamed_mesh, renamed_solid).empty());
+      Solid solid_alone;
+      unpack_node_solid(bytes, path, solid_alone);
+      CHECK(shape_difference(renamed_mesh, solid_alone, renamed_mesh, renamed_solid).empty());
+      CHECK_THROWS_AS(unpack_node_mesh(std::span(bytes).first(0), {}, mesh_alone), std::invalid_argument);
       // Cut short anywhere, or with a byte more, the bytes are refused.
       for (const std::size_t keep : {std::size_t{0}, bytes.size() / 3, bytes.size() - 1}) {
         CHECK_THROWS_AS(unpack_node_shape(std::span(bytes).first(keep), {}, unpacked_mesh, unpacked_solid), std::invalid_argument);
@@ -1250,25 +1258,39 @@ TEST_CASE("a lean build keeps no approximations and gives the same tree otherwis
         MeshTree lean = build_mesh_tree(test_mesh(name).mesh, recipe, {.threads = threads, .lean = true});
         REQUIRE(lean.nodes.size() == full.nodes.size());
         std::size_t packed_leaves = 0;
+        NodeShapes shapes(lean);
         for (std::size_t k = 0; k < full.nodes.size(); ++k) {
           INFO("node " << k);
           // Else there would be nothing to release, nor to compare below.
           REQUIRE(full.nodes[k].solid->approx.size() == full.nodes[k].solid->defs.size());
           REQUIRE(!full.nodes[k].solid->defs.empty());
           CHECK(lean.nodes[k].solid->approx.empty());
-          // Every node is packed, but for a leaf whose cut was undone (a surplus).
-          if (!full.nodes[k].is_leaf()) CHECK(lean.is_packed(static_cast<NodeIndex>(k)));
+          // Every node is packed, a leaf whose cut was undone (a surplus) too.
+          CHECK(lean.is_packed(static_cast<NodeIndex>(k)));
           packed_leaves += full.nodes[k].is_leaf() && lean.is_packed(static_cast<NodeIndex>(k)) ? 1 : 0;
           CHECK(lean.nodes[k].convex == full.nodes[k].convex);
           if (lean.is_packed(static_cast<NodeIndex>(k))) {
             CHECK(lean.nodes[k].mesh->triangles.empty());
             CHECK(lean.nodes[k].solid->defs.empty());
           }
+          // NodeShapes reads the full build's node, whole or either part alone.
+          const Mesh& full_mesh = *full.nodes[k].mesh;
+          const Solid& full_solid = *full.nodes[k].solid;
+          const NodeShape whole = shapes(static_cast<NodeIndex>(k));
+          CHECK(shape_difference(whole.mesh, whole.solid, full_mesh, full_solid).empty());
+          CHECK(shape_difference(shapes.mesh(static_cast<NodeIndex>(k)), full_solid, full_mesh, full_solid).empty());
+          CHECK(shape_difference(full_mesh, shapes.solid(static_cast<NodeIndex>(k)), full_mesh, full_solid).empty());
         }
-        // Leaves are packed as they finish; only an undone cut (never in a
-        // balanced build) leaves one unpacked, and those are few.
-        if (recipe.strategy == Strategy::balanced) CHECK(packed_leaves == lean.leaf_count());
-        CHECK(2 * packed_leaves >= lean.leaf_count());
+        // Leaves are packed as they finish, and a node whose cut was undone
+        // stays packed: pack_leaves then has nothing to do, and leaves the
+        // build's certificate as it is.
+        CHECK(packed_leaves == lean.leaf_count());
+        {
+          MeshTree repacked = lean;
+          pack_leaves(repacked);
+          CHECK(byte_difference(encode_shatter(repacked), encode_shatter(lean)) == "equal");
+          CHECK(certificate_holds(repacked));
+        }
         CHECK(validate_tree(lean).summary() == "valid");
         {
           // Packed bytes that do not unpack, a table of the wrong size and a

@@ -48,6 +48,12 @@ void unpack_node_shape(std::span<const std::uint8_t> bytes, std::span<const Node
 /// solid (the bonds). Throws as unpack_node_shape does.
 void unpack_node_solid(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Solid& solid);
 
+/// unpack_node_shape's mesh alone: the reading stops where the solid's bytes
+/// begin, which are neither read nor checked, for a reader that needs only the
+/// mesh (the file writer's mass check and hulls). Throws as unpack_node_shape
+/// does for a defect in the mesh's bytes.
+void unpack_node_mesh(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh);
+
 struct MeshTree;
 
 /// Packs every leaf's mesh and solid of a tree with an exact representation

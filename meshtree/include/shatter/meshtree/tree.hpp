@@ -81,10 +81,17 @@ class TreeCertificate {
  public:
   /// Whether a certificate was made at all (not whether it still holds).
   bool present() const { return present_; }
+  /// What it says beyond validity, while it holds: every node's mass is
+  /// mass_properties of the node's mesh, bit for bit. True of the trees
+  /// build_mesh_tree and the Voronoi builder make (they compute each mass so),
+  /// false of certify_tree's (validate_tree does not compare masses); it lets
+  /// the writer leave the masses out of a file without recomputing each.
+  bool masses_derived() const { return masses_derived_; }
 
  private:
   friend struct detail::TreeCertifier;
   bool present_ = false;
+  bool masses_derived_ = false;
   std::uint64_t digest_[2] = {0, 0};
 };
 
@@ -122,9 +129,10 @@ struct MeshTree {
   std::vector<Plane> cut_planes;
   /// A lean build's nodes (BuildRunOptions::lean): one entry per node, the
   /// node's mesh and exact solid packed (packed_node.hpp) once it was cut or
-  /// finished as a leaf, with its own `mesh` and `solid` left empty; an empty
-  /// entry for a node that keeps them (a leaf whose cut was undone, as a
-  /// surplus). Empty in every other tree. Read a node's mesh and solid through
+  /// finished as a leaf (a surplus cut undone leaves its node packed, a leaf),
+  /// with its own `mesh` and `solid` left empty; an empty entry for a node that
+  /// keeps them (pack_leaves packs a tree's remaining leaves). Empty in every
+  /// other tree. Read a node's mesh and solid through
   /// NodeShapes, which unpacks them; fill_tree_caches (validate_tree.hpp)
   /// unpacks them all into the nodes. The bytes are kept in blocks
   /// (PackedShapes), not one array a node.
@@ -174,6 +182,10 @@ class NodeShapes {
   /// Node `node`'s solid alone (a packed node's mesh is not unpacked), valid
   /// as operator()'s shapes are; throws as it does.
   const Solid& solid(NodeIndex node);
+  /// Node `node`'s mesh alone (a packed node's solid is not unpacked, nor its
+  /// bytes checked), valid as operator()'s shapes are; throws as it does for a
+  /// defect in the mesh's bytes.
+  const Mesh& mesh(NodeIndex node);
 
  private:
   void find_path(NodeIndex node);  // path_[d]: the node's ancestor at depth d
