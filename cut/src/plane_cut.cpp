@@ -1,6 +1,7 @@
 #include "shatter/cut/plane_cut.hpp"
 
 #include <algorithm>
+#include <optional>
 
 #include <tbb/parallel_for.h>
 
@@ -32,8 +33,14 @@ PlaneCut cut_by_plane(const PlaneInput& input, const PlaneSet& set, const Solid&
   meshing.allow_self_intersections = options.allow_self_intersections;
   meshing.trusted = solid_mesh;
   // Against a trusted parent, the triangles to test are the new ones along the
-  // cut: certification looks for what they may cross in a slab around it.
-  if (solid_mesh != nullptr) meshing.cut = &set.cuts[cut.index()];
+  // cut: certification looks for what they may cross in a slab around it. The
+  // parent's triangles are indexed once for all the pieces, and only if one
+  // needs them (a piece certified convex or star-shaped does not).
+  std::optional<TrustedTrianglesOnce> parent_triangles;
+  if (solid_mesh != nullptr) {
+    meshing.cut = &set.cuts[cut.index()];
+    meshing.trusted_triangles = &parent_triangles.emplace(*solid_mesh);
+  }
   std::vector<Solid*> exact_pieces;
   exact_pieces.reserve(exact.below.size() + exact.above.size());
   std::size_t faces = 0;

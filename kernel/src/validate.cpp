@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cstring>
 #include <tuple>
 #include <unordered_set>
@@ -659,16 +660,6 @@ std::vector<std::uint32_t> embedded_groups(const Mesh& mesh, const std::vector<s
   return embedded;
 }
 
-// TrustedTriangles' sort order: lexicographic over the corners' coordinates,
-// whose equivalence is TriangleKeyEqual's equality.
-bool key_less(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
-  for (int i = 0; i < 3; ++i) {
-    if (std::tie(a[i].x, a[i].y, a[i].z) < std::tie(b[i].x, b[i].y, b[i].z)) return true;
-    if (std::tie(b[i].x, b[i].y, b[i].z) < std::tie(a[i].x, a[i].y, a[i].z)) return false;
-  }
-  return false;
-}
-
 ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trusted, const Plane* near) {
   // A triangle of the trusted mesh is not flat: only the new ones are tested.
   std::vector<std::uint8_t> is_new(mesh.triangles.size(), 1);
@@ -775,16 +766,51 @@ ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trus
 
 }  // namespace
 
+namespace {
+
+// TriangleKeyHash's value spread over its low bits (the slot is taken from them;
+// the product's low bits see only the coordinates' low bits, zero on coarse
+// grids): the finalizer of SplitMix64 (Steele, Lea & Flood 2014).
+std::size_t slot_hash(const std::array<Vec3, 3>& key) {
+  std::uint64_t h = TriangleKeyHash{}(key);
+  h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;
+  h = (h ^ (h >> 27)) * 0x94D049BB133111EBull;
+  return static_cast<std::size_t>(h ^ (h >> 31));
+}
+
+}  // namespace
+
 TrustedTriangles::TrustedTriangles(const Mesh& mesh) {
   keys_.reserve(mesh.triangles.size());
-  for (const Triangle& t : mesh.triangles) keys_.push_back(triangle_key(mesh, t));
-  std::sort(keys_.begin(), keys_.end(), key_less);
+  // At most half full, so a probe ends within a few slots.
+  slots_.assign(std::bit_ceil(std::max<std::size_t>(16, 2 * mesh.triangles.size())), empty_slot);
+  const std::size_t mask = slots_.size() - 1;
+  for (const Triangle& t : mesh.triangles) {
+    std::array<Vec3, 3> key = triangle_key(mesh, t);
+    for (std::size_t slot = slot_hash(key) & mask;; slot = (slot + 1) & mask) {
+      if (slots_[slot] == empty_slot) {
+        slots_[slot] = static_cast<std::uint32_t>(keys_.size());
+        keys_.push_back(key);
+        break;
+      }
+      if (TriangleKeyEqual{}(keys_[slots_[slot]], key)) break;  // the same triangle again
+    }
+  }
 }
 
 bool TrustedTriangles::contains(const Mesh& mesh, const Triangle& t) const {
+  if (keys_.empty()) return false;
   const std::array<Vec3, 3> key = triangle_key(mesh, t);
-  const auto it = std::lower_bound(keys_.begin(), keys_.end(), key, key_less);
-  return it != keys_.end() && TriangleKeyEqual{}(*it, key);
+  const std::size_t mask = slots_.size() - 1;
+  for (std::size_t slot = slot_hash(key) & mask; slots_[slot] != empty_slot; slot = (slot + 1) & mask) {
+    if (TriangleKeyEqual{}(keys_[slots_[slot]], key)) return true;
+  }
+  return false;
+}
+
+const TrustedTriangles& TrustedTrianglesOnce::get() const {
+  std::call_once(made_, [this] { index_ = TrustedTriangles(*mesh_); });
+  return index_;
 }
 
 ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near) {

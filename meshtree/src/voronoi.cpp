@@ -1121,8 +1121,9 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
   meshing.interior_uv_scale = recipe.interior_uv_scale;
   meshing.allow_self_intersections = recipe.allow_self_intersections;
   meshing.trusted = &mesh;
-  // Indexed once: certifying a fragment otherwise indexes the whole input again.
-  const TrustedTriangles input_triangles(mesh);
+  // Indexed once, at the first fragment that needs it: certifying a fragment
+  // otherwise indexes the whole input again.
+  const TrustedTrianglesOnce input_triangles(mesh);
   meshing.trusted_triangles = &input_triangles;
   arena.execute([&] {
     tbb::parallel_for(std::uint32_t{0}, site_count, [&](std::uint32_t s) {

@@ -10,8 +10,10 @@
 #include <map>
 #include <numeric>
 #include <random>
+#include <set>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <vector>
 
 #include "shatter/generators/corpus.hpp"
@@ -498,6 +500,71 @@ TEST_CASE("TrustedTriangles finds a mesh's triangles in any rotation, not revers
       CHECK(same_defects(validate_mesh_against(*checked, TrustedTriangles(half)), validate_mesh(*checked)));
     }
   }
+}
+
+TEST_CASE("TrustedTriangles on grid coordinates finds exactly the triangles a sorted set of keys holds",
+          "[validate][certify]") {
+  // Coordinates on a coarse grid (small integers and halves, +0 and -0) share
+  // their low bits, where a hash table takes its slots: every lookup must still
+  // answer as a brute-force set of the rotated corner triples does.
+  std::mt19937_64 random(20261206);
+  for (int round = 0; round < 6; ++round) {
+    INFO("round " << round);
+    const int side = 8 + round * 6;
+    Mesh grid;
+    const auto coordinate = [&](int i) { return i == 0 && round % 2 == 1 ? -0.0 : 0.5 * i; };
+    for (int i = 0; i <= side; ++i) {
+      for (int j = 0; j <= side; ++j) grid.positions.push_back({coordinate(i), coordinate(j), double((i * j) % 3)});
+    }
+    const auto at = [&](int i, int j) { return static_cast<VertexIndex>(i * (side + 1) + j); };
+    for (int i = 0; i < side; ++i) {
+      for (int j = 0; j < side; ++j) {
+        grid.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+        grid.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+      }
+    }
+    // Every other triangle trusted; the same triangle twice is held once.
+    Mesh trusted = grid;
+    trusted.triangles.clear();
+    for (std::size_t t = 0; t < grid.triangles.size(); t += 2) trusted.triangles.push_back(grid.triangles[t]);
+    trusted.triangles.push_back(trusted.triangles.front());
+    const auto key = [](const Mesh& mesh, Triangle t) {
+      std::array<std::array<double, 3>, 3> corners;
+      for (int c = 0; c < 3; ++c) {
+        const Vec3 p = mesh.positions[t[c]];
+        corners[c] = {p.x + 0.0, p.y + 0.0, p.z + 0.0};  // -0 + 0 is +0: the index's equality
+      }
+      std::rotate(corners.begin(), std::min_element(corners.begin(), corners.end()), corners.end());
+      return corners;
+    };
+    std::set<std::array<std::array<double, 3>, 3>> reference;
+    for (const Triangle& t : trusted.triangles) reference.insert(key(trusted, t));
+    const TrustedTrianglesOnce once(trusted);
+    // Asked from several threads at once, the index is made once and answers alike.
+    std::vector<std::size_t> mismatches(4, 0);
+    std::vector<std::thread> askers;
+    for (std::size_t a = 0; a < mismatches.size(); ++a) {
+      askers.emplace_back([&, a] {
+        std::mt19937_64 mine(a);
+        for (int k = 0; k < 2000; ++k) {
+          Triangle t{static_cast<VertexIndex>(mine() % grid.positions.size()),
+                     static_cast<VertexIndex>(mine() % grid.positions.size()),
+                     static_cast<VertexIndex>(mine() % grid.positions.size())};
+          if (k % 2 == 0) t = grid.triangles[mine() % grid.triangles.size()];
+          std::rotate(t.begin(), t.begin() + static_cast<std::ptrdiff_t>(mine() % 3), t.end());
+          mismatches[a] += once.get().contains(grid, t) != reference.contains(key(grid, t));
+        }
+      });
+    }
+    for (std::thread& asker : askers) asker.join();
+    for (const std::size_t m : mismatches) CHECK(m == 0);
+    std::size_t found = 0;
+    for (const Triangle& t : grid.triangles) found += once.get().contains(grid, t);
+    CHECK(found == grid.triangles.size() / 2);
+    CHECK(&once.get() == &once.get());
+    CHECK(&once.mesh() == &trusted);
+  }
+  CHECK_FALSE(TrustedTriangles().contains(Mesh{}, Triangle{0, 0, 0}));
 }
 
 namespace {

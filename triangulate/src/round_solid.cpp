@@ -43,7 +43,7 @@ RoundedSolid copy_without_mesh(RoundedSolid& result) {
 ValidationReport validate_knowing(const Mesh& mesh, const SolidMeshOptions& options) {
   if (!options.parts.empty()) return validate_mesh_of_parts(mesh, options.parts);
   if (options.trusted != nullptr && options.trusted_triangles != nullptr) {
-    return validate_mesh_against(mesh, *options.trusted_triangles, options.cut);
+    return validate_mesh_against(mesh, options.trusted_triangles->get(), options.cut);
   }
   return validate_mesh_against(mesh, options.trusted, options.cut);
 }

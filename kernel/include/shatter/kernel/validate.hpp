@@ -4,6 +4,8 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
+#include <mutex>
 #include <span>
 #include <string>
 #include <string_view>
@@ -113,11 +115,12 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
 ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near = nullptr);
 
 /// The triangles of a mesh by their three corner positions, turning the same
-/// way (any rotation), sorted for lookup in O(log T): what validate_mesh_against
-/// finds its trusted triangles by. Built once, it serves every mesh checked
-/// against one trusted mesh (the fragments of one input), where building it per
-/// check would cost the whole trusted mesh each time. Coordinates compare as
-/// doubles (-0 equals 0); the mesh must have finite coordinates.
+/// way (any rotation), in a hash table for lookup in O(1) expected: what
+/// validate_mesh_against finds its trusted triangles by. Built once (O(T)
+/// expected), it serves every mesh checked against one trusted mesh (the pieces
+/// of one cut, the fragments of one input), where building it per check would
+/// cost the whole trusted mesh each time. Coordinates compare as doubles (-0
+/// equals 0); the mesh must have finite coordinates.
 class TrustedTriangles {
  public:
   TrustedTriangles() = default;
@@ -127,7 +130,30 @@ class TrustedTriangles {
   bool empty() const { return keys_.empty(); }
 
  private:
-  std::vector<std::array<Vec3, 3>> keys_;  // each rotated to start at its least corner, sorted
+  std::vector<std::array<Vec3, 3>> keys_;  // each rotated to start at its least corner, one per distinct triangle
+  std::vector<std::uint32_t> slots_;       // open addressing (linear probing) into keys_; empty_slot where none
+  static constexpr std::uint32_t empty_slot = ~std::uint32_t{0};
+};
+
+/// A mesh's TrustedTriangles, made at the first get() and then kept: the
+/// pieces of one cut share their parent's, and a cut whose pieces are all
+/// certified without it (convex, star-shaped) never pays for it.
+/// Precondition: `mesh` outlives this object, unchanged, with finite
+/// coordinates. Thread-safe: concurrent get() calls make it once and all see it.
+class TrustedTrianglesOnce {
+ public:
+  explicit TrustedTrianglesOnce(const Mesh& mesh) : mesh_(&mesh) {}
+  TrustedTrianglesOnce(const TrustedTrianglesOnce&) = delete;
+  TrustedTrianglesOnce& operator=(const TrustedTrianglesOnce&) = delete;
+  /// The mesh whose triangles these are.
+  const Mesh& mesh() const { return *mesh_; }
+  /// The index, made on the first call. Throws what building it throws (memory).
+  const TrustedTriangles& get() const;
+
+ private:
+  const Mesh* mesh_;
+  mutable std::once_flag made_;
+  mutable TrustedTriangles index_;
 };
 
 /// validate_mesh_against with the trusted mesh's triangles indexed already; the

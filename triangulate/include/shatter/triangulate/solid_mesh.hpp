@@ -68,10 +68,12 @@ struct SolidMeshOptions {
   /// one was cut from), or nullptr: certification then tests only the pairs of
   /// triangles not both found in it (validate_mesh_against).
   const Mesh* trusted = nullptr;
-  /// `trusted`'s triangles indexed (TrustedTriangles of that same mesh), or
-  /// nullptr to index them at each certification: a caller rounding many pieces
-  /// of one mesh indexes it once. Used only with `trusted`.
-  const TrustedTriangles* trusted_triangles = nullptr;
+  /// `trusted`'s triangles, indexed at the first certification that needs them
+  /// and kept (TrustedTrianglesOnce of that same mesh), or nullptr to index them
+  /// at each certification: a caller rounding several pieces of one mesh (a
+  /// cut's pieces, a Voronoi input's fragments) indexes it at most once. Used
+  /// only with `trusted`.
+  const TrustedTrianglesOnce* trusted_triangles = nullptr;
   /// The cut plane that made this solid from `trusted` (its new triangles lie
   /// along it), or nullptr: narrows the intersection tests to a slab around it.
   const Plane* cut = nullptr;
