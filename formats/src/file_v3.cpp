@@ -18,6 +18,7 @@
 #include <cfenv>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -210,7 +211,8 @@ std::uint64_t surface_code(SurfaceId surface, const AncestorPath& path, const st
 }
 
 /// Finds each position among `sources` bit for bit: first where the previous
-/// vertex's offset points, then the same index, then by a sorted search.
+/// vertex's offset points, then the same index, then in a hash table of the
+/// sources (made at the first search; the lowest index of equal sources).
 class PositionFinder {
  public:
   explicit PositionFinder(std::span<const Vec3> sources) : sources_(sources) {}
@@ -235,23 +237,44 @@ class PositionFinder {
   }
 
  private:
-  using Key = std::array<std::uint64_t, 3>;
-  static Key key_of(Vec3 p) { return {bits(p.x), bits(p.y), bits(p.z)}; }
-
+  // The source index bit for bit equal to `position` (the lowest), or -1.
   std::int64_t search(Vec3 position) {
-    if (sorted_.empty() && !sources_.empty()) {
-      sorted_.reserve(sources_.size());
-      for (std::size_t s = 0; s < sources_.size(); ++s) sorted_.emplace_back(key_of(sources_[s]), static_cast<std::uint32_t>(s));
-      std::sort(sorted_.begin(), sorted_.end());
+    if (slots_.empty()) {
+      // At most half full, so a probe ends within a few slots.
+      slots_.assign(std::bit_ceil(std::max<std::size_t>(16, 2 * sources_.size())), empty_slot);
+      for (std::size_t s = 0; s < sources_.size(); ++s) {
+        for (std::size_t slot = slot_of(sources_[s]);; slot = (slot + 1) & (slots_.size() - 1)) {
+          if (slots_[slot] == empty_slot) {
+            slots_[slot] = static_cast<std::uint32_t>(s);
+            break;
+          }
+          if (same_bits(sources_[slots_[slot]], sources_[s])) break;  // keep the lowest index
+        }
+      }
     }
-    const Key key = key_of(position);
-    const auto found = std::lower_bound(sorted_.begin(), sorted_.end(), std::pair<Key, std::uint32_t>(key, 0));
-    return found != sorted_.end() && found->first == key ? static_cast<std::int64_t>(found->second) : -1;
+    for (std::size_t slot = slot_of(position); slots_[slot] != empty_slot; slot = (slot + 1) & (slots_.size() - 1)) {
+      if (same_bits(sources_[slots_[slot]], position)) return slots_[slot];
+    }
+    return -1;
+  }
+
+  // The coordinates' bits mixed (SplitMix64's finalizer, Steele, Lea & Flood
+  // 2014: the slot comes from the low bits), masked to the table.
+  std::size_t slot_of(Vec3 p) const {
+    std::uint64_t h = 0;
+    for (const double x : {p.x, p.y, p.z}) {
+      h = (h ^ bits(x)) * 0x9E3779B97F4A7C15ull;
+      h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;
+      h = (h ^ (h >> 27)) * 0x94D049BB133111EBull;
+      h ^= h >> 31;
+    }
+    return static_cast<std::size_t>(h) & (slots_.size() - 1);
   }
 
   std::span<const Vec3> sources_;
   std::int64_t offset_ = 0;
-  std::vector<std::pair<Key, std::uint32_t>> sorted_;
+  std::vector<std::uint32_t> slots_;  // into sources_; empty_slot where none
+  static constexpr std::uint32_t empty_slot = ~std::uint32_t{0};
 };
 
 void write_mesh(ByteWriter& out, const Mesh& mesh, std::span<const Vec3> sources, const AncestorPath& path,
@@ -353,7 +376,11 @@ void solid_records(const MeshTree& tree, std::size_t first, std::size_t end, Byt
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
   AncestorPath path;
   if (first < end) path.start_at(static_cast<NodeIndex>(first), nodes);
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> face_of_edge;  // (from, to) -> face, sorted
+  // Each vertex's out-edges (to, face) in face order, by a counting sort on
+  // `from`: the face across an edge is the first face of the reverse edge's
+  // list, found among its tail's few out-edges.
+  std::vector<std::uint32_t> first_out;
+  std::vector<std::pair<VertexIndex, std::uint32_t>> out_edges;
   NodeShapes shapes(tree);
   for (std::size_t k = first; k < end; ++k) {
     const MeshTreeNode& node = nodes[k];
@@ -388,24 +415,39 @@ void solid_records(const MeshTree& tree, std::size_t first, std::size_t end, Byt
     }
     for (const SolidLoop& loop : solid.loops) out.varint(loop.corner_count);
 
-    const std::uint64_t vertex_count = solid.defs.size();
-    face_of_edge.clear();
+    const auto face_loops = [&](std::uint32_t f) {
+      return std::span(solid.loops).subspan(solid.faces[f].first_loop, solid.faces[f].loop_count);
+    };
+    first_out.assign(solid.defs.size() + 1, 0);
     for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
-      for (const SolidLoop& loop : std::span(solid.loops).subspan(solid.faces[f].first_loop, solid.faces[f].loop_count)) {
-        for (const CornerEdge& edge : loop_edges(solid.corners, loop)) face_of_edge.emplace_back(edge.from * vertex_count + edge.to, f);
+      for (const SolidLoop& loop : face_loops(f)) {
+        for (const CornerEdge& edge : loop_edges(solid.corners, loop)) ++first_out[edge.from + 1];
       }
     }
-    std::sort(face_of_edge.begin(), face_of_edge.end());
+    for (std::size_t v = 0; v < solid.defs.size(); ++v) first_out[v + 1] += first_out[v];
+    out_edges.resize(first_out.back());
+    for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+      for (const SolidLoop& loop : face_loops(f)) {
+        for (const CornerEdge& edge : loop_edges(solid.corners, loop)) out_edges[first_out[edge.from]++] = {edge.to, f};
+      }
+    }
+    // The fill moved each start to the next vertex's: shift them back.
+    for (std::size_t v = solid.defs.size(); v > 0; --v) first_out[v] = first_out[v - 1];
+    first_out[0] = 0;
+    // The lowest face holding the edge from -> to, or none.
+    const auto face_of_edge = [&](VertexIndex from, VertexIndex to) -> std::optional<std::uint32_t> {
+      for (std::uint32_t i = first_out[from]; i < first_out[from + 1]; ++i) {
+        if (out_edges[i].first == to) return out_edges[i].second;
+      }
+      return std::nullopt;
+    };
     // The validator has checked that the loops cover the corners in order.
     for (const SolidLoop& loop : solid.loops) {
       for (const CornerEdge& edge : loop_edges(solid.corners, loop)) {
         std::uint64_t mode = edge.line.is_segment() ? line_segment : line_stored;
         if (!edge.line.is_segment()) {
-          const std::uint64_t reverse = edge.to * vertex_count + edge.from;
-          const auto across = std::lower_bound(face_of_edge.begin(), face_of_edge.end(), std::pair<std::uint64_t, std::uint32_t>(reverse, 0));
-          if (across != face_of_edge.end() && across->first == reverse && solid.faces[across->second].plane == edge.line.other) {
-            mode = line_across;
-          }
+          const std::optional<std::uint32_t> across = face_of_edge(edge.to, edge.from);
+          if (across && solid.faces[*across].plane == edge.line.other) mode = line_across;
         }
         out.varint((std::uint64_t{edge.from} << 2) | mode);
         if (mode != line_across) plane(edge.line.other);
