@@ -91,6 +91,8 @@ double quotient_error(const Estimate& x, const Estimate& w) {
 }
 
 class PlaneBonds {
+  struct CachedSolid;  // a leaf's unpacked solid (leaf_solid), defined below
+
  public:
   struct FaceRef {
     std::uint32_t cut;  // a node's plane, or a cell plane after them (MeshTree::cut_planes)
@@ -100,7 +102,7 @@ class PlaneBonds {
 
   explicit PlaneBonds(const MeshTree& tree) : tree_(tree), set_(tree.plane_set()) {
     cache_.reserve(cache_slots);
-    for (std::size_t i = 0; i < cache_slots; ++i) cache_.push_back({no_leaf, NodeShapes(tree)});
+    for (std::size_t i = 0; i < cache_slots; ++i) cache_.push_back({no_leaf, NodeShapes(tree), nullptr, {}, {}});
   }
 
   std::vector<Bond> run() {
@@ -392,7 +394,7 @@ class PlaneBonds {
       const SolidLoop& loop = solid.loops[face.first_loop];
       part_vertices_.clear();
       for (std::uint32_t i = 0; i < loop.corner_count; ++i) part_vertices_.push_back(solid.corners[loop.first_corner + i].vertex);
-      add_part(solid, part_vertices_, reverse, cap);
+      add_part(solid, part_vertices_, reverse, cap, cached_slot(ref.leaf));
     } else {
       points3_.clear();
       const Solid& cached = with_approximations(ref.leaf, solid);
@@ -426,9 +428,21 @@ class PlaneBonds {
     if (slot.leaf != leaf) {
       slot.leaf = no_leaf;  // until it unpacks
       slot.solid = &slot.shapes.solid(node);
+      slot.known.assign(slot.solid->defs.size(), 0);
+      slot.approx.resize(slot.solid->defs.size());
       slot.leaf = leaf;
     }
     return *slot.solid;
+  }
+
+  // The cached slot of `leaf`, whose approximations are kept there as they are
+  // computed (a packed leaf's solid keeps none, and a vertex of a convex leaf is
+  // a corner of two or three of its caps, each met on its own cut), or nullptr
+  // when the leaf is not packed. Valid after leaf_solid(leaf), until the next.
+  CachedSolid* cached_slot(LeafIndex leaf) {
+    if (!tree_.is_packed(tree_.leaf_nodes[leaf])) return nullptr;
+    CachedSolid& slot = cache_[leaf % cache_slots];
+    return slot.leaf == leaf ? &slot : nullptr;
   }
 
   // The solid of `leaf` with every approximation there: itself when it keeps
@@ -446,16 +460,26 @@ class PlaneBonds {
     return filled_;
   }
 
-  ApproxPoint approximation(const Solid& solid, VertexIndex v) const {
-    return solid.approx.empty() ? approximate(set_, solid.defs[v]) : solid.approx[v];
+  // Vertex v's approximation: the solid's own, or else the one cached in
+  // `slot` (the leaf's cache slot, when the solid is its solid), computed at the
+  // first need; approximate()'s value either way.
+  ApproxPoint approximation(const Solid& solid, VertexIndex v, CachedSolid* slot) const {
+    if (!solid.approx.empty()) return solid.approx[v];
+    if (slot == nullptr) return approximate(set_, solid.defs[v]);
+    if (!slot->known[v]) {
+      slot->approx[v] = approximate(set_, solid.defs[v]);
+      slot->known[v] = 1;
+    }
+    return slot->approx[v];
   }
 
-  void add_part(const Solid& solid, std::vector<VertexIndex>& vertices, bool reverse, CapFace& cap) {
+  void add_part(const Solid& solid, std::vector<VertexIndex>& vertices, bool reverse, CapFace& cap,
+                CachedSolid* slot = nullptr) {
     if (reverse) std::reverse(vertices.begin(), vertices.end());
     Part part{static_cast<std::uint32_t>(corner_defs_.size()), static_cast<std::uint32_t>(vertices.size()),
               static_cast<std::uint32_t>(measure_points_.size()), 0, INFINITY, -INFINITY, INFINITY, -INFINITY};
     for (VertexIndex v : vertices) {
-      const ApproxPoint a = approximation(solid, v);
+      const ApproxPoint a = approximation(solid, v, slot);
       const Vec2 p = project(a);
       const double e = project_error(a);
       corner_defs_.push_back(solid.defs[v]);
@@ -689,6 +713,8 @@ class PlaneBonds {
     LeafIndex leaf;      // whose solid `solid` is; no_leaf: none
     NodeShapes shapes;   // owns what `solid` points to
     const Solid* solid = nullptr;
+    std::vector<ApproxPoint> approx;  // per vertex of `solid`, where `known`
+    std::vector<std::uint8_t> known;
   };
   static constexpr LeafIndex no_leaf = ~LeafIndex{0};
   static constexpr std::uint32_t no_cut = ~std::uint32_t{0};
