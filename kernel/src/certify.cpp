@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <optional>
 
+#include "shatter/kernel/deepest_point.hpp"
 #include "shatter/kernel/union_find.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "star_shaped.hpp"
@@ -105,12 +107,24 @@ bool certify_piece(const Mesh& mesh) {
                    [n](const Triangle& t) { return t[0] < n && t[1] < n && t[2] < n; })) {
     return decline();
   }
-  Vec3 centres[2];
+  Vec3 centres[3];
   std::size_t centre_count = 0;
   centres[centre_count++] = vertex_average(mesh);
   if (volume_centroid(mesh, centres[centre_count])) ++centre_count;
   bool topology_checked = false;
-  for (std::size_t k = 0; k < centre_count; ++k) {
+  bool deepest_tried = false;
+  for (std::size_t k = 0;; ++k) {
+    if (k == centre_count) {
+      // Last, once the cheap centres have failed: the kernel's deepest point,
+      // which a linear program finds for a piece that is star-shaped around
+      // some point (most of the pieces of curved meshes they miss); O(T)
+      // expected, against the full check's search.
+      if (deepest_tried) break;
+      deepest_tried = true;
+      const std::optional<Vec3> deepest = kernel_detail::deepest_inner_point(mesh);
+      if (!deepest) break;
+      centres[centre_count++] = *deepest;
+    }
     // A piece that is not star-shaped around the centre usually shows it within
     // a few triangles: that test goes first, so a declined piece costs little
     // before the full check.

@@ -52,15 +52,18 @@ bool connected_surface(const Mesh& mesh);
 /// A fast exact certificate that `mesh` is a valid solid (validate_mesh would find
 /// no defect): it is a connected, closed, consistently oriented 2-manifold (checked
 /// here, linear) and star-shaped around one of a few centres computed from the
-/// mesh: its vertex average, then its volume centroid (certify_star_shaped; see
-/// the file comment for why that proves validity). Meant for pieces that are not
-/// known to be convex: most small pieces of curved meshes are star-shaped around
-/// their centroid even when some edge is concave.
+/// mesh: its vertex average, then its volume centroid, then the deepest point
+/// of its kernel that a linear program in doubles finds (certify_star_shaped;
+/// see the file comment for why that proves validity: each centre is only
+/// tried, exactly). Meant for pieces that are not known to be convex: most
+/// pieces of curved meshes are star-shaped around some point even when some
+/// edge is concave, often their centroid.
 /// Preconditions: none (any mesh; out-of-range indices and coordinates that are
 /// not finite or not below 2^500 in magnitude make it decline).
 /// Guarantees: true only for a mesh validate_mesh finds valid; false proves nothing.
 /// Counted in certify_counts(). Cost: O(T) per centre tried, usually declining at
-/// the first triangle that faces a centre. Never throws.
+/// the first triangle that faces a centre, and O(T) expected for the program.
+/// Never throws.
 bool certify_piece(const Mesh& mesh);
 
 }  // namespace shatter
