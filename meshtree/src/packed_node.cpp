@@ -65,8 +65,22 @@ class Unpacker {
   Unpacker(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path) : bytes_(bytes), path_(path) {}
 
   std::uint64_t varint() {
-    // Most values take one byte (indices of a small piece, plane codes).
-    if (at_ < bytes_.size() && bytes_[at_] < 0x80) return bytes_[at_++];
+    // Most values take one byte (indices of a small piece, plane codes), most
+    // others two (indices of a piece of up to 16,384 vertices).
+    if (at_ + 1 < bytes_.size()) {
+      const std::uint8_t low = bytes_[at_];
+      if (low < 0x80) {
+        ++at_;
+        return low;
+      }
+      const std::uint8_t high = bytes_[at_ + 1];
+      if (high < 0x80) {
+        at_ += 2;
+        return (low & 0x7fu) | (std::uint64_t{high} << 7);
+      }
+    } else if (at_ < bytes_.size() && bytes_[at_] < 0x80) {
+      return bytes_[at_++];
+    }
     return long_varint();
   }
   std::uint32_t u32() {

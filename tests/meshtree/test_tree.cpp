@@ -1224,9 +1224,19 @@ TEST_CASE("a packed node shape unpacks to the same mesh and solid", "[tree][pack
       unpack_node_solid(bytes, path, solid_alone);
       CHECK(shape_difference(renamed_mesh, solid_alone, renamed_mesh, renamed_solid).empty());
       CHECK_THROWS_AS(unpack_node_mesh(std::span(bytes).first(0), {}, mesh_alone), std::invalid_argument);
-      // Cut short anywhere, or with a byte more, the bytes are refused.
-      for (const std::size_t keep : {std::size_t{0}, bytes.size() / 3, bytes.size() - 1}) {
+      // Cut short anywhere, or with a byte more, the bytes are refused: among
+      // the last ten bytes too, where a varint is read a byte at a time.
+      std::vector<std::size_t> keeps{0, bytes.size() / 3};
+      for (std::size_t cut = 1; cut <= std::min<std::size_t>(12, bytes.size()); ++cut) keeps.push_back(bytes.size() - cut);
+      for (const std::size_t keep : keeps) {
         CHECK_THROWS_AS(unpack_node_shape(std::span(bytes).first(keep), {}, unpacked_mesh, unpacked_solid), std::invalid_argument);
+      }
+      // A varint of more than ten bytes (more than 64 bits) is refused, far
+      // from the end and near it.
+      for (const std::size_t tail : {std::size_t{0}, std::size_t{40}}) {
+        std::vector<std::uint8_t> overlong(11, 0xff);
+        overlong.resize(11 + tail, 0);
+        CHECK_THROWS_AS(unpack_node_shape(overlong, {}, unpacked_mesh, unpacked_solid), std::invalid_argument);
       }
       std::vector<std::uint8_t> longer = bytes;
       longer.push_back(0);
