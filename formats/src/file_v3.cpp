@@ -27,6 +27,7 @@
 #include "file_layout.hpp"
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/position_key.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/meshtree/recipe.hpp"
 #include "shatter/meshtree/tree.hpp"
@@ -258,17 +259,10 @@ class PositionFinder {
     return -1;
   }
 
-  // The coordinates' bits mixed (SplitMix64's finalizer, Steele, Lea & Flood
-  // 2014: the slot comes from the low bits), masked to the table.
+  // The kernel's position hash (position_key.hpp; it takes -0 for +0, which
+  // only makes the two share a slot: same_bits decides), masked to the table.
   std::size_t slot_of(Vec3 p) const {
-    std::uint64_t h = 0;
-    for (const double x : {p.x, p.y, p.z}) {
-      h = (h ^ bits(x)) * 0x9E3779B97F4A7C15ull;
-      h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;
-      h = (h ^ (h >> 27)) * 0x94D049BB133111EBull;
-      h ^= h >> 31;
-    }
-    return static_cast<std::size_t>(h) & (slots_.size() - 1);
+    return kernel_detail::PositionKeyHash{}(kernel_detail::key_of(p)) & (slots_.size() - 1);
   }
 
   std::span<const Vec3> sources_;

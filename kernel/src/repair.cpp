@@ -30,7 +30,7 @@
 #include <utility>
 #include <vector>
 
-#include "position_key.hpp"
+#include "shatter/kernel/position_key.hpp"
 #include "repair_touching.hpp"
 #include "shatter/kernel/arrangement.hpp"
 #include "shatter/kernel/union_find.hpp"

@@ -23,6 +23,7 @@
 #include "shatter/kernel/certify.hpp"
 #include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/mass.hpp"
+#include "shatter/kernel/position_key.hpp"
 #include "shatter/kernel/predicates.hpp"
 #include "shatter/kernel/self_intersections.hpp"
 #include "shatter/kernel/shells.hpp"
@@ -768,14 +769,13 @@ ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trus
 
 namespace {
 
-// TriangleKeyHash's value spread over its low bits (the slot is taken from them;
-// the product's low bits see only the coordinates' low bits, zero on coarse
-// grids): the finalizer of SplitMix64 (Steele, Lea & Flood 2014).
+// A triangle key's slot: its corners' position hashes (the kernel's one,
+// position_key.hpp, which mixes the low bits doubles often leave zero),
+// rotated apart so that the corners' order counts.
 std::size_t slot_hash(const std::array<Vec3, 3>& key) {
-  std::uint64_t h = TriangleKeyHash{}(key);
-  h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;
-  h = (h ^ (h >> 27)) * 0x94D049BB133111EBull;
-  return static_cast<std::size_t>(h ^ (h >> 31));
+  const kernel_detail::PositionKeyHash hash;
+  return hash(kernel_detail::key_of(key[0])) ^ std::rotl(hash(kernel_detail::key_of(key[1])), 21) ^
+         std::rotl(hash(kernel_detail::key_of(key[2])), 42);
 }
 
 }  // namespace

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "io_internal.hpp"
-#include "position_key.hpp"
+#include "shatter/kernel/position_key.hpp"
 
 namespace shatter::io_detail {
 

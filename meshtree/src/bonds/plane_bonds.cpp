@@ -454,7 +454,8 @@ class PlaneBonds {
     if (filled_leaf_ != leaf) {
       filled_ = solid;
       filled_.approx.resize(solid.defs.size());
-      for (std::size_t v = 0; v < solid.defs.size(); ++v) filled_.approx[v] = approximate(set_, solid.defs[v]);
+      CachedSolid* slot = cached_slot(leaf);  // the convex faces' approximations, where met
+      for (VertexIndex v = 0; v < solid.defs.size(); ++v) filled_.approx[v] = approximation(solid, v, slot);
       filled_leaf_ = leaf;
     }
     return filled_;

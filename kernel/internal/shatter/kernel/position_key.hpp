@@ -1,6 +1,9 @@
 #pragma once
 // The exact key of a position, shared by welding (weld.cpp) and repair's vertex
-// merge (repair.cpp), so both weld by the same rule. Private to the kernel.
+// merge (repair.cpp), so both weld by the same rule, and its hash, which the
+// hash tables of positions and triangles (validate.cpp's trusted triangles, the
+// file writer's position lookup) take their slots from. Not installed
+// (kernel/internal/).
 
 #include <bit>
 #include <cstddef>
