@@ -16,6 +16,8 @@
 #include <iterator>
 #include <limits>
 #include <optional>
+#include <span>
+#include <stdexcept>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -563,7 +565,9 @@ struct TriangleKeyEqual {
 // corners in both, and triangles_intersect answers alike. Without this, two
 // coincident copies of a trusted triangle, over different vertices, would be
 // skipped as a trusted pair; so marked, they are tested (and found).
-void untrust_shared_positions(const Mesh& mesh, std::vector<std::uint8_t>& is_new) {
+// The vertices whose position another vertex has too (one flag per vertex), or
+// empty when every position is one vertex's.
+std::vector<std::uint8_t> shared_positions(const Mesh& mesh) {
   std::vector<VertexIndex> order(mesh.positions.size());
   for (VertexIndex v = 0; v < order.size(); ++v) order[v] = v;
   const auto less = [&](VertexIndex a, VertexIndex b) {
@@ -578,6 +582,12 @@ void untrust_shared_positions(const Mesh& mesh, std::vector<std::uint8_t>& is_ne
     if (shared.empty()) shared.assign(mesh.positions.size(), 0);
     shared[order[k - 1]] = shared[order[k]] = 1;
   }
+  return shared;
+}
+
+// A trusted triangle with a corner whose position another vertex has is tested
+// as a new one: the trusted mesh said nothing of that other vertex.
+void untrust_shared_positions(const Mesh& mesh, std::span<const std::uint8_t> shared, std::vector<std::uint8_t>& is_new) {
   if (shared.empty()) return;
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     for (const VertexIndex v : mesh.triangles[t]) {
@@ -661,7 +671,8 @@ std::vector<std::uint32_t> embedded_groups(const Mesh& mesh, const std::vector<s
   return embedded;
 }
 
-ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trusted, const Plane* near) {
+ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trusted, const Plane* near,
+                                  std::span<const std::uint8_t> exact_vertices) {
   // A triangle of the trusted mesh is not flat: only the new ones are tested.
   std::vector<std::uint8_t> is_new(mesh.triangles.size(), 1);
   if (trusted) {
@@ -676,7 +687,31 @@ ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trus
   without.check_self_intersections = false;
   ValidationReport report = validate_masked(mesh, without, &is_new);
   if (!report.valid()) return report;
-  if (trusted) untrust_shared_positions(mesh, is_new);
+  if (!exact_vertices.empty() && exact_vertices.size() != mesh.positions.size()) {
+    throw std::invalid_argument("validate_mesh_against: exact_vertices must hold one flag per vertex");
+  }
+  const bool use_exact = !exact_vertices.empty();
+  const std::vector<std::uint8_t> shared = trusted || use_exact ? shared_positions(mesh) : std::vector<std::uint8_t>{};
+  if (trusted) untrust_shared_positions(mesh, shared, is_new);
+  // Two triangles whose corners are all exact (flagged, each at a position of
+  // its own) are two triangles of an embedded surface (the caller's
+  // precondition): they meet only in what they share. A pair is therefore
+  // tested only when one triangle is new and one is not all exact ("moved"):
+  // the new moved ones against every triangle (`tested`), and the new exact
+  // ones against the trusted moved ones (below).
+  std::vector<std::uint8_t> moved;
+  if (use_exact) {
+    moved.assign(mesh.triangles.size(), 0);
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      for (const VertexIndex v : mesh.triangles[t]) {
+        if (!exact_vertices[v] || (!shared.empty() && shared[v])) moved[t] = 1;
+      }
+    }
+  }
+  std::vector<std::uint8_t> tested = is_new;
+  if (use_exact) {
+    for (std::size_t t = 0; t < tested.size(); ++t) tested[t] &= moved[t];
+  }
   std::vector<std::uint32_t> all;  // the triangles searched
   all.reserve(mesh.triangles.size());
   // With a plane the new triangles lie along, only triangles within the slab the
@@ -710,15 +745,15 @@ ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trus
   // grid, the same pairs as CGAL's box intersection of the tested boxes against
   // the members').
   const std::vector<std::uint32_t> embedded = embedded_groups(mesh, is_new);
-  const auto search = [&](const std::vector<std::uint32_t>& members, const std::vector<std::uint8_t>& tested) {
+  const auto search = [&](const std::vector<std::uint32_t>& members, const std::vector<std::uint8_t>& these) {
     const std::vector<TrianglePair> found =
-        intersecting_pairs_with(mesh.positions, mesh.triangles, members, tested, embedded);
+        intersecting_pairs_with(mesh.positions, mesh.triangles, members, these, embedded);
     pairs.insert(pairs.end(), found.begin(), found.end());
   };
   if (!near) {
     all.resize(mesh.triangles.size());
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) all[t] = static_cast<std::uint32_t>(t);
-    search(all, is_new);
+    search(all, tested);
   } else {
     // The new triangles split in two: those flat along the plane (the cap, all
     // corners within a rounding's reach of it: their ranges inside [-flat, flat])
@@ -732,7 +767,7 @@ ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trus
     std::vector<std::uint8_t> is_flat(mesh.triangles.size(), 0), is_side(mesh.triangles.size(), 0);
     double flat_lo = INFINITY, flat_hi = -INFINITY, side_lo = INFINITY, side_hi = -INFINITY;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-      if (!is_new[t]) continue;
+      if (!tested[t]) continue;
       if (range[t][0] >= -flat && range[t][1] <= flat) {
         is_flat[t] = 1;
         flat_lo = std::min(flat_lo, range[t][0]);
@@ -747,7 +782,7 @@ ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trus
     std::vector<std::uint32_t> near_flat;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       const bool side_reach = meets(t, side_lo, side_hi), flat_reach = meets(t, flat_lo, flat_hi);
-      if (!side_reach && !flat_reach && !is_new[t]) continue;
+      if (!side_reach && !flat_reach && !tested[t]) continue;
       // The side triangles against every triangle in their slab but the flat ones;
       // the flat ones against every triangle reaching Z, the side ones included
       // (most side triangles, those of a clipped face away from the cut, do not).
@@ -756,6 +791,28 @@ ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trus
     }
     search(all, is_side);
     search(near_flat, is_flat);
+  }
+  if (use_exact && trusted) {
+    // The new exact triangles against the trusted moved ones, whose pairs with
+    // each other the trusted mesh settles (one group).
+    std::vector<std::uint32_t> members, group(mesh.triangles.size(), no_embedded_group);
+    std::vector<std::uint8_t> trusted_moved(mesh.triangles.size(), 0);
+    bool any_new_exact = false;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      if (is_new[t] == moved[t]) continue;  // new and moved (tested above), or trusted and exact
+      members.push_back(static_cast<std::uint32_t>(t));
+      if (moved[t]) {
+        trusted_moved[t] = 1;
+        group[t] = 0;
+      } else {
+        any_new_exact = true;
+      }
+    }
+    if (any_new_exact) {
+      const std::vector<TrianglePair> found =
+          intersecting_pairs_with(mesh.positions, mesh.triangles, members, trusted_moved, group);
+      pairs.insert(pairs.end(), found.begin(), found.end());
+    }
   }
   std::sort(pairs.begin(), pairs.end());
   append_self_intersections(report, pairs);
@@ -813,14 +870,16 @@ const TrustedTriangles& TrustedTrianglesOnce::get() const {
   return index_;
 }
 
-ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near) {
-  if (!trusted) return validate_against(mesh, nullptr, near);
+ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near,
+                                       std::span<const std::uint8_t> exact_vertices) {
+  if (!trusted) return validate_against(mesh, nullptr, near, exact_vertices);
   const TrustedTriangles index(*trusted);
-  return validate_against(mesh, &index, near);
+  return validate_against(mesh, &index, near, exact_vertices);
 }
 
-ValidationReport validate_mesh_against(const Mesh& mesh, const TrustedTriangles& trusted, const Plane* near) {
-  return validate_against(mesh, &trusted, near);
+ValidationReport validate_mesh_against(const Mesh& mesh, const TrustedTriangles& trusted, const Plane* near,
+                                       std::span<const std::uint8_t> exact_vertices) {
+  return validate_against(mesh, &trusted, near, exact_vertices);
 }
 
 ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* const> parts) {
@@ -895,7 +954,7 @@ ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* 
   without.check_self_intersections = false;
   ValidationReport report = validate_masked(mesh, without, &is_new);
   if (!report.valid()) return report;
-  untrust_shared_positions(mesh, is_new);
+  untrust_shared_positions(mesh, shared_positions(mesh), is_new);
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     if (is_new[t]) part_of[t] = untrusted;
   }

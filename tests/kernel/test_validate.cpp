@@ -11,6 +11,7 @@
 #include <numeric>
 #include <random>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -19,6 +20,7 @@
 #include "shatter/generators/corpus.hpp"
 #include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
+#include "shatter/kernel/self_intersections.hpp"
 #include "shatter/kernel/validate.hpp"
 
 using namespace shatter;
@@ -500,6 +502,99 @@ TEST_CASE("TrustedTriangles finds a mesh's triangles in any rotation, not revers
       CHECK(same_defects(validate_mesh_against(*checked, TrustedTriangles(half)), validate_mesh(*checked)));
     }
   }
+}
+
+TEST_CASE("validate_mesh_against with exact vertices finds what validate_mesh finds whenever the all-exact triangles meet only as they share",
+          "[validate][certify]") {
+  // The flags' promise (validate.hpp): triangles with three flagged corners meet
+  // only in what they share. Each draw moves one vertex of a valid mesh, often
+  // through the surface, flags a random share of the vertices (the moved one or
+  // not), and checks the promise by brute force on the all-flagged triangles
+  // alone; where it holds, the report must be validate_mesh's, against the
+  // original as the trusted mesh and against none. Every pair class the search
+  // splits is counted where it intersects, so each path is shown to find some.
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  for (auto& named : test::generated_meshes()) meshes.emplace_back(named.name, std::move(named.mesh));
+  for (const auto& path : test::valid_meshes()) {
+    Mesh mesh = read_mesh(path);
+    if (mesh.triangles.size() <= 6000) meshes.emplace_back(path.filename().string(), std::move(mesh));
+  }
+  std::mt19937_64 random(23);
+  std::size_t checked = 0, promise_broken = 0, intersecting = 0;
+  std::size_t new_moved_pairs = 0, new_exact_against_trusted_moved = 0;
+  for (const auto& [name, mesh] : meshes) {
+    INFO(name);
+    REQUIRE(validate_mesh(mesh).valid());
+    Vec3 low = mesh.positions[0], high = mesh.positions[0];
+    for (const Vec3& p : mesh.positions) {
+      low = {std::min(low.x, p.x), std::min(low.y, p.y), std::min(low.z, p.z)};
+      high = {std::max(high.x, p.x), std::max(high.y, p.y), std::max(high.z, p.z)};
+    }
+    const double size = std::sqrt(dot(high - low, high - low));
+    const TrustedTriangles original(mesh);
+    for (int draw = 0; draw < 24; ++draw) {
+      INFO("draw " << draw);
+      Mesh edited = mesh;
+      const std::size_t v = random() % edited.positions.size();
+      std::normal_distribution<double> normal;
+      const Vec3 direction = normalized(Vec3{normal(random), normal(random), normal(random)});
+      const double reach = size * std::ldexp(1.0, -static_cast<int>(random() % 8));  // size to size/128
+      edited.positions[v] = edited.positions[v] + direction * reach;
+      const double share = static_cast<double>(1 + random() % 9) / 10.0;  // of the other vertices flagged
+      std::vector<std::uint8_t> exact(edited.positions.size(), 0);
+      for (std::size_t w = 0; w < exact.size(); ++w) {
+        exact[w] = std::uniform_real_distribution<double>(0, 1)(random) < share;
+      }
+      exact[v] = random() % 2;
+      // The promise, by brute force: the all-flagged triangles among themselves.
+      const auto all_flagged = [&](const Triangle& t) { return exact[t[0]] && exact[t[1]] && exact[t[2]]; };
+      std::vector<Triangle> flagged;
+      for (const Triangle& t : edited.triangles) {
+        if (all_flagged(t)) flagged.push_back(t);
+      }
+      if (!self_intersecting_pairs(edited.positions, flagged).empty()) {
+        ++promise_broken;
+        continue;
+      }
+      ++checked;
+      // The flags change no report: the same as without them, and validate_mesh's
+      // validity (its very report when the only defects are crossings; another
+      // defect ends validate_mesh_against before its search, flags or not).
+      const ValidationReport reference = validate_mesh(edited);
+      const ValidationReport unflagged = validate_mesh_against(edited, &mesh);
+      const bool crossings_only = std::all_of(reference.defects.begin(), reference.defects.end(),
+                                              [](const Defect& d) { return d.kind == DefectKind::self_intersection; });
+      for (const ValidationReport& report :
+           {validate_mesh_against(edited, &mesh, nullptr, exact), validate_mesh_against(edited, original, nullptr, exact),
+            validate_mesh_against(edited, nullptr, nullptr, exact)}) {
+        CHECK(same_defects(report, unflagged));
+        CHECK(report.valid() == reference.valid());
+        if (crossings_only) CHECK(same_defects(report, reference));
+      }
+      const std::vector<TrianglePair> pairs = self_intersecting_pairs(edited.positions, edited.triangles);
+      if (pairs.empty()) continue;
+      ++intersecting;
+      for (const auto& [a, b] : pairs) {
+        const Triangle &s = edited.triangles[a], &t = edited.triangles[b];
+        const bool new_s = !original.contains(edited, s), new_t = !original.contains(edited, t);
+        const bool moved_s = !all_flagged(s), moved_t = !all_flagged(t);
+        if ((new_s && moved_s) || (new_t && moved_t)) {
+          ++new_moved_pairs;
+        } else if ((new_s && !moved_s && !new_t && moved_t) || (new_t && !moved_t && !new_s && moved_s)) {
+          ++new_exact_against_trusted_moved;
+        }
+      }
+    }
+  }
+  INFO("checked " << checked << ", promise broken " << promise_broken << ", intersecting " << intersecting);
+  CHECK(checked >= 3 * promise_broken);
+  CHECK(intersecting >= checked / 10);
+  CHECK(new_moved_pairs >= 100);
+  CHECK(new_exact_against_trusted_moved >= 20);
+  // One flag per vertex, or none.
+  const Mesh tetrahedron = corner_tetrahedron();
+  const std::vector<std::uint8_t> short_flags(3, 1);
+  CHECK_THROWS_AS(validate_mesh_against(tetrahedron, &tetrahedron, nullptr, short_flags), std::invalid_argument);
 }
 
 TEST_CASE("TrustedTriangles on grid coordinates finds exactly the triangles a sorted set of keys holds",

@@ -417,6 +417,10 @@ std::optional<RoundedSolid> round_merging_thin_strips(const PlaneSet& set, const
 // accepts every valid one, so the mesh written is the same either way), else
 // validate_knowing; or the topology alone (with vertices where the surface
 // touches itself allowed) for a solid accepted with self-intersections.
-ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& options);
+// `exact_vertices`: empty, or validate_mesh_against's flags (the vertices written
+// at their exact positions, when the mesh triangulates the embedded exact
+// solid's faces over them).
+ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& options,
+                                 std::span<const std::uint8_t> exact_vertices = {});
 
 }  // namespace shatter::rounding

@@ -100,9 +100,10 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
 /// the new triangle's plane by more than a bound on the rounding: first whether
 /// their projections along the largest normal component of one are apart (exact 2D
 /// orientations, which settle the nearly coplanar triangles of a flat face without
-/// exact arithmetic), then as CGAL's self_intersections tests them. Same report as
-/// validate_mesh (the self-intersection count counts only the pairs tested, and a
-/// skipped pair never intersects).
+/// exact arithmetic), then as CGAL's self_intersections tests them. The same
+/// validity as validate_mesh, and its report when the only defects are crossings
+/// (the self-intersection count counts only the pairs tested, and a skipped pair
+/// never intersects); any other defect is reported without the search.
 /// `near`: a plane the triangles not in `trusted` are known to lie along (a cut);
 /// only triangles within the slab of n·x + d values those span are then tested
 /// against them (a prefilter in doubles, widened by a bound on its rounding). The
@@ -110,9 +111,20 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
 /// largest |n_x x| + |n_y y| + |n_z z| + |d|) span a slab a few ulps thick, and
 /// are tested only against the triangles reaching that slab; the other new ones
 /// against their own slab.
+/// `exact_vertices`: empty, or one flag per vertex. The triangles whose three
+/// corners are flagged (and whose positions no other vertex shares) are known
+/// not to meet each other beyond what they share by index, and their pairs are
+/// not tested either. A caller flags the vertices written at their exact
+/// positions when the mesh triangulates an embedded exact solid's faces over
+/// them (round_solid's first rounding: every input vertex), so such a pair is
+/// two triangles of that solid's surface. A pair is then tested when one of its
+/// triangles is new and one has an unflagged corner: the new triangles with an
+/// unflagged corner against all the others (as above), and the new ones all
+/// flagged only against the trusted ones with an unflagged corner.
 /// Cost: O(T log T) plus the pairs of boxes that meet a tested triangle's box
 /// (about linear on the grid for triangles of similar size).
-ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near = nullptr);
+ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near = nullptr,
+                                       std::span<const std::uint8_t> exact_vertices = {});
 
 /// The triangles of a mesh by their three corner positions, turning the same
 /// way (any rotation), in a hash table for lookup in O(1) expected: what
@@ -158,7 +170,8 @@ class TrustedTrianglesOnce {
 
 /// validate_mesh_against with the trusted mesh's triangles indexed already; the
 /// same report.
-ValidationReport validate_mesh_against(const Mesh& mesh, const TrustedTriangles& trusted, const Plane* near = nullptr);
+ValidationReport validate_mesh_against(const Mesh& mesh, const TrustedTriangles& trusted, const Plane* near = nullptr,
+                                       std::span<const std::uint8_t> exact_vertices = {});
 
 /// validate_mesh for a mesh made of the triangles of several valid meshes
 /// (`parts`, each of which passed validate_mesh with the self-intersection
