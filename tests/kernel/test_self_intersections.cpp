@@ -146,9 +146,9 @@ std::size_t check_same_pairs_with(const std::string& name, const Mesh& mesh, std
 
 // A fine solid crossed by `count` long random triangles, and one more long one
 // sharing a vertex with the solid: the side path for boxes spanning many cells.
-Mesh crossed_by_long_triangles(std::mt19937_64& random, int count) {
+Mesh crossed_by_long_triangles(std::mt19937_64& random, int count, int slices = 30, int stacks = 20) {
   std::uniform_real_distribution<double> unit(-1, 1);
-  Mesh crossed = test::ellipsoid({0, 0, 0}, {1, 1, 1}, 30, 20);
+  Mesh crossed = test::ellipsoid({0, 0, 0}, {1, 1, 1}, slices, stacks);
   const auto base = static_cast<VertexIndex>(crossed.positions.size());
   for (int k = 0; k < count; ++k) {
     for (int c = 0; c < 3; ++c) crossed.positions.push_back({2 * unit(random), 2 * unit(random), 2 * unit(random)});
@@ -259,8 +259,11 @@ TEST_CASE("the grid finder of pairs with a tested triangle finds the box tree's 
         seed % 4 == 0);
     run("lattice soup" + tag, lattice_soup(random, 12 + seed, 40 + 5 * seed, 3, 1.0), true);
     run("fine lattice soup" + tag, lattice_soup(random, 60, 150, 6 + seed % 5, 0.125), true);
-    // Long triangles (the box-tree side path), tested or not as the draw falls.
+    // Long triangles (compared with every member's box, as a cut's few are),
+    // tested or not as the draw falls; and, every tenth seed, enough of them
+    // among enough members to go to the box tree (64 x 19,000 box tests).
     run("long triangles" + tag, crossed_by_long_triangles(random, 4), false);
+    if (seed % 10 == 0) run("many long triangles" + tag, crossed_by_long_triangles(random, 64, 120, 80), false);
   }
   // Real intersections were found (860 draws, 540 with pairs, 286,403 pairs).
   CHECK(checked >= 800);
