@@ -22,6 +22,7 @@
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/self_intersections.hpp"
 #include "shatter/kernel/validate.hpp"
+#include "support/sanitizers.hpp"
 
 using namespace shatter;
 
@@ -515,9 +516,12 @@ TEST_CASE("validate_mesh_against with exact vertices finds what validate_mesh fi
   // splits is counted where it intersects, so each path is shown to find some.
   std::vector<std::pair<std::string, Mesh>> meshes;
   for (auto& named : test::generated_meshes()) meshes.emplace_back(named.name, std::move(named.mesh));
+  // Smaller under the sanitizers (the library's checks run about 12 times slower).
+  const std::size_t largest = test::sized(6000, 2500);
+  const int draws = static_cast<int>(test::sized(24, 8));
   for (const auto& path : test::valid_meshes()) {
     Mesh mesh = read_mesh(path);
-    if (mesh.triangles.size() <= 6000) meshes.emplace_back(path.filename().string(), std::move(mesh));
+    if (mesh.triangles.size() <= largest) meshes.emplace_back(path.filename().string(), std::move(mesh));
   }
   std::mt19937_64 random(23);
   std::size_t checked = 0, promise_broken = 0, intersecting = 0;
@@ -532,7 +536,7 @@ TEST_CASE("validate_mesh_against with exact vertices finds what validate_mesh fi
     }
     const double size = std::sqrt(dot(high - low, high - low));
     const TrustedTriangles original(mesh);
-    for (int draw = 0; draw < 24; ++draw) {
+    for (int draw = 0; draw < draws; ++draw) {
       INFO("draw " << draw);
       Mesh edited = mesh;
       const std::size_t v = random() % edited.positions.size();
@@ -589,8 +593,8 @@ TEST_CASE("validate_mesh_against with exact vertices finds what validate_mesh fi
   INFO("checked " << checked << ", promise broken " << promise_broken << ", intersecting " << intersecting);
   CHECK(checked >= 3 * promise_broken);
   CHECK(intersecting >= checked / 10);
-  CHECK(new_moved_pairs >= 100);
-  CHECK(new_exact_against_trusted_moved >= 20);
+  CHECK(new_moved_pairs >= test::sized(100, 30));
+  CHECK(new_exact_against_trusted_moved >= test::sized(20, 5));
   // One flag per vertex, or none.
   const Mesh tetrahedron = corner_tetrahedron();
   const std::vector<std::uint8_t> short_flags(3, 1);

@@ -69,7 +69,8 @@ std::vector<TrianglePair> self_intersecting_pairs_by_box_tree(std::span<const Ve
 /// holding the low corner of the overlap of their float boxes rounded outward); a
 /// triangle that is not tested is entered only in the buckets a tested one
 /// occupies, and pairs of two untested triangles are never looked at. Members whose
-/// boxes span more than 64 cells go to CGAL's box intersection, as there. A
+/// boxes span more than 64 cells are compared with every member's box (when that
+/// is at most 2^20 box tests), or else go to CGAL's box intersection, as there. A
 /// candidate whose box lies beyond the tested triangle's plane (in doubles, past a
 /// bound on their rounding) is dropped before the exact test: it cannot meet it.
 /// Preconditions: as triangles_intersect, for every member.
