@@ -556,15 +556,6 @@ struct TriangleKeyEqual {
   }
 };
 
-// Marks as new (untrusted) every triangle with a corner whose position another
-// vertex of the mesh shares. A valid mesh has no two vertices at one position
-// (every vertex is used, and triangles around two vertices at one point meet
-// there beyond any element they share), so in a mesh's trusted triangles and in
-// the valid mesh they were found in, two corners are one vertex exactly when
-// they are at one position: a pair of trusted triangles then shares the same
-// corners in both, and triangles_intersect answers alike. Without this, two
-// coincident copies of a trusted triangle, over different vertices, would be
-// skipped as a trusted pair; so marked, they are tested (and found).
 // The vertices whose position another vertex has too (one flag per vertex), or
 // empty when every position is one vertex's.
 std::vector<std::uint8_t> shared_positions(const Mesh& mesh) {
@@ -585,8 +576,15 @@ std::vector<std::uint8_t> shared_positions(const Mesh& mesh) {
   return shared;
 }
 
-// A trusted triangle with a corner whose position another vertex has is tested
-// as a new one: the trusted mesh said nothing of that other vertex.
+// Marks as new (untrusted) every triangle with a corner whose position another
+// vertex of the mesh shares (`shared`, from shared_positions). A valid mesh has
+// no two vertices at one position (every vertex is used, and triangles around two
+// vertices at one point meet there beyond any element they share), so in a mesh's
+// trusted triangles and in the valid mesh they were found in, two corners are one
+// vertex exactly when they are at one position: a pair of trusted triangles then
+// shares the same corners in both, and triangles_intersect answers alike. Without
+// this, two coincident copies of a trusted triangle, over different vertices,
+// would be skipped as a trusted pair; so marked, they are tested (and found).
 void untrust_shared_positions(const Mesh& mesh, std::span<const std::uint8_t> shared, std::vector<std::uint8_t>& is_new) {
   if (shared.empty()) return;
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
@@ -673,6 +671,9 @@ std::vector<std::uint32_t> embedded_groups(const Mesh& mesh, const std::vector<s
 
 ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trusted, const Plane* near,
                                   std::span<const std::uint8_t> exact_vertices) {
+  if (!exact_vertices.empty() && exact_vertices.size() != mesh.positions.size()) {
+    throw std::invalid_argument("validate_mesh_against: exact_vertices must hold one flag per vertex");
+  }
   // A triangle of the trusted mesh is not flat: only the new ones are tested.
   std::vector<std::uint8_t> is_new(mesh.triangles.size(), 1);
   if (trusted) {
@@ -687,9 +688,6 @@ ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trus
   without.check_self_intersections = false;
   ValidationReport report = validate_masked(mesh, without, &is_new);
   if (!report.valid()) return report;
-  if (!exact_vertices.empty() && exact_vertices.size() != mesh.positions.size()) {
-    throw std::invalid_argument("validate_mesh_against: exact_vertices must hold one flag per vertex");
-  }
   const bool use_exact = !exact_vertices.empty();
   const std::vector<std::uint8_t> shared = trusted || use_exact ? shared_positions(mesh) : std::vector<std::uint8_t>{};
   if (trusted) untrust_shared_positions(mesh, shared, is_new);

@@ -115,12 +115,14 @@ ValidationReport validate_mesh(const Mesh& mesh, const ValidationOptions& option
 /// corners are flagged (and whose positions no other vertex shares) are known
 /// not to meet each other beyond what they share by index, and their pairs are
 /// not tested either. A caller flags the vertices written at their exact
-/// positions when the mesh triangulates an embedded exact solid's faces over
-/// them (round_solid's first rounding: every input vertex), so such a pair is
-/// two triangles of that solid's surface. A pair is then tested when one of its
-/// triangles is new and one has an unflagged corner: the new triangles with an
-/// unflagged corner against all the others (as above), and the new ones all
-/// flagged only against the trusted ones with an unflagged corner.
+/// positions where the mesh triangulates faces of an exact solid that meet only
+/// in what they share (round_solid's first rounding: the input vertices on no
+/// cap), so such a pair is two triangles of that surface. A pair is then tested
+/// when one of its triangles is new and one has an unflagged corner: the new
+/// triangles with an unflagged corner against all the others (as above), and
+/// the new ones all flagged only against the trusted ones with an unflagged
+/// corner. Throws std::invalid_argument when `exact_vertices` is neither empty
+/// nor one flag per vertex (checked before anything else).
 /// Cost: O(T log T) plus the pairs of boxes that meet a tested triangle's box
 /// (about linear on the grid for triangles of similar size).
 ValidationReport validate_mesh_against(const Mesh& mesh, const Mesh* trusted, const Plane* near = nullptr,
