@@ -6,10 +6,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <span>
 #include <stdexcept>
+#include <vector>
 
 #include "shatter/kernel/certify.hpp"
 #include "shatter/kernel/error.hpp"
+#include "shatter/kernel/face_loops.hpp"
 #include "shatter/kernel/non_manifold.hpp"
 #include "shatter/kernel/self_intersections.hpp"
 #include "shatter/kernel/snap_predicates.hpp"
@@ -47,6 +50,34 @@ ValidationReport validate_knowing(const Mesh& mesh, const SolidMeshOptions& opti
     return validate_mesh_against(mesh, options.trusted_triangles->get(), options.cut, exact_vertices);
   }
   return validate_mesh_against(mesh, options.trusted, options.cut, exact_vertices);
+}
+
+// validate_mesh_against's exact vertices for a mesh that triangulates `solid`'s
+// faces over their own vertices, no two merged (`mesh_vertex_of`: each solid
+// vertex's mesh vertex, or no_index): every input vertex on no cap. Each face's
+// triangles are then exactly counter-clockwise over exactly its region, and an
+// input vertex is written where it is. The solid's input faces are parts of the
+// valid input's surface, which meet only in what they share (a vertex a pinch
+// split in two is one position again: merged); a cut may make a solid touch
+// itself, but only on a cap (a cap through a face, an edge or a vertex on its
+// plane, which the rounding then separates). So two triangles whose corners are
+// all flagged meet only in what they share. (Flagging the caps' input vertices
+// too failed test_split's nested islands: a cap through an island's edge.)
+std::vector<std::uint8_t> exact_input_vertices(const Solid& solid, std::span<const VertexIndex> mesh_vertex_of,
+                                               std::size_t mesh_vertex_count) {
+  std::vector<std::uint8_t> exact(mesh_vertex_count, 0);
+  for (VertexIndex v = 0; v < solid.defs.size(); ++v) {
+    if (solid.defs[v].kind == PointKind::input && mesh_vertex_of[v] != no_index) exact[mesh_vertex_of[v]] = 1;
+  }
+  for (const SolidFace& face : solid.faces) {
+    if (face.surface == original_surface) continue;
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+      for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
+        if (mesh_vertex_of[edge.from] != no_index) exact[mesh_vertex_of[edge.from]] = 0;
+      }
+    }
+  }
+  return exact;
 }
 
 }  // namespace
@@ -238,35 +269,11 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
       result.valid = true;
       return result;
     } else {
-      // The first rounding, no two vertices merged, triangulates the exact
-      // solid's faces over their own vertices (each face's triangles exactly
-      // counter-clockwise over exactly its region), and the input vertices are
-      // written where they are. The exact solid's input faces are parts of the
-      // valid input's surface, which meet only in what they share (a vertex a
-      // pinch split in two is merged back, merged > 0); a cut may make the solid
-      // touch itself, but only on a cap (a cap meeting a face or an edge on its
-      // plane, which the rounding separates below): so the input vertices on no
-      // cap are exact in validate_mesh_against's sense. (Flagging the cap's
-      // input vertices too failed test_split's nested islands: a cap through an
-      // island's edge.)
-      std::vector<std::uint8_t> exact_vertices;
-      if (step == 0 && merged == 0) {
-        exact_vertices.assign(mesh.positions.size(), 0);
-        for (VertexIndex v = 0; v < solid.defs.size(); ++v) {
-          if (solid.defs[v].kind == PointKind::input && mesh_vertex_of[v] != no_index) {
-            exact_vertices[mesh_vertex_of[v]] = 1;
-          }
-        }
-        for (const SolidFace& face : solid.faces) {
-          if (face.surface == original_surface) continue;
-          for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-            for (std::uint32_t i = 0; i < solid.loops[l].corner_count; ++i) {
-              const VertexIndex v = solid.corners[solid.loops[l].first_corner + i].vertex;
-              if (mesh_vertex_of[v] != no_index) exact_vertices[mesh_vertex_of[v]] = 0;
-            }
-          }
-        }
-      }
+      // Only the first rounding triangulates the exact solid's faces over their
+      // own vertices, and only with none merged are they all apart.
+      const std::vector<std::uint8_t> exact_vertices =
+          step == 0 && merged == 0 ? exact_input_vertices(solid, mesh_vertex_of, mesh.positions.size())
+                                   : std::vector<std::uint8_t>{};
       report = certify_rounded(mesh, options, exact_vertices);
       if (mesh.triangles.empty()) {
         // Every vertex rounded onto a few points and the whole piece flattened
