@@ -789,32 +789,24 @@ std::vector<TrianglePair> intersecting_pairs_with(std::span<const Vec3> position
   // The long members: a tested long one against every member (two tested long
   // ones once), an untested long one against the tested members in the grid
   // (the tested long ones found it already). A few long ones (a cut's pieces
-  // have at most some dozens) are compared with every member's float box
-  // directly; more go to the box tree, whose set-up costs every member's box.
-  // Either way every pair whose boxes meet is offered to `report`.
+  // have few) are compared with every member's float box directly; more go to
+  // the box tree, whose set-up costs every member's box. Either way every pair
+  // whose boxes meet is offered to `report`.
   std::vector<std::uint32_t> long_members;
-  std::size_t gridded_tested_count = 0;
-  for (std::size_t k = 0; k < count; ++k) {
-    if (is_large[k]) {
-      long_members.push_back(static_cast<std::uint32_t>(k));
-    } else if (member_tested[k]) {
-      ++gridded_tested_count;
+  if (any_large) {
+    for (std::size_t k = 0; k < count; ++k) {
+      if (is_large[k]) long_members.push_back(static_cast<std::uint32_t>(k));
     }
   }
   constexpr std::size_t most_box_tests_by_scan = std::size_t{1} << 20;
-  if (any_large && long_members.size() * count <= most_box_tests_by_scan) {
+  const bool scan = long_members.size() * count <= most_box_tests_by_scan;
+  if (any_large && scan) {
     for (const std::uint32_t s : long_members) {
       const FloatBox& box_s = boxes[s];
-      if (member_tested[s]) {
-        for (std::size_t t = 0; t < count; ++t) {
-          if (t == s || (is_large[t] && member_tested[t] && t < s)) continue;
-          if (boxes_meet(box_s, boxes[t])) report(s, t);
-        }
-      } else if (gridded_tested_count > 0) {
-        for (std::size_t t = 0; t < count; ++t) {
-          if (is_large[t] || !member_tested[t]) continue;
-          if (boxes_meet(box_s, boxes[t])) report(s, t);
-        }
+      for (std::size_t t = 0; t < count; ++t) {
+        const bool offered = member_tested[s] ? t != s && !(is_large[t] && member_tested[t] && t < s)
+                                              : !is_large[t] && member_tested[t];
+        if (offered && boxes_meet(box_s, boxes[t])) report(s, t);
       }
     }
   } else if (any_large) {

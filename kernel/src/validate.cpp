@@ -706,10 +706,12 @@ ValidationReport validate_against(const Mesh& mesh, const TrustedTriangles* trus
       }
     }
   }
-  std::vector<std::uint8_t> tested = is_new;
+  std::vector<std::uint8_t> new_and_moved;
   if (use_exact) {
-    for (std::size_t t = 0; t < tested.size(); ++t) tested[t] &= moved[t];
+    new_and_moved = is_new;
+    for (std::size_t t = 0; t < new_and_moved.size(); ++t) new_and_moved[t] &= moved[t];
   }
+  const std::vector<std::uint8_t>& tested = use_exact ? new_and_moved : is_new;
   std::vector<std::uint32_t> all;  // the triangles searched
   all.reserve(mesh.triangles.size());
   // With a plane the new triangles lie along, only triangles within the slab the

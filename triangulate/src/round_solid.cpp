@@ -82,8 +82,7 @@ std::vector<std::uint8_t> exact_input_vertices(const Solid& solid, std::span<con
 
 }  // namespace
 
-ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& options,
-                                 std::span<const std::uint8_t> exact_vertices) {
+ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& options, const ExactVertexSource* exact) {
   if (!options.allow_self_intersections) {
     if (certify_piece(mesh)) {
       ValidationReport certified;
@@ -92,6 +91,9 @@ ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& optio
       certified.self_intersections_checked = true;
       return certified;
     }
+    const std::vector<std::uint8_t> exact_vertices =
+        exact != nullptr ? exact_input_vertices(exact->solid, exact->mesh_vertex_of, mesh.positions.size())
+                         : std::vector<std::uint8_t>{};
     return validate_knowing(mesh, options, exact_vertices);
   }
   ValidationOptions topology_only;
@@ -271,10 +273,8 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
     } else {
       // Only the first rounding triangulates the exact solid's faces over their
       // own vertices, and only with none merged are they all apart.
-      const std::vector<std::uint8_t> exact_vertices =
-          step == 0 && merged == 0 ? exact_input_vertices(solid, mesh_vertex_of, mesh.positions.size())
-                                   : std::vector<std::uint8_t>{};
-      report = certify_rounded(mesh, options, exact_vertices);
+      const ExactVertexSource source{solid, mesh_vertex_of};
+      report = certify_rounded(mesh, options, step == 0 && merged == 0 ? &source : nullptr);
       if (mesh.triangles.empty()) {
         // Every vertex rounded onto a few points and the whole piece flattened
         // away: no defect is left to name, but nothing is left either.

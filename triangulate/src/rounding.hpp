@@ -417,10 +417,17 @@ std::optional<RoundedSolid> round_merging_thin_strips(const PlaneSet& set, const
 // accepts every valid one, so the mesh written is the same either way), else
 // validate_knowing; or the topology alone (with vertices where the surface
 // touches itself allowed) for a solid accepted with self-intersections.
-// `exact_vertices`: empty, or validate_mesh_against's flags (the vertices written
-// at their exact positions, when the mesh triangulates the embedded exact
-// solid's faces over them).
+// A mesh triangulating `solid`'s faces over their own vertices, none merged
+// (round_solid's first rounding), with each solid vertex's mesh vertex (or
+// no_index): what certify_rounded flags validate_mesh_against's exact vertices
+// from (exact_input_vertices in round_solid.cpp says which and why).
+struct ExactVertexSource {
+  const Solid& solid;
+  std::span<const VertexIndex> mesh_vertex_of;
+};
+// `exact`: nullptr, or where the mesh came from; its flags are made only when
+// the full check runs (certify_piece certifies most pieces without them).
 ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& options,
-                                 std::span<const std::uint8_t> exact_vertices = {});
+                                 const ExactVertexSource* exact = nullptr);
 
 }  // namespace shatter::rounding
