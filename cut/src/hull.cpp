@@ -66,6 +66,19 @@ bool lexicographically_less(const Vec3& a, const Vec3& b) {
   return a.z < b.z;
 }
 
+// The order of the point hull's input: lexicographic by value, and among
+// points equal by value (-0 and +0 in some coordinate) the one with the
+// negative zero first, coordinate by coordinate. Each point is then kept once
+// as the least of its equals, whatever order the points came in: by value
+// alone, which of them was kept, and so the hull's bits, followed the input order.
+bool less_in_value_then_bits(const Vec3& a, const Vec3& b) {
+  if (lexicographically_less(a, b)) return true;
+  if (lexicographically_less(b, a)) return false;
+  if (std::signbit(a.x) != std::signbit(b.x)) return std::signbit(a.x);
+  if (std::signbit(a.y) != std::signbit(b.y)) return std::signbit(a.y);
+  return std::signbit(a.z) && !std::signbit(b.z);
+}
+
 // The strictly convex corners of a facet, counter-clockwise seen from outside
 // (the side `outward`, one of its triangles, faces). The facet is projected by
 // dropping a coordinate, tried in the order the rounded normal suggests; the
@@ -513,8 +526,8 @@ Mesh convex_hull_of_points(std::span<const Vec3> input) {
   // Duplicates removed first (a node's points repeat the vertices its children
   // share); the sort also makes the hull's work independent of the input order.
   std::vector<Vec3> points(input.begin(), input.end());
-  std::sort(points.begin(), points.end(), lexicographically_less);
-  points.erase(std::unique(points.begin(), points.end()), points.end());
+  std::sort(points.begin(), points.end(), less_in_value_then_bits);
+  points.erase(std::unique(points.begin(), points.end()), points.end());  // equal by value: the first kept
   const Quickhull hull(points);
   return canonical_hull(points, hull.surface(), true);
 }

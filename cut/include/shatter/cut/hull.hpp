@@ -30,7 +30,8 @@ Mesh convex_hull_of(const Mesh& mesh);
 /// Preconditions: finite points that span a volume (four of them not coplanar).
 /// Guarantees: every input point lies inside the hull or on it, exactly; the hull
 /// is closed, convex and outward; equal point sets (in any order, with any
-/// repetitions) give equal meshes.
+/// repetitions) give equal meshes, to the bit (of points equal in value but for
+/// the sign of a zero, the one with negative zeros first is kept).
 /// Failure: std::invalid_argument when the points are all coplanar (or fewer
 /// than four distinct).
 Mesh convex_hull_of_points(std::span<const Vec3> points);
