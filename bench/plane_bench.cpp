@@ -141,6 +141,7 @@ struct Options {
   std::string node = "node";
   fs::path shatter_exe = SHATTER_EXE;  ///< the command timed end to end
   bool no_end_to_end = false;
+  bool two_threads = false;  ///< also time `fracture --threads 2` against 1 thread, paired
   double manifold_timeout = 300;
   std::optional<int> manifold_repeat;
   bool no_manifold = false;
@@ -707,12 +708,24 @@ struct EndToEnd {
   std::uintmax_t file_bytes = 0;
 };
 
+/// `shatter fracture` on 2 threads against 1, run in turn (1, 2, 1, 2, ...) so
+/// that the ratio of each pair sees the same machine.
+struct ThreadPair {
+  bool ok = false;
+  std::string why;  ///< why not run, or how it failed
+  double one_seconds = not_measured, two_seconds = not_measured;  ///< medians
+  double speedup = not_measured;  ///< median over the pairs of 1-thread seconds / 2-thread seconds
+  int pairs = 0;
+  bool identical = false;  ///< every pair's two files equal byte for byte
+};
+
 struct Row {
   std::string id;
   const Input* input = nullptr;
   std::uint32_t fragments = 0;
   Timed full;
   EndToEnd command;
+  ThreadPair threads;
   std::optional<Timed> half;  ///< the build to N/2, for the last level's splits
   ManifoldResult manifold;
   std::string cgal_skipped;   ///< why the CGAL replay was not run, if not
@@ -823,9 +836,57 @@ class OffFiles {
   std::map<std::string, fs::path> paths_;
 };
 
-/// Runs `shatter fracture OFF --fragments N --seed S --threads 1 --out TMP` as a
-/// child process until `repeat` is met, timing each run's wall clock around the
-/// whole process; the file it wrote is measured and removed.
+/// One run of `shatter fracture OFF --fragments N --seed S --threads T --out OUT`
+/// as a child process, its wall clock taken around the whole process.
+struct FractureRun {
+  bool ok = false;
+  std::string why;  ///< how it failed
+  double seconds = not_measured;
+  double peak_mb = not_measured;  ///< the child's ru_maxrss
+};
+
+FractureRun run_fracture(const Options& o, const fs::path& off, std::uint32_t fragments, int threads, const fs::path& out) {
+  FractureRun run;
+  std::vector<std::string> args{o.shatter_exe.string(), "fracture",   off.string(),   "--fragments",
+                                std::to_string(fragments), "--seed", std::to_string(o.seed), "--threads",
+                                std::to_string(threads),    "--out",  out.string()};
+  const auto started = Clock::now();
+  const pid_t pid = fork_flushed();
+  if (pid == 0) {
+    const int devnull = ::open("/dev/null", O_RDWR);
+    if (devnull >= 0) {
+      ::dup2(devnull, 0);
+      ::dup2(devnull, 1);
+      ::dup2(devnull, 2);
+    }
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  int status = 0;
+  rusage usage{};
+  while (::wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
+  }
+  run.seconds = seconds_between(started, Clock::now());
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    run.why = "shatter fracture --threads " + std::to_string(threads) + " failed (" +
+              (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
+                                 : "signal " + std::to_string(WTERMSIG(status))) + ")";
+    return run;
+  }
+  run.ok = true;
+  run.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
+  return run;
+}
+
+fs::path temporary_output(const std::string& tag) {
+  return fs::temp_directory_path() / ("shatter-bench-plane-" + std::to_string(::getpid()) + tag + ".shatter");
+}
+
+/// Runs `shatter fracture` on 1 thread until `repeat` is met; the file it wrote
+/// is measured and removed.
 EndToEnd time_fracture_command(const Options& o, const fs::path& off, std::uint32_t fragments,
                                const Repeat& repeat) {
   EndToEnd result;
@@ -833,55 +894,82 @@ EndToEnd time_fracture_command(const Options& o, const fs::path& off, std::uint3
     result.why = o.shatter_exe.string() + " not found";
     return result;
   }
-  const fs::path out = fs::temp_directory_path() / ("shatter-bench-plane-" + std::to_string(::getpid()) + ".shatter");
-  std::vector<std::string> args{o.shatter_exe.string(), "fracture",   off.string(),   "--fragments",
-                                std::to_string(fragments), "--seed", std::to_string(o.seed), "--threads",
-                                "1",                        "--out",  out.string()};
+  const fs::path out = temporary_output("");
   std::vector<double> times;
   double total = 0, peak_mb = 0;
+  std::error_code ignored;
   while (static_cast<int>(times.size()) < repeat.max_runs) {
-    const auto started = Clock::now();
-    const pid_t pid = fork_flushed();
-    if (pid == 0) {
-      const int devnull = ::open("/dev/null", O_RDWR);
-      if (devnull >= 0) {
-        ::dup2(devnull, 0);
-        ::dup2(devnull, 1);
-        ::dup2(devnull, 2);
-      }
-      std::vector<char*> argv;
-      for (std::string& a : args) argv.push_back(a.data());
-      argv.push_back(nullptr);
-      ::execv(argv[0], argv.data());
-      ::_exit(127);
-    }
-    int status = 0;
-    rusage usage{};
-    while (::wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
-    }
-    const double seconds = seconds_between(started, Clock::now());
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-      result.why = "shatter fracture failed (" +
-                   (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
-                                      : "signal " + std::to_string(WTERMSIG(status))) + ")";
-      std::error_code ignored;
+    const FractureRun run = run_fracture(o, off, fragments, 1, out);
+    if (!run.ok) {
+      result.why = run.why;
       fs::remove(out, ignored);
       return result;
     }
-    peak_mb = std::max(peak_mb, static_cast<double>(usage.ru_maxrss) / 1024.0);
+    peak_mb = std::max(peak_mb, run.peak_mb);
     std::error_code size_error;
     result.file_bytes = fs::file_size(out, size_error);
-    times.push_back(seconds);
-    total += seconds;
-    if (seconds > repeat.no_repeat_seconds) break;
+    times.push_back(run.seconds);
+    total += run.seconds;
+    if (run.seconds > repeat.no_repeat_seconds) break;
     if (static_cast<int>(times.size()) >= repeat.min_runs && total >= repeat.min_total_seconds) break;
   }
-  std::error_code ignored;
   fs::remove(out, ignored);
   result.ok = true;
   result.peak_mb = peak_mb;
   result.runs = static_cast<int>(times.size());
   result.seconds = median_of(times);
+  return result;
+}
+
+/// Whether two files hold the same bytes.
+bool same_file_bytes(const fs::path& a, const fs::path& b) {
+  std::ifstream in_a(a, std::ios::binary), in_b(b, std::ios::binary);
+  if (!in_a || !in_b) return false;
+  std::vector<char> block_a(1 << 16), block_b(1 << 16);
+  while (true) {
+    in_a.read(block_a.data(), static_cast<std::streamsize>(block_a.size()));
+    in_b.read(block_b.data(), static_cast<std::streamsize>(block_b.size()));
+    if (in_a.gcount() != in_b.gcount()) return false;
+    if (!std::equal(block_a.begin(), block_a.begin() + in_a.gcount(), block_b.begin())) return false;
+    if (in_a.gcount() == 0 || !in_a) return !in_b || in_b.peek() == EOF;
+  }
+}
+
+/// `shatter fracture` on 1 and on 2 threads in turn, pairs until `repeat` is met
+/// (counting pairs as runs, at least 3 pairs), each pair's files compared byte
+/// for byte.
+ThreadPair time_thread_pair(const Options& o, const fs::path& off, std::uint32_t fragments, const Repeat& repeat) {
+  ThreadPair result;
+  const fs::path one = temporary_output("-1"), two = temporary_output("-2");
+  std::vector<double> one_times, two_times, ratios;
+  double total = 0;
+  bool identical = true;
+  std::error_code ignored;
+  while (static_cast<int>(ratios.size()) < repeat.max_runs) {
+    const FractureRun a = run_fracture(o, off, fragments, 1, one);
+    const FractureRun b = a.ok ? run_fracture(o, off, fragments, 2, two) : FractureRun{};
+    if (!a.ok || !b.ok) {
+      result.why = a.ok ? b.why : a.why;
+      fs::remove(one, ignored);
+      fs::remove(two, ignored);
+      return result;
+    }
+    identical = identical && same_file_bytes(one, two);
+    one_times.push_back(a.seconds);
+    two_times.push_back(b.seconds);
+    ratios.push_back(a.seconds / b.seconds);
+    total += a.seconds + b.seconds;
+    if (a.seconds > repeat.no_repeat_seconds) break;
+    if (static_cast<int>(ratios.size()) >= std::max(3, repeat.min_runs) && total >= repeat.min_total_seconds) break;
+  }
+  fs::remove(one, ignored);
+  fs::remove(two, ignored);
+  result.ok = true;
+  result.one_seconds = median_of(one_times);
+  result.two_seconds = median_of(two_times);
+  result.speedup = median_of(ratios);
+  result.pairs = static_cast<int>(ratios.size());
+  result.identical = identical;
   return result;
 }
 
@@ -934,6 +1022,22 @@ Row run_row(const RowSpec& spec, const Input& input, const Options& o, const Rep
     if (!row.command.ok) {
       row.failed = true;
       row.add_note(row.command.why);
+    }
+  }
+  if (!o.two_threads) {
+    row.threads.why = "not run (no --two-threads)";
+  } else if (o.no_end_to_end || !row.full.ok || !row.command.ok) {
+    row.threads.why = "not run";
+  } else {
+    std::cerr << "; 1 vs 2 threads" << std::flush;
+    row.threads = time_thread_pair(o, files.get(input), spec.fragments, repeat);
+    std::cerr << " " << (row.threads.ok ? ratio_text(row.threads.speedup) + "x" : row.threads.why) << std::flush;
+    if (!row.threads.ok) {
+      row.failed = true;
+      row.add_note(row.threads.why);
+    } else if (!row.threads.identical) {
+      row.failed = true;
+      row.add_note("the 2-thread file differs from the 1-thread file");
     }
   }
   if (o.no_peers || o.no_manifold) {
@@ -1033,6 +1137,16 @@ std::vector<Verdict> judge(const std::vector<Row>& rows) {
                                   : "missed by " + std::to_string(f.invalid) + " invalid leaves";
     }
     out.push_back(v);
+  }
+  for (const Row& r : rows) {
+    if (!r.threads.ok) continue;
+    const ThreadPair& t = r.threads;
+    out.push_back({"2 threads ≥ 1.8× one thread end to end, same bytes", r.id,
+                   ratio_text(t.speedup) + "× (" + seconds_text(t.one_seconds) + " s / " + seconds_text(t.two_seconds) +
+                       " s)" + (t.identical ? "" : ", files differ"),
+                   !t.identical        ? "missed: the files differ"
+                   : t.speedup >= 1.8 ? "met"
+                                      : "missed by a factor " + ratio_text(1.8 / t.speedup)});
   }
   if (const Row* r = find_row(rows, "cube", 65536)) {
     Verdict v{"leaves carry no more triangles than Manifold's (same run)", r->id, "", ""};
@@ -1166,6 +1280,25 @@ void print_tables(std::ostream& out, const std::vector<Row>& rows, const std::ve
         << " | " << ratio_text(r.cgal_ratio_to_cutting()) << " | " << cgal_status(r) << " |\n";
   }
 
+  if (std::any_of(rows.begin(), rows.end(), [](const Row& r) { return r.threads.ok; })) {
+    out << "\n### `shatter fracture` on 2 threads against 1 (--two-threads)\n\n"
+        << "| row | pairs | 1 thread s | 2 threads s | speed-up (median of the pairs) | files identical |\n"
+        << "|---|---:|---:|---:|---:|---|\n";
+    for (const Row& r : rows) {
+      const ThreadPair& t = r.threads;
+      if (!t.ok) {
+        out << "| " << r.id << " | – | – | – | – | " << t.why << " |\n";
+        continue;
+      }
+      out << "| " << r.id << " | " << t.pairs << " | " << seconds_text(t.one_seconds) << " | "
+          << seconds_text(t.two_seconds) << " | " << ratio_text(t.speedup) << " | " << (t.identical ? "yes" : "NO")
+          << " |\n";
+    }
+    out << "\nThe two commands run in turn, 1 thread then 2, and each pair's ratio is taken before the median, so a "
+           "drift in the machine's speed moves both sides of a ratio alike. Issue 18's target: at least 1.8, files "
+           "identical.\n";
+  }
+
   // The WASM caveat, with this run's figures against the native ones.
   std::string version;
   for (const Row& r : rows)
@@ -1217,7 +1350,8 @@ void write_csv(const fs::path& path, const std::vector<Row>& rows, std::uint64_t
       "manifold_wasm_heap_mb,manifold_over_shatter,leaf_triangles_over_manifold,cgal_status,cgal_seconds,"
       "cgal_over_shatter,cgal_over_cutting,cgal_nodes_done,cgal_internal_nodes,cgal_pieces,cgal_invalid,"
       "cgal_missing,fracture_seconds,fracture_runs,fracture_peak_rss_mb,shatter_file_bytes,"
-      "manifold_over_fracture,failed,note");
+      "manifold_over_fracture,two_thread_pairs,fracture_1_thread_seconds,fracture_2_threads_seconds,"
+      "two_thread_speedup,two_thread_files_identical,failed,note");
   for (const Row& r : rows) {
     const BuildRun& f = r.full.first;
     const bool ok = r.full.ok;
@@ -1260,6 +1394,13 @@ void write_csv(const fs::path& path, const std::vector<Row>& rows, std::uint64_t
     const EndToEnd& c = r.command;
     csv.field(c.ok ? c.seconds : not_measured).field_if(c.ok, c.runs).field(c.ok ? c.peak_mb : not_measured);
     csv.field_if(c.ok, c.file_bytes).field(r.manifold_ratio_end_to_end());
+    const ThreadPair& t = r.threads;
+    csv.field_if(t.ok, t.pairs).field(t.one_seconds).field(t.two_seconds).field(t.speedup);
+    if (t.ok) {
+      csv.field(t.identical);
+    } else {
+      csv.empty(1);
+    }
     std::string note = r.note;
     if (!m.ok() && !m.detail.empty()) note += (note.empty() ? "" : "; ") + ("Manifold: " + m.detail);
     if (m.ok() && !m.detail.empty()) note += (note.empty() ? "" : "; ") + ("Manifold: " + m.detail);
@@ -1315,6 +1456,10 @@ int parse(int argc, char** argv, Options& o) {
   app.add_option("--shatter", o.shatter_exe, "The shatter executable timed end to end (fracture, 1 thread)")
       ->capture_default_str();
   app.add_flag("--no-end-to-end", o.no_end_to_end, "Skip timing the shatter fracture command");
+  app.add_flag("--two-threads", o.two_threads,
+               "Also run shatter fracture on 2 threads and on 1 in turn (at least 3 pairs; 1 with --quick), report the median "
+               "speed-up of the pairs and whether each pair's files are identical byte for byte (a row whose files "
+               "differ fails)");
   app.add_option("--peer-timeout", o.peer_timeout, "Wall-clock limit of one CGAL replay, seconds")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
