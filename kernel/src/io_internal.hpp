@@ -35,6 +35,23 @@ struct TriangleSoup {
 /// refuse non-finite coordinates where they can still name the vertex.
 Mesh weld(TriangleSoup soup);
 
+/// A soup whose corners index a file's own vertex list (OFF, PLY and OBJ
+/// faces do): corner c of triangle t is vertex corner_vertices[3t + c] of
+/// `positions`. Indices are in range (the readers refuse others).
+struct IndexedSoup {
+  std::vector<Vec3> positions;  ///< the file's vertices, in its order
+  std::vector<std::size_t> corner_vertices;
+  CornerAttributes corners;
+
+  std::size_t triangle_count() const { return corner_vertices.size() / 3; }
+};
+
+/// weld of the TriangleSoup whose corner c lies at positions[corner_vertices[c]]:
+/// the same mesh to the bit (vertices numbered by first use, each keeping the
+/// bits of its first corner, the same refusals), looking each file vertex up
+/// once instead of each corner, and without copying a position per corner.
+Mesh weld(IndexedSoup soup);
+
 /// The corners (a, b, c) of each triangle of a polygon over `corners` (its
 /// positions, in the file's order), each triangle in the polygon's orientation.
 /// The fan (0, 1, 2), (0, 2, 3), ... whenever every fan triangle turns the way

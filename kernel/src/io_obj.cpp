@@ -175,7 +175,7 @@ bool channel_present(const std::vector<bool>& corner_has, const ObjContent& cont
 }  // namespace
 
 Mesh read_obj(std::string_view bytes, std::vector<std::string>& warnings) {
-  const ObjContent content = scan_lines(bytes);
+  ObjContent content = scan_lines(bytes);  // its positions move into the soup at the end
 
   tinyobj::ObjReaderConfig config;
   config.triangulate = false;  // fanned below, identically to the other formats
@@ -208,7 +208,7 @@ Mesh read_obj(std::string_view bytes, std::vector<std::string>& warnings) {
   const bool wants_uvs = channel_present(content.corner_has_uv, content, "texture coordinate", warnings);
   const bool wants_normals = channel_present(content.corner_has_normal, content, "normal", warnings);
 
-  TriangleSoup soup;
+  IndexedSoup soup;
   std::size_t first_corner = 0;
   for (std::size_t face_number = 0; face_number < content.faces.size(); ++face_number) {
     const ObjContent::Face& face = content.faces[face_number];
@@ -229,11 +229,12 @@ Mesh read_obj(std::string_view bytes, std::vector<std::string>& warnings) {
         face.corner_count,
         [&](std::size_t k) { return content.positions[static_cast<std::size_t>(corners[k].vertex_index)]; },
         [&](std::size_t k) {
-      soup.corner_positions.push_back(content.positions[static_cast<std::size_t>(corners[k].vertex_index)]);
+      soup.corner_vertices.push_back(static_cast<std::size_t>(corners[k].vertex_index));
       if (wants_uvs) soup.corners.uvs.push_back(content.uvs[static_cast<std::size_t>(corners[k].texcoord_index)]);
       if (wants_normals) soup.corners.normals.push_back(content.normals[static_cast<std::size_t>(corners[k].normal_index)]);
     });
   }
+  soup.positions = std::move(content.positions);
   return weld(std::move(soup));
 }
 

@@ -112,8 +112,8 @@ Mesh read_off(std::string_view bytes, std::vector<std::string>& warnings) {
     positions.push_back(position);
   }
 
-  TriangleSoup soup;
-  soup.corner_positions.reserve(3 * reserve_bound(face_count, bytes.size(), 8));
+  IndexedSoup soup;
+  soup.corner_vertices.reserve(3 * reserve_bound(face_count, bytes.size(), 8));
   std::vector<std::size_t> polygon;
   for (std::uint64_t face = 0; face < face_count; ++face) {
     if (!lines.next(tokens)) {
@@ -140,7 +140,7 @@ Mesh read_off(std::string_view bytes, std::vector<std::string>& warnings) {
     }
     triangulate_polygon(
         polygon.size(), [&](std::size_t k) { return positions[polygon[k]]; },
-        [&](std::size_t k) { soup.corner_positions.push_back(positions[polygon[k]]); });
+        [&](std::size_t k) { soup.corner_vertices.push_back(polygon[k]); });
   }
   // Face lines past the header's count (CGAL's prim.off: 8 under a header of 7).
   // The header's count is what the format defines and what other readers take
@@ -165,6 +165,7 @@ Mesh read_off(std::string_view bytes, std::vector<std::string>& warnings) {
                        " after the header's " + std::to_string(face_count) + " faces skipped (from line " +
                        std::to_string(first_extra_line) + "); the header's count is read, as other readers do");
   }
+  soup.positions = std::move(positions);
   return weld(std::move(soup));
 }
 

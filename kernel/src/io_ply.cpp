@@ -383,18 +383,19 @@ Mesh read_ply(std::string_view bytes, std::vector<std::string>& warnings) {
   }
   if (!reader.at_end()) refuse("PLY file has data after its last element");
 
-  TriangleSoup soup;
+  IndexedSoup soup;
   std::size_t first = 0;
   for (const std::size_t corner_count : faces.corner_counts) {
     const std::size_t* polygon = faces.indices.data() + first;
     first += corner_count;
     triangulate_polygon(corner_count, [&](std::size_t k) { return positions[polygon[k]]; }, [&](std::size_t k) {
       const std::size_t vertex = polygon[k];
-      soup.corner_positions.push_back(positions[vertex]);
+      soup.corner_vertices.push_back(vertex);
       if (!normals.empty()) soup.corners.normals.push_back(normals[vertex]);
       if (!uvs.empty()) soup.corners.uvs.push_back(uvs[vertex]);
     });
   }
+  soup.positions = std::move(positions);
   return weld(std::move(soup));
 }
 

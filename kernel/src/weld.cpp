@@ -93,4 +93,38 @@ Mesh weld(TriangleSoup soup) {
   return mesh;
 }
 
+Mesh weld(IndexedSoup soup) {
+  if (soup.corner_vertices.empty()) refuse("the file holds no faces");
+  Mesh mesh;
+  const std::size_t corner_count = soup.corner_vertices.size();
+  mesh.triangles.resize(soup.triangle_count());
+  mesh.surfaces.assign(soup.triangle_count(), original_surface);
+
+  // Each file vertex's welded vertex, found at its first corner: the lookup the
+  // soup's weld makes there. Its later corners would find the same vertex
+  // (the table only grows), so they take it from here.
+  std::vector<VertexIndex> welded(soup.positions.size(), VertexTable::empty);
+  VertexTable vertex_of(std::min(corner_count / 4, soup.positions.size()));
+  mesh.positions.reserve(std::min(corner_count / 4, soup.positions.size()));
+  for (std::size_t corner = 0; corner < corner_count; ++corner) {
+    const std::size_t file_vertex = soup.corner_vertices[corner];
+    VertexIndex vertex = welded[file_vertex];
+    if (vertex == VertexTable::empty) {
+      const Vec3 position = soup.positions[file_vertex];
+      const auto fresh = static_cast<VertexIndex>(mesh.positions.size());
+      vertex = vertex_of.find_or_insert(key_of(position), fresh, mesh.positions);
+      if (vertex == fresh) {
+        if (mesh.positions.size() == std::numeric_limits<VertexIndex>::max()) {
+          refuse("mesh has more than " + std::to_string(std::numeric_limits<VertexIndex>::max()) + " vertices");
+        }
+        mesh.positions.push_back(position);  // as weld(TriangleSoup): the first corner's bits
+      }
+      welded[file_vertex] = vertex;
+    }
+    mesh.triangles[corner / 3][corner % 3] = vertex;
+  }
+  mesh.corners = std::move(soup.corners);
+  return mesh;
+}
+
 }  // namespace shatter::io_detail

@@ -12,6 +12,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -862,6 +863,42 @@ TEST_CASE("welding merges equal positions, -0.0 with +0.0, and nothing else", "[
   REQUIRE(mesh.triangles == std::vector<Triangle>{{0, 1, 2}, {0, 3, 4}});
   REQUIRE(same_bits(mesh.positions[0].x, 0.0));  // the first corner's bits are kept
   REQUIRE(mesh.positions[4].x == std::nextafter(1.0, 2.0));
+}
+
+TEST_CASE("indexed files weld to the bit as the soup of their corners does", "[io]") {
+  // OFF, PLY and OBJ weld their own vertex list, looking each vertex up once;
+  // STL welds a copy of every corner. The same corners must give the same mesh:
+  // numbering by first use, the first corner's bits (-0 or +0), unused
+  // vertices dropped, repeated and degenerate triangles kept.
+  const double values[] = {-1.0, -0.0, 0.0, 0.5, 1.0};
+  const auto text_of = [](double x) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.17g", x);  // "-0" for -0.0
+    return std::string(buffer);
+  };
+  for (std::uint64_t seed = 1; seed <= 300; ++seed) {
+    test::Random random(seed);
+    const std::size_t vertex_count = 1 + random.index(24), triangle_count = 1 + random.index(40);
+    std::vector<Vec3> vertices(vertex_count);
+    for (Vec3& v : vertices) v = {values[random.index(5)], values[random.index(5)], values[random.index(5)]};
+    std::vector<std::array<std::size_t, 3>> triangles(triangle_count);
+    for (auto& t : triangles) t = {random.index(vertex_count), random.index(vertex_count), random.index(vertex_count)};
+    std::string off = "OFF\n" + std::to_string(vertex_count) + " " + std::to_string(triangle_count) + " 0\n";
+    for (const Vec3& v : vertices) off += text_of(v.x) + " " + text_of(v.y) + " " + text_of(v.z) + "\n";
+    std::string stl = "solid s\n";
+    for (const auto& t : triangles) {
+      off += "3 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) + "\n";
+      stl += "facet normal 0 0 0\nouter loop\n";
+      for (const std::size_t v : t) stl += "vertex " + text_of(vertices[v].x) + " " + text_of(vertices[v].y) + " " + text_of(vertices[v].z) + "\n";
+      stl += "endloop\nendfacet\n";
+    }
+    stl += "endsolid s\n";
+    INFO("seed " << seed << "\n" << off);
+    const Mesh indexed = read_text(off, MeshFormat::off), soup = read_text(stl, MeshFormat::stl);
+    REQUIRE(indexed.triangles == soup.triangles);
+    REQUIRE(indexed.vertex_count() == soup.vertex_count());
+    for (std::size_t v = 0; v < indexed.vertex_count(); ++v) REQUIRE(same_bits(indexed.positions[v], soup.positions[v]));
+  }
 }
 
 TEST_CASE("duplicate positions weld, unused vertices are dropped, degenerate faces are kept", "[io]") {
