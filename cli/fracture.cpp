@@ -510,7 +510,16 @@ int run_fracture_here(const FractureArgs& args) {
     throw UsageError("--out " + args.out + " is a folder; it names the .shatter file to write");
   }
 
-  InputMesh input = read_valid_solid(args.mesh, args.repair, args.allow_self_intersections);
+  // A plane build takes the input prepared beside its check; a cell build
+  // prepares its own (build_voronoi_tree).
+  std::optional<PreparedSolid> prepared;
+  InputMesh input;
+  if (is_cell_pattern(args)) {
+    input = read_valid_solid(args.mesh, args.repair, args.allow_self_intersections);
+  } else {
+    prepared = read_prepared_solid(args.mesh, args.repair, args.allow_self_intersections);
+    input = std::move(prepared->input);
+  }
   outcome.repair = std::move(input.repair);
 
   std::vector<Vec3> sites;
@@ -526,6 +535,7 @@ int run_fracture_here(const FractureArgs& args) {
     const BuildRunOptions run{.threads = args.threads,
                               // read_valid_solid made the full check: the builder need not repeat it
                               .input_validated = true,
+                              .prepared = prepared ? &prepared->plane : nullptr,
                               .progress = progress_bar.callback(),
                               // the tree is only written, summed up and exported
                               // below: what the build can recompute goes early

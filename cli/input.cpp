@@ -3,6 +3,7 @@
 #include <iostream>
 #include <string_view>
 
+#include "shatter/cut/plane_input.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
@@ -49,13 +50,20 @@ std::string no_volume_refusal(const std::string& path, const RepairReport& repor
          defects + ")";
 }
 
-InputMesh read_valid_solid(const std::string& path, bool repair, bool allow_self_intersections) {
+namespace {
+
+InputMesh read_and_repair(const std::string& path, bool repair) {
   InputMesh input = read_input(path);
-  if (!repair) {
+  if (repair) input.repair = repair_and_print(input.mesh, path);
+  return input;
+}
+
+// read_valid_solid's check of a mesh read, and repaired when input.repair says so.
+void require_valid_input(const InputMesh& input, const std::string& path, bool allow_self_intersections) {
+  if (!input.repair) {
     require_valid_solid(input.mesh, path, allow_self_intersections);
-    return input;
+    return;
   }
-  input.repair = repair_and_print(input.mesh, path);
   try {
     require_valid_solid(input.mesh, path, allow_self_intersections);
   } catch (const InvalidMeshError& e) {
@@ -69,7 +77,22 @@ InputMesh read_valid_solid(const std::string& path, bool repair, bool allow_self
     }
     throw InvalidMeshError(message + " (after --repair)");
   }
+}
+
+}  // namespace
+
+InputMesh read_valid_solid(const std::string& path, bool repair, bool allow_self_intersections) {
+  InputMesh input = read_and_repair(path, repair);
+  require_valid_input(input, path, allow_self_intersections);
   return input;
+}
+
+PreparedSolid read_prepared_solid(const std::string& path, bool repair, bool allow_self_intersections) {
+  PreparedSolid solid;
+  solid.input = read_and_repair(path, repair);
+  solid.plane = prepare_plane_input_beside(solid.input.mesh,
+                                           [&] { require_valid_input(solid.input, path, allow_self_intersections); });
+  return solid;
 }
 
 ValidatedMesh read_and_validate(const std::string& path, bool repair) {

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "shatter/cut/plane_input.hpp"
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/repair.hpp"
 #include "shatter/kernel/validate.hpp"
@@ -46,6 +47,20 @@ struct InputMesh {
 /// " (after --repair)" appended when it was repaired, or no_volume_refusal's line
 /// when repair found that it encloses no volume.
 InputMesh read_valid_solid(const std::string& path, bool repair, bool allow_self_intersections);
+
+/// A mesh as read_valid_solid returns it, and made ready for the plane kernel.
+struct PreparedSolid {
+  InputMesh input;
+  PlaneInput plane;  ///< prepare_plane_input(input.mesh)
+};
+
+/// read_valid_solid, with the mesh also prepared for the plane kernel beside its
+/// check (prepare_plane_input_beside: the two in parallel in the caller's task
+/// arena, so on two threads the preparation costs no time after the check), for
+/// a caller that hands it to the builder (BuildRunOptions::prepared).
+/// Guarantees and failures: read_valid_solid's (its refusal wins over anything
+/// the preparation throws), and prepare_plane_input's on a mesh that passed.
+PreparedSolid read_prepared_solid(const std::string& path, bool repair, bool allow_self_intersections);
 
 /// The one refusal of a repaired mesh that encloses no volume: "invalid mesh <path>
 /// after --repair: encloses no volume: <report.no_volume_reason> (what is left: <defects>)",

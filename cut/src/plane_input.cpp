@@ -1,10 +1,16 @@
 #include "shatter/cut/plane_input.hpp"
 
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
+#include <exception>
+#include <optional>
 
 #include "shatter/kernel/half_edges.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/union_find.hpp"
+#include "shatter/kernel/validate.hpp"
 #include "shatter/cut/separate.hpp"
 
 namespace shatter {
@@ -102,6 +108,32 @@ PlaneInput prepare_plane_input(const Mesh& mesh) {
   input.geometry.points = input.mesh.positions;
   input.solid = solid_from_mesh(input.mesh, !has_attributes, input.geometry, &twins);
   return input;
+}
+
+PlaneInput prepare_plane_input_beside(const Mesh& mesh, const std::function<void()>& check) {
+  // The preparation reads only a mesh whose every other defect is ruled out
+  // first (one linear pass): on a non-finite coordinate or a zero-area
+  // triangle it would meet floating-point exceptions, which a program may trap.
+  // On one thread nothing overlaps, so nothing is checked twice either.
+  ValidationOptions without_search;
+  without_search.check_self_intersections = false;
+  if (tbb::this_task_arena::max_concurrency() < 2 || !validate_mesh(mesh, without_search).valid()) {
+    check();
+    return prepare_plane_input(mesh);
+  }
+  std::optional<PlaneInput> prepared;
+  std::exception_ptr preparation_failed;
+  // The check's exception, if any, is the one parallel_invoke rethrows: the
+  // preparation's is caught here and only rethrown once the check passed.
+  tbb::parallel_invoke(check, [&] {
+    try {
+      prepared = prepare_plane_input(mesh);
+    } catch (...) {
+      preparation_failed = std::current_exception();
+    }
+  });
+  if (preparation_failed) std::rethrow_exception(preparation_failed);
+  return std::move(*prepared);
 }
 
 }  // namespace shatter

@@ -276,9 +276,11 @@ class Builder {
   Builder(const TreeRecipe& recipe, const LeafProgressFn& progress, bool lean)
       : recipe_(recipe), progress_(progress), lean_(lean) {}
 
-  std::unique_ptr<BuildNode> root(const Mesh& mesh) {
+  // The root: `mesh` as given, over `input`, which is prepare_plane_input(mesh)
+  // and outlives the builder.
+  std::unique_ptr<BuildNode> root(const Mesh& mesh, const PlaneInput& input) {
     auto node = std::make_unique<BuildNode>();
-    plane_input_ = prepare_plane_input(mesh);
+    plane_input_ = &input;
     node->solid = plane_input_->solid;
     node->mesh = mesh;  // the root is the input as given (validated on the way in)
     node->mass = mass_properties(node->mesh);
@@ -430,7 +432,7 @@ class Builder {
   }
 
   const TreeRecipe& recipe_;  // what to build
-  std::optional<PlaneInput> plane_input_;
+  const PlaneInput* plane_input_ = nullptr;  // Builder::root's
   const LeafProgressFn& progress_;
   const bool lean_;  // BuildRunOptions::lean
   // Every BuildNode::packed, in blocks of the thread that packed it. One set of
@@ -742,13 +744,23 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
       throw std::invalid_argument("build_mesh_tree needs every input triangle on surface 0 (caps are numbered by cut)");
     }
   }
-  if (!run.input_validated) require_valid_solid(mesh, "input", recipe.allow_self_intersections);
-
   const unsigned threads = run.threads == 0 ? static_cast<unsigned>(tbb::info::default_concurrency()) : run.threads;
-  auto phase_start = std::chrono::steady_clock::now();
-  Builder builder(recipe, run.progress, run.lean);
-  std::unique_ptr<BuildNode> root = builder.root(mesh);
   tbb::task_arena arena(static_cast<int>(threads));
+  auto phase_start = std::chrono::steady_clock::now();
+  // The input checked (unless the caller did) and prepared (unless the caller
+  // did), the two side by side when the build does both.
+  const auto check = [&] { require_valid_solid(mesh, "input", recipe.allow_self_intersections); };
+  std::optional<PlaneInput> prepared_here;
+  if (run.prepared != nullptr) {
+    if (!run.input_validated) arena.execute(check);
+  } else if (run.input_validated) {
+    prepared_here = prepare_plane_input(mesh);
+  } else {
+    arena.execute([&] { prepared_here = prepare_plane_input_beside(mesh, check); });
+  }
+  const PlaneInput& input = run.prepared != nullptr ? *run.prepared : *prepared_here;
+  Builder builder(recipe, run.progress, run.lean);
+  std::unique_ptr<BuildNode> root = builder.root(mesh, input);
   arena.execute([&] {
     if (recipe.strategy == Strategy::balanced) {
       grow_balanced(builder, *root, recipe.fragments, threads);

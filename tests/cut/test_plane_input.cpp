@@ -7,7 +7,12 @@
 
 #include <gmpxx.h>
 
+#include <tbb/task_arena.h>
+
 #include <algorithm>
+#include <limits>
+#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -48,6 +53,104 @@ TEST_CASE("meshes become sound plane-based solids, coplanar faces merged without
   CHECK(seams.solid.faces.size() == 12);  // attributes: every triangle its own face
   CHECK(seams.solid.convex);
   CHECK_FALSE(prepare_plane_input(torus(3, 1, 16, 8)).solid.convex);
+}
+
+namespace {
+
+// The parts of two plane inputs that the builder reads, compared field by field.
+void require_same_input(const PlaneInput& a, const PlaneInput& b) {
+  REQUIRE(a.mesh.triangles == b.mesh.triangles);
+  REQUIRE(a.mesh.positions == b.mesh.positions);
+  REQUIRE(a.geometry.planes.size() == b.geometry.planes.size());
+  REQUIRE(a.shells.shell_of_triangle == b.shells.shell_of_triangle);
+  REQUIRE(a.solid.defs == b.solid.defs);
+  REQUIRE(a.solid.faces.size() == b.solid.faces.size());
+  for (std::size_t f = 0; f < a.solid.faces.size(); ++f) {
+    const SolidFace &x = a.solid.faces[f], &y = b.solid.faces[f];
+    REQUIRE((x.plane == y.plane && x.reversed == y.reversed && x.convex == y.convex && x.surface == y.surface &&
+             x.source == y.source && x.first_loop == y.first_loop && x.loop_count == y.loop_count));
+  }
+  REQUIRE(a.solid.corners.size() == b.solid.corners.size());
+  for (std::size_t c = 0; c < a.solid.corners.size(); ++c) {
+    REQUIRE((a.solid.corners[c].vertex == b.solid.corners[c].vertex && a.solid.corners[c].line == b.solid.corners[c].line));
+  }
+  REQUIRE(a.solid.convex == b.solid.convex);
+}
+
+// require_valid_solid's refusal of `mesh`, or "" when it passes.
+std::string refusal_of(const Mesh& mesh) {
+  try {
+    require_valid_solid(mesh, "m", false);
+  } catch (const InvalidMeshError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("prepare_plane_input_beside prepares as prepare_plane_input or throws the check's refusal", "[plane][solid]") {
+  // On one thread the check runs first; on two, beside the preparation once a
+  // linear pass has ruled out every defect but self-intersections. Either way
+  // the input is prepare_plane_input's, and a refused mesh throws the check's
+  // own line, never what the preparation met (this main traps floating-point
+  // exceptions: a preparation run on a NaN coordinate stopped the test).
+  std::vector<NamedMesh> meshes = generated_meshes();
+  for (const auto& path : valid_meshes()) meshes.push_back({path.filename().string(), read_mesh(path)});
+  for (const auto& path : bad_meshes()) {
+    try {
+      meshes.push_back({path.filename().string(), read_mesh(path)});
+    } catch (const std::exception&) {
+      // refused by the reader: nothing to prepare
+    }
+  }
+  Mesh not_finite = unit_cube();
+  not_finite.positions[3].y = std::numeric_limits<double>::quiet_NaN();
+  meshes.push_back({"NaN coordinate", not_finite});
+  Mesh degenerate = unit_cube();
+  degenerate.positions.push_back({0.5, 0, 0});
+  degenerate.triangles.push_back({0, 1, static_cast<VertexIndex>(degenerate.positions.size() - 1)});
+  degenerate.surfaces.push_back(original_surface);
+  meshes.push_back({"zero-area triangle", degenerate});
+  Mesh open = box({0, 0, 0}, {1, 1, 1});
+  open.triangles.pop_back();
+  open.surfaces.pop_back();
+  meshes.push_back({"open box", open});
+  meshes.push_back({"flipped box", flipped(box({0, 0, 0}, {1, 1, 1}))});
+  meshes.push_back({"two overlapping boxes", merge({box({0, 0, 0}, {2, 2, 2}), box({1, 1, 1}, {3, 3, 3})})});
+  std::size_t refused = 0, prepared = 0;
+  for (const NamedMesh& m : meshes) {
+    INFO(m.name);
+    const std::string refusal = refusal_of(m.mesh);
+    for (const int threads : {1, 2}) {
+      INFO(threads << " threads");
+      tbb::task_arena arena(threads);
+      const auto beside = [&] {
+        return arena.execute([&] {
+          return prepare_plane_input_beside(m.mesh, [&] { require_valid_solid(m.mesh, "m", false); });
+        });
+      };
+      if (!refusal.empty()) {
+        ++refused;
+        try {
+          beside();
+          FAIL("no refusal");
+        } catch (const InvalidMeshError& e) {
+          REQUIRE(std::string(e.what()) == refusal);
+        }
+        continue;
+      }
+      ++prepared;
+      require_same_input(beside(), prepare_plane_input(m.mesh));
+      // The check's exception wins on a mesh the preparation handles well.
+      REQUIRE_THROWS_WITH(arena.execute([&] {
+                            return prepare_plane_input_beside(m.mesh, [] { throw std::runtime_error("checked"); });
+                          }),
+                          "checked");
+    }
+  }
+  CHECK(refused >= 2 * 8);
+  CHECK(prepared >= 2 * 20);
 }
 
 // The one cut call (plane_cut.hpp) over generated solids and the corpus: a plane

@@ -36,6 +36,7 @@
 #include <tuple>
 #include <vector>
 
+#include "shatter/cut/plane_input.hpp"
 #include "shatter/generators/corpus.hpp"
 #include "shatter/generators/random.hpp"
 #include "shatter/generators/solids.hpp"
@@ -1138,6 +1139,33 @@ TEST_CASE("the same recipe gives the same bytes, another seed another tree", "[t
     // threads = 0 (one per hardware thread) gives the same tree too.
     CHECK(byte_difference(encode_shatter(build_mesh_tree(m.mesh, recipe, {.threads = 0})), first) == "equal");
   }
+}
+
+TEST_CASE("a build given its input prepared writes the same bytes and still checks an unchecked input", "[tree][build]") {
+  // BuildRunOptions::prepared (what `shatter fracture` passes, made beside its
+  // check of the mesh) against the build preparing the mesh itself, on 1 and 2
+  // threads, for every strategy.
+  for (const char* name : {"torus-800", "box"}) {
+    const TestMesh& m = test_mesh(name);
+    const PlaneInput prepared = prepare_plane_input(m.mesh);
+    for (const Strategy strategy : all_strategies) {
+      const TreeRecipe recipe = recipe_for(std::uint32_t(test::sized(24, 8)), strategy, 3);
+      INFO(name << " " << describe({&m, recipe, Level::full, false}));
+      for (const unsigned threads : {1u, 2u}) {
+        const std::string own = encode_shatter(build_mesh_tree(m.mesh, recipe, {.threads = threads}));
+        const std::string given =
+            encode_shatter(build_mesh_tree(m.mesh, recipe, {.threads = threads, .input_validated = true, .prepared = &prepared}));
+        CHECK(byte_difference(given, own) == "equal");
+      }
+    }
+  }
+  // Given a prepared input but no word that the mesh was checked, the build checks it.
+  Mesh open = box({0, 0, 0}, {1, 1, 1});
+  const PlaneInput of_box = prepare_plane_input(open);
+  open.triangles.pop_back();
+  open.surfaces.pop_back();
+  CHECK_THROWS_AS(build_mesh_tree(open, recipe_for(4, Strategy::thesis, 1), {.threads = 2, .prepared = &of_box}),
+                  InvalidMeshError);
 }
 
 namespace {

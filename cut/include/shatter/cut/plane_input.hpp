@@ -2,6 +2,8 @@
 // An input mesh made ready for the plane kernel: its solids, their shells, and
 // one plane-based solid over input points and input planes.
 
+#include <functional>
+
 #include "shatter/kernel/mesh.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/cut/cut_solid.hpp"
@@ -28,5 +30,20 @@ struct PlaneInput {
 /// geometry.plane_set({}); deterministic. Throws InvalidMeshError on an open or
 /// inconsistently oriented mesh.
 PlaneInput prepare_plane_input(const Mesh& mesh);
+
+/// prepare_plane_input(mesh) side by side with `check`, the caller's check of
+/// the mesh (which throws to refuse it): the two run in parallel in the
+/// caller's task arena, so on two threads the preparation, otherwise a serial
+/// step between reading a mesh and its first cut, costs no time after the
+/// check. Only when the mesh has no defect but what validate_mesh's
+/// self-intersection search looks for (a linear pass decides it first): else,
+/// and on one thread, `check` runs first and the preparation after.
+/// Preconditions: `check` only reads the mesh; once it passes, those of
+/// prepare_plane_input (the preparation may run on a self-intersecting mesh the
+/// check then refuses: it only reads it, and what it throws there is dropped).
+/// Guarantees: prepare_plane_input's result, after `check` passed.
+/// Failure: what `check` throws, whatever the preparation did; else what
+/// prepare_plane_input throws.
+PlaneInput prepare_plane_input_beside(const Mesh& mesh, const std::function<void()>& check);
 
 }  // namespace shatter

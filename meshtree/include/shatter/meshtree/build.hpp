@@ -15,6 +15,8 @@
 
 namespace shatter {
 
+struct PlaneInput;  // shatter/cut/plane_input.hpp
+
 /// Called once per finished leaf with the number finished so far. May be called
 /// from any worker thread, concurrently: it must be thread-safe and cheap.
 using LeafProgressFn = std::function<void(std::size_t leaves_done)>;
@@ -22,7 +24,9 @@ using LeafProgressFn = std::function<void(std::size_t leaves_done)>;
 /// Where a build's time went, and how often a drawn plane was not used. The
 /// counts are part of the deterministic build; the seconds are wall-clock.
 struct BuildReport {
-  /// Cutting, mass properties, and making the stored meshes: rounding each piece
+  /// Preparing the input for the plane kernel (unless BuildRunOptions::prepared,
+  /// and with the build's check of the input beside it when it makes one),
+  /// cutting, mass properties, and making the stored meshes: rounding each piece
   /// once, certified.
   double cutting_seconds = 0;
   double hull_seconds = 0;     ///< convex hulls of every node (in parallel)
@@ -57,6 +61,12 @@ struct BuildRunOptions {
   /// check instead of repeating it. Set it only after such a check of this very
   /// mesh: on any other mesh the build's guarantees do not hold.
   bool input_validated = false;
+  /// When given: prepare_plane_input of this very mesh, made by the caller (as
+  /// `shatter fracture` does, beside its check of the mesh:
+  /// prepare_plane_input_beside), which the build uses instead of preparing the
+  /// mesh again. It must outlive the build, which only reads it. Without it the
+  /// build prepares the mesh itself, beside its own check when it makes one.
+  const PlaneInput* prepared = nullptr;
   /// Called once per finished leaf (see LeafProgressFn); empty: not called.
   /// (Initialized here, like every field, so a designated initializer may leave
   /// it out without GCC's -Wmissing-field-initializers.)
