@@ -1,6 +1,10 @@
 #include "shatter/cut/cut_solid.hpp"
 
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
+#include <exception>
 #include <numeric>
 
 #include "shatter/kernel/error.hpp"
@@ -592,7 +596,7 @@ void find_chords(const PlaneSet& set, PlaneRef cut, const SplitSolid& split, con
 SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, SurfaceId cap_surface,
                    const InputShells& shells, CutSides sides) {
   thread_local SplitSolid split;
-  thread_local FaceSet below_cap, above_cap, side;
+  thread_local FaceSet below_cap, above_cap, below_side, above_side;
   SolidCut result;
   split_solid(set, solid, cut, split,
               sides == CutSides::both ? SplitSides::both : sides == CutSides::below ? SplitSides::below : SplitSides::above);
@@ -623,14 +627,46 @@ SolidCut cut_solid(const PlaneSet& set, const Solid& solid, PlaneRef cut, Surfac
     make_caps(set, cut, split.defs, split.approx, split.border, solid.convex, cap_surface, below_cap, above_cap,
               chords.below, chords.above);
   }
-  for (const bool below : {true, false}) {
-    if (sides == (below ? CutSides::above : CutSides::below)) continue;
+  // This thread's scratch, named here: a side run on another thread must read
+  // these, not that thread's own.
+  const SplitSolid& split_here = split;
+  const FaceSet &below_cap_here = below_cap, &above_cap_here = above_cap;
+  const Chords& chords_here = chords;
+  FaceSet &below_side_here = below_side, &above_side_here = above_side;
+  const auto separate = [&](bool below) {
+    FaceSet& side = below ? below_side_here : above_side_here;
     side.clear();
-    append_faces(below ? split.below : split.above, side);
+    append_faces(below ? split_here.below : split_here.above, side);
     const std::size_t first_cap = side.faces.size();
-    append_faces(below ? below_cap : above_cap, side);
-    separate_side(set, cut, split.defs, split.approx, side, first_cap, solid.convex, shells,
-                  below ? chords.below_keys : chords.above_keys, below ? result.below : result.above);
+    append_faces(below ? below_cap_here : above_cap_here, side);
+    separate_side(set, cut, split_here.defs, split_here.approx, side, first_cap, solid.convex, shells,
+                  below ? chords_here.below_keys : chords_here.above_keys, below ? result.below : result.above);
+  };
+  // The two sides of a large solid (the first cuts of a build, whose pieces are
+  // few and large: its serial part) are separated in parallel; each is a pure
+  // function of the split, so the pieces are the same either way, and so is
+  // what is thrown: the below side's refusal first, as in turn. Isolated: a
+  // thread waiting here runs no other cut, which would overwrite the scratch
+  // both sides read.
+  constexpr std::size_t parallel_faces = 1024;
+  if (sides == CutSides::both && solid.faces.size() >= parallel_faces) {
+    std::exception_ptr failed[2];
+    const auto separate_or_keep = [&](bool below) {
+      try {
+        separate(below);
+      } catch (...) {
+        failed[below ? 0 : 1] = std::current_exception();
+      }
+    };
+    tbb::this_task_arena::isolate(
+        [&] { tbb::parallel_invoke([&] { separate_or_keep(true); }, [&] { separate_or_keep(false); }); });
+    for (const std::exception_ptr& e : failed) {
+      if (e) std::rethrow_exception(e);
+    }
+    return result;
+  }
+  for (const bool below : {true, false}) {
+    if (sides != (below ? CutSides::above : CutSides::below)) separate(below);
   }
   return result;
 }

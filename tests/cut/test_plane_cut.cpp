@@ -12,6 +12,8 @@
 
 #include <gmpxx.h>
 
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -22,7 +24,9 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/rationals.hpp"
 #include "shatter/kernel/validate.hpp"
+#include "shatter/cut/cut_solid.hpp"
 #include "shatter/cut/plane_cut.hpp"
+#include "shatter/cut/plane_input.hpp"
 #include "shatter/generators/corpus.hpp"
 #include "shatter/generators/random.hpp"
 #include "shatter/generators/solids.hpp"
@@ -329,6 +333,79 @@ TEST_CASE("30 planes through vertices of every corpus mesh: none refused, both r
   CHECK(tally.cuts == 30 * valid_meshes().size());
   CHECK(tally.separated >= 1);
   CHECK(tally.vanished >= 1);
+}
+
+namespace {
+
+bool same_solid(const Solid& a, const Solid& b) {
+  if (!(a.defs == b.defs) || a.faces.size() != b.faces.size() || a.loops.size() != b.loops.size() ||
+      a.corners.size() != b.corners.size() || a.convex != b.convex) {
+    return false;
+  }
+  for (std::size_t f = 0; f < a.faces.size(); ++f) {
+    const SolidFace &x = a.faces[f], &y = b.faces[f];
+    if (!(x.plane == y.plane && x.reversed == y.reversed && x.convex == y.convex && x.surface == y.surface &&
+          x.source == y.source && x.first_loop == y.first_loop && x.loop_count == y.loop_count)) {
+      return false;
+    }
+  }
+  for (std::size_t l = 0; l < a.loops.size(); ++l) {
+    if (a.loops[l].first_corner != b.loops[l].first_corner || a.loops[l].corner_count != b.loops[l].corner_count) return false;
+  }
+  for (std::size_t c = 0; c < a.corners.size(); ++c) {
+    if (a.corners[c].vertex != b.corners[c].vertex || !(a.corners[c].line == b.corners[c].line)) return false;
+  }
+  return true;
+}
+
+// cut_solid's result in an arena of `threads` threads, or its refusal's line.
+struct CutOrRefusal {
+  SolidCut cut;
+  std::string refusal;
+};
+CutOrRefusal cut_on(int threads, const PlaneInput& input, const PlaneSet& set) {
+  tbb::task_arena arena(threads);
+  return arena.execute([&] {
+    CutOrRefusal result;
+    try {
+      result.cut = cut_solid(set, input.solid, PlaneRef::cut(0), 1, input.shells);
+    } catch (const UnsupportedGeometryError& e) {
+      result.refusal = e.what();
+    }
+    return result;
+  });
+}
+
+}  // namespace
+
+TEST_CASE("a large solid's two sides are separated in parallel: the same solids on 1 and 2 threads", "[plane][cut]") {
+  // cut_solid separates the sides of a solid of 1,024 faces or more on two
+  // threads; the pieces, and a refusal's line, must not depend on it.
+  std::vector<NamedMesh> meshes;
+  for (const auto& path : valid_meshes()) meshes.push_back({path.filename().string(), read_mesh(path)});
+  meshes.push_back({"torus 64 x 32", torus(3, 1, 64, 32)});
+  meshes.push_back({"ellipsoid 48 x 24", ellipsoid({0.1, 0.2, 0.3}, {1, 2, 3}, 48, 24)});
+  std::size_t large = 0, cuts = 0;
+  for (const NamedMesh& m : meshes) {
+    const PlaneInput input = prepare_plane_input(m.mesh);
+    if (input.solid.faces.size() < 1024) continue;
+    ++large;
+    for (const Plane& plane : planes_through_vertices(m.mesh, sized(4, 2), 29)) {
+      INFO(m.name << " plane " << plane.normal.x << " " << plane.normal.y << " " << plane.normal.z << " " << plane.offset);
+      const Plane planes[] = {plane};
+      const PlaneSet set = input.geometry.plane_set(planes);
+      const CutOrRefusal one = cut_on(1, input, set), two = cut_on(2, input, set);
+      REQUIRE(one.refusal == two.refusal);
+      REQUIRE(one.cut.plane_missed == two.cut.plane_missed);
+      REQUIRE(one.cut.below.size() == two.cut.below.size());
+      REQUIRE(one.cut.above.size() == two.cut.above.size());
+      for (std::size_t i = 0; i < one.cut.below.size(); ++i) REQUIRE(same_solid(one.cut.below[i], two.cut.below[i]));
+      for (std::size_t i = 0; i < one.cut.above.size(); ++i) REQUIRE(same_solid(one.cut.above[i], two.cut.above[i]));
+      if (!one.cut.below.empty() && !one.cut.above.empty()) ++cuts;
+    }
+  }
+  CHECK(large >= 3);
+  CHECK(cuts >= 2 * large);
 }
 
 TEST_CASE("a cavity's corner on the cut: the piece around it is written, the corner moved off the cap", "[plane][cut]") {
