@@ -337,27 +337,6 @@ TEST_CASE("30 planes through vertices of every corpus mesh: none refused, both r
 
 namespace {
 
-bool same_solid(const Solid& a, const Solid& b) {
-  if (!(a.defs == b.defs) || a.faces.size() != b.faces.size() || a.loops.size() != b.loops.size() ||
-      a.corners.size() != b.corners.size() || a.convex != b.convex) {
-    return false;
-  }
-  for (std::size_t f = 0; f < a.faces.size(); ++f) {
-    const SolidFace &x = a.faces[f], &y = b.faces[f];
-    if (!(x.plane == y.plane && x.reversed == y.reversed && x.convex == y.convex && x.surface == y.surface &&
-          x.source == y.source && x.first_loop == y.first_loop && x.loop_count == y.loop_count)) {
-      return false;
-    }
-  }
-  for (std::size_t l = 0; l < a.loops.size(); ++l) {
-    if (a.loops[l].first_corner != b.loops[l].first_corner || a.loops[l].corner_count != b.loops[l].corner_count) return false;
-  }
-  for (std::size_t c = 0; c < a.corners.size(); ++c) {
-    if (a.corners[c].vertex != b.corners[c].vertex || !(a.corners[c].line == b.corners[c].line)) return false;
-  }
-  return true;
-}
-
 // cut_solid's result in an arena of `threads` threads, or its refusal's line.
 struct CutOrRefusal {
   SolidCut cut;
@@ -397,10 +376,8 @@ TEST_CASE("a large solid's two sides are separated in parallel: the same solids 
       const CutOrRefusal one = cut_on(1, input, set), two = cut_on(2, input, set);
       REQUIRE(one.refusal == two.refusal);
       REQUIRE(one.cut.plane_missed == two.cut.plane_missed);
-      REQUIRE(one.cut.below.size() == two.cut.below.size());
-      REQUIRE(one.cut.above.size() == two.cut.above.size());
-      for (std::size_t i = 0; i < one.cut.below.size(); ++i) REQUIRE(same_solid(one.cut.below[i], two.cut.below[i]));
-      for (std::size_t i = 0; i < one.cut.above.size(); ++i) REQUIRE(same_solid(one.cut.above[i], two.cut.above[i]));
+      REQUIRE(same_solids(one.cut.below, two.cut.below));
+      REQUIRE(same_solids(one.cut.above, two.cut.above));
       if (!one.cut.below.empty() && !one.cut.above.empty()) ++cuts;
     }
   }

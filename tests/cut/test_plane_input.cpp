@@ -63,18 +63,7 @@ void require_same_input(const PlaneInput& a, const PlaneInput& b) {
   REQUIRE(a.mesh.positions == b.mesh.positions);
   REQUIRE(a.geometry.planes.size() == b.geometry.planes.size());
   REQUIRE(a.shells.shell_of_triangle == b.shells.shell_of_triangle);
-  REQUIRE(a.solid.defs == b.solid.defs);
-  REQUIRE(a.solid.faces.size() == b.solid.faces.size());
-  for (std::size_t f = 0; f < a.solid.faces.size(); ++f) {
-    const SolidFace &x = a.solid.faces[f], &y = b.solid.faces[f];
-    REQUIRE((x.plane == y.plane && x.reversed == y.reversed && x.convex == y.convex && x.surface == y.surface &&
-             x.source == y.source && x.first_loop == y.first_loop && x.loop_count == y.loop_count));
-  }
-  REQUIRE(a.solid.corners.size() == b.solid.corners.size());
-  for (std::size_t c = 0; c < a.solid.corners.size(); ++c) {
-    REQUIRE((a.solid.corners[c].vertex == b.solid.corners[c].vertex && a.solid.corners[c].line == b.solid.corners[c].line));
-  }
-  REQUIRE(a.solid.convex == b.solid.convex);
+  REQUIRE(same_solid(a.solid, b.solid));
 }
 
 // require_valid_solid's refusal of `mesh`, or "" when it passes.

@@ -124,33 +124,6 @@ std::string num(double x) {
   return out.str();
 }
 
-// Whether two lists of solids are the same, field by field (the approximations
-// are functions of the definitions).
-bool same_solids(const std::vector<Solid>& a, const std::vector<Solid>& b) {
-  if (a.size() != b.size()) return false;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    const Solid &x = a[i], &y = b[i];
-    if (x.defs != y.defs || x.convex != y.convex || x.faces.size() != y.faces.size() || x.loops.size() != y.loops.size() ||
-        x.corners.size() != y.corners.size()) {
-      return false;
-    }
-    for (std::size_t f = 0; f < x.faces.size(); ++f) {
-      const SolidFace &p = x.faces[f], &q = y.faces[f];
-      if (p.plane != q.plane || p.reversed != q.reversed || p.convex != q.convex || p.surface != q.surface ||
-          p.source != q.source || p.first_loop != q.first_loop || p.loop_count != q.loop_count) {
-        return false;
-      }
-    }
-    for (std::size_t l = 0; l < x.loops.size(); ++l) {
-      if (x.loops[l].first_corner != y.loops[l].first_corner || x.loops[l].corner_count != y.loops[l].corner_count) return false;
-    }
-    for (std::size_t c = 0; c < x.corners.size(); ++c) {
-      if (x.corners[c].vertex != y.corners[c].vertex || !(x.corners[c].line == y.corners[c].line)) return false;
-    }
-  }
-  return true;
-}
-
 // 64 successive cuts of one solid: each time the largest piece (by approximate
 // volume) is cut by a random plane through its vertex average. Every piece made
 // is checked: sound (check_solid), exact volumes of the two sides summing to the
@@ -366,26 +339,6 @@ TEST_CASE("degenerate planes: every vertex, edge and face of the lattice solids"
 }
 
 namespace {
-
-bool same_faces(const FaceSet& a, const FaceSet& b) {
-  if (a.faces.size() != b.faces.size() || a.loops.size() != b.loops.size() || a.corners.size() != b.corners.size()) {
-    return false;
-  }
-  for (std::size_t f = 0; f < a.faces.size(); ++f) {
-    const SolidFace &p = a.faces[f], &q = b.faces[f];
-    if (p.plane != q.plane || p.reversed != q.reversed || p.convex != q.convex || p.surface != q.surface ||
-        p.source != q.source || p.first_loop != q.first_loop || p.loop_count != q.loop_count) {
-      return false;
-    }
-  }
-  for (std::size_t l = 0; l < a.loops.size(); ++l) {
-    if (a.loops[l].first_corner != b.loops[l].first_corner || a.loops[l].corner_count != b.loops[l].corner_count) return false;
-  }
-  for (std::size_t c = 0; c < a.corners.size(); ++c) {
-    if (a.corners[c].vertex != b.corners[c].vertex || !(a.corners[c].line == b.corners[c].line)) return false;
-  }
-  return true;
-}
 
 bool same_border(const std::vector<LoopEdge>& a, const std::vector<LoopEdge>& b) {
   if (a.size() != b.size()) return false;

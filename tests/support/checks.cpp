@@ -136,4 +136,16 @@ Box3 bounds(const Mesh& mesh) {
 }
 
 
+bool same_solid(const Solid& a, const Solid& b) {
+  return a.defs == b.defs && a.convex == b.convex && same_faces(a, b);
+}
+
+bool same_solids(const std::vector<Solid>& a, const std::vector<Solid>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!same_solid(a[i], b[i])) return false;
+  }
+  return true;
+}
+
 }  // namespace shatter::test

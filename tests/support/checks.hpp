@@ -42,6 +42,36 @@ mpq_class exact_six_volume(const Mesh& mesh);
 /// Six times the volume of a plane-based solid, exactly (the kernel's).
 using shatter::exact_six_volume;
 
+/// Whether two sets of faces with their loops and corners (a Solid's, or a
+/// split's FaceSet) are the same, field by field.
+template <class Faces>
+bool same_faces(const Faces& a, const Faces& b) {
+  if (a.faces.size() != b.faces.size() || a.loops.size() != b.loops.size() || a.corners.size() != b.corners.size()) {
+    return false;
+  }
+  for (std::size_t f = 0; f < a.faces.size(); ++f) {
+    const SolidFace &p = a.faces[f], &q = b.faces[f];
+    if (p.plane != q.plane || p.reversed != q.reversed || p.convex != q.convex || p.surface != q.surface ||
+        p.source != q.source || p.first_loop != q.first_loop || p.loop_count != q.loop_count) {
+      return false;
+    }
+  }
+  for (std::size_t l = 0; l < a.loops.size(); ++l) {
+    if (a.loops[l].first_corner != b.loops[l].first_corner || a.loops[l].corner_count != b.loops[l].corner_count) return false;
+  }
+  for (std::size_t c = 0; c < a.corners.size(); ++c) {
+    if (a.corners[c].vertex != b.corners[c].vertex || !(a.corners[c].line == b.corners[c].line)) return false;
+  }
+  return true;
+}
+
+/// Whether two plane-based solids are the same, field by field: definitions,
+/// faces, loops, corners and convexity (the approximations are functions of
+/// the definitions, so they are not compared).
+bool same_solid(const Solid& a, const Solid& b);
+/// The same for two lists of solids, in order.
+bool same_solids(const std::vector<Solid>& a, const std::vector<Solid>& b);
+
 /// The mesh's bytes in a canonical binary form, to compare outputs for identity.
 std::string canonical_bytes(const Mesh& mesh);
 
