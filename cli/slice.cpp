@@ -78,12 +78,13 @@ struct SliceResult {
 // be written as a valid mesh fails the command before anything is written, but
 // for a piece thinner than the rounding of its coordinates, which vanishes (it
 // is named, with its volume, and not written).
-SliceResult cut_into_pieces(const Mesh& mesh, const Plane& plane, const SliceArgs& args, SurfaceId cap_surface) {
+SliceResult cut_into_pieces(const Mesh& mesh, const PlaneInput& prepared, const Plane& plane, const SliceArgs& args,
+                            SurfaceId cap_surface) {
   PlaneCutOptions options;
   options.cap_surface = cap_surface;
   options.interior_uv_scale = args.interior_uv_scale;
   options.allow_self_intersections = args.allow_self_intersections;
-  PlaneCut cut = cut_mesh_by_plane(mesh, plane, options);
+  PlaneCut cut = cut_mesh_by_plane(prepared, plane, options);
   SliceResult result;
   result.plane_missed = cut.plane_missed;
   result.cap_loops = cut.cap_loops;
@@ -162,14 +163,16 @@ int run_slice(const SliceArgs& args) {
   const Plane plane = parse_plane(args.plane);
   const auto format = parse_mesh_format(args.format);
   if (!format) throw UsageError("--format must be off, obj, ply or stl");
-  const InputMesh input = read_valid_solid(args.mesh, args.repair, args.allow_self_intersections);
+  // Prepared for the cut beside its check (read_prepared_solid).
+  const PreparedSolid prepared = read_prepared_solid(args.mesh, args.repair, args.allow_self_intersections);
+  const InputMesh& input = prepared.input;
   const Mesh& mesh = input.mesh;
 
   SurfaceId cap_surface = 1;
   for (SurfaceId s : mesh.surfaces) cap_surface = std::max(cap_surface, s + 1);
   // Every piece is certified as it is rounded (cut_mesh_by_plane): what is
   // written validates when read back, and is not checked again here.
-  const SliceResult result = cut_into_pieces(mesh, plane, args, cap_surface);
+  const SliceResult result = cut_into_pieces(mesh, prepared.plane, plane, args, cap_surface);
   const std::vector<Piece>& pieces = result.pieces;
   const std::vector<std::string> names = piece_names(pieces, *format);
   json pieces_json = json::array();

@@ -82,7 +82,10 @@ PlaneCut cut_by_plane(const PlaneInput& input, const PlaneSet& set, const Solid&
 }
 
 PlaneCut cut_mesh_by_plane(const Mesh& mesh, const Plane& plane, const PlaneCutOptions& options) {
-  const PlaneInput input = prepare_plane_input(mesh);
+  return cut_mesh_by_plane(prepare_plane_input(mesh), plane, options);
+}
+
+PlaneCut cut_mesh_by_plane(const PlaneInput& input, const Plane& plane, const PlaneCutOptions& options) {
   const Plane cuts[] = {plane};
   return cut_by_plane(input, input.geometry.plane_set(cuts), input.solid, &input.mesh, PlaneRef::cut(0), options);
 }

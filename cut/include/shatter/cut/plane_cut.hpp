@@ -97,4 +97,10 @@ PlaneCut cut_by_plane(const PlaneInput& input, const PlaneSet& set, const Solid&
 /// prepare_plane_input's InvalidMeshError for an open or inconsistently oriented mesh.
 PlaneCut cut_mesh_by_plane(const Mesh& mesh, const Plane& plane, const PlaneCutOptions& options = {});
 
+/// cut_mesh_by_plane of a mesh already prepared: `input` is prepare_plane_input's
+/// result (or prepare_plane_input_beside's, made beside a check of the mesh, as
+/// `shatter slice` does). The pieces' solids refer to `input`.
+/// Preconditions, guarantees and failures: cut_mesh_by_plane's.
+PlaneCut cut_mesh_by_plane(const PlaneInput& input, const Plane& plane, const PlaneCutOptions& options = {});
+
 }  // namespace shatter
