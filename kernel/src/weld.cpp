@@ -4,6 +4,7 @@
 #include <bit>
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -64,67 +65,61 @@ class VertexTable {
   std::size_t mask_ = 0, size_ = 0;
 };
 
-}  // namespace
-
-Mesh weld(TriangleSoup soup) {
-  if (soup.corner_positions.empty()) refuse("the file holds no faces");
+// The weld both soups share: corner c lies at position_of(c); slot_of(c) is
+// where the vertex found for c is remembered for the corners that share c's
+// file vertex (it holds VertexTable::empty until then), or nullptr when every
+// corner is looked up. Vertices are numbered by first use, each keeping the
+// bits of its first corner (a vertex first written as -0.0 stays -0.0).
+template <class PositionOf, class SlotOf>
+Mesh weld_corners(std::size_t corner_count, std::size_t expected_vertices, const PositionOf& position_of,
+                  const SlotOf& slot_of, CornerAttributes corners) {
+  if (corner_count == 0) refuse("the file holds no faces");
   Mesh mesh;
-  const std::size_t corner_count = soup.corner_positions.size();
-  mesh.triangles.resize(soup.triangle_count());
-  mesh.surfaces.assign(soup.triangle_count(), original_surface);
-
-  // A closed mesh has about one vertex per six corners; the table grows past that.
-  VertexTable vertex_of(corner_count / 4);
-  mesh.positions.reserve(corner_count / 4);
+  mesh.triangles.resize(corner_count / 3);
+  mesh.surfaces.assign(corner_count / 3, original_surface);
+  VertexTable vertex_of(expected_vertices);
+  mesh.positions.reserve(expected_vertices);
   for (std::size_t corner = 0; corner < corner_count; ++corner) {
-    const Vec3 position = soup.corner_positions[corner];
-    const auto fresh = static_cast<VertexIndex>(mesh.positions.size());
-    const VertexIndex vertex = vertex_of.find_or_insert(key_of(position), fresh, mesh.positions);
-    if (vertex == fresh) {
-      if (mesh.positions.size() == std::numeric_limits<VertexIndex>::max()) {
-        refuse("mesh has more than " + std::to_string(std::numeric_limits<VertexIndex>::max()) + " vertices");
-      }
-      // The first corner's own bits are kept: a vertex first written as -0.0 stays -0.0.
-      mesh.positions.push_back(position);
-    }
-    mesh.triangles[corner / 3][corner % 3] = vertex;
-  }
-  mesh.corners = std::move(soup.corners);
-  return mesh;
-}
-
-Mesh weld(IndexedSoup soup) {
-  if (soup.corner_vertices.empty()) refuse("the file holds no faces");
-  Mesh mesh;
-  const std::size_t corner_count = soup.corner_vertices.size();
-  mesh.triangles.resize(soup.triangle_count());
-  mesh.surfaces.assign(soup.triangle_count(), original_surface);
-
-  // Each file vertex's welded vertex, found at its first corner: the lookup the
-  // soup's weld makes there. Its later corners would find the same vertex
-  // (the table only grows), so they take it from here.
-  std::vector<VertexIndex> welded(soup.positions.size(), VertexTable::empty);
-  VertexTable vertex_of(std::min(corner_count / 4, soup.positions.size()));
-  mesh.positions.reserve(std::min(corner_count / 4, soup.positions.size()));
-  for (std::size_t corner = 0; corner < corner_count; ++corner) {
-    const std::size_t file_vertex = soup.corner_vertices[corner];
-    VertexIndex vertex = welded[file_vertex];
+    VertexIndex* const slot = slot_of(corner);
+    VertexIndex vertex = slot != nullptr ? *slot : VertexTable::empty;
     if (vertex == VertexTable::empty) {
-      const Vec3 position = soup.positions[file_vertex];
+      const Vec3 position = position_of(corner);
       const auto fresh = static_cast<VertexIndex>(mesh.positions.size());
       vertex = vertex_of.find_or_insert(key_of(position), fresh, mesh.positions);
       if (vertex == fresh) {
         if (mesh.positions.size() == std::numeric_limits<VertexIndex>::max()) {
           refuse("mesh has more than " + std::to_string(std::numeric_limits<VertexIndex>::max()) + " vertices");
         }
-        mesh.positions.push_back(position);  // as weld(TriangleSoup): the first corner's bits
+        mesh.positions.push_back(position);
       }
-      welded[file_vertex] = vertex;
+      if (slot != nullptr) *slot = vertex;
     }
     mesh.triangles[corner / 3][corner % 3] = vertex;
   }
-  mesh.corners = std::move(soup.corners);
+  mesh.corners = std::move(corners);
   return mesh;
+}
+
+}  // namespace
+
+Mesh weld(TriangleSoup soup) {
+  // A closed mesh has about one vertex per six corners; the table grows past that.
+  const std::span<const Vec3> positions = soup.corner_positions;
+  return weld_corners(
+      positions.size(), positions.size() / 4, [&](std::size_t c) { return positions[c]; },
+      [](std::size_t) -> VertexIndex* { return nullptr; }, std::move(soup.corners));
+}
+
+Mesh weld(IndexedSoup soup) {
+  // Each file vertex's welded vertex, found at its first corner: the lookup the
+  // soup's weld makes there. Its later corners would find the same vertex
+  // (the table only grows), so they take it from here.
+  std::vector<VertexIndex> welded(soup.positions.size(), VertexTable::empty);
+  const std::size_t corner_count = soup.corner_vertices.size();
+  return weld_corners(
+      corner_count, std::min(corner_count / 4, soup.positions.size()),
+      [&](std::size_t c) { return soup.positions[soup.corner_vertices[c]]; },
+      [&](std::size_t c) { return &welded[soup.corner_vertices[c]]; }, std::move(soup.corners));
 }
 
 }  // namespace shatter::io_detail
