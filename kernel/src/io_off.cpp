@@ -4,10 +4,15 @@
 // values to each vertex line, which are read past; 4OFF, nOFF and binary OFF
 // change the layout and are refused.
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,10 +39,104 @@ class OffLines {
     return false;
   }
   std::size_t line_number() const { return cursor_.line_number(); }
+  /// Bytes not yet returned as lines.
+  std::string_view rest() const { return cursor_.rest(); }
 
  private:
   LineCursor cursor_;
 };
+
+// A line's tokens as OffLines gives them: the comment cut off, then split.
+void tokens_of(std::string_view line, std::vector<std::string_view>& tokens) {
+  if (const std::size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
+  split_tokens(line, tokens);
+}
+
+// Below this many bytes of vertex and face lines, the body is read on one thread.
+constexpr std::size_t parallel_body_bytes = std::size_t{1} << 20;
+
+// The vertex and face lines of a large file (`body`, all after the counts) read
+// on the caller's threads: cut into chunks at line ends, each chunk's data lines
+// counted, then each chunk parsed knowing the index of its first data line.
+// Only the plain case is read so: exactly vertex_count + face_count data lines,
+// every vertex line three finite coordinates (or more where the variant allows),
+// every face a triangle of indices in range. Anything else gives nullopt, and
+// the sequential reader reads the file again and decides (refusing with the line
+// named, skipping extra face lines with a warning, triangulating polygons): the
+// same mesh or the same refusal either way.
+std::optional<IndexedSoup> read_body_in_parallel(std::string_view body, std::uint64_t vertex_count,
+                                                 std::uint64_t face_count, bool extras_allowed) {
+  const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+  if (threads < 2 || body.size() < parallel_body_bytes) return std::nullopt;
+  if (vertex_count > body.size() || face_count > body.size()) return std::nullopt;  // claims no file this size holds
+  const std::size_t chunk_count = 8 * threads;
+  std::vector<std::size_t> start(chunk_count + 1, body.size());
+  start[0] = 0;
+  for (std::size_t c = 1; c < chunk_count; ++c) {
+    const std::size_t end_of_line = body.find('\n', std::max(start[c - 1], c * body.size() / chunk_count));
+    start[c] = end_of_line == std::string_view::npos ? body.size() : end_of_line + 1;
+  }
+  const auto chunk = [&](std::size_t c) { return body.substr(start[c], start[c + 1] - start[c]); };
+
+  std::vector<std::uint64_t> first_data_line(chunk_count + 1, 0);
+  tbb::parallel_for(std::size_t{0}, chunk_count, [&](std::size_t c) {
+    // A line has tokens exactly when its first non-blank byte is not a comment's '#'.
+    LineCursor cursor(chunk(c));
+    std::string_view line;
+    std::uint64_t count = 0;
+    while (cursor.next(line)) {
+      std::size_t i = 0;
+      while (i < line.size() && is_blank(line[i])) ++i;
+      if (i < line.size() && line[i] != '#') ++count;
+    }
+    first_data_line[c + 1] = count;
+  });
+  for (std::size_t c = 0; c < chunk_count; ++c) first_data_line[c + 1] += first_data_line[c];
+  if (first_data_line[chunk_count] != vertex_count + face_count) return std::nullopt;
+
+  IndexedSoup soup;
+  soup.positions.resize(vertex_count);
+  std::vector<std::vector<std::size_t>> corners(chunk_count);
+  std::atomic<bool> plain{true};
+  tbb::parallel_for(std::size_t{0}, chunk_count, [&](std::size_t c) {
+    LineCursor cursor(chunk(c));
+    std::vector<std::string_view> tokens;
+    std::string_view line;
+    std::uint64_t data_line = first_data_line[c];
+    while (plain.load(std::memory_order_relaxed) && cursor.next(line)) {
+      tokens_of(line, tokens);
+      if (tokens.empty()) continue;
+      const std::uint64_t d = data_line++;
+      if (d < vertex_count) {
+        Vec3& position = soup.positions[d];
+        if (tokens.size() < 3 || (tokens.size() > 3 && !extras_allowed) || !parse_double(tokens[0], position.x) ||
+            !parse_double(tokens[1], position.y) || !parse_double(tokens[2], position.z) || !is_finite(position)) {
+          plain = false;
+        }
+        continue;
+      }
+      std::int64_t corner_count = 0;
+      if (!parse_integer(tokens[0], corner_count) || corner_count != 3 || tokens.size() < 4) {
+        plain = false;
+        continue;
+      }
+      for (std::size_t k = 1; k <= 3; ++k) {
+        std::int64_t index = 0;
+        if (!parse_integer(tokens[k], index) || index < 0 || static_cast<std::uint64_t>(index) >= vertex_count) {
+          plain = false;
+          break;
+        }
+        corners[c].push_back(static_cast<std::size_t>(index));
+      }
+    }
+  });
+  if (!plain) return std::nullopt;
+  soup.corner_vertices.reserve(3 * face_count);
+  for (const std::vector<std::size_t>& part : corners) {
+    soup.corner_vertices.insert(soup.corner_vertices.end(), part.begin(), part.end());
+  }
+  return soup;
+}
 
 /// Whether vertex lines carry values beyond x y z (colour, normal, texture).
 bool vertex_lines_have_extras(std::string_view keyword, std::size_t line) {
@@ -86,6 +185,10 @@ Mesh read_off(std::string_view bytes, std::vector<std::string>& warnings) {
   const std::uint64_t vertex_count = parse_count(count_tokens[0], "vertex", lines.line_number());
   const std::uint64_t face_count = parse_count(count_tokens[1], "face", lines.line_number());
   parse_count(count_tokens[2], "edge", lines.line_number());  // unused, but must be well-formed
+
+  if (std::optional<IndexedSoup> soup = read_body_in_parallel(lines.rest(), vertex_count, face_count, extras_allowed)) {
+    return weld(std::move(*soup));
+  }
 
   // "0 0 0" is the shortest vertex line, "3 0 0 0" the shortest face line.
   std::vector<Vec3> positions;

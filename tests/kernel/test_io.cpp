@@ -5,6 +5,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <tbb/task_arena.h>
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -23,6 +25,7 @@
 
 #include "shatter/generators/corpus.hpp"
 #include "shatter/generators/random.hpp"
+#include "shatter/generators/solids.hpp"
 #include "shatter/kernel/atomic_file.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
@@ -898,6 +901,90 @@ TEST_CASE("indexed files weld to the bit as the soup of their corners does", "[i
     REQUIRE(indexed.triangles == soup.triangles);
     REQUIRE(indexed.vertex_count() == soup.vertex_count());
     for (std::size_t v = 0; v < indexed.vertex_count(); ++v) REQUIRE(same_bits(indexed.positions[v], soup.positions[v]));
+  }
+}
+
+TEST_CASE("a large OFF file reads on two threads as on one: the same mesh or the same refusal", "[io][off]") {
+  // Above 1 MiB of vertex and face lines, read_off parses the body in chunks on
+  // the arena's threads when it is plain (the counted lines, triangles, finite
+  // coordinates) and leaves anything else to the sequential reader. Damaged and
+  // irregular variants of one large file must read alike on 1 and 2 threads.
+  const Mesh torus_mesh = test::torus(3, 1, 160, 100);  // 32,000 triangles
+  const auto text_of = [](double x) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.17g", x);
+    return std::string(buffer);
+  };
+  std::vector<std::string> vertex_lines, face_lines;
+  for (const Vec3& p : torus_mesh.positions) vertex_lines.push_back(text_of(p.x) + " " + text_of(p.y) + " " + text_of(p.z));
+  for (const Triangle& t : torus_mesh.triangles) {
+    face_lines.push_back("3 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]));
+  }
+  const auto file_of = [&](const std::string& keyword, std::size_t vertices, std::size_t faces,
+                           const std::vector<std::string>& vs, const std::vector<std::string>& fs, const std::string& eol) {
+    std::string text = keyword + eol + std::to_string(vertices) + " " + std::to_string(faces) + " 0" + eol;
+    for (const std::string& l : vs) text += l + eol;
+    for (const std::string& l : fs) text += l + eol;
+    return text;
+  };
+  struct Variant {
+    std::string name, text;
+  };
+  std::vector<Variant> variants;
+  const std::size_t V = vertex_lines.size(), F = face_lines.size();
+  variants.push_back({"plain", file_of("OFF", V, F, vertex_lines, face_lines, "\n")});
+  variants.push_back({"CRLF", file_of("OFF", V, F, vertex_lines, face_lines, "\r\n")});
+  {
+    std::vector<std::string> vs = vertex_lines, fs = face_lines;
+    for (std::size_t i = 0; i < vs.size(); i += 97) vs[i] += "  # a comment";
+    for (std::size_t i = 0; i < fs.size(); i += 89) fs[i] = "\n# between\n\n" + fs[i] + " 0.5 0.5 0.5";
+    variants.push_back({"comments, blank lines, face colours", file_of("OFF", V, F, vs, fs, "\n")});
+  }
+  {
+    std::vector<std::string> vs = vertex_lines;
+    for (std::string& l : vs) l += " 1 0 0 1";
+    variants.push_back({"COFF", file_of("COFF", V, F, vs, face_lines, "\n")});
+    variants.push_back({"extras in plain OFF", file_of("OFF", V, F, vs, face_lines, "\n")});
+  }
+  test::Random random(31);
+  for (int draw = 0; draw < 6; ++draw) {
+    std::vector<std::string> vs = vertex_lines, fs = face_lines;
+    const std::size_t at = random.index(V), face = random.index(F);
+    std::size_t v_count = V, f_count = F;
+    std::string name;
+    switch (draw) {
+      case 0: vs[at] = "1 2 x"; name = "a bad coordinate"; break;
+      case 1: vs[at] = "1e999 0 0"; name = "a coordinate beyond double"; break;
+      case 2: fs[face] = "3 0 1 " + std::to_string(V); name = "an index out of range"; break;
+      case 3: fs[face] = "4 0 1 2 3"; name = "a quad"; break;
+      case 4: fs.push_back(face_lines[face]); name = "an extra face line"; break;
+      case 5: fs.pop_back(); ++f_count; name = "a face missing"; break;
+    }
+    (void)v_count;
+    variants.push_back({name, file_of("OFF", v_count, f_count, vs, fs, "\n")});
+  }
+  for (const Variant& v : variants) {
+    INFO(v.name);
+    REQUIRE(v.text.size() > (std::size_t{1} << 20));
+    const auto read_on = [&](int threads, std::vector<std::string>& warnings, std::string& refusal) {
+      tbb::task_arena arena(threads);
+      return arena.execute([&] {
+        try {
+          return read_mesh_from_bytes(v.text, MeshFormat::off, &warnings);
+        } catch (const InvalidMeshError& e) {
+          refusal = e.what();
+          return Mesh();
+        }
+      });
+    };
+    std::vector<std::string> warnings_one, warnings_two;
+    std::string refusal_one, refusal_two;
+    const Mesh one = read_on(1, warnings_one, refusal_one), two = read_on(2, warnings_two, refusal_two);
+    REQUIRE(refusal_one == refusal_two);
+    REQUIRE(warnings_one == warnings_two);
+    REQUIRE(one.triangles == two.triangles);
+    REQUIRE(one.vertex_count() == two.vertex_count());
+    for (std::size_t i = 0; i < one.vertex_count(); ++i) REQUIRE(same_bits(one.positions[i], two.positions[i]));
   }
 }
 
