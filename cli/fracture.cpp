@@ -533,7 +533,7 @@ int run_fracture_here(const FractureArgs& args) {
   {
     LeafProgressBar progress_bar(recipe.fragments, progress_delay);
     const BuildRunOptions run{.threads = args.threads,
-                              // read_valid_solid made the full check: the builder need not repeat it
+                              // the read made the full check: the builder need not repeat it
                               .input_validated = true,
                               .prepared = prepared ? &prepared->plane : nullptr,
                               .progress = progress_bar.callback(),

@@ -24,6 +24,12 @@ namespace {
 
 std::string at_line(std::size_t line) { return " at line " + std::to_string(line); }
 
+// A line's tokens: the comment cut off, then split.
+void tokens_of(std::string_view line, std::vector<std::string_view>& tokens) {
+  if (const std::size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
+  split_tokens(line, tokens);
+}
+
 /// Lines with comments removed; blank lines are skipped.
 class OffLines {
  public:
@@ -32,8 +38,7 @@ class OffLines {
   bool next(std::vector<std::string_view>& tokens) {
     std::string_view line;
     while (cursor_.next(line)) {
-      if (const std::size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
-      split_tokens(line, tokens);
+      tokens_of(line, tokens);
       if (!tokens.empty()) return true;
     }
     return false;
@@ -45,12 +50,6 @@ class OffLines {
  private:
   LineCursor cursor_;
 };
-
-// A line's tokens as OffLines gives them: the comment cut off, then split.
-void tokens_of(std::string_view line, std::vector<std::string_view>& tokens) {
-  if (const std::size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
-  split_tokens(line, tokens);
-}
 
 // Below this many bytes of vertex and face lines, the body is read on one thread.
 constexpr std::size_t parallel_body_bytes = std::size_t{1} << 20;

@@ -412,11 +412,6 @@ std::optional<RoundedSolid> round_merging_thin_strips(const PlaneSet& set, const
 
 // --- Certification (round_solid.cpp) -----------------------------------------------------
 
-// Certifies a rounded mesh as round_solid promises: the linear certificate of
-// certify_piece when it applies (it accepts only valid meshes, and the full check
-// accepts every valid one, so the mesh written is the same either way), else
-// validate_knowing; or the topology alone (with vertices where the surface
-// touches itself allowed) for a solid accepted with self-intersections.
 // A mesh triangulating `solid`'s faces over their own vertices, none merged
 // (round_solid's first rounding), with each solid vertex's mesh vertex (or
 // no_index): what certify_rounded flags validate_mesh_against's exact vertices
@@ -425,6 +420,12 @@ struct ExactVertexSource {
   const Solid& solid;
   std::span<const VertexIndex> mesh_vertex_of;
 };
+
+// Certifies a rounded mesh as round_solid promises: the linear certificate of
+// certify_piece when it applies (it accepts only valid meshes, and the full check
+// accepts every valid one, so the mesh written is the same either way), else
+// validate_knowing; or the topology alone (with vertices where the surface
+// touches itself allowed) for a solid accepted with self-intersections.
 // `exact`: nullptr, or where the mesh came from; its flags are made only when
 // the full check runs (certify_piece certifies most pieces without them).
 ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& options,
