@@ -244,6 +244,50 @@ void pack_node_shape(const Mesh& mesh, const Solid& solid, bool named_by_node, s
 
 namespace {
 
+// A packed mesh's counts, as its header gives them (each checked against the
+// bytes left, as unpacking checks them).
+struct PackedMeshHeader {
+  std::size_t positions, triangles, normals, uvs, tangents;
+};
+
+PackedMeshHeader read_mesh_header(Unpacker& in) {
+  PackedMeshHeader header{};
+  header.positions = in.count(sizeof(Vec3));
+  header.triangles = in.count(3);
+  header.normals = in.count(sizeof(Vec3));
+  header.uvs = in.count(sizeof(Vec2));
+  header.tangents = in.count(sizeof(Vec4));
+  return header;
+}
+
+// Reads past the mesh whose header `header` is, checking its bytes as unpacking
+// does; returns how many of its triangles lie on a cut's cap (a surface other
+// than the input's, whatever the naming).
+std::size_t read_past_mesh(Unpacker& in, const PackedMeshHeader& header) {
+  in.skip(header.positions, sizeof(Vec3));
+  for (std::size_t i = 0; i < 3 * header.triangles; ++i) in.u32();
+  const std::size_t runs = in.count(2);
+  std::uint64_t covered = 0, on_caps = 0;
+  for (std::size_t r = 0; r < runs; ++r) {
+    const SurfaceId surface = in.surface();
+    const std::uint64_t length = in.varint();
+    if (length > header.triangles - covered) throw std::invalid_argument("packed node: surface runs beyond the triangles");
+    covered += length;
+    if (surface != original_surface) on_caps += length;
+  }
+  in.skip(header.normals, sizeof(Vec3));
+  in.skip(header.uvs, sizeof(Vec2));
+  in.skip(header.tangents, sizeof(Vec4));
+  return static_cast<std::size_t>(on_caps);
+}
+
+// The flags byte that opens a packing, checked.
+std::uint8_t read_flags(Unpacker& in) {
+  const std::uint8_t flags = in.u8();
+  if ((flags & ~(solid_convex_bit | named_by_node_bit)) != 0) throw std::invalid_argument("packed node: unknown flags");
+  return flags;
+}
+
 // Unpacks into `mesh` and `solid`; a null `mesh` is read past (its bytes
 // checked as they are when unpacked) and left out; with a null `solid` the
 // reading stops after the mesh (the solid's bytes are neither read nor checked).
@@ -252,27 +296,11 @@ void unpack(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path
   // Names that are already the tree's are kept whatever the path.
   const bool named_by_node = (bytes[0] & named_by_node_bit) != 0;
   Unpacker in(bytes, named_by_node ? std::span<const NodeIndex>() : path);
-  const std::uint8_t flags = in.u8();
-  if ((flags & ~(solid_convex_bit | named_by_node_bit)) != 0) throw std::invalid_argument("packed node: unknown flags");
-  const std::size_t position_count = in.count(sizeof(Vec3));
-  const std::size_t triangle_count = in.count(3);
-  const std::size_t normal_count = in.count(sizeof(Vec3));
-  const std::size_t uv_count = in.count(sizeof(Vec2));
-  const std::size_t tangent_count = in.count(sizeof(Vec4));
+  const std::uint8_t flags = read_flags(in);
+  const PackedMeshHeader header = read_mesh_header(in);
+  const std::size_t position_count = header.positions, triangle_count = header.triangles;
   if (mesh == nullptr) {
-    in.skip(position_count, sizeof(Vec3));
-    for (std::size_t i = 0; i < 3 * triangle_count; ++i) in.u32();
-    const std::size_t runs = in.count(2);
-    std::uint64_t covered = 0;
-    for (std::size_t r = 0; r < runs; ++r) {
-      in.surface();
-      const std::uint64_t length = in.varint();
-      if (length > triangle_count - covered) throw std::invalid_argument("packed node: surface runs beyond the triangles");
-      covered += length;
-    }
-    in.skip(normal_count, sizeof(Vec3));
-    in.skip(uv_count, sizeof(Vec2));
-    in.skip(tangent_count, sizeof(Vec4));
+    read_past_mesh(in, header);
   } else {
     in.raw(mesh->positions, position_count);
     mesh->triangles.resize(triangle_count);
@@ -288,9 +316,9 @@ void unpack(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path
       if (length > triangle_count - mesh->surfaces.size()) throw std::invalid_argument("packed node: surface runs beyond the triangles");
       mesh->surfaces.insert(mesh->surfaces.end(), static_cast<std::size_t>(length), surface);
     }
-    in.raw(mesh->corners.normals, normal_count);
-    in.raw(mesh->corners.uvs, uv_count);
-    in.raw(mesh->corners.tangents, tangent_count);
+    in.raw(mesh->corners.normals, header.normals);
+    in.raw(mesh->corners.uvs, header.uvs);
+    in.raw(mesh->corners.tangents, header.tangents);
   }
   if (solid_out == nullptr) return;
 
@@ -367,6 +395,20 @@ void unpack_node_solid(std::span<const std::uint8_t> bytes, std::span<const Node
 
 void unpack_node_mesh(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh) {
   unpack(bytes, path, &mesh, nullptr);
+}
+
+PackedMeshSizes packed_mesh_sizes(std::span<const std::uint8_t> bytes) {
+  if (bytes.empty()) throw std::invalid_argument("packed node: cut short");
+  // No path: the surface ids are compared with the input's alone, which no
+  // renaming changes.
+  Unpacker in(bytes, {});
+  read_flags(in);
+  const PackedMeshHeader header = read_mesh_header(in);
+  PackedMeshSizes sizes;
+  sizes.vertices = header.positions;
+  sizes.triangles = header.triangles;
+  sizes.cap_triangles = read_past_mesh(in, header);
+  return sizes;
 }
 
 void rename_by_path(std::span<const NodeIndex> path, Mesh& mesh, Solid& solid) {

@@ -11,6 +11,7 @@
 #include <numeric>
 
 #include "shatter/meshtree/bonds.hpp"
+#include "shatter/meshtree/packed_node.hpp"
 
 namespace shatter {
 
@@ -68,15 +69,23 @@ TreeStats tree_stats(const MeshTree& tree) {
     stats.total_leaf_volume += leaf.mass.volume;  // in leaf order: the same sum on any thread count
     stats.min_leaf_depth = std::min(stats.min_leaf_depth, leaf.depth);
   }
-  // The leaves' meshes, unpacked in runs on the caller's threads (a lean
-  // tree's leaves may be packed: pack_leaves): whole-number sums, in any order.
+  // The leaves' sizes; a packed leaf's (a lean tree's, pack_leaves) are read
+  // from its bytes' counts and surface runs, not unpacked: whole-number sums,
+  // in any order, on the caller's threads.
   std::atomic<std::size_t> triangles{0}, vertices{0}, cap_triangles{0};
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tree.leaf_nodes.size(), 256),
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tree.leaf_nodes.size(), 1024),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-                      NodeShapes shapes(tree);
                       std::size_t t = 0, v = 0, c = 0;
                       for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                        const Mesh& mesh = shapes.mesh(tree.leaf_nodes[i]);
+                        const NodeIndex leaf = tree.leaf_nodes[i];
+                        if (tree.is_packed(leaf)) {
+                          const PackedMeshSizes sizes = packed_mesh_sizes(tree.packed_shapes[leaf]);
+                          t += sizes.triangles;
+                          v += sizes.vertices;
+                          c += sizes.cap_triangles;
+                          continue;
+                        }
+                        const Mesh& mesh = tree.nodes[leaf].mesh;
                         t += mesh.triangle_count();
                         v += mesh.vertex_count();
                         c += static_cast<std::size_t>(std::count_if(mesh.surfaces.begin(), mesh.surfaces.end(),

@@ -40,6 +40,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/meshtree/bonds.hpp"
 #include "shatter/meshtree/build.hpp"
+#include "shatter/meshtree/packed_node.hpp"
 #include "shatter/formats/file.hpp"
 #include "shatter/meshtree/recipe.hpp"
 #include "shatter/meshtree/sites.hpp"
@@ -2140,11 +2141,19 @@ TEST_CASE("the file encoded on 2 and 4 threads is the one-thread file byte for b
       });
       return bytes;
     };
-    const auto stats_on = [&](int threads) {
+    const auto stats_of = [](const MeshTree& tree, int threads) {
       tbb::task_arena arena(threads);
-      return arena.execute([&] { return tree_stats(c.tree); });
+      return arena.execute([&] { return tree_stats(tree); });
     };
-    const TreeStats stats_one = stats_on(1);
+    const TreeStats stats_one = stats_of(c.tree, 1);
+    // Packed leaves are counted from their bytes, not unpacked: the same sums.
+    MeshTree packed = c.tree;
+    pack_leaves(packed);
+    REQUIRE(std::all_of(packed.leaf_nodes.begin(), packed.leaf_nodes.end(), [&](NodeIndex k) { return packed.is_packed(k); }));
+    const TreeStats stats_packed = stats_of(packed, 2);
+    CHECK(stats_packed.leaf_triangles == stats_one.leaf_triangles);
+    CHECK(stats_packed.leaf_vertices == stats_one.leaf_vertices);
+    CHECK(stats_packed.leaf_cap_triangles == stats_one.leaf_cap_triangles);
     const auto one = encoded(1);
     REQUIRE(one.first == one.second);
     CHECK(decode_shatter(one.first).nodes.size() == c.tree.nodes.size());
@@ -2154,7 +2163,7 @@ TEST_CASE("the file encoded on 2 and 4 threads is the one-thread file byte for b
       CHECK(several.first == one.first);
       CHECK(several.second == one.first);
       // The summary fracture prints, counted on as many threads.
-      const TreeStats stats = stats_on(threads);
+      const TreeStats stats = stats_of(c.tree, threads);
       CHECK(stats.leaf_triangles == stats_one.leaf_triangles);
       CHECK(stats.leaf_vertices == stats_one.leaf_vertices);
       CHECK(stats.leaf_cap_triangles == stats_one.leaf_cap_triangles);

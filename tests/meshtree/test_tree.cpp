@@ -1252,6 +1252,20 @@ TEST_CASE("a packed node shape unpacks to the same mesh and solid", "[tree][pack
       unpack_node_solid(bytes, path, solid_alone);
       CHECK(shape_difference(renamed_mesh, solid_alone, renamed_mesh, renamed_solid).empty());
       CHECK_THROWS_AS(unpack_node_mesh(std::span(bytes).first(0), {}, mesh_alone), std::invalid_argument);
+      // The mesh's sizes, read without unpacking (tree_stats), packed either way
+      // of naming; refused wherever the mesh's bytes are cut short.
+      const auto on_caps = static_cast<std::size_t>(std::count_if(
+          mesh.surfaces.begin(), mesh.surfaces.end(), [](SurfaceId surface) { return surface != original_surface; }));
+      for (const bool named_by_node : {false, true}) {
+        const PackedMeshSizes sizes = packed_mesh_sizes(pack_node_shape(mesh, node.solid, named_by_node));
+        CHECK(sizes.vertices == mesh.vertex_count());
+        CHECK(sizes.triangles == mesh.triangle_count());
+        CHECK(sizes.cap_triangles == on_caps);
+      }
+      const std::size_t mesh_bytes = pack_node_shape(mesh, Solid{}).size() - 4;  // an empty solid is four zero counts
+      for (const std::size_t keep : {std::size_t{0}, mesh_bytes / 2, mesh_bytes - 1}) {
+        CHECK_THROWS_AS(packed_mesh_sizes(std::span(bytes).first(keep)), std::invalid_argument);
+      }
       // Cut short anywhere, or with a byte more, the bytes are refused: among
       // the last ten bytes too, where a varint is read a byte at a time.
       std::vector<std::size_t> keeps{0, bytes.size() / 3};

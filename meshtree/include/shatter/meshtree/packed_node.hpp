@@ -54,6 +54,22 @@ void unpack_node_solid(std::span<const std::uint8_t> bytes, std::span<const Node
 /// does for a defect in the mesh's bytes.
 void unpack_node_mesh(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh);
 
+/// A packed mesh's sizes: its vertices, its triangles, and those of them on a
+/// cut's cap (any surface but the input's).
+struct PackedMeshSizes {
+  std::size_t vertices = 0;
+  std::size_t triangles = 0;
+  std::size_t cap_triangles = 0;
+};
+
+/// The sizes of the mesh pack_node_shape packed into `bytes`, read from its
+/// counts and surface runs, without unpacking it (tree_stats counts a lean
+/// tree's leaves so). Equal to the counts of the mesh unpack_node_mesh gives,
+/// under any path. Throws std::invalid_argument when the mesh's bytes are not
+/// such a packing (cut short, a count beyond the bytes, surface runs beyond the
+/// triangles).
+PackedMeshSizes packed_mesh_sizes(std::span<const std::uint8_t> bytes);
+
 struct MeshTree;
 
 /// Packs every leaf's mesh and solid of a tree with an exact representation
