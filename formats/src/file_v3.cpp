@@ -498,15 +498,16 @@ void mesh_records(const MeshTree& tree, bool hulls, std::size_t first, std::size
       out.end_record();
       continue;
     }
-    // A lean build's internal nodes are packed (MeshTree::packed_shapes).
-    const NodeShape shape = shapes(static_cast<NodeIndex>(k));
-    solid_positions.resize(shape.solid.defs.size());
+    // A lean build's internal nodes are packed (MeshTree::packed_shapes); the
+    // positions need the solid's point definitions, not its faces.
+    const NodePoints shape = shapes.mesh_and_points(static_cast<NodeIndex>(k));
+    solid_positions.resize(shape.defs.size());
     // A lean tree keeps no approximations (the validator has checked that a
     // solid has all or none): they are computed here, as the reader will.
-    const bool cached = !shape.solid.approx.empty();
+    const bool cached = !shape.approx.empty();
     for (std::size_t v = 0; v < solid_positions.size(); ++v) {
-      const PointDef& def = shape.solid.defs[v];
-      solid_positions[v] = output_position(set, def, cached ? shape.solid.approx[v] : approximate(set, def));
+      const PointDef& def = shape.defs[v];
+      solid_positions[v] = output_position(set, def, cached ? shape.approx[v] : approximate(set, def));
     }
     write_mesh(out, shape.mesh, solid_positions, path, nodes);
     out.end_record();

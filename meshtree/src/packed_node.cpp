@@ -290,8 +290,11 @@ std::uint8_t read_flags(Unpacker& in) {
 
 // Unpacks into `mesh` and `solid`; a null `mesh` is read past (its bytes
 // checked as they are when unpacked) and left out; with a null `solid` the
-// reading stops after the mesh (the solid's bytes are neither read nor checked).
-void unpack(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh* mesh, Solid* solid_out) {
+// reading stops after the mesh (the solid's bytes are neither read nor checked);
+// with `points_only` it stops after the solid's point definitions (its faces,
+// loops and corners are left empty, their bytes neither read nor checked).
+void unpack(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh* mesh, Solid* solid_out,
+            bool points_only = false) {
   if (bytes.empty()) throw std::invalid_argument("packed node: cut short");
   // Names that are already the tree's are kept whatever the path.
   const bool named_by_node = (bytes[0] & named_by_node_bit) != 0;
@@ -347,6 +350,12 @@ void unpack(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path
         break;
     }
   }
+  if (points_only) {
+    solid.faces.clear();
+    solid.loops.clear();
+    solid.corners.clear();
+    return;
+  }
   const auto unzigzag = [](std::uint64_t code, std::uint64_t expected) {
     const auto difference = static_cast<std::int64_t>(code >> 1) ^ -static_cast<std::int64_t>(code & 1);
     return static_cast<std::uint32_t>(expected + static_cast<std::uint64_t>(difference));
@@ -395,6 +404,11 @@ void unpack_node_solid(std::span<const std::uint8_t> bytes, std::span<const Node
 
 void unpack_node_mesh(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh) {
   unpack(bytes, path, &mesh, nullptr);
+}
+
+void unpack_node_mesh_and_points(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh,
+                                 Solid& points) {
+  unpack(bytes, path, &mesh, &points, true);
 }
 
 PackedMeshSizes packed_mesh_sizes(std::span<const std::uint8_t> bytes) {
@@ -476,6 +490,14 @@ const Mesh& NodeShapes::mesh(NodeIndex node) {
   find_path(node);
   unpack_node_mesh(tree_.packed_shapes[node], path_, mesh_);
   return mesh_;
+}
+
+NodePoints NodeShapes::mesh_and_points(NodeIndex node) {
+  const MeshTreeNode& own = tree_.nodes[node];
+  if (!tree_.is_packed(node)) return {own.mesh, own.solid->defs, own.solid->approx};
+  find_path(node);
+  unpack_node_mesh_and_points(tree_.packed_shapes[node], path_, mesh_, solid_);
+  return {mesh_, solid_.defs, solid_.approx};
 }
 
 const Solid& NodeShapes::solid(NodeIndex node) {

@@ -1266,6 +1266,16 @@ TEST_CASE("a packed node shape unpacks to the same mesh and solid", "[tree][pack
       for (const std::size_t keep : {std::size_t{0}, mesh_bytes / 2, mesh_bytes - 1}) {
         CHECK_THROWS_AS(packed_mesh_sizes(std::span(bytes).first(keep)), std::invalid_argument);
       }
+      // The mesh and the point definitions alone (the writer's MESH records),
+      // renamed alike; refused when the bytes end before the definitions do.
+      Mesh mesh_with_points;
+      Solid points = node.solid;  // what was there before is replaced
+      unpack_node_mesh_and_points(bytes, path, mesh_with_points, points);
+      CHECK(shape_difference(mesh_with_points, renamed_solid, renamed_mesh, renamed_solid).empty());
+      CHECK(points.defs == renamed_solid.defs);
+      CHECK((points.faces.empty() && points.loops.empty() && points.corners.empty() && points.approx.empty()));
+      CHECK_THROWS_AS(unpack_node_mesh_and_points(std::span(bytes).first(mesh_bytes), path, mesh_with_points, points),
+                      std::invalid_argument);
       // Cut short anywhere, or with a byte more, the bytes are refused: among
       // the last ten bytes too, where a varint is read a byte at a time.
       std::vector<std::size_t> keeps{0, bytes.size() / 3};

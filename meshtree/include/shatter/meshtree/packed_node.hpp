@@ -54,6 +54,15 @@ void unpack_node_solid(std::span<const std::uint8_t> bytes, std::span<const Node
 /// does for a defect in the mesh's bytes.
 void unpack_node_mesh(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh);
 
+/// unpack_node_shape's mesh and the solid's point definitions alone, into
+/// `mesh` and `points.defs` (points' faces, loops and corners emptied, its
+/// approx left empty): the reading stops after the definitions, whose bytes are
+/// checked as unpack_node_shape checks them; the rest is neither read nor
+/// checked. For a reader of the positions a mesh refers to (the file writer's
+/// MESH records). Throws as unpack_node_shape does for a defect in what it reads.
+void unpack_node_mesh_and_points(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh,
+                                 Solid& points);
+
 /// A packed mesh's sizes: its vertices, its triangles, and those of them on a
 /// cut's cap (any surface but the input's).
 struct PackedMeshSizes {

@@ -8,6 +8,7 @@
 // builder (build.hpp) includes this header.
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -168,6 +169,15 @@ struct NodeShape {
   const Solid& solid;
 };
 
+/// A node's mesh and its exact solid's point definitions (with their
+/// approximations where the node keeps them; else empty), as
+/// NodeShapes::mesh_and_points gives them.
+struct NodePoints {
+  const Mesh& mesh;
+  std::span<const PointDef> defs;
+  std::span<const ApproxPoint> approx;
+};
+
 /// Reads the nodes' meshes and solids one at a time, whether a node keeps its
 /// own or a lean build packed them (MeshTree::packed_shapes): those are
 /// unpacked into buffers reused from call to call, so a returned shape is valid
@@ -186,6 +196,11 @@ class NodeShapes {
   /// bytes checked), valid as operator()'s shapes are; throws as it does for a
   /// defect in the mesh's bytes.
   const Mesh& mesh(NodeIndex node);
+  /// Node `node`'s mesh and its solid's point definitions alone (a packed
+  /// node's faces, loops and corners are neither unpacked nor checked), for a
+  /// reader of the positions the mesh refers to; valid as operator()'s shapes
+  /// are; throws as it does for a defect in what it reads.
+  NodePoints mesh_and_points(NodeIndex node);
 
  private:
   void find_path(NodeIndex node);  // path_[d]: the node's ancestor at depth d
