@@ -31,16 +31,16 @@ constexpr double rounding_tolerance = 0x1p-40;
 // ulps of the end's largest coordinate.
 constexpr double snap_ulps = 64;
 
-Estimate operator+(Estimate a, Estimate b) {
+[[gnu::always_inline]] inline Estimate operator+(Estimate a, Estimate b) {
   const double sum = a.value + b.value;
   return {sum, a.error + b.error + unit_roundoff * std::fabs(sum)};
 }
-Estimate operator-(Estimate a, Estimate b) {
+[[gnu::always_inline]] inline Estimate operator-(Estimate a, Estimate b) {
   const double difference = a.value - b.value;
   return {difference, a.error + b.error + unit_roundoff * std::fabs(difference)};
 }
 Estimate operator-(Estimate a) { return {-a.value, a.error}; }
-Estimate operator*(Estimate a, Estimate b) {
+[[gnu::always_inline]] inline Estimate operator*(Estimate a, Estimate b) {
   const double product = a.value * b.value;
   return {product, std::fabs(a.value) * b.error + std::fabs(b.value) * a.error + a.error * b.error +
                        unit_roundoff * std::fabs(product) + underflow_error};
@@ -95,7 +95,7 @@ V3<NT> operator-(const V3<NT>& a, const V3<NT>& b) {
   return {a.x - b.x, a.y - b.y, a.z - b.z};
 }
 template <class NT>
-V3<NT> cross(const V3<NT>& a, const V3<NT>& b) {
+[[gnu::always_inline]] inline V3<NT> cross(const V3<NT>& a, const V3<NT>& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 template <class NT>
