@@ -223,9 +223,6 @@ class ByteWriter {
     append(bytes);
     end_record();
   }
-  void reserve(std::size_t size) {
-    if (size > bytes_.size()) bytes_.resize(size);
-  }
 
   /// The bytes written, whole. Pieces put aside by end_record are joined first.
   std::string take() {
