@@ -27,8 +27,8 @@
 #include "file_layout.hpp"
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/mass.hpp"
-#include "shatter/kernel/position_key.hpp"
 #include "shatter/kernel/solid.hpp"
+#include "shatter/meshtree/packed_node.hpp"
 #include "shatter/meshtree/recipe.hpp"
 #include "shatter/meshtree/tree.hpp"
 
@@ -49,12 +49,9 @@ constexpr std::uint64_t centroid_stored = 3;
 constexpr std::uint64_t line_across = 0;   // the plane of the face across the edge, no segment
 constexpr std::uint64_t line_stored = 1;   // a plane code follows, no segment
 constexpr std::uint64_t line_segment = 2;  // a plane code and the segment's points follow
-// A position code: 0 stored, else 1 + zigzag(source - vertex).
-constexpr std::uint64_t position_stored = 0;
+// A position code: 0 stored, else 1 + zigzag(source - vertex) (PositionCoder, packed_node.hpp).
+constexpr std::uint64_t position_stored = PositionCoder::stored;
 
-std::uint64_t zigzag(std::int64_t value) {
-  return (static_cast<std::uint64_t>(value) << 1) ^ static_cast<std::uint64_t>(value >> 63);
-}
 std::int64_t unzigzag(std::uint64_t code) { return static_cast<std::int64_t>(code >> 1) ^ -static_cast<std::int64_t>(code & 1); }
 
 std::uint64_t bits(double value) { return std::bit_cast<std::uint64_t>(value); }
@@ -224,78 +221,44 @@ std::uint64_t surface_code(SurfaceId surface, const AncestorPath& path, const st
   return std::uint64_t{path.depth()} + surface;
 }
 
-/// Finds each position among `sources` bit for bit: first where the previous
-/// vertex's offset points, then the same index, then in a hash table of the
-/// sources (made at the first search; the lowest index of equal sources).
-class PositionFinder {
- public:
-  explicit PositionFinder(std::span<const Vec3> sources) : sources_(sources) {}
 
-  /// The position code of vertex `vertex` at `position`.
-  std::uint64_t code(std::size_t vertex, Vec3 position) {
-    const auto matches = [&](std::int64_t source) {
-      return source >= 0 && static_cast<std::size_t>(source) < sources_.size() && same_bits(sources_[static_cast<std::size_t>(source)], position);
-    };
-    const auto at = static_cast<std::int64_t>(vertex);
-    std::int64_t source = -1;
-    if (matches(at + offset_)) {
-      source = at + offset_;
-    } else if (matches(at)) {
-      source = at;
-    } else {
-      source = search(position);
-    }
-    if (source < 0) return position_stored;
-    offset_ = source - at;
-    return 1 + zigzag(offset_);
-  }
+void write_mesh_after_positions(ByteWriter& out, const Mesh& mesh, std::size_t vertex_count, const AncestorPath& path,
+                                const std::vector<MeshTreeNode>& nodes);
 
- private:
-  // The source index bit for bit equal to `position` (the lowest), or -1.
-  std::int64_t search(Vec3 position) {
-    if (slots_.empty()) {
-      // At most half full, so a probe ends within a few slots.
-      slots_.assign(std::bit_ceil(std::max<std::size_t>(16, 2 * sources_.size())), empty_slot);
-      for (std::size_t s = 0; s < sources_.size(); ++s) {
-        for (std::size_t slot = slot_of(sources_[s]);; slot = (slot + 1) & (slots_.size() - 1)) {
-          if (slots_[slot] == empty_slot) {
-            slots_[slot] = static_cast<std::uint32_t>(s);
-            break;
-          }
-          if (same_bits(sources_[slots_[slot]], sources_[s])) break;  // keep the lowest index
-        }
-      }
-    }
-    for (std::size_t slot = slot_of(position); slots_[slot] != empty_slot; slot = (slot + 1) & (slots_.size() - 1)) {
-      if (same_bits(sources_[slots_[slot]], position)) return slots_[slot];
-    }
-    return -1;
-  }
-
-  // The kernel's position hash (position_key.hpp; it takes -0 for +0, which
-  // only makes the two share a slot: same_bits decides), masked to the table.
-  std::size_t slot_of(Vec3 p) const {
-    return kernel_detail::PositionKeyHash{}(kernel_detail::key_of(p)) & (slots_.size() - 1);
-  }
-
-  std::span<const Vec3> sources_;
-  std::int64_t offset_ = 0;
-  std::vector<std::uint32_t> slots_;  // into sources_; empty_slot where none
-  static constexpr std::uint32_t empty_slot = ~std::uint32_t{0};
-};
-
+/// A mesh record, each position coded against `sources` (PositionCoder).
 void write_mesh(ByteWriter& out, const Mesh& mesh, std::span<const Vec3> sources, const AncestorPath& path,
                 const std::vector<MeshTreeNode>& nodes) {
   out.varint(mesh.positions.size());
   out.varint(mesh.triangles.size());
   out.u8(channel_flags(mesh));
-  PositionFinder finder(sources);
+  PositionCoder coder(sources);
   for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-    const std::uint64_t code = finder.code(v, mesh.positions[v]);
+    const std::uint64_t code = coder.code(v, mesh.positions[v]);
     out.varint(code);
     if (code == position_stored) out.vec3(mesh.positions[v]);
   }
-  const std::size_t width = mesh.positions.size() <= 0x100 ? 1 : mesh.positions.size() <= 0x10000 ? 2 : 4;
+  write_mesh_after_positions(out, mesh, mesh.positions.size(), path, nodes);
+}
+
+/// The same record from a packed mesh's codes (NodeShapes::mesh_codes), which
+/// the packing made with the same coder against the same sources.
+void write_mesh(ByteWriter& out, const NodeMeshCodes& coded, const AncestorPath& path,
+                const std::vector<MeshTreeNode>& nodes) {
+  out.varint(coded.codes.size());
+  out.varint(coded.mesh.triangles.size());
+  out.u8(channel_flags(coded.mesh));
+  std::size_t next_stored = 0;
+  for (const std::uint64_t code : coded.codes) {
+    out.varint(code);
+    if (code == position_stored) out.vec3(coded.stored[next_stored++]);
+  }
+  write_mesh_after_positions(out, coded.mesh, coded.codes.size(), path, nodes);
+}
+
+/// A mesh record's triangles, surfaces and corner channels.
+void write_mesh_after_positions(ByteWriter& out, const Mesh& mesh, std::size_t vertex_count, const AncestorPath& path,
+                                const std::vector<MeshTreeNode>& nodes) {
+  const std::size_t width = vertex_count <= 0x100 ? 1 : vertex_count <= 0x10000 ? 2 : 4;
   for (const Triangle& triangle : mesh.triangles) {
     for (const VertexIndex vertex : triangle) {
       if (width == 1) out.u8(static_cast<std::uint8_t>(vertex));
@@ -498,8 +461,13 @@ void mesh_records(const MeshTree& tree, bool hulls, std::size_t first, std::size
       out.end_record();
       continue;
     }
-    // A lean build's internal nodes are packed (MeshTree::packed_shapes); the
-    // positions need the solid's point definitions, not its faces.
+    // A lean build packed its nodes' positions coded as this record codes them.
+    if (const std::optional<NodeMeshCodes> coded = shapes.mesh_codes(static_cast<NodeIndex>(k))) {
+      write_mesh(out, *coded, path, nodes);
+      out.end_record();
+      continue;
+    }
+    // Another packed node's positions need the solid's point definitions, not its faces.
     const NodePoints shape = shapes.mesh_and_points(static_cast<NodeIndex>(k));
     solid_positions.resize(shape.defs.size());
     // A lean tree keeps no approximations (the validator has checked that a

@@ -266,11 +266,6 @@ void fit_to_size(BuildNode& node) {
   fit(node.solid->corners);
 }
 
-// A lean build's release of a node's cached approximations (BuildRunOptions::lean):
-// a pure function of the definitions, so the writer and the bonds recompute
-// what they need, and nothing else reads them once the node will not be cut.
-void release_approximations(Solid& solid) { std::vector<ApproxPoint>().swap(solid.approx); }
-
 class Builder {
  public:
   Builder(const TreeRecipe& recipe, const LeafProgressFn& progress, bool lean)
@@ -361,8 +356,6 @@ class Builder {
         node.children.push_back(std::move(child));
       }
       node.plane = path.back();
-      // Cut once and for all (an undone cut leaves it a leaf, never cut again).
-      if (lean_) release_approximations(*node.solid);
       node.vanished_pieces = vanished;
       node.vanished_volume = vanished_volume;
       node.vanished_volume_bound = vanished_bound;
@@ -417,14 +410,23 @@ class Builder {
 
  private:
   // A lean build's packing of `node`'s mesh and solid (its approximations go),
-  // into the blocks every worker appends to.
+  // into the blocks every worker appends to. The mesh's positions are coded
+  // against the solid's (output_position of each definition, which the
+  // approximations the cut left make cheap): 24 bytes a vertex become one or
+  // two, and the file's MESH record takes the codes as they are, where it
+  // computed every definition's approximation and position again.
   void pack(BuildNode& node) {
     node.packed_convex = node.solid->convex;
+    // The planes the node's definitions name: its ancestors' by depth, as in cut().
+    thread_local std::vector<Plane> path;
+    path.assign(std::size_t{node.depth} + 1, Plane{});
+    for (const BuildNode* a = node.parent; a != nullptr; a = a->parent) path[a->depth] = a->plane;
+    const PlaneSet set = plane_input_->geometry.plane_set(path);
     // One buffer a thread, the bytes copied on into the blocks (a fresh array
     // a node grew by doubling, a dozen times for a small piece); one that a
     // large node made large is not kept for the rest of the build.
     thread_local std::vector<std::uint8_t> bytes;
-    pack_node_shape(node.mesh, node.solid, false, bytes);
+    pack_node_shape(node.mesh, node.solid, false, bytes, &set);
     node.packed = packed_bytes_.local().append(bytes);
     if (bytes.capacity() > ByteBlocks::block_size) std::vector<std::uint8_t>().swap(bytes);
     node.mesh.reset();

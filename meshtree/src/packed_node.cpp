@@ -1,10 +1,12 @@
 #include "shatter/meshtree/packed_node.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cstring>
 #include <stdexcept>
 #include <string>
 
+#include "shatter/kernel/position_key.hpp"
 #include "shatter/meshtree/tree.hpp"
 #include "validate_tree_certificate.hpp"
 
@@ -19,8 +21,15 @@ namespace {
 
 constexpr std::uint8_t solid_convex_bit = 1;
 constexpr std::uint8_t named_by_node_bit = 2;
+constexpr std::uint8_t positions_coded_bit = 4;
 constexpr std::uint8_t face_reversed_bit = 1;
 constexpr std::uint8_t face_convex_bit = 2;
+
+bool same_bits(Vec3 a, Vec3 b) {
+  return std::bit_cast<std::uint64_t>(a.x) == std::bit_cast<std::uint64_t>(b.x) &&
+         std::bit_cast<std::uint64_t>(a.y) == std::bit_cast<std::uint64_t>(b.y) &&
+         std::bit_cast<std::uint64_t>(a.z) == std::bit_cast<std::uint64_t>(b.z);
+}
 
 class Packer {
  public:
@@ -35,9 +44,13 @@ class Packer {
   }
   void u8(std::uint8_t value) { bytes_.push_back(value); }
   template <class T>
-  void raw(const std::vector<T>& values) {
+  void raw(std::span<const T> values) {
     const auto* at = reinterpret_cast<const std::uint8_t*>(values.data());
     bytes_.insert(bytes_.end(), at, at + values.size() * sizeof(T));
+  }
+  template <class T>
+  void raw(const std::vector<T>& values) {
+    raw(std::span<const T>(values));
   }
   void plane(PlaneRef plane) {
     if (plane.bits == no_index) {
@@ -97,6 +110,21 @@ class Unpacker {
     const std::uint64_t value = varint();
     if (value > (bytes_.size() - at_) / size) fail_unpacking("packed node: a count beyond its bytes");
     return static_cast<std::size_t>(value);
+  }
+  /// A length in bytes, then that many bytes.
+  std::span<const std::uint8_t> block() {
+    const std::uint64_t length = varint();
+    if (length > bytes_.size() - at_) fail_unpacking("packed node: cut short");
+    const std::span<const std::uint8_t> bytes = bytes_.subspan(at_, static_cast<std::size_t>(length));
+    at_ += bytes.size();
+    return bytes;
+  }
+  Vec3 vec3() {
+    if (sizeof(Vec3) > bytes_.size() - at_) fail_unpacking("packed node: cut short");
+    Vec3 value;
+    std::memcpy(&value, bytes_.data() + at_, sizeof(Vec3));
+    at_ += sizeof(Vec3);
+    return value;
   }
   template <class T>
   void raw(std::vector<T>& values, std::size_t count) {
@@ -161,22 +189,95 @@ class Unpacker {
 
 }  // namespace
 
-std::vector<std::uint8_t> pack_node_shape(const Mesh& mesh, const Solid& solid, bool named_by_node) {
+std::uint64_t PositionCoder::code(std::size_t vertex, Vec3 position) {
+  const auto matches = [&](std::int64_t source) {
+    return source >= 0 && static_cast<std::size_t>(source) < sources_.size() &&
+           same_bits(sources_[static_cast<std::size_t>(source)], position);
+  };
+  const auto at = static_cast<std::int64_t>(vertex);
+  std::int64_t source = -1;
+  if (matches(at + offset_)) {
+    source = at + offset_;
+  } else if (matches(at)) {
+    source = at;
+  } else {
+    source = search(position);
+  }
+  if (source < 0) return stored;
+  offset_ = source - at;
+  return 1 + ((static_cast<std::uint64_t>(offset_) << 1) ^ static_cast<std::uint64_t>(offset_ >> 63));
+}
+
+std::int64_t PositionCoder::source_of(std::size_t vertex, std::uint64_t code) {
+  const std::uint64_t zigzag = code - 1;
+  const auto offset = static_cast<std::int64_t>(zigzag >> 1) ^ -static_cast<std::int64_t>(zigzag & 1);
+  return static_cast<std::int64_t>(vertex) + offset;
+}
+
+std::int64_t PositionCoder::search(Vec3 position) {
+  if (slots_.empty()) {
+    // At most half full, so a probe ends within a few slots.
+    slots_.assign(std::bit_ceil(std::max<std::size_t>(16, 2 * sources_.size())), empty_slot);
+    for (std::size_t s = 0; s < sources_.size(); ++s) {
+      for (std::size_t slot = slot_of(sources_[s]);; slot = (slot + 1) & (slots_.size() - 1)) {
+        if (slots_[slot] == empty_slot) {
+          slots_[slot] = static_cast<std::uint32_t>(s);
+          break;
+        }
+        if (same_bits(sources_[slots_[slot]], sources_[s])) break;  // keep the lowest index
+      }
+    }
+  }
+  for (std::size_t slot = slot_of(position); slots_[slot] != empty_slot; slot = (slot + 1) & (slots_.size() - 1)) {
+    if (same_bits(sources_[slots_[slot]], position)) return slots_[slot];
+  }
+  return -1;
+}
+
+// The kernel's position hash (position_key.hpp; it takes -0 for +0, which only
+// makes the two share a slot: same_bits decides), masked to the table.
+std::size_t PositionCoder::slot_of(Vec3 position) const {
+  return kernel_detail::PositionKeyHash{}(kernel_detail::key_of(position)) & (slots_.size() - 1);
+}
+
+std::vector<std::uint8_t> pack_node_shape(const Mesh& mesh, const Solid& solid, bool named_by_node,
+                                          const PlaneSet* set) {
   std::vector<std::uint8_t> bytes;
-  pack_node_shape(mesh, solid, named_by_node, bytes);
+  pack_node_shape(mesh, solid, named_by_node, bytes, set);
   return bytes;
 }
 
-void pack_node_shape(const Mesh& mesh, const Solid& solid, bool named_by_node, std::vector<std::uint8_t>& bytes) {
+void pack_node_shape(const Mesh& mesh, const Solid& solid, bool named_by_node, std::vector<std::uint8_t>& bytes,
+                     const PlaneSet* set) {
   bytes.clear();
   Packer out(bytes);
-  out.u8(static_cast<std::uint8_t>((solid.convex ? solid_convex_bit : 0) | (named_by_node ? named_by_node_bit : 0)));
+  const bool coded = set != nullptr && solid.approx.size() == solid.defs.size();
+  out.u8(static_cast<std::uint8_t>((solid.convex ? solid_convex_bit : 0) | (named_by_node ? named_by_node_bit : 0) |
+                                   (coded ? positions_coded_bit : 0)));
   out.varint(mesh.positions.size());
   out.varint(mesh.triangles.size());
   out.varint(mesh.corners.normals.size());
   out.varint(mesh.corners.uvs.size());
   out.varint(mesh.corners.tangents.size());
-  out.raw(mesh.positions);
+  if (coded) {
+    // The codes' length first, so a reader of the solid alone steps over them.
+    thread_local std::vector<Vec3> sources;
+    thread_local std::vector<std::uint8_t> codes;
+    sources.resize(solid.defs.size());
+    for (std::size_t v = 0; v < sources.size(); ++v) sources[v] = output_position(*set, solid.defs[v], solid.approx[v]);
+    codes.clear();
+    Packer code_out(codes);
+    PositionCoder coder(sources);
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+      const std::uint64_t code = coder.code(v, mesh.positions[v]);
+      code_out.varint(code);
+      if (code == PositionCoder::stored) code_out.raw(std::span<const Vec3>(&mesh.positions[v], 1));
+    }
+    out.varint(codes.size());
+    out.raw(codes);
+  } else {
+    out.raw(mesh.positions);
+  }
   for (const Triangle& triangle : mesh.triangles) {
     for (const VertexIndex vertex : triangle) out.varint(vertex);
   }
@@ -250,9 +351,9 @@ struct PackedMeshHeader {
   std::size_t positions, triangles, normals, uvs, tangents;
 };
 
-PackedMeshHeader read_mesh_header(Unpacker& in) {
+PackedMeshHeader read_mesh_header(Unpacker& in, bool coded) {
   PackedMeshHeader header{};
-  header.positions = in.count(sizeof(Vec3));
+  header.positions = in.count(coded ? 1 : sizeof(Vec3));  // a code takes a byte at least
   header.triangles = in.count(3);
   header.normals = in.count(sizeof(Vec3));
   header.uvs = in.count(sizeof(Vec2));
@@ -263,8 +364,12 @@ PackedMeshHeader read_mesh_header(Unpacker& in) {
 // Reads past the mesh whose header `header` is, checking its bytes as unpacking
 // does; returns how many of its triangles lie on a cut's cap (a surface other
 // than the input's, whatever the naming).
-std::size_t read_past_mesh(Unpacker& in, const PackedMeshHeader& header) {
-  in.skip(header.positions, sizeof(Vec3));
+std::size_t read_past_mesh(Unpacker& in, const PackedMeshHeader& header, bool coded) {
+  if (coded) {
+    in.block();
+  } else {
+    in.skip(header.positions, sizeof(Vec3));
+  }
   for (std::size_t i = 0; i < 3 * header.triangles; ++i) in.u32();
   const std::size_t runs = in.count(2);
   std::uint64_t covered = 0, on_caps = 0;
@@ -284,28 +389,81 @@ std::size_t read_past_mesh(Unpacker& in, const PackedMeshHeader& header) {
 // The flags byte that opens a packing, checked.
 std::uint8_t read_flags(Unpacker& in) {
   const std::uint8_t flags = in.u8();
-  if ((flags & ~(solid_convex_bit | named_by_node_bit)) != 0) throw std::invalid_argument("packed node: unknown flags");
+  if ((flags & ~(solid_convex_bit | named_by_node_bit | positions_coded_bit)) != 0) {
+    throw std::invalid_argument("packed node: unknown flags");
+  }
   return flags;
+}
+
+// What a reading of a packing leaves out or keeps as it is (unpack).
+struct Reading {
+  bool points_only = false;  // the solid's faces, loops and corners neither read nor checked
+  // Coded positions left as codes, here (unpack_node_mesh_codes), not computed.
+  std::vector<std::uint64_t>* codes = nullptr;
+  std::vector<Vec3>* stored = nullptr;
+};
+
+// The positions coded in `block` (a packing's, for `count` vertices), each
+// computed from the definition its code names, in `set`.
+void decode_positions(std::span<const std::uint8_t> block, std::size_t count, std::span<const PointDef> defs,
+                      const PlaneSet* set, std::vector<Vec3>& positions) {
+  if (set == nullptr) fail_unpacking("packed node: its positions are coded, and no plane set was given");
+  Unpacker in(block, {});
+  positions.resize(count);
+  for (std::size_t v = 0; v < count; ++v) {
+    const std::uint64_t code = in.varint();
+    if (code == PositionCoder::stored) {
+      positions[v] = in.vec3();
+      continue;
+    }
+    const std::int64_t source = PositionCoder::source_of(v, code);
+    if (source < 0 || static_cast<std::uint64_t>(source) >= defs.size()) {
+      fail_unpacking("packed node: a position code names no definition, at vertex ", v);
+    }
+    const PointDef& def = defs[static_cast<std::size_t>(source)];
+    positions[v] = output_position(*set, def, approximate(*set, def));
+  }
+  in.expect_end();
+}
+
+// The codes in `block` as they are, and the positions stored among them.
+void read_position_codes(std::span<const std::uint8_t> block, std::size_t count, std::vector<std::uint64_t>& codes,
+                         std::vector<Vec3>& stored) {
+  Unpacker in(block, {});
+  codes.resize(count);
+  stored.clear();
+  for (std::uint64_t& code : codes) {
+    code = in.varint();
+    if (code == PositionCoder::stored) stored.push_back(in.vec3());
+  }
+  in.expect_end();
 }
 
 // Unpacks into `mesh` and `solid`; a null `mesh` is read past (its bytes
 // checked as they are when unpacked) and left out; with a null `solid` the
-// reading stops after the mesh (the solid's bytes are neither read nor checked);
-// with `points_only` it stops after the solid's point definitions (its faces,
-// loops and corners are left empty, their bytes neither read nor checked).
+// reading stops after the mesh (the solid's bytes are neither read nor checked)
+// or, when its positions are coded and computed, after the solid's point
+// definitions they are computed from; `reading` says what else is left out.
 void unpack(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh* mesh, Solid* solid_out,
-            bool points_only = false) {
+            const PlaneSet* set, const Reading& reading = {}) {
   if (bytes.empty()) throw std::invalid_argument("packed node: cut short");
   // Names that are already the tree's are kept whatever the path.
   const bool named_by_node = (bytes[0] & named_by_node_bit) != 0;
   Unpacker in(bytes, named_by_node ? std::span<const NodeIndex>() : path);
   const std::uint8_t flags = read_flags(in);
-  const PackedMeshHeader header = read_mesh_header(in);
+  const bool coded = (flags & positions_coded_bit) != 0;
+  const PackedMeshHeader header = read_mesh_header(in, coded);
   const std::size_t position_count = header.positions, triangle_count = header.triangles;
+  std::span<const std::uint8_t> code_block;
   if (mesh == nullptr) {
-    read_past_mesh(in, header);
+    read_past_mesh(in, header, coded);
   } else {
-    in.raw(mesh->positions, position_count);
+    if (coded) {
+      code_block = in.block();
+      mesh->positions.clear();
+    } else {
+      in.raw(mesh->positions, position_count);
+    }
     mesh->triangles.resize(triangle_count);
     for (Triangle& triangle : mesh->triangles) {
       for (VertexIndex& vertex : triangle) vertex = in.u32();
@@ -323,9 +481,17 @@ void unpack(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path
     in.raw(mesh->corners.uvs, header.uvs);
     in.raw(mesh->corners.tangents, header.tangents);
   }
-  if (solid_out == nullptr) return;
+  if (reading.codes != nullptr) {
+    if (!coded) fail_unpacking("packed node: its positions are not coded");
+    read_position_codes(code_block, position_count, *reading.codes, *reading.stored);
+    return;
+  }
+  const bool compute_positions = mesh != nullptr && coded;
+  if (solid_out == nullptr && !compute_positions) return;
 
-  Solid& solid = *solid_out;
+  // The definitions go to a scratch solid when only the positions need them.
+  thread_local Solid scratch;
+  Solid& solid = solid_out != nullptr ? *solid_out : scratch;
   solid.convex = (flags & solid_convex_bit) != 0;
   const std::size_t def_count = in.count(2);
   const std::size_t face_count = in.count(6);
@@ -350,7 +516,8 @@ void unpack(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path
         break;
     }
   }
-  if (points_only) {
+  if (compute_positions) decode_positions(code_block, position_count, solid.defs, set, mesh->positions);
+  if (solid_out == nullptr || reading.points_only) {
     solid.faces.clear();
     solid.loops.clear();
     solid.corners.clear();
@@ -393,22 +560,33 @@ void unpack(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path
 
 }  // namespace
 
+bool packed_positions_coded(std::span<const std::uint8_t> bytes) {
+  if (bytes.empty()) throw std::invalid_argument("packed node: cut short");
+  return (bytes[0] & positions_coded_bit) != 0;
+}
+
 void unpack_node_shape(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh,
-                       Solid& solid) {
-  unpack(bytes, path, &mesh, &solid);
+                       Solid& solid, const PlaneSet* set) {
+  unpack(bytes, path, &mesh, &solid, set);
 }
 
 void unpack_node_solid(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Solid& solid) {
-  unpack(bytes, path, nullptr, &solid);
+  unpack(bytes, path, nullptr, &solid, nullptr);
 }
 
-void unpack_node_mesh(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh) {
-  unpack(bytes, path, &mesh, nullptr);
+void unpack_node_mesh(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh,
+                      const PlaneSet* set) {
+  unpack(bytes, path, &mesh, nullptr, set);
 }
 
 void unpack_node_mesh_and_points(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh,
-                                 Solid& points) {
-  unpack(bytes, path, &mesh, &points, true);
+                                 Solid& points, const PlaneSet* set) {
+  unpack(bytes, path, &mesh, &points, set, Reading{true});
+}
+
+void unpack_node_mesh_codes(std::span<const std::uint8_t> bytes, std::span<const NodeIndex> path, Mesh& mesh,
+                            std::vector<std::uint64_t>& codes, std::vector<Vec3>& stored) {
+  unpack(bytes, path, &mesh, nullptr, nullptr, Reading{false, &codes, &stored});
 }
 
 PackedMeshSizes packed_mesh_sizes(std::span<const std::uint8_t> bytes) {
@@ -416,12 +594,12 @@ PackedMeshSizes packed_mesh_sizes(std::span<const std::uint8_t> bytes) {
   // No path: the surface ids are compared with the input's alone, which no
   // renaming changes.
   Unpacker in(bytes, {});
-  read_flags(in);
-  const PackedMeshHeader header = read_mesh_header(in);
+  const bool coded = (read_flags(in) & positions_coded_bit) != 0;
+  const PackedMeshHeader header = read_mesh_header(in, coded);
   PackedMeshSizes sizes;
   sizes.vertices = header.positions;
   sizes.triangles = header.triangles;
-  sizes.cap_triangles = read_past_mesh(in, header);
+  sizes.cap_triangles = read_past_mesh(in, header, coded);
   return sizes;
 }
 
@@ -459,10 +637,11 @@ void pack_leaves(MeshTree& tree) {
   const bool masses_derived = tree.certificate.masses_derived();
   detail::TreeCertifier::clear(tree);
   if (tree.packed_shapes.empty()) tree.packed_shapes.resize(tree.nodes.size());
+  const PlaneSet set = tree.plane_set();
   for (const NodeIndex k : tree.leaf_nodes) {
     MeshTreeNode& leaf = tree.nodes[k];
     if (tree.is_packed(k)) continue;
-    tree.packed_shapes.assign(k, pack_node_shape(leaf.mesh, leaf.solid, true));
+    tree.packed_shapes.assign(k, pack_node_shape(leaf.mesh, leaf.solid, true, &set));
     leaf.mesh = Mesh();
     leaf.solid = Solid();
   }
@@ -480,7 +659,8 @@ NodeShape NodeShapes::operator()(NodeIndex node) {
   const MeshTreeNode& own = tree_.nodes[node];
   if (!tree_.is_packed(node)) return {own.mesh, own.solid};
   find_path(node);
-  unpack_node_shape(tree_.packed_shapes[node], path_, mesh_, solid_);
+  const PlaneSet set = tree_.plane_set();
+  unpack_node_shape(tree_.packed_shapes[node], path_, mesh_, solid_, &set);
   return {mesh_, solid_};
 }
 
@@ -488,7 +668,8 @@ const Mesh& NodeShapes::mesh(NodeIndex node) {
   const MeshTreeNode& own = tree_.nodes[node];
   if (!tree_.is_packed(node)) return own.mesh;
   find_path(node);
-  unpack_node_mesh(tree_.packed_shapes[node], path_, mesh_);
+  const PlaneSet set = tree_.plane_set();
+  unpack_node_mesh(tree_.packed_shapes[node], path_, mesh_, &set);
   return mesh_;
 }
 
@@ -496,8 +677,16 @@ NodePoints NodeShapes::mesh_and_points(NodeIndex node) {
   const MeshTreeNode& own = tree_.nodes[node];
   if (!tree_.is_packed(node)) return {own.mesh, own.solid->defs, own.solid->approx};
   find_path(node);
-  unpack_node_mesh_and_points(tree_.packed_shapes[node], path_, mesh_, solid_);
+  const PlaneSet set = tree_.plane_set();
+  unpack_node_mesh_and_points(tree_.packed_shapes[node], path_, mesh_, solid_, &set);
   return {mesh_, solid_.defs, solid_.approx};
+}
+
+std::optional<NodeMeshCodes> NodeShapes::mesh_codes(NodeIndex node) {
+  if (!tree_.is_packed(node) || !packed_positions_coded(tree_.packed_shapes[node])) return std::nullopt;
+  find_path(node);
+  unpack_node_mesh_codes(tree_.packed_shapes[node], path_, mesh_, codes_, stored_);
+  return NodeMeshCodes{mesh_, codes_, stored_};
 }
 
 const Solid& NodeShapes::solid(NodeIndex node) {

@@ -1297,6 +1297,107 @@ TEST_CASE("a packed node shape unpacks to the same mesh and solid", "[tree][pack
   }
 }
 
+TEST_CASE("a packed node shape with coded positions unpacks to the same mesh and solid", "[tree][packed][property]") {
+  // As a finished tree's leaves are packed (pack_leaves: named by node, in the
+  // tree's plane set), every node of concave and convex trees: the positions
+  // come back from the definitions bit for bit, in far fewer bytes.
+  for (const char* name : {"torus-800", "spool.off", "cube.off", "hollow-egg"}) {
+    const TreeRecipe recipe = recipe_for(std::uint32_t(test::sized(32, 8)), Strategy::thesis, 7);
+    INFO(name);
+    const MeshTree tree = build_mesh_tree(test_mesh(name).mesh, recipe, {.threads = 1});
+    const PlaneSet set = tree.plane_set();
+    std::size_t stored = 0, coded_vertices = 0, misnamed = 0;
+    for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+      INFO("node " << k);
+      const Mesh& mesh = tree.nodes[k].mesh;
+      const Solid& solid = tree.nodes[k].solid;
+      REQUIRE(solid.approx.size() == solid.defs.size());
+      const std::vector<std::uint8_t> raw = pack_node_shape(mesh, solid, true);
+      const std::vector<std::uint8_t> bytes = pack_node_shape(mesh, solid, true, &set);
+      CHECK_FALSE(packed_positions_coded(raw));
+      REQUIRE(packed_positions_coded(bytes));
+      CHECK(bytes.size() + 20 * mesh.vertex_count() <= raw.size());
+      Mesh unpacked_mesh;
+      Solid unpacked_solid;
+      unpack_node_shape(bytes, {}, unpacked_mesh, unpacked_solid, &set);
+      CHECK(shape_difference(unpacked_mesh, unpacked_solid, mesh, solid).empty());
+      CHECK(pack_node_shape(unpacked_mesh, solid, true, &set) == bytes);
+      // Either part alone; the solid alone needs no plane set.
+      Mesh mesh_alone;
+      unpack_node_mesh(bytes, {}, mesh_alone, &set);
+      CHECK(shape_difference(mesh_alone, solid, mesh, solid).empty());
+      Solid solid_alone;
+      unpack_node_solid(bytes, {}, solid_alone);
+      CHECK(shape_difference(mesh, solid_alone, mesh, solid).empty());
+      Mesh mesh_with_points;
+      Solid points;
+      unpack_node_mesh_and_points(bytes, {}, mesh_with_points, points, &set);
+      CHECK(shape_difference(mesh_with_points, solid, mesh, solid).empty());
+      CHECK(points.defs == solid.defs);
+      // The codes as they are: PositionCoder's against the output positions,
+      // each stored position the mesh's own.
+      Mesh mesh_of_codes;
+      std::vector<std::uint64_t> codes;
+      std::vector<Vec3> stored_positions;
+      unpack_node_mesh_codes(bytes, {}, mesh_of_codes, codes, stored_positions);
+      CHECK(mesh_of_codes.positions.empty());
+      CHECK(mesh_of_codes.triangles == mesh.triangles);
+      CHECK(mesh_of_codes.surfaces == mesh.surfaces);
+      std::vector<Vec3> sources;
+      for (std::size_t v = 0; v < solid.defs.size(); ++v) sources.push_back(output_position(set, solid.defs[v], solid.approx[v]));
+      PositionCoder coder(sources);
+      REQUIRE(codes.size() == mesh.vertex_count());
+      std::size_t next_stored = 0;
+      for (std::size_t v = 0; v < codes.size(); ++v) {
+        CHECK(codes[v] == coder.code(v, mesh.positions[v]));
+        if (codes[v] == PositionCoder::stored) {
+          REQUIRE(next_stored < stored_positions.size());
+          CHECK(std::memcmp(&stored_positions[next_stored++], &mesh.positions[v], sizeof(Vec3)) == 0);
+        }
+      }
+      CHECK(next_stored == stored_positions.size());
+      stored += stored_positions.size();
+      coded_vertices += codes.size();
+      CHECK_THROWS_AS(unpack_node_mesh_codes(raw, {}, mesh_of_codes, codes, stored_positions), std::invalid_argument);
+      // The sizes read past the codes.
+      const PackedMeshSizes sizes = packed_mesh_sizes(bytes);
+      CHECK(sizes.vertices == mesh.vertex_count());
+      CHECK(sizes.triangles == mesh.triangle_count());
+      // Coded positions need the plane set: refused without it, whole or the mesh alone.
+      CHECK_THROWS_AS(unpack_node_shape(bytes, {}, unpacked_mesh, unpacked_solid), std::invalid_argument);
+      CHECK_THROWS_AS(unpack_node_mesh(bytes, {}, mesh_alone), std::invalid_argument);
+      // Cut short anywhere (in the codes too), or with a byte more: refused.
+      std::vector<std::size_t> keeps{0, 7, bytes.size() / 3, bytes.size() / 2};
+      for (std::size_t cut = 1; cut <= std::min<std::size_t>(12, bytes.size()); ++cut) keeps.push_back(bytes.size() - cut);
+      for (const std::size_t keep : keeps) {
+        CHECK_THROWS_AS(unpack_node_shape(std::span(bytes).first(keep), {}, unpacked_mesh, unpacked_solid, &set),
+                        std::invalid_argument);
+      }
+      std::vector<std::uint8_t> longer = bytes;
+      longer.push_back(0);
+      CHECK_THROWS_AS(unpack_node_shape(longer, {}, unpacked_mesh, unpacked_solid, &set), std::invalid_argument);
+      // A first code naming the definition before the first (1 + zigzag(-1)),
+      // where the packing has the one-byte code of vertex 0's own definition.
+      // Its place: the flags, five one-byte counts, the codes' one-byte length.
+      const bool one_byte_counts = mesh.vertex_count() < 0x80 && mesh.triangle_count() < 0x80 &&
+                                   mesh.corners.normals.empty() && mesh.corners.uvs.empty() &&
+                                   mesh.corners.tangents.empty();
+      if (one_byte_counts && codes.front() == 1 && bytes[6] < 0x80) {
+        std::vector<std::uint8_t> wrong = bytes;
+        REQUIRE(wrong[7] == 1);
+        wrong[7] = 2;
+        CHECK_THROWS_WITH(unpack_node_shape(wrong, {}, unpacked_mesh, unpacked_solid, &set),
+                          Catch::Contains("names no definition"));
+        ++misnamed;
+      }
+    }
+    // Most positions are their definitions' (the rounding snaps a few); the
+    // small pieces' bytes were edited above.
+    CHECK(stored * 10 < coded_vertices);
+    CHECK(misnamed > 0);
+  }
+}
+
 namespace {
 // Two bonds alike bit for bit, field by field (Bond has padding).
 bool same_bond_bits(const Bond& a, const Bond& b) {
@@ -1334,6 +1435,10 @@ TEST_CASE("a lean build keeps no approximations and gives the same tree otherwis
           if (lean.is_packed(static_cast<NodeIndex>(k))) {
             CHECK(lean.nodes[k].mesh->triangles.empty());
             CHECK(lean.nodes[k].solid->defs.empty());
+            // Its positions coded against its solid's (the cut left the
+            // approximations that needs): what is compared below is computed
+            // back from the definitions.
+            CHECK(packed_positions_coded(lean.packed_shapes[k]));
           }
           // NodeShapes reads the full build's node, whole or either part alone.
           const Mesh& full_mesh = *full.nodes[k].mesh;

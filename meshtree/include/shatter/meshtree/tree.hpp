@@ -8,6 +8,7 @@
 // builder (build.hpp) includes this header.
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -178,6 +179,16 @@ struct NodePoints {
   std::span<const ApproxPoint> approx;
 };
 
+/// A node's mesh with its positions left as the codes a lean build packed them
+/// as (PositionCoder, against the solid's output positions in definition
+/// order): `mesh` has no positions, `codes` one per vertex, `stored` the
+/// positions of the codes PositionCoder::stored, in order.
+struct NodeMeshCodes {
+  const Mesh& mesh;
+  std::span<const std::uint64_t> codes;
+  std::span<const Vec3> stored;
+};
+
 /// Reads the nodes' meshes and solids one at a time, whether a node keeps its
 /// own or a lean build packed them (MeshTree::packed_shapes): those are
 /// unpacked into buffers reused from call to call, so a returned shape is valid
@@ -201,6 +212,11 @@ class NodeShapes {
   /// reader of the positions the mesh refers to; valid as operator()'s shapes
   /// are; throws as it does for a defect in what it reads.
   NodePoints mesh_and_points(NodeIndex node);
+  /// Node `node`'s mesh with its positions as codes, when it is packed with
+  /// them coded (packed_positions_coded), without computing them: the file
+  /// writer's MESH record, whose codes they are; std::nullopt for any other
+  /// node. Valid until the next call; throws as mesh() does.
+  std::optional<NodeMeshCodes> mesh_codes(NodeIndex node);
 
  private:
   void find_path(NodeIndex node);  // path_[d]: the node's ancestor at depth d
@@ -209,6 +225,8 @@ class NodeShapes {
   Mesh mesh_;
   Solid solid_;
   std::vector<NodeIndex> path_;
+  std::vector<std::uint64_t> codes_;
+  std::vector<Vec3> stored_;
 };
 
 /// The surface id cap triangles of the cut at `node` carry.
