@@ -8,7 +8,7 @@
 #include "shatter/kernel/deepest_point.hpp"
 #include "shatter/kernel/union_find.hpp"
 #include "shatter/kernel/validate.hpp"
-#include "star_shaped.hpp"
+#include "shatter/kernel/star_shaped.hpp"
 
 namespace shatter {
 
@@ -136,7 +136,7 @@ bool certify_piece(const Mesh& mesh) {
       if (!is_closed_oriented_manifold(mesh) || !connected_surface(mesh)) return decline();
       topology_checked = true;
     }
-    if (kernel_detail::winds_once_around(mesh, centres[k])) {
+    if (kernel_detail::covers_once(mesh, centres[k])) {
       star_count.fetch_add(1, std::memory_order_relaxed);
       return true;
     }

@@ -30,7 +30,7 @@
 #include "shatter/kernel/self_intersections.hpp"
 #include "shatter/kernel/shells.hpp"
 #include "shatter/kernel/union_find.hpp"
-#include "star_shaped.hpp"
+#include "shatter/kernel/star_shaped.hpp"
 #include "triangle_boxes.hpp"
 
 namespace shatter {
@@ -1048,7 +1048,70 @@ ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* 
 bool is_closed_oriented_manifold(const Mesh& mesh) { return closed_oriented_manifold(mesh); }
 
 bool certify_star_shaped(const Mesh& mesh, const Vec3& centre) {
-  return kernel_detail::faces_away_from(mesh, centre) && kernel_detail::winds_once_around(mesh, centre);
+  return kernel_detail::faces_away_from(mesh, centre) && kernel_detail::covers_once(mesh, centre);
+}
+
+// Why one ray suffices. Every triangle strictly faces away from the centre c,
+// so the radial projection from c maps each onto a spherical triangle,
+// preserving orientation; across an edge the two triangles (the edge used once
+// each way) land on the two sides of its arc, and around a vertex the ring's
+// image winds k >= 1 times (each step turns by an angle in (0, pi)). The
+// projection of the closed surface is then a branched covering of the sphere,
+// of some degree d >= 1 for each component, branched k-fold at a vertex whose
+// ring winds k times. Over a point of the sphere that is no image of an edge
+// or a vertex, the triangles whose cones hold it number the sum of the
+// components' degrees. When that is 1 there is one component, of degree 1,
+// which no vertex can branch (a k-fold branch point has k preimages nearby):
+// the projection is one-to-one, the surface embedded and star-shaped around c,
+// exactly what every ring winding once (winds_once_around) shows, at 1-3
+// orientations a triangle where that walk takes three and an edge lookup.
+std::optional<bool> kernel_detail::covered_once_along_a_ray(const Mesh& mesh, const Vec3& centre) {
+  using Point = CGAL::Epick::Point_3;
+  const auto point = [](const Vec3& p) { return Point(p.x, p.y, p.z); };
+  const Point c = point(centre);
+  // Whether the ray from c through `target` runs inside triangle t's cone
+  // (positive), outside it (negative), or along its boundary (zero): for a
+  // triangle facing away, the cone is where the three planes through c and an
+  // edge all have the target on their positive side.
+  const auto in_cone = [&](const Triangle& t, const Point& target) {
+    bool on_boundary = false;
+    for (int k = 0; k < 3; ++k) {
+      const CGAL::Orientation side =
+          CGAL::orientation(c, point(mesh.positions[t[k]]), point(mesh.positions[t[(k + 1) % 3]]), target);
+      if (side == CGAL::NEGATIVE) return CGAL::NEGATIVE;
+      on_boundary |= side == CGAL::COPLANAR;
+    }
+    return on_boundary ? CGAL::COPLANAR : CGAL::POSITIVE;
+  };
+  // The ray: through a triangle's centroid (rounded, then tested exactly),
+  // from the first few triangles whose rounded centroid lands inside its cone.
+  constexpr std::size_t tries = 4;
+  for (std::size_t first = 0; first < std::min(tries, mesh.triangles.size()); ++first) {
+    const Triangle& t0 = mesh.triangles[first];
+    const Vec3 a = mesh.positions[t0[0]], b = mesh.positions[t0[1]], d = mesh.positions[t0[2]];
+    const Point target = point({(a.x + b.x + d.x) / 3, (a.y + b.y + d.y) / 3, (a.z + b.z + d.z) / 3});
+    if (in_cone(t0, target) != CGAL::POSITIVE) continue;
+    std::size_t covering = 0;
+    for (const Triangle& t : mesh.triangles) {
+      const CGAL::Orientation side = in_cone(t, target);
+      if (side == CGAL::COPLANAR) return std::nullopt;  // along an edge's image: not a regular point
+      if (side == CGAL::POSITIVE && ++covering > 1) return false;
+    }
+    return covering == 1;
+  }
+  return std::nullopt;
+}
+
+bool kernel_detail::covers_once(const Mesh& mesh, const Vec3& centre) {
+  // Every vertex used, as the walk around each vertex requires.
+  thread_local std::vector<std::uint8_t> used;
+  used.assign(mesh.positions.size(), 0);
+  for (const Triangle& t : mesh.triangles) {
+    for (const VertexIndex v : t) used[v] = 1;
+  }
+  if (std::find(used.begin(), used.end(), 0) != used.end()) return false;
+  if (const std::optional<bool> once = covered_once_along_a_ray(mesh, centre)) return *once;
+  return winds_once_around(mesh, centre);
 }
 
 bool kernel_detail::faces_away_from(const Mesh& mesh, const Vec3& centre) {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <numeric>
 #include <random>
 #include <set>
@@ -20,7 +21,9 @@
 #include "shatter/generators/corpus.hpp"
 #include "shatter/generators/solids.hpp"
 #include "shatter/kernel/io.hpp"
+#include "shatter/kernel/certify.hpp"
 #include "shatter/kernel/self_intersections.hpp"
+#include "shatter/kernel/star_shaped.hpp"
 #include "shatter/kernel/validate.hpp"
 #include "support/sanitizers.hpp"
 
@@ -800,6 +803,119 @@ TEST_CASE("the star-shaped certificate accepts convex solids around an inner poi
     INFO(named.name);
     if (certify_star_shaped(named.mesh, centre)) CHECK(validate_mesh(named.mesh).valid());
   }
+}
+
+namespace {
+
+// An octahedron with vertices at +-1 on the axes, its first triangle (e_x, e_y,
+// e_z), faces outward.
+Mesh octahedron() {
+  const std::vector<Vec3> positions{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}};
+  std::vector<Triangle> triangles;
+  for (const VertexIndex x : {0u, 3u}) {
+    for (const VertexIndex y : {1u, 4u}) {
+      for (const VertexIndex z : {2u, 5u}) {
+        // Outward when the signs of the three axes are even (counted by the negatives).
+        const int negatives = (x == 3) + (y == 4) + (z == 5);
+        triangles.push_back(negatives % 2 == 0 ? Triangle{x, y, z} : Triangle{x, z, y});
+      }
+    }
+  }
+  return test::mesh_from(positions, triangles);
+}
+
+// The bipyramid whose equator goes around `turns` times (m vertices a turn,
+// radius growing from 1 by `step` a vertex): every triangle faces away from
+// the origin, and the rings around the poles wind `turns` times.
+Mesh wrapped_bipyramid(int m, int turns, double step) {
+  std::vector<Vec3> positions{{0, 0, 1}, {0, 0, -1}};
+  std::vector<Triangle> triangles;
+  const int n = m * turns;
+  for (int k = 0; k < n; ++k) {
+    const double angle = 2 * M_PI * turns * k / n, radius = 1 + step * k;
+    positions.push_back({radius * std::cos(angle), radius * std::sin(angle), 0});
+  }
+  for (int k = 0; k < n; ++k) {
+    const auto a = static_cast<VertexIndex>(2 + k), b = static_cast<VertexIndex>(2 + (k + 1) % n);
+    triangles.push_back({0, a, b});
+    triangles.push_back({1, b, a});
+  }
+  return test::mesh_from(positions, triangles);
+}
+
+}  // namespace
+
+TEST_CASE("one ray's count decides the covering as the walk around every vertex does", "[validate][certify][property]") {
+  // covered_once_along_a_ray against winds_once_around with connectivity, on
+  // every surface both apply to (sound topology, every triangle facing away):
+  // convex and star-shaped solids around many centres, surfaces wrapping their
+  // centre two or three times, two shells around one centre. Where the ray
+  // decides, it must agree; where it does not, covers_once falls back to the walk.
+  std::vector<std::pair<std::string, Mesh>> surfaces;
+  for (const auto& named : test::generated_meshes()) surfaces.emplace_back(named.name, named.mesh);
+  surfaces.emplace_back("ellipsoid", test::ellipsoid({0.2, -0.1, 0.3}, {1, 2, 3}, 16, 12));
+  surfaces.emplace_back("octahedron", octahedron());
+  for (const int turns : {1, 2, 3}) {
+    for (const int m : {3, 5, 8}) {
+      surfaces.emplace_back("bipyramid " + std::to_string(turns) + "x" + std::to_string(m),
+                            wrapped_bipyramid(m, turns, turns == 1 ? 0.0 : 0.5 / m));
+    }
+  }
+  surfaces.emplace_back("two shells", test::merge({test::ellipsoid({0, 0, 0}, {1, 1, 1}, 10, 8),
+                                                   test::ellipsoid({0, 0, 0}, {3, 2.5, 2}, 12, 9)}));
+  // Star-shaped but far from convex: an ellipsoid's vertices moved along their rays.
+  std::mt19937_64 random(71);
+  std::uniform_real_distribution<double> unit(0, 1);
+  for (int draw = 0; draw < 40; ++draw) {
+    Mesh bumpy = test::ellipsoid({0, 0, 0}, {1, 1.5, 2}, 6 + draw % 10, 5 + draw % 7);
+    for (Vec3& p : bumpy.positions) p = p * (0.6 + 0.8 * unit(random));
+    surfaces.emplace_back("bumpy " + std::to_string(draw), bumpy);
+  }
+  std::size_t decided = 0, undecided = 0, accepted = 0, refused = 0;
+  for (const auto& [name, mesh] : surfaces) {
+    INFO(name);
+    if (!is_closed_oriented_manifold(mesh)) continue;
+    Vec3 average;
+    for (const Vec3& p : mesh.positions) average = average + p;
+    average = average * (1.0 / static_cast<double>(mesh.positions.size()));
+    std::vector<Vec3> centres{average, {0, 0, 0}};
+    for (int k = 0; k < 20; ++k) centres.push_back(average + Vec3{unit(random) - 0.5, unit(random) - 0.5, unit(random) - 0.5});
+    for (const Vec3& centre : centres) {
+      INFO("centre " << centre.x << " " << centre.y << " " << centre.z);
+      if (!kernel_detail::faces_away_from(mesh, centre)) continue;
+      const bool walked = kernel_detail::winds_once_around(mesh, centre) && connected_surface(mesh);
+      const std::optional<bool> counted = kernel_detail::covered_once_along_a_ray(mesh, centre);
+      if (counted) {
+        ++decided;
+        CHECK(*counted == walked);
+        (*counted ? accepted : refused) += 1;
+      } else {
+        ++undecided;
+      }
+      if (connected_surface(mesh)) CHECK(kernel_detail::covers_once(mesh, centre) == walked);
+      if (walked) CHECK(validate_mesh(mesh).valid());
+    }
+  }
+  // Both answers are met many times; a ray along an edge's image is rare.
+  CHECK(accepted > 100);
+  CHECK(refused >= 10);
+  CHECK(undecided * 20 < decided);
+
+  // A ray along a vertex's image decides nothing: the octahedron's first
+  // triangle's centroid, (1/3, 1/3, 1/3) in doubles, points from the origin at
+  // the corner (2, 2, 2) of a box around it. The walk then decides: it winds
+  // once around every vertex of both shells (the connectivity test, which the
+  // certificates run first, is what refuses two shells).
+  const Mesh nested = test::merge({octahedron(), test::box({-2, -2, -2}, {2, 2, 2})});
+  REQUIRE(is_closed_oriented_manifold(nested));
+  REQUIRE(kernel_detail::faces_away_from(nested, {0, 0, 0}));
+  CHECK_FALSE(kernel_detail::covered_once_along_a_ray(nested, {0, 0, 0}).has_value());
+  CHECK(kernel_detail::covers_once(nested, {0, 0, 0}) == kernel_detail::winds_once_around(nested, {0, 0, 0}));
+  CHECK_FALSE(connected_surface(nested));
+  // Moved off that corner, the same shells are counted twice.
+  const Mesh shifted = test::merge({octahedron(), test::box({-2, -2.5, -2}, {2.5, 2.25, 3})});
+  REQUIRE(kernel_detail::faces_away_from(shifted, {0, 0, 0}));
+  CHECK(kernel_detail::covered_once_along_a_ray(shifted, {0, 0, 0}) == std::optional<bool>(false));
 }
 
 // --- the fast topology path against an independent count ------------------------
