@@ -701,13 +701,31 @@ class PlaneBonds {
       const std::uint32_t i = part.first + e, j = part.first + (e + 1) % part.count;
       bool all_outside = true;
       for (std::uint32_t c = 0; c < other.count && all_outside; ++c) {
-        const std::uint32_t z = other.first + c;
-        all_outside = orient_in_plane(set_, raw_, corner_defs_[i], corner_approx_[i], corner_defs_[j], corner_approx_[j],
-                                      corner_defs_[z], corner_approx_[z]) != Sign::positive;
+        all_outside = !strictly_left(i, j, other.first + c);
       }
       if (all_outside) return true;
     }
     return false;
+  }
+
+  // Whether corner z lies strictly left of the line from corner i to corner j,
+  // exactly. Tried first on the rounded corners, as in strictly_inside: each
+  // coordinate of b - a is within ea + eb of the exact difference, of p - a
+  // within ea + ez; a value the bound cannot settle (a corner on the line, as
+  // where two parts share an edge of their node's cap) goes to the exact
+  // predicate on the defined points.
+  bool strictly_left(std::uint32_t i, std::uint32_t j, std::uint32_t z) const {
+    const Vec2 a = points_[i], b = points_[j], p = points_[z];
+    const double e_edge = errors_[i] + errors_[j], e_point = errors_[i] + errors_[z];
+    const double bx = b.x - a.x, by = b.y - a.y, px = p.x - a.x, py = p.y - a.y;
+    const double value = bx * py - by * px;
+    const double span = std::fabs(bx) + std::fabs(by) + std::fabs(px) + std::fabs(py) + 2 * (e_edge + e_point);
+    const double bound = 2 * (e_edge * (std::fabs(px) + std::fabs(py) + e_point) + e_point * (std::fabs(bx) + std::fabs(by))) +
+                         0x1p-50 * span * span;
+    if (value > bound) return true;
+    if (value < -bound) return false;
+    return orient_in_plane(set_, raw_, corner_defs_[i], corner_approx_[i], corner_defs_[j], corner_approx_[j],
+                           corner_defs_[z], corner_approx_[z]) == Sign::positive;
   }
 
   struct CachedSolid {
