@@ -87,7 +87,7 @@ bool volume_centroid(const Mesh& mesh, Vec3& centroid) {
 
 }  // namespace
 
-bool certify_piece(const Mesh& mesh) {
+bool certify_piece(const Mesh& mesh, bool topology_sound) {
   attempt_count.fetch_add(1, std::memory_order_relaxed);
   const auto decline = [] {
     declined_count.fetch_add(1, std::memory_order_relaxed);
@@ -112,6 +112,7 @@ bool certify_piece(const Mesh& mesh) {
   centres[centre_count++] = vertex_average(mesh);
   if (volume_centroid(mesh, centres[centre_count])) ++centre_count;
   bool topology_checked = false;
+  std::optional<bool> connected;  // connected_surface, once asked
   bool deepest_tried = false;
   for (std::size_t k = 0;; ++k) {
     if (k == centre_count) {
@@ -129,14 +130,22 @@ bool certify_piece(const Mesh& mesh) {
     // a few triangles: that test goes first, so a declined piece costs little
     // before the full check.
     if (!kernel_detail::faces_away_from(mesh, centres[k])) continue;
-    // The winding test takes the topology as given: it is checked here, and
-    // connectivity with it (two star-shaped shells around one centre would each
-    // wind once, yet may cross each other).
+    // The covering tests take the topology as given: it is checked here
+    // unless the caller knows it sound by construction.
     if (!topology_checked) {
-      if (!is_closed_oriented_manifold(mesh) || !connected_surface(mesh)) return decline();
+      if (!topology_sound && !is_closed_oriented_manifold(mesh)) return decline();
       topology_checked = true;
     }
-    if (kernel_detail::covers_once(mesh, centres[k])) {
+    // One ray's count proves one component too; the walk around every vertex,
+    // where the ray decides nothing, needs connectivity shown apart (two
+    // star-shaped shells around one centre each wind once, yet may cross).
+    std::optional<bool> once = kernel_detail::covered_once_along_a_ray(mesh, centres[k]);
+    if (!once) {
+      if (!connected) connected = connected_surface(mesh);
+      if (!*connected) return decline();
+      once = kernel_detail::winds_once_around(mesh, centres[k]);
+    }
+    if (*once) {
       star_count.fetch_add(1, std::memory_order_relaxed);
       return true;
     }

@@ -126,10 +126,21 @@ bool closed_oriented_manifold(const Mesh& mesh) {
       }
     }
   }
-  // The out-edge v -> w, as its index into `out`, or none.
+  // The out-edge v -> w, as its index into `out`, or none. A short list (most
+  // vertices have a handful of out-edges) is scanned, a long one searched:
+  // the binary search's unpredictable branches were most of this check's time
+  // on the pieces of curved meshes. Either finds the one entry (no directed
+  // edge is there twice, checked before any lookup).
   constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+  constexpr std::uint32_t scanned = 16;
   const auto find_out = [&](VertexIndex v, VertexIndex w) {
     const auto begin = out.begin() + first_out[v], end = out.begin() + first_out[v + 1];
+    if (end - begin <= scanned) {
+      for (auto it = begin; it != end; ++it) {
+        if ((*it >> 32) == w) return static_cast<std::uint32_t>(it - out.begin());
+      }
+      return none;
+    }
     const auto it = std::lower_bound(begin, end, std::uint64_t{w} << 32);
     return it != end && (*it >> 32) == w ? static_cast<std::uint32_t>(it - out.begin()) : none;
   };

@@ -84,7 +84,10 @@ std::vector<std::uint8_t> exact_input_vertices(const Solid& solid, std::span<con
 
 ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& options, const ExactVertexSource* exact) {
   if (!options.allow_self_intersections) {
-    if (certify_piece(mesh)) {
+    // A triangulation of the exact solid's faces over their own vertices, none
+    // merged (what `exact` says), has the solid's topology: closed, oriented,
+    // 2-manifold by index, every vertex used.
+    if (certify_piece(mesh, exact != nullptr)) {
       ValidationReport certified;
       certified.vertex_count = mesh.vertex_count();
       certified.triangle_count = mesh.triangle_count();

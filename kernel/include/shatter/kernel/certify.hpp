@@ -64,6 +64,13 @@ bool connected_surface(const Mesh& mesh);
 /// Counted in certify_counts(). Cost: O(T) per centre tried, usually declining at
 /// the first triangle that faces a centre, and O(T) expected for the program.
 /// Never throws.
-bool certify_piece(const Mesh& mesh);
+/// `topology_sound`: the caller knows by construction that the mesh is a
+/// closed, consistently oriented 2-manifold by index with every vertex used
+/// (is_closed_oriented_manifold would hold), as round_solid knows of a
+/// triangulation of a valid exact solid's faces over their own vertices with
+/// none merged; that check is then skipped (connectivity is still
+/// established, by the one-ray count or connected_surface). The guarantee
+/// then rests on that knowledge.
+bool certify_piece(const Mesh& mesh, bool topology_sound = false);
 
 }  // namespace shatter
