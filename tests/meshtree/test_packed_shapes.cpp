@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstddef>
 #include <cstring>
 #include <iterator>
 #include <span>
@@ -14,6 +15,7 @@
 
 #include "shatter/generators/random.hpp"
 #include "shatter/meshtree/packed_shapes.hpp"
+#include "../../meshtree/src/populate.hpp"
 #include "support/sanitizers.hpp"
 
 using namespace shatter;
@@ -132,5 +134,37 @@ TEST_CASE("packed shapes are entries in blocks, copied with their bytes", "[pack
     CHECK(equal(shapes[0], expected[0]));
     copy = shapes;
     for (std::size_t k = 0; k < expected.size(); ++k) REQUIRE(equal(copy[k], expected[k]));
+  }
+}
+
+TEST_CASE("populating pages ahead changes no byte written and nothing past the room reserved",
+          "[packed_shapes][property]") {
+  // number_tree and the bond search populate their arrays' reserved room ahead
+  // of the fill (meshtree/src/populate.hpp): what was written before must stay
+  // (a wrong advice, MADV_DONTNEED say, would zero it), at any alignment, and
+  // the fill must read back whole.
+  for (const std::uint64_t seed : {1u, 2u, 3u}) {
+    shatter::test::Random random(seed);
+    std::vector<std::uint64_t> values;
+    values.reserve(300'000 + random.index(100'000));
+    shatter::detail::PopulatedAhead ahead(values, std::size_t{1} << 16);
+    std::uint64_t state = seed;
+    while (values.size() < values.capacity()) {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      values.push_back(state);
+      ahead.ensure();
+      // Now and then the whole of what is written, from an odd address on.
+      if (values.size() % 50'000 == 0) {
+        shatter::detail::populate_for_writing(reinterpret_cast<std::byte*>(values.data()) + 3,
+                                              values.size() * sizeof(std::uint64_t) - 3);
+      }
+    }
+    std::uint64_t check = seed;
+    std::size_t changed = 0;
+    for (const std::uint64_t value : values) {
+      check = check * 6364136223846793005ull + 1442695040888963407ull;
+      changed += value != check;
+    }
+    CHECK(changed == 0);
   }
 }
