@@ -225,6 +225,9 @@ struct BuildNode {
   // (they grow in parallel, and cuts may be undone), so the depth names the
   // plane until number_tree gives the node its index.
   Boxed<Solid> solid;
+  // A lean build's non-convex leaf's hull, taken as it finishes (leaf_finished);
+  // plane_hulls makes every other node's.
+  Boxed<Mesh> hull;
   const BuildNode* parent = nullptr;
   MassProperties mass;
   Plane plane;  // the plane that cut this node; zero while it is a leaf
@@ -388,7 +391,12 @@ class Builder {
   /// the writer) unpacks it (NodeShapes), and a million leaves' arrays would
   /// otherwise be the largest part of the tree (README "Lean memory").
   void leaf_finished(BuildNode& node) {
-    if (lean_) pack(node);
+    if (lean_) {
+      // A non-convex leaf's hull while its mesh is at hand: plane_hulls would
+      // unpack the mesh again, computing every position from its definition.
+      if (node.mesh.present() && !node.solid->convex) node.hull = convex_hull_of(*node.mesh);
+      pack(node);
+    }
     const std::size_t done = ++leaves_done_;
     if (progress_) progress_(done);
   }
@@ -655,6 +663,7 @@ void number_tree(std::unique_ptr<BuildNode> root, ByteBlocks packed, MeshTree& t
       rename_by_path(path, *node.mesh, *node.solid);
     }
     node.mass = built.mass;
+    node.hull = std::move(built.hull);
     node.parent = pending.parent;
     tree.cut_planes.push_back(built.plane);
     node.above_parent_plane = built.above_parent_plane;
@@ -721,7 +730,8 @@ void plane_hulls(tbb::task_arena& arena, MeshTree& tree) {
         if (node.convex) return;
         NodeShapes shapes(tree);  // a lean build's nodes are packed
         if (node.is_leaf()) {
-          node.hull = convex_hull_of(shapes.mesh(level[i]));
+          // A lean build's leaf has it already, unless its cut was undone.
+          if (!node.hull.present()) node.hull = convex_hull_of(shapes.mesh(level[i]));
           return;
         }
         std::vector<Vec3> points;
