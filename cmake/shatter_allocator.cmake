@@ -13,10 +13,15 @@ if(SHATTER_JEMALLOC)
   pkg_check_modules(jemalloc REQUIRED IMPORTED_TARGET jemalloc)
 endif()
 
-# Gives `target` (an executable) jemalloc and its options, when SHATTER_JEMALLOC is on.
+# Gives `target` (an executable) jemalloc and its options, and large arrays on
+# huge pages (cli/huge_page_arrays.cpp), when SHATTER_JEMALLOC is on.
 function(shatter_use_jemalloc target)
   if(SHATTER_JEMALLOC)
-    target_sources(${target} PRIVATE ${PROJECT_SOURCE_DIR}/cli/jemalloc_options.cpp)
+    target_sources(${target} PRIVATE ${PROJECT_SOURCE_DIR}/cli/jemalloc_options.cpp
+                                      ${PROJECT_SOURCE_DIR}/cli/huge_page_arrays.cpp)
+    # Its own translation unit: it defines operator new, whatever a unity build
+    # would put beside it.
+    set_source_files_properties(${PROJECT_SOURCE_DIR}/cli/huge_page_arrays.cpp PROPERTIES SKIP_UNITY_BUILD_INCLUSION ON)
     target_link_libraries(${target} PRIVATE PkgConfig::jemalloc)
   endif()
 endfunction()
