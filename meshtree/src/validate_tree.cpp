@@ -7,7 +7,10 @@
 
 #include "shatter/meshtree/validate_tree.hpp"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+
+#include <atomic>
 
 #include <algorithm>
 #include <array>
@@ -51,6 +54,29 @@ std::string hex(std::uint64_t value, int digits) {
 namespace {
 
 constexpr std::uint64_t max_u32 = std::numeric_limits<std::uint32_t>::max();
+
+/// The defect `check(k)` finds at the lowest k of [0, count), or nothing.
+/// Nodes are checked in parallel, in blocks; a block stops at its first defect,
+/// none goes on past the lowest found so far, and the lowest is checked again
+/// for its message: the answer a loop in node order gives, on any number of
+/// threads, without a defect held per node (a tree of 2^21 nodes would hold
+/// over 100 MB of them). `check` must be safe to call concurrently for
+/// different nodes, and again for the same one.
+template <class Check>
+std::optional<TreeDefect> lowest_node_defect(std::size_t count, const Check& check) {
+  std::atomic<std::size_t> lowest{count};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t k = range.begin(); k != range.end() && k < lowest.load(std::memory_order_relaxed); ++k) {
+      if (!check(k)) continue;
+      std::size_t seen = lowest.load();
+      while (k < seen && !lowest.compare_exchange_weak(seen, k)) {
+      }
+      return;
+    }
+  });
+  if (lowest.load() == count) return std::nullopt;
+  return check(lowest.load());
+}
 
 std::string str(std::uint64_t value) { return std::to_string(value); }
 
@@ -564,9 +590,7 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
     const MeshTreeNode& node = tree.nodes[k];
     context.subtree_end[k] = node.is_leaf() ? static_cast<NodeIndex>(k + 1) : context.subtree_end[node.children.back()];
   }
-  SolidScratch scratch;
-  NodeShapes shapes(tree);  // first_defect has unpacked every packed node
-  for (std::size_t k = 0; k < node_count; ++k) {
+  return lowest_node_defect(node_count, [&](std::size_t k) -> std::optional<TreeDefect> {
     const MeshTreeNode& node = tree.nodes[k];
     if (node.convex && !(node.hull->positions.empty() && node.hull->triangles.empty())) {
       return TreeDefect{
@@ -574,11 +598,13 @@ std::optional<TreeDefect> exact_defect(const MeshTree& tree, bool caches) {
           "node " + str(k) + " is convex, so its hull must be empty (its mesh is its hull), but the hull has " +
               str(node.hull->positions.size()) + " vertices and " + str(node.hull->triangles.size()) + " triangles"};
     }
+    thread_local SolidScratch scratch;
+    NodeShapes shapes(tree);  // first_defect has unpacked every packed node
     if (auto problem = solid_defect(shapes(static_cast<NodeIndex>(k)).solid, k, context, caches, scratch)) {
       return TreeDefect{TreePart::solid, k, "the solid of node " + str(k) + " " + *problem};
     }
-  }
-  return std::nullopt;
+    return std::nullopt;
+  });
 }
 
 /// A lean build's packed nodes (MeshTree::packed_shapes): one entry per node or
@@ -613,8 +639,8 @@ std::optional<TreeDefect> first_defect(const MeshTree& tree, bool caches) {
   if (auto defect = leaf_list_defect(tree)) return defect;
   if (auto defect = cut_planes_defect(tree)) return defect;
   if (auto defect = packed_defect(tree)) return defect;
-  NodeShapes shapes(tree);
-  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+  const auto node_defect = [&](std::size_t k) -> std::optional<TreeDefect> {
+    NodeShapes shapes(tree);
     const Mesh* mesh = nullptr;
     try {
       mesh = &shapes(static_cast<NodeIndex>(k)).mesh;
@@ -625,7 +651,9 @@ std::optional<TreeDefect> first_defect(const MeshTree& tree, bool caches) {
       return TreeDefect{TreePart::mesh, k, "the mesh of node " + str(k) + " " + *problem};
     if (auto problem = mesh_defect(*tree.nodes[k].hull))
       return TreeDefect{TreePart::hull, k, "the hull of node " + str(k) + " " + *problem};
-  }
+    return std::nullopt;
+  };
+  if (auto defect = lowest_node_defect(tree.nodes.size(), node_defect)) return defect;
   if (auto defect = bonds_defect(tree)) return defect;
   return exact_defect(tree, caches);
 }
@@ -660,9 +688,7 @@ std::optional<TreeDefect> caches_defect(const MeshTree& tree, MeshTree* fill) {
   }
   // Made after plane_approx is filled: the set views it.
   const PlaneSet set = tree.plane_set();
-  // Nodes in parallel, each on its own (its own approximations filled), the
-  // lowest-numbered node's defect reported: the answer never depends on threads.
-  std::vector<std::optional<TreeDefect>> defect_of_node(tree.nodes.size());
+  // Nodes in parallel, each on its own (its own approximations filled).
   const auto node_defect = [&](std::size_t k) -> std::optional<TreeDefect> {
     NodeShapes shapes(tree);  // fill_tree_caches unpacks every node first
     const Solid& solid = shapes(static_cast<NodeIndex>(k)).solid;
@@ -692,11 +718,7 @@ std::optional<TreeDefect> caches_defect(const MeshTree& tree, MeshTree* fill) {
     }
     return std::nullopt;
   };
-  tbb::parallel_for(std::size_t{0}, tree.nodes.size(), [&](std::size_t k) { defect_of_node[k] = node_defect(k); });
-  for (std::optional<TreeDefect>& defect : defect_of_node) {
-    if (defect) return std::move(defect);
-  }
-  return std::nullopt;
+  return lowest_node_defect(tree.nodes.size(), node_defect);
 }
 
 // --- the geometry (TreeValidationOptions::geometry) -------------------------------
@@ -766,13 +788,8 @@ std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k
 /// The geometric defect of the lowest-numbered node that has one. Nodes are
 /// checked in parallel, each on its own, so the answer never depends on threads.
 std::optional<TreeDefect> geometry_defect(const MeshTree& tree) {
-  std::vector<std::optional<TreeDefect>> defect_of_node(tree.nodes.size());
-  tbb::parallel_for(std::size_t{0}, tree.nodes.size(),
-                    [&](std::size_t k) { defect_of_node[k] = node_geometry_defect(tree, static_cast<NodeIndex>(k)); });
-  for (std::optional<TreeDefect>& defect : defect_of_node) {
-    if (defect) return std::move(defect);
-  }
-  return std::nullopt;
+  return lowest_node_defect(tree.nodes.size(),
+                            [&](std::size_t k) { return node_geometry_defect(tree, static_cast<NodeIndex>(k)); });
 }
 
 }  // namespace
