@@ -573,11 +573,7 @@ MeshTree decode_shatter(std::string_view bytes) {
     if (sections.cell_planes) read_cell_planes(*sections.cell_planes, tree);
     tree.geometry = read_geometry(*sections.geometry);
     offsets.point_count = tree.geometry.points.size();
-    read_version3_solids(*sections.solids, tree, offsets);
-    read_version3_meshes(*sections.meshes, tree, false, pending, offsets);
-    read_version3_meshes(*sections.hulls, tree, true, pending, offsets);
-    tree.leaf_nodes = leaves_in_order(tree.nodes);
-    read_version3_bonds(*sections.bonds, tree, offsets);
+    read_version3_shapes(sections, tree, pending, offsets);
   } else {
     read_nodes(*sections.nodes, tree, offsets.nodes);
     read_meshes(*sections.meshes, tree.nodes, false, offsets.meshes);

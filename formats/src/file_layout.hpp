@@ -590,6 +590,10 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
 void read_cell_planes(const Section& section, MeshTree& tree);
 void read_version3_meshes(const Section& section, MeshTree& tree, bool hulls, Version3Pending& pending, RecordOffsets& offsets);
 void read_version3_bonds(const Section& section, MeshTree& tree, RecordOffsets& offsets);
+/// SOLD, MESH, HULL and BOND (with tree.leaf_nodes), SOLD beside the other
+/// three; refuses what reading them in that order refuses, with the same
+/// message (the first failure in section and record order).
+void read_version3_shapes(const SectionTable& sections, MeshTree& tree, Version3Pending& pending, RecordOffsets& offsets);
 /// Fills the derived positions and masses. Precondition: the tree passed
 /// validate_tree without caches and its caches are filled.
 void finish_version3(MeshTree& tree, const Version3Pending& pending);

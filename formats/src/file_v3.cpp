@@ -9,6 +9,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
 
@@ -17,6 +18,7 @@
 #include <bit>
 #include <cfenv>
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <optional>
 #include <span>
@@ -879,7 +881,17 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
   in.expect_end();
 }
 
-void read_version3_meshes(const Section& section, MeshTree& tree, bool hulls, Version3Pending& pending, RecordOffsets& offsets) {
+namespace {
+
+// What the MESH section's reading beside SOLD's leaves to check once the
+// solids are read (read_version3_shapes): `read` records were read, and the
+// next one (if any) failed to.
+struct DeferredSources {
+  std::size_t read = 0;
+};
+
+void read_meshes(const Section& section, MeshTree& tree, bool hulls, Version3Pending& pending, RecordOffsets& offsets,
+                 DeferredSources* deferred) {
   PayloadReader in(section);
   std::vector<MeshTreeNode>& nodes = tree.nodes;
   const std::uint32_t mesh_count = in.u32("the mesh count");
@@ -893,8 +905,14 @@ void read_version3_meshes(const Section& section, MeshTree& tree, bool hulls, Ve
     record_offsets[k] = in.offset();
     in.set_record("node " + str(k));
     path.enter(static_cast<NodeIndex>(k), nodes[k].depth);
-    const std::size_t source_count = hulls ? nodes[k].mesh->positions.size() : nodes[k].solid->defs.size();
+    // Deferred: any source a 32-bit index holds passes here (no_index, the
+    // stored mark, does not), and is checked against the solid's vertex count
+    // once it is known.
+    const std::size_t source_count = deferred != nullptr ? std::size_t{no_index}
+                                     : hulls               ? nodes[k].mesh->positions.size()
+                                                           : nodes[k].solid->defs.size();
     Mesh mesh = read_mesh(in, source_count, sources[k], path);
+    if (deferred != nullptr) deferred->read = k + 1;
     if (!hulls) {
       nodes[k].mesh = std::move(mesh);
     } else if (!mesh.positions.empty() || !mesh.triangles.empty()) {
@@ -903,6 +921,69 @@ void read_version3_meshes(const Section& section, MeshTree& tree, bool hulls, Ve
   }
   in.set_record("");
   in.expect_end();
+}
+
+// Reads MESH record `k` again, now that the solids are read, with its solid's
+// vertex count: it throws just what reading it in turn would have.
+void reread_mesh_record(const Section& section, const MeshTree& tree, const RecordOffsets& offsets, std::size_t k) {
+  const std::size_t from = offsets.meshes[k] - section.payload_offset;
+  Section rest = section;
+  rest.payload = section.payload.substr(from);
+  rest.payload_offset = section.payload_offset + from;
+  PayloadReader in(rest);
+  in.set_record("node " + str(k));
+  AncestorPath path;
+  path.start_at(static_cast<NodeIndex>(k), tree.nodes);
+  std::vector<std::uint32_t> sources;
+  read_mesh(in, tree.nodes[k].solid->defs.size(), sources, path);
+}
+
+}  // namespace
+
+void read_version3_meshes(const Section& section, MeshTree& tree, bool hulls, Version3Pending& pending, RecordOffsets& offsets) {
+  read_meshes(section, tree, hulls, pending, offsets, nullptr);
+}
+
+void read_version3_shapes(const SectionTable& sections, MeshTree& tree, Version3Pending& pending, RecordOffsets& offsets) {
+  // SOLD on one side; MESH, HULL and BOND on the other, which need of the
+  // solids only their vertex counts (the sources of MESH's positions), checked
+  // after both. Failures are then reported as reading in turn would: SOLD's
+  // first, then a deferred source of a MESH record before the one MESH failed
+  // at (read again, so the message is the same), then the other side's own.
+  std::exception_ptr solids_failure, others_failure;
+  DeferredSources deferred;
+  bool meshes_done = false;
+  tbb::parallel_invoke(
+      [&] {
+        try {
+          read_version3_solids(*sections.solids, tree, offsets);
+        } catch (...) {
+          solids_failure = std::current_exception();
+        }
+      },
+      [&] {
+        try {
+          read_meshes(*sections.meshes, tree, false, pending, offsets, &deferred);
+          meshes_done = true;
+          read_meshes(*sections.hulls, tree, true, pending, offsets, nullptr);
+          tree.leaf_nodes = leaves_in_order(tree.nodes);
+          read_version3_bonds(*sections.bonds, tree, offsets);
+        } catch (...) {
+          others_failure = std::current_exception();
+        }
+      });
+  if (solids_failure) std::rethrow_exception(solids_failure);
+  for (std::size_t k = 0; k < deferred.read; ++k) {
+    const std::size_t vertices = tree.nodes[k].solid->defs.size();
+    for (const std::uint32_t source : pending.mesh_sources[k]) {
+      if (source != no_index && source >= vertices) reread_mesh_record(*sections.meshes, tree, offsets, k);
+    }
+  }
+  // MESH failed at a record: with the solid's count it may fail sooner in it.
+  if (others_failure && !meshes_done && deferred.read < tree.nodes.size() && deferred.read < offsets.meshes.size()) {
+    reread_mesh_record(*sections.meshes, tree, offsets, deferred.read);
+  }
+  if (others_failure) std::rethrow_exception(others_failure);
 }
 
 void read_version3_bonds(const Section& section, MeshTree& tree, RecordOffsets& offsets) {

@@ -2172,3 +2172,105 @@ TEST_CASE("the file encoded on 2 and 4 threads is the one-thread file byte for b
   }
   CHECK(cases.size() == 7);
 }
+
+namespace {
+
+// Where one MESH record starts in its payload, its channel byte, and its first
+// position code that names a source (npos when every position is stored).
+// Meshes without attribute channels only (built trees' meshes).
+struct MeshRecordAt {
+  std::size_t start = 0, channels = 0, code = std::string::npos, code_end = 0, triangles = 0;
+  std::uint64_t vertex = 0;
+};
+
+std::vector<MeshRecordAt> mesh_records(std::string_view payload) {
+  std::vector<MeshRecordAt> records;
+  std::size_t at = 4;  // after the mesh count
+  while (at < payload.size()) {
+    MeshRecordAt record;
+    record.start = at;
+    const std::uint64_t vertices = read_vu(payload, at), triangles = read_vu(payload, at);
+    record.channels = at;
+    REQUIRE(payload.at(at++) == 0);
+    for (std::uint64_t v = 0; v < vertices; ++v) {
+      const std::size_t code_at = at;
+      if (read_vu(payload, at) == 0) {
+        at += 24;  // a stored position
+      } else if (record.code == std::string::npos) {
+        record.code = code_at, record.code_end = at, record.vertex = v;
+      }
+    }
+    record.triangles = at;
+    at += 3 * (vertices <= 0x100 ? 1 : vertices <= 0x10000 ? 2 : 4) * triangles;
+    const std::uint64_t runs = read_vu(payload, at);
+    for (std::uint64_t r = 0; r < 2 * runs; ++r) read_vu(payload, at);
+    records.push_back(record);
+  }
+  return records;
+}
+
+}  // namespace
+
+// decode_shatter reads SOLD beside MESH, HULL and BOND (MESH's sources checked
+// against the solids' vertex counts after both): what it refuses, and the
+// message, must be what reading them in turn gives. Every node's first coded
+// position is made to name the source one past its solid's last vertex, alone
+// and with a later failure in MESH, in HULL, or in SOLD.
+TEST_CASE("SOLD, MESH, HULL and BOND read side by side refuse as reading them in turn does", "[shatter_file][v3][hostile]") {
+  TreeRecipe recipe;
+  recipe.fragments = 16;
+  const MeshTree box = build_mesh_tree(test::box({0, 0, 0}, {1, 2, 3}), recipe, {.threads = 1});
+  std::size_t cases = 0;
+  for (const MeshTree* tree : {&small_plane_tree(), &box}) {
+    const std::vector<std::pair<std::string, std::string>> parts = payloads_v3(*tree);
+    const auto file_with = [&](std::initializer_list<std::pair<std::string_view, std::string>> changes) {
+      auto changed = parts;
+      for (auto& [tag, payload] : changed) {
+        for (const auto& [changed_tag, changed_payload] : changes) {
+          if (tag == changed_tag) payload = changed_payload;
+        }
+      }
+      return file_of_parts(changed, 3);
+    };
+    const auto payload = [&](std::string_view tag) {
+      for (const auto& [t, p] : parts) {
+        if (t == tag) return p;
+      }
+      FAIL("no " << tag << " section");
+      return std::string();
+    };
+    const std::string meshes = payload("MESH"), hulls = payload("HULL"), solids = payload("SOLD");
+    const std::vector<MeshRecordAt> records = mesh_records(meshes);
+    REQUIRE(records.size() == tree->nodes.size());
+    for (std::size_t k = 0; k < records.size(); ++k) {
+      const MeshRecordAt& record = records[k];
+      if (record.code == std::string::npos) continue;
+      const std::uint64_t n = tree->nodes[k].solid->defs.size(), v = record.vertex;
+      std::string bad = meshes;
+      bad.replace(record.code, record.code_end - record.code, Bytes{}.vu(1 + 2 * (n - v)).data);
+      const std::string expected = "vertex " + std::to_string(v) + " takes the position of source vertex " +
+                                   std::to_string(n) + ", of " + std::to_string(n);
+      const auto check = [&](const std::string& bytes, const std::string& message, const char* what) {
+        INFO(what << ", node " << k);
+        check_refused(bytes, message);
+        if (message == expected) check_refused(bytes, "node " + std::to_string(k));
+        ++cases;
+      };
+      check(file_with({{"MESH", bad}}), expected, "alone");
+      check(file_with({{"MESH", bad}, {"HULL", hulls.substr(0, hulls.size() - 1)}}), expected, "HULL cut short");
+      if (k + 1 < records.size()) {
+        std::string later = bad;
+        later[records[k + 1].channels + (later.size() - meshes.size())] = '\x80';
+        check(file_with({{"MESH", later}}), expected, "a later record's unknown channel bits");
+      }
+      // Cut short inside the record's triangles, after its codes: reading in
+      // turn meets the source first.
+      const std::size_t triangles = record.triangles + (bad.size() - meshes.size());
+      check(file_with({{"MESH", bad.substr(0, triangles + 1)}}), expected, "MESH cut short in the triangles");
+      std::string bad_solids = solids;
+      bad_solids[4] = '\x80';  // the root's solid flags
+      check(file_with({{"MESH", bad}, {"SOLD", bad_solids}}), "unknown solid flag bits 0x80", "SOLD's flags");
+    }
+  }
+  CHECK(cases > 100);
+}
