@@ -25,6 +25,7 @@
 #include <utility>
 #include <vector>
 
+#include "shatter/kernel/certify.hpp"
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/validate.hpp"
@@ -732,7 +733,7 @@ bool embedding_defect(DefectKind kind) {
 
 /// The first geometric defect of node `k`: its plane and children's sides, its
 /// mass, its mesh, its hull. Requires a tree that passed first_defect.
-std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k) {
+std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k, bool certificates) {
   const MeshTreeNode& node = tree.nodes[k];
   NodeShapes shapes(tree);
   const Mesh& mesh = shapes(k).mesh;  // first_defect has unpacked every packed node
@@ -765,12 +766,16 @@ std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k
   // validate_mesh finds nothing wrong with no triangles at all.
   if (mesh.triangles.empty()) return TreeDefect{TreePart::mesh, k, "the mesh of " + name + " is empty"};
   const bool topology_only = tree.recipe.allow_self_intersections;
-  ValidationReport mesh_report = validate_mesh(mesh, {.check_self_intersections = !topology_only});
-  if (topology_only) {
-    std::erase_if(mesh_report.defects, [](const Defect& defect) { return embedding_defect(defect.kind); });
-  }
-  if (!mesh_report.valid()) {
-    return TreeDefect{TreePart::mesh, k, "the mesh of " + name + " is not a valid solid: " + mesh_report.summary()};
+  // A certified mesh is one validate_mesh finds valid; a declined one proves
+  // nothing and is checked in full.
+  if (!(certificates && !topology_only && certify_piece(mesh))) {
+    ValidationReport mesh_report = validate_mesh(mesh, {.check_self_intersections = !topology_only});
+    if (topology_only) {
+      std::erase_if(mesh_report.defects, [](const Defect& defect) { return embedding_defect(defect.kind); });
+    }
+    if (!mesh_report.valid()) {
+      return TreeDefect{TreePart::mesh, k, "the mesh of " + name + " is not a valid solid: " + mesh_report.summary()};
+    }
   }
   // A convex node is its own hull (the structure checked that none is stored).
   if (!node.convex) {
@@ -787,9 +792,10 @@ std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k
 
 /// The geometric defect of the lowest-numbered node that has one. Nodes are
 /// checked in parallel, each on its own, so the answer never depends on threads.
-std::optional<TreeDefect> geometry_defect(const MeshTree& tree) {
-  return lowest_node_defect(tree.nodes.size(),
-                            [&](std::size_t k) { return node_geometry_defect(tree, static_cast<NodeIndex>(k)); });
+std::optional<TreeDefect> geometry_defect(const MeshTree& tree, bool certificates) {
+  return lowest_node_defect(tree.nodes.size(), [&](std::size_t k) {
+    return node_geometry_defect(tree, static_cast<NodeIndex>(k), certificates);
+  });
 }
 
 }  // namespace
@@ -1092,7 +1098,7 @@ TreeValidationReport validate_tree(const MeshTree& tree, const TreeValidationOpt
   if (!report.defect && options.caches) report.defect = detail::caches_defect(tree, nullptr);
   if (!report.defect && options.geometry) {
     report.geometry_checked = true;
-    report.defect = detail::geometry_defect(tree);
+    report.defect = detail::geometry_defect(tree, options.certificates);
   }
   return report;
 }

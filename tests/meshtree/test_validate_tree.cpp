@@ -441,6 +441,10 @@ TEST_CASE("built trees hold: structure, caches and geometry", "[validate_tree]")
     CHECK(validate_tree(sample.tree, {.caches = false}).valid());
     // What the reader gives back holds too.
     CHECK(validate_tree(decode_shatter(encode_shatter(sample.tree)), {.geometry = true}).valid());
+    // With the piece certificates (info --check): the same verdict.
+    const TreeValidationReport certified = validate_tree(sample.tree, {.geometry = true, .certificates = true});
+    CHECK(certified.valid());
+    CHECK(certified.geometry_checked);
   }
 }
 
@@ -483,6 +487,9 @@ TEST_CASE("every kind of defect, in every tree that has a place for it, is named
             const TreeValidationReport again = validate_tree(read_back, {.geometry = true});
             check_names(again, *place);
             CHECK(again.summary() == report.summary());
+            // A certificate never accepts the broken node: the full check it
+            // falls back on names the same defect in the same words.
+            CHECK(validate_tree(tree, {.geometry = true, .certificates = true}).summary() == report.summary());
             break;
           }
         }

@@ -70,6 +70,13 @@ struct TreeValidationOptions {
   /// in parallel: seconds for thousands of fragments, which is why the reader
   /// never asks for it.
   bool geometry = false;
+  /// With `geometry`: a node's mesh that certify_piece certifies (a linear-time
+  /// exact proof that validate_mesh finds it valid; README, "Certificates") is
+  /// not searched for self-intersections; any other is checked in full, so the
+  /// verdict and the defect named are the same either way, only the time
+  /// differs. `shatter info --check` turns it on; the tests leave it off, so
+  /// that the full validator checks every node they build.
+  bool certificates = false;
 };
 
 /// The answer of validate_tree.
