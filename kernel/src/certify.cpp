@@ -95,9 +95,12 @@ bool certify_piece(const Mesh& mesh, bool topology_sound) {
   };
   if (mesh.triangles.empty()) return decline();
   // Non-finite coordinates, and coordinates so large that the centres' sums could
-  // overflow (tests trap it), are left to the full check.
+  // overflow (tests trap it), are left to the full check. Compared quietly
+  // (std::isless): `<` on a NaN raises the invalid-operation flag, which the
+  // tests also trap.
   if (!std::all_of(mesh.positions.begin(), mesh.positions.end(), [](const Vec3& p) {
-        return std::fabs(p.x) < 0x1p500 && std::fabs(p.y) < 0x1p500 && std::fabs(p.z) < 0x1p500;
+        return std::isless(std::fabs(p.x), 0x1p500) && std::isless(std::fabs(p.y), 0x1p500) &&
+               std::isless(std::fabs(p.z), 0x1p500);
       })) {
     return decline();
   }

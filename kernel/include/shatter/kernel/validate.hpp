@@ -225,7 +225,10 @@ bool certify_star_shaped(const Mesh& mesh, const Vec3& centre);
 /// <name>: <summary>" (an empty mesh: "invalid mesh <name>: empty (no triangles)"). Self-intersections, and the pinched vertices where a surface
 /// touches itself, pass when `allow_self_intersections`: a cut then still gives
 /// closed, oriented pieces, but their embedding may overlap. Never returns on a
-/// mesh the slicer's preconditions exclude.
+/// mesh the slicer's preconditions exclude. A mesh certify_piece certifies
+/// (certify.hpp) passes without the self-intersection search; any other is
+/// checked in full, so what passes and what is refused, and the message, are
+/// validate_mesh's either way.
 void require_valid_solid(const Mesh& mesh, std::string_view name, bool allow_self_intersections);
 
 }  // namespace shatter
