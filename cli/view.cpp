@@ -310,6 +310,18 @@ Command add_view_command(CLI::App& app) {
 }
 
 int run_view(const ViewArgs& args) {
+  // SIGINT and SIGTERM are taken by one thread (sigwait), never by a handler,
+  // so stopping the server happens in ordinary code. They are blocked first of
+  // all, before reading the file starts the thread pool's workers: every thread
+  // inherits the mask, so none can take a stop signal and end the process there
+  // (reading a tree runs on the pool; while the mask was set only after the
+  // read, Ctrl-C killed the server). One sent while the file is read waits, and
+  // stops the server as soon as it listens.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
   require_viewer("view");
   const fs::path path(args.input);
   const std::string extension = lower_extension(path);
@@ -340,14 +352,6 @@ int run_view(const ViewArgs& args) {
   }
   const std::string page = served_viewer_page();
 
-  // SIGINT and SIGTERM are taken by one thread (sigwait), never by a handler,
-  // so stopping the server happens in ordinary code. They are blocked before the
-  // server starts its threads, which inherit the mask.
-  sigset_t stop_signals;
-  sigemptyset(&stop_signals);
-  sigaddset(&stop_signals, SIGINT);
-  sigaddset(&stop_signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
   // A browser that closes a connection while a model is being sent must not end the server.
   ::signal(SIGPIPE, SIG_IGN);
 
