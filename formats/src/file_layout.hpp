@@ -588,7 +588,6 @@ void read_version3_nodes(const Section& section, MeshTree& tree, Version3Pending
 void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets& offsets);
 /// Appends the CELL section's planes to tree.cut_planes (after the nodes' own).
 void read_cell_planes(const Section& section, MeshTree& tree);
-void read_version3_meshes(const Section& section, MeshTree& tree, bool hulls, Version3Pending& pending, RecordOffsets& offsets);
 void read_version3_bonds(const Section& section, MeshTree& tree, RecordOffsets& offsets);
 /// SOLD, MESH, HULL and BOND (with tree.leaf_nodes), SOLD beside the other
 /// three; refuses what reading them in that order refuses, with the same

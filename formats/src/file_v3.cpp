@@ -940,10 +940,6 @@ void reread_mesh_record(const Section& section, const MeshTree& tree, const Reco
 
 }  // namespace
 
-void read_version3_meshes(const Section& section, MeshTree& tree, bool hulls, Version3Pending& pending, RecordOffsets& offsets) {
-  read_meshes(section, tree, hulls, pending, offsets, nullptr);
-}
-
 void read_version3_shapes(const SectionTable& sections, MeshTree& tree, Version3Pending& pending, RecordOffsets& offsets) {
   // SOLD on one side; MESH, HULL and BOND on the other, which need of the
   // solids only their vertex counts (the sources of MESH's positions), checked
@@ -952,7 +948,6 @@ void read_version3_shapes(const SectionTable& sections, MeshTree& tree, Version3
   // at (read again, so the message is the same), then the other side's own.
   std::exception_ptr solids_failure, others_failure;
   DeferredSources deferred;
-  bool meshes_done = false;
   tbb::parallel_invoke(
       [&] {
         try {
@@ -964,7 +959,6 @@ void read_version3_shapes(const SectionTable& sections, MeshTree& tree, Version3
       [&] {
         try {
           read_meshes(*sections.meshes, tree, false, pending, offsets, &deferred);
-          meshes_done = true;
           read_meshes(*sections.hulls, tree, true, pending, offsets, nullptr);
           tree.leaf_nodes = leaves_in_order(tree.nodes);
           read_version3_bonds(*sections.bonds, tree, offsets);
@@ -979,8 +973,9 @@ void read_version3_shapes(const SectionTable& sections, MeshTree& tree, Version3
       if (source != no_index && source >= vertices) reread_mesh_record(*sections.meshes, tree, offsets, k);
     }
   }
-  // MESH failed at a record: with the solid's count it may fail sooner in it.
-  if (others_failure && !meshes_done && deferred.read < tree.nodes.size() && deferred.read < offsets.meshes.size()) {
+  // MESH failed at a record (fewer read than it holds): with the solid's count
+  // it may fail sooner in it.
+  if (others_failure && deferred.read < offsets.meshes.size()) {
     reread_mesh_record(*sections.meshes, tree, offsets, deferred.read);
   }
   if (others_failure) std::rethrow_exception(others_failure);
