@@ -9,9 +9,9 @@
 // Why: on these virtual machines every page fault is a trip through the
 // hypervisor. Faulting in a fresh 4 KiB page costs about 10 us; a 2 MiB page
 // whose frame the host has backed before costs about what 4 KiB pages cost for
-// 40 KiB of it (256 MiB touched page by page: 650 ms on 4 KiB pages, 330 ms
-// with MADV_POPULATE_WRITE, 17-370 ms on huge pages; /tmp micro-benchmark,
-// 2026-12-06). jemalloc hands its arrays of 8 MiB and more back to the system
+// 40 KiB of it (256 MiB touched page by page: 682-721 ms on 4 KiB pages,
+// 377-390 ms with MADV_POPULATE_WRITE, 17-416 ms on huge pages;
+// bench/page_faults_bench.cpp, 2026-12-06). jemalloc hands its arrays of 8 MiB and more back to the system
 // when they are freed (its oversize arena), so the large arrays a command makes
 // one after another (the file read, the welded mesh, the plane solid, each cut's
 // sides, the pieces' meshes, the encoded file) each fault in fresh memory; on
