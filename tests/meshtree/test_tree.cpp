@@ -23,6 +23,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -1295,6 +1296,89 @@ TEST_CASE("a packed node shape unpacks to the same mesh and solid", "[tree][pack
       CHECK_THROWS_AS(unpack_node_shape(longer, {}, unpacked_mesh, unpacked_solid), std::invalid_argument);
     }
   }
+}
+
+// The packing's bytes with its corner indices (the varints after the mesh's
+// uncoded positions) each rewritten by `rewrite`, which appends the bytes of
+// one index to `out`.
+std::vector<std::uint8_t> with_indices_rewritten(
+    const std::vector<std::uint8_t>& bytes, const Mesh& mesh,
+    const std::function<void(std::uint32_t index, std::size_t which, std::vector<std::uint8_t>& out)>& rewrite) {
+  // Flags, five counts (each under 2^14 here: at most two bytes), positions.
+  std::size_t at = 1;
+  for (int count = 0; count < 5; ++count) at += (bytes[at] & 0x80) != 0 ? 2 : 1;
+  at += mesh.positions.size() * sizeof(Vec3);
+  std::vector<std::uint8_t> out(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(at));
+  for (std::size_t i = 0; i < 3 * mesh.triangles.size(); ++i) {
+    std::uint64_t value = 0;
+    for (int shift = 0;; shift += 7) {
+      const std::uint8_t byte = bytes[at++];
+      value |= std::uint64_t{byte & 0x7fu} << shift;
+      if ((byte & 0x80) == 0) break;
+    }
+    rewrite(static_cast<std::uint32_t>(value), i, out);
+  }
+  out.insert(out.end(), bytes.begin() + static_cast<std::ptrdiff_t>(at), bytes.end());
+  return out;
+}
+
+// `value` as a varint of exactly `length` bytes (zero bytes padding it out).
+void varint_of_length(std::uint64_t value, std::size_t length, std::vector<std::uint8_t>& out) {
+  for (std::size_t k = 0; k < length; ++k) {
+    const auto byte = static_cast<std::uint8_t>(value & 0x7fu);
+    value >>= 7;
+    out.push_back(k + 1 < length ? static_cast<std::uint8_t>(byte | 0x80) : byte);
+  }
+}
+
+TEST_CASE("the solid alone steps over the mesh's corner indices as unpacking reads them", "[tree][packed][property]") {
+  // unpack_node_solid steps over the indices without decoding them; whatever
+  // their bytes, it must accept exactly what unpack_node_shape accepts, and
+  // give the same solid. Each index rewritten in 1 to 10 bytes (a varint
+  // padded out is still the value), some pushed above 32 bits in 5 or more.
+  const MeshTree tree = build_mesh_tree(test_mesh("spool.off").mesh, recipe_for(8, Strategy::thesis, 3), {.threads = 1});
+  Random random(11);
+  std::size_t refused = 0, accepted = 0;
+  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+    const MeshTreeNode& node = tree.nodes[k];
+    const Mesh& own = *node.mesh;
+    const std::vector<std::uint8_t> bytes = pack_node_shape(own, node.solid);
+    for (int draw = 0; draw < 20; ++draw) {
+      INFO("node " << k << ", draw " << draw);
+      const std::size_t corrupt = draw % 2 == 0 ? random.index(3 * own.triangles.size()) : ~std::size_t{0};
+      const std::vector<std::uint8_t> rewritten = with_indices_rewritten(
+          bytes, own, [&](std::uint32_t index, std::size_t which, std::vector<std::uint8_t>& out) {
+            // A value above 32 bits where corrupt, in as many bytes as hold it or more.
+            const std::uint64_t value = which == corrupt ? index + (std::uint64_t{1} << (32 + random.index(4))) : index;
+            std::size_t length = 1 + random.index(10);
+            while (length < 10 && (value >> (7 * length)) != 0) ++length;
+            varint_of_length(value, length, out);
+          });
+      Mesh mesh;
+      Solid whole, alone;
+      bool whole_refused = false, alone_refused = false;
+      try {
+        unpack_node_shape(rewritten, {}, mesh, whole);
+      } catch (const std::invalid_argument&) {
+        whole_refused = true;
+      }
+      try {
+        unpack_node_solid(rewritten, {}, alone);
+      } catch (const std::invalid_argument&) {
+        alone_refused = true;
+      }
+      REQUIRE(whole_refused == alone_refused);
+      REQUIRE(whole_refused == (corrupt != ~std::size_t{0}));
+      if (whole_refused) {
+        ++refused;
+        continue;
+      }
+      ++accepted;
+      CHECK(shape_difference(own, alone, own, node.solid).empty());
+    }
+  }
+  CHECK(refused > 10);
+  CHECK(accepted > 10);
 }
 
 TEST_CASE("a packed node shape with coded positions unpacks to the same mesh and solid", "[tree][packed][property]") {

@@ -225,6 +225,7 @@ class NodeShapes {
   Mesh mesh_;
   Solid solid_;
   std::vector<NodeIndex> path_;
+  bool path_is_chain_ = true;  // path_ holds a chain of parents (find_path)
   std::vector<std::uint64_t> codes_;
   std::vector<Vec3> stored_;
 };
