@@ -11,6 +11,7 @@
 #include "shatter/formats/file.hpp"
 #include "shatter/meshtree/tree.hpp"
 #include "errors.hpp"
+#include "huge_page_objects.hpp"
 #include "viewer_page.hpp"
 
 namespace shatter::cli {
@@ -136,6 +137,7 @@ int run_export(const ExportArgs& args) {
   // The viewer's depth slider needs every level, so a page holds all nodes unless told otherwise.
   const NodeSelection selection = selection_of(args.nodes.empty() ? (format.kind == Kind::html ? "all" : "leaves")
                                                                   : args.nodes);
+  keep_small_objects_on_huge_pages();
   const MeshTree tree = read_shatter_file(args.input);
   const std::vector<NodeIndex> nodes = select_nodes(tree, selection);
 

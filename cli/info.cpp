@@ -16,6 +16,7 @@
 #include "shatter/meshtree/stats.hpp"
 #include "shatter/meshtree/validate_tree.hpp"
 #include "errors.hpp"
+#include "huge_page_objects.hpp"
 #include "input.hpp"
 #include "node_json.hpp"
 #include "tree_stats_json.hpp"
@@ -141,6 +142,7 @@ int run_info(const InfoArgs& args) {
       throw UsageError(std::string("--nodes: ") + e.what());
     }
   }
+  keep_small_objects_on_huge_pages();
   const MeshTree tree = read_shatter_file(args.input);
   if (args.check) {
     // The reader checked the structure and computed the caches from the file,

@@ -18,6 +18,7 @@
 #include "shatter/formats/file.hpp"
 #include "shatter/runtime/recording.hpp"
 #include "errors.hpp"
+#include "huge_page_objects.hpp"
 #include "output_transaction.hpp"
 
 namespace shatter::cli {
@@ -344,6 +345,7 @@ int run_simulate(const SimulateArgs& args) {
   rt::WorldOptions world_options = args.world;
   world_options.sleeping = !args.no_sleep;
 
+  keep_small_objects_on_huge_pages();
   auto tree = std::make_shared<const MeshTree>(read_shatter_file(args.input));
   std::shared_ptr<const rt::BreakableShapes> shapes;
   try {

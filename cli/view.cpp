@@ -33,6 +33,7 @@
 #include "shatter/formats/file.hpp"
 #include "shatter/formats/tinygltf.hpp"
 #include "errors.hpp"
+#include "huge_page_objects.hpp"
 #include "tree_stats_json.hpp"
 #include "view_original.hpp"
 #include "viewer_page.hpp"
@@ -334,6 +335,7 @@ int run_view(const ViewArgs& args) {
   std::unique_ptr<Session> session;
   std::string original;  // the answer of GET /api/original
   if (extension == ".shatter") {
+    keep_small_objects_on_huge_pages();
     MeshTree tree = read_shatter_file(path);
     if (tree.nodes.empty()) throw CorruptFileError(args.input + ": the tree has no nodes");
     std::string original_name;

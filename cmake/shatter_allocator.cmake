@@ -23,5 +23,7 @@ function(shatter_use_jemalloc target)
     # would put beside it.
     set_source_files_properties(${PROJECT_SOURCE_DIR}/cli/huge_page_arrays.cpp PROPERTIES SKIP_UNITY_BUILD_INCLUSION ON)
     target_link_libraries(${target} PRIVATE PkgConfig::jemalloc)
+    # cli/huge_page_objects.cpp talks to jemalloc only where it is linked.
+    target_compile_definitions(${target} PRIVATE SHATTER_WITH_JEMALLOC=1)
   endif()
 endfunction()

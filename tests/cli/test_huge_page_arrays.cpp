@@ -2,7 +2,9 @@
 // jemalloc as the executables take it): every request gives writable memory of
 // its size, aligned for any object that fits in it; a request of 2 MiB or more starts on a 2 MiB
 // boundary and its mapping is advised for huge pages; a request that cannot be
-// met calls the new-handler and then throws std::bad_alloc.
+// met calls the new-handler and then throws std::bad_alloc. And the reading
+// commands' switch (cli/huge_page_objects.cpp): small objects made after it,
+// on any thread, lie in memory advised for huge pages.
 
 #include <catch2/catch.hpp>
 
@@ -15,7 +17,10 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
+
+#include "huge_page_objects.hpp"
 
 namespace {
 
@@ -116,4 +121,32 @@ TEST_CASE("a request that cannot be met calls the new-handler, then throws", "[a
   // A small request still succeeds afterwards.
   const std::unique_ptr<int> small(new int(7));
   CHECK(*small == 7);
+}
+
+TEST_CASE("small objects made after the reading commands' switch lie on memory advised for huge pages", "[allocator]") {
+  // Enough small objects that jemalloc maps fresh memory for them after the
+  // switch (its arenas hold a few megabytes beforehand): 64 MiB of 48-byte
+  // objects, every one written and read back.
+  const auto make_small_objects = [](std::vector<std::unique_ptr<std::uint64_t[]>>& objects) {
+    for (std::size_t i = 0; i < (std::size_t{64} << 20) / 48; ++i) {
+      objects.emplace_back(new std::uint64_t[6]);
+      for (std::size_t k = 0; k < 6; ++k) objects.back()[k] = i * 6 + k;
+    }
+    std::size_t wrong = 0;
+    for (std::size_t i = 0; i < objects.size(); ++i) {
+      for (std::size_t k = 0; k < 6; ++k) wrong += objects[i][k] != i * 6 + k;
+    }
+    return wrong;
+  };
+  shatter::cli::keep_small_objects_on_huge_pages();
+  shatter::cli::keep_small_objects_on_huge_pages();  // idempotent
+  std::vector<std::unique_ptr<std::uint64_t[]>> here;
+  CHECK(make_small_objects(here) == 0);
+  CHECK(has_flag(vm_flags_of(here.back().get()), "hg"));
+  // Another thread allocates from another of jemalloc's arenas: advised too.
+  std::vector<std::unique_ptr<std::uint64_t[]>> there;
+  std::size_t wrong_there = 1;
+  std::thread([&] { wrong_there = make_small_objects(there); }).join();
+  CHECK(wrong_there == 0);
+  CHECK(has_flag(vm_flags_of(there.back().get()), "hg"));
 }
