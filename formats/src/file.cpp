@@ -180,7 +180,7 @@ void read_nodes(const Section& section, MeshTree& tree, std::vector<std::size_t>
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     MeshTreeNode& node = nodes[k];
     record_offsets[k] = in.offset();
-    in.set_record("node " + str(k));
+    in.set_record("node", k);
     node.parent = in.u32("parent");
     node.depth = in.u32("depth");
     node.first_leaf = in.u32("first_leaf");
@@ -232,7 +232,7 @@ void read_meshes(const Section& section, std::vector<MeshTreeNode>& nodes, bool 
   record_offsets.resize(nodes.size());
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     record_offsets[k] = in.offset();
-    in.set_record("node " + str(k));
+    in.set_record("node", k);
     Mesh mesh = read_mesh_record(in);
     if (!hulls) {
       nodes[k].mesh = std::move(mesh);
@@ -251,7 +251,7 @@ std::vector<Bond> read_bonds(const Section& section) {
   std::vector<Bond> bonds(static_cast<std::size_t>(bond_count));
   for (std::size_t i = 0; i < bonds.size(); ++i) {
     Bond& bond = bonds[i];
-    in.set_record("bond " + str(i));
+    in.set_record("bond", i);
     bond.first = in.u32("first");
     bond.second = in.u32("second");
     bond.cut_node = in.u32("cut_node");
@@ -295,7 +295,7 @@ void read_solids(const Section& section, std::vector<MeshTreeNode>& nodes, bool 
   record_offsets.resize(record_count);
   for (std::size_t k = 0; k < record_count; ++k) {
     record_offsets[k] = in.offset();
-    in.set_record("node " + str(k));
+    in.set_record("node", k);
     MeshTreeNode& node = nodes[k];
     Solid& solid = *node.solid;
     read_solid_flags(in, node);
@@ -664,7 +664,7 @@ RepairReport read_repair(const Section& section) {
   const std::uint32_t change_count = in.u32("the change count");
   in.check_room(change_count, 13, "changes");
   for (std::uint32_t k = 0; k < change_count; ++k) {
-    in.set_record("change " + str(k));
+    in.set_record("change", k);
     const std::size_t at = in.offset();
     const std::uint8_t kind = in.u8("the change kind");
     if (kind >= all_repair_kinds.size()) in.fail_at(at, "unknown repair kind " + str(kind));
@@ -677,7 +677,7 @@ RepairReport read_repair(const Section& section) {
   const std::uint32_t note_count = in.u32("the note count");
   in.check_room(note_count, 4, "notes");
   for (std::uint32_t k = 0; k < note_count; ++k) {
-    in.set_record("note " + str(k));
+    in.set_record("note", k);
     report.notes.push_back({text("the note text")});
   }
   in.expect_end();

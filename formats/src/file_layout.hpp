@@ -342,7 +342,17 @@ class PayloadReader {
   std::size_t remaining() const { return payload_.size() - position_; }
 
   /// Names the record being read in failure messages ("node 3", ...).
-  void set_record(std::string record) { record_ = std::move(record); }
+  void set_record(std::string record) {
+    record_ = std::move(record);
+    record_kind_ = nullptr;
+  }
+  /// The same as set_record(kind + " " + index), the name made only if a
+  /// failure needs it: a file of 600,000 bonds made as many strings to read them.
+  /// `kind` must outlive the reading (a string literal).
+  void set_record(const char* kind, std::size_t index) {
+    record_kind_ = kind;
+    record_index_ = index;
+  }
 
   std::uint8_t u8(const char* field) {
     need(1, field);
@@ -428,7 +438,8 @@ class PayloadReader {
 
   [[noreturn]] void fail(const std::string& problem) const { fail_at(offset(), problem); }
   [[noreturn]] void fail_at(std::size_t at, const std::string& problem) const {
-    refuse("damaged .shatter file: " + section_name(tag_) + " section, byte " + str(at) + (record_.empty() ? "" : ", " + record_) + ": " + problem);
+    const std::string record = record_kind_ != nullptr ? std::string(record_kind_) + " " + str(record_index_) : record_;
+    refuse("damaged .shatter file: " + section_name(tag_) + " section, byte " + str(at) + (record.empty() ? "" : ", " + record) + ": " + problem);
   }
 
  private:
@@ -437,6 +448,8 @@ class PayloadReader {
   std::size_t position_ = 0;
   Tag tag_;
   std::string record_;
+  const char* record_kind_ = nullptr;  // with record_index_, the record when set so (set_record)
+  std::size_t record_index_ = 0;
 };
 
 // ---------------------------------------------------------------------------

@@ -714,7 +714,7 @@ void read_version3_nodes(const Section& section, MeshTree& tree, Version3Pending
   for (std::size_t k = 0; k < node_count; ++k) {
     MeshTreeNode& node = nodes[k];
     offsets.nodes[k] = in.offset();
-    in.set_record("node " + str(k));
+    in.set_record("node", k);
     const std::uint64_t code = in.varint("child count", 64);
     const std::uint64_t child_count = code >> 1;
     node.above_parent_plane = (code & 1) != 0;
@@ -775,11 +775,13 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
   if (exact && record_count != nodes.size()) in.fail(str(record_count) + " solids for " + str(nodes.size()) + " nodes");
   offsets.solids.resize(record_count);
   AncestorPath path;
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> face_of_edge;
   std::vector<std::uint32_t> across;  // corners whose line is the plane across their edge
+  // Each vertex's out-edges (to, face), and each corner's next vertex in its loop.
+  std::vector<std::uint32_t> first_out, next_vertex;
+  std::vector<std::pair<VertexIndex, std::uint32_t>> out_edges;
   for (std::size_t k = 0; k < record_count; ++k) {
     offsets.solids[k] = in.offset();
-    in.set_record("node " + str(k));
+    in.set_record("node", k);
     MeshTreeNode& node = nodes[k];
     path.enter(static_cast<NodeIndex>(k), node.depth);
     Solid& solid = *node.solid;
@@ -854,27 +856,43 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
       }
     }
     if (across.empty()) continue;
-    // The line across an edge is the plane of the face that runs it the other way.
-    const std::uint64_t vertices = vertex_count;
-    face_of_edge.clear();
-    std::vector<std::uint32_t> next_vertex(corner_count, no_index);
+    // The line across an edge is the plane of the lowest face that runs it the
+    // other way: each vertex's out-edges (to, face) in face order, by a
+    // counting sort on `from`, as the writer finds them (solid_records); a
+    // sort of all edges and a binary search a corner was a tenth of reading.
+    next_vertex.assign(corner_count, no_index);
+    first_out.assign(std::size_t{vertex_count} + 1, 0);
+    for (const SolidFace& face : solid.faces) {
+      for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+        for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) ++first_out[edge.from + 1];
+      }
+    }
+    for (std::size_t v = 0; v < vertex_count; ++v) first_out[v + 1] += first_out[v];
+    out_edges.resize(first_out.back());
     for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
       const SolidFace& face = solid.faces[f];
       for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
         for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
           next_vertex[edge.corner] = edge.to;
-          face_of_edge.emplace_back(edge.from * vertices + edge.to, f);
+          out_edges[first_out[edge.from]++] = {edge.to, f};
         }
       }
     }
-    std::sort(face_of_edge.begin(), face_of_edge.end());
+    // The fill moved each start to the next vertex's: shift them back.
+    for (std::size_t v = vertex_count; v > 0; --v) first_out[v] = first_out[v - 1];
+    first_out[0] = 0;
     for (const std::uint32_t c : across) {
-      const std::uint64_t reverse = next_vertex[c] == no_index ? ~std::uint64_t{0} : next_vertex[c] * vertices + solid.corners[c].vertex;
-      const auto found = std::lower_bound(face_of_edge.begin(), face_of_edge.end(), std::pair<std::uint64_t, std::uint32_t>(reverse, 0));
-      if (found == face_of_edge.end() || found->first != reverse) {
+      const VertexIndex from = next_vertex[c], to = solid.corners[c].vertex;
+      std::uint32_t found = no_index;
+      if (from != no_index) {
+        for (std::uint32_t i = first_out[from]; i < first_out[from + 1] && found == no_index; ++i) {
+          if (out_edges[i].first == to) found = out_edges[i].second;
+        }
+      }
+      if (found == no_index) {
         in.fail_at(offsets.solids[k], "corner " + str(c) + " takes the plane of the face across its edge, but no face runs that edge the other way");
       }
-      solid.corners[c].line.other = solid.faces[found->second].plane;
+      solid.corners[c].line.other = solid.faces[found].plane;
     }
   }
   in.set_record("");
@@ -903,7 +921,7 @@ void read_meshes(const Section& section, MeshTree& tree, bool hulls, Version3Pen
   AncestorPath path;
   for (std::size_t k = 0; k < mesh_count; ++k) {
     record_offsets[k] = in.offset();
-    in.set_record("node " + str(k));
+    in.set_record("node", k);
     path.enter(static_cast<NodeIndex>(k), nodes[k].depth);
     // Deferred: any source a 32-bit index holds passes here (no_index, the
     // stored mark, does not), and is checked against the solid's vertex count
@@ -931,7 +949,7 @@ void reread_mesh_record(const Section& section, const MeshTree& tree, const Reco
   rest.payload = section.payload.substr(from);
   rest.payload_offset = section.payload_offset + from;
   PayloadReader in(rest);
-  in.set_record("node " + str(k));
+  in.set_record("node", k);
   AncestorPath path;
   path.start_at(static_cast<NodeIndex>(k), tree.nodes);
   std::vector<std::uint32_t> sources;
@@ -997,7 +1015,7 @@ void read_version3_bonds(const Section& section, MeshTree& tree, RecordOffsets& 
   for (std::size_t i = 0; i < tree.bonds.size(); ++i) {
     Bond& bond = tree.bonds[i];
     offsets.bonds[i] = in.offset();
-    in.set_record("bond " + str(i));
+    in.set_record("bond", i);
     first += in.varint("first", 64);
     const std::uint64_t code = in.varint("second", 64);
     const std::uint64_t second = first + 1 + (code >> 2);
@@ -1053,20 +1071,25 @@ void read_cell_planes(const Section& section, MeshTree& tree) {
 }
 
 void finish_version3(MeshTree& tree, const Version3Pending& pending) {
-  const HeldFloatingPointExceptions held;
   const PlaneSet set = tree.plane_set();
-  for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
-    MeshTreeNode& node = tree.nodes[k];
-    const std::vector<std::uint32_t>& mesh_sources = pending.mesh_sources[k];
-    for (std::size_t v = 0; v < mesh_sources.size(); ++v) {
-      if (const std::uint32_t s = mesh_sources[v]; s != no_index) node.mesh->positions[v] = output_position(set, node.solid->defs[s], node.solid->approx[s]);
+  // Node by node in parallel: each node's positions and mass are its own, so
+  // the bits do not depend on the schedule. On one thread it was a tenth of
+  // `info` (cube -> 65,536), run while the other thread waited.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tree.nodes.size(), 256), [&](const tbb::blocked_range<std::size_t>& range) {
+    const HeldFloatingPointExceptions held;  // the environment is each thread's own
+    for (std::size_t k = range.begin(); k != range.end(); ++k) {
+      MeshTreeNode& node = tree.nodes[k];
+      const std::vector<std::uint32_t>& mesh_sources = pending.mesh_sources[k];
+      for (std::size_t v = 0; v < mesh_sources.size(); ++v) {
+        if (const std::uint32_t s = mesh_sources[v]; s != no_index) node.mesh->positions[v] = output_position(set, node.solid->defs[s], node.solid->approx[s]);
+      }
+      const std::vector<std::uint32_t>& hull_sources = pending.hull_sources[k];
+      for (std::size_t v = 0; v < hull_sources.size(); ++v) {
+        if (const std::uint32_t s = hull_sources[v]; s != no_index) node.hull->positions[v] = node.mesh->positions[s];
+      }
+      if (pending.masses_derived) node.mass = mass_properties(node.mesh);
     }
-    const std::vector<std::uint32_t>& hull_sources = pending.hull_sources[k];
-    for (std::size_t v = 0; v < hull_sources.size(); ++v) {
-      if (const std::uint32_t s = hull_sources[v]; s != no_index) node.hull->positions[v] = node.mesh->positions[s];
-    }
-    if (pending.masses_derived) node.mass = mass_properties(node.mesh);
-  }
+  });
 }
 
 }  // namespace shatter::file_layout
