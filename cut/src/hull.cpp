@@ -337,12 +337,30 @@ class Quickhull {
     return f;
   }
 
-  // Puts p in the outside set of the first face of `candidates` it is strictly
-  // beyond; a point beyond none is inside the hull or on it and is dropped.
+  // Puts p in the outside set of a face of `candidates` it is strictly beyond:
+  // the one it lies highest above in floating point if it is beyond that one,
+  // else the first it is beyond; a point beyond none is inside the hull or on
+  // it and is dropped. Trying the highest first (any face p is beyond would
+  // do: the hull is the same) spares the exact tests of the faces before it,
+  // nearly coplanar ones among them: a fifth of the hulls' orient3d calls on
+  // fractured curved meshes, and 4-9 % of their time.
   void assign(std::uint32_t p, std::span<const std::uint32_t> candidates) {
-    for (const std::uint32_t f : candidates) {
-      if (side(faces_[f], p) == Sign::positive) {
-        faces_[f].outside.push_back(p);
+    if (candidates.empty()) return;
+    std::size_t highest = 0;
+    double highest_height = -INFINITY;
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      const Face& face = faces_[candidates[i]];
+      const double height = dot(face.normal, scaled_[p] - scaled_[face.v[0]]);
+      if (height > highest_height) highest_height = height, highest = i;
+    }
+    if (side(faces_[candidates[highest]], p) == Sign::positive) {
+      faces_[candidates[highest]].outside.push_back(p);
+      return;
+    }
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      if (i == highest) continue;
+      if (side(faces_[candidates[i]], p) == Sign::positive) {
+        faces_[candidates[i]].outside.push_back(p);
         return;
       }
     }

@@ -52,11 +52,28 @@ class Clipper {
   }
 
  private:
+  // Each corner's side is computed once (it was twice: as an edge's start and
+  // as the previous edge's end), with the same arithmetic, so the same bits; a
+  // polygon wholly on one side is kept or emptied without a copy. The clip was
+  // a sixteenth of `fracture` cube -> 65,536.
   void clip_left_of(Vec2 p, Vec2 q) {
+    const std::size_t n = polygon_.size();
+    sides_.resize(n);
+    bool all_inside = true, all_outside = true;
+    for (std::size_t i = 0; i < n; ++i) {
+      sides_[i] = cross(p, q, polygon_[i]);
+      (sides_[i] >= 0 ? all_outside : all_inside) = false;
+    }
+    if (all_inside) return;
+    if (all_outside) {
+      polygon_.clear();
+      return;
+    }
     clipped_.clear();
-    for (std::size_t i = 0; i < polygon_.size(); ++i) {
-      const Vec2 s = polygon_[i], e = polygon_[(i + 1) % polygon_.size()];
-      const double side_s = cross(p, q, s), side_e = cross(p, q, e);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t j = i + 1 == n ? 0 : i + 1;
+      const Vec2 s = polygon_[i], e = polygon_[j];
+      const double side_s = sides_[i], side_e = sides_[j];
       const bool s_inside = side_s >= 0, e_inside = side_e >= 0;
       if (s_inside) clipped_.push_back(s);
       if (s_inside != e_inside) {
@@ -68,6 +85,7 @@ class Clipper {
   }
 
   std::vector<Vec2> polygon_, clipped_;
+  std::vector<double> sides_;  // clip_left_of's, per corner
 };
 
 }  // namespace shatter::detail
