@@ -46,7 +46,7 @@ void* allocate_advised(extent_hooks_t*, void* new_address, std::size_t size, std
   return memory;
 }
 
-void install() noexcept {
+void install() {  // std::to_string may throw: keep_small_objects_on_huge_pages catches it
   unsigned arenas = 0;
   std::size_t length = sizeof arenas;
   if (mallctl("arenas.narenas", &arenas, &length, nullptr, 0) != 0) return;

@@ -331,6 +331,46 @@ void nodes_payload(const MeshTree& tree, bool masses_derived, ByteWriter& out) {
   }
 }
 
+/// Which face of a solid runs an edge: each vertex's out-edges (to, face) in
+/// face order, by a counting sort on `from`, so an edge's lowest face is found
+/// among its tail's few out-edges. The SOLD writer asks it whether a corner's
+/// line is the face across its edge, the reader which face that is. Buffers
+/// are kept from solid to solid.
+class EdgeFaces {
+ public:
+  /// Indexes the edges of the loops of `solid`'s faces. Precondition: every
+  /// corner's vertex is below `vertex_count` (the reader checks it first).
+  void index(const Solid& solid, std::size_t vertex_count) {
+    first_out_.assign(vertex_count + 1, 0);
+    const auto for_each_edge = [&](const auto& visit) {
+      for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+        const SolidFace& face = solid.faces[f];
+        for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
+          for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) visit(edge, f);
+        }
+      }
+    };
+    for_each_edge([&](const CornerEdge& edge, std::uint32_t) { ++first_out_[edge.from + 1]; });
+    for (std::size_t v = 0; v < vertex_count; ++v) first_out_[v + 1] += first_out_[v];
+    out_edges_.resize(first_out_.back());
+    for_each_edge([&](const CornerEdge& edge, std::uint32_t f) { out_edges_[first_out_[edge.from]++] = {edge.to, f}; });
+    // The fill moved each start to the next vertex's: shift them back.
+    for (std::size_t v = vertex_count; v > 0; --v) first_out_[v] = first_out_[v - 1];
+    first_out_[0] = 0;
+  }
+  /// The lowest face whose loops run the edge from -> to, or none.
+  std::optional<std::uint32_t> face_of_edge(VertexIndex from, VertexIndex to) const {
+    for (std::uint32_t i = first_out_[from]; i < first_out_[from + 1]; ++i) {
+      if (out_edges_[i].first == to) return out_edges_[i].second;
+    }
+    return std::nullopt;
+  }
+
+ private:
+  std::vector<std::uint32_t> first_out_;
+  std::vector<std::pair<VertexIndex, std::uint32_t>> out_edges_;
+};
+
 void solid_records(const MeshTree& tree, std::size_t first, std::size_t end, ByteWriter& out);
 
 void solids_payload(const MeshTree& tree, ByteWriter& out) {
@@ -348,11 +388,7 @@ void solid_records(const MeshTree& tree, std::size_t first, std::size_t end, Byt
   const std::vector<MeshTreeNode>& nodes = tree.nodes;
   AncestorPath path;
   if (first < end) path.start_at(static_cast<NodeIndex>(first), nodes);
-  // Each vertex's out-edges (to, face) in face order, by a counting sort on
-  // `from`: the face across an edge is the first face of the reverse edge's
-  // list, found among its tail's few out-edges.
-  std::vector<std::uint32_t> first_out;
-  std::vector<std::pair<VertexIndex, std::uint32_t>> out_edges;
+  EdgeFaces edge_faces;  // the face across a corner's edge
   NodeShapes shapes(tree);
   for (std::size_t k = first; k < end; ++k) {
     const MeshTreeNode& node = nodes[k];
@@ -387,38 +423,13 @@ void solid_records(const MeshTree& tree, std::size_t first, std::size_t end, Byt
     }
     for (const SolidLoop& loop : solid.loops) out.varint(loop.corner_count);
 
-    const auto face_loops = [&](std::uint32_t f) {
-      return std::span(solid.loops).subspan(solid.faces[f].first_loop, solid.faces[f].loop_count);
-    };
-    first_out.assign(solid.defs.size() + 1, 0);
-    for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
-      for (const SolidLoop& loop : face_loops(f)) {
-        for (const CornerEdge& edge : loop_edges(solid.corners, loop)) ++first_out[edge.from + 1];
-      }
-    }
-    for (std::size_t v = 0; v < solid.defs.size(); ++v) first_out[v + 1] += first_out[v];
-    out_edges.resize(first_out.back());
-    for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
-      for (const SolidLoop& loop : face_loops(f)) {
-        for (const CornerEdge& edge : loop_edges(solid.corners, loop)) out_edges[first_out[edge.from]++] = {edge.to, f};
-      }
-    }
-    // The fill moved each start to the next vertex's: shift them back.
-    for (std::size_t v = solid.defs.size(); v > 0; --v) first_out[v] = first_out[v - 1];
-    first_out[0] = 0;
-    // The lowest face holding the edge from -> to, or none.
-    const auto face_of_edge = [&](VertexIndex from, VertexIndex to) -> std::optional<std::uint32_t> {
-      for (std::uint32_t i = first_out[from]; i < first_out[from + 1]; ++i) {
-        if (out_edges[i].first == to) return out_edges[i].second;
-      }
-      return std::nullopt;
-    };
+    edge_faces.index(solid, solid.defs.size());
     // The validator has checked that the loops cover the corners in order.
     for (const SolidLoop& loop : solid.loops) {
       for (const CornerEdge& edge : loop_edges(solid.corners, loop)) {
         std::uint64_t mode = edge.line.is_segment() ? line_segment : line_stored;
         if (!edge.line.is_segment()) {
-          const std::optional<std::uint32_t> across = face_of_edge(edge.to, edge.from);
+          const std::optional<std::uint32_t> across = edge_faces.face_of_edge(edge.to, edge.from);
           if (across && solid.faces[*across].plane == edge.line.other) mode = line_across;
         }
         out.varint((std::uint64_t{edge.from} << 2) | mode);
@@ -776,9 +787,8 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
   offsets.solids.resize(record_count);
   AncestorPath path;
   std::vector<std::uint32_t> across;  // corners whose line is the plane across their edge
-  // Each vertex's out-edges (to, face), and each corner's next vertex in its loop.
-  std::vector<std::uint32_t> first_out, next_vertex;
-  std::vector<std::pair<VertexIndex, std::uint32_t>> out_edges;
+  EdgeFaces edge_faces;                   // the face across a corner's edge
+  std::vector<std::uint32_t> next_vertex;  // per corner: the next vertex of its loop
   for (std::size_t k = 0; k < record_count; ++k) {
     offsets.solids[k] = in.offset();
     in.set_record("node", k);
@@ -857,42 +867,23 @@ void read_version3_solids(const Section& section, MeshTree& tree, RecordOffsets&
     }
     if (across.empty()) continue;
     // The line across an edge is the plane of the lowest face that runs it the
-    // other way: each vertex's out-edges (to, face) in face order, by a
-    // counting sort on `from`, as the writer finds them (solid_records); a
-    // sort of all edges and a binary search a corner was a tenth of reading.
+    // other way, found as the writer found it (EdgeFaces; a sort of all edges
+    // and a binary search a corner was a tenth of reading).
+    edge_faces.index(solid, vertex_count);
     next_vertex.assign(corner_count, no_index);
-    first_out.assign(std::size_t{vertex_count} + 1, 0);
-    for (const SolidFace& face : solid.faces) {
+    for (const SolidFace& face : solid.faces) {  // the faces' loops only, as the index
       for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-        for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) ++first_out[edge.from + 1];
+        for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) next_vertex[edge.corner] = edge.to;
       }
     }
-    for (std::size_t v = 0; v < vertex_count; ++v) first_out[v + 1] += first_out[v];
-    out_edges.resize(first_out.back());
-    for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
-      const SolidFace& face = solid.faces[f];
-      for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) {
-        for (const CornerEdge& edge : loop_edges(solid.corners, solid.loops[l])) {
-          next_vertex[edge.corner] = edge.to;
-          out_edges[first_out[edge.from]++] = {edge.to, f};
-        }
-      }
-    }
-    // The fill moved each start to the next vertex's: shift them back.
-    for (std::size_t v = vertex_count; v > 0; --v) first_out[v] = first_out[v - 1];
-    first_out[0] = 0;
     for (const std::uint32_t c : across) {
-      const VertexIndex from = next_vertex[c], to = solid.corners[c].vertex;
-      std::uint32_t found = no_index;
-      if (from != no_index) {
-        for (std::uint32_t i = first_out[from]; i < first_out[from + 1] && found == no_index; ++i) {
-          if (out_edges[i].first == to) found = out_edges[i].second;
-        }
-      }
-      if (found == no_index) {
+      const VertexIndex from = next_vertex[c];
+      const std::optional<std::uint32_t> found =
+          from == no_index ? std::nullopt : edge_faces.face_of_edge(from, solid.corners[c].vertex);
+      if (!found) {
         in.fail_at(offsets.solids[k], "corner " + str(c) + " takes the plane of the face across its edge, but no face runs that edge the other way");
       }
-      solid.corners[c].line.other = solid.faces[found].plane;
+      solid.corners[c].line.other = solid.faces[*found].plane;
     }
   }
   in.set_record("");

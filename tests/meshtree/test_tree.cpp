@@ -1304,20 +1304,19 @@ TEST_CASE("a packed node shape unpacks to the same mesh and solid", "[tree][pack
 std::vector<std::uint8_t> with_indices_rewritten(
     const std::vector<std::uint8_t>& bytes, const Mesh& mesh,
     const std::function<void(std::uint32_t index, std::size_t which, std::vector<std::uint8_t>& out)>& rewrite) {
-  // Flags, five counts (each under 2^14 here: at most two bytes), positions.
-  std::size_t at = 1;
-  for (int count = 0; count < 5; ++count) at += (bytes[at] & 0x80) != 0 ? 2 : 1;
-  at += mesh.positions.size() * sizeof(Vec3);
-  std::vector<std::uint8_t> out(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(at));
-  for (std::size_t i = 0; i < 3 * mesh.triangles.size(); ++i) {
+  std::size_t at = 1;  // past the flags
+  const auto varint = [&] {
     std::uint64_t value = 0;
     for (int shift = 0;; shift += 7) {
       const std::uint8_t byte = bytes[at++];
       value |= std::uint64_t{byte & 0x7fu} << shift;
-      if ((byte & 0x80) == 0) break;
+      if ((byte & 0x80) == 0) return value;
     }
-    rewrite(static_cast<std::uint32_t>(value), i, out);
-  }
+  };
+  for (int count = 0; count < 5; ++count) varint();  // the mesh's five counts
+  at += mesh.positions.size() * sizeof(Vec3);
+  std::vector<std::uint8_t> out(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(at));
+  for (std::size_t i = 0; i < 3 * mesh.triangles.size(); ++i) rewrite(static_cast<std::uint32_t>(varint()), i, out);
   out.insert(out.end(), bytes.begin() + static_cast<std::ptrdiff_t>(at), bytes.end());
   return out;
 }
