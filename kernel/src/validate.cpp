@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <tuple>
 #include <unordered_set>
@@ -897,12 +898,160 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const TrustedTriangles&
   return validate_against(mesh, &trusted, near, exact_vertices);
 }
 
-ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* const> parts) {
+namespace {
+
+// The range of a plane's values over a triangle's corners, widened by the
+// error bound of evaluating n.x + d in doubles: each corner's value is four
+// roundings from the exact one (three products, three sums, at most four on any
+// term's path), so |error| <= gamma_4 (|n_x x| + |n_y y| + |n_z z| + |d|) with
+// gamma_4 < 2^-50.9; 2^-49 of that sum also covers the roundings of the sum and
+// of the widening itself, and 2^-1000 the products that underflow. Inputs are
+// below 2^500 (checked by the caller), so nothing overflows. A linear function
+// takes every value it has on the triangle within its corners' range, so two
+// triangles with disjoint ranges share no point.
+struct ValueRange {
+  double lo, hi;
+};
+
+ValueRange value_range(const Plane& plane, std::span<const Vec3> positions, const Triangle& tri) {
+  ValueRange range{INFINITY, -INFINITY};
+  for (const VertexIndex v : tri) {
+    const Vec3& q = positions[v];
+    const double x = plane.normal.x * q.x, y = plane.normal.y * q.y, z = plane.normal.z * q.z;
+    const double value = x + y + z + plane.offset;
+    const double error = 0x1p-49 * (std::fabs(x) + std::fabs(y) + std::fabs(z) + std::fabs(plane.offset)) + 0x1p-1000;
+    range.lo = std::min(range.lo, value - error);
+    range.hi = std::max(range.hi, value + error);
+  }
+  return range;
+}
+
+bool ranges_meet(const ValueRange& a, const ValueRange& b) { return !(a.hi < b.lo || b.hi < a.lo); }
+
+bool below_two_to_500(double x) { return std::isless(std::fabs(x), 0x1p500); }
+
+// Calls `test(i, j)` for every pair of triangles across parts whose boxes meet
+// and which `regions`' planes do not keep apart (the argument at PartRegions):
+// the trusted triangles (part_of[t] their part, region[t] their region or
+// no_region) grouped by (part, region); the pairs of groups of different parts
+// whose bounding boxes meet; for each, the triangles of each group whose value
+// range over the groups' plane meets the other group's, then those pairs whose
+// boxes and ranges meet. Without a plane, every pair whose boxes meet.
+template <typename Test>
+void test_across_regions(const Mesh& mesh, std::span<const TriangleBox> boxes, std::span<const std::uint32_t> part_of,
+                         std::span<const std::uint32_t> region, std::uint32_t untrusted, const PartRegions& regions,
+                         bool planes_usable, Test&& test) {
+  constexpr std::uint32_t no_region = std::numeric_limits<std::uint32_t>::max();
+  struct Member {
+    std::uint32_t part, region, triangle;
+  };
+  struct Group {
+    std::uint32_t part, region, begin, end;
+    CGAL::Bbox_3 box;
+  };
+  thread_local std::vector<Member> members;
+  thread_local std::vector<Group> groups;
+  thread_local std::vector<TriangleBox> group_boxes, near_a, near_b;
+  thread_local std::vector<ValueRange> range_of;  // per triangle, for the current pair of groups
+  members.clear();
+  for (std::size_t t = 0; t < part_of.size(); ++t) {
+    if (part_of[t] != untrusted) members.push_back({part_of[t], region[t], static_cast<std::uint32_t>(t)});
+  }
+  std::sort(members.begin(), members.end(), [](const Member& a, const Member& b) {
+    return std::tie(a.part, a.region, a.triangle) < std::tie(b.part, b.region, b.triangle);
+  });
+  groups.clear();
+  for (std::uint32_t i = 0; i < members.size();) {
+    Group group{members[i].part, members[i].region, i, i, CGAL::Bbox_3()};
+    for (; i < members.size() && members[i].part == group.part && members[i].region == group.region; ++i) {
+      group.box += boxes[members[i].triangle].bbox();
+    }
+    group.end = i;
+    groups.push_back(group);
+  }
+  range_of.resize(mesh.triangles.size());
+  const auto pair_of_groups = [&](std::size_t ga, std::size_t gb) {
+    const Group &a = groups[ga], &b = groups[gb];
+    if (a.part == b.part) return;
+    std::optional<Plane> plane;
+    if (planes_usable && a.region != no_region && b.region != no_region) {
+      plane = regions.plane_between(a.region, b.region);
+      if (plane && !(below_two_to_500(plane->normal.x) && below_two_to_500(plane->normal.y) &&
+                     below_two_to_500(plane->normal.z) && below_two_to_500(plane->offset))) {
+        plane.reset();
+      }
+    }
+    near_a.clear();
+    near_b.clear();
+    if (plane) {
+      ValueRange span_a{INFINITY, -INFINITY}, span_b{INFINITY, -INFINITY};
+      for (std::uint32_t i = a.begin; i < a.end; ++i) {
+        const std::uint32_t t = members[i].triangle;
+        range_of[t] = value_range(*plane, mesh.positions, mesh.triangles[t]);
+        span_a = {std::min(span_a.lo, range_of[t].lo), std::max(span_a.hi, range_of[t].hi)};
+      }
+      for (std::uint32_t i = b.begin; i < b.end; ++i) {
+        const std::uint32_t t = members[i].triangle;
+        range_of[t] = value_range(*plane, mesh.positions, mesh.triangles[t]);
+        span_b = {std::min(span_b.lo, range_of[t].lo), std::max(span_b.hi, range_of[t].hi)};
+      }
+      for (std::uint32_t i = a.begin; i < a.end; ++i) {
+        const std::uint32_t t = members[i].triangle;
+        if (ranges_meet(range_of[t], span_b)) near_a.push_back(boxes[t]);
+      }
+      for (std::uint32_t i = b.begin; i < b.end; ++i) {
+        const std::uint32_t t = members[i].triangle;
+        if (ranges_meet(range_of[t], span_a)) near_b.push_back(boxes[t]);
+      }
+    } else {
+      for (std::uint32_t i = a.begin; i < a.end; ++i) near_a.push_back(boxes[members[i].triangle]);
+      for (std::uint32_t i = b.begin; i < b.end; ++i) near_b.push_back(boxes[members[i].triangle]);
+    }
+    const auto maybe_test = [&](std::size_t i, std::size_t j) {
+      if (!plane || ranges_meet(range_of[i], range_of[j])) test(i, j);
+    };
+    if (near_a.size() * near_b.size() <= 1024) {
+      for (const TriangleBox& x : near_a) {
+        for (const TriangleBox& y : near_b) {
+          if (CGAL::do_overlap(x.bbox(), y.bbox())) maybe_test(x.handle(), y.handle());
+        }
+      }
+    } else {
+      CGAL::box_intersection_d(
+          near_a.begin(), near_a.end(), near_b.begin(), near_b.end(),
+          [&](const TriangleBox& x, const TriangleBox& y) { maybe_test(x.handle(), y.handle()); }, std::ptrdiff_t{10},
+          CGAL::Box_intersection_d::CLOSED);
+    }
+  };
+  if (groups.size() <= 64) {
+    for (std::size_t ga = 0; ga < groups.size(); ++ga) {
+      for (std::size_t gb = ga + 1; gb < groups.size(); ++gb) {
+        if (CGAL::do_overlap(groups[ga].box, groups[gb].box)) pair_of_groups(ga, gb);
+      }
+    }
+  } else {
+    group_boxes.clear();
+    for (std::size_t g = 0; g < groups.size(); ++g) group_boxes.emplace_back(groups[g].box, g);
+    CGAL::box_self_intersection_d(
+        group_boxes.begin(), group_boxes.end(),
+        [&](const TriangleBox& x, const TriangleBox& y) { pair_of_groups(x.handle(), y.handle()); },
+        std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
+  }
+  constexpr std::size_t kept = std::size_t{1} << 16;  // released past this, as validate_mesh_of_parts' buffers
+  if (range_of.capacity() > kept) range_of = {};
+  if (members.capacity() > kept) members = {};
+}
+
+}  // namespace
+
+ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* const> parts,
+                                        const PartRegions* regions) {
   constexpr std::uint32_t untrusted = std::numeric_limits<std::uint32_t>::max();
   // Reused buffers: a hierarchy certifies thousands of unions, and fresh large
   // allocations each cost their pages' zeroing again. Those grown past a few
   // megabytes (the few largest unions) are released at the end.
   thread_local std::vector<std::uint32_t> part_of;  // per triangle: the part it is found in, or `untrusted`
+  thread_local std::vector<std::uint32_t> region;   // per triangle, with `regions`: its region in that part
   thread_local std::vector<std::uint8_t> is_new;
   thread_local std::vector<TriangleBox> boxes, fresh, all, tested, against;
   thread_local std::vector<std::size_t> first, by_part, fill;
@@ -915,6 +1064,7 @@ ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* 
       constexpr std::size_t kept = std::size_t{1} << 16;  // triangles
       if (part_of.capacity() > kept) {
         part_of = {};
+        region = {};
         is_new = {};
         first = {};
         by_part = {};
@@ -929,6 +1079,7 @@ ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* 
   // Each triangle's part: the first part whose mesh has it (same corner
   // positions, turning the same way).
   part_of.assign(mesh.triangles.size(), untrusted);
+  region.assign(regions ? mesh.triangles.size() : 0, std::numeric_limits<std::uint32_t>::max());
   {
     std::size_t total = 0;
     for (const Mesh* part : parts) total += part ? part->triangles.size() : 0;
@@ -959,7 +1110,15 @@ ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* 
       const Triangle& tri = mesh.triangles[t];
       if (tri[0] >= mesh.positions.size() || tri[1] >= mesh.positions.size() || tri[2] >= mesh.positions.size()) continue;
       const std::size_t at = find(triangle_key(mesh, tri));
-      if (known[at] != empty) part_of[t] = static_cast<std::uint32_t>(known[at] >> 32);
+      if (known[at] == empty) continue;
+      const auto k = static_cast<std::uint32_t>(known[at] >> 32);
+      part_of[t] = k;
+      if (regions) {
+        const std::span<const std::uint32_t> given =
+            k < regions->region_of.size() ? regions->region_of[k] : std::span<const std::uint32_t>{};
+        const std::uint32_t index = known[at] & 0xFFFFFFFFu;
+        if (given.size() == parts[k]->triangles.size()) region[t] = given[index];
+      }
     }
   }
   // A triangle of a valid part is not flat: only the new ones are tested.
@@ -1002,6 +1161,17 @@ ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* 
           test(i, j);
         },
         std::ptrdiff_t{10}, CGAL::Box_intersection_d::CLOSED);
+  }
+  if (regions) {
+    const bool planes_usable =
+        regions->plane_between && std::all_of(mesh.positions.begin(), mesh.positions.end(), [](const Vec3& p) {
+          return below_two_to_500(p.x) && below_two_to_500(p.y) && below_two_to_500(p.z);
+        });
+    test_across_regions(mesh, boxes, part_of, region, untrusted, *regions, planes_usable, test);
+    std::sort(pairs.begin(), pairs.end());
+    append_self_intersections(report, pairs);
+    if (report.valid()) append(report, DefectKind::misnested_shell, misnested_shells(mesh));
+    return report;
   }
   // The parts' triangles, grouped by part (in mesh order within a part), and
   // each part's bounding box.

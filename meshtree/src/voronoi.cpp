@@ -808,7 +808,35 @@ struct Part {
   /// Per face of `solid`, the attempt of triangulate_face that wrote it in
   /// `mesh`; empty when `mesh` is no plain triangulation (RoundedSolid::attempt).
   std::vector<std::uint8_t> face_attempts;
+  /// Per face of `solid`, the fragment whose face it is (numbered as
+  /// build_voronoi_tree's first_region numbers them); per triangle of `mesh`,
+  /// its face's fragment, or empty when `mesh` is no plain triangulation.
+  /// Hints for certifying a union of parts (PartRegions: nothing of them is
+  /// trusted).
+  std::vector<std::uint32_t> face_regions, triangle_regions;
 };
+
+// Per triangle of a plain triangulation of `solid` (RoundedSolid::attempt >= 0),
+// the region of the face it triangulates: triangulate_solid writes each face's
+// triangles together, in face order, k - 2 + 2h of them for a face of k corners
+// and h holes. Empty when the count does not add up (a hint, never trusted).
+std::vector<std::uint32_t> triangle_regions_of(const Solid& solid, const RoundedSolid& rounded,
+                                               std::span<const std::uint32_t> face_regions) {
+  std::vector<std::uint32_t> regions;
+  if (rounded.attempt < 0) return regions;
+  regions.reserve(rounded.mesh.triangles.size());
+  for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
+    const SolidFace& face = solid.faces[f];
+    std::size_t corners = 0;
+    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) corners += solid.loops[l].corner_count;
+    if (corners + 2 * face.loop_count < 4) return {};
+    const std::size_t count = corners + 2 * face.loop_count - 4;
+    if (regions.size() + count > rounded.mesh.triangles.size()) return {};
+    regions.insert(regions.end(), count, face_regions[f]);
+  }
+  if (regions.size() != rounded.mesh.triangles.size()) return {};
+  return regions;
+}
 
 // Per face of `solid`, the attempt each face took in `rounded` (RoundedSolid::
 // attempt, with `given` the face_attempts round_solid was given); empty when
@@ -1166,6 +1194,20 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
     if (p < box_base || p >= box_end) site_pairs[p] = pair_of(p);
   }
   std::atomic<std::size_t> nodes_glued{0}, sets_unglued{0}, nodes_retried{0};
+  // The fragments numbered as regions for certifying the unions (PartRegions):
+  // site s's kept fragments are first_region[s] onward. Two fragments of
+  // different sites lie on either side of their sites' bisector, but for what
+  // rounding moved; two of one site have no plane between them.
+  std::vector<std::uint32_t> first_region(site_count + 1, 0), site_of_region;
+  for (std::uint32_t s = 0; s < site_count; ++s) {
+    first_region[s + 1] = first_region[s] + static_cast<std::uint32_t>(kept_of[s].size());
+    site_of_region.insert(site_of_region.end(), kept_of[s].size(), s);
+  }
+  const auto plane_between_regions = [&](std::uint32_t a, std::uint32_t b) -> std::optional<Plane> {
+    const std::uint32_t sa = site_of_region[a], sb = site_of_region[b];
+    if (sa == sb) return std::nullopt;
+    return exact_bisector(points[sa], points[sb], quantized.step);
+  };
   const std::vector<Group>& groups = cutter.groups();
   const std::vector<std::uint32_t>& order = cutter.order();
   const auto glue_level = [&](std::vector<Part> items) {
@@ -1189,11 +1231,21 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
           // across parts, and every triangle the union writes differently (a
           // vertex whose definition another part's replaced, a face triangulated
           // or repaired otherwise), are tested. The check accepts the meshes the
-          // full one does.
+          // full one does. The pairs across parts are sought fragment pair by
+          // fragment pair (PartRegions): two fragments of different sites lie on
+          // either side of the sites' bisector, so only their triangles within
+          // rounding's reach of it, at a shared face, are paired, where a
+          // search by boxes paired nearly every triangle of a large union.
           std::vector<const Mesh*> part_meshes;
-          for (const std::uint32_t m : members) part_meshes.push_back(&items[m].mesh);
+          std::vector<std::span<const std::uint32_t>> part_triangle_regions;
+          for (const std::uint32_t m : members) {
+            part_meshes.push_back(&items[m].mesh);
+            part_triangle_regions.push_back(items[m].triangle_regions);
+          }
+          PartRegions regions{part_triangle_regions, plane_between_regions};
           SolidMeshOptions union_meshing = meshing;
           union_meshing.parts = part_meshes;
+          union_meshing.part_regions = &regions;
           // Each face triangulated at the attempt its part was certified at: a
           // part certified only at a later attempt (a fold its first one made)
           // would make the union's first attempt fail the same way, and every
@@ -1220,6 +1272,11 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
             if (r.attempt != 0) ++nodes_retried;
             Part node;
             node.face_attempts = face_attempts_of(*glued, r, union_meshing.face_attempts);
+            node.face_regions.resize(glued->faces.size());
+            for (std::size_t f = 0; f < face_origin.size(); ++f) {
+              node.face_regions[f] = items[members[face_origin[f][0]]].face_regions[face_origin[f][1]];
+            }
+            node.triangle_regions = triangle_regions_of(*glued, r, node.face_regions);
             node.solid = std::move(*glued);
             node.mesh = std::move(r.mesh);
             for (const std::uint32_t m : members) {
@@ -1249,9 +1306,13 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
     if (group.left < 0) {
       for (std::uint32_t i = group.begin; i < group.end; ++i) {
         const std::uint32_t s = order[i];
-        for (Rounded* r : kept_of[s]) {
+        for (std::size_t k = 0; k < kept_of[s].size(); ++k) {
+          Rounded* r = kept_of[s][k];
           Part leaf;
           leaf.face_attempts = face_attempts_of(r->solid, r->rounded, {});
+          // Every face and triangle of a fragment is the fragment's.
+          leaf.face_regions.assign(r->solid.faces.size(), first_region[s] + static_cast<std::uint32_t>(k));
+          leaf.triangle_regions.assign(r->rounded.mesh.triangles.size(), first_region[s] + static_cast<std::uint32_t>(k));
           leaf.solid = std::move(r->solid);
           leaf.mesh = std::move(r->rounded.mesh);
           leaf.sites = {s};

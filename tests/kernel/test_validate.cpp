@@ -753,6 +753,88 @@ TEST_CASE("validate_mesh_of_parts refuses parts that cross, touch or repeat each
   CHECK(validate_mesh_of_parts(test::merge({cube, far}), apart).valid());
 }
 
+TEST_CASE("validate_mesh_of_parts given regions and planes reports what it reports without them",
+          "[validate][certify]") {
+  // The planes only decide which pairs go untested, and only pairs no two
+  // triangles that meet can be: so whatever the regions and planes (separating,
+  // through the contact, through the crossing, random, missing), the report is
+  // the one without them, which is validate_mesh's. The shapes touch and cross
+  // each other often, so a filter that dropped a meeting pair would show.
+  const std::vector<Mesh> shapes{test::grid_box({0, 0, 0}, {1, 1, 1}, 3), test::ellipsoid({0.5, 0.5, 0.5}, {0.6, 0.4, 0.5}, 12, 7),
+                                 test::torus(0.6, 0.2, 12, 8), test::box({0, 0, 0}, {1, 0.5, 0.25})};
+  std::mt19937_64 random(11);
+  std::uniform_real_distribution<double> offset(-1.2, 1.2), unit(-1, 1);
+  std::size_t refused = 0, accepted = 0;
+  for (int trial = 0; trial < 160; ++trial) {
+    const Mesh& first = shapes[trial % shapes.size()];
+    const Mesh& second = shapes[(trial / shapes.size()) % shapes.size()];
+    Vec3 shift{offset(random), offset(random), offset(random)};
+    if (trial % 8 == 0) shift = {0, 0, 0};   // coincident or nested
+    if (trial % 8 == 1) shift = {1, 0, 0};   // touching at x = 1 (boxes) or crossing
+    if (trial % 8 == 2) shift = {1.25, 0, 0};
+    const Mesh moved = test::transformed(second, 1.0, shift);
+    const Mesh joined = test::merge({first, moved});
+    const std::array<const Mesh*, 2> parts{&first, &moved};
+    // Regions: each part's triangles by the octant of their first corner
+    // around the part's own centre (so a part has up to 8 regions), numbered
+    // apart per part; some trials leave the second part without regions.
+    const auto octants = [](const Mesh& mesh, std::uint32_t base) {
+      Vec3 centre;
+      for (const Vec3& p : mesh.positions) centre = centre + p;
+      centre = centre * (1.0 / static_cast<double>(mesh.positions.size()));
+      std::vector<std::uint32_t> region;
+      for (const Triangle& t : mesh.triangles) {
+        const Vec3 p = mesh.positions[t[0]];
+        region.push_back(base + (p.x > centre.x ? 1u : 0u) + (p.y > centre.y ? 2u : 0u) + (p.z > centre.z ? 4u : 0u));
+      }
+      return region;
+    };
+    const std::vector<std::uint32_t> first_regions = octants(first, 0), second_regions = octants(moved, 8);
+    std::vector<std::span<const std::uint32_t>> region_of{first_regions, second_regions};
+    if (trial % 5 == 4) region_of[1] = {};
+    // Planes: the one between the parts' centres when they are apart (x = 1 for
+    // the touching boxes), through the contact or the crossing otherwise, a
+    // random one, or none, by trial and region pair.
+    const int kind = trial % 4;
+    const Plane random_plane{{unit(random), unit(random), unit(random)}, unit(random)};
+    PartRegions regions{region_of, [&](std::uint32_t a, std::uint32_t b) -> std::optional<Plane> {
+                          CHECK((a < 8) != (b < 8));  // asked only across parts
+                          if (kind == 3 && (a + b) % 3 == 0) return std::nullopt;
+                          if (kind == 2) return random_plane;
+                          const double at = kind == 1 ? 1.0 : 0.5 * (1.0 + shift.x);
+                          return Plane{{a < 8 ? 1.0 : -1.0, 0, 0}, a < 8 ? -at : at};
+                        }};
+    INFO("trial " << trial);
+    const ValidationReport full = validate_mesh(joined);
+    const ValidationReport without = validate_mesh_of_parts(joined, parts);
+    const ValidationReport with = validate_mesh_of_parts(joined, parts, &regions);
+    CHECK(same_defects(with, without));
+    CHECK(same_defects(with, full));
+    CHECK(with.valid() == full.valid());
+    (full.valid() ? accepted : refused) += 1;
+  }
+  CHECK(accepted > 10);
+  CHECK(refused > 10);
+  // The cases above by name: crossing cubes split by a plane through the
+  // crossing, cubes touching along x = 1 with the plane there, and coincident
+  // copies (their shared positions make their triangles new) all refused.
+  const Mesh cube = test::grid_box({0, 0, 0}, {1, 1, 1}, 2);
+  for (const Vec3& shift : {Vec3{0.5, 0.25, 0.125}, Vec3{1, 0, 0}, Vec3{0, 0, 0}}) {
+    const Mesh other = test::transformed(cube, 1, shift);
+    const std::vector<std::uint32_t> zeros(cube.triangles.size(), 0), ones(other.triangles.size(), 1);
+    const std::array<std::span<const std::uint32_t>, 2> region_of{zeros, ones};
+    const PartRegions split{region_of, [&](std::uint32_t, std::uint32_t) -> std::optional<Plane> {
+                              return Plane{{1, 0, 0}, -(0.5 + 0.5 * shift.x)};
+                            }};
+    const std::array<const Mesh*, 2> parts{&cube, &other};
+    const Mesh joined = test::merge({cube, other});
+    INFO("shift " << shift.x);
+    const ValidationReport with = validate_mesh_of_parts(joined, parts, &split);
+    CHECK_FALSE(with.valid());
+    CHECK(same_defects(with, validate_mesh(joined)));
+  }
+}
+
 TEST_CASE("the star-shaped certificate accepts convex solids around an inner point and nothing invalid",
           "[validate][certify]") {
   const Mesh box = test::box({0, 0, 0}, {2, 3, 4});

@@ -45,7 +45,7 @@ RoundedSolid copy_without_mesh(RoundedSolid& result) {
 // validate_mesh accepts (validate.hpp says why).
 ValidationReport validate_knowing(const Mesh& mesh, const SolidMeshOptions& options,
                                   std::span<const std::uint8_t> exact_vertices) {
-  if (!options.parts.empty()) return validate_mesh_of_parts(mesh, options.parts);
+  if (!options.parts.empty()) return validate_mesh_of_parts(mesh, options.parts, options.part_regions);
   if (options.trusted != nullptr && options.trusted_triangles != nullptr) {
     return validate_mesh_against(mesh, options.trusted_triangles->get(), options.cut, exact_vertices);
   }

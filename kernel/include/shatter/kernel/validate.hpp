@@ -5,7 +5,9 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <mutex>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -175,6 +177,32 @@ class TrustedTrianglesOnce {
 ValidationReport validate_mesh_against(const Mesh& mesh, const TrustedTriangles& trusted, const Plane* near = nullptr,
                                        std::span<const std::uint8_t> exact_vertices = {});
 
+/// What a caller knows of where the triangles of validate_mesh_of_parts' parts
+/// lie: each part's triangles grouped into regions, and for two regions of
+/// different parts a plane between them (one region's triangles on one side, the
+/// other's on the other, but for what rounding moved). Nothing of it is trusted:
+/// it decides only which pairs across parts go untested, and a pair goes
+/// untested only when the plane's values at its two triangles' corners span
+/// disjoint intervals (exactly, by a floating-point evaluation with its error
+/// bound), which no two triangles that meet can do, whatever the plane. So a
+/// wrong region or a plane that separates nothing leaves more pairs to test,
+/// never a pair that meets untested, and the report is the same. Why it pays:
+/// the Voronoi hierarchy's parts are fragments of cells, and the bisector of two
+/// cells leaves only the triangles at their shared face within rounding's reach
+/// of it; the pairs across parts are then those few, found region pair by
+/// region pair, instead of every pair of triangles whose boxes meet.
+struct PartRegions {
+  /// Per part (as `parts`), the region of each triangle of its mesh; a part
+  /// given no regions (an empty span, or one of another size) is one region
+  /// of its own, without planes.
+  std::span<const std::span<const std::uint32_t>> region_of;
+  /// A plane between regions a and b (each a region_of value of a different
+  /// part), or none: their triangles are then tested wherever their boxes meet.
+  /// Called at most once per pair of regions whose triangles' bounding boxes
+  /// meet; may be called from any thread that calls validate_mesh_of_parts.
+  std::function<std::optional<Plane>(std::uint32_t a, std::uint32_t b)> plane_between;
+};
+
 /// validate_mesh for a mesh made of the triangles of several valid meshes
 /// (`parts`, each of which passed validate_mesh with the self-intersection
 /// test; nullptr entries are skipped), plus any new ones: the union of solids
@@ -194,10 +222,15 @@ ValidationReport validate_mesh_against(const Mesh& mesh, const TrustedTriangles&
 /// vertices turning the same way fail the topology check first.
 /// Same report as validate_mesh when valid; when not, the same defects but a
 /// self-intersection count of the pairs tested.
+/// With `regions` (PartRegions), pairs across parts are enumerated region pair
+/// by region pair, and a pair whose triangles the pair's plane provably keeps
+/// apart is not tested: the same pairs are found meeting, so the same report.
 /// Cost: O(T log T) plus the pairs of boxes that meet across parts or with a
-/// new triangle; the pairs within one part (most pairs of nearby triangles)
-/// are never enumerated.
-ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* const> parts);
+/// new triangle (with regions: the pairs of regions whose boxes meet, each
+/// O(its triangles) plus the pairs near its plane); the pairs within one part
+/// (most pairs of nearby triangles) are never enumerated.
+ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* const> parts,
+                                        const PartRegions* regions = nullptr);
 
 /// Whether the mesh is a closed, consistently oriented 2-manifold by index: every
 /// index in range, every vertex used, no triangle repeating an index, every

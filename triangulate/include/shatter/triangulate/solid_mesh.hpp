@@ -87,6 +87,10 @@ struct SolidMeshOptions {
   /// every triangle. The mesh written is the same as without it (the checks
   /// accept the same meshes); only the time differs.
   std::span<const Mesh* const> parts;
+  /// With `parts`: where the parts' triangles lie (PartRegions), or nullptr.
+  /// Certification then tests pairs across parts region pair by region pair,
+  /// leaving out those the regions' planes keep apart; the same meshes pass.
+  const PartRegions* part_regions = nullptr;
   /// Per face of the solid, the attempt of triangulate_face its face takes on
   /// round_solid's first attempt, or empty for attempt 0 everywhere. A union of
   /// parts passes the attempt that certified each face's part
