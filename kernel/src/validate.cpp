@@ -1045,7 +1045,7 @@ void test_across_regions(const Mesh& mesh, std::span<const TriangleBox> boxes, s
 }  // namespace
 
 ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* const> parts,
-                                        const PartRegions* regions) {
+                                        const PartRegions* regions, bool topology_sound) {
   constexpr std::uint32_t untrusted = std::numeric_limits<std::uint32_t>::max();
   // Reused buffers: a hierarchy certifies thousands of unions, and fresh large
   // allocations each cost their pages' zeroing again. Those grown past a few
@@ -1126,7 +1126,9 @@ ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* 
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) is_new[t] = part_of[t] == untrusted;
   ValidationOptions without;
   without.check_self_intersections = false;
-  ValidationReport report = validate_masked(mesh, without, &is_new);
+  const bool sound = topology_sound && std::all_of(mesh.positions.begin(), mesh.positions.end(),
+                                                   [](const Vec3& p) { return is_finite(p); });
+  ValidationReport report = sound ? validate_sound_topology(mesh, without, &is_new) : validate_masked(mesh, without, &is_new);
   if (!report.valid()) return report;
   untrust_shared_positions(mesh, shared_positions(mesh), is_new);
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {

@@ -809,33 +809,83 @@ struct Part {
   /// `mesh`; empty when `mesh` is no plain triangulation (RoundedSolid::attempt).
   std::vector<std::uint8_t> face_attempts;
   /// Per face of `solid`, the fragment whose face it is (numbered as
-  /// build_voronoi_tree's first_region numbers them); per triangle of `mesh`,
-  /// its face's fragment, or empty when `mesh` is no plain triangulation.
-  /// Hints for certifying a union of parts (PartRegions: nothing of them is
-  /// trusted).
-  std::vector<std::uint32_t> face_regions, triangle_regions;
+  /// build_voronoi_tree's first_region numbers them), and for a fragment its
+  /// own number (no_index for a union): hints for certifying a union of parts
+  /// (PartRegions: nothing of them is trusted).
+  std::vector<std::uint32_t> face_regions;
+  std::uint32_t sole_region = no_index;
+  /// When `mesh` is a plain triangulation of `solid`: per vertex of `mesh`, the
+  /// solid's vertex it rounds, and where face f's triangles start in `mesh`
+  /// (face_first_triangle[f], one more for the end); else both empty. A union
+  /// writes a face its part wrote with the same triangles
+  /// (SolidMeshOptions::face_triangles).
+  std::vector<VertexIndex> solid_vertex_of;
+  std::vector<std::uint32_t> face_first_triangle;
+
+  /// Frees the hints above, once the part is glued.
+  void drop_hints() {
+    face_regions = {};
+    solid_vertex_of = {};
+    face_first_triangle = {};
+  }
 };
 
-// Per triangle of a plain triangulation of `solid` (RoundedSolid::attempt >= 0),
-// the region of the face it triangulates: triangulate_solid writes each face's
-// triangles together, in face order, k - 2 + 2h of them for a face of k corners
-// and h holes. Empty when the count does not add up (a hint, never trusted).
-std::vector<std::uint32_t> triangle_regions_of(const Solid& solid, const RoundedSolid& rounded,
-                                               std::span<const std::uint32_t> face_regions) {
-  std::vector<std::uint32_t> regions;
-  if (rounded.attempt < 0) return regions;
-  regions.reserve(rounded.mesh.triangles.size());
+// Where each face's triangles start in a plain triangulation of `solid` with
+// `triangles` triangles (RoundedSolid::attempt >= 0), one more for the end:
+// triangulate_solid writes each face's triangles together, in face order,
+// k - 2 + 2h of them for a face of k corners and h holes. Empty when the count
+// does not add up.
+std::vector<std::uint32_t> face_first_triangle_of(const Solid& solid, std::size_t triangles) {
+  std::vector<std::uint32_t> first(solid.faces.size() + 1, 0);
   for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
     const SolidFace& face = solid.faces[f];
     std::size_t corners = 0;
     for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) corners += solid.loops[l].corner_count;
     if (corners + 2 * face.loop_count < 4) return {};
-    const std::size_t count = corners + 2 * face.loop_count - 4;
-    if (regions.size() + count > rounded.mesh.triangles.size()) return {};
-    regions.insert(regions.end(), count, face_regions[f]);
+    first[f + 1] = first[f] + static_cast<std::uint32_t>(corners + 2 * face.loop_count - 4);
   }
-  if (regions.size() != rounded.mesh.triangles.size()) return {};
-  return regions;
+  if (first.back() != triangles) return {};
+  return first;
+}
+
+// Per triangle of `part`'s mesh, its fragment (PartRegions::region_of), into
+// `out`: a fragment's own number throughout, or each face's over its
+// triangles; empty when neither is known (a union not plainly triangulated).
+void triangle_regions_of(const Part& part, std::vector<std::uint32_t>& out) {
+  out.clear();
+  if (part.sole_region != no_index) {
+    out.assign(part.mesh.triangles.size(), part.sole_region);
+  } else if (!part.face_first_triangle.empty()) {
+    for (std::size_t f = 0; f + 1 < part.face_first_triangle.size(); ++f) {
+      out.insert(out.end(), part.face_first_triangle[f + 1] - part.face_first_triangle[f], part.face_regions[f]);
+    }
+  }
+}
+
+// The hints of a part made of `solid` and its rounding `rounded` (Part's
+// face_regions, solid_vertex_of, face_first_triangle; the face regions given):
+// what a union of it needs to certify it by regions and to write its faces again.
+void set_part_hints(Part& part, const Solid& solid, const RoundedSolid& rounded, std::vector<std::uint32_t> face_regions) {
+  part.face_regions = std::move(face_regions);
+  part.solid_vertex_of.clear();
+  part.face_first_triangle.clear();
+  if (rounded.attempt < 0) return;
+  std::vector<std::uint32_t> first = face_first_triangle_of(solid, rounded.mesh.triangles.size());
+  if (first.empty()) return;
+  // The mesh's vertices back to the solid's: every vertex of a plain
+  // triangulation is one of the solid's, each once.
+  const std::vector<VertexIndex>& mesh_vertex_of = rounded.mesh_vertex_of;
+  if (mesh_vertex_of.size() != solid.defs.size()) {
+    part.face_first_triangle = std::move(first);  // for the regions (triangle_regions_of)
+    return;
+  }
+  std::vector<VertexIndex> solid_vertex_of(rounded.mesh.positions.size(), no_index);
+  for (VertexIndex v = 0; v < mesh_vertex_of.size(); ++v) {
+    if (mesh_vertex_of[v] < solid_vertex_of.size()) solid_vertex_of[mesh_vertex_of[v]] = v;
+  }
+  if (std::find(solid_vertex_of.begin(), solid_vertex_of.end(), no_index) != solid_vertex_of.end()) return;
+  part.solid_vertex_of = std::move(solid_vertex_of);
+  part.face_first_triangle = std::move(first);
 }
 
 // Per face of `solid`, the attempt each face took in `rounded` (RoundedSolid::
@@ -1153,6 +1203,7 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
   // otherwise indexes the whole input again.
   const TrustedTrianglesOnce input_triangles(mesh);
   meshing.trusted_triangles = &input_triangles;
+  meshing.keep_vertex_map = true;  // for the union's face triangles (set_part_hints)
   arena.execute([&] {
     tbb::parallel_for(std::uint32_t{0}, site_count, [&](std::uint32_t s) {
       for (Solid& solid : cells[s]) {
@@ -1221,7 +1272,8 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
         for (const std::uint32_t m : members) chosen.push_back(parts[m]);
         std::string why;
         std::vector<std::array<std::uint32_t, 2>> face_origin;
-        std::optional<Solid> glued = detail::glue_parts(set, chosen, site_pairs, why, &face_origin);
+        std::vector<std::uint32_t> vertex_of;
+        std::optional<Solid> glued = detail::glue_parts(set, chosen, site_pairs, why, &face_origin, &vertex_of);
         if (glued) {
           // Certified knowing its parts (validate_mesh_of_parts): the union keeps
           // every face of every part but the twins, each face's loops as they were
@@ -1237,10 +1289,14 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
           // rounding's reach of it, at a shared face, are paired, where a
           // search by boxes paired nearly every triangle of a large union.
           std::vector<const Mesh*> part_meshes;
+          // (Not kept per thread: round_solid may wait on parallel work, and the
+          // thread run another union meanwhile.)
+          std::vector<std::vector<std::uint32_t>> region_buffers(members.size());
           std::vector<std::span<const std::uint32_t>> part_triangle_regions;
-          for (const std::uint32_t m : members) {
-            part_meshes.push_back(&items[m].mesh);
-            part_triangle_regions.push_back(items[m].triangle_regions);
+          for (std::size_t k = 0; k < members.size(); ++k) {
+            part_meshes.push_back(&items[members[k]].mesh);
+            triangle_regions_of(items[members[k]], region_buffers[k]);
+            part_triangle_regions.push_back(region_buffers[k]);
           }
           PartRegions regions{part_triangle_regions, plane_between_regions};
           SolidMeshOptions union_meshing = meshing;
@@ -1261,6 +1317,42 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
             any_later |= face_attempts[f] != 0;
           }
           if (any_later) union_meshing.face_attempts = face_attempts;
+          // Each face written with its part's triangles (the same loops over the
+          // same points, so a triangulation of the face over its own corners):
+          // triangulate_face would write the same ones again, given the same
+          // rounded corners, i.e. the same definitions, which is when they are
+          // passed (a corner defined as another part's equal point may round
+          // elsewhere; its faces are triangulated as before).
+          std::vector<std::uint32_t> first_vertex_of_member(members.size() + 1, 0);
+          for (std::size_t k = 0; k < members.size(); ++k) {
+            first_vertex_of_member[k + 1] =
+                first_vertex_of_member[k] + static_cast<std::uint32_t>(items[members[k]].solid.defs.size());
+          }
+          std::vector<Triangle> face_triangles;
+          std::vector<std::uint32_t> face_triangles_first(glued->faces.size() + 1, 0);
+          for (std::size_t f = 0; f < face_origin.size(); ++f) {
+            const auto [member, part_face] = face_origin[f];
+            const Part& from = items[members[member]];
+            if (!from.face_first_triangle.empty()) {
+              const std::size_t before = face_triangles.size();
+              bool same = true;
+              for (std::uint32_t t = from.face_first_triangle[part_face];
+                   same && t < from.face_first_triangle[part_face + 1]; ++t) {
+                Triangle mapped;
+                for (int k = 0; k < 3; ++k) {
+                  const VertexIndex v = from.solid_vertex_of[from.mesh.triangles[t][k]];
+                  mapped[k] = vertex_of[first_vertex_of_member[member] + v];
+                  same = mapped[k] != no_index && glued->defs[mapped[k]] == from.solid.defs[v];
+                  if (!same) break;
+                }
+                if (same) face_triangles.push_back(mapped);
+              }
+              if (!same) face_triangles.resize(before);
+            }
+            face_triangles_first[f + 1] = static_cast<std::uint32_t>(face_triangles.size());
+          }
+          union_meshing.face_triangles = face_triangles;
+          union_meshing.face_triangles_first = face_triangles_first;
           // A union round_solid cannot place is left unglued, as one it cannot certify.
           RoundedSolid r;
           try {
@@ -1272,16 +1364,17 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
             if (r.attempt != 0) ++nodes_retried;
             Part node;
             node.face_attempts = face_attempts_of(*glued, r, union_meshing.face_attempts);
-            node.face_regions.resize(glued->faces.size());
+            std::vector<std::uint32_t> face_regions(glued->faces.size());
             for (std::size_t f = 0; f < face_origin.size(); ++f) {
-              node.face_regions[f] = items[members[face_origin[f][0]]].face_regions[face_origin[f][1]];
+              face_regions[f] = items[members[face_origin[f][0]]].face_regions[face_origin[f][1]];
             }
-            node.triangle_regions = triangle_regions_of(*glued, r, node.face_regions);
+            set_part_hints(node, *glued, r, std::move(face_regions));
             node.solid = std::move(*glued);
             node.mesh = std::move(r.mesh);
             for (const std::uint32_t m : members) {
               node.sites.insert(node.sites.end(), items[m].sites.begin(), items[m].sites.end());
               node.children.push_back(std::move(items[m]));
+              node.children.back().drop_hints();  // glued: no union needs them again
             }
             std::sort(node.sites.begin(), node.sites.end());
             node.sites.erase(std::unique(node.sites.begin(), node.sites.end()), node.sites.end());
@@ -1310,9 +1403,12 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
           Rounded* r = kept_of[s][k];
           Part leaf;
           leaf.face_attempts = face_attempts_of(r->solid, r->rounded, {});
-          // Every face and triangle of a fragment is the fragment's.
-          leaf.face_regions.assign(r->solid.faces.size(), first_region[s] + static_cast<std::uint32_t>(k));
-          leaf.triangle_regions.assign(r->rounded.mesh.triangles.size(), first_region[s] + static_cast<std::uint32_t>(k));
+          // Every face of a fragment is the fragment's; so is every triangle,
+          // plain triangulation or not.
+          const std::uint32_t region = first_region[s] + static_cast<std::uint32_t>(k);
+          set_part_hints(leaf, r->solid, r->rounded, std::vector<std::uint32_t>(r->solid.faces.size(), region));
+          leaf.sole_region = region;
+          r->rounded.mesh_vertex_of = {};
           leaf.solid = std::move(r->solid);
           leaf.mesh = std::move(r->rounded.mesh);
           leaf.sites = {s};

@@ -131,7 +131,8 @@ struct GlueScratch {
 }  // namespace
 
 std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> parts, SitePairs pairs, std::string& why,
-                                std::vector<std::array<std::uint32_t, 2>>* face_origin) {
+                                std::vector<std::array<std::uint32_t, 2>>* face_origin,
+                                std::vector<std::uint32_t>* vertex_of) {
   const PartsOfSite parts_of(parts);
   thread_local GlueScratch scratch;
   // Plain references, not a structured binding: lambdas below capture them
@@ -411,6 +412,10 @@ std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> p
       }
       at = next_corner[reverse];
     }
+  }
+  if (vertex_of != nullptr) {
+    vertex_of->resize(first_vertex.back());
+    for (std::uint32_t g = 0; g < first_vertex.back(); ++g) (*vertex_of)[g] = number[same.find(id[g])];
   }
   glued.convex = solid_is_convex(set, glued);
   return glued;

@@ -55,9 +55,12 @@ std::vector<std::vector<std::uint32_t>> face_connected_groups(std::span<const Gl
 /// (parts touching along an edge only) or a vertex with several fans (parts
 /// touching at a point). Never throws on such input. `face_origin`, when given,
 /// receives for each face of the union the part and the face of it it was kept
-/// from.
+/// from; `vertex_of`, for each vertex of each part (part i's vertex v at the sum
+/// of the earlier parts' vertex counts, plus v), its vertex in the union, or
+/// no_index when only deleted faces use it.
 std::optional<Solid> glue_parts(const PlaneSet& set, std::span<const GluePart> parts, SitePairs pairs,
                                 std::string& why,
-                                std::vector<std::array<std::uint32_t, 2>>* face_origin = nullptr);
+                                std::vector<std::array<std::uint32_t, 2>>* face_origin = nullptr,
+                                std::vector<std::uint32_t>* vertex_of = nullptr);
 
 }  // namespace shatter::detail

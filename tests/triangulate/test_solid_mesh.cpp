@@ -304,6 +304,73 @@ void check_face_attempts(const PlaneSet& set, const Solid& piece, const RoundedS
   CHECK(first.mesh.triangles == rounded.mesh.triangles);
 }
 
+// RoundedSolid::mesh_vertex_of and SolidMeshOptions::face_triangles: a plain
+// triangulation read back over the solid's vertices, face by face (each face's
+// k - 2 + 2h triangles together, in face order), and given as every face's
+// triangles, or every other face's, is written again bit for bit at the first
+// attempt (what a Voronoi union asks with its parts' triangles); offsets of the
+// wrong length, descending or past the triangles are refused.
+// `rounded` is round_solid's with keep_vertex_map.
+void check_face_triangles(const PlaneSet& set, const Solid& piece, const RoundedSolid& rounded) {
+  if (!rounded.valid || rounded.attempt < 0) {
+    CHECK(rounded.mesh_vertex_of.empty());
+    return;
+  }
+  REQUIRE(rounded.mesh_vertex_of.size() == piece.defs.size());
+  std::vector<VertexIndex> solid_vertex_of(rounded.mesh.positions.size(), no_index);
+  for (VertexIndex v = 0; v < piece.defs.size(); ++v) {
+    REQUIRE(rounded.mesh_vertex_of[v] < solid_vertex_of.size());
+    CHECK(solid_vertex_of[rounded.mesh_vertex_of[v]] == no_index);  // one solid vertex each
+    solid_vertex_of[rounded.mesh_vertex_of[v]] = v;
+  }
+  std::vector<Triangle> over_solid;
+  for (const Triangle& t : rounded.mesh.triangles) {
+    over_solid.push_back({solid_vertex_of[t[0]], solid_vertex_of[t[1]], solid_vertex_of[t[2]]});
+  }
+  std::vector<std::uint32_t> first{0}, every_other{0};
+  std::vector<Triangle> some;
+  for (std::uint32_t f = 0; f < piece.faces.size(); ++f) {
+    std::size_t corners = 0;
+    for (std::uint32_t l = piece.faces[f].first_loop; l < piece.faces[f].first_loop + piece.faces[f].loop_count; ++l) {
+      corners += piece.loops[l].corner_count;
+    }
+    const auto count = static_cast<std::uint32_t>(corners + 2 * piece.faces[f].loop_count - 4);
+    first.push_back(first.back() + count);
+    if (f % 2 == 0) some.insert(some.end(), over_solid.begin() + first[f], over_solid.begin() + first[f + 1]);
+    every_other.push_back(static_cast<std::uint32_t>(some.size()));
+  }
+  REQUIRE(first.back() == over_solid.size());
+  const std::vector<std::uint8_t> attempts(piece.faces.size(), static_cast<std::uint8_t>(rounded.attempt));
+  for (const auto& [triangles, offsets] : {std::pair{&over_solid, &first}, std::pair{&some, &every_other}}) {
+    SolidMeshOptions given;
+    given.face_attempts = attempts;
+    given.face_triangles = *triangles;
+    given.face_triangles_first = *offsets;
+    const RoundedSolid again = round_solid(set, piece, given);
+    CHECK(again.valid);
+    CHECK(again.attempt == 0);
+    CHECK(again.mesh.positions == rounded.mesh.positions);
+    CHECK(again.mesh.triangles == rounded.mesh.triangles);
+  }
+  SolidMeshOptions wrong;
+  wrong.face_triangles = over_solid;
+  const std::vector<std::uint32_t> short_offsets(first.begin(), first.end() - 1);
+  wrong.face_triangles_first = short_offsets;
+  CHECK_THROWS_AS(round_solid(set, piece, wrong), std::invalid_argument);
+  std::vector<std::uint32_t> past = first;
+  past.back() += 1;
+  wrong.face_triangles_first = past;
+  CHECK_THROWS_AS(round_solid(set, piece, wrong), std::invalid_argument);
+  if (first.size() > 2) {
+    std::vector<std::uint32_t> descending = first;
+    std::swap(descending[1], descending[2]);
+    if (descending[1] != descending[2]) {
+      wrong.face_triangles_first = descending;
+      CHECK_THROWS_AS(round_solid(set, piece, wrong), std::invalid_argument);
+    }
+  }
+}
+
 // Six times the volume of a mesh of doubles, exactly.
 mpq_class six_volume_of(const Mesh& mesh) {
   mpq_class six = 0;
@@ -321,9 +388,14 @@ mpq_class six_volume_of(const Mesh& mesh) {
 // written after parts of it rounded flat (or after separation) moved what its
 // mesh and the exact piece disagree on, within the bound.
 void check_rounding(const PlaneSet& set, const Solid& piece, RoundingTally& tally) {
-  const RoundedSolid rounded = round_solid(set, piece);
+  // Keeping the vertex map changes nothing else (check_face_attempts compares
+  // the mesh with one rounded without it).
+  SolidMeshOptions keep;
+  keep.keep_vertex_map = true;
+  const RoundedSolid rounded = round_solid(set, piece, keep);
   ++tally.pieces;
   check_face_attempts(set, piece, rounded, tally);
+  check_face_triangles(set, piece, rounded);
   const mpq_class six = exact_six_volume(set, piece);
   REQUIRE(six > 0);
   const double volume = mpq_class(six / 6).get_d();

@@ -243,9 +243,16 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
       }
     }
     if (!changed) {
-      const std::size_t face_attempt =
-          attempt == 0 && !options.face_attempts.empty() ? options.face_attempts[f] : attempt;
-      triangulate_face(set, solid, f, positions, face_triangles, face_attempt);
+      const bool given = attempt == 0 && !options.face_triangles_first.empty() &&
+                         options.face_triangles_first[f] < options.face_triangles_first[f + 1];
+      if (given) {
+        face_triangles.assign(options.face_triangles.begin() + options.face_triangles_first[f],
+                              options.face_triangles.begin() + options.face_triangles_first[f + 1]);
+      } else {
+        const std::size_t face_attempt =
+            attempt == 0 && !options.face_attempts.empty() ? options.face_attempts[f] : attempt;
+        triangulate_face(set, solid, f, positions, face_triangles, face_attempt);
+      }
     } else if (!loops.empty()) {
       // A face that cannot be triangulated over its placed corners is left out.
       // If it had vanished in the rounding (seen: a thin annulus cap whose two

@@ -199,7 +199,8 @@ struct PartRegions {
   /// A plane between regions a and b (each a region_of value of a different
   /// part), or none: their triangles are then tested wherever their boxes meet.
   /// Called at most once per pair of regions whose triangles' bounding boxes
-  /// meet; may be called from any thread that calls validate_mesh_of_parts.
+  /// meet, on the thread that called validate_mesh_of_parts, while that
+  /// thread's buffers are in use: it must not wait on parallel work.
   std::function<std::optional<Plane>(std::uint32_t a, std::uint32_t b)> plane_between;
 };
 
@@ -229,8 +230,13 @@ struct PartRegions {
 /// new triangle (with regions: the pairs of regions whose boxes meet, each
 /// O(its triangles) plus the pairs near its plane); the pairs within one part
 /// (most pairs of nearby triangles) are never enumerated.
+/// `topology_sound`: the caller knows the mesh a closed, consistently oriented
+/// 2-manifold by index with every vertex used (as certify_piece's
+/// topology_sound: a union's faces triangulated over their own corners, none
+/// merged, glued edge for edge); the topology checks are then skipped, and the
+/// report is the one they would have let through.
 ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* const> parts,
-                                        const PartRegions* regions = nullptr);
+                                        const PartRegions* regions = nullptr, bool topology_sound = false);
 
 /// Whether the mesh is a closed, consistently oriented 2-manifold by index: every
 /// index in range, every vertex used, no triangle repeating an index, every

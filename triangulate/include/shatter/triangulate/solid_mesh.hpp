@@ -100,6 +100,22 @@ struct SolidMeshOptions {
   /// every face, as without it. Throws std::invalid_argument (round_solid) when
   /// not empty and not one per face.
   std::span<const std::uint8_t> face_attempts;
+  /// Per face of the solid, triangles to write it with on round_solid's first
+  /// attempt instead of triangulating it: face f's are
+  /// face_triangles[face_triangles_first[f] .. face_triangles_first[f + 1]),
+  /// over the solid's vertex indices; an empty range triangulates the face as
+  /// usual, and so do later attempts. Precondition (not checked: certification
+  /// takes the topology of a first attempt as sound): a face's triangles are a
+  /// triangulation of its exact polygon over its own corners, as
+  /// triangulate_face writes one: a union passes the triangles its part wrote
+  /// the same face with (the same loops over the same points), so that it
+  /// writes them again without triangulating. Both empty for none; throws
+  /// std::invalid_argument (round_solid) when face_triangles_first is neither
+  /// empty nor one more than the faces, or a range runs past face_triangles.
+  std::span<const Triangle> face_triangles;
+  std::span<const std::uint32_t> face_triangles_first;
+  /// Keep RoundedSolid::mesh_vertex_of for a plain triangulation.
+  bool keep_vertex_map = false;
   /// Certify without the self-intersection check, and accept vertices where the
   /// surface touches itself (a self-intersecting input was accepted on request:
   /// only the topology can be promised).
@@ -181,6 +197,9 @@ struct RoundedSolid {
   /// given means each face took its own); -1 otherwise. A union with other solids
   /// passes it on (face_attempts) to write this one's faces alike.
   int attempt = -1;
+  /// With SolidMeshOptions::keep_vertex_map and a plain triangulation (attempt
+  /// >= 0): per vertex of the solid, its vertex in `mesh`; else empty.
+  std::vector<VertexIndex> mesh_vertex_of;
 };
 
 /// Steps 1 to 3, and the separation of a piece that touches itself. A cut can
