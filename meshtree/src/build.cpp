@@ -814,7 +814,7 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
     // On the build's threads: the same bonds on any number (bonds.hpp).
     arena.execute([&] { tree.packed_bonds = find_packed_plane_bonds(tree); });
   } else {
-    tree.bonds = find_bonds(tree);
+    arena.execute([&] { tree.bonds = find_bonds(tree); });
   }
   timing.bond_seconds = seconds_since(phase_start);
   // The tree passes validate_tree, caches included, by construction (README

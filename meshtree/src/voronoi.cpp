@@ -1550,7 +1550,7 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
   }
   report.seconds_hulls = seconds_since(phase);
   phase = std::chrono::steady_clock::now();
-  tree.bonds = find_bonds(tree);
+  arena.execute([&] { tree.bonds = find_bonds(tree); });  // on the build's threads
   report.seconds_bonds = seconds_since(phase);
   if (run.lean) {
     for (MeshTreeNode& node : tree.nodes) std::vector<ApproxPoint>().swap(node.solid->approx);

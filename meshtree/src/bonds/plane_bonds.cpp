@@ -112,6 +112,41 @@ class PlaneBonds {
     return bonds;
   }
 
+  // run() on the arena's threads: the faces gathered by cut once, then the
+  // cuts shared out among workers of their own (a cut's bonds are a function
+  // of its faces in leaf order alone), handed over in any order and sorted as
+  // run() sorts them (no two bonds share a sort key): the same list on any
+  // number of threads. A Voronoi tree's bonds lie on some 35,000 cell planes at
+  // 10^4 sites, which one thread read while the other waited.
+  static std::vector<Bond> run_parallel(const MeshTree& tree) {
+    PlaneBonds gatherer(tree);
+    gatherer.gather_faces_by_cut();
+    std::vector<Bond> bonds;
+    bonds.reserve(2 * gatherer.refs_.size());  // as run_cuts
+    std::mutex bonds_mutex;
+    tbb::enumerable_thread_specific<std::optional<PlaneBonds>> workers;
+    const std::size_t cuts = tree.cut_planes.size();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cuts, 64), [&](const tbb::blocked_range<std::size_t>& range) {
+      std::optional<PlaneBonds>& mine = workers.local();
+      if (!mine) mine.emplace(tree);
+      std::vector<Bond> found;
+      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+        const std::size_t begin = gatherer.start_[k], end = gatherer.start_[k + 1];
+        if (end - begin < 2) continue;
+        mine->run_cut(
+            static_cast<std::uint32_t>(k),
+            [&](const auto& visit) {
+              for (std::size_t i = begin; i < end; ++i) visit(gatherer.refs_[gatherer.order_[i]]);
+            },
+            found);
+      }
+      const std::lock_guard lock(bonds_mutex);
+      bonds.insert(bonds.end(), found.begin(), found.end());
+    });
+    sort_bonds(bonds);
+    return bonds;
+  }
+
   // The bonds as find_packed_plane_bonds gives them: packed as they are found.
   // Every cut is a node's, and a node's cap faces lie on leaves of its own
   // range, so its faces are all known once its last leaf is read: the leaves
@@ -784,7 +819,10 @@ class PlaneBonds {
 
 }  // namespace
 
-std::vector<Bond> find_plane_bonds(const MeshTree& tree) { return PlaneBonds(tree).run(); }
+std::vector<Bond> find_plane_bonds(const MeshTree& tree) {
+  if (tbb::this_task_arena::max_concurrency() <= 1) return PlaneBonds(tree).run();
+  return PlaneBonds::run_parallel(tree);
+}
 
 std::vector<PackedBond> find_packed_plane_bonds(const MeshTree& tree) {
   const auto threads = static_cast<std::uint32_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
