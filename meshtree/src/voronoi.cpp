@@ -880,18 +880,54 @@ void set_part_hints(Part& part, const Solid& solid, const RoundedSolid& rounded,
   if (first.empty()) return;
   // The mesh's vertices back to the solid's: every vertex of a plain
   // triangulation is one of the solid's, each once.
+  part.face_first_triangle = std::move(first);  // for the regions (triangle_regions_of), map or not
   const std::vector<VertexIndex>& mesh_vertex_of = rounded.mesh_vertex_of;
-  if (mesh_vertex_of.size() != solid.defs.size()) {
-    part.face_first_triangle = std::move(first);  // for the regions (triangle_regions_of)
-    return;
-  }
+  if (mesh_vertex_of.size() != solid.defs.size()) return;
   std::vector<VertexIndex> solid_vertex_of(rounded.mesh.positions.size(), no_index);
   for (VertexIndex v = 0; v < mesh_vertex_of.size(); ++v) {
     if (mesh_vertex_of[v] < solid_vertex_of.size()) solid_vertex_of[mesh_vertex_of[v]] = v;
   }
   if (std::find(solid_vertex_of.begin(), solid_vertex_of.end(), no_index) != solid_vertex_of.end()) return;
   part.solid_vertex_of = std::move(solid_vertex_of);
-  part.face_first_triangle = std::move(first);
+}
+
+// The triangles a union's faces are written with (SolidMeshOptions::
+// face_triangles and face_triangles_first, over the union's vertices): each
+// face's part's triangles, where the part kept them (Part::solid_vertex_of) and
+// every corner keeps its part's definition, so rounds to the same bits and
+// triangulate_face would write the same ones again (the same loops over the same
+// points: a triangulation of the face over its own corners); an empty range
+// otherwise (a corner defined as another part's equal point may round
+// elsewhere; that face is triangulated as before). `members`: the parts glued,
+// in glue_parts' order; `face_origin` and `vertex_of` as glue_parts gave them.
+void face_triangles_from_parts(const Solid& glued, std::span<const Part* const> members,
+                               std::span<const std::array<std::uint32_t, 2>> face_origin,
+                               std::span<const std::uint32_t> vertex_of, std::vector<Triangle>& triangles,
+                               std::vector<std::uint32_t>& first) {
+  std::vector<std::uint32_t> first_vertex_of_member(members.size() + 1, 0);
+  for (std::size_t k = 0; k < members.size(); ++k) {
+    first_vertex_of_member[k + 1] = first_vertex_of_member[k] + static_cast<std::uint32_t>(members[k]->solid.defs.size());
+  }
+  triangles.clear();
+  first.assign(glued.faces.size() + 1, 0);
+  for (std::size_t f = 0; f < face_origin.size(); ++f) {
+    const auto [member, part_face] = face_origin[f];
+    const Part& from = *members[member];
+    const std::size_t before = triangles.size();
+    bool same = !from.solid_vertex_of.empty();
+    for (std::uint32_t t = same ? from.face_first_triangle[part_face] : 0;
+         same && t < from.face_first_triangle[part_face + 1]; ++t) {
+      Triangle mapped;
+      for (int k = 0; k < 3 && same; ++k) {
+        const VertexIndex v = from.solid_vertex_of[from.mesh.triangles[t][k]];
+        mapped[k] = vertex_of[first_vertex_of_member[member] + v];
+        same = mapped[k] != no_index && glued.defs[mapped[k]] == from.solid.defs[v];
+      }
+      if (same) triangles.push_back(mapped);
+    }
+    if (!same) triangles.resize(before);
+    first[f + 1] = static_cast<std::uint32_t>(triangles.size());
+  }
 }
 
 // Per face of `solid`, the attempt each face took in `rounded` (RoundedSolid::
@@ -1323,40 +1359,12 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
             any_later |= face_attempts[f] != 0;
           }
           if (any_later) union_meshing.face_attempts = face_attempts;
-          // Each face written with its part's triangles (the same loops over the
-          // same points, so a triangulation of the face over its own corners):
-          // triangulate_face would write the same ones again, given the same
-          // rounded corners, i.e. the same definitions, which is when they are
-          // passed (a corner defined as another part's equal point may round
-          // elsewhere; its faces are triangulated as before).
-          std::vector<std::uint32_t> first_vertex_of_member(members.size() + 1, 0);
-          for (std::size_t k = 0; k < members.size(); ++k) {
-            first_vertex_of_member[k + 1] =
-                first_vertex_of_member[k] + static_cast<std::uint32_t>(items[members[k]].solid.defs.size());
-          }
+          // Each face written with its part's triangles (face_triangles_from_parts).
+          std::vector<const Part*> member_parts;
+          for (const std::uint32_t m : members) member_parts.push_back(&items[m]);
           std::vector<Triangle> face_triangles;
-          std::vector<std::uint32_t> face_triangles_first(glued->faces.size() + 1, 0);
-          for (std::size_t f = 0; f < face_origin.size(); ++f) {
-            const auto [member, part_face] = face_origin[f];
-            const Part& from = items[members[member]];
-            if (!from.face_first_triangle.empty()) {
-              const std::size_t before = face_triangles.size();
-              bool same = true;
-              for (std::uint32_t t = from.face_first_triangle[part_face];
-                   same && t < from.face_first_triangle[part_face + 1]; ++t) {
-                Triangle mapped;
-                for (int k = 0; k < 3; ++k) {
-                  const VertexIndex v = from.solid_vertex_of[from.mesh.triangles[t][k]];
-                  mapped[k] = vertex_of[first_vertex_of_member[member] + v];
-                  same = mapped[k] != no_index && glued->defs[mapped[k]] == from.solid.defs[v];
-                  if (!same) break;
-                }
-                if (same) face_triangles.push_back(mapped);
-              }
-              if (!same) face_triangles.resize(before);
-            }
-            face_triangles_first[f + 1] = static_cast<std::uint32_t>(face_triangles.size());
-          }
+          std::vector<std::uint32_t> face_triangles_first;
+          face_triangles_from_parts(*glued, member_parts, face_origin, vertex_of, face_triangles, face_triangles_first);
           union_meshing.face_triangles = face_triangles;
           union_meshing.face_triangles_first = face_triangles_first;
           // A union round_solid cannot place is left unglued, as one it cannot certify.
