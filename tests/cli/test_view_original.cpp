@@ -16,13 +16,12 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 #include "shatter/generators/corpus.hpp"
 #include "shatter/kernel/error.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/repair.hpp"
 #include "shatter/kernel/validate.hpp"
+#include "support/scratch.hpp"
 #include "view_original.hpp"
 
 using namespace shatter;
@@ -35,9 +34,7 @@ namespace {
 
 // A file in this test's own scratch folder (no shatter binary is run here).
 fs::path scratch(const std::string& name) {
-  const fs::path folder = fs::temp_directory_path() / ("test_view_original-" + std::to_string(::getpid()));
-  fs::create_directories(folder);
-  return folder / name;
+  return process_scratch_folder("test_view_original") / name;
 }
 
 std::vector<fs::path> every_corpus_mesh() {

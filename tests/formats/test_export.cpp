@@ -6,8 +6,6 @@
 
 #include <catch2/catch.hpp>
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
@@ -28,6 +26,7 @@
 #include "shatter/meshtree/stats.hpp"
 #include "support/checks.hpp"
 #include "support/gltf.hpp"
+#include "support/scratch.hpp"
 
 #include "shatter/formats/tinygltf.hpp"
 
@@ -185,7 +184,7 @@ void require_partition(const MeshTree& tree, const std::vector<NodeIndex>& nodes
 // --- files ---------------------------------------------------------------------------
 
 fs::path scratch_folder(const std::string& name) {
-  const fs::path folder = fs::temp_directory_path() / ("shatter-export-test-" + std::to_string(::getpid())) / name;
+  const fs::path folder = test::process_scratch_folder("shatter-export-test") / name;
   fs::remove_all(folder);
   fs::create_directories(folder);
   return folder;

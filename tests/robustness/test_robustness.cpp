@@ -27,6 +27,7 @@
 #include "shatter/meshtree/build.hpp"
 #include "support/checks.hpp"
 #include "support/degenerate.hpp"
+#include "support/scratch.hpp"
 
 using namespace shatter;
 using namespace shatter::robust;
@@ -35,7 +36,7 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("shatter-test-robustness-" + name);
+  const fs::path dir = shatter::test::process_scratch_folder("shatter-test-robustness") / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

@@ -11,6 +11,8 @@
 #include <sstream>
 #include <string>
 
+#include "scratch.hpp"
+
 #ifndef SHATTER_EXE
 #error "define SHATTER_EXE (the shatter binary's path) for this test target"
 #endif
@@ -34,11 +36,11 @@ inline std::string slurp(const std::filesystem::path& path) {
   return buffer.str();
 }
 
-/// A fresh path `name` in this process's own scratch folder (emptied if it
-/// existed; the folder above it created), under `tag` so test binaries never meet.
+/// A fresh path `name` in this process's own scratch folder for `tag`
+/// (process_scratch_folder: removed at exit), emptied if it existed, the folder
+/// above it created.
 inline std::filesystem::path scratch_path(const std::string& tag, const std::string& name) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / (tag + "-" + std::to_string(::getpid())) / name;
+  const std::filesystem::path dir = process_scratch_folder(tag) / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir.parent_path());
   return dir;
