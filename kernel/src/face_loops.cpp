@@ -113,7 +113,13 @@ bool inside_loop(const FaceGeometry& g, VertexIndex v, std::span<const LoopEdge>
 bool is_convex_loop(const FaceGeometry& g, std::span<const LoopEdge> loop) {
   for (std::size_t k = 0; k < loop.size(); ++k) {
     const LoopEdge& e = loop[k];
-    if (g.orient(e.from, e.to, loop[(k + 1) % loop.size()].to) == Sign::negative) return false;
+    const LoopEdge& next = loop[(k + 1) % loop.size()];
+    // Two edges on one known line go straight, without arithmetic: a cut puts a
+    // crossing vertex on every edge it crosses, whose three points are exactly
+    // collinear and would take the exact fallback of orient_in_plane (1.7 % of
+    // a Voronoi build of a curved mesh went there).
+    if (e.line == next.line && (e.line.other.bits != no_index || e.line.is_segment())) continue;
+    if (g.orient(e.from, e.to, next.to) == Sign::negative) return false;
   }
   return true;
 }
