@@ -735,10 +735,24 @@ class VoronoiCutter {
         clip(*set_, input_.shells, pieces, plane, true);
       }
     };
+    // The box's planes inside the parent's box, the one cutting off the largest
+    // share of the parent's box first: the first cut reads the whole parent,
+    // the later ones only what is left (in axis order, the first cut was often
+    // a thin margin's trim, and the split that halves the parent came last).
+    std::array<std::pair<double, std::uint32_t>, 6> box_cuts;
+    std::size_t box_cut_count = 0;
     for (int a = 0; a < 3; ++a) {
-      if (axis_of(group.box.lo, a) > axis_of(parent_box.lo, a)) cut_by(box_base_ + 6 * g + 2 * a);
-      if (axis_of(group.box.hi, a) < axis_of(parent_box.hi, a)) cut_by(box_base_ + 6 * g + 2 * a + 1);
+      const double extent = axis_of(parent_box.hi, a) - axis_of(parent_box.lo, a);
+      if (axis_of(group.box.lo, a) > axis_of(parent_box.lo, a)) {
+        box_cuts[box_cut_count++] = {(axis_of(group.box.lo, a) - axis_of(parent_box.lo, a)) / extent, 2 * a};
+      }
+      if (axis_of(group.box.hi, a) < axis_of(parent_box.hi, a)) {
+        box_cuts[box_cut_count++] = {(axis_of(parent_box.hi, a) - axis_of(group.box.hi, a)) / extent, 2 * a + 1};
+      }
     }
+    std::sort(box_cuts.begin(), box_cuts.begin() + box_cut_count,
+              [](const auto& x, const auto& y) { return x.first > y.first || (x.first == y.first && x.second < y.second); });
+    for (std::size_t k = 0; k < box_cut_count; ++k) cut_by(box_base_ + 6 * g + box_cuts[k].second);
     if (!cut) pieces = parent;
     if (group.left < 0) {
       for (std::uint32_t i = group.begin; i < group.end; ++i) {
