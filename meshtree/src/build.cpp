@@ -28,6 +28,7 @@
 #include "shatter/meshtree/packed_shapes.hpp"
 #include "address_sanitizer.hpp"
 #include "populate.hpp"
+#include "tree_hulls.hpp"
 #include "shatter/cut/hull.hpp"
 #include "shatter/cut/plane_cut.hpp"
 #include "shatter/cut/plane_input.hpp"
@@ -226,7 +227,7 @@ struct BuildNode {
   // plane until number_tree gives the node its index.
   Boxed<Solid> solid;
   // A lean build's non-convex leaf's hull, taken as it finishes (leaf_finished);
-  // plane_hulls makes every other node's.
+  // tree_hulls makes every other node's.
   Boxed<Mesh> hull;
   const BuildNode* parent = nullptr;
   MassProperties mass;
@@ -392,7 +393,7 @@ class Builder {
   /// otherwise be the largest part of the tree (README "Lean memory").
   void leaf_finished(BuildNode& node) {
     if (lean_) {
-      // A non-convex leaf's hull while its mesh is at hand: plane_hulls would
+      // A non-convex leaf's hull while its mesh is at hand: tree_hulls would
       // unpack the mesh again, computing every position from its definition.
       if (node.mesh.present() && !node.solid->convex) node.hull = convex_hull_of(*node.mesh);
       pack(node);
@@ -707,44 +708,6 @@ void count_vanished(const BuildNode& root, BuildReport& report) {
   }
 }
 
-// The plane kernel's hulls, from the leaves up: a convex node (decided exactly)
-// is its own hull; any other leaf's hull is that of its vertices; any other
-// internal node's is that of its children's hull vertices, which hold all of its
-// own vertices (every vertex of a node is a vertex of a child) and far fewer
-// points. Such a hull contains the node's mesh (it may exceed the hull of the
-// node's own vertices by the rounding of the cut points inside it). Each depth is
-// done in parallel, deepest first; pure functions of the meshes, so the bytes do
-// not depend on the schedule.
-void plane_hulls(tbb::task_arena& arena, MeshTree& tree) {
-  std::vector<std::vector<NodeIndex>> by_depth;
-  for (NodeIndex v = 0; v < tree.nodes.size(); ++v) {
-    const std::uint32_t depth = tree.nodes[v].depth;
-    if (by_depth.size() <= depth) by_depth.resize(depth + 1);
-    by_depth[depth].push_back(v);
-  }
-  for (std::size_t d = by_depth.size(); d-- > 0;) {
-    const std::vector<NodeIndex>& level = by_depth[d];
-    arena.execute([&] {
-      tbb::parallel_for(std::size_t{0}, level.size(), [&](std::size_t i) {
-        MeshTreeNode& node = tree.nodes[level[i]];
-        if (node.convex) return;
-        NodeShapes shapes(tree);  // a lean build's nodes are packed
-        if (node.is_leaf()) {
-          // A lean build's leaf has it already, unless its cut was undone.
-          if (!node.hull.present()) node.hull = convex_hull_of(shapes.mesh(level[i]));
-          return;
-        }
-        std::vector<Vec3> points;
-        for (const NodeIndex c : node.children) {
-          const Mesh& child_hull = tree.nodes[c].convex ? shapes.mesh(c) : *std::as_const(tree.nodes[c]).hull;
-          points.insert(points.end(), child_hull.positions.begin(), child_hull.positions.end());
-        }
-        node.hull = convex_hull_of_points(points);
-      });
-    });
-  }
-}
-
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -805,7 +768,7 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
   // the cut planes number_tree stored.
   tree.geometry = builder.plane_input().geometry;
   phase_start = std::chrono::steady_clock::now();
-  plane_hulls(arena, tree);
+  detail::tree_hulls(arena, tree);
   timing.hull_seconds = seconds_since(phase_start);
   phase_start = std::chrono::steady_clock::now();
   // A lean build keeps its bonds packed, found so (40 bytes a bond instead of
@@ -822,8 +785,9 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
   // leaf ranges, leaf list and one cut plane per node in preorder; every mesh
   // is one the cut certified a valid solid as written (round_solid: closed,
   // manifold, oriented, its indices in range), or the input read_valid_solid /
-  // require_valid_solid checked; every hull is one convex_hull_of built over its
-  // own positions; find_bonds lists bonds sorted, between leaves its cut node
+  // require_valid_solid checked; every hull is one convex_hull_of built
+  // (tree_hulls) over a leaf's positions or an internal node's children's
+  // hulls' points; find_bonds lists bonds sorted, between leaves its cut node
   // separates; every solid is what the exact cut made of its parent's, closed,
   // its vertices' definitions approximated by the cut itself (so none is
   // degenerate), its planes input planes or its ancestors' (named by depth,

@@ -338,28 +338,6 @@ CGAL::Mpzf six_volume(const Mesh& mesh) { return six_volume(mesh.positions, mesh
 
 bool lexicographic_less(const Vec3& a, const Vec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); }
 
-// Empty when the closed triangle mesh `hull` is convex at every edge: the far
-// corner of the triangle across each edge is not above the triangle's plane
-// (exact orientation); else the first triangle where it is open or not convex.
-std::string convexity_problem(const Mesh& hull) {
-  std::map<std::pair<VertexIndex, VertexIndex>, VertexIndex> far_corner;
-  for (const Triangle& t : hull.triangles) {
-    for (int c = 0; c < 3; ++c) far_corner[{t[c], t[(c + 1) % 3]}] = t[(c + 2) % 3];
-  }
-  for (std::size_t i = 0; i < hull.triangles.size(); ++i) {
-    const Triangle& t = hull.triangles[i];
-    const EpickPoint a = epick(hull.positions[t[0]]), b = epick(hull.positions[t[1]]), c = epick(hull.positions[t[2]]);
-    for (int k = 0; k < 3; ++k) {
-      const auto across = far_corner.find({t[(k + 1) % 3], t[k]});
-      if (across == far_corner.end()) return "open at triangle " + std::to_string(i);
-      if (CGAL::orientation(a, b, c, epick(hull.positions[across->second])) == CGAL::POSITIVE) {
-        return "not convex at an edge of triangle " + std::to_string(i);
-      }
-    }
-  }
-  return {};
-}
-
 // Empty when `hull` is the convex hull of `mesh`'s vertices as the tree promises
 // it: a valid solid (closed, oriented, positive volume, no zero-area triangle),
 // surface ids 0, no attributes, its vertices among the mesh's; with `complete`,
@@ -405,29 +383,6 @@ std::string hull_problem(const Mesh& mesh, const Mesh& hull, bool complete) {
   if (actual != expected) {
     return "encloses volume " + num(actual.to_double() / 6) + ", the vertices' convex hull " +
            num(expected.to_double() / 6) + " (a mesh vertex lies outside it)";
-  }
-  return {};
-}
-
-// The plane kernel's hull of a non-convex internal node is built from its
-// children's hulls: a valid convex solid (exact orientation at every edge) that
-// contains every vertex of the node's mesh (each on or behind every hull
-// triangle, exactly); it may exceed the hull of the node's own vertices by the
-// rounding of cut points inside the node.
-std::string containing_hull_problem(const Mesh& mesh, const Mesh& hull) {
-  if (const std::string problem = solid_problem(hull); !problem.empty()) return "not a valid solid: " + problem;
-  if (std::any_of(hull.surfaces.begin(), hull.surfaces.end(), [](SurfaceId s) { return s != 0; })) {
-    return "a surface id other than 0";
-  }
-  if (const std::string problem = convexity_problem(hull); !problem.empty()) return problem;
-  for (std::size_t i = 0; i < hull.triangles.size(); ++i) {
-    const Triangle& t = hull.triangles[i];
-    const EpickPoint a = epick(hull.positions[t[0]]), b = epick(hull.positions[t[1]]), c = epick(hull.positions[t[2]]);
-    for (const Vec3& p : mesh.positions) {
-      if (CGAL::orientation(a, b, c, epick(p)) == CGAL::POSITIVE) {
-        return "mesh vertex " + vec_text(p) + " lies outside hull triangle " + std::to_string(i);
-      }
-    }
   }
   return {};
 }

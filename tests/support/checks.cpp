@@ -1,11 +1,15 @@
 #include "support/checks.hpp"
 
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Mpzf.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <map>
+#include <sstream>
+#include <utility>
 
 #include "shatter/kernel/validate.hpp"
 #include "shatter/meshtree/validate_tree.hpp"
@@ -34,7 +38,54 @@ Number six_volume(const std::vector<Triangle>& triangles, const std::vector<std:
   return sum;
 }
 
+using EpickPoint = CGAL::Exact_predicates_inexact_constructions_kernel::Point_3;
+EpickPoint epick(const Vec3& p) { return {p.x, p.y, p.z}; }
+
+std::string point_text(const Vec3& v) {
+  std::ostringstream out;
+  out.precision(17);
+  out << "(" << v.x << ", " << v.y << ", " << v.z << ")";
+  return out.str();
+}
+
 }  // namespace
+
+std::string convexity_problem(const Mesh& hull) {
+  std::map<std::pair<VertexIndex, VertexIndex>, VertexIndex> far_corner;
+  for (const Triangle& t : hull.triangles) {
+    for (int c = 0; c < 3; ++c) far_corner[{t[c], t[(c + 1) % 3]}] = t[(c + 2) % 3];
+  }
+  for (std::size_t i = 0; i < hull.triangles.size(); ++i) {
+    const Triangle& t = hull.triangles[i];
+    const EpickPoint a = epick(hull.positions[t[0]]), b = epick(hull.positions[t[1]]), c = epick(hull.positions[t[2]]);
+    for (int k = 0; k < 3; ++k) {
+      const auto across = far_corner.find({t[(k + 1) % 3], t[k]});
+      if (across == far_corner.end()) return "open at triangle " + std::to_string(i);
+      if (CGAL::orientation(a, b, c, epick(hull.positions[across->second])) == CGAL::POSITIVE) {
+        return "not convex at an edge of triangle " + std::to_string(i);
+      }
+    }
+  }
+  return {};
+}
+
+std::string containing_hull_problem(const Mesh& mesh, const Mesh& hull) {
+  if (const std::string problem = solid_problem(hull); !problem.empty()) return "not a valid solid: " + problem;
+  if (std::any_of(hull.surfaces.begin(), hull.surfaces.end(), [](SurfaceId s) { return s != 0; })) {
+    return "a surface id other than 0";
+  }
+  if (const std::string problem = convexity_problem(hull); !problem.empty()) return problem;
+  for (std::size_t i = 0; i < hull.triangles.size(); ++i) {
+    const Triangle& t = hull.triangles[i];
+    const EpickPoint a = epick(hull.positions[t[0]]), b = epick(hull.positions[t[1]]), c = epick(hull.positions[t[2]]);
+    for (const Vec3& p : mesh.positions) {
+      if (CGAL::orientation(a, b, c, epick(p)) == CGAL::POSITIVE) {
+        return "mesh vertex " + point_text(p) + " lies outside hull triangle " + std::to_string(i);
+      }
+    }
+  }
+  return {};
+}
 
 std::string solid_problem(const Mesh& mesh) {
   const std::size_t corners = 3 * mesh.triangles.size();

@@ -35,6 +35,19 @@ std::string tree_problem(const MeshTree& tree, bool geometry = false);
 /// topology_problem, then no exactly collinear triangle, then positive volume.
 std::string exact_solid_problem(const ExactMesh& mesh);
 
+/// Empty when the closed triangle mesh `hull` is convex at every edge: the far
+/// corner of the triangle across each edge is not above the triangle's plane
+/// (CGAL's exact orientation); else the first triangle where it is open or not
+/// convex.
+std::string convexity_problem(const Mesh& hull);
+
+/// Empty when `hull` holds `mesh` as a node's hull must: a valid solid with
+/// surface ids 0, convex at every edge, and every vertex of `mesh` on or behind
+/// every hull triangle (exact orientation). It may exceed the hull of the
+/// mesh's own vertices (an internal node's hull is built from its children's).
+/// Else the first problem found, naming the vertex or triangle.
+std::string containing_hull_problem(const Mesh& mesh, const Mesh& hull);
+
 /// Six times the volume, exactly, as a rational.
 mpq_class exact_six_volume(const ExactMesh& mesh);
 mpq_class exact_six_volume(const Mesh& mesh);
