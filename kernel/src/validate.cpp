@@ -1045,7 +1045,8 @@ void test_across_regions(const Mesh& mesh, std::span<const TriangleBox> boxes, s
 }  // namespace
 
 ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* const> parts,
-                                        const PartRegions* regions, bool topology_sound) {
+                                        const PartRegions* regions, bool topology_sound,
+                                        std::span<const std::uint64_t> origins) {
   constexpr std::uint32_t untrusted = std::numeric_limits<std::uint32_t>::max();
   // Reused buffers: a hierarchy certifies thousands of unions, and fresh large
   // allocations each cost their pages' zeroing again. Those grown past a few
@@ -1076,11 +1077,37 @@ ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* 
       if (known.capacity() > 4 * kept) known = {};
     }
   } release;
-  // Each triangle's part: the first part whose mesh has it (same corner
-  // positions, turning the same way).
+  // Each triangle's part: the part its origin names if that part has it (same
+  // corner positions, turning the same way), else the first part whose mesh
+  // has it.
   part_of.assign(mesh.triangles.size(), untrusted);
   region.assign(regions ? mesh.triangles.size() : 0, std::numeric_limits<std::uint32_t>::max());
-  {
+  const auto take = [&](std::size_t t, std::uint32_t k, std::uint32_t index) {
+    part_of[t] = k;
+    if (regions) {
+      const std::span<const std::uint32_t> given =
+          k < regions->region_of.size() ? regions->region_of[k] : std::span<const std::uint32_t>{};
+      if (given.size() == parts[k]->triangles.size()) region[t] = given[index];
+    }
+  };
+  const auto in_range = [&](const Mesh& m, const Triangle& tri) {
+    return tri[0] < m.positions.size() && tri[1] < m.positions.size() && tri[2] < m.positions.size();
+  };
+  std::size_t unplaced = mesh.triangles.size();
+  if (origins.size() == mesh.triangles.size()) {
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const auto k = static_cast<std::uint32_t>(origins[t] >> 32);
+      const auto index = static_cast<std::uint32_t>(origins[t] & 0xFFFFFFFFu);
+      if (k >= parts.size() || !parts[k] || index >= parts[k]->triangles.size()) continue;
+      const Triangle& tri = mesh.triangles[t];
+      const Triangle& theirs = parts[k]->triangles[index];
+      if (!in_range(mesh, tri) || !in_range(*parts[k], theirs)) continue;
+      if (!TriangleKeyEqual{}(triangle_key(mesh, tri), triangle_key(*parts[k], theirs))) continue;
+      take(t, k, index);
+      --unplaced;
+    }
+  }
+  if (unplaced > 0) {
     std::size_t total = 0;
     for (const Mesh* part : parts) total += part ? part->triangles.size() : 0;
     std::size_t capacity = 16;
@@ -1108,17 +1135,10 @@ ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* 
     }
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       const Triangle& tri = mesh.triangles[t];
-      if (tri[0] >= mesh.positions.size() || tri[1] >= mesh.positions.size() || tri[2] >= mesh.positions.size()) continue;
+      if (part_of[t] != untrusted || !in_range(mesh, tri)) continue;
       const std::size_t at = find(triangle_key(mesh, tri));
       if (known[at] == empty) continue;
-      const auto k = static_cast<std::uint32_t>(known[at] >> 32);
-      part_of[t] = k;
-      if (regions) {
-        const std::span<const std::uint32_t> given =
-            k < regions->region_of.size() ? regions->region_of[k] : std::span<const std::uint32_t>{};
-        const std::uint32_t index = known[at] & 0xFFFFFFFFu;
-        if (given.size() == parts[k]->triangles.size()) region[t] = given[index];
-      }
+      take(t, static_cast<std::uint32_t>(known[at] >> 32), static_cast<std::uint32_t>(known[at] & 0xFFFFFFFFu));
     }
   }
   // A triangle of a valid part is not flat: only the new ones are tested.

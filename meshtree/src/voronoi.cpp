@@ -915,15 +915,19 @@ void set_part_hints(Part& part, const Solid& solid, const RoundedSolid& rounded,
 // otherwise (a corner defined as another part's equal point may round
 // elsewhere; that face is triangulated as before). `members`: the parts glued,
 // in glue_parts' order; `face_origin` and `vertex_of` as glue_parts gave them.
+// `origins`: per triangle, the member (its index in `members`, as the union's
+// certification numbers its parts) << 32 | its triangle in that member's mesh
+// (SolidMeshOptions::face_triangle_origins).
 void face_triangles_from_parts(const Solid& glued, std::span<const Part* const> members,
                                std::span<const std::array<std::uint32_t, 2>> face_origin,
                                std::span<const std::uint32_t> vertex_of, std::vector<Triangle>& triangles,
-                               std::vector<std::uint32_t>& first) {
+                               std::vector<std::uint32_t>& first, std::vector<std::uint64_t>& origins) {
   std::vector<std::uint32_t> first_vertex_of_member(members.size() + 1, 0);
   for (std::size_t k = 0; k < members.size(); ++k) {
     first_vertex_of_member[k + 1] = first_vertex_of_member[k] + static_cast<std::uint32_t>(members[k]->solid.defs.size());
   }
   triangles.clear();
+  origins.clear();
   first.assign(glued.faces.size() + 1, 0);
   for (std::size_t f = 0; f < face_origin.size(); ++f) {
     const auto [member, part_face] = face_origin[f];
@@ -938,9 +942,15 @@ void face_triangles_from_parts(const Solid& glued, std::span<const Part* const> 
         mapped[k] = vertex_of[first_vertex_of_member[member] + v];
         same = mapped[k] != no_index && glued.defs[mapped[k]] == from.solid.defs[v];
       }
-      if (same) triangles.push_back(mapped);
+      if (same) {
+        triangles.push_back(mapped);
+        origins.push_back(std::uint64_t{member} << 32 | t);
+      }
     }
-    if (!same) triangles.resize(before);
+    if (!same) {
+      triangles.resize(before);
+      origins.resize(before);
+    }
     first[f + 1] = static_cast<std::uint32_t>(triangles.size());
   }
 }
@@ -1379,9 +1389,14 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
           for (const std::uint32_t m : members) member_parts.push_back(&items[m]);
           std::vector<Triangle> face_triangles;
           std::vector<std::uint32_t> face_triangles_first;
-          face_triangles_from_parts(*glued, member_parts, face_origin, vertex_of, face_triangles, face_triangles_first);
+          std::vector<std::uint64_t> face_triangle_origins;
+          face_triangles_from_parts(*glued, member_parts, face_origin, vertex_of, face_triangles, face_triangles_first,
+                                    face_triangle_origins);
           union_meshing.face_triangles = face_triangles;
           union_meshing.face_triangles_first = face_triangles_first;
+          // Certification then finds each triangle's part from where it came
+          // (checked), not by matching every part's triangles by position.
+          union_meshing.face_triangle_origins = face_triangle_origins;
           // A union round_solid cannot place is left unglued, as one it cannot certify.
           RoundedSolid r;
           try {

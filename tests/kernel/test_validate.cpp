@@ -813,6 +813,21 @@ TEST_CASE("validate_mesh_of_parts given regions and planes, or a sound topology,
     // Two closed manifolds over separate vertices are one by index: the topology
     // given as sound changes nothing.
     CHECK(same_defects(validate_mesh_of_parts(joined, parts, &regions, true), full));
+    // Where each triangle came from: right, crossed over between the parts, or
+    // wild (none, or any part and index, in range or not). Checked against the
+    // named part's triangle, never trusted: the same report.
+    std::vector<std::uint64_t> right, crossed, wild;
+    for (std::size_t t = 0; t < joined.triangles.size(); ++t) {
+      const bool in_first = t < first.triangles.size();
+      const std::uint64_t index = in_first ? t : t - first.triangles.size();
+      right.push_back((in_first ? 0 : std::uint64_t{1} << 32) | index);
+      crossed.push_back((in_first ? std::uint64_t{1} << 32 : 0) | index);
+      wild.push_back(t % 3 == 0 ? ~std::uint64_t{0} : std::uint64_t{t % 5} << 32 | (t * 7919 % (joined.triangles.size() + 3)));
+    }
+    for (const std::vector<std::uint64_t>* origins : {&right, &crossed, &wild}) {
+      CHECK(same_defects(validate_mesh_of_parts(joined, parts, &regions, false, *origins), full));
+      CHECK(same_defects(validate_mesh_of_parts(joined, parts, nullptr, true, *origins), full));
+    }
     CHECK(with.valid() == full.valid());
     (full.valid() ? accepted : refused) += 1;
   }

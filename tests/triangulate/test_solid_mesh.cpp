@@ -352,8 +352,34 @@ void check_face_triangles(const PlaneSet& set, const Solid& piece, const Rounded
     CHECK(again.mesh.positions == rounded.mesh.positions);
     CHECK(again.mesh.triangles == rounded.mesh.triangles);
   }
+  // Certified as a union of one part, its own first rounding, told where each
+  // triangle came from (rightly, or each from the next triangle): the same mesh.
+  std::vector<std::uint64_t> right_origins, shifted_origins;
+  for (std::uint64_t t = 0; t < over_solid.size(); ++t) {
+    right_origins.push_back(t);
+    shifted_origins.push_back((t + 1) % over_solid.size());
+  }
+  const std::array<const Mesh*, 1> own{&rounded.mesh};
+  for (const std::vector<std::uint64_t>* origins : {&right_origins, &shifted_origins}) {
+    SolidMeshOptions given;
+    given.face_attempts = attempts;
+    given.face_triangles = over_solid;
+    given.face_triangles_first = first;
+    given.face_triangle_origins = *origins;
+    given.parts = own;
+    const RoundedSolid again = round_solid(set, piece, given);
+    CHECK(again.valid);
+    CHECK(again.attempt == 0);
+    CHECK(again.mesh.positions == rounded.mesh.positions);
+    CHECK(again.mesh.triangles == rounded.mesh.triangles);
+  }
   SolidMeshOptions wrong;
   wrong.face_triangles = over_solid;
+  wrong.face_triangles_first = first;
+  const std::vector<std::uint64_t> short_origins(right_origins.begin(), right_origins.end() - 1);
+  wrong.face_triangle_origins = short_origins;
+  CHECK_THROWS_AS(round_solid(set, piece, wrong), std::invalid_argument);
+  wrong.face_triangle_origins = {};
   const std::vector<std::uint32_t> short_offsets(first.begin(), first.end() - 1);
   wrong.face_triangles_first = short_offsets;
   CHECK_THROWS_AS(round_solid(set, piece, wrong), std::invalid_argument);

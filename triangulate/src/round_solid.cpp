@@ -44,9 +44,10 @@ RoundedSolid copy_without_mesh(RoundedSolid& result) {
 // else the trusted mesh the piece was cut from. Both accept exactly the meshes
 // validate_mesh accepts (validate.hpp says why).
 ValidationReport validate_knowing(const Mesh& mesh, const SolidMeshOptions& options,
-                                  std::span<const std::uint8_t> exact_vertices, bool topology_sound) {
+                                  std::span<const std::uint8_t> exact_vertices, bool topology_sound,
+                                  std::span<const std::uint64_t> triangle_origins = {}) {
   if (!options.parts.empty()) {
-    return validate_mesh_of_parts(mesh, options.parts, options.part_regions, topology_sound);
+    return validate_mesh_of_parts(mesh, options.parts, options.part_regions, topology_sound, triangle_origins);
   }
   if (options.trusted != nullptr && options.trusted_triangles != nullptr) {
     return validate_mesh_against(mesh, options.trusted_triangles->get(), options.cut, exact_vertices);
@@ -84,7 +85,8 @@ std::vector<std::uint8_t> exact_input_vertices(const Solid& solid, std::span<con
 
 }  // namespace
 
-ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& options, const ExactVertexSource* exact) {
+ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& options, const ExactVertexSource* exact,
+                                 std::span<const std::uint64_t> triangle_origins) {
   if (!options.allow_self_intersections) {
     // A triangulation of the exact solid's faces over their own vertices, none
     // merged (what `exact` says), has the solid's topology: closed, oriented,
@@ -104,7 +106,7 @@ ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& optio
     const std::vector<std::uint8_t> exact_vertices =
         exact != nullptr ? exact_input_vertices(exact->solid, exact->mesh_vertex_of, mesh.positions.size())
                          : std::vector<std::uint8_t>{};
-    return validate_knowing(mesh, options, exact_vertices, exact != nullptr);
+    return validate_knowing(mesh, options, exact_vertices, exact != nullptr, triangle_origins);
   }
   ValidationOptions topology_only;
   topology_only.check_self_intersections = false;
@@ -130,6 +132,10 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
        options.face_triangles_first.back() > options.face_triangles.size())) {
     throw std::invalid_argument("round_solid: face_triangles_first must hold one ascending offset per face, and one more");
   }
+  if (!options.face_triangle_origins.empty() && options.face_triangle_origins.size() != options.face_triangles.size()) {
+    throw std::invalid_argument("round_solid: face_triangle_origins must be empty or hold one origin per face triangle");
+  }
+
   RoundedSolid result;
   PieceVolumes piece(set, solid);
   ValidationReport first_report;
@@ -208,6 +214,8 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
   std::optional<RoundingReach> reach;
   std::vector<Vec3> output_positions;
   std::vector<std::uint32_t> face_of_triangle;
+  // Where the first attempt's triangles came from (face_triangle_origins).
+  std::vector<std::uint64_t> triangle_origins;
   // The first separation certified with some fans held still (see below), the
   // last resort.
   std::optional<RoundedSolid> held_fallback;
@@ -265,7 +273,8 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
                            : std::span<const std::pair<std::uint32_t, std::uint32_t>>(),
                 untangle_edges ? &face_of_triangle : nullptr, &folded_faces, thin_only,
                 snapping ? std::span<const VertexIndex>(snapped_to) : std::span<const VertexIndex>(),
-                snapping ? &snap_pixel : nullptr, apart, fold_merge);
+                snapping ? &snap_pixel : nullptr, apart, fold_merge,
+                step == 0 && !options.face_triangle_origins.empty() ? &triangle_origins : nullptr);
     std::size_t inserted = 0;
     if (inserting) {
       if (!reach) {
@@ -291,7 +300,8 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
       // Only the first rounding triangulates the exact solid's faces over their
       // own vertices, and only with none merged are they all apart.
       const ExactVertexSource source{solid, mesh_vertex_of};
-      report = certify_rounded(mesh, options, step == 0 && merged == 0 ? &source : nullptr);
+      report = certify_rounded(mesh, options, step == 0 && merged == 0 ? &source : nullptr,
+                               step == 0 ? std::span<const std::uint64_t>(triangle_origins) : std::span<const std::uint64_t>());
       if (mesh.triangles.empty()) {
         // Every vertex rounded onto a few points and the whole piece flattened
         // away: no defect is left to name, but nothing is left either.
@@ -617,6 +627,7 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
             refined_options.face_attempts = {};
             refined_options.face_triangles = {};  // the refined solid's faces are others
             refined_options.face_triangles_first = {};
+            refined_options.face_triangle_origins = {};
             if (rounded != nullptr) *rounded = true;
             if (strips) {
               std::vector<Vec3> positions;

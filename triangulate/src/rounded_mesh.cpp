@@ -14,6 +14,9 @@ namespace rounding {
 
 namespace {
 
+// No given face triangles (triangulate's per-face marker).
+constexpr std::size_t no_given = ~std::size_t{0};
+
 // Per-corner attributes at a point of input triangle `source`: the corner's own
 // value at one of its vertices, else interpolated with barycentric coordinates
 // of the rounded point projected into the triangle (attributes never decide
@@ -105,7 +108,7 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
                  std::vector<std::uint32_t>* face_of_triangle, std::size_t* folded,
                  bool thin_folds_only, std::span<const VertexIndex> snapped_to,
                  const mpq_class* snap_within, bool folds_apart_too,
-                 FoldMerge fold_merge) {
+                 FoldMerge fold_merge, std::vector<std::uint64_t>* triangle_origins) {
   const std::size_t n = solid.defs.size();
   thread_local std::vector<Vec3> positions;
   thread_local std::vector<PointDef> placed;
@@ -165,6 +168,7 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
   thread_local std::vector<std::uint32_t> emit_as, home;  // merge_coplanar_sheets, merge_folded_faces
   emit_as.clear();
   if (face_of_triangle != nullptr) face_of_triangle->clear();
+  if (triangle_origins != nullptr) triangle_origins->clear();
   if (folded != nullptr) *folded = 0;
   // Folds are merged on the loops over representatives, which the repair
   // builds, merged vertices or not.
@@ -224,6 +228,7 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
     if (repairing && route_crossed && emit_as[f] == no_index) continue;
     const SolidFace& face = solid.faces[repairing && route_crossed ? emit_as[f] : f];
     face_triangles.clear();
+    std::size_t given_from = no_given;  // where the face's given triangles start in face_triangles, if given
     bool changed = false;
     if (repairing) {
       changed = repaired_changed[f];
@@ -248,6 +253,7 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
       if (given) {
         face_triangles.assign(options.face_triangles.begin() + options.face_triangles_first[f],
                               options.face_triangles.begin() + options.face_triangles_first[f + 1]);
+        given_from = options.face_triangles_first[f];
       } else {
         const std::size_t face_attempt =
             attempt == 0 && !options.face_attempts.empty() ? options.face_attempts[f] : attempt;
@@ -305,8 +311,13 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
       basis = PlaneBasis(Plane{{a.a.value, a.b.value, a.c.value}, a.d.value});
       cap_normal = face.reversed ? -basis.normal : basis.normal;
     }
-    for (Triangle t : face_triangles) {
+    for (std::size_t i = 0; i < face_triangles.size(); ++i) {
+      Triangle t = face_triangles[i];
       if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) continue;
+      if (triangle_origins != nullptr) {
+        const bool known = given_from != no_given && !options.face_triangle_origins.empty();
+        triangle_origins->push_back(known ? options.face_triangle_origins[given_from + i] : ~std::uint64_t{0});
+      }
       for (VertexIndex& v : t) {
         if (out_index[v] == no_index) {
           out_index[v] = static_cast<VertexIndex>(mesh.positions.size());

@@ -210,6 +210,9 @@ std::size_t merge_folded_faces(const PlaneSet& set, const Solid& solid, std::spa
 // `folded` receives how many faces that merged; `folds_apart_too`: as
 // merge_folded_faces' `apart_too`. `face_of_triangle`: when given,
 // the face (loop index) each triangle of `mesh` came from, in order.
+// `triangle_origins`: when given, per triangle of `mesh`, its
+// SolidMeshOptions::face_triangle_origins entry when it is one of the given
+// face triangles written, else ~0.
 void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions& options, std::size_t attempt,
                  Mesh& mesh, std::size_t& merged, std::vector<VertexIndex>* mesh_vertex_of = nullptr,
                  bool repair_loops = false, bool route_crossed = false,
@@ -217,7 +220,7 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
                  std::vector<std::uint32_t>* face_of_triangle = nullptr, std::size_t* folded = nullptr,
                  bool thin_folds_only = false, std::span<const VertexIndex> snapped_to = {},
                  const mpq_class* snap_within = nullptr, bool folds_apart_too = false,
-                 FoldMerge fold_merge = FoldMerge::pairs);
+                 FoldMerge fold_merge = FoldMerge::pairs, std::vector<std::uint64_t>* triangle_origins = nullptr);
 
 // --- Repairs of the rounded mesh (rounding_repairs.cpp) ----------------------------------
 
@@ -428,7 +431,10 @@ struct ExactVertexSource {
 // touches itself allowed) for a solid accepted with self-intersections.
 // `exact`: nullptr, or where the mesh came from; its flags are made only when
 // the full check runs (certify_piece certifies most pieces without them).
+// `triangle_origins`: for a union of parts, triangulate's (checked, not
+// trusted: validate_mesh_of_parts' `origins`).
 ValidationReport certify_rounded(const Mesh& mesh, const SolidMeshOptions& options,
-                                 const ExactVertexSource* exact = nullptr);
+                                 const ExactVertexSource* exact = nullptr,
+                                 std::span<const std::uint64_t> triangle_origins = {});
 
 }  // namespace shatter::rounding

@@ -235,8 +235,18 @@ struct PartRegions {
 /// topology_sound: a union's faces triangulated over their own corners, none
 /// merged, glued edge for edge); the topology checks are then skipped, and the
 /// report is the one they would have let through.
+/// `origins`: per triangle of `mesh` (or empty), where the caller took it from,
+/// part << 32 | that part's triangle, or ~0 for none. Nothing of it is trusted:
+/// a triangle is that part's only if the part's triangle has the same corner
+/// positions turning the same way; every other triangle is looked for in all
+/// parts as above. When every triangle's origin holds, no table of the parts'
+/// triangles is made (the Voronoi hierarchy writes each union face with its
+/// part's triangles and knows them). A triangle found in several parts then
+/// counts as the one its origin names, a witness as good as the first: the
+/// skipped pairs are still pairs of triangles of one valid mesh.
 ValidationReport validate_mesh_of_parts(const Mesh& mesh, std::span<const Mesh* const> parts,
-                                        const PartRegions* regions = nullptr, bool topology_sound = false);
+                                        const PartRegions* regions = nullptr, bool topology_sound = false,
+                                        std::span<const std::uint64_t> origins = {});
 
 /// Whether the mesh is a closed, consistently oriented 2-manifold by index: every
 /// index in range, every vertex used, no triangle repeating an index, every

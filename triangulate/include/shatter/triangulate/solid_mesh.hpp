@@ -114,6 +114,13 @@ struct SolidMeshOptions {
   /// empty nor one more than the faces, or a range runs past face_triangles.
   std::span<const Triangle> face_triangles;
   std::span<const std::uint32_t> face_triangles_first;
+  /// Per triangle of face_triangles (or empty), where it was taken from:
+  /// parts[part] << 32 | that part mesh's triangle (validate_mesh_of_parts'
+  /// `origins`), or ~0 for none. Certification checks each against the part's
+  /// triangle and, when every triangle written holds, matches none by position.
+  /// Throws std::invalid_argument (round_solid) when neither empty nor one per
+  /// face triangle.
+  std::span<const std::uint64_t> face_triangle_origins;
   /// Keep RoundedSolid::mesh_vertex_of for a plain triangulation.
   bool keep_vertex_map = false;
   /// Certify without the self-intersection check, and accept vertices where the
