@@ -341,16 +341,20 @@ void check_face_triangles(const PlaneSet& set, const Solid& piece, const Rounded
   }
   REQUIRE(first.back() == over_solid.size());
   const std::vector<std::uint8_t> attempts(piece.faces.size(), static_cast<std::uint8_t>(rounded.attempt));
-  for (const auto& [triangles, offsets] : {std::pair{&over_solid, &first}, std::pair{&some, &every_other}}) {
-    SolidMeshOptions given;
-    given.face_attempts = attempts;
-    given.face_triangles = *triangles;
-    given.face_triangles_first = *offsets;
+  // Rounded with `given`, the piece's first attempt writes the same mesh again.
+  const auto writes_it_again = [&](const SolidMeshOptions& given) {
     const RoundedSolid again = round_solid(set, piece, given);
     CHECK(again.valid);
     CHECK(again.attempt == 0);
     CHECK(again.mesh.positions == rounded.mesh.positions);
     CHECK(again.mesh.triangles == rounded.mesh.triangles);
+  };
+  for (const auto& [triangles, offsets] : {std::pair{&over_solid, &first}, std::pair{&some, &every_other}}) {
+    SolidMeshOptions given;
+    given.face_attempts = attempts;
+    given.face_triangles = *triangles;
+    given.face_triangles_first = *offsets;
+    writes_it_again(given);
   }
   // Certified as a union of one part, its own first rounding, told where each
   // triangle came from (rightly, or each from the next triangle): the same mesh.
@@ -367,11 +371,7 @@ void check_face_triangles(const PlaneSet& set, const Solid& piece, const Rounded
     given.face_triangles_first = first;
     given.face_triangle_origins = *origins;
     given.parts = own;
-    const RoundedSolid again = round_solid(set, piece, given);
-    CHECK(again.valid);
-    CHECK(again.attempt == 0);
-    CHECK(again.mesh.positions == rounded.mesh.positions);
-    CHECK(again.mesh.triangles == rounded.mesh.triangles);
+    writes_it_again(given);
   }
   SolidMeshOptions wrong;
   wrong.face_triangles = over_solid;
