@@ -781,14 +781,10 @@ TEST_CASE("a glued node writes its faces as its parts were certified: no retry w
   CHECK(voronoi_problem(tree, report) == "");
 }
 
-}  // namespace shatter
-
-namespace shatter {
-
-// Internal nodes' hulls come from their children's hulls (tree_hulls). Where a
-// union's rounding moved a vertex off its part's position (the copies of a
-// point where cells of a regular grid touch, moved apart), that hull is not the
-// hull of the node's own vertices; it must still hold the node's mesh.
+// Internal nodes' hulls come from their children's hulls (tree_hulls). On a
+// regular grid (cells meeting four or more at a point) the children's meshes
+// hold points the union's does not, and that hull is larger than the hull of
+// the node's own vertices; it must still hold the node's mesh.
 TEST_CASE("hulls from children's hulls hold their nodes' meshes, regular grids included", "[voronoi][corpus]") {
   std::size_t differing = 0;
   for (const auto& [name, cells] : {std::pair<const char*, std::array<std::uint32_t, 3>>{"blobby.off", {9, 9, 9}},

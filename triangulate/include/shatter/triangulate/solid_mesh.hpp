@@ -114,9 +114,9 @@ struct SolidMeshOptions {
   /// empty nor one more than the faces, or a range runs past face_triangles.
   std::span<const Triangle> face_triangles;
   std::span<const std::uint32_t> face_triangles_first;
-  /// Per triangle of face_triangles (or empty), where it was taken from:
-  /// parts[part] << 32 | that part mesh's triangle (validate_mesh_of_parts'
-  /// `origins`), or ~0 for none. Certification checks each against the part's
+  /// Per triangle of face_triangles (or empty), where it was taken from: the
+  /// part's index in `parts` << 32 | that part mesh's triangle
+  /// (validate_mesh_of_parts' `origins`), or ~0 for none. Certification checks each against the part's
   /// triangle and, when every triangle written holds, matches none by position.
   /// Throws std::invalid_argument (round_solid) when neither empty nor one per
   /// face triangle.
