@@ -4,7 +4,9 @@
 // computed here, independently and exactly (GMP rationals): whether a fan from
 // the first vertex is valid, whether the loops are simple in the points each step
 // triangulates (no two vertices at one point, no edges touching or crossing), and
-// whether a rounded triangulation joins three exactly collinear points.
+// whether a rounded triangulation joins three exactly collinear points. Where a
+// rounded triangulation is none of the exact points, the flips that make it one
+// (flip_to_counter_clockwise) are checked to give an exact tiling.
 
 #include <catch2/catch.hpp>
 
@@ -343,6 +345,40 @@ Scene collinear_runs(Random& random) {
   return s;
 }
 
+// A convex polygon with a corner inserted on some of its edges: rounded, each
+// such corner lies 2^-40 outside its edge (the rounded polygon convex there), but
+// its exact point lies on the edge or 2^-60 inside it (a straight or reflex
+// corner), so any triangulation of the rounded points has a triangle at that
+// corner that is flat or clockwise for the exact points: the sliver rounding
+// turned over, which flip_to_counter_clockwise flips away.
+Scene turned_corners(Random& random) {
+  Scene s;
+  s.name = "corners turned by rounding";
+  s.axis = static_cast<int>(random.index(3));
+  const std::size_t corners = 3 + random.index(6);
+  const std::vector<double> angles = angles_around(random, corners);
+  std::vector<std::array<double, 2>> poly;
+  for (const double a : angles) {
+    poly.push_back({std::ldexp(std::round(std::ldexp(std::cos(a), 20)), -20),
+                    std::ldexp(std::round(std::ldexp(std::sin(a), 20)), -20)});
+  }
+  std::vector<VertexIndex> loop;
+  for (std::size_t i = 0; i < corners; ++i) {
+    const auto& a = poly[i];
+    const auto& b = poly[(i + 1) % corners];
+    loop.push_back(s.add(a[0], a[1]));
+    if (random.index(3) == 0) continue;
+    // The midpoint (on a 2^-21 grid, exact), the edge's outward normal (b - a
+    // turned clockwise; its components are multiples of 2^-20 below 2).
+    const double mu = (a[0] + b[0]) / 2, mv = (a[1] + b[1]) / 2;
+    const double nu = b[1] - a[1], nv = a[0] - b[0];
+    const double out = std::ldexp(1.0, -40), in = random.index(2) == 0 ? 0 : std::ldexp(1.0, -60);
+    loop.push_back(s.add(mu + out * nu, mv + out * nv, -(out + in) * nu, -(out + in) * nv));
+  }
+  s.close_loop(std::move(loop));
+  return s;
+}
+
 // --- the chain -----------------------------------------------------------------------
 
 struct PathsTaken {
@@ -389,6 +425,26 @@ void check_chain(const Scene& s, PathsTaken& paths) {
   const Cap<Vec3> rounded = triangulate_cap(s.positions, s.border, plane, {});
   check_simple_chain(s, s.rounded_2d, rounded.method, rounded.triangles, rounded.added_points.size(), true, paths,
                      "rounded");
+  // The rounded triangulation made one of the exact points by flips: kept as it
+  // is where it already is one; else, where the flips succeed, a tiling of the
+  // exact region (checked here independently, on rationals).
+  if (rounded.method == CapMethod::fan || rounded.method == CapMethod::cdt) {
+    std::vector<Triangle> flipped = rounded.triangles;
+    const bool already = tiling_problem(s.exact_2d, flipped, s.border).empty();
+    const bool made = flip_to_counter_clockwise(flipped, s.border, s.positions, [&](VertexIndex a, VertexIndex b, VertexIndex c) {
+      return orientation(s.exact_2d[a], s.exact_2d[b], s.exact_2d[c]) > 0;
+    });
+    if (already) {
+      CHECK(made);
+      CHECK(flipped == rounded.triangles);
+    } else if (made) {
+      CHECK(boundary_problem(flipped, s.border) == "");
+      CHECK(tiling_problem(s.exact_2d, flipped, s.border) == "");
+      ++paths.count["flips: a sliver flipped away"];
+    } else {
+      ++paths.count["flips: declined"];
+    }
+  }
   // The full chain: exact_cdt exactly when the rounded steps failed or joined
   // three exactly collinear points; then on the exact points, else steiner_fan.
   const Cap<Vec3> full = triangulate_cap(s.positions, s.border, plane,
@@ -477,7 +533,8 @@ TEST_CASE("the cap fall-back chain takes each step exactly when the one before c
     check_chain(touching_squares(random, false), paths);
     check_chain(touching_squares(random, true), paths);
     for (int k = 0; k < 4; ++k) check_chain(collinear_runs(random), paths);
-    scenes += 6;
+    for (int k = 0; k < 2; ++k) check_chain(turned_corners(random), paths);
+    scenes += 8;
   }
   std::string taken;
   for (const auto& [path, count] : paths.count) taken += "\n  " + path + ": " + std::to_string(count);
@@ -486,7 +543,7 @@ TEST_CASE("the cap fall-back chain takes each step exactly when the one before c
   for (const char* path : {"rounded fan", "rounded cdt", "rounded steiner", "full: rounded step kept",
                            "full: exact_cdt after rounded loops met", "full: exact_cdt after a rounded sliver",
                            "full: steiner", "exact fan", "exact cdt", "exact steiner", "exact without fan cdt",
-                           "exact without fan steiner"}) {
+                           "exact without fan steiner", "flips: a sliver flipped away"}) {
     INFO(path);
     CHECK(paths.count[path] > 0);
   }

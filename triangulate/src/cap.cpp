@@ -6,6 +6,8 @@
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <deque>
 #include <optional>
 #include <type_traits>
@@ -120,6 +122,93 @@ bool cap_boundary_is_border(std::span<const Triangle> triangles, std::span<const
     }
   }
   return true;
+}
+
+bool flip_to_counter_clockwise(std::vector<Triangle>& triangles, std::span<const Edge> border,
+                               std::span<const Vec3> positions,
+                               const std::function<bool(VertexIndex, VertexIndex, VertexIndex)>& counter_clockwise) {
+  std::vector<std::uint32_t> slivers;
+  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+    if (!counter_clockwise(triangles[t][0], triangles[t][1], triangles[t][2])) slivers.push_back(t);
+  }
+  if (slivers.empty()) return true;
+  // Slivers are rare (about one cap in fifteen of a fractured curved mesh, one
+  // or two triangles each), so each neighbour is found by a scan; a border edge
+  // has none, as the region lies on its left only.
+  const auto across = [&](VertexIndex u, VertexIndex v) -> std::uint32_t {
+    for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+      const Triangle& n = triangles[t];
+      for (int k = 0; k < 3; ++k) {
+        if (n[k] == v && n[(k + 1) % 3] == u) return t;
+      }
+    }
+    return IndexMap::absent;
+  };
+  // Flips edge k of triangle t, (u, v), shared with the neighbour (v, u, x): the
+  // diagonal u-v of quadrilateral u, x, v, w becomes x-w, when both new
+  // triangles are counter-clockwise exactly (else nothing changes).
+  // `delaunay_only`: and only when the edge is not locally Delaunay on the
+  // rounded positions (the angles at w and x sum to more than a half-turn): a
+  // choice of shape, which no validity rests on.
+  std::uint32_t changed = IndexMap::absent;
+  const auto flip = [&](std::uint32_t t, int k, bool delaunay_only) {
+    const VertexIndex u = triangles[t][k], v = triangles[t][(k + 1) % 3], w = triangles[t][(k + 2) % 3];
+    const std::uint32_t n = across(u, v);
+    if (n == IndexMap::absent) return false;
+    VertexIndex x = triangles[n][0];
+    for (const VertexIndex corner : triangles[n]) {
+      if (corner != u && corner != v) x = corner;
+    }
+    if (x == w) return false;
+    if (delaunay_only) {
+      const Vec3 a = positions[u] - positions[w], b = positions[v] - positions[w];
+      const Vec3 c = positions[v] - positions[x], d = positions[u] - positions[x];
+      // sin(alpha + beta) < 0, each factor scaled by the positive |a||b| or |c||d|.
+      if (!(norm(cross(a, b)) * dot(c, d) + dot(a, b) * norm(cross(c, d)) < 0)) return false;
+    }
+    if (!counter_clockwise(u, x, w) || !counter_clockwise(x, v, w)) return false;
+    triangles[t] = {u, x, w};
+    triangles[n] = {x, v, w};
+    changed = n;
+    return true;
+  };
+  std::vector<std::uint8_t> is_sliver(triangles.size(), 0);
+  for (const std::uint32_t t : slivers) is_sliver[t] = 1;
+  std::vector<std::uint32_t> touched;
+  for (const std::uint32_t t : slivers) {
+    if (!is_sliver[t]) continue;  // flipped away with a neighbour that was one too
+    // Its longest edge first: the chord its middle corner was moved across,
+    // whose flip joins that corner to the vertex beyond.
+    const auto length = [&](int k) {
+      const Vec3 d = positions[triangles[t][(k + 1) % 3]] - positions[triangles[t][k]];
+      return dot(d, d);
+    };
+    std::array<int, 3> order{0, 1, 2};
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return length(a) > length(b); });
+    if (!flip(t, order[0], false) && !flip(t, order[1], false) && !flip(t, order[2], false)) return false;
+    is_sliver[t] = is_sliver[changed] = 0;
+    touched.push_back(t);
+    touched.push_back(changed);
+  }
+  // The vertex beyond may lie nearly on the line too (a run of corners along a
+  // flat stretch of the section), leaving thin triangles the exact Delaunay
+  // triangulation would not have: Lawson's flips around the flipped ones bring
+  // the shape back, a bounded number of them (a cycle on nearly cocircular
+  // corners ends there).
+  for (std::size_t budget = 8 * touched.size(); !touched.empty() && budget > 0;) {
+    const std::uint32_t t = touched.back();
+    touched.pop_back();
+    for (int k = 0; k < 3; ++k) {
+      if (!flip(t, k, true)) continue;
+      touched.push_back(t);
+      touched.push_back(changed);
+      --budget;
+      break;
+    }
+  }
+  // A flip can make an edge that another pair of triangles has already: then
+  // the triangles are no chain with the border as its boundary.
+  return cap_boundary_is_border(triangles, border);
 }
 
 namespace {
@@ -351,15 +440,18 @@ bool joins_exactly_collinear_points(const std::vector<Triangle>& triangles, cons
 }  // namespace
 
 Cap<Vec3> triangulate_cap(std::span<const Vec3> positions, std::span<const Edge> border, const Plane& plane,
-                          const ExactPositionFn& exact_position) {
+                          const ExactPositionFn& exact_position, bool allow_fan) {
   if (border.empty()) return {};
   const PlaneProjection projection = PlaneProjection::of(plane);
   const auto loops = link_loops(border);
   using Point2 = CGAL::Epick::Point_2;
-  auto rounded = fan_or_cdt<CGAL::Epick, Vec3, Point2>(border, loops, [&](VertexIndex v) {
-    const Vec2 p = projection(positions[v]);
-    return Point2(p.x, p.y);
-  });
+  auto rounded = fan_or_cdt<CGAL::Epick, Vec3, Point2>(
+      border, loops,
+      [&](VertexIndex v) {
+        const Vec2 p = projection(positions[v]);
+        return Point2(p.x, p.y);
+      },
+      allow_fan);
   if (rounded && (!exact_position || !joins_exactly_collinear_points(rounded->triangles, projection, exact_position))) {
     return std::move(*rounded);
   }

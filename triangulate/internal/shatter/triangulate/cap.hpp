@@ -57,11 +57,11 @@ using ExactPositionFn = std::function<ExactPoint(VertexIndex)>;
 /// and every vertex on the plane (exactly, or up to the rounding of its position).
 /// Guarantees: the cap's boundary is exactly `border`; no vertex added on it.
 /// Throws UnsupportedGeometryError only if even steiner_fan cannot close it.
+/// `allow_fan` false skips method 1 (in both overloads): the constrained Delaunay
+/// triangulation, whose triangles are as far from slivers as the loops allow
+/// (used to retriangulate a face whose fan's slivers did not survive rounding).
 Cap<Vec3> triangulate_cap(std::span<const Vec3> positions, std::span<const Edge> border,
-                          const Plane& plane, const ExactPositionFn& exact_position);
-/// `allow_fan` false skips method 1: the constrained Delaunay triangulation, whose
-/// triangles are as far from slivers as the loops allow (used to retriangulate a
-/// face whose fan's slivers did not survive rounding).
+                          const Plane& plane, const ExactPositionFn& exact_position, bool allow_fan = true);
 Cap<ExactPoint> triangulate_cap(std::span<const ExactPoint> positions, std::span<const Edge> border,
                                 const Plane& plane, bool allow_fan = true);
 
@@ -70,6 +70,28 @@ Cap<ExactPoint> triangulate_cap(std::span<const ExactPoint> positions, std::span
 /// used in its own direction and not reversed, and every other edge is matched by
 /// its reverse, so the triangles' boundary is exactly `border`. Linear time.
 bool cap_boundary_is_border(std::span<const Triangle> triangles, std::span<const Edge> border);
+
+/// Makes a cap triangulated over approximations of its points (a constrained
+/// Delaunay triangulation of the rounded positions) one of the exact points, by
+/// edge flips: each triangle that is not strictly counter-clockwise for the
+/// exact points (a sliver whose middle corner rounding moved across its chord)
+/// is flipped with a neighbour across one of its non-border edges, where both
+/// new triangles are; each flip removes at least one such triangle and adds
+/// none, so there are at most as many flips as such triangles.
+/// `counter_clockwise(a, b, c)`: whether a, b, c (the caller's vertex indices)
+/// turn strictly counter-clockwise seen from the cap's outward side, decided
+/// exactly. `positions`, the rounded ones, only order the edges tried (the
+/// sliver's longest first). Preconditions: cap_boundary_is_border(triangles,
+/// border); a position for every vertex index the triangles use.
+/// Guarantees, on true: every triangle strictly counter-clockwise and
+/// cap_boundary_is_border still holds, so the triangles cover the region the
+/// border bounds once and meet only along edges (the argument at
+/// certifies_for_exact_points, cap.cpp); true at once, unchanged, when every
+/// triangle already is. On false (a sliver with no such flip) `triangles` is
+/// left in an unspecified state: the caller triangulates the exact points.
+bool flip_to_counter_clockwise(std::vector<Triangle>& triangles, std::span<const Edge> border,
+                               std::span<const Vec3> positions,
+                               const std::function<bool(VertexIndex, VertexIndex, VertexIndex)>& counter_clockwise);
 
 /// The border edges linked into closed loops of vertex indices, in linear time.
 /// Where several loops meet at a vertex, each visit takes the next unused edge.
