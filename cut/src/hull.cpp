@@ -196,10 +196,16 @@ Mesh canonical_hull(const std::vector<Vec3>& positions, const HullSurface& surfa
 
   // Vertices in lexicographic order of their coordinates, facets fanned from their
   // least vertex, triangles sorted.
+  // The vertices used, in index order: marked, then collected (each is a corner
+  // of about six facets' polygons, which a sort would order first).
+  thread_local std::vector<std::uint8_t> is_used;
+  is_used.assign(positions.size(), 0);
+  for (const VertexIndex v : polygon_corners) is_used[v] = 1;
   thread_local std::vector<VertexIndex> used;
-  used.assign(polygon_corners.begin(), polygon_corners.end());
-  std::sort(used.begin(), used.end());
-  used.erase(std::unique(used.begin(), used.end()), used.end());
+  used.clear();
+  for (VertexIndex v = 0; v < positions.size(); ++v) {
+    if (is_used[v]) used.push_back(v);
+  }
   if (!positions_sorted) {
     std::sort(used.begin(), used.end(), [&](VertexIndex p, VertexIndex q) {
       return lexicographically_less(positions[p], positions[q]);
@@ -544,7 +550,22 @@ Mesh convex_hull_of_points(std::span<const Vec3> input) {
   // Duplicates removed first (a node's points repeat the vertices its children
   // share); the sort also makes the hull's work independent of the input order.
   std::vector<Vec3> points(input.begin(), input.end());
-  std::sort(points.begin(), points.end(), less_in_value_then_bits);
+  // An internal node's points are its children's hull vertices, each hull's in
+  // lexicographic order already: a few ascending runs, merged rather than sorted.
+  constexpr std::size_t most_runs_merged = 8;
+  std::vector<std::size_t> run_ends;
+  for (std::size_t i = 1; i < points.size() && run_ends.size() < most_runs_merged; ++i) {
+    if (less_in_value_then_bits(points[i], points[i - 1])) run_ends.push_back(i);
+  }
+  if (run_ends.size() < most_runs_merged) {
+    run_ends.push_back(points.size());
+    for (std::size_t k = 1; k < run_ends.size(); ++k) {
+      std::inplace_merge(points.begin(), points.begin() + static_cast<std::ptrdiff_t>(run_ends[k - 1]),
+                         points.begin() + static_cast<std::ptrdiff_t>(run_ends[k]), less_in_value_then_bits);
+    }
+  } else {
+    std::sort(points.begin(), points.end(), less_in_value_then_bits);
+  }
   points.erase(std::unique(points.begin(), points.end()), points.end());  // equal by value: the first kept
   const Quickhull hull(points);
   return canonical_hull(points, hull.surface(), true);
