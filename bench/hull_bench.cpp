@@ -1,7 +1,7 @@
 // shatter-bench-hulls: the convex hulls of a written tree's non-convex nodes,
 // computed again from the points the builder gives them (a leaf's mesh
 // vertices; an internal node's children's hull vertices, or a convex child's
-// mesh vertices, as plane_hulls in meshtree/src/build.cpp), on one thread, and
+// mesh vertices, as meshtree/src/tree_hulls.cpp does), on one thread, and
 // compared with the hulls the file stores (bit for bit: any difference exits 1).
 // Reports the points, the hull vertices, the seconds and the orient3d calls, how
 // many the floating-point filter left to expansion arithmetic, and how many the
