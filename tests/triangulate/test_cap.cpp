@@ -346,14 +346,22 @@ Scene collinear_runs(Random& random) {
 }
 
 // A convex polygon with a corner inserted on some of its edges: rounded, each
-// such corner lies 2^-40 outside its edge (the rounded polygon convex there), but
-// its exact point lies on the edge or 2^-60 inside it (a straight or reflex
-// corner), so any triangulation of the rounded points has a triangle at that
-// corner that is flat or clockwise for the exact points: the sliver rounding
-// turned over, which flip_to_counter_clockwise flips away.
-Scene turned_corners(Random& random) {
+// such corner lies 2^-30 times the edge's normal outside its edge (the rounded
+// polygon convex there), but its exact point lies on the edge or 2^-45 times
+// the normal inside it (a straight or reflex corner). A triangulation of the
+// rounded points that cuts that corner off as one triangle, as its fans and
+// mostly its Delaunay triangulations do (the corner is nearly straight), has a
+// triangle flat or clockwise for the exact points there: the sliver rounding
+// turned over, which flip_to_counter_clockwise flips away. Every coordinate is
+// exact: a rounded corner is a multiple of 2^-50 below 2 (51 bits), and its
+// offset to the exact point a product of at most 37 bits. With `by_a_hair` the
+// pushes are 2^-40 out and 2^-60 in, below the rounding of the corner's own
+// coordinates (the rounded corner is no longer on the grid): its exact point is
+// then within an ulp of the edge on either side, straight, reflex or convex by
+// a hair, where some flips are themselves invalid and must be declined.
+Scene turned_corners(Random& random, bool by_a_hair) {
   Scene s;
-  s.name = "corners turned by rounding";
+  s.name = by_a_hair ? "corners turned by rounding, by a hair" : "corners turned by rounding";
   s.axis = static_cast<int>(random.index(3));
   const std::size_t corners = 3 + random.index(6);
   const std::vector<double> angles = angles_around(random, corners);
@@ -372,7 +380,8 @@ Scene turned_corners(Random& random) {
     // turned clockwise; its components are multiples of 2^-20 below 2).
     const double mu = (a[0] + b[0]) / 2, mv = (a[1] + b[1]) / 2;
     const double nu = b[1] - a[1], nv = a[0] - b[0];
-    const double out = std::ldexp(1.0, -40), in = random.index(2) == 0 ? 0 : std::ldexp(1.0, -60);
+    const double out = std::ldexp(1.0, by_a_hair ? -40 : -30);
+    const double in = random.index(2) == 0 ? 0 : std::ldexp(1.0, by_a_hair ? -60 : -45);
     loop.push_back(s.add(mu + out * nu, mv + out * nv, -(out + in) * nu, -(out + in) * nv));
   }
   s.close_loop(std::move(loop));
@@ -431,9 +440,10 @@ void check_chain(const Scene& s, PathsTaken& paths) {
   if (rounded.method == CapMethod::fan || rounded.method == CapMethod::cdt) {
     std::vector<Triangle> flipped = rounded.triangles;
     const bool already = tiling_problem(s.exact_2d, flipped, s.border).empty();
-    const bool made = flip_to_counter_clockwise(flipped, s.border, s.positions, [&](VertexIndex a, VertexIndex b, VertexIndex c) {
+    const auto counter_clockwise = [&](VertexIndex a, VertexIndex b, VertexIndex c) {
       return orientation(s.exact_2d[a], s.exact_2d[b], s.exact_2d[c]) > 0;
-    });
+    };
+    const bool made = flip_to_counter_clockwise(flipped, s.border, s.positions, counter_clockwise);
     if (already) {
       CHECK(made);
       CHECK(flipped == rounded.triangles);
@@ -518,6 +528,37 @@ TEST_CASE("the cap check refuses caps whose boundary is not exactly the border")
   CHECK_FALSE(cap_boundary_is_border(Triangles{{0, 1, 2}, {0, 2, 3}, {3, 2, 4}}, border));  // sticks out
 }
 
+TEST_CASE("flips: a sliver turned over by rounding is flipped away, and a flip that would fold is declined",
+          "[cap][flips]") {
+  // The unit square with a corner 4 on its right edge, cut off as the ear
+  // (1, 4, 2) by a triangulation of the rounded points (4 a hair outside the
+  // edge). Its exact point decides: a hair inside, the ear is clockwise and the
+  // flip of its long edge with (0, 1, 2) makes (2, 0, 4) and (0, 1, 4), both
+  // counter-clockwise (then the Delaunay flips may turn the square's diagonal);
+  // on the edge, the ear is flat and goes the same way; beyond the square's left edge (the exact loop crosses
+  // itself), that flip folds, no other edge of the ear can flip (both are on the
+  // border), and the triangulation is declined.
+  const std::vector<Edge> border = {{0, 1}, {1, 4}, {4, 2}, {2, 3}, {3, 0}};
+  const std::vector<Vec3> rounded = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1 + 0x1p-30, 0.5, 0}};
+  for (const double exact_x : {1 - 0x1p-45, 1.0, -0.5}) {
+    INFO("the corner's exact x: " << exact_x);
+    const std::vector<Q2> exact = {{0, 0}, {1, 0}, {1, 1}, {0, 1}, {mpq_class(exact_x), mpq_class(0.5)}};
+    std::vector<Triangle> triangles = {{1, 4, 2}, {0, 1, 2}, {0, 2, 3}};
+    REQUIRE(boundary_problem(triangles, border) == "");
+    const auto counter_clockwise = [&](VertexIndex a, VertexIndex b, VertexIndex c) {
+      return orientation(exact[a], exact[b], exact[c]) > 0;
+    };
+    const bool made = flip_to_counter_clockwise(triangles, border, rounded, counter_clockwise);
+    if (exact_x < 0) {
+      CHECK_FALSE(made);
+    } else {
+      CHECK(made);
+      CHECK(boundary_problem(triangles, border) == "");
+      CHECK(tiling_problem(exact, triangles, border) == "");  // every triangle counter-clockwise, the ear gone
+    }
+  }
+}
+
 TEST_CASE("the cap fall-back chain takes each step exactly when the one before cannot", "[cap][chain]") {
   PathsTaken paths;
   std::size_t scenes = 0;
@@ -533,7 +574,7 @@ TEST_CASE("the cap fall-back chain takes each step exactly when the one before c
     check_chain(touching_squares(random, false), paths);
     check_chain(touching_squares(random, true), paths);
     for (int k = 0; k < 4; ++k) check_chain(collinear_runs(random), paths);
-    for (int k = 0; k < 2; ++k) check_chain(turned_corners(random), paths);
+    for (const bool by_a_hair : {false, true}) check_chain(turned_corners(random, by_a_hair), paths);
     scenes += 8;
   }
   std::string taken;
