@@ -122,10 +122,12 @@ void triangulate_region(const PlaneSet& set, const SolidFace& face, Projection p
   Cap<Vec3> cap;
   if (!exact_delaunay) cap = triangulate_cap(local_rounded, border, plane, {});
   const FaceGeometry outward = outward_geometry(set, face, projection, solid);
+  const auto counter_clockwise = [&](VertexIndex a, VertexIndex b, VertexIndex c) {
+    return outward.orient(vertices[a], vertices[b], vertices[c]) == Sign::positive;
+  };
   auto all_positive = [&](const std::vector<Triangle>& triangles) {
-    return std::all_of(triangles.begin(), triangles.end(), [&](const Triangle& t) {
-      return outward.orient(vertices[t[0]], vertices[t[1]], vertices[t[2]]) == Sign::positive;
-    });
+    return std::all_of(triangles.begin(), triangles.end(),
+                       [&](const Triangle& t) { return counter_clockwise(t[0], t[1], t[2]); });
   };
   // A triangle of the rounded triangulation that is flat or clockwise for the
   // exact points (a corner rounding moved across its neighbours' chord): the
@@ -136,11 +138,9 @@ void triangulate_region(const PlaneSet& set, const SolidFace& face, Projection p
   // in fifteen there). Not the fan with its slivers flipped: a fan of a smooth
   // section is thin all around its apex, which the exact triangulation, being
   // Delaunay, is not (test_glb_normals' cap normals).
-  const auto counter_clockwise = [&](VertexIndex a, VertexIndex b, VertexIndex c) {
-    return outward.orient(vertices[a], vertices[b], vertices[c]) == Sign::positive;
-  };
-  bool rounded_kept = !exact_delaunay && cap.added_points.empty() && all_positive(cap.triangles);
-  if (!exact_delaunay && cap.added_points.empty() && !rounded_kept) {
+  const bool rounded_tried = !exact_delaunay && cap.added_points.empty();
+  bool rounded_kept = rounded_tried && all_positive(cap.triangles);
+  if (rounded_tried && !rounded_kept) {
     if (cap.method == CapMethod::fan) cap = triangulate_cap(local_rounded, border, plane, {}, false);
     rounded_kept = cap.method == CapMethod::cdt &&
                    flip_to_counter_clockwise(cap.triangles, border, local_rounded, counter_clockwise);

@@ -77,12 +77,15 @@ bool cap_boundary_is_border(std::span<const Triangle> triangles, std::span<const
 /// exact points (a sliver whose middle corner rounding moved across its chord)
 /// is flipped with a neighbour across one of its non-border edges, where both
 /// new triangles are; each flip removes at least one such triangle and adds
-/// none, so there are at most as many flips as such triangles.
+/// none, so there are at most as many flips as such triangles. Then Lawson's
+/// flips restore the Delaunay shape around the flipped triangles, at most eight
+/// per flipped triangle, each also made only where both new triangles are.
 /// `counter_clockwise(a, b, c)`: whether a, b, c (the caller's vertex indices)
 /// turn strictly counter-clockwise seen from the cap's outward side, decided
-/// exactly. `positions`, the rounded ones, only order the edges tried (the
-/// sliver's longest first). Preconditions: cap_boundary_is_border(triangles,
-/// border); a position for every vertex index the triangles use.
+/// exactly. `positions`, the rounded ones, only make choices of shape (the
+/// sliver's longest edge tried first, the Delaunay test of Lawson's flips),
+/// never validity. Preconditions: cap_boundary_is_border(triangles, border); a
+/// position for every vertex index the triangles use.
 /// Guarantees, on true: every triangle strictly counter-clockwise and
 /// cap_boundary_is_border still holds, so the triangles cover the region the
 /// border bounds once and meet only along edges (the argument at
