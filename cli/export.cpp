@@ -12,6 +12,7 @@
 #include "shatter/meshtree/tree.hpp"
 #include "errors.hpp"
 #include "huge_page_objects.hpp"
+#include "view_original.hpp"
 #include "viewer_page.hpp"
 
 namespace shatter::cli {
@@ -127,6 +128,14 @@ Command add_export_command(CLI::App& app) {
             }
           },
           "leaves|all|depth:K", "node selection"));
+  command->add_option("--original", args->original,
+                      "html only: the mesh file the tree was built from (read as fracture reads it), put on the "
+                      "page as `view --original` serves it: an \"Original input\" panel with the repair report and "
+                      "a switch that draws the file as it is beside the tree's root, its boundary edges, "
+                      "non-manifold edges and self-intersecting triangles highlighted. Needs the root on the page "
+                      "(--nodes all, the default for html, or depth:0). Refused with one line, nothing written, "
+                      "when the file cannot be read or drawn, or its bounding box does not hold the root's (equals "
+                      "it, for a tree built without --repair)");
   return {command, [args] { return run_export(*args); }};
 }
 
@@ -134,23 +143,43 @@ int run_export(const ExportArgs& args) {
   using Kind = ExportFormat::Kind;
   const ExportFormat format = export_format(args);
   if (format.kind == Kind::html) require_viewer("export --format html");
+  if (!args.original.empty() && format.kind != Kind::html) {
+    throw UsageError("--original goes with --format html (the viewer page draws it beside the root), not with --out " +
+                     args.out);
+  }
   // The viewer's depth slider needs every level, so a page holds all nodes unless told otherwise.
   const NodeSelection selection = selection_of(args.nodes.empty() ? (format.kind == Kind::html ? "all" : "leaves")
                                                                   : args.nodes);
+  // The page draws the original beside the root, so the root must be on it.
+  if (!args.original.empty() && selection.kind != NodeSelectionKind::all &&
+      !(selection.kind == NodeSelectionKind::depth && selection.depth == 0)) {
+    throw UsageError("--original is drawn beside the tree's root, which is not on the page with --nodes " +
+                     node_selection_name(selection) + "; use --nodes all (the default for html) or depth:0");
+  }
   keep_small_objects_on_huge_pages();
   const MeshTree tree = read_shatter_file(args.input);
   const std::vector<NodeIndex> nodes = select_nodes(tree, selection);
+  std::optional<nlohmann::ordered_json> original;
+  if (!args.original.empty()) {
+    if (tree.nodes.empty()) throw CorruptFileError(args.input + ": the tree has no nodes");
+    original = original_json(read_original_input(args.original, tree.nodes[0].mesh, tree.input_repair),
+                             tree.input_repair);
+  }
 
   OutputTransaction output;
   if (format.kind != Kind::mesh_files) {
     std::string bytes = encode_glb(tree, nodes);
     if (format.kind == Kind::html) {
-      bytes = self_contained_viewer_page(fs::path(args.input).filename().string(), bytes);
+      bytes = self_contained_viewer_page(fs::path(args.input).filename().string(), bytes,
+                                         original ? &*original : nullptr);
     }
     if (const fs::path folder = fs::path(args.out).parent_path(); !folder.empty()) output.create_folder(folder);
     output.write_file(args.out, bytes);
     output.commit();
-    std::cout << "wrote " << args.out << (format.kind == Kind::html ? " (the viewer with the tree inline)" : "")
+    std::cout << "wrote " << args.out
+              << (format.kind != Kind::html ? ""
+                  : original               ? " (the viewer with the tree and the original input inline)"
+                                           : " (the viewer with the tree inline)")
               << ": " << tree.nodes.size() << " tree nodes, meshes on " << nodes.size() << " ("
               << node_selection_name(selection) << "), " << triangles_of(tree, nodes) << " triangles\n";
     return static_cast<int>(ExitCode::ok);

@@ -27,6 +27,9 @@ struct ExportArgs {
   /// "leaves", "all" or "depth:K" (parse_node_selection); empty: "all" for
   /// html, "leaves" otherwise.
   std::string nodes;
+  /// html only: the mesh file the tree was built from, drawn beside its root
+  /// on the page (as `view --original`); empty: none.
+  std::string original;
 };
 
 /// Declares the `export` subcommand on `app`.
@@ -38,10 +41,14 @@ Command add_export_command(CLI::App& app);
 /// viewer and that GLB (self_contained_viewer_page; its folder created if
 /// missing). All files or none (OutputTransaction). Prints what it wrote on
 /// stdout. Returns 0.
+/// With --original (html only), the page also holds that file and its defects
+/// (read_original_input, original_json), as `view --original` serves them.
 /// Throws UsageError for a bad --format or --nodes, a --format that contradicts
 /// the --out extension (or glb or html while --out names an existing folder),
-/// or html in a build without the viewer, before reading; CorruptFileError or
-/// IoError from reading the tree; IoError from writing.
+/// html in a build without the viewer, or --original with another format or
+/// with --nodes that leave the root out, before reading; CorruptFileError or
+/// IoError from reading the tree; IoError or InvalidMeshError from
+/// read_original_input (nothing written); IoError from writing.
 int run_export(const ExportArgs& args);
 
 /// Writes the mesh of every node in `nodes` into `folder` (created if missing)

@@ -58,12 +58,16 @@ std::string served_viewer_page() {
   return page_with_data(config_script({{"mode", "served"}}));
 }
 
-std::string self_contained_viewer_page(std::string_view name, std::string_view glb) {
+std::string self_contained_viewer_page(std::string_view name, std::string_view glb,
+                                       const nlohmann::ordered_json* original) {
   require_viewer("export --format html");
   // base64 never contains '<', so the model needs no escaping.
-  return page_with_data(config_script({{"mode", "file"}, {"name", std::string(name)}}) +
-                        "\n<script id=\"shatter-model\" type=\"application/octet-stream\">" + base64(glb) +
-                        "</script>");
+  std::string data = config_script({{"mode", "file"}, {"name", std::string(name)}}) +
+                     "\n<script id=\"shatter-model\" type=\"application/octet-stream\">" + base64(glb) + "</script>";
+  if (original != nullptr) {
+    data += "\n<script id=\"shatter-original\" type=\"application/json\">" + script_safe_json(*original) + "</script>";
+  }
+  return page_with_data(data);
 }
 
 std::string base64(std::string_view bytes) {

@@ -5,6 +5,8 @@
 // without npm has no page: viewer_built() says so and the commands that need
 // it refuse with one line saying why.
 
+#include <nlohmann/json.hpp>
+
 #include <string>
 #include <string_view>
 
@@ -28,8 +30,11 @@ std::string served_viewer_page();
 
 /// The page as `shatter export --format html` writes it: self-contained, the
 /// GLB `glb` inline (base64), shown under the name `name`, so it opens from
-/// disk (file://) with no server. Throws as require_viewer.
-std::string self_contained_viewer_page(std::string_view name, std::string_view glb);
+/// disk (file://) with no server. `original`, when given, is the answer `view
+/// --original` serves as GET /api/original (original_json), inline too: the
+/// page then has the same "Original input" panel. Throws as require_viewer.
+std::string self_contained_viewer_page(std::string_view name, std::string_view glb,
+                                       const nlohmann::ordered_json* original = nullptr);
 
 /// `bytes` in base64 (RFC 4648, with padding, no line breaks).
 std::string base64(std::string_view bytes);

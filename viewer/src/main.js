@@ -191,8 +191,9 @@ function presentModel(viewer, name) {
   viewer.setInteriorMaterial($('interior-material').checked);
 }
 
-// The "Original input" panel (`shatter view TREE --original MESH`): the file's name, what validation finds in it with
-// a colour key and counts, and the repair the tree records, one line per change.
+// The "Original input" panel (`shatter view TREE --original MESH`, or a page from `export --format html --original
+// MESH`): the file's name, what validation finds in it with a colour key and counts, and the repair the tree records,
+// one line per change.
 function presentOriginal(original) {
   $('original').hidden = false;
   $('original-name').textContent = `${original.file}: ${original.triangles} triangles, ${original.vertices} vertices`;
@@ -249,6 +250,17 @@ function showOriginal(viewer, on) {
     showSelection(viewer, viewer.selected);
   }
   viewer.setShowOriginal(on);
+}
+
+// The original input (GET api/original's answer, or the page's inline copy): drawn hidden, its panel shown, its
+// switch wired.
+function attachOriginal(viewer, answer) {
+  const original = readOriginal(answer);
+  const object = originalObject(original);
+  object.userData.read = { ...original, box: object.userData.box };
+  viewer.setOriginal(object);
+  presentOriginal(original);
+  $('show-original').addEventListener('change', (e) => showOriginal(viewer, e.target.checked));
 }
 
 async function main() {
@@ -315,6 +327,9 @@ async function main() {
   try {
     if (cfg.mode === 'file') {
       await load(base64Bytes($('shatter-model').textContent), cfg.name || '');
+      // `shatter export --format html --original MESH`: the answer `view --original` serves, inline.
+      const inline = $('shatter-original');
+      if (inline) attachOriginal(viewer, JSON.parse(inline.textContent));
     } else if (cfg.mode === 'served') {
       const response = await fetch('api/session', { cache: 'no-store' });
       if (!response.ok) throw new Error(`api/session: ${await errorOf(response)}`);
@@ -323,12 +338,7 @@ async function main() {
       if (session.original) {
         const answer = await fetch('api/original', { cache: 'no-store' });
         if (!answer.ok) throw new Error(`api/original: ${await errorOf(answer)}`);
-        const original = readOriginal(await answer.json());
-        const object = originalObject(original);
-        object.userData.read = { ...original, box: object.userData.box };
-        viewer.setOriginal(object);
-        presentOriginal(original);
-        $('show-original').addEventListener('change', (e) => showOriginal(viewer, e.target.checked));
+        attachOriginal(viewer, await answer.json());
       }
       if (session.editable) {
         $('editor').hidden = false;

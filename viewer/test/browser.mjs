@@ -30,6 +30,9 @@
 //                                 edges; its switch shows the original left of the root (the depth goes to 0) with
 //                                 the open edges drawn in their colour, and takes both back; without --original the
 //                                 session, the panel and api/original are as before (screenshots kept)
+//   node browser.mjs original-page the same tree written by `export --format html --original`: the page from disk
+//                                 has the same panel and switch; --original with glb, with --nodes leaves or with
+//                                 another mesh is refused with one line and nothing written; without it, no panel
 //   node browser.mjs server       the command: 127.0.0.1 only, 404 as JSON, refused files and busy ports, SIGTERM
 //
 // Environment (set by CTest): SHATTER_EXE, SHATTER_CHROMIUM, SHATTER_NODE_MODULES, SHATTER_MESH,
@@ -156,6 +159,66 @@ async function usePageOverride(page, url) {
       () => '<script id="shatter-config" type="application/json">{"mode":"served"}</script>') });
   });
   return { url, check: () => assert.ok(served > 0, `SHATTER_VIEWER_PAGE was not served at ${url}`) };
+}
+
+// The "Original input" panel and switch of a page showing the tree fractured from the cube with a hole (`view
+// --original` or `export --format html --original`): the repair lines the file records (`recorded`, from `info
+// --json`), the hole's 4 boundary edges in the legend; the switch draws the original left of the root, the tree cut
+// back to its root, the open edges in their colour, and takes both back. `shot` names the screenshot kept.
+async function checkOriginalPanel(page, recorded, shot) {
+  assert.equal(await page.locator('#original').isVisible(), true, 'the panel shows with --original');
+  const panel = () => page.evaluate(() => ({
+    repair: [...document.querySelectorAll('#original-repair [data-field=repair]')].map((e) => e.textContent),
+    legend: Object.fromEntries([...document.querySelectorAll('#original-legend li')]
+      .map((e) => [e.dataset.field, Number(e.dataset.value)])),
+    validation: document.getElementById('original-validation').textContent,
+  }));
+  const shown = await panel();
+  assert.deepEqual(shown.repair, recorded.repair.map((r) => r.text), 'the repair lines are the file\'s');
+  assert.deepEqual(shown.legend, { boundary_edges: 4, non_manifold_edges: 0, self_intersecting_triangles: 0 });
+  assert.match(shown.validation, /open mesh: 4 boundary edges/);
+  const before = await state(page);
+  assert.equal(before.original.shown, false, 'hidden until the switch is turned on');
+  assert.equal(before.original.triangles, recorded.triangles_before);
+  const deepest = before.depth;
+  const tubeColour = [0xff, 0xc8, 0x3d];
+  const tubesBefore = await canvasPixels(page, tubeColour);
+
+  await setCheckbox(page, 'show-original', true);
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  const on = await state(page);
+  assert.equal(on.original.shown, true);
+  assert.equal(on.depth, on.depths[0], 'the tree is cut back to its root beside the original');
+  assert.equal(on.meshesShown, 1);
+  // Beside, not over: the moved original ends left of the root's box, and only x moved.
+  const rootBox = await page.evaluate(() => {
+    const { viewer, THREE } = window.shatterViewer;
+    const box = new THREE.Box3().setFromObject(viewer.tree.nodes[0].object);
+    return { min: box.min.toArray(), max: box.max.toArray() };
+  });
+  assert.ok(on.original.box.max[0] + on.original.position[0] < rootBox.min[0], 'the original lies left of the root');
+  assert.deepEqual(on.original.position.slice(1), [0, 0]);
+  assertNotBlank(await screenshot(page, shot), `original beside the root (${shot})`);
+  // Where the root's centre is on the screen, as a fraction of the canvas width.
+  const rootCentre = await page.evaluate(() => {
+    const { viewer, THREE } = window.shatterViewer;
+    const centre = new THREE.Box3().setFromObject(viewer.tree.nodes[0].object).getCenter(new THREE.Vector3());
+    return viewer.toScreen(centre).x / viewer.renderer.domElement.getBoundingClientRect().width;
+  });
+  const tubes = await canvasPixels(page, tubeColour, rootCentre);
+  console.log(`open edges: ${tubes.count} pixels of their colour (${tubesBefore.count} before), `
+    + `${tubes.left} left of the root's centre`);
+  assert.equal(tubesBefore.count, 0, 'nothing in the open-edge colour before the switch');
+  assert.ok(tubes.count > 200 && tubes.left === tubes.count, 'the open edges are drawn, left of the root');
+  const covered = await canvasPixels(page, null);
+  assert.ok(covered.left > 0.05 * covered.total && covered.right > 0.05 * covered.total,
+    `both halves of the view show a solid: ${JSON.stringify(covered)}`);
+
+  await setCheckbox(page, 'show-original', false);
+  const off = await state(page);
+  assert.equal(off.original.shown, false);
+  assert.equal(off.depth, deepest, 'the depth shown before comes back');
+  assert.equal((await canvasPixels(page, tubeColour)).count, 0);
 }
 
 /** Opens `url` and waits until the viewer has shown its data; collects console errors and page errors. */
@@ -728,60 +791,7 @@ const cases = {
     const browser = await openBrowser();
     try {
       const { page, errors } = await openViewer(browser, server.url);
-      assert.equal(await page.locator('#original').isVisible(), true, 'the panel shows with --original');
-      const panel = () => page.evaluate(() => ({
-        repair: [...document.querySelectorAll('#original-repair [data-field=repair]')].map((e) => e.textContent),
-        legend: Object.fromEntries([...document.querySelectorAll('#original-legend li')]
-          .map((e) => [e.dataset.field, Number(e.dataset.value)])),
-        validation: document.getElementById('original-validation').textContent,
-      }));
-      const shown = await panel();
-      assert.deepEqual(shown.repair, recorded.repair.map((r) => r.text), 'the repair lines are the file\'s');
-      assert.deepEqual(shown.legend, { boundary_edges: 4, non_manifold_edges: 0, self_intersecting_triangles: 0 });
-      assert.match(shown.validation, /open mesh: 4 boundary edges/);
-      const before = await state(page);
-      assert.equal(before.original.shown, false, 'hidden until the switch is turned on');
-      assert.equal(before.original.triangles, recorded.triangles_before);
-      const deepest = before.depth;
-      const tubeColour = [0xff, 0xc8, 0x3d];
-      const tubesBefore = await canvasPixels(page, tubeColour);
-
-      await setCheckbox(page, 'show-original', true);
-      await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
-      const on = await state(page);
-      assert.equal(on.original.shown, true);
-      assert.equal(on.depth, on.depths[0], 'the tree is cut back to its root beside the original');
-      assert.equal(on.meshesShown, 1);
-      // Beside, not over: the moved original ends left of the root's box, and only x moved.
-      const rootBox = await page.evaluate(() => {
-        const { viewer, THREE } = window.shatterViewer;
-        const box = new THREE.Box3().setFromObject(viewer.tree.nodes[0].object);
-        return { min: box.min.toArray(), max: box.max.toArray() };
-      });
-      assert.ok(on.original.box.max[0] + on.original.position[0] < rootBox.min[0], 'the original lies left of the root');
-      assert.deepEqual(on.original.position.slice(1), [0, 0]);
-      const shot = await screenshot(page, 'original-beside-root');
-      assertNotBlank(shot, 'original beside the root');
-      // Where the root's centre is on the screen, as a fraction of the canvas width.
-      const rootCentre = await page.evaluate(() => {
-        const { viewer, THREE } = window.shatterViewer;
-        const centre = new THREE.Box3().setFromObject(viewer.tree.nodes[0].object).getCenter(new THREE.Vector3());
-        return viewer.toScreen(centre).x / viewer.renderer.domElement.getBoundingClientRect().width;
-      });
-      const tubes = await canvasPixels(page, tubeColour, rootCentre);
-      console.log(`open edges: ${tubes.count} pixels of their colour (${tubesBefore.count} before), `
-        + `${tubes.left} left of the root's centre`);
-      assert.equal(tubesBefore.count, 0, 'nothing in the open-edge colour before the switch');
-      assert.ok(tubes.count > 200 && tubes.left === tubes.count, 'the open edges are drawn, left of the root');
-      const covered = await canvasPixels(page, null);
-      assert.ok(covered.left > 0.05 * covered.total && covered.right > 0.05 * covered.total,
-        `both halves of the view show a solid: ${JSON.stringify(covered)}`);
-
-      await setCheckbox(page, 'show-original', false);
-      const off = await state(page);
-      assert.equal(off.original.shown, false);
-      assert.equal(off.depth, deepest, 'the depth shown before comes back');
-      assert.equal((await canvasPixels(page, tubeColour)).count, 0);
+      await checkOriginalPanel(page, recorded, 'original-beside-root');
       assert.deepEqual(errors, [], 'console errors');
     } catch (error) {
       server.proc.kill('SIGTERM');  // a failed check leaves no server behind
@@ -811,6 +821,55 @@ const cases = {
       await second.close();
     }
     assert.equal((await stopView(plain)).code, 0);
+  },
+
+  async 'original-page'() {
+    // `export --format html --original`: the page from disk has the panel and switch `view --original` has.
+    const damaged = path.join(path.dirname(env('SHATTER_MESH')), 'bad', 'cube-ouvert.off');
+    mkdirSync(work, { recursive: true });
+    const repaired = file('repaired-page.shatter');
+    run('fracture', damaged, '--fragments', '6', '--repair', '--out', repaired);
+    const recorded = JSON.parse(run('info', repaired, '--json')).input_repair;
+
+    // Refused with one line and nothing written: another format, a page without the root, and a file that is not
+    // this tree's input.
+    const refused = (args, code, pattern, out) => {
+      const answer = runFailing('export', repaired, '--out', out, ...args);
+      assert.equal(answer.code, code, answer.stderr);
+      assert.match(answer.stderr, pattern);
+      assert.equal(existsSync(out), false, `${out} written`);
+    };
+    refused(['--original', damaged], 2, /^error: --original goes with --format html/, file('refused.glb'));
+    refused(['--original', damaged, '--nodes', 'leaves'], 2, /^error: --original is drawn beside the tree's root/,
+      file('refused-leaves.html'));
+    refused(['--original', env('SHATTER_MESH')], 3,
+      /^error: --original .*knot1\.off is not the input of this tree: .*\n$/, file('refused-other.html'));
+    assert.match(run('export', '--help'), /--original/);
+
+    const pagePath = file('repaired.html');
+    assert.match(run('export', repaired, '--out', pagePath, '--original', damaged),
+      /the viewer with the tree and the original input inline/);
+    const browser = await openBrowser();
+    try {
+      const { page, errors } = await openViewer(browser, pathToFileURL(pagePath).href);
+      await checkOriginalPanel(page, recorded, 'original-page-beside-root');
+      assert.deepEqual(errors, [], 'console errors');
+    } finally {
+      await browser.close();
+    }
+
+    // Without --original the page has no original and no panel.
+    const plainPath = file('repaired-plain.html');
+    run('export', repaired, '--out', plainPath);
+    assert.equal(readFileSync(plainPath, 'utf8').includes('id="shatter-original"'), false);
+    const second = await openBrowser();
+    try {
+      const { page } = await openViewer(second, pathToFileURL(plainPath).href);
+      assert.equal(await page.locator('#original').isVisible(), false);
+      assert.equal((await state(page)).original, undefined);
+    } finally {
+      await second.close();
+    }
   },
 
   async server() {
