@@ -388,6 +388,31 @@ Sign compare_along(const PlaneSet& set, PlaneRef line_a, PlaneRef line_b, const 
                      .sign());
 }
 
+namespace {
+
+// Whether p and q are both defined on one cut plane whose normal lies along
+// `axis` (its other two coefficients zero: the doubles that define a cut plane
+// are its exact coefficients): every point of that plane has the one
+// coordinate -offset / normal[axis] there. A Voronoi build's group boxes and a
+// grid's bisectors are such planes, and the points they make are compared
+// along them when faces they cross are walked (lowest_corner, locate_in_loop);
+// the filter cannot settle an exact tie, which took the exact path 69,000
+// times in a Voronoi build of the elephant at 10^4 sites.
+bool on_one_plane_across(const PlaneSet& set, int axis, const PointDef& p, const PointDef& q) {
+  if (p.kind == PointKind::input || q.kind == PointKind::input) return false;
+  const int count = p.kind == PointKind::segment_plane ? 1 : 3;
+  for (int k = 0; k < count; ++k) {
+    const PlaneRef plane = p.planes[k];
+    if (!plane.is_cut() || !q.defined_on(plane)) continue;
+    const Vec3& n = set.cuts[plane.index()].normal;
+    const double across[3] = {n.x, n.y, n.z};
+    if (across[(axis + 1) % 3] == 0 && across[(axis + 2) % 3] == 0) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 Sign compare_coordinate(const PlaneSet& set, int axis, const PointDef& p, const ApproxPoint& pa, const PointDef& q,
                         const ApproxPoint& qa) {
   ImplicitCounters& counters = implicit_counters();
@@ -396,6 +421,7 @@ Sign compare_coordinate(const PlaneSet& set, int axis, const PointDef& p, const 
   auto value = [axis](const auto& ph, const auto& qh) { return coordinate(qh, axis) * ph.w - coordinate(ph, axis) * qh.w; };
   const int s = certified_sign(value(cached(pa), cached(qa)));
   if (s != 0) return to_sign(s);
+  if (on_one_plane_across(set, axis, p, q)) return Sign::zero;
   ++counters.order_exact;
   return to_sign(value(exact_normalised(set, p), exact_normalised(set, q)).sign());
 }

@@ -174,6 +174,79 @@ TEST_CASE("plane kernel predicates agree with an independent exact evaluation", 
   CHECK(zeros > queries / 50);  // the lattice cases exercise the exact path
 }
 
+TEST_CASE("compare_coordinate: points on one cut plane normal to an axis tie along it, without the exact path",
+          "[plane][predicates]") {
+  // A Voronoi build's group boxes are cut planes x = c (and y, z): the points
+  // they make tie exactly along their axis, which no filter settles. Every
+  // answer is checked against the exact evaluation; the ties on such a plane
+  // must not take the exact path, and a plane a hair off the axis (a tiny
+  // second coefficient) must not be taken for one.
+  std::uint64_t ties = 0, near_axis_pairs = 0;
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    Random random(seed * 104729);
+    RandomGeometry g = random_geometry(random, seed % 2 == 0);
+    const int axis = static_cast<int>(seed % 3);
+    const auto scale = std::fabs(g.input.points[0].x) + std::fabs(g.input.points[0].y) + 1;
+    const auto axis_plane = [&](double across) {
+      Plane plane;
+      double n[3] = {0, 0, 0};
+      n[axis] = random.index(2) ? 1.0 : -2.0;
+      n[(axis + 1) % 3] = across;
+      plane.normal = {n[0], n[1], n[2]};
+      plane.offset = random.uniform(-0.5, 0.5) * scale;
+      return plane;
+    };
+    const auto on_axis = static_cast<std::uint32_t>(g.cuts.size());
+    g.cuts.push_back(axis_plane(0));
+    g.cuts.push_back(axis_plane(std::ldexp(1.0, -60)));  // a hair off the axis
+    const PlaneSet set = g.set();
+    for (const std::uint32_t cut : {on_axis, on_axis + 1}) {
+      const PlaneRef on = PlaneRef::cut(cut);
+      std::vector<PointDef> defs;
+      std::vector<ApproxPoint> approx;
+      for (int tries = 0; tries < 400 && defs.size() < 10; ++tries) {
+        PointDef def;
+        if (random.index(2)) {
+          const auto p = static_cast<std::uint32_t>(random.index(12)), q = static_cast<std::uint32_t>(random.index(12));
+          if (p == q) continue;
+          def = PointDef::segment_plane(p, q, on);
+        } else {
+          const auto pick = [&] {
+            return random.index(2) ? PlaneRef::input(static_cast<std::uint32_t>(random.index(g.input.planes.size())))
+                                   : PlaneRef::cut(static_cast<std::uint32_t>(random.index(on_axis)));
+          };
+          def = PointDef::three_planes(pick(), on, pick());
+        }
+        try {
+          approx.push_back(approximate(set, def));
+        } catch (const std::domain_error&) {
+          continue;  // not a point (parallel planes, a segment along the plane)
+        }
+        defs.push_back(def);
+      }
+      for (std::size_t i = 0; i < defs.size(); ++i) {
+        for (std::size_t j = 0; j < defs.size(); ++j) {
+          const Q3 p = reference_point(set, defs[i]), q = reference_point(set, defs[j]);
+          for (int a = 0; a < 3; ++a) {
+            const mpq_class& pa = a == 0 ? p.x : a == 1 ? p.y : p.z;
+            const mpq_class& qa = a == 0 ? q.x : a == 1 ? q.y : q.z;
+            const std::uint64_t exact_before = implicit_counters().order_exact;
+            INFO("seed " << seed << " plane " << cut << " points " << i << ", " << j << " axis " << a);
+            CHECK(compare_coordinate(set, a, defs[i], approx[i], defs[j], approx[j]) == sign_of(qa - pa));
+            if (cut == on_axis && a == axis && !(defs[i] == defs[j])) {
+              CHECK(implicit_counters().order_exact == exact_before);
+              ++ties;
+            }
+            if (cut != on_axis && a == axis && pa != qa) ++near_axis_pairs;
+          }
+        }
+      }
+    }
+  }
+  CHECK(ties > 1000);
+  CHECK(near_axis_pairs > 1000);  // the hair-off plane's points do differ along the axis, and were ordered exactly
+}
+
 TEST_CASE("orientation in a plane agrees with an independent exact evaluation", "[plane][predicates]") {
   // Points defined on one cut plane: the meets of that plane with segments and
   // with pairs of other planes, as caps have them.
