@@ -117,6 +117,38 @@ std::optional<PointDef> random_point(const RandomGeometry& g, Random& random) {
   return def;
 }
 
+// Up to ten distinct sound points on cut plane `on`, as caps have them: its
+// meets with input segments, and with two other planes (input planes, or cut
+// planes first_cut .. end_cut - 1), `on` being the three planes' plane `slot`.
+std::vector<PointDef> points_on_cut(const RandomGeometry& g, Random& random, PlaneRef on, std::uint32_t first_cut,
+                                    std::uint32_t end_cut, int slot) {
+  const PlaneSet set = g.set();
+  std::vector<PointDef> defs;
+  for (int tries = 0; tries < 400 && defs.size() < 10; ++tries) {
+    PointDef def;
+    if (random.index(2)) {
+      const auto p = static_cast<std::uint32_t>(random.index(12)), q = static_cast<std::uint32_t>(random.index(12));
+      if (p == q) continue;
+      def = PointDef::segment_plane(p, q, on);
+    } else {
+      const auto pick = [&] {
+        return random.index(2) ? PlaneRef::input(static_cast<std::uint32_t>(random.index(g.input.planes.size())))
+                               : PlaneRef::cut(first_cut + static_cast<std::uint32_t>(random.index(end_cut - first_cut)));
+      };
+      const PlaneRef first = pick(), second = pick();
+      def = slot == 0 ? PointDef::three_planes(on, first, second) : PointDef::three_planes(first, on, second);
+    }
+    try {
+      (void)approximate(set, def);
+      (void)reference_point(set, def);
+    } catch (...) {
+      continue;  // not a point (parallel planes, a segment along the plane)
+    }
+    if (std::find(defs.begin(), defs.end(), def) == defs.end()) defs.push_back(def);
+  }
+  return defs;
+}
+
 }  // namespace
 
 TEST_CASE("plane kernel predicates agree with an independent exact evaluation", "[plane][predicates]") {
@@ -202,28 +234,9 @@ TEST_CASE("compare_coordinate: points on one cut plane normal to an axis tie alo
     const PlaneSet set = g.set();
     for (const std::uint32_t cut : {on_axis, on_axis + 1}) {
       const PlaneRef on = PlaneRef::cut(cut);
-      std::vector<PointDef> defs;
+      const std::vector<PointDef> defs = points_on_cut(g, random, on, 0, on_axis, 1);
       std::vector<ApproxPoint> approx;
-      for (int tries = 0; tries < 400 && defs.size() < 10; ++tries) {
-        PointDef def;
-        if (random.index(2)) {
-          const auto p = static_cast<std::uint32_t>(random.index(12)), q = static_cast<std::uint32_t>(random.index(12));
-          if (p == q) continue;
-          def = PointDef::segment_plane(p, q, on);
-        } else {
-          const auto pick = [&] {
-            return random.index(2) ? PlaneRef::input(static_cast<std::uint32_t>(random.index(g.input.planes.size())))
-                                   : PlaneRef::cut(static_cast<std::uint32_t>(random.index(on_axis)));
-          };
-          def = PointDef::three_planes(pick(), on, pick());
-        }
-        try {
-          approx.push_back(approximate(set, def));
-        } catch (const std::domain_error&) {
-          continue;  // not a point (parallel planes, a segment along the plane)
-        }
-        defs.push_back(def);
-      }
+      for (const PointDef& def : defs) approx.push_back(approximate(set, def));
       for (std::size_t i = 0; i < defs.size(); ++i) {
         for (std::size_t j = 0; j < defs.size(); ++j) {
           const Q3 p = reference_point(set, defs[i]), q = reference_point(set, defs[j]);
@@ -255,28 +268,7 @@ TEST_CASE("orientation in a plane agrees with an independent exact evaluation", 
     const RandomGeometry g = random_geometry(random, seed % 2 == 0);
     const PlaneSet set = g.set();
     const PlaneRef on = PlaneRef::cut(0);
-    std::vector<PointDef> defs;
-    for (int tries = 0; tries < 400 && defs.size() < 10; ++tries) {
-      PointDef def;
-      if (random.index(2)) {
-        const auto p = static_cast<std::uint32_t>(random.index(12)), q = static_cast<std::uint32_t>(random.index(12));
-        if (p == q) continue;
-        def = PointDef::segment_plane(p, q, on);
-      } else {
-        const auto pick = [&] {
-          return random.index(2) ? PlaneRef::input(static_cast<std::uint32_t>(random.index(g.input.planes.size())))
-                                 : PlaneRef::cut(1 + static_cast<std::uint32_t>(random.index(g.cuts.size() - 1)));
-        };
-        def = PointDef::three_planes(on, pick(), pick());
-      }
-      try {
-        (void)approximate(set, def);
-        (void)reference_point(set, def);
-      } catch (...) {
-        continue;
-      }
-      if (std::find(defs.begin(), defs.end(), def) == defs.end()) defs.push_back(def);
-    }
+    const std::vector<PointDef> defs = points_on_cut(g, random, on, 1, static_cast<std::uint32_t>(g.cuts.size()), 0);
     std::vector<ApproxPoint> approx;
     std::vector<Q3> exact;
     for (const PointDef& def : defs) {
