@@ -7,14 +7,17 @@
 // thread unless --threads says otherwise. A benchmark, not a test: it prints what
 // it measured.
 // With --manifold, Manifold (npm manifold-3d, bench/peers/manifold/voronoi.mjs)
-// cuts the same cells in the same run: this writes the cells shatter cuts
-// (voronoi_cell_planes: the same quantized sites, Delaunay neighbours and exact
-// bisectors) to a file, and the peer trims the input by each cell's planes and
-// splits the result into components. voro++, the issue's cell peer, is not among
-// this machine's Debian packages; the cells here are shatter's, and computing
-// them is not part of the peer's time (it is part of shatter's).
+// cuts cells in the same run: the peer trims the input by each cell's planes
+// and splits the result into components. By default the cells are the ones
+// shatter cuts (voronoi_cell_planes: the same quantized sites, Delaunay
+// neighbours and exact bisectors), and computing them is not in the peer's
+// time. With --voro they are voro++'s (Debian voro++-dev, the cell library the
+// issue names), computed from the same sites in double precision, and the
+// peer's time is voro++'s plus Manifold's: the pipeline of the tools that build
+// cells and then intersect the mesh per cell. --voro alone times voro++'s cells.
 //
-//   shatter-bench-voronoi [--quick] [--max-sites N] [--threads T] [--manifold] [--repeat R]
+//   shatter-bench-voronoi [--quick] [--max-sites N] [--threads T] [--manifold] [--voro] [--repeat R]
+//                         [--meshes cube.off,elephant.off,...]
 
 #include <algorithm>
 #include <chrono>
@@ -29,6 +32,10 @@
 
 #include <nlohmann/json.hpp>
 #include <unistd.h>
+
+#if SHATTER_WITH_VOROPP
+#include <voro++/voro++.hh>
+#endif
 
 #include "shatter/generators/corpus.hpp"
 #include "shatter/kernel/io.hpp"
@@ -51,11 +58,11 @@ struct PeerResult {
 
 /// Writes the cells' planes in the format voronoi.mjs reads (shortest
 /// round-trip decimals, so the peer gets the same doubles).
-void write_cells(const fs::path& path, const VoronoiCellPlanes& cells) {
+void write_cells(const fs::path& path, const std::vector<std::vector<Plane>>& cells) {
   std::ofstream out(path);
-  out << "cells " << cells.cells.size() << '\n';
+  out << "cells " << cells.size() << '\n';
   char line[160];
-  for (const std::vector<Plane>& planes : cells.cells) {
+  for (const std::vector<Plane>& planes : cells) {
     out << "cell " << planes.size() << '\n';
     for (const Plane& p : planes) {
       std::snprintf(line, sizeof line, "%.17g %.17g %.17g %.17g\n", p.normal.x, p.normal.y, p.normal.z, p.offset);
@@ -105,10 +112,90 @@ PeerResult run_manifold(const fs::path& mesh_file, const fs::path& cells_file, i
   return result;
 }
 
+/// Cells computed by voro++ for the peer pipeline (--voro).
+struct VoroCells {
+  std::vector<std::vector<Plane>> cells;  ///< per site, its cell's planes, nearest first; each <= 0 inside
+  double seconds = 0;                      ///< voro++'s time: the container, the cells and their faces read
+  std::size_t failed = 0;                  ///< sites voro++ computed no cell for
+  std::string failure;                     ///< why there are no cells (a build without voro++)
+};
+
+#if SHATTER_WITH_VOROPP
+/// The Voronoi cells of `sites` by voro++: its container is the mesh's box
+/// grown by a tenth (so every site is in it and the walls lie outside the
+/// solid, whose faces on the walls are then left out: they cut nothing), with
+/// about five sites per block, voro++'s advice for its grid. Each face of a cell
+/// gives the plane through its first vertex with the face's normal, which
+/// voro++ gives outward; the planes come nearest to the site first, as
+/// voronoi_cell_planes orders its bisectors, so the peer trims in that order.
+VoroCells voropp_cells(const Mesh& mesh, const std::vector<Vec3>& sites) {
+  VoroCells result;
+  const auto start = std::chrono::steady_clock::now();
+  Vec3 lo = mesh.positions.front(), hi = lo;
+  for (const Vec3& p : mesh.positions) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  const Vec3 margin = (hi - lo) * 0.1;
+  lo = lo - margin;
+  hi = hi + margin;
+  const Vec3 extent = hi - lo;
+  const double block = std::cbrt(extent.x * extent.y * extent.z * 5 / static_cast<double>(sites.size()));
+  const auto blocks = [&](double length) { return std::max(1, static_cast<int>(std::lround(length / block))); };
+  voro::container container(lo.x, hi.x, lo.y, hi.y, lo.z, hi.z, blocks(extent.x), blocks(extent.y), blocks(extent.z),
+                            false, false, false, 8);
+  for (std::size_t i = 0; i < sites.size(); ++i) container.put(static_cast<int>(i), sites[i].x, sites[i].y, sites[i].z);
+  result.cells.resize(sites.size());
+  voro::c_loop_all loop(container);
+  voro::voronoicell_neighbor cell;
+  std::vector<int> neighbours, face_vertices;
+  std::vector<double> normals, vertices;
+  std::vector<std::pair<double, Plane>> planes;
+  std::size_t computed = 0;
+  if (loop.start()) {
+    do {
+      if (!container.compute_cell(cell, loop)) continue;
+      ++computed;
+      double x, y, z;
+      loop.pos(x, y, z);
+      const Vec3 site{x, y, z};
+      cell.neighbors(neighbours);
+      cell.normals(normals);
+      cell.face_vertices(face_vertices);
+      cell.vertices(x, y, z, vertices);
+      planes.clear();
+      std::size_t at = 0;  // face_vertices: per face, its vertex count, then its vertices
+      for (std::size_t f = 0; f < neighbours.size(); ++f) {
+        const auto first = static_cast<std::size_t>(face_vertices[at + 1]);
+        at += static_cast<std::size_t>(face_vertices[at]) + 1;
+        const Vec3 normal{normals[3 * f], normals[3 * f + 1], normals[3 * f + 2]};
+        if (neighbours[f] < 0 || (normal.x == 0 && normal.y == 0 && normal.z == 0)) continue;  // a wall, a degenerate face
+        const Vec3 corner{vertices[3 * first], vertices[3 * first + 1], vertices[3 * first + 2]};
+        const Plane plane{normal, -dot(normal, corner)};
+        planes.push_back({-(dot(normal, site) + plane.offset), plane});  // the site's distance to it
+      }
+      std::sort(planes.begin(), planes.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      std::vector<Plane>& out = result.cells[static_cast<std::size_t>(loop.pid())];
+      for (const auto& [distance, plane] : planes) out.push_back(plane);
+    } while (loop.inc());
+  }
+  result.failed = sites.size() - computed;
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+#else
+VoroCells voropp_cells(const Mesh&, const std::vector<Vec3>&) {
+  VoroCells result;
+  result.failure = "this benchmark was built without voro++ (apt-get install voro++-dev, then configure again)";
+  return result;
+}
+#endif
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool quick = false, manifold = false;
+  bool quick = false, manifold = false, voro = false;
+  std::string only;  // --meshes: a comma-separated subset of the rows' meshes
   std::size_t max_sites = 10000;
   unsigned threads = 1;
   int repeat = 1;
@@ -118,6 +205,10 @@ int main(int argc, char** argv) {
       quick = true;
     } else if (arg == "--manifold") {
       manifold = true;
+    } else if (arg == "--voro") {
+      voro = true;
+    } else if (arg == "--meshes" && i + 1 < argc) {
+      only = argv[++i];
     } else if (arg == "--max-sites" && i + 1 < argc) {
       max_sites = std::strtoull(argv[++i], nullptr, 10);
     } else if (arg == "--threads" && i + 1 < argc) {
@@ -126,9 +217,13 @@ int main(int argc, char** argv) {
       repeat = std::max(1, std::atoi(argv[++i]));
     } else {
       std::fprintf(stderr,
-                   "usage: shatter-bench-voronoi [--quick] [--max-sites N] [--threads T] [--manifold] [--repeat R]\n"
+                   "usage: shatter-bench-voronoi [--quick] [--max-sites N] [--threads T] [--manifold] [--voro] [--repeat R]\n"
+                   "                             [--meshes cube.off,elephant.off,knot1.off,fandisk.off,fandiskx4.off]\n"
                    "  --manifold  also time Manifold (bench/peers/manifold/voronoi.mjs, needs node and npm ci there)\n"
-                   "              cutting the same cells, and print the ratio of its seconds to shatter's\n"
+                   "              cutting the same cells, and print the ratio of its seconds (with --voro, voro++'s\n"
+                   "              plus its) to shatter's\n"
+                   "  --voro      the peer's cells from voro++ (voro++-dev), its seconds added to Manifold's;\n"
+                   "              without --manifold, voro++'s cells alone are timed\n"
                    "  --repeat R  run each row R times (shatter and the peer) and report the medians\n");
       return 2;
     }
@@ -136,13 +231,23 @@ int main(int argc, char** argv) {
   // "fandiskx4.off": fandisk.off subdivided once by edge midpoints (51,784
   // triangles), the size of issue 22's target (10^4 fragments of a 50k-triangle
   // solid in 2 s on one thread).
-  const std::vector<std::string> meshes =
+  std::vector<std::string> meshes =
       quick ? std::vector<std::string>{"cube.off"}
             : std::vector<std::string>{"cube.off", "elephant.off", "knot1.off", "fandisk.off", "fandiskx4.off"};
+  if (!only.empty()) {
+    const std::string list = "," + only + ",";
+    std::erase_if(meshes, [&](const std::string& name) { return list.find("," + name + ",") == std::string::npos; });
+    if (meshes.empty()) {
+      std::fprintf(stderr, "--meshes %s names none of cube.off, elephant.off, knot1.off, fandisk.off, fandiskx4.off\n",
+                   only.c_str());
+      return 2;
+    }
+  }
   const fs::path scratch = fs::temp_directory_path() / ("shatter-bench-voronoi-" + std::to_string(::getpid()));
   if (manifold) fs::create_directories(scratch);
   std::printf("%-14s %9s %7s %9s %9s %10s %8s %14s %8s %8s %6s %8s %9s", "mesh", "triangles", "sites", "fragments", "seconds",
               "cells/s", "invalid", "volume error", "glue s", "internal", "depth", "unglued", "assembled");
+  if (voro) std::printf(" %9s %8s", "voro++ s", "v. cells");
   if (manifold) std::printf(" %10s %10s %10s %8s", "manifold s", "m. frags", "m. vol err", "ratio");
   std::printf("\n");
   for (const std::string& name : meshes) {
@@ -183,12 +288,45 @@ int main(int argc, char** argv) {
                   sites_count, tree.leaf_count(), seconds, static_cast<double>(sites_count) / seconds, invalid, error,
                   report.seconds_glue, tree.nodes.size() - tree.leaf_count(), depth, report.sets_unglued,
                   report.cells_assembled);
+      double cell_seconds = 0;  // the peer's cells' time: voro++'s, or none (shatter's cells)
+      std::vector<std::vector<Plane>> cells;
+      if (voro) {
+        std::vector<double> voro_times;
+        VoroCells computed;
+        for (int r = 0; r < repeat; ++r) {
+          computed = voropp_cells(mesh, sites);
+          voro_times.push_back(computed.seconds);
+        }
+        if (!computed.failure.empty()) {
+          std::printf(" voro++: %s\n", computed.failure.c_str());
+          return 1;
+        }
+        std::sort(voro_times.begin(), voro_times.end());
+        cell_seconds = voro_times[voro_times.size() / 2];
+        // Each site strictly inside its own cell, bounded by four planes or
+        // more: what the faces were read as (outward normals, offsets through a
+        // corner) must at least give that.
+        std::size_t misread = 0;
+        for (std::size_t i = 0; i < computed.cells.size(); ++i) {
+          const std::vector<Plane>& planes = computed.cells[i];
+          bool inside = planes.size() >= 4 || planes.empty();  // empty: a cell walls alone bound (one site)
+          for (const Plane& plane : planes) inside = inside && dot(plane.normal, sites[i]) + plane.offset < 0;
+          if (!inside) ++misread;
+        }
+        if (misread > 0) {
+          std::printf(" voro++: %zu cells do not hold their site strictly inside\n", misread);
+          return 1;
+        }
+        std::printf(" %9.3f %8zu", cell_seconds, sites.size() - computed.failed);
+        cells = std::move(computed.cells);
+      }
       if (manifold) {
         const fs::path cells_file = scratch / "cells.txt";
-        write_cells(cells_file, voronoi_cell_planes(mesh, sites));
+        write_cells(cells_file, voro ? cells : voronoi_cell_planes(mesh, sites).cells);
         const PeerResult peer = run_manifold(mesh_file, cells_file, repeat, scratch);
         if (peer.failure.empty()) {
-          std::printf(" %10.3f %10zu %10.3g %7.1fx", peer.seconds, peer.fragments, peer.volume_error, peer.seconds / seconds);
+          const double pipeline = cell_seconds + peer.seconds;
+          std::printf(" %10.3f %10zu %10.3g %7.1fx", peer.seconds, peer.fragments, peer.volume_error, pipeline / seconds);
           if (peer.bad > 0) std::printf(" (%zu bad)", peer.bad);
         } else {
           std::printf(" manifold: %s", peer.failure.c_str());
