@@ -4,7 +4,8 @@
 // the fragments are exactly voro++'s cells: every fragment's volume is its cell's
 // volume, and the bonds are voro++'s pairs of neighbouring cells, with their
 // faces' areas. Both are compared within what voro++'s doubles can be off
-// (1e-12 on a cube of side 2); shatter's exactness itself is tested in
+// (1e-12 on a cube of side 2), over uniform sites, a regular and a jittered
+// lattice and sites all in one plane; shatter's exactness itself is tested in
 // test_voronoi (volumes summing exactly, bonds against an exact brute force).
 // Built only where CMake finds voro++ (tests/meshtree/CMakeLists.txt).
 
@@ -71,10 +72,19 @@ TEST_CASE("the cube's Voronoi fragments are voro++'s cells: volumes and bonds", 
     lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
     hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
   }
-  std::size_t volumes = 0, bonds = 0;
+  std::size_t volumes = 0, bonds = 0, expected_volumes = 0;
   for (std::uint64_t seed = 1; seed <= 4; ++seed) {
-    for (const std::uint32_t count : {40u, 250u}) {
-      const std::vector<Vec3> given = uniform_sites(cube, count, seed);
+    // Uniform sites; a regular lattice (cells meeting eight at a point: diagonal
+    // neighbours touch along an edge or at a point, with no bond) and a
+    // jittered one; sites all in one plane (the radial pattern: prisms through
+    // the cube).
+    std::vector<std::pair<const char*, std::vector<Vec3>>> site_sets{
+        {"uniform", uniform_sites(cube, 40, seed)},
+        {"uniform", uniform_sites(cube, 250, seed)},
+        {"jittered grid", grid_sites(cube, {6, 5, 4}, false, 0.0, 0.3, seed)},
+        {"radial", radial_sites({0.1, -0.05, 0}, {0.2, 0.1, 1}, 3, 7, 0.6, 0.4, seed)}};
+    if (seed == 1) site_sets.push_back({"regular grid", grid_sites(cube, {5, 4, 3}, false, 0.0, 0.0, seed)});
+    for (const auto& [pattern, given] : site_sets) {
       // The sites the cells are made of (quantized onto the bisector-exact grid).
       const std::vector<Vec3> sites = voronoi_cell_planes(cube, given).quantized.sites;
       TreeRecipe recipe;
@@ -83,8 +93,9 @@ TEST_CASE("the cube's Voronoi fragments are voro++'s cells: volumes and bonds", 
       run.threads = 1;
       const MeshTree tree = build_voronoi_tree(cube, given, recipe, run);
       const std::vector<VoroppCell> cells = voropp_cells(sites, lo, hi);
-      INFO("seed " << seed << ", " << count << " sites");
+      INFO("seed " << seed << ", " << pattern << ", " << sites.size() << " sites");
       REQUIRE(tree.leaf_count() == sites.size());
+      expected_volumes += sites.size();
 
       // Each fragment's site: the one nearest its centroid, which lies inside
       // its convex cell. Every site has one fragment, of its cell's volume.
@@ -131,6 +142,6 @@ TEST_CASE("the cube's Voronoi fragments are voro++'s cells: volumes and bonds", 
       }
     }
   }
-  CHECK(volumes == 4 * (40 + 250));
-  CHECK(bonds > 5000);  // 6,776 when written
+  CHECK(volumes == expected_volumes);
+  CHECK(bonds > 5000);
 }
