@@ -387,6 +387,26 @@ TEST_CASE("a Voronoi build is the same at any thread count", "[voronoi]") {
   CHECK(encode_shatter(build(mesh, sites, report, 4)) == one);
 }
 
+// A lean build (what `shatter fracture` runs) keeps no approximations in its
+// solids, and drops a glued part's as soon as its union is made, so the bonds
+// compute the leaves' again where they need them: the file is the full build's,
+// byte for byte, over patterns whose unions are many levels deep.
+TEST_CASE("a lean Voronoi build writes the full build's bytes", "[voronoi]") {
+  const std::vector<std::pair<std::string, std::vector<Vec3>>> cases{
+      {"spool.off", uniform_sites(corpus("spool.off"), 300, 3)},
+      {"fandisk.off", uniform_sites(corpus("fandisk.off"), 200, 5)},
+      {"cube.off", grid_sites(corpus("cube.off"), {7, 6, 5}, false, 0.0, 0.2, 2)}};
+  for (const auto& [name, sites] : cases) {
+    const Mesh mesh = corpus(name);
+    BuildRunOptions full, lean;
+    lean.lean = true;
+    const MeshTree lean_tree = build_voronoi_tree(mesh, sites, voronoi_recipe(), lean);
+    INFO(name << ", " << sites.size() << " sites, depth " << lean_tree.nodes.back().depth);
+    for (const MeshTreeNode& node : lean_tree.nodes) CHECK(node.solid->approx.empty());
+    CHECK(encode_shatter(lean_tree) == encode_shatter(build_voronoi_tree(mesh, sites, voronoi_recipe(), full)));
+  }
+}
+
 // Regression: inner cells are assembled on several threads at once, and CGAL's
 // incident_cells marks the cells it walks in the triangulation itself, so two
 // walks over stars sharing cells could skip each other's: the assembly then
