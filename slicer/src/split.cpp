@@ -38,6 +38,13 @@ class Splitter {
     out_.plane_misses = !(any_below && any_above);
     out_.all_below = !any_above;
     out_.other_side_partial = sides_ != SplitSides::both && !any_on;
+    // Keeping the below side with no vertex on the plane, the above side is not
+    // made at all: its only use would be the border, and then every zero edge
+    // of the below side is a new edge along the cut (both its ends are
+    // crossings), which the above side runs the other way; so the border is the
+    // below side's zero edges, in the order collect_border would list them.
+    // Not for a kept above side: its border is listed in the below side's order.
+    below_only_ = out_.other_side_partial && sides_ == SplitSides::below;
     if (out_.plane_misses) return;
     out_.new_vertex_of_edge.reset(solid_.corners.size() / 4 + 8);
     zero_edges_below_.clear();
@@ -112,7 +119,7 @@ class Splitter {
     } else if (face.convex) {
       augment(face);
       emit_convex_part(face, Sign::negative, out_.below, true);
-      emit_convex_part(face, Sign::positive, out_.above, false);
+      if (!below_only_) emit_convex_part(face, Sign::positive, out_.above, false);
     } else {
       augment(face);
       split_general(face);
@@ -256,7 +263,7 @@ class Splitter {
       k = end;
     }
     emit_parts(face, below_edges_, out_.below, true);
-    emit_parts(face, above_edges_, out_.above, false);
+    if (!below_only_) emit_parts(face, above_edges_, out_.above, false);
   }
 
   // Of the zero points [begin, end) at one place, the vertex whose corner of
@@ -325,6 +332,10 @@ class Splitter {
 
   // Border edges: edges on the cut whose two faces went to different sides.
   void collect_border() {
+    if (below_only_) {
+      out_.border.assign(zero_edges_below_.begin(), zero_edges_below_.end());
+      return;
+    }
     above_zero_map_.reset(zero_edges_above_.size());
     for (std::uint32_t i = 0; i < zero_edges_above_.size(); ++i) {
       above_zero_map_.insert(directed_edge_key(zero_edges_above_[i].from, zero_edges_above_[i].to), i);
@@ -339,6 +350,7 @@ class Splitter {
   PlaneRef cut_;
   SplitSolid& out_;
   SplitSides sides_;
+  bool below_only_ = false;  // the above side is not made (run)
 
   std::vector<SolidCorner> augmented_;     // the face's corners with crossings inserted
   std::vector<SolidLoop> augmented_loops_;  // the face's loops over augmented_

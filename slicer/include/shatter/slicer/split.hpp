@@ -48,7 +48,7 @@ struct SplitSolid {
   /// True when split_solid left out the faces of the side it was not asked for
   /// that lie whole on that side (SplitSides below or above, and no vertex of
   /// the solid on the plane): that side's FaceSet then holds only the parts of
-  /// the faces the plane crosses.
+  /// the faces the plane crosses, and nothing when the side asked for is below.
   bool other_side_partial = false;
 
   // Work space.
@@ -69,8 +69,9 @@ struct SplitSolid {
 /// UnsupportedGeometryError when a face part's hole cannot be placed (a face whose
 /// loops touch at every vertex of a hole; not made by cuts of a valid solid).
 /// `sides`: with below or above, when no vertex of the solid lies on the plane,
-/// the faces lying whole on the other side are not copied (other_side_partial):
-/// for a caller that keeps one side. Everything else is as with both, bit for
+/// the faces lying whole on the other side are not copied (other_side_partial),
+/// nor, with below, the above parts of the faces it crosses: for a caller that
+/// keeps one side. Everything else is as with both, bit for
 /// bit (the kept side, `border`, the new vertices and their numbers): such faces
 /// hold no edge on the plane, so they add no border edge. With a vertex on the
 /// plane both sides are made in full (the chords of a cut need both).
