@@ -36,9 +36,8 @@
 // Neighbouring fragments then write their shared corners bit for bit alike.
 //
 // The hierarchy reuses the k-d groups: bottom up, each group below the root
-// glues the face-connected sets of its parts (voronoi_glue.hpp). Groups of
-// sites near each other are compact, so their unions are mostly single solids;
-// a set that is not (pinched, or not certified once rounded) stays unglued.
+// glues the face-connected sets of its parts (voronoi_hierarchy.hpp, and
+// voronoi_glue.hpp for a union).
 
 #include "shatter/meshtree/voronoi.hpp"
 
@@ -81,7 +80,7 @@
 #include "shatter/version.hpp"
 #include "validate_tree_certificate.hpp"
 #include "tree_hulls.hpp"
-#include "voronoi_glue.hpp"
+#include "voronoi_hierarchy.hpp"
 
 namespace shatter {
 
@@ -90,14 +89,6 @@ namespace {
 constexpr std::int64_t grid_limit = std::int64_t{1} << 24;  // |k| <= 2^24
 constexpr std::uint32_t sentinel_count = 8;
 constexpr std::size_t leaf_group_size = 8;
-// The hierarchy glues the lowest k-d groups and every second level above them
-// (so a node has up to 8 fragments, or up to 4 parts, as children): every node
-// is rounded and certified once glued, which costs about the whole surface per
-// level glued; at 1,000 sites every level cost 2.5 to 4.5 times main's build,
-// every second level 2 to 3.4 times (shatter-bench-voronoi, README), before
-// the certification tested only pairs across parts (it now takes 0.3 to 0.45
-// of the gluing's former time).
-constexpr std::uint32_t glue_every_levels = 2;
 
 struct Box {
   Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
@@ -821,151 +812,6 @@ class VoronoiCutter {
   std::vector<std::vector<Solid>> pieces_;
 };
 
-// A node of the hierarchy being built: a fragment, or a glued set of parts.
-struct Part {
-  Solid solid;
-  Mesh mesh;
-  std::vector<std::uint32_t> sites;  ///< the sites of its fragments, sorted
-  std::vector<Part> children;        ///< none for a fragment
-  /// Per face of `solid`, the attempt of triangulate_face that wrote it in
-  /// `mesh`; empty when `mesh` is no plain triangulation (RoundedSolid::attempt).
-  std::vector<std::uint8_t> face_attempts;
-  /// Per face of `solid`, the fragment whose face it is (numbered as
-  /// build_voronoi_tree's first_region numbers them), and for a fragment its
-  /// own number (no_index for a union): hints for certifying a union of parts
-  /// (PartRegions: nothing of them is trusted).
-  std::vector<std::uint32_t> face_regions;
-  std::uint32_t sole_region = no_index;
-  /// When `mesh` is a plain triangulation of `solid`: per vertex of `mesh`, the
-  /// solid's vertex it rounds, and where face f's triangles start in `mesh`
-  /// (face_first_triangle[f], one more for the end); else both empty. A union
-  /// writes a face its part wrote with the same triangles
-  /// (SolidMeshOptions::face_triangles).
-  std::vector<VertexIndex> solid_vertex_of;
-  std::vector<std::uint32_t> face_first_triangle;
-
-  /// Frees the hints above, once the part is glued.
-  void drop_hints() {
-    face_regions = {};
-    solid_vertex_of = {};
-    face_first_triangle = {};
-  }
-};
-
-// Where each face's triangles start in a plain triangulation of `solid` with
-// `triangles` triangles (RoundedSolid::attempt >= 0), one more for the end:
-// triangulate_solid writes each face's triangles together, in face order,
-// k - 2 + 2h of them for a face of k corners and h holes. Empty when the count
-// does not add up.
-std::vector<std::uint32_t> face_first_triangle_of(const Solid& solid, std::size_t triangles) {
-  std::vector<std::uint32_t> first(solid.faces.size() + 1, 0);
-  for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
-    const SolidFace& face = solid.faces[f];
-    std::size_t corners = 0;
-    for (std::uint32_t l = face.first_loop; l < face.first_loop + face.loop_count; ++l) corners += solid.loops[l].corner_count;
-    if (corners + 2 * face.loop_count < 4) return {};
-    first[f + 1] = first[f] + static_cast<std::uint32_t>(corners + 2 * face.loop_count - 4);
-  }
-  if (first.back() != triangles) return {};
-  return first;
-}
-
-// Per triangle of `part`'s mesh, its fragment (PartRegions::region_of), into
-// `out`: a fragment's own number throughout, or each face's over its
-// triangles; empty when neither is known (a union not plainly triangulated).
-void triangle_regions_of(const Part& part, std::vector<std::uint32_t>& out) {
-  out.clear();
-  if (part.sole_region != no_index) {
-    out.assign(part.mesh.triangles.size(), part.sole_region);
-  } else if (!part.face_first_triangle.empty()) {
-    for (std::size_t f = 0; f + 1 < part.face_first_triangle.size(); ++f) {
-      out.insert(out.end(), part.face_first_triangle[f + 1] - part.face_first_triangle[f], part.face_regions[f]);
-    }
-  }
-}
-
-// The hints of a part made of `solid` and its rounding `rounded` (Part's
-// face_regions, solid_vertex_of, face_first_triangle; the face regions given):
-// what a union of it needs to certify it by regions and to write its faces again.
-void set_part_hints(Part& part, const Solid& solid, const RoundedSolid& rounded, std::vector<std::uint32_t> face_regions) {
-  part.face_regions = std::move(face_regions);
-  part.solid_vertex_of.clear();
-  part.face_first_triangle.clear();
-  if (rounded.attempt < 0) return;
-  std::vector<std::uint32_t> first = face_first_triangle_of(solid, rounded.mesh.triangles.size());
-  if (first.empty()) return;
-  // The mesh's vertices back to the solid's: every vertex of a plain
-  // triangulation is one of the solid's, each once.
-  part.face_first_triangle = std::move(first);  // for the regions (triangle_regions_of), map or not
-  const std::vector<VertexIndex>& mesh_vertex_of = rounded.mesh_vertex_of;
-  if (mesh_vertex_of.size() != solid.defs.size()) return;
-  std::vector<VertexIndex> solid_vertex_of(rounded.mesh.positions.size(), no_index);
-  for (VertexIndex v = 0; v < mesh_vertex_of.size(); ++v) {
-    if (mesh_vertex_of[v] < solid_vertex_of.size()) solid_vertex_of[mesh_vertex_of[v]] = v;
-  }
-  if (std::find(solid_vertex_of.begin(), solid_vertex_of.end(), no_index) != solid_vertex_of.end()) return;
-  part.solid_vertex_of = std::move(solid_vertex_of);
-}
-
-// The triangles a union's faces are written with (SolidMeshOptions::
-// face_triangles and face_triangles_first, over the union's vertices): each
-// face's part's triangles, where the part kept them (Part::solid_vertex_of) and
-// every corner keeps its part's definition, so rounds to the same bits and
-// triangulate_face would write the same ones again (the same loops over the same
-// points: a triangulation of the face over its own corners); an empty range
-// otherwise (a corner defined as another part's equal point may round
-// elsewhere; that face is triangulated as before). `members`: the parts glued,
-// in glue_parts' order; `face_origin` and `vertex_of` as glue_parts gave them.
-// `origins`: per triangle, the member (its index in `members`, as the union's
-// certification numbers its parts) << 32 | its triangle in that member's mesh
-// (SolidMeshOptions::face_triangle_origins).
-void face_triangles_from_parts(const Solid& glued, std::span<const Part* const> members,
-                               std::span<const std::array<std::uint32_t, 2>> face_origin,
-                               std::span<const std::uint32_t> vertex_of, std::vector<Triangle>& triangles,
-                               std::vector<std::uint32_t>& first, std::vector<std::uint64_t>& origins) {
-  std::vector<std::uint32_t> first_vertex_of_member(members.size() + 1, 0);
-  for (std::size_t k = 0; k < members.size(); ++k) {
-    first_vertex_of_member[k + 1] = first_vertex_of_member[k] + static_cast<std::uint32_t>(members[k]->solid.defs.size());
-  }
-  triangles.clear();
-  origins.clear();
-  first.assign(glued.faces.size() + 1, 0);
-  for (std::size_t f = 0; f < face_origin.size(); ++f) {
-    const auto [member, part_face] = face_origin[f];
-    const Part& from = *members[member];
-    const std::size_t before = triangles.size();
-    bool same = !from.solid_vertex_of.empty();
-    for (std::uint32_t t = same ? from.face_first_triangle[part_face] : 0;
-         same && t < from.face_first_triangle[part_face + 1]; ++t) {
-      Triangle mapped;
-      for (int k = 0; k < 3 && same; ++k) {
-        const VertexIndex v = from.solid_vertex_of[from.mesh.triangles[t][k]];
-        mapped[k] = vertex_of[first_vertex_of_member[member] + v];
-        same = mapped[k] != no_index && glued.defs[mapped[k]] == from.solid.defs[v];
-      }
-      if (same) {
-        triangles.push_back(mapped);
-        origins.push_back(std::uint64_t{member} << 32 | t);
-      }
-    }
-    if (!same) {
-      triangles.resize(before);
-      origins.resize(before);
-    }
-    first[f + 1] = static_cast<std::uint32_t>(triangles.size());
-  }
-}
-
-// Per face of `solid`, the attempt each face took in `rounded` (RoundedSolid::
-// attempt, with `given` the face_attempts round_solid was given); empty when
-// the mesh is no plain triangulation.
-std::vector<std::uint8_t> face_attempts_of(const Solid& solid, const RoundedSolid& rounded,
-                                           std::span<const std::uint8_t> given) {
-  if (rounded.attempt < 0) return {};
-  if (rounded.attempt == 0 && !given.empty()) return {given.begin(), given.end()};
-  return std::vector<std::uint8_t>(solid.faces.size(), static_cast<std::uint8_t>(rounded.attempt));
-}
-
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -1140,6 +986,64 @@ VoronoiCellPlanes voronoi_cell_planes(const Mesh& mesh, std::span<const Vec3> si
   return out;
 }
 
+namespace {
+
+// Canonical definitions (the file comment): every vertex of the cells' pieces
+// defined by two or more bisectors gets, in place of them, the bisectors of the
+// smallest of their sites with each of the others (the same point), after its
+// other plane; its approximation follows. The bisectors this needs that were
+// not cut are added to `cell.planes`, `cell.plane_of_pair` and `site_pairs`
+// (per plane, its two sites; no_index for a plane that is no bisector).
+void make_definitions_canonical(std::vector<std::vector<Solid>>& cells, CellPlanes& cell,
+                                std::vector<std::array<std::uint32_t, 2>>& site_pairs, const InputGeometry& geometry) {
+  const auto is_bisector = [&](PlaneRef ref) {
+    return ref.bits != no_index && ref.is_cut() && site_pairs[ref.index()][0] != no_index;
+  };
+  for (std::vector<Solid>& pieces : cells) {
+    for (Solid& solid : pieces) {
+      for (std::size_t v = 0; v < solid.defs.size(); ++v) {
+        PointDef& def = solid.defs[v];
+        if (def.kind != PointKind::three_planes) continue;
+        std::vector<PlaneRef> others;
+        std::vector<std::uint32_t> involved;
+        int bisectors = 0;
+        for (const PlaneRef ref : def.planes) {
+          if (is_bisector(ref)) {
+            ++bisectors;
+            const auto pair = site_pairs[ref.index()];
+            involved.push_back(pair[0]);
+            involved.push_back(pair[1]);
+          } else {
+            others.push_back(ref);
+          }
+        }
+        if (bisectors < 2) continue;
+        std::sort(involved.begin(), involved.end());
+        involved.erase(std::unique(involved.begin(), involved.end()), involved.end());
+        if (involved.size() != static_cast<std::size_t>(bisectors) + 1) continue;
+        std::vector<PlaneRef> canonical = others;
+        for (std::size_t k = 1; k < involved.size(); ++k) {
+          const std::array<std::uint32_t, 2> pair{involved[0], involved[k]};
+          auto found = cell.plane_of_pair.find(pair);
+          if (found == cell.plane_of_pair.end()) {
+            const auto index = static_cast<std::uint32_t>(cell.planes.size());
+            cell.planes.push_back(exact_bisector(cell.points[pair[0]], cell.points[pair[1]], cell.quantized.step));
+            site_pairs.push_back(pair);
+            found = cell.plane_of_pair.emplace(pair, index).first;
+          }
+          canonical.push_back(PlaneRef::cut(found->second));
+        }
+        if (std::equal(canonical.begin(), canonical.end(), def.planes.begin())) continue;
+        for (int k = 0; k < 3; ++k) def.planes[k] = canonical[k];
+        // The cache follows the definition (the file's reader recomputes it bit for bit).
+        solid.approx[v] = approximate(geometry.plane_set(cell.planes), def);
+      }
+    }
+  }
+}
+
+}  // namespace
+
 MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites, const TreeRecipe& recipe,
                             const BuildRunOptions& run, VoronoiReport* report_out) {
   if (recipe.strategy != Strategy::voronoi) throw std::invalid_argument("build_voronoi_tree needs recipe.strategy voronoi");
@@ -1166,7 +1070,6 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
   Triangulated& triangulated = cell.triangulated;
   std::vector<Plane>& planes = cell.planes;
   std::vector<std::array<std::uint32_t, 2>>& plane_pairs = cell.plane_pairs;
-  std::map<std::array<std::uint32_t, 2>, std::uint32_t>& plane_of_pair = cell.plane_of_pair;
   std::vector<std::vector<std::uint32_t>>& bisectors_of = cell.bisectors_of;
   const std::vector<Vec3>& points = cell.points;
   const QuantizedSites& quantized = cell.quantized;
@@ -1207,61 +1110,17 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
   report.cells_inside = static_cast<std::size_t>(std::count(place.begin(), place.end(), CellPlace::inside));
   report.cells_assembled = cells_assembled;
   const std::uint32_t box_base = cutter.box_base(), box_end = cutter.box_end();
-  const auto is_bisector = [&](PlaneRef ref) {
-    return ref.bits != no_index && ref.is_cut() && (ref.index() < box_base || ref.index() >= box_end);
-  };
-  const auto pair_of = [&](std::uint32_t plane) { return plane < box_base ? plane_pairs[plane] : plane_pairs[plane - (box_end - box_base)]; };
-
-  // Canonical definitions (the file comment), adding bisectors as needed.
-  for (std::uint32_t s = 0; s < site_count; ++s) {
-    for (Solid& solid : cells[s]) {
-      for (std::size_t v = 0; v < solid.defs.size(); ++v) {
-        PointDef& def = solid.defs[v];
-        if (def.kind != PointKind::three_planes) continue;
-        std::vector<PlaneRef> others;
-        std::vector<std::uint32_t> involved;
-        int bisectors = 0;
-        for (const PlaneRef ref : def.planes) {
-          if (is_bisector(ref)) {
-            ++bisectors;
-            const auto pair = pair_of(ref.index());
-            involved.push_back(pair[0]);
-            involved.push_back(pair[1]);
-          } else {
-            others.push_back(ref);
-          }
-        }
-        if (bisectors < 2) continue;
-        std::sort(involved.begin(), involved.end());
-        involved.erase(std::unique(involved.begin(), involved.end()), involved.end());
-        if (involved.size() != static_cast<std::size_t>(bisectors) + 1) continue;
-        std::vector<PlaneRef> canonical = others;
-        for (std::size_t k = 1; k < involved.size(); ++k) {
-          const std::array<std::uint32_t, 2> pair{involved[0], involved[k]};
-          auto found = plane_of_pair.find(pair);
-          if (found == plane_of_pair.end()) {
-            const auto index = static_cast<std::uint32_t>(planes.size());
-            planes.push_back(exact_bisector(points[pair[0]], points[pair[1]], quantized.step));
-            plane_pairs.push_back(pair);
-            found = plane_of_pair.emplace(pair, index).first;
-          }
-          canonical.push_back(PlaneRef::cut(found->second));
-        }
-        if (std::equal(canonical.begin(), canonical.end(), def.planes.begin())) continue;
-        for (int k = 0; k < 3; ++k) def.planes[k] = canonical[k];
-        // The cache follows the definition (the file's reader recomputes it bit for bit).
-        solid.approx[v] = approximate(input.geometry.plane_set(planes), def);
-      }
-    }
+  // Per plane, the two sites it bisects; none for the groups' box planes.
+  std::vector<std::array<std::uint32_t, 2>> site_pairs(planes.size(), {no_index, no_index});
+  for (std::uint32_t p = 0; p < planes.size(); ++p) {
+    if (p < box_base) site_pairs[p] = plane_pairs[p];
+    if (p >= box_end) site_pairs[p] = plane_pairs[p - (box_end - box_base)];
   }
+  make_definitions_canonical(cells, cell, site_pairs, input.geometry);
 
   // Round and certify every fragment, in parallel; then number them in site order.
   const PlaneSet set = input.geometry.plane_set(planes);
-  struct Rounded {
-    Solid solid;
-    RoundedSolid rounded;
-  };
-  std::vector<std::vector<Rounded>> rounded(site_count);
+  std::vector<std::vector<detail::VoronoiFragment>> rounded(site_count);
   SolidMeshOptions meshing;
   meshing.attributes = &input.mesh;
   meshing.interior_uv_scale = recipe.interior_uv_scale;
@@ -1282,11 +1141,10 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
     });
   });
 
-  std::vector<std::vector<Rounded*>> kept_of(site_count);  // per site, its fragments
-  std::size_t kept_count = 0;
+  std::vector<std::vector<detail::VoronoiFragment*>> kept_of(site_count);  // per site, its fragments
   for (std::uint32_t s = 0; s < site_count; ++s) {
     if (rounded[s].empty()) ++report.cells_empty;
-    for (Rounded& r : rounded[s]) {
+    for (detail::VoronoiFragment& r : rounded[s]) {
       if (r.rounded.collapsed) {
         ++report.fragments_vanished;
         report.vanished_volume += r.rounded.moved_volume;
@@ -1300,281 +1158,24 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
       kept_of[s].push_back(&r);
       if (r.rounded.attempt != 0) ++report.fragments_retried;
     }
-    kept_count += kept_of[s].size();
     if (kept_of[s].size() > 1) ++report.cells_split;
   }
   report.seconds_cells = seconds_since(start);
 
-  // The hierarchy (the file comment): the k-d groups, bottom up, each gluing the
-  // face-connected sets of its parts into nodes.
+  // The hierarchy (voronoi_hierarchy.hpp), and the tree made of it.
   auto phase = std::chrono::steady_clock::now();
-  std::vector<std::array<std::uint32_t, 2>> site_pairs(planes.size(), {no_index, no_index});
-  for (std::uint32_t p = 0; p < planes.size(); ++p) {
-    if (p < box_base || p >= box_end) site_pairs[p] = pair_of(p);
-  }
-  std::atomic<std::size_t> nodes_glued{0}, sets_unglued{0}, nodes_retried{0};
-  // The fragments numbered as regions for certifying the unions (PartRegions):
-  // site s's kept fragments are first_region[s] onward. Two fragments of
-  // different sites lie on either side of their sites' bisector, but for what
-  // rounding moved; two of one site have no plane between them.
-  std::vector<std::uint32_t> first_region(site_count + 1, 0), site_of_region;
-  for (std::uint32_t s = 0; s < site_count; ++s) {
-    first_region[s + 1] = first_region[s] + static_cast<std::uint32_t>(kept_of[s].size());
-    site_of_region.insert(site_of_region.end(), kept_of[s].size(), s);
-  }
-  const auto plane_between_regions = [&](std::uint32_t a, std::uint32_t b) -> std::optional<Plane> {
-    const std::uint32_t sa = site_of_region[a], sb = site_of_region[b];
-    if (sa == sb) return std::nullopt;
-    return exact_bisector(points[sa], points[sb], quantized.step);
-  };
-  const std::vector<Group>& groups = cutter.groups();
-  const std::vector<std::uint32_t>& order = cutter.order();
-  const auto glue_level = [&](std::vector<Part> items) {
-    std::vector<detail::GluePart> parts;
-    parts.reserve(items.size());
-    for (const Part& item : items) parts.push_back({&item.solid, item.sites});
-    std::vector<Part> out;
-    for (const std::vector<std::uint32_t>& members : detail::face_connected_groups(parts, site_pairs)) {
-      if (members.size() > 1) {
-        std::vector<detail::GluePart> chosen;
-        for (const std::uint32_t m : members) chosen.push_back(parts[m]);
-        std::string why;
-        std::vector<std::array<std::uint32_t, 2>> face_origin;
-        std::vector<std::uint32_t> vertex_of;
-        std::optional<Solid> glued = detail::glue_parts(set, chosen, site_pairs, why, &face_origin, &vertex_of);
-        if (glued) {
-          // Certified knowing its parts (validate_mesh_of_parts): the union keeps
-          // every face of every part but the twins, each face's loops as they were
-          // over the same definitions, so where a vertex rounds where the part
-          // rounded it (the same definition: the same bits) the face's triangles
-          // are the part's, already certified against each other; only pairs
-          // across parts, and every triangle the union writes differently (a
-          // vertex whose definition another part's replaced, a face triangulated
-          // or repaired otherwise), are tested. The check accepts the meshes the
-          // full one does. The pairs across parts are sought fragment pair by
-          // fragment pair (PartRegions): two fragments of different sites lie on
-          // either side of the sites' bisector, so only their triangles within
-          // rounding's reach of it, at a shared face, are paired, where a
-          // search by boxes paired nearly every triangle of a large union.
-          std::vector<const Mesh*> part_meshes;
-          // (Not kept per thread: round_solid may wait on parallel work, and the
-          // thread run another union meanwhile.)
-          std::vector<std::vector<std::uint32_t>> region_buffers(members.size());
-          std::vector<std::span<const std::uint32_t>> part_triangle_regions;
-          for (std::size_t k = 0; k < members.size(); ++k) {
-            part_meshes.push_back(&items[members[k]].mesh);
-            triangle_regions_of(items[members[k]], region_buffers[k]);
-            part_triangle_regions.push_back(region_buffers[k]);
-          }
-          PartRegions regions{part_triangle_regions, plane_between_regions};
-          SolidMeshOptions union_meshing = meshing;
-          union_meshing.parts = part_meshes;
-          union_meshing.part_regions = &regions;
-          // Each face triangulated at the attempt its part was certified at: a
-          // part certified only at a later attempt (a fold its first one made)
-          // would make the union's first attempt fail the same way, and every
-          // later attempt retriangulates every face, which certification must
-          // then test against all others (on fandisk subdivided to 52k
-          // triangles at 10^4 sites, 185 such unions took 80 % of the gluing).
-          // So the union's first attempt writes its parts' triangles again.
-          std::vector<std::uint8_t> face_attempts(glued->faces.size(), 0);
-          bool any_later = false;
-          for (std::size_t f = 0; f < face_origin.size(); ++f) {
-            const Part& from = items[members[face_origin[f][0]]];
-            if (!from.face_attempts.empty()) face_attempts[f] = from.face_attempts[face_origin[f][1]];
-            any_later |= face_attempts[f] != 0;
-          }
-          if (any_later) union_meshing.face_attempts = face_attempts;
-          // Each face written with its part's triangles (face_triangles_from_parts).
-          std::vector<const Part*> member_parts;
-          for (const std::uint32_t m : members) member_parts.push_back(&items[m]);
-          std::vector<Triangle> face_triangles;
-          std::vector<std::uint32_t> face_triangles_first;
-          std::vector<std::uint64_t> face_triangle_origins;
-          face_triangles_from_parts(*glued, member_parts, face_origin, vertex_of, face_triangles, face_triangles_first,
-                                    face_triangle_origins);
-          union_meshing.face_triangles = face_triangles;
-          union_meshing.face_triangles_first = face_triangles_first;
-          // Certification then finds each triangle's part from where it came
-          // (checked), not by matching every part's triangles by position.
-          union_meshing.face_triangle_origins = face_triangle_origins;
-          // A union round_solid cannot place is left unglued, as one it cannot certify.
-          RoundedSolid r;
-          try {
-            r = round_solid(set, *glued, union_meshing);
-          } catch (const UnsupportedGeometryError&) {
-            r.valid = false;
-          }
-          if (r.valid && !r.collapsed) {
-            if (r.attempt != 0) ++nodes_retried;
-            Part node;
-            node.face_attempts = face_attempts_of(*glued, r, union_meshing.face_attempts);
-            std::vector<std::uint32_t> face_regions(glued->faces.size());
-            for (std::size_t f = 0; f < face_origin.size(); ++f) {
-              face_regions[f] = items[members[face_origin[f][0]]].face_regions[face_origin[f][1]];
-            }
-            set_part_hints(node, *glued, r, std::move(face_regions));
-            node.solid = std::move(*glued);
-            node.mesh = std::move(r.mesh);
-            for (const std::uint32_t m : members) {
-              node.sites.insert(node.sites.end(), items[m].sites.begin(), items[m].sites.end());
-              node.children.push_back(std::move(items[m]));
-              node.children.back().drop_hints();  // glued: no union needs them again
-              // A lean tree's solids keep no approximations (every node's are
-              // dropped once the bonds are found); a glued part's go now, as no
-              // union reads them again: on the cube at 10^5 sites the build's
-              // peak went from 2.65 to 2.12 GB, the same bytes. find_bonds
-              // computes the leaves' where it needs them (approximate(), the
-              // same values).
-              if (run.lean) std::vector<ApproxPoint>().swap(node.children.back().solid.approx);
-            }
-            std::sort(node.sites.begin(), node.sites.end());
-            node.sites.erase(std::unique(node.sites.begin(), node.sites.end()), node.sites.end());
-            out.push_back(std::move(node));
-            ++nodes_glued;
-            continue;
-          }
-        }
-        ++sets_unglued;
-      }
-      for (const std::uint32_t m : members) out.push_back(std::move(items[m]));
-    }
-    return out;
-  };
-  std::vector<std::uint32_t> height(groups.size(), 0);  // above the lowest groups; children follow parents
-  for (std::size_t g = groups.size(); g-- > 0;) {
-    if (groups[g].left >= 0) height[g] = 1 + std::max(height[groups[g].left], height[groups[g].right]);
-  }
-  std::function<std::vector<Part>(std::uint32_t)> parts_of_group = [&](std::uint32_t g) {
-    const Group& group = groups[g];
-    std::vector<Part> items;
-    if (group.left < 0) {
-      for (std::uint32_t i = group.begin; i < group.end; ++i) {
-        const std::uint32_t s = order[i];
-        for (std::size_t k = 0; k < kept_of[s].size(); ++k) {
-          Rounded* r = kept_of[s][k];
-          Part leaf;
-          leaf.face_attempts = face_attempts_of(r->solid, r->rounded, {});
-          // Every face of a fragment is the fragment's; so is every triangle,
-          // plain triangulation or not.
-          const std::uint32_t region = first_region[s] + static_cast<std::uint32_t>(k);
-          set_part_hints(leaf, r->solid, r->rounded, std::vector<std::uint32_t>(r->solid.faces.size(), region));
-          leaf.sole_region = region;
-          r->rounded.mesh_vertex_of = {};
-          leaf.solid = std::move(r->solid);
-          leaf.mesh = std::move(r->rounded.mesh);
-          leaf.sites = {s};
-          items.push_back(std::move(leaf));
-        }
-      }
-    } else {
-      std::vector<Part> right;
-      tbb::parallel_invoke([&] { items = parts_of_group(static_cast<std::uint32_t>(group.left)); },
-                           [&] { right = parts_of_group(static_cast<std::uint32_t>(group.right)); });
-      for (Part& part : right) items.push_back(std::move(part));
-    }
-    // The root group is the input itself.
-    if (g == 0 || items.size() < 2 || height[g] % glue_every_levels != 0) return items;
-    return glue_level(std::move(items));
-  };
-  std::vector<Part> top;
-  if (kept_count >= 2) arena.execute([&] { top = parts_of_group(0); });
-  // A group holding every fragment is the root again: its children take its place.
-  while (top.size() == 1 && !top[0].children.empty()) top = std::move(top[0].children);
-  report.nodes_glued = nodes_glued;
-  report.sets_unglued = sets_unglued;
-  report.nodes_retried = nodes_retried;
+  std::vector<detail::SiteGroup> groups;
+  for (const Group& group : cutter.groups()) groups.push_back({group.begin, group.end, group.left, group.right});
+  const detail::VoronoiHierarchyInput hierarchy{set, groups, cutter.order(), kept_of, site_pairs, points,
+                                                quantized.step, meshing, run.lean};
+  detail::HierarchyCounts counts;
+  std::vector<detail::VoronoiPart> top;
+  arena.execute([&] { top = detail::glue_voronoi_hierarchy(hierarchy, counts); });
+  report.nodes_glued = counts.nodes_glued;
+  report.sets_unglued = counts.sets_unglued;
+  report.nodes_retried = counts.nodes_retried;
   report.seconds_glue = seconds_since(phase);
-
-  MeshTree tree;
-  tree.recipe = recipe;
-  tree.shatter_version = std::string(version_string);
-  tree.geometry = input.geometry;
-  MeshTreeNode root;
-  root.mesh = mesh;
-  root.mass = mass_properties(root.mesh);
-  root.solid = input.solid;
-  root.convex = root.solid->convex;
-  root.seed = root_node_seed(recipe.seed);
-  root.first_leaf = 0;
-  root.leaf_count = 1;
-  tree.nodes.push_back(std::move(root));
-  tree.cut_planes.push_back({});
-  if (top.size() < 2) {
-    tree.leaf_nodes.push_back(0);
-  } else {
-    std::size_t node_count = 1;
-    const std::function<void(const Part&)> count_nodes = [&](const Part& part) {
-      ++node_count;
-      for (const Part& child : part.children) count_nodes(child);
-    };
-    for (const Part& part : top) count_nodes(part);
-    // The bisectors the fragments use, in the order of their site pairs (a
-    // glued node's planes are its fragments').
-    std::vector<char> used(planes.size(), 0);
-    const auto use = [&](PlaneRef ref) {
-      if (ref.bits == no_index || !ref.is_cut()) return;
-      if (!is_bisector(ref)) throw std::logic_error("build_voronoi_tree: a container box cut into a cell's part of the solid");
-      used[ref.index()] = 1;
-    };
-    const std::function<void(const Part&)> use_planes = [&](const Part& part) {
-      for (const Part& child : part.children) use_planes(child);
-      if (!part.children.empty()) return;
-      for (const SolidFace& face : part.solid.faces) use(face.plane);
-      for (const SolidCorner& corner : part.solid.corners) use(corner.line.other);
-      for (const PointDef& def : part.solid.defs) {
-        const int count = def.kind == PointKind::segment_plane ? 1 : def.kind == PointKind::three_planes ? 3 : 0;
-        for (int k = 0; k < count; ++k) use(def.planes[k]);
-      }
-    };
-    for (const Part& part : top) use_planes(part);
-    std::vector<std::uint32_t> used_planes;
-    for (std::uint32_t p = 0; p < planes.size(); ++p) {
-      if (used[p]) used_planes.push_back(p);
-    }
-    std::sort(used_planes.begin(), used_planes.end(), [&](std::uint32_t a, std::uint32_t b) { return pair_of(a) < pair_of(b); });
-    std::vector<std::uint32_t> final_index(planes.size(), no_index);
-    for (std::uint32_t r = 0; r < used_planes.size(); ++r) final_index[used_planes[r]] = static_cast<std::uint32_t>(node_count) + r;
-    const auto remap = [&](PlaneRef& ref) {
-      if (ref.bits != no_index && ref.is_cut()) ref = PlaneRef::cut(final_index[ref.index()]);
-    };
-    const auto remap_surface = [&](SurfaceId& surface) {
-      if (surface != original_surface) surface = cap_surface_of(final_index[surface - 1]);
-    };
-    // Nodes in preorder, leaves numbered in that order.
-    tree.nodes.reserve(node_count);
-    const std::function<void(Part&, NodeIndex, std::size_t)> add = [&](Part& part, NodeIndex parent, std::size_t index) {
-      const auto k = static_cast<NodeIndex>(tree.nodes.size());
-      MeshTreeNode node;
-      node.solid = std::move(part.solid);
-      for (SolidFace& face : node.solid->faces) {
-        remap(face.plane);
-        remap_surface(face.surface);
-      }
-      for (SolidCorner& corner : node.solid->corners) remap(corner.line.other);
-      for (PointDef& def : node.solid->defs) {
-        const int count = def.kind == PointKind::segment_plane ? 1 : def.kind == PointKind::three_planes ? 3 : 0;
-        for (int c = 0; c < count; ++c) remap(def.planes[c]);
-      }
-      node.mesh = std::move(part.mesh);
-      for (SurfaceId& surface : node.mesh->surfaces) remap_surface(surface);
-      node.mass = mass_properties(node.mesh);
-      node.convex = node.solid->convex;
-      node.parent = parent;
-      node.depth = tree.nodes[parent].depth + 1;
-      node.first_leaf = static_cast<LeafIndex>(tree.leaf_nodes.size());
-      node.seed = child_node_seed(tree.nodes[parent].seed, index);
-      tree.nodes[parent].children.push_back(k);
-      tree.nodes.push_back(std::move(node));
-      tree.cut_planes.push_back({});
-      if (part.children.empty()) tree.leaf_nodes.push_back(k);
-      for (std::size_t c = 0; c < part.children.size(); ++c) add(part.children[c], k, c);
-      tree.nodes[k].leaf_count = static_cast<std::uint32_t>(tree.leaf_nodes.size() - tree.nodes[k].first_leaf);
-    };
-    for (std::size_t c = 0; c < top.size(); ++c) add(top[c], 0, c);
-    tree.nodes[0].leaf_count = static_cast<std::uint32_t>(tree.leaf_nodes.size());
-    for (const std::uint32_t p : used_planes) tree.cut_planes.push_back(planes[p]);
-  }
+  MeshTree tree = detail::voronoi_tree_of_parts(mesh, input, recipe, top, planes, site_pairs);
 
   phase = std::chrono::steady_clock::now();
   // Internal nodes' hulls from their children's hulls, as a plane tree's (each
