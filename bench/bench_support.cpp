@@ -1,9 +1,11 @@
 #include "bench_support.hpp"
 
+#include <CGAL/Convex_hull_3/dual/halfspace_intersection_3.h>
 #include <CGAL/Polygon_mesh_processing/clip.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
 #include <CGAL/boost/graph/helpers.h>
 
 #include <poll.h>
@@ -304,6 +306,102 @@ void apply_peer_line(const std::string& line, PeerResult& result) {
   }
 }
 
+/// Runs in the forked child: cuts the cells out of `input` with CGAL and reports
+/// through `send` (progress lines, then "cells_clipped ...", then
+/// "cells_checked ..." when `check_pieces`).
+void clip_cells_with_cgal(const shatter::Mesh& input, const std::vector<std::vector<shatter::Plane>>& cells,
+                          std::span<const shatter::Vec3> sites, bool check_pieces,
+                          const std::function<void(const std::string&)>& send) {
+  const CgalMesh whole = to_cgal(input);
+  // The input's box grown by a tenth bounds every cell (a cell without its
+  // container's walls may be unbounded), and cuts nothing of the input.
+  shatter::Vec3 lo = input.positions.front(), hi = lo;
+  for (const shatter::Vec3& p : input.positions) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  const shatter::Vec3 room = (hi - lo) * 0.1;
+  lo = lo - room;
+  hi = hi + room;
+  const std::array<Epick::Plane_3, 6> walls{Epick::Plane_3(-1, 0, 0, lo.x), Epick::Plane_3(1, 0, 0, -hi.x),
+                                            Epick::Plane_3(0, -1, 0, lo.y), Epick::Plane_3(0, 1, 0, -hi.y),
+                                            Epick::Plane_3(0, 0, -1, lo.z), Epick::Plane_3(0, 0, 1, -hi.z)};
+  std::size_t cells_done = 0, failed_clips = 0, threw = 0, fragments = 0;
+  double clip_seconds = 0;
+  std::vector<CgalMesh> pieces;  // every fragment, checked after the clock
+  auto last_report = Clock::now();
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    std::vector<CgalMesh> components;
+    try {
+      // Outside the clock: the input's copy, and the cell as a closed triangle
+      // mesh (the intersection of its half-spaces, around its site).
+      CgalMesh piece = whole;
+      std::vector<Epick::Plane_3> planes(walls.begin(), walls.end());
+      for (const shatter::Plane& plane : cells[c]) {
+        planes.emplace_back(plane.normal.x, plane.normal.y, plane.normal.z, plane.offset);
+      }
+      CgalMesh cell;
+      CGAL::halfspace_intersection_3(planes.begin(), planes.end(), cell,
+                                     boost::make_optional(Epick::Point_3(sites[c].x, sites[c].y, sites[c].z)));
+      PMP::triangulate_faces(cell);
+      const auto t0 = Clock::now();
+      const bool clipped = PMP::clip(piece, cell, CGAL::parameters::clip_volume(true));
+      if (clipped && piece.number_of_faces() > 0) {
+        piece.collect_garbage();  // the default index maps need dense indices
+        PMP::split_connected_components(piece, components);
+      }
+      clip_seconds += seconds_between(t0, Clock::now());
+      if (!clipped) ++failed_clips;
+    } catch (...) {
+      ++threw;
+      components.clear();
+    }
+    ++cells_done;
+    fragments += components.size();
+    if (check_pieces) {
+      for (CgalMesh& component : components) pieces.push_back(std::move(component));
+    }
+    if (seconds_between(last_report, Clock::now()) > 0.25) {
+      send("cells_progress " + std::to_string(cells_done) + " " + fixed(clip_seconds, 6));
+      last_report = Clock::now();
+    }
+  }
+  send("cells_clipped " + fixed(clip_seconds, 6) + " " + std::to_string(cells_done) + " " + std::to_string(failed_clips) +
+       " " + std::to_string(threw) + " " + std::to_string(fragments));
+  if (!check_pieces) return;
+  std::size_t invalid = 0;
+  double volume = 0;
+  for (const CgalMesh& piece : pieces) {
+    bool valid = false;
+    try {
+      valid = peer_piece_valid(piece);
+      if (CGAL::is_closed(piece)) volume += PMP::volume(piece);
+    } catch (...) {
+    }
+    invalid += !valid;
+  }
+  char volume_text[64];
+  std::snprintf(volume_text, sizeof volume_text, "%.17g", volume);
+  send("cells_checked " + std::to_string(invalid) + " " + volume_text);
+}
+
+void apply_cell_line(const std::string& line, CellClipResult& result) {
+  std::istringstream in(line);
+  std::string tag;
+  in >> tag;
+  if (tag == "cells_progress") {
+    in >> result.cells_done >> result.clip_seconds;
+  } else if (tag == "cells_clipped") {
+    in >> result.clip_seconds >> result.cells_done >> result.failed_clips >> result.threw >> result.fragments;
+    result.clipping_finished = true;
+  } else if (tag == "cells_checked") {
+    in >> result.invalid >> result.volume;
+  } else if (tag == "error") {
+    result.status = PeerResult::Status::error;
+    std::getline(in >> std::ws, result.detail);
+  }
+}
+
 /// The address space the process uses now, so the child's limit can be "this much more".
 std::uint64_t current_address_space_bytes() {
   std::ifstream statm("/proc/self/statm");
@@ -350,7 +448,8 @@ int signal_in_forked_child(const std::function<void()>& body) {
   return WIFSIGNALED(status) ? WTERMSIG(status) : 0;
 }
 
-PeerResult replay_with_cgal_isolated(const MeshTree& tree, const Mesh& input, const ReplayLimits& limits) {
+ChildReport run_reporting_child(const std::function<void(const std::function<void(const std::string&)>&)>& body,
+                                const ReplayLimits& limits) {
   int fds[2];
   if (::pipe(fds) != 0) throw std::runtime_error(std::string("pipe failed: ") + std::strerror(errno));
   const pid_t pid = fork_flushed();
@@ -364,7 +463,7 @@ PeerResult replay_with_cgal_isolated(const MeshTree& tree, const Mesh& input, co
     ::setrlimit(RLIMIT_AS, &address_space);
     const int out = fds[1];
     try {
-      replay_with_cgal(tree, input, limits.check_pieces, [out](const std::string& line) { write_all(out, line + "\n"); });
+      body([out](const std::string& line) { write_all(out, line + "\n"); });
     } catch (const std::exception& e) {
       write_all(out, std::string("error ") + e.what() + "\n");
     } catch (...) {
@@ -375,15 +474,14 @@ PeerResult replay_with_cgal_isolated(const MeshTree& tree, const Mesh& input, co
   }
 
   ::close(fds[1]);
-  PeerResult result;
+  ChildReport report;
   std::string pending;
   const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                            std::chrono::duration<double>(limits.timeout_seconds));
-  bool timed_out = false;
   for (;;) {
     const double remaining = seconds_between(Clock::now(), deadline);
     if (remaining <= 0) {
-      timed_out = true;
+      report.timed_out = true;
       break;
     }
     pollfd watch{fds[0], POLLIN, 0};
@@ -396,27 +494,65 @@ PeerResult replay_with_cgal_isolated(const MeshTree& tree, const Mesh& input, co
     if (n <= 0) break;  // end of file: the child is done (or died)
     pending.append(buffer, static_cast<std::size_t>(n));
     for (std::size_t eol; (eol = pending.find('\n')) != std::string::npos;) {
-      apply_peer_line(pending.substr(0, eol), result);
+      report.lines.push_back(pending.substr(0, eol));
       pending.erase(0, eol + 1);
     }
   }
-  if (timed_out) ::kill(pid, SIGKILL);
+  if (report.timed_out) ::kill(pid, SIGKILL);
   ::close(fds[0]);
   const int status = wait_for_child(pid);
+  if (WIFSIGNALED(status)) report.signal = WTERMSIG(status);
+  return report;
+}
 
+PeerResult replay_with_cgal_isolated(const MeshTree& tree, const Mesh& input, const ReplayLimits& limits) {
+  const ChildReport child = run_reporting_child(
+      [&](const std::function<void(const std::string&)>& send) {
+        replay_with_cgal(tree, input, limits.check_pieces, send);
+      },
+      limits);
+  PeerResult result;
+  for (const std::string& line : child.lines) apply_peer_line(line, result);
   const std::string progress = std::to_string(result.nodes_done) + "/" + std::to_string(result.internal_nodes) +
                                " nodes clipped in " + seconds_text(result.clip_seconds) + " s";
-  if (timed_out) {
+  if (child.timed_out) {
     result.status = PeerResult::Status::timeout;
     result.detail = "no result within " + fixed(limits.timeout_seconds, 0) + " s (" +
                     (result.clipping_finished ? "clipping finished, checking pieces" : progress) + ")";
-  } else if (WIFSIGNALED(status)) {
+  } else if (child.signal != 0) {
     result.status = PeerResult::Status::crashed;
-    result.detail = std::string("signal ") + std::to_string(WTERMSIG(status)) + " (" +
-                    ::strsignal(WTERMSIG(status)) + ") after " + progress;
+    result.detail = std::string("signal ") + std::to_string(child.signal) + " (" + ::strsignal(child.signal) +
+                    ") after " + progress;
   } else if (result.status == PeerResult::Status::ok && !result.clipping_finished) {
     result.status = PeerResult::Status::error;
     result.detail = "the replay ended without a result after " + progress;
+  }
+  return result;
+}
+
+CellClipResult clip_cells_with_cgal_isolated(const Mesh& input, const std::vector<std::vector<Plane>>& cells,
+                                             std::span<const Vec3> sites, const ReplayLimits& limits) {
+  const ChildReport child = run_reporting_child(
+      [&](const std::function<void(const std::string&)>& send) {
+        clip_cells_with_cgal(input, cells, sites, limits.check_pieces, send);
+      },
+      limits);
+  CellClipResult result;
+  result.cells = cells.size();
+  for (const std::string& line : child.lines) apply_cell_line(line, result);
+  const std::string progress = std::to_string(result.cells_done) + "/" + std::to_string(result.cells) +
+                               " cells clipped in " + seconds_text(result.clip_seconds) + " s";
+  if (child.timed_out) {
+    result.status = PeerResult::Status::timeout;
+    result.detail = "no result within " + fixed(limits.timeout_seconds, 0) + " s (" +
+                    (result.clipping_finished ? "clipping finished, checking pieces" : progress) + ")";
+  } else if (child.signal != 0) {
+    result.status = PeerResult::Status::crashed;
+    result.detail = std::string("signal ") + std::to_string(child.signal) + " (" + ::strsignal(child.signal) +
+                    ") after " + progress;
+  } else if (result.status == PeerResult::Status::ok && !result.clipping_finished) {
+    result.status = PeerResult::Status::error;
+    result.detail = "the cells ended without a result after " + progress;
   }
   return result;
 }

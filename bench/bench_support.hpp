@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -129,10 +130,58 @@ void write_all(int fd, const std::string& text);
 /// when fork fails.
 int signal_in_forked_child(const std::function<void()>& body);
 
+/// What a child of run_reporting_child said and how it ended.
+struct ChildReport {
+  std::vector<std::string> lines;  ///< every line it sent, in order
+  bool timed_out = false;          ///< killed at the limit's timeout
+  int signal = 0;                  ///< the signal that ended it (SIGKILL after a timeout), else 0
+};
+
+/// Runs `body` in a forked child under `limits` (timeout and address space;
+/// check_pieces is the body's business): the child reports through the `send`
+/// it is given, a line at a time, over a pipe, and an exception escaping `body`
+/// is sent as "error <what>". Returns the lines the parent read before the
+/// child ended or the timeout killed it. Throws std::runtime_error only when
+/// pipe or fork fails.
+ChildReport run_reporting_child(const std::function<void(const std::function<void(const std::string&)>&)>& body,
+                                const ReplayLimits& limits);
+
 /// Replays `tree` (built from `input`) with CGAL clip in a forked child process
 /// under `limits`, because after a few levels rounded points can make CGAL's
 /// pieces degenerate and clip may then hang, explode or crash. Throws
 /// std::runtime_error only when pipe or fork fails.
 PeerResult replay_with_cgal_isolated(const MeshTree& tree, const Mesh& input, const ReplayLimits& limits);
+
+// ---------------------------------------------------------------------------
+// The peer CGAL 5.5 PMP::clip(clip_volume(true)) on Surface_mesh<Epick> cutting
+// given Voronoi cells out of a mesh, the per-cell pipeline of the fracture tools:
+// for each cell, a copy of the input clipped by the cell as a closed mesh (the
+// intersection of the cell's half-spaces and of the input's box grown by a
+// tenth: CGAL::halfspace_intersection_3 around the cell's site, its faces
+// triangulated), then split into connected components, its fragments. Its time
+// is the sum of the clip and split_connected_components calls only (the copy
+// and the cell's mesh are made outside the clock). Clipping by each plane in
+// turn instead hung inside clip on the first cube cell at 10^2 sites (its 11th
+// plane; 2026-12-07), as corefinement on inexact constructions can.
+
+/// What one run of the cells did; a timeout or crash keeps the progress made.
+struct CellClipResult {
+  PeerResult::Status status = PeerResult::Status::ok;
+  double clip_seconds = not_measured;  ///< a lower bound unless status is ok
+  std::size_t cells = 0, cells_done = 0;
+  std::size_t failed_clips = 0, threw = 0;  ///< cells whose clip returned false, or threw
+  std::size_t fragments = 0;
+  long invalid = -1;      ///< fragments not closed, self-intersecting or of volume <= 0; -1 = not checked
+  double volume = NAN;    ///< the fragments' volumes summed (PMP::volume), when checked
+  bool clipping_finished = false;
+  std::string detail;  ///< why it is not ok
+};
+
+/// Cuts `cells` (each a list of planes whose negative sides hold the cell;
+/// sites[i] strictly inside cell i) out of `input` with CGAL clip in a forked
+/// child process under `limits` (clip can hang, explode or crash on nearly
+/// degenerate input). Throws std::runtime_error only when pipe or fork fails.
+CellClipResult clip_cells_with_cgal_isolated(const Mesh& input, const std::vector<std::vector<Plane>>& cells,
+                                             std::span<const Vec3> sites, const ReplayLimits& limits);
 
 }  // namespace shatter::bench

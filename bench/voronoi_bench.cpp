@@ -2,10 +2,11 @@
 // cube, curved corpus meshes and fandisk subdivided to 52k triangles at
 // 10^2 .. 10^4 sites (10^5 with --max-sites): seconds, cells per second,
 // fragments that fail validate_mesh as written, and the volume error of the
-// meshes as written; the seconds of it spent gluing the
-// internal nodes, their count, the tree's depth and the sets left unglued. One
-// thread unless --threads says otherwise. A benchmark, not a test: it prints what
-// it measured.
+// meshes as written; the seconds of it spent making the fragments (the sites
+// quantized and triangulated, the cells cut or assembled, each fragment rounded
+// and certified: VoronoiReport::seconds_cells) and gluing the internal nodes,
+// their count, the tree's depth and the sets left unglued. One thread unless
+// --threads says otherwise. A benchmark, not a test: it prints what it measured.
 // With --manifold, Manifold (npm manifold-3d, bench/peers/manifold/voronoi.mjs)
 // cuts cells in the same run: the peer trims the input by each cell's planes
 // and splits the result into components. By default the cells are the ones
@@ -15,9 +16,14 @@
 // issue names), computed from the same sites in double precision, and the
 // peer's time is voro++'s plus Manifold's: the pipeline of the tools that build
 // cells and then intersect the mesh per cell. --voro alone times voro++'s cells.
+// With --cgal, CGAL 5.5's PMP::clip on Surface_mesh<Epick> cuts the same cells
+// (voro++'s with --voro), the input clipped by each cell as one closed mesh
+// (bench_support.hpp, clip_cells_with_cgal_isolated), in a forked child under a
+// time limit, since clip can hang or crash: "where it finishes", as the issue
+// asks. Its time is added to voro++'s with --voro.
 //
-//   shatter-bench-voronoi [--quick] [--max-sites N] [--threads T] [--manifold] [--voro] [--repeat R]
-//                         [--meshes cube.off,elephant.off,...]
+//   shatter-bench-voronoi [--quick] [--max-sites N] [--threads T] [--manifold] [--voro] [--cgal]
+//                         [--cgal-timeout S] [--repeat R] [--meshes cube.off,elephant.off,...]
 
 #include <algorithm>
 #include <chrono>
@@ -194,7 +200,8 @@ VoroCells voropp_cells(const Mesh&, const std::vector<Vec3>&) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool quick = false, manifold = false, voro = false;
+  bool quick = false, manifold = false, voro = false, cgal = false;
+  double cgal_timeout = 60;
   std::string only;  // --meshes: a comma-separated subset of the rows' meshes
   std::size_t max_sites = 10000;
   unsigned threads = 1;
@@ -207,6 +214,10 @@ int main(int argc, char** argv) {
       manifold = true;
     } else if (arg == "--voro") {
       voro = true;
+    } else if (arg == "--cgal") {
+      cgal = true;
+    } else if (arg == "--cgal-timeout" && i + 1 < argc && std::atof(argv[i + 1]) > 0) {
+      cgal_timeout = std::atof(argv[++i]);
     } else if (arg == "--meshes" && i + 1 < argc) {
       only = argv[++i];
     } else if (arg == "--max-sites" && i + 1 < argc) {
@@ -217,13 +228,17 @@ int main(int argc, char** argv) {
       repeat = std::max(1, std::atoi(argv[++i]));
     } else {
       std::fprintf(stderr,
-                   "usage: shatter-bench-voronoi [--quick] [--max-sites N] [--threads T] [--manifold] [--voro] [--repeat R]\n"
+                   "usage: shatter-bench-voronoi [--quick] [--max-sites N] [--threads T] [--manifold] [--voro] [--cgal]\n"
+                   "                             [--cgal-timeout S] [--repeat R]\n"
                    "                             [--meshes cube.off,elephant.off,knot1.off,fandisk.off,fandiskx4.off]\n"
                    "  --manifold  also time Manifold (bench/peers/manifold/voronoi.mjs, needs node and npm ci there)\n"
                    "              cutting the same cells, and print the ratio of its seconds (with --voro, voro++'s\n"
                    "              plus its) to shatter's\n"
                    "  --voro      the peer's cells from voro++ (voro++-dev), its seconds added to Manifold's;\n"
                    "              without --manifold, voro++'s cells alone are timed\n"
+                   "  --cgal      also time CGAL 5.5 PMP::clip cutting the same cells (voro++'s with --voro), in a\n"
+                   "              child process given --cgal-timeout seconds (default 60) a row; its fragments are\n"
+                   "              checked (closed, no self-intersection, positive volume) after the clock\n"
                    "  --repeat R  run each row R times (shatter and the peer) and report the medians\n");
       return 2;
     }
@@ -245,10 +260,12 @@ int main(int argc, char** argv) {
   }
   const fs::path scratch = fs::temp_directory_path() / ("shatter-bench-voronoi-" + std::to_string(::getpid()));
   if (manifold) fs::create_directories(scratch);
-  std::printf("%-14s %9s %7s %9s %9s %10s %8s %14s %8s %8s %6s %8s %9s", "mesh", "triangles", "sites", "fragments", "seconds",
-              "cells/s", "invalid", "volume error", "glue s", "internal", "depth", "unglued", "assembled");
+  std::printf("%-14s %9s %7s %9s %9s %10s %8s %14s %8s %8s %8s %6s %8s %9s", "mesh", "triangles", "sites", "fragments",
+              "seconds", "cells/s", "invalid", "volume error", "cells s", "glue s", "internal", "depth", "unglued",
+              "assembled");
   if (voro) std::printf(" %9s %8s", "voro++ s", "v. cells");
   if (manifold) std::printf(" %10s %10s %10s %8s", "manifold s", "m. frags", "m. vol err", "ratio");
+  if (cgal) std::printf(" %9s %8s %9s %10s %8s", "cgal s", "c. frags", "c. invalid", "c. vol err", "ratio");
   std::printf("\n");
   for (const std::string& name : meshes) {
     const bool subdivided = name == "fandiskx4.off";
@@ -284,10 +301,10 @@ int main(int argc, char** argv) {
         volume += tree.leaf(leaf).mass.volume;
       }
       const double error = std::fabs(volume - tree.nodes[0].mass.volume) / tree.nodes[0].mass.volume;
-      std::printf("%-14s %9zu %7zu %9zu %9.3f %10.0f %8zu %14.3g %8.3f %8zu %6u %8zu %9zu", name.c_str(), mesh.triangles.size(),
-                  sites_count, tree.leaf_count(), seconds, static_cast<double>(sites_count) / seconds, invalid, error,
-                  report.seconds_glue, tree.nodes.size() - tree.leaf_count(), depth, report.sets_unglued,
-                  report.cells_assembled);
+      std::printf("%-14s %9zu %7zu %9zu %9.3f %10.0f %8zu %14.3g %8.3f %8.3f %8zu %6u %8zu %9zu", name.c_str(),
+                  mesh.triangles.size(), sites_count, tree.leaf_count(), seconds, static_cast<double>(sites_count) / seconds,
+                  invalid, error, report.seconds_cells, report.seconds_glue, tree.nodes.size() - tree.leaf_count(), depth,
+                  report.sets_unglued, report.cells_assembled);
       double cell_seconds = 0;  // the peer's cells' time: voro++'s, or none (shatter's cells)
       std::vector<std::vector<Plane>> cells;
       if (voro) {
@@ -320,10 +337,16 @@ int main(int argc, char** argv) {
         std::printf(" %9.3f %8zu", cell_seconds, sites.size() - computed.failed);
         cells = std::move(computed.cells);
       }
+      std::vector<Vec3> cell_sites = sites;  // a point strictly inside each cell, for the CGAL peer
+      if (cgal && !voro) {
+        VoronoiCellPlanes shatter_cells = voronoi_cell_planes(mesh, sites);
+        cells = std::move(shatter_cells.cells);
+        cell_sites = std::move(shatter_cells.quantized.sites);
+      }
       if (manifold) {
         const fs::path cells_file = scratch / "cells.txt";
         // (Not one conditional expression: it would copy voro++'s cells.)
-        if (voro) {
+        if (voro || cgal) {
           write_cells(cells_file, cells);
         } else {
           write_cells(cells_file, voronoi_cell_planes(mesh, sites).cells);
@@ -335,6 +358,19 @@ int main(int argc, char** argv) {
           if (peer.bad > 0) std::printf(" (%zu bad)", peer.bad);
         } else {
           std::printf(" manifold: %s", peer.failure.c_str());
+        }
+      }
+      if (cgal) {
+        bench::ReplayLimits limits;
+        limits.timeout_seconds = cgal_timeout;
+        const bench::CellClipResult peer = bench::clip_cells_with_cgal_isolated(mesh, cells, cell_sites, limits);
+        if (peer.status == bench::PeerResult::Status::ok) {
+          const double input_volume = tree.nodes[0].mass.volume;
+          std::printf(" %9.3f %8zu %9ld %10.3g %7.1fx", peer.clip_seconds, peer.fragments, peer.invalid,
+                      std::fabs(peer.volume - input_volume) / input_volume, (cell_seconds + peer.clip_seconds) / seconds);
+          if (peer.failed_clips + peer.threw > 0) std::printf(" (%zu cells failed, %zu threw)", peer.failed_clips, peer.threw);
+        } else {
+          std::printf(" cgal: %s", peer.detail.c_str());
         }
       }
       std::printf("\n");
