@@ -505,6 +505,29 @@ ChildReport run_reporting_child(const std::function<void(const std::function<voi
   return report;
 }
 
+namespace {
+
+// How a CGAL child ended, into `status` and `detail` (left as the lines set them
+// when it ran to its end): a timeout, a signal, or no final line (`finished`)
+// although it exited; `progress` says how far it got, `what` names the run.
+void settle_status(const ChildReport& child, const ReplayLimits& limits, bool finished, const std::string& progress,
+                   const char* what, PeerResult::Status& status, std::string& detail) {
+  if (child.timed_out) {
+    status = PeerResult::Status::timeout;
+    detail = "no result within " + fixed(limits.timeout_seconds, 0) + " s (" +
+             (finished ? "clipping finished, checking pieces" : progress) + ")";
+  } else if (child.signal != 0) {
+    status = PeerResult::Status::crashed;
+    detail = std::string("signal ") + std::to_string(child.signal) + " (" + ::strsignal(child.signal) + ") after " +
+             progress;
+  } else if (status == PeerResult::Status::ok && !finished) {
+    status = PeerResult::Status::error;
+    detail = std::string(what) + " ended without a result after " + progress;
+  }
+}
+
+}  // namespace
+
 PeerResult replay_with_cgal_isolated(const MeshTree& tree, const Mesh& input, const ReplayLimits& limits) {
   const ChildReport child = run_reporting_child(
       [&](const std::function<void(const std::string&)>& send) {
@@ -515,18 +538,7 @@ PeerResult replay_with_cgal_isolated(const MeshTree& tree, const Mesh& input, co
   for (const std::string& line : child.lines) apply_peer_line(line, result);
   const std::string progress = std::to_string(result.nodes_done) + "/" + std::to_string(result.internal_nodes) +
                                " nodes clipped in " + seconds_text(result.clip_seconds) + " s";
-  if (child.timed_out) {
-    result.status = PeerResult::Status::timeout;
-    result.detail = "no result within " + fixed(limits.timeout_seconds, 0) + " s (" +
-                    (result.clipping_finished ? "clipping finished, checking pieces" : progress) + ")";
-  } else if (child.signal != 0) {
-    result.status = PeerResult::Status::crashed;
-    result.detail = std::string("signal ") + std::to_string(child.signal) + " (" + ::strsignal(child.signal) +
-                    ") after " + progress;
-  } else if (result.status == PeerResult::Status::ok && !result.clipping_finished) {
-    result.status = PeerResult::Status::error;
-    result.detail = "the replay ended without a result after " + progress;
-  }
+  settle_status(child, limits, result.clipping_finished, progress, "the replay", result.status, result.detail);
   return result;
 }
 
@@ -542,18 +554,7 @@ CellClipResult clip_cells_with_cgal_isolated(const Mesh& input, const std::vecto
   for (const std::string& line : child.lines) apply_cell_line(line, result);
   const std::string progress = std::to_string(result.cells_done) + "/" + std::to_string(result.cells) +
                                " cells clipped in " + seconds_text(result.clip_seconds) + " s";
-  if (child.timed_out) {
-    result.status = PeerResult::Status::timeout;
-    result.detail = "no result within " + fixed(limits.timeout_seconds, 0) + " s (" +
-                    (result.clipping_finished ? "clipping finished, checking pieces" : progress) + ")";
-  } else if (child.signal != 0) {
-    result.status = PeerResult::Status::crashed;
-    result.detail = std::string("signal ") + std::to_string(child.signal) + " (" + ::strsignal(child.signal) +
-                    ") after " + progress;
-  } else if (result.status == PeerResult::Status::ok && !result.clipping_finished) {
-    result.status = PeerResult::Status::error;
-    result.detail = "the cells ended without a result after " + progress;
-  }
+  settle_status(child, limits, result.clipping_finished, progress, "the cells", result.status, result.detail);
   return result;
 }
 
