@@ -17,6 +17,13 @@
 #include "shatter/version.hpp"
 
 namespace shatter::detail {
+
+void VoronoiPart::drop_hints() {
+  face_regions = {};
+  solid_vertex_of = {};
+  face_first_triangle = {};
+}
+
 namespace {
 
 // The hierarchy glues the lowest k-d groups and every second level above them

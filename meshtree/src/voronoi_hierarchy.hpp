@@ -58,11 +58,7 @@ struct VoronoiPart {
   std::vector<std::uint32_t> face_first_triangle;
 
   /// Frees the hints above, once the part is glued.
-  void drop_hints() {
-    face_regions = {};
-    solid_vertex_of = {};
-    face_first_triangle = {};
-  }
+  void drop_hints();
 };
 
 /// What glue_voronoi_hierarchy reads.
