@@ -1,5 +1,5 @@
 #pragma once
-// Gluing Voronoi fragments into the internal nodes of a cell tree (voronoi.cpp),
+// Gluing Voronoi fragments into the internal nodes of a cell tree (voronoi_hierarchy.hpp),
 // without a Boolean.
 //
 // The face of the fragment of site p on the bisector B_pq and the face of the

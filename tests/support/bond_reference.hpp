@@ -256,7 +256,7 @@ inline Reference plane_reference_bonds(const MeshTree& tree) {
     for (int a = 1; a < 3; ++a) {
       if (abs(n[a]) > abs(n[axis])) axis = a;
     }
-    // A Voronoi hierarchy's glued node was cut by no plane (voronoi.cpp pushes a
+    // A Voronoi hierarchy's glued node was cut by no plane (voronoi_hierarchy.cpp pushes a
     // zero one): nothing is bonded across it. Its scale below would be 0 / 0,
     // which trapped once the test files compiled at -O0 under the sanitizers
     // (at -O1 the unused division was never reached).
