@@ -315,14 +315,7 @@ void clip_cells_with_cgal(const shatter::Mesh& input, const std::vector<std::vec
   const CgalMesh whole = to_cgal(input);
   // The input's box grown by a tenth bounds every cell (a cell without its
   // container's walls may be unbounded), and cuts nothing of the input.
-  shatter::Vec3 lo = input.positions.front(), hi = lo;
-  for (const shatter::Vec3& p : input.positions) {
-    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-  }
-  const shatter::Vec3 room = (hi - lo) * 0.1;
-  lo = lo - room;
-  hi = hi + room;
+  const auto [lo, hi] = grown_box(input, 0.1);
   const std::array<Epick::Plane_3, 6> walls{Epick::Plane_3(-1, 0, 0, lo.x), Epick::Plane_3(1, 0, 0, -hi.x),
                                             Epick::Plane_3(0, -1, 0, lo.y), Epick::Plane_3(0, 1, 0, -hi.y),
                                             Epick::Plane_3(0, 0, -1, lo.z), Epick::Plane_3(0, 0, 1, -hi.z)};
@@ -556,6 +549,16 @@ CellClipResult clip_cells_with_cgal_isolated(const Mesh& input, const std::vecto
                                " cells clipped in " + seconds_text(result.clip_seconds) + " s";
   settle_status(child, limits, result.clipping_finished, progress, "the cells", result.status, result.detail);
   return result;
+}
+
+std::array<Vec3, 2> grown_box(const Mesh& mesh, double fraction) {
+  Vec3 lo = mesh.positions.front(), hi = lo;
+  for (const Vec3& p : mesh.positions) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  const Vec3 room = (hi - lo) * fraction;
+  return {lo - room, hi + room};
 }
 
 Mesh subdivide_midpoints(const Mesh& mesh) {

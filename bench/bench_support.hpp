@@ -8,6 +8,7 @@
 
 #include <sys/types.h>
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -64,6 +65,11 @@ std::string fixed(double value, int digits);
 
 /// 65536 -> "65,536".
 std::string with_thousands(std::uint64_t value);
+
+/// The corners (lo, hi) of `mesh`'s box grown on every side by `fraction` of its
+/// extent along that axis: the peers' container (voro++) and cell walls (CGAL),
+/// which then lie outside the solid. Precondition: `mesh` has a position.
+std::array<Vec3, 2> grown_box(const Mesh& mesh, double fraction);
 
 /// Each triangle into four by its edge midpoints (shared per edge, so the mesh
 /// stays closed and welded); flat: the new vertices are (a + b) / 2 in doubles,

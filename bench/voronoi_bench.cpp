@@ -33,6 +33,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -137,14 +138,7 @@ struct VoroCells {
 VoroCells voropp_cells(const Mesh& mesh, const std::vector<Vec3>& sites) {
   VoroCells result;
   const auto start = std::chrono::steady_clock::now();
-  Vec3 lo = mesh.positions.front(), hi = lo;
-  for (const Vec3& p : mesh.positions) {
-    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-  }
-  const Vec3 margin = (hi - lo) * 0.1;
-  lo = lo - margin;
-  hi = hi + margin;
+  const auto [lo, hi] = bench::grown_box(mesh, 0.1);
   const Vec3 extent = hi - lo;
   const double block = std::cbrt(extent.x * extent.y * extent.z * 5 / static_cast<double>(sites.size()));
   const auto blocks = [&](double length) { return std::max(1, static_cast<int>(std::lround(length / block))); };
@@ -337,20 +331,18 @@ int main(int argc, char** argv) {
         std::printf(" %9.3f %8zu", cell_seconds, sites.size() - computed.failed);
         cells = std::move(computed.cells);
       }
-      std::vector<Vec3> cell_sites = sites;  // a point strictly inside each cell, for the CGAL peer
-      if (cgal && !voro) {
+      // Without voro++, the peers cut shatter's cells, around its quantized sites.
+      std::vector<Vec3> quantized_sites;
+      std::span<const Vec3> cell_sites = sites;  // a point strictly inside each cell, for the CGAL peer
+      if (!voro && (manifold || cgal)) {
         VoronoiCellPlanes shatter_cells = voronoi_cell_planes(mesh, sites);
         cells = std::move(shatter_cells.cells);
-        cell_sites = std::move(shatter_cells.quantized.sites);
+        quantized_sites = std::move(shatter_cells.quantized.sites);
+        cell_sites = quantized_sites;
       }
       if (manifold) {
         const fs::path cells_file = scratch / "cells.txt";
-        // (Not one conditional expression: it would copy voro++'s cells.)
-        if (voro || cgal) {
-          write_cells(cells_file, cells);
-        } else {
-          write_cells(cells_file, voronoi_cell_planes(mesh, sites).cells);
-        }
+        write_cells(cells_file, cells);
         const PeerResult peer = run_manifold(mesh_file, cells_file, repeat, scratch);
         if (peer.failure.empty()) {
           const double pipeline = cell_seconds + peer.seconds;
