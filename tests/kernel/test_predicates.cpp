@@ -12,6 +12,7 @@
 
 #include "shatter/generators/random.hpp"
 #include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/integer_orient.hpp"
 #include "shatter/kernel/predicates.hpp"
 
 using namespace shatter;
@@ -172,8 +173,92 @@ TEST_CASE("orient3d agrees with exact rationals on random, nearly coplanar and c
   // planes' points are not exactly coplanar, so the adaptive stages settle
   // nearly all of it without multiplying out the full expansion.
   CHECK(counters.orient3d_expansion >= 4 * coplanar);
+  // Points of one piece share a scale: the integer stage takes most of those.
+  CHECK(counters.orient3d_integer * 2 > counters.orient3d_expansion);
   CHECK(counters.orient3d_gmp == 0);
   CHECK(counters.orient3d_full * 100 < counters.orient3d_expansion);
+}
+
+namespace {
+
+// The spread of a column as integer_orient.hpp defines it, measured another
+// way: from the least significant set bit of any coordinate (frexp, then the
+// fraction's trailing zeros) to the top of the largest magnitude (ilogb + 1).
+int column_spread(std::array<double, 4> column) {
+  int least = 0, top = 0;
+  bool any = false;
+  for (const double v : column) {
+    if (v == 0) continue;
+    int exponent = 0;
+    double fraction = std::fabs(std::frexp(v, &exponent));  // v = fraction * 2^exponent
+    int low = exponent;
+    while (fraction != std::floor(fraction)) fraction *= 2, --low;  // fraction * 2^k is an integer from here
+    least = any ? std::min(least, low) : low;
+    top = any ? std::max(top, std::ilogb(v) + 1) : std::ilogb(v) + 1;
+    any = true;
+  }
+  return any ? top - least : 0;
+}
+
+// A coordinate of a column built below: zero, or an odd integer of up to
+// `width` bits at an offset from the column's base exponent that keeps it
+// within `spread` bits of that base.
+double column_coordinate(Random& random, int base, int spread) {
+  if (random.index(8) == 0) return 0;
+  const int width = 1 + static_cast<int>(random.index(static_cast<std::size_t>(std::min(53, spread))));
+  const int offset = static_cast<int>(random.index(static_cast<std::size_t>(spread - width + 1)));
+  const std::uint64_t odd = ((random.next() >> (64 - width)) | (std::uint64_t{1} << (width - 1))) | 1;
+  const double magnitude = std::ldexp(static_cast<double>(odd), base + offset);
+  return random.index(2) == 0 ? magnitude : -magnitude;
+}
+
+}  // namespace
+
+// The integer stage on its own, where the filter would never send most of these
+// queries: coordinates whose columns spread over 1 to 64 bits at exponents from
+// -290 to 230, exactly coplanar and collinear sets among them. It answers
+// exactly when every column spreads over at most 61 bits, and then agrees with
+// the rationals; its 192-bit sums meet carries, borrows and both signs.
+TEST_CASE("orient3d's integer stage agrees with exact rationals, and answers exactly within its range") {
+  std::size_t answered = 0, declined = 0, zero = 0, positive = 0, negative = 0;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    Random random(seed);
+    for (int i = 0; i < 2000; ++i) {
+      std::array<std::array<double, 4>, 3> columns;
+      for (auto& column : columns) {
+        const int base = static_cast<int>(random.index(520)) - 290;
+        // Mostly at the edge of the range (59 to 64 bits), else anywhere below it.
+        const int spread = random.index(2) == 0 ? 59 + static_cast<int>(random.index(6)) : 1 + static_cast<int>(random.index(61));
+        for (double& v : column) v = column_coordinate(random, base, spread);
+      }
+      const auto point = [&](int k) { return Vec3{columns[0][k], columns[1][k], columns[2][k]}; };
+      std::array<Vec3, 4> p{point(0), point(1), point(2), point(3)};
+      switch (random.index(4)) {
+        case 0: p[2] = p[0]; break;                      // a repeated point
+        case 1: p[3].z = p[2].z = p[1].z = p[0].z; break;  // four points in a plane z = constant
+        default: break;
+      }
+      const bool in_range = column_spread({p[0].x, p[1].x, p[2].x, p[3].x}) <= 61 &&
+                            column_spread({p[0].y, p[1].y, p[2].y, p[3].y}) <= 61 &&
+                            column_spread({p[0].z, p[1].z, p[2].z, p[3].z}) <= 61;
+      const std::optional<int> sign = orient3d_by_integers(p[0], p[1], p[2], p[3]);
+      INFO("seed " << seed << " query " << i);
+      REQUIRE(sign.has_value() == in_range);
+      if (!sign) {
+        ++declined;
+        continue;
+      }
+      ++answered;
+      // Shewchuk's convention: the opposite of orient3d's.
+      const Sign expected = reference_orient3d(p[0], p[1], p[2], p[3]);
+      REQUIRE(*sign == (expected == Sign::positive ? -1 : expected == Sign::negative ? 1 : 0));
+      (*sign == 0 ? zero : *sign > 0 ? positive : negative) += 1;
+    }
+  }
+  CHECK(declined > 400);
+  CHECK(zero > 1000);
+  CHECK(positive > 1000);
+  CHECK(negative > 1000);
 }
 
 TEST_CASE("orient3d_if_clear answers points in general position, and only what the filter proves") {

@@ -93,8 +93,9 @@ struct PredicateCounters {
   std::uint64_t side_of_plane_calls = 0;
   std::uint64_t side_of_plane_exact = 0;
   std::uint64_t orient3d_calls = 0;
-  std::uint64_t orient3d_expansion = 0;  ///< the filter deferred to expansion arithmetic
-  std::uint64_t orient3d_full = 0;       ///< of those, the adaptive stages did not decide either
+  std::uint64_t orient3d_expansion = 0;  ///< the filter deferred to exact arithmetic (integers or expansions)
+  std::uint64_t orient3d_integer = 0;    ///< of those, decided on integers (coordinates of one scale)
+  std::uint64_t orient3d_full = 0;       ///< of the rest, the adaptive stages did not decide either
   std::uint64_t orient3d_gmp = 0;        ///< outside the expansions' exact range: GMP
 };
 PredicateCounters& predicate_counters();
