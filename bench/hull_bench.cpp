@@ -4,9 +4,10 @@
 // mesh vertices, as meshtree/src/tree_hulls.cpp does), on one thread, and
 // compared with the hulls the file stores (bit for bit: any difference exits 1).
 // Reports the points, the hull vertices, the seconds and the orient3d calls, how
-// many the floating-point filter left to expansion arithmetic, and how many the
-// adaptive stages left to the full expansion: the figures behind quickhull's
-// changes (README "Smaller costs of fracture"). A benchmark, not a test.
+// many the floating-point filter left to exact arithmetic, how many of those the
+// integer stage decided, and how many the adaptive stages left to the full
+// expansion: the figures behind quickhull's changes (README "Smaller costs of
+// `fracture`"). A benchmark, not a test.
 //
 //   ./build/cli/shatter fracture MESH --fragments N --out t.shatter
 //   ./build/bench/shatter-bench-hulls t.shatter [repetitions=3]
@@ -63,12 +64,13 @@ int main(int argc, char** argv) {
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / repetitions;
     const shatter::PredicateCounters& counts = shatter::predicate_counters();
-    std::printf("| hulls | points | hull vertices | seconds (mean of %d) | orient3d calls | past the filter | full expansion | differing from the file |\n"
-                "|---:|---:|---:|---:|---:|---:|---:|---:|\n"
-                "| %zu | %zu | %zu | %.3f | %llu | %llu | %llu | %zu |\n",
+    std::printf("| hulls | points | hull vertices | seconds (mean of %d) | orient3d calls | past the filter | on integers | full expansion | differing from the file |\n"
+                "|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+                "| %zu | %zu | %zu | %.3f | %llu | %llu | %llu | %llu | %zu |\n",
                 repetitions, inputs.size(), points, hull_vertices, seconds,
                 static_cast<unsigned long long>(counts.orient3d_calls / repetitions),
                 static_cast<unsigned long long>(counts.orient3d_expansion / repetitions),
+                static_cast<unsigned long long>(counts.orient3d_integer / repetitions),
                 static_cast<unsigned long long>(counts.orient3d_full / repetitions), differing);
     return differing == 0 ? 0 : 1;
   } catch (const std::exception& error) {
