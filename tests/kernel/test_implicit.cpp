@@ -206,6 +206,39 @@ TEST_CASE("plane kernel predicates agree with an independent exact evaluation", 
   CHECK(zeros > queries / 50);  // the lattice cases exercise the exact path
 }
 
+// approximate()'s bounds, each coordinate's against the exact polynomial
+// (exact_homogeneous, w made positive as approximate makes it): over every kind
+// of definition, on lattices (exact zeros) and at scales from 2^-20 to 2^20.
+// The definitions made of error-free numbers only (an input segment met by a
+// cut plane, three cut planes) take their own shorter arithmetic, which must
+// give the same bounds: they are counted, so the case cannot pass without them.
+TEST_CASE("approximate's error bounds hold the exact homogeneous coordinates", "[plane][predicates]") {
+  std::size_t error_free = 0, mixed = 0;
+  for (std::uint64_t seed = 1; seed <= 80; ++seed) {
+    Random random(seed);
+    const RandomGeometry g = random_geometry(random, seed % 2 == 0);
+    const PlaneSet set = g.set();
+    for (int i = 0; i < 60; ++i) {
+      const std::optional<PointDef> def = random_point(g, random);
+      if (!def) continue;
+      const ApproxPoint a = approximate(set, *def);
+      std::array<mpq_class, 4> exact = exact_homogeneous(set, *def);
+      if (sgn(exact[3]) < 0) {
+        for (mpq_class& c : exact) c = -c;
+      }
+      const Estimate estimates[4] = {a.x, a.y, a.z, a.w};
+      INFO("seed " << seed << " point " << i << " kind " << int(def->kind));
+      for (int k = 0; k < 4; ++k) CHECK(abs(mpq_class(estimates[k].value) - exact[k]) <= mpq_class(estimates[k].error));
+      const bool all_cuts = def->kind == PointKind::three_planes && def->planes[0].is_cut() && def->planes[1].is_cut() &&
+                            def->planes[2].is_cut();
+      const bool cut_segment = def->kind == PointKind::segment_plane && def->planes[0].is_cut();
+      (all_cuts || cut_segment ? error_free : mixed) += def->kind == PointKind::input ? 0 : 1;
+    }
+  }
+  CHECK(error_free > 200);
+  CHECK(mixed > 200);
+}
+
 TEST_CASE("compare_coordinate: points on one cut plane normal to an axis tie along it, without the exact path",
           "[plane][predicates]") {
   // A Voronoi build's group boxes are cut planes x = c (and y, z): the points
