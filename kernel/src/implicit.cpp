@@ -210,27 +210,50 @@ H4<NT> homogeneous(const PlaneSet& set, const PointDef& point) {
   return {};
 }
 
-// homogeneous<Estimate> where every number it starts from is error-free: a
-// segment of two input points met by a cut plane, and three cut planes (every
-// vertex of a Voronoi cell; the box and cell planes are cuts). The same
-// expressions as homogeneous's, so the same values and bounds.
-H4<Estimate> homogeneous_estimate(const PlaneSet& set, const PointDef& point) {
-  if (point.kind == PointKind::segment_plane && point.planes[0].is_cut()) {
-    const Vec3& pp = set.points[point.a];
-    const Vec3& qq = set.points[point.b];
-    const V3<ErrorFree> p{{pp.x}, {pp.y}, {pp.z}}, q{{qq.x}, {qq.y}, {qq.z}};
-    const P4<ErrorFree> plane = cut_coefficients(set, point.planes[0]);
-    const Estimate at_p = evaluate(plane, p), at_q = evaluate(plane, q);
-    return {p.x * at_q - q.x * at_p, p.y * at_q - q.y * at_p, p.z * at_q - q.z * at_p, at_q - at_p};
+// homogeneous<Estimate> with the numbers it starts from error-free where they
+// are (input points, cut planes; an input plane's coefficients are
+// approximated): the same expressions as homogeneous's, so the same values and
+// bounds. Every vertex of a Voronoi cell is three cut planes; a plane tree's
+// are input segments met by cut planes, and two cut planes with an input plane.
+template <class A, class B, class C>
+H4<Estimate> three_planes_estimate(const P4<A>& a, const P4<B>& b, const P4<C>& c) {
+  const V3<Estimate> bc = cross(b.n, c.n), ca = cross(c.n, a.n), ab = cross(a.n, b.n);
+  return {-(a.d * bc.x + b.d * ca.x + c.d * ab.x), -(a.d * bc.y + b.d * ca.y + c.d * ab.y),
+          -(a.d * bc.z + b.d * ca.z + c.d * ab.z), dot(a.n, bc)};
+}
+
+// The planes of a three_planes definition taken one by one, each as the type
+// its numbers are: `known` holds the first ones.
+template <class... Known>
+H4<Estimate> three_planes_from(const PlaneSet& set, const PointDef& point, const Known&... known) {
+  if constexpr (sizeof...(Known) == 3) {
+    return three_planes_estimate(known...);
+  } else {
+    const PlaneRef plane = point.planes[sizeof...(Known)];
+    if (plane.is_cut()) return three_planes_from(set, point, known..., cut_coefficients(set, plane));
+    return three_planes_from(set, point, known..., plane_coefficients<Estimate>(set, plane));
   }
-  if (point.kind == PointKind::three_planes && point.planes[0].is_cut() && point.planes[1].is_cut() &&
-      point.planes[2].is_cut()) {
-    const P4<ErrorFree> a = cut_coefficients(set, point.planes[0]);
-    const P4<ErrorFree> b = cut_coefficients(set, point.planes[1]);
-    const P4<ErrorFree> c = cut_coefficients(set, point.planes[2]);
-    const V3<Estimate> bc = cross(b.n, c.n), ca = cross(c.n, a.n), ab = cross(a.n, b.n);
-    return {-(a.d * bc.x + b.d * ca.x + c.d * ab.x), -(a.d * bc.y + b.d * ca.y + c.d * ab.y),
-            -(a.d * bc.z + b.d * ca.z + c.d * ab.z), dot(a.n, bc)};
+}
+
+template <class Coefficient>
+H4<Estimate> segment_plane_estimate(const V3<ErrorFree>& p, const V3<ErrorFree>& q, const P4<Coefficient>& plane) {
+  const Estimate at_p = evaluate(plane, p), at_q = evaluate(plane, q);
+  return {p.x * at_q - q.x * at_p, p.y * at_q - q.y * at_p, p.z * at_q - q.z * at_p, at_q - at_p};
+}
+
+H4<Estimate> homogeneous_estimate(const PlaneSet& set, const PointDef& point) {
+  switch (point.kind) {
+    case PointKind::input:
+      break;
+    case PointKind::segment_plane: {
+      const Vec3& pp = set.points[point.a];
+      const Vec3& qq = set.points[point.b];
+      const V3<ErrorFree> p{{pp.x}, {pp.y}, {pp.z}}, q{{qq.x}, {qq.y}, {qq.z}};
+      if (point.planes[0].is_cut()) return segment_plane_estimate(p, q, cut_coefficients(set, point.planes[0]));
+      return segment_plane_estimate(p, q, plane_coefficients<Estimate>(set, point.planes[0]));
+    }
+    case PointKind::three_planes:
+      return three_planes_from(set, point);
   }
   return homogeneous<Estimate>(set, point);
 }

@@ -209,9 +209,10 @@ TEST_CASE("plane kernel predicates agree with an independent exact evaluation", 
 // approximate()'s bounds, each coordinate's against the exact polynomial
 // (exact_homogeneous, w made positive as approximate makes it): over every kind
 // of definition, on lattices (exact zeros) and at scales from 2^-20 to 2^20.
-// The definitions made of error-free numbers only (an input segment met by a
-// cut plane, three cut planes) take their own shorter arithmetic, which must
-// give the same bounds: they are counted, so the case cannot pass without them.
+// Cut planes and input points enter that arithmetic as error-free numbers,
+// input planes with their errors: definitions of error-free numbers only (an
+// input segment met by a cut plane, three cut planes) and mixed ones are
+// counted, so the case cannot pass without both.
 TEST_CASE("approximate's error bounds hold the exact homogeneous coordinates", "[plane][predicates]") {
   std::size_t error_free = 0, mixed = 0;
   for (std::uint64_t seed = 1; seed <= 80; ++seed) {
