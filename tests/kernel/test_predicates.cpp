@@ -14,6 +14,7 @@
 #include "shatter/kernel/exact.hpp"
 #include "shatter/kernel/integer_orient.hpp"
 #include "shatter/kernel/predicates.hpp"
+#include "support/orient_reference.hpp"
 
 using namespace shatter;
 using namespace shatter::test;
@@ -96,17 +97,6 @@ TEST_CASE("exact points: side and rounding") {
 
 namespace {
 
-// det[b - a, c - a, d - a] in rationals, exact for any finite double.
-Sign reference_orient3d(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
-  const mpq_class m[3][3] = {{mpq_class(b.x) - a.x, mpq_class(b.y) - a.y, mpq_class(b.z) - a.z},
-                             {mpq_class(c.x) - a.x, mpq_class(c.y) - a.y, mpq_class(c.z) - a.z},
-                             {mpq_class(d.x) - a.x, mpq_class(d.y) - a.y, mpq_class(d.z) - a.z}};
-  const mpq_class det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-                        m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                        m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-  return sgn(det) < 0 ? Sign::negative : sgn(det) > 0 ? Sign::positive : Sign::zero;
-}
-
 // orient3d against the reference, and against itself with the points permuted
 // (an odd permutation flips the sign): the filter and the exact stage see the
 // differences taken from another point then.
@@ -180,25 +170,6 @@ TEST_CASE("orient3d agrees with exact rationals on random, nearly coplanar and c
 }
 
 namespace {
-
-// The spread of a column as integer_orient.hpp defines it, measured another
-// way: from the least significant set bit of any coordinate (frexp, then the
-// fraction's trailing zeros) to the top of the largest magnitude (ilogb + 1).
-int column_spread(std::array<double, 4> column) {
-  int least = 0, top = 0;
-  bool any = false;
-  for (const double v : column) {
-    if (v == 0) continue;
-    int exponent = 0;
-    double fraction = std::fabs(std::frexp(v, &exponent));  // v = fraction * 2^exponent
-    int low = exponent;
-    while (fraction != std::floor(fraction)) fraction *= 2, --low;  // fraction * 2^k is an integer from here
-    least = any ? std::min(least, low) : low;
-    top = any ? std::max(top, std::ilogb(v) + 1) : std::ilogb(v) + 1;
-    any = true;
-  }
-  return any ? top - least : 0;
-}
 
 // A coordinate of a column built below: zero, or an odd integer of up to
 // `width` bits at an offset from the column's base exponent that keeps it
