@@ -63,7 +63,7 @@ constexpr double largest_safe_offset = 0x1p1000;
 // and tried first: the determinant on integers (integer_orient.hpp), which
 // takes nearly all of those queries (the points of one piece share a scale):
 // 99.5 % of the queries past the filter in `fracture` of blobby x4 and
-// fandisk x4 -> 4,096, which the expansion's stage B took about 0.35 us each.
+// fandisk x4 -> 4,096, which the expansions took about 0.3 us each.
 
 // The range in which both stages below are exact (finite, and the filter's bound
 // holds): coordinates below 2^300 in magnitude, so no product of three differences
