@@ -60,6 +60,7 @@
 #include <functional>
 #include <cmath>
 #include <map>
+#include <unordered_map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -894,13 +895,17 @@ namespace {
 // voronoi_cell_planes: the quantized sites, the sentinels on their grid, the
 // Delaunay bisectors (each site's sorted nearest neighbour first), the solid's
 // box grown by a margin that holds it strictly inside.
+std::uint64_t pair_key(const std::array<std::uint32_t, 2>& pair) { return std::uint64_t{pair[0]} << 32 | pair[1]; }
+
 struct CellPlanes {
   QuantizedSites quantized;
   std::vector<Vec3> points;  ///< the sites, then the sentinels
   Triangulated triangulated;
   std::vector<Plane> planes;
   std::vector<std::array<std::uint32_t, 2>> plane_pairs;
-  std::map<std::array<std::uint32_t, 2>, std::uint32_t> plane_of_pair;
+  /// Per site pair (pair_key), its bisector's plane: looked up for every vertex
+  /// made canonical, so hashed (only found and added, never walked in order).
+  std::unordered_map<std::uint64_t, std::uint32_t> plane_of_pair;
   std::vector<std::vector<std::uint32_t>> bisectors_of;
   std::size_t neighbour_pairs = 0;
   double margin = 0;
@@ -942,7 +947,7 @@ CellPlanes cell_planes(const Mesh& mesh, std::span<const Vec3> given_sites) {
     const auto index = static_cast<std::uint32_t>(planes.size());
     planes.push_back(exact_bisector(points[pair[0]], points[pair[1]], quantized.step));
     plane_pairs.push_back(pair);
-    cell.plane_of_pair.emplace(pair, index);
+    cell.plane_of_pair.emplace(pair_key(pair), index);
     bisectors_of[pair[0]].push_back(index);
     if (pair[1] < site_count) {
       bisectors_of[pair[1]].push_back(index);
@@ -1004,34 +1009,44 @@ void make_definitions_canonical(std::vector<std::vector<Solid>>& cells, CellPlan
       for (std::size_t v = 0; v < solid.defs.size(); ++v) {
         PointDef& def = solid.defs[v];
         if (def.kind != PointKind::three_planes) continue;
-        std::vector<PlaneRef> others;
-        std::vector<std::uint32_t> involved;
+        // At most three planes: fixed arrays, not a vector's allocation per vertex.
+        std::array<PlaneRef, 3> canonical;
+        std::size_t others = 0;
+        std::array<std::uint32_t, 6> involved;
+        std::size_t involved_count = 0;
         int bisectors = 0;
         for (const PlaneRef ref : def.planes) {
           if (is_bisector(ref)) {
             ++bisectors;
             const auto pair = site_pairs[ref.index()];
-            involved.push_back(pair[0]);
-            involved.push_back(pair[1]);
+            involved[involved_count++] = pair[0];
+            involved[involved_count++] = pair[1];
           } else {
-            others.push_back(ref);
+            canonical[others++] = ref;
           }
         }
         if (bisectors < 2) continue;
-        std::sort(involved.begin(), involved.end());
-        involved.erase(std::unique(involved.begin(), involved.end()), involved.end());
-        if (involved.size() != static_cast<std::size_t>(bisectors) + 1) continue;
-        std::vector<PlaneRef> canonical = others;
-        for (std::size_t k = 1; k < involved.size(); ++k) {
+        // Sorted and made unique by hand: six values at most (std::sort on a
+        // prefix of a fixed array draws a false -Warray-bounds from GCC 12).
+        for (std::size_t i = 1; i < involved_count; ++i) {
+          for (std::size_t j = i; j > 0 && involved[j] < involved[j - 1]; --j) std::swap(involved[j], involved[j - 1]);
+        }
+        std::size_t distinct = 0;
+        for (std::size_t i = 0; i < involved_count; ++i) {
+          if (distinct == 0 || involved[i] != involved[distinct - 1]) involved[distinct++] = involved[i];
+        }
+        involved_count = distinct;
+        if (involved_count != static_cast<std::size_t>(bisectors) + 1) continue;
+        for (std::size_t k = 1; k < involved_count; ++k) {
           const std::array<std::uint32_t, 2> pair{involved[0], involved[k]};
-          auto found = cell.plane_of_pair.find(pair);
+          auto found = cell.plane_of_pair.find(pair_key(pair));
           if (found == cell.plane_of_pair.end()) {
             const auto index = static_cast<std::uint32_t>(cell.planes.size());
             cell.planes.push_back(exact_bisector(cell.points[pair[0]], cell.points[pair[1]], cell.quantized.step));
             site_pairs.push_back(pair);
-            found = cell.plane_of_pair.emplace(pair, index).first;
+            found = cell.plane_of_pair.emplace(pair_key(pair), index).first;
           }
-          canonical.push_back(PlaneRef::cut(found->second));
+          canonical[others + k - 1] = PlaneRef::cut(found->second);
         }
         if (std::equal(canonical.begin(), canonical.end(), def.planes.begin())) continue;
         for (int k = 0; k < 3; ++k) def.planes[k] = canonical[k];
