@@ -164,7 +164,7 @@ TEST_CASE("orient3d agrees with exact rationals on random, nearly coplanar and c
   // nearly all of it without multiplying out the full expansion.
   CHECK(counters.orient3d_expansion >= 4 * coplanar);
   // Points of one piece share a scale: the integer stage takes most of those.
-  CHECK(counters.orient3d_integer * 2 > counters.orient3d_expansion);
+  if (integer_orient_available) CHECK(counters.orient3d_integer * 2 > counters.orient3d_expansion);
   CHECK(counters.orient3d_gmp == 0);
   CHECK(counters.orient3d_full * 100 < counters.orient3d_expansion);
 }
@@ -209,7 +209,7 @@ TEST_CASE("orient3d's integer stage agrees with exact rationals, and answers exa
         case 1: p[3].z = p[2].z = p[1].z = p[0].z; break;  // four points in a plane z = constant
         default: break;
       }
-      const bool in_range = column_spread({p[0].x, p[1].x, p[2].x, p[3].x}) <= 61 &&
+      const bool in_range = integer_orient_available && column_spread({p[0].x, p[1].x, p[2].x, p[3].x}) <= 61 &&
                             column_spread({p[0].y, p[1].y, p[2].y, p[3].y}) <= 61 &&
                             column_spread({p[0].z, p[1].z, p[2].z, p[3].z}) <= 61;
       const std::optional<int> sign = orient3d_by_integers(p[0], p[1], p[2], p[3]);
@@ -227,9 +227,11 @@ TEST_CASE("orient3d's integer stage agrees with exact rationals, and answers exa
     }
   }
   CHECK(declined > 400);
-  CHECK(zero > 1000);
-  CHECK(positive > 1000);
-  CHECK(negative > 1000);
+  if (integer_orient_available) {
+    CHECK(zero > 1000);
+    CHECK(positive > 1000);
+    CHECK(negative > 1000);
+  }
 }
 
 TEST_CASE("orient3d_if_clear answers points in general position, and only what the filter proves") {

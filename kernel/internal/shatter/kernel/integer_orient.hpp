@@ -22,11 +22,20 @@
 
 namespace shatter {
 
+/// Whether the compiler has the 128-bit integers the stage needs (GCC and
+/// Clang do); without them orient3d_by_integers never answers and orient3d
+/// goes to its expansions as before.
+#if defined(__SIZEOF_INT128__)
+inline constexpr bool integer_orient_available = true;
+#else
+inline constexpr bool integer_orient_available = false;
+#endif
+
 /// The sign of det[a - d, b - d, c - d] (Shewchuk's convention: +1, 0 or -1,
 /// the opposite of orient3d's Sign) when every column of the four points, x, y
 /// and z apart, is integers below 2^61 times one power of two (the spread of
 /// each column, from its least significant set bit to its largest magnitude,
-/// at most 61 bits); nothing otherwise.
+/// at most 61 bits) and integer_orient_available; nothing otherwise.
 /// Preconditions: finite coordinates, each zero or normal (no subnormal).
 /// Guarantees: exact. Failure: none (nothing outside its range).
 std::optional<int> orient3d_by_integers(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
