@@ -58,9 +58,11 @@ int certified_sign(Estimate a) {
 // zero, and every term of the general operators above that it multiplies adds
 // exactly zero (x + 0 = x for the non-negative errors): these operators leave
 // those terms out, so they give the same values and the same bounds, bit for
-// bit, with about half the arithmetic. The approximations the kernel caches
-// (approximate) are therefore those of the general code, as validate_tree
-// checks them.
+// bit, with about half the arithmetic. (Only where a value overflows to
+// infinity do they differ: the general code's bound is then NaN, 0 times
+// infinity, and this one's infinite; neither certifies a sign.) The
+// approximations the kernel caches (approximate) are therefore those of the
+// general code, as validate_tree checks them.
 struct ErrorFree {
   double value = 0;
 };
