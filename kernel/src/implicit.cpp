@@ -186,6 +186,24 @@ P4<ErrorFree> cut_coefficients(const PlaneSet& set, PlaneRef plane) {
   return {{{cut.normal.x}, {cut.normal.y}, {cut.normal.z}}, {cut.offset}};
 }
 
+// The homogeneous coordinates of the line through input points p and q met by
+// a plane, and of the meet of three planes, as in implicit.hpp: over one number
+// type, or (the filter) over error-free operands and Estimates mixed, the same
+// expressions either way.
+template <class Point, class Coefficient>
+auto segment_plane_homogeneous(const V3<Point>& p, const V3<Point>& q, const P4<Coefficient>& plane) {
+  const auto at_p = evaluate(plane, p), at_q = evaluate(plane, q);
+  using NT = decltype(at_q - at_p);
+  return H4<NT>{p.x * at_q - q.x * at_p, p.y * at_q - q.y * at_p, p.z * at_q - q.z * at_p, at_q - at_p};
+}
+template <class A, class B, class C>
+auto three_planes_homogeneous(const P4<A>& a, const P4<B>& b, const P4<C>& c) {
+  const auto bc = cross(b.n, c.n), ca = cross(c.n, a.n), ab = cross(a.n, b.n);
+  using NT = decltype(dot(a.n, bc));
+  return H4<NT>{-(a.d * bc.x + b.d * ca.x + c.d * ab.x), -(a.d * bc.y + b.d * ca.y + c.d * ab.y),
+                -(a.d * bc.z + b.d * ca.z + c.d * ab.z), dot(a.n, bc)};
+}
+
 // The homogeneous coordinates of a definition, as in implicit.hpp.
 template <class NT>
 H4<NT> homogeneous(const PlaneSet& set, const PointDef& point) {
@@ -194,42 +212,23 @@ H4<NT> homogeneous(const PlaneSet& set, const PointDef& point) {
       const V3<NT> p = input_point<NT>(set, point.a);
       return {p.x, p.y, p.z, input<NT>(1.0)};
     }
-    case PointKind::segment_plane: {
-      const V3<NT> p = input_point<NT>(set, point.a), q = input_point<NT>(set, point.b);
-      const P4<NT> plane = plane_coefficients<NT>(set, point.planes[0]);
-      const NT at_p = evaluate(plane, p), at_q = evaluate(plane, q);
-      return {p.x * at_q - q.x * at_p, p.y * at_q - q.y * at_p, p.z * at_q - q.z * at_p, at_q - at_p};
-    }
-    case PointKind::three_planes: {
-      const P4<NT> a = plane_coefficients<NT>(set, point.planes[0]);
-      const P4<NT> b = plane_coefficients<NT>(set, point.planes[1]);
-      const P4<NT> c = plane_coefficients<NT>(set, point.planes[2]);
-      const V3<NT> bc = cross(b.n, c.n), ca = cross(c.n, a.n), ab = cross(a.n, b.n);
-      return {-(a.d * bc.x + b.d * ca.x + c.d * ab.x), -(a.d * bc.y + b.d * ca.y + c.d * ab.y),
-              -(a.d * bc.z + b.d * ca.z + c.d * ab.z), dot(a.n, bc)};
-    }
+    case PointKind::segment_plane:
+      return segment_plane_homogeneous(input_point<NT>(set, point.a), input_point<NT>(set, point.b),
+                                       plane_coefficients<NT>(set, point.planes[0]));
+    case PointKind::three_planes:
+      return three_planes_homogeneous(plane_coefficients<NT>(set, point.planes[0]),
+                                      plane_coefficients<NT>(set, point.planes[1]),
+                                      plane_coefficients<NT>(set, point.planes[2]));
   }
   return {};
 }
 
-// homogeneous<Estimate> with the numbers it starts from error-free where they
-// are (input points, cut planes; an input plane's coefficients are
-// approximated): the same expressions as homogeneous's, so the same values and
-// bounds. Every vertex of a Voronoi cell is three cut planes; a plane tree's
-// are input segments met by cut planes, and two cut planes with an input plane.
-template <class A, class B, class C>
-H4<Estimate> three_planes_estimate(const P4<A>& a, const P4<B>& b, const P4<C>& c) {
-  const V3<Estimate> bc = cross(b.n, c.n), ca = cross(c.n, a.n), ab = cross(a.n, b.n);
-  return {-(a.d * bc.x + b.d * ca.x + c.d * ab.x), -(a.d * bc.y + b.d * ca.y + c.d * ab.y),
-          -(a.d * bc.z + b.d * ca.z + c.d * ab.z), dot(a.n, bc)};
-}
-
-// The planes of a three_planes definition taken one by one, each as the type
-// its numbers are: `known` holds the first ones.
+// The filter's three_planes_homogeneous, the planes taken one by one, each as
+// the type its numbers are (homogeneous_estimate): `known` holds the first ones.
 template <class... Known>
 H4<Estimate> three_planes_from(const PlaneSet& set, const PointDef& point, const Known&... known) {
   if constexpr (sizeof...(Known) == 3) {
-    return three_planes_estimate(known...);
+    return three_planes_homogeneous(known...);
   } else {
     const PlaneRef plane = point.planes[sizeof...(Known)];
     if (plane.is_cut()) return three_planes_from(set, point, known..., cut_coefficients(set, plane));
@@ -237,12 +236,11 @@ H4<Estimate> three_planes_from(const PlaneSet& set, const PointDef& point, const
   }
 }
 
-template <class Coefficient>
-H4<Estimate> segment_plane_estimate(const V3<ErrorFree>& p, const V3<ErrorFree>& q, const P4<Coefficient>& plane) {
-  const Estimate at_p = evaluate(plane, p), at_q = evaluate(plane, q);
-  return {p.x * at_q - q.x * at_p, p.y * at_q - q.y * at_p, p.z * at_q - q.z * at_p, at_q - at_p};
-}
-
+// homogeneous<Estimate> with the numbers it starts from error-free where they
+// are (input points, cut planes; an input plane's coefficients are
+// approximated): the same expressions, so the same values and bounds. Every
+// vertex of a Voronoi cell is three cut planes; a plane tree's are input
+// segments met by cut planes, and two cut planes with an input plane.
 H4<Estimate> homogeneous_estimate(const PlaneSet& set, const PointDef& point) {
   switch (point.kind) {
     case PointKind::input:
@@ -251,8 +249,8 @@ H4<Estimate> homogeneous_estimate(const PlaneSet& set, const PointDef& point) {
       const Vec3& pp = set.points[point.a];
       const Vec3& qq = set.points[point.b];
       const V3<ErrorFree> p{{pp.x}, {pp.y}, {pp.z}}, q{{qq.x}, {qq.y}, {qq.z}};
-      if (point.planes[0].is_cut()) return segment_plane_estimate(p, q, cut_coefficients(set, point.planes[0]));
-      return segment_plane_estimate(p, q, plane_coefficients<Estimate>(set, point.planes[0]));
+      if (point.planes[0].is_cut()) return segment_plane_homogeneous(p, q, cut_coefficients(set, point.planes[0]));
+      return segment_plane_homogeneous(p, q, plane_coefficients<Estimate>(set, point.planes[0]));
     }
     case PointKind::three_planes:
       return three_planes_from(set, point);

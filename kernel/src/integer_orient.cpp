@@ -46,7 +46,7 @@ bool column_integers(const std::array<double, 4>& column, std::array<std::int64_
   }
   if (any && top - least > 61) return false;
   for (int i = 0; i < 4; ++i) {
-    // exponent - least < 61 - width: the shift keeps every bit below 2^61.
+    // exponent - least <= 61 - width: the shift keeps every bit below 2^61.
     const auto magnitude = static_cast<std::int64_t>(parts[i].odd << (parts[i].odd == 0 ? 0 : parts[i].exponent - least));
     out[i] = parts[i].negative ? -magnitude : magnitude;
   }

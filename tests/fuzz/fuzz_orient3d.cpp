@@ -131,9 +131,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                           shatter::test::column_spread({a.z, b.z, c.z, d.z}) <= 61;
     const std::optional<int> on_integers = shatter::orient3d_by_integers(a, b, c, d);
     require(on_integers.has_value() == in_range, "the integer stage answers outside its range, or not within it, at " + where);
-    // Shewchuk's convention: the opposite of orient3d's.
-    const int shewchuk = expected == Sign::positive ? -1 : expected == Sign::negative ? 1 : 0;
-    require(!on_integers || *on_integers == shewchuk, "the integer stage disagrees with the rationals at " + where);
+    require(!on_integers || *on_integers == shatter::test::shewchuk_sign(expected),
+            "the integer stage disagrees with the rationals at " + where);
   }
   return 0;
 }

@@ -26,6 +26,10 @@ inline Sign reference_orient3d(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
   return sgn(det) < 0 ? Sign::negative : sgn(det) > 0 ? Sign::positive : Sign::zero;
 }
 
+/// An orient3d sign in Shewchuk's convention (+1 where orient3d says negative),
+/// as orient3d_by_integers answers.
+inline int shewchuk_sign(Sign s) { return s == Sign::positive ? -1 : s == Sign::negative ? 1 : 0; }
+
 /// The spread of a column of finite coordinates: from the least significant set
 /// bit of any of them (frexp, then the fraction's trailing zeros) to the top of
 /// the largest magnitude (ilogb + 1); 0 for a column of zeros.
