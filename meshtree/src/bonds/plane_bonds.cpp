@@ -18,12 +18,12 @@
 // the bonds are the same bit for bit.
 //
 // A lean tree's leaves are packed (packed_node.hpp): their solids are unpacked
-// into a small cache by leaf. The packed bonds read each leaf once, in order,
-// and make its cap faces' parts at once, for every cut they lie on (each cap
-// corner's definition kept beside its approximation), so the pairs are tested
-// without the leaves' solids. The other searches unpack a leaf as the cuts meet
-// it (the cuts go in preorder, so a subtree's cuts, which meet the same few
-// leaves, come one after the other).
+// as the cuts meet them, into a small cache by leaf (the cuts go in preorder,
+// or in postorder for packed bonds, so a subtree's cuts, which meet the same
+// few leaves, come one after the other; in postorder a cut of at most 256
+// leaves finds all of them there, read last), and each cap corner's definition
+// is kept beside its approximation, so the pairs are tested without the
+// leaves' solids.
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -276,12 +276,7 @@ class PlaneBonds {
   // `outer_refs`, in leaf order.
   void run_leaves(LeafIndex lo, LeafIndex hi, const std::vector<std::uint8_t>* outer, std::vector<FaceRef>* outer_refs,
                   std::vector<PackedBond>& bonds) {
-    // By depth: the faces on the plane of the current leaf's ancestor there,
-    // made into parts as their leaf is read (add_face), while it is unpacked
-    // and its corners' approximations are at hand. Made when the cut runs,
-    // a cut of more leaves than the cache holds unpacked each of them again
-    // and approximated its corners again (7 % of `fracture` cube -> 65,536).
-    std::vector<CutFaces> open;
+    std::vector<std::vector<FaceRef>> open;  // by depth: the faces on the plane of the current leaf's ancestor there
     for (LeafIndex leaf = lo; leaf < hi; ++leaf) {
       const Solid& solid = leaf_solid(leaf);
       for (std::uint32_t f = 0; f < solid.faces.size(); ++f) {
@@ -294,11 +289,7 @@ class PlaneBonds {
           continue;
         }
         if (open.size() <= node.depth) open.resize(std::size_t{node.depth} + 1);
-        CutFaces& faces = open[node.depth];
-        swap_faces(faces);
-        if (faces_.empty()) begin_cut(cut);
-        add_face({cut, leaf, f});
-        swap_faces(faces);
+        open[node.depth].push_back({cut, leaf, f});
       }
       // The cuts whose range ends here: the leaf's last ancestors, deepest first.
       for (NodeIndex a = tree_.nodes[tree_.leaf_nodes[leaf]].parent; a != no_node; a = tree_.nodes[a].parent) {
@@ -306,11 +297,9 @@ class PlaneBonds {
         if (leaf + 1 != node.first_leaf + node.leaf_count) break;
         if (outer != nullptr && (*outer)[a] != 0) break;  // and so are the ones above it
         if (open.size() <= node.depth) continue;
-        CutFaces& faces = open[node.depth];
-        swap_faces(faces);
-        if (faces_.size() >= 2) finish_cut(a, bonds);
-        faces_.clear();
-        swap_faces(faces);
+        std::vector<FaceRef>& refs = open[node.depth];
+        run_refs(a, refs, bonds);
+        refs.clear();
         if (bonds_ahead_ != nullptr) bonds_ahead_->ensure();
       }
     }
@@ -601,13 +590,6 @@ class PlaneBonds {
   // 12's std::views::transform over a span).
   template <class Record, class ForEachRef>
   void run_cut(std::uint32_t k, const ForEachRef& for_each_ref, std::vector<Record>& bonds) {
-    begin_cut(k);
-    for_each_ref([this](const FaceRef& ref) { add_face(ref); });
-    finish_cut(k, bonds);
-  }
-
-  // Cut k's projection, and no faces yet.
-  void begin_cut(std::uint32_t k) {
     const Projection projection = projection_of(set_, PlaneRef::cut(k));
     axis_ = projection.axis;
     flipped_ = projection.flipped;
@@ -619,11 +601,7 @@ class PlaneBonds {
     points_.clear();
     measure_points_.clear();
     errors_.clear();
-  }
-
-  // The bonds of cut k between the faces added since begin_cut(k).
-  template <class Record>
-  void finish_cut(std::uint32_t k, std::vector<Record>& bonds) {
+    for_each_ref([this](const FaceRef& ref) { add_face(ref); });
     const Plane& plane = tree_.cut_planes[k];
     const double n[3] = {plane.normal.x, plane.normal.y, plane.normal.z};
     area_scale_ = norm(plane.normal) / std::fabs(n[axis_]);
@@ -794,34 +772,6 @@ class PlaneBonds {
     if (value < -bound) return false;
     return orient_in_plane(set_, raw_, corner_defs_[i], corner_approx_[i], corner_defs_[j], corner_approx_[j],
                            corner_defs_[z], corner_approx_[z]) == Sign::positive;
-  }
-
-  // One cut's faces as add_face makes them (the arrays below, and the
-  // projection they are made in), kept aside while other cuts' are made.
-  struct CutFaces {
-    std::vector<CapFace> faces;
-    std::vector<Part> parts;
-    std::vector<PointDef> corner_defs;
-    std::vector<ApproxPoint> corner_approx;
-    std::vector<Vec2> points;
-    std::vector<double> errors;
-    std::vector<Vec2> measure_points;
-    int axis = 2;
-    bool flipped = false;
-  };
-
-  // Exchanges `faces` with the arrays add_face and finish_cut work on.
-  void swap_faces(CutFaces& faces) {
-    faces_.swap(faces.faces);
-    parts_.swap(faces.parts);
-    corner_defs_.swap(faces.corner_defs);
-    corner_approx_.swap(faces.corner_approx);
-    points_.swap(faces.points);
-    errors_.swap(faces.errors);
-    measure_points_.swap(faces.measure_points);
-    std::swap(axis_, faces.axis);
-    std::swap(flipped_, faces.flipped);
-    raw_ = Projection{axis_, false};
   }
 
   struct CachedSolid {
