@@ -891,12 +891,13 @@ Plane exact_bisector(const Vec3& p, const Vec3& q, double step) {
 
 namespace {
 
+// A pair of sites as one key: the first in the high half.
+std::uint64_t pair_key(const std::array<std::uint32_t, 2>& pair) { return std::uint64_t{pair[0]} << 32 | pair[1]; }
+
 // What the cells are made of, shared by build_voronoi_tree and
 // voronoi_cell_planes: the quantized sites, the sentinels on their grid, the
 // Delaunay bisectors (each site's sorted nearest neighbour first), the solid's
 // box grown by a margin that holds it strictly inside.
-std::uint64_t pair_key(const std::array<std::uint32_t, 2>& pair) { return std::uint64_t{pair[0]} << 32 | pair[1]; }
-
 struct CellPlanes {
   QuantizedSites quantized;
   std::vector<Vec3> points;  ///< the sites, then the sentinels
