@@ -220,12 +220,16 @@ std::optional<TreeDefect> cut_planes_defect(const MeshTree& tree) {
   return std::nullopt;
 }
 
-/// A node whose children are cells (voronoi.hpp): in a tree with cell planes,
-/// an internal node whose own plane is all zero.
+/// A node whose children are cells (voronoi.hpp): in a cell tree, an internal
+/// node whose own plane is all zero. A cell tree is one built as one
+/// (recipe.strategy voronoi) or one with cell planes: a Voronoi build whose
+/// every fragment is a whole shell of the input, its cell cutting nothing (two
+/// disjoint solids, a site beside each), uses no bisector and keeps none.
 bool is_cell_node(const MeshTree& tree, NodeIndex k) {
   const Plane& plane = tree.cut_planes[k];
-  return tree.cut_planes.size() > tree.nodes.size() && !tree.nodes[k].is_leaf() && plane.normal.x == 0 &&
-         plane.normal.y == 0 && plane.normal.z == 0 && plane.offset == 0;
+  const bool cell_tree = tree.recipe.strategy == Strategy::voronoi || tree.cut_planes.size() > tree.nodes.size();
+  return cell_tree && !tree.nodes[k].is_leaf() && plane.normal.x == 0 && plane.normal.y == 0 &&
+         plane.normal.z == 0 && plane.offset == 0;
 }
 
 std::optional<TreeDefect> leaf_list_defect(const MeshTree& tree) {

@@ -291,6 +291,31 @@ TEST_CASE("degenerate site sets", "[voronoi]") {
   }
 }
 
+// Found by a sweep of `fracture --pattern sites` (2026-12-07): two disjoint boxes
+// with a site beside each, so each cell holds a whole box and cuts nothing. No
+// fragment used a bisector, the tree kept no cell plane, and the checker took its
+// root (plane all zero, as every cell node's) for a plane node cut by a zero
+// normal: `fracture` wrote a file `info --check` refused.
+TEST_CASE("cells that hold whole shells and cut nothing make a valid cell tree", "[voronoi]") {
+  const Mesh two = test::merge({test::box({0, 0, 0}, {1, 1, 1}), test::box({2, 0, 0}, {3, 1, 1}), test::box({0, 2, 0}, {1, 3, 1})});
+  const std::vector<std::vector<Vec3>> site_sets = {
+      {{0.5, 0.5, 0.5}, {2.5, 0.5, 0.5}},                     // x = 1.5 between: the first cell holds two boxes
+      {{0.5, 0.5, 0.5}, {2.5, 0.5, 0.5}, {0.5, 2.5, 0.5}},  // one box a cell
+      {{1.5, 1.5, -4}, {1.5, 1.5, 5}},                        // z = 0.5 cuts every box: cell planes used
+  };
+  for (std::size_t i = 0; i < site_sets.size(); ++i) {
+    INFO("site set " << i);
+    VoronoiReport report;
+    const MeshTree tree = build(two, site_sets[i], report);
+    CHECK(tree.leaf_count() == std::vector<std::size_t>{3, 3, 6}[i]);
+    CHECK(voronoi_problem(tree, report) == "");
+    TreeValidationOptions everything;
+    everything.geometry = true;
+    const TreeValidationReport checked = validate_tree(decode_shatter(encode_shatter(tree)), everything);
+    CHECK(checked.summary() == "valid");
+  }
+}
+
 TEST_CASE("every site pattern over a few meshes", "[voronoi][corpus]") {
   for (const char* name : {"cube.off", "sphere.off", "helmet.off"}) {
     const Mesh mesh = corpus(name);
@@ -537,8 +562,11 @@ TEST_CASE("the checker and the reader refuse broken cell trees", "[voronoi]") {
     REQUIRE(validate_tree(broken, {}).defect);
   }
   {
-    // A zero plane on an internal node is a defect in a tree without cell planes.
+    // A zero plane on an internal node is a defect in a plane tree: one neither
+    // built as a cell tree nor keeping cell planes.
     MeshTree broken = tree;
+    broken.recipe.strategy = Strategy::thesis;
+    broken.recipe.pattern.clear();
     broken.cut_planes.resize(tree.nodes.size());
     for (MeshTreeNode& node : broken.nodes) node.solid.reset(), node.convex = false;
     broken.geometry = {};

@@ -59,7 +59,8 @@ struct TreeValidationOptions {
   bool caches = true;
   /// What the builder promises of the geometry, too: every internal node's plane
   /// has a finite, non-zero normal and a finite offset, with children on both of
-  /// its sides; every node's mass has a positive volume and finite moments; every
+  /// its sides, but a cell node's (a cell tree's: recipe.strategy voronoi or cell
+  /// planes kept), which is all zero; every node's mass has a positive volume and finite moments; every
   /// node's mesh is a valid solid, not empty (validate_mesh, self-intersections
   /// included; a tree built with allow_self_intersections is held to the
   /// topology only: closed, consistently oriented, manifold, finite, every vertex
