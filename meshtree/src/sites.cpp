@@ -114,11 +114,16 @@ std::vector<Vec3> clustered_sites(const Mesh& mesh, std::uint32_t clusters, std:
 std::vector<Vec3> radial_sites(const Vec3& centre, const Vec3& direction, std::uint32_t rings, std::uint32_t sectors,
                                double radius, double variability, std::uint64_t seed) {
   if (rings == 0 || sectors == 0) throw std::invalid_argument("radial_sites: rings and sectors must be at least 1");
-  const double length = std::sqrt(dot(direction, direction));
-  if (!positive_finite(length)) throw std::invalid_argument("radial_sites: the direction must be non-zero and finite");
+  // Divided by its largest component before its length is taken: the squares
+  // of a direction like 1e-200,0,1e-200 underflow to zero and of 1e200,0,0
+  // overflow, though any finite non-zero direction names a plane.
+  const double largest = std::max({std::fabs(direction.x), std::fabs(direction.y), std::fabs(direction.z)});
+  if (!positive_finite(largest)) throw std::invalid_argument("radial_sites: the direction must be non-zero and finite");
+  const Vec3 scaled{direction.x / largest, direction.y / largest, direction.z / largest};
+  const double length = std::sqrt(dot(scaled, scaled));
   if (!positive_finite(radius)) throw std::invalid_argument("radial_sites: the radius must be positive and finite");
   if (!(variability >= 0 && variability <= 1)) throw std::invalid_argument("radial_sites: variability must be in [0, 1]");
-  const Vec3 n = direction * (1 / length);
+  const Vec3 n = scaled * (1 / length);
   // A frame (u, v) of the plane: u across the smallest component of n.
   const Vec3 axis = std::fabs(n.x) <= std::fabs(n.y) && std::fabs(n.x) <= std::fabs(n.z) ? Vec3{1, 0, 0}
                     : std::fabs(n.y) <= std::fabs(n.z)                                     ? Vec3{0, 1, 0}

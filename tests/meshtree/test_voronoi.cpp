@@ -375,6 +375,23 @@ TEST_CASE("site patterns are deterministic and where they say", "[voronoi]") {
   for (const Vec3& p : radial) CHECK(p.z == 3);  // in the plane through the centre, across the direction
   CHECK(grid_sites(sphere, {2, 3, 4}, true, 0.5, 0.2, 1).size() == 24);
   CHECK_THROWS_AS(radial_sites({0, 0, 0}, {0, 0, 0}, 1, 1, 1, 0, 1), std::invalid_argument);
+  CHECK_THROWS_AS(radial_sites({0, 0, 0}, {INFINITY, 0, 0}, 1, 1, 1, 0, 1), std::invalid_argument);
+  // Any finite non-zero direction, however long or short (found by a sweep:
+  // 1e-300 and 1e200 were refused as zero or infinite, their squares out of
+  // range). Scaled by a power of two, a direction gives the same sites bit for bit.
+  const Vec3 direction{0.2, 1, 0.1};
+  const std::vector<Vec3> unit = radial_sites({1, 2, 3}, direction, 3, 5, 1.0, 0.4, 7);
+  for (const double scale : {0x1p-1015, 0x1p-600, 0x1p600, 0x1p1000}) {
+    INFO("direction scaled by " << scale);
+    const std::vector<Vec3> scaled = radial_sites({1, 2, 3}, direction * scale, 3, 5, 1.0, 0.4, 7);
+    CHECK(std::equal(unit.begin(), unit.end(), scaled.begin(), scaled.end(),
+                     [](const Vec3& x, const Vec3& y) { return x.x == y.x && x.y == y.y && x.z == y.z; }));
+  }
+  // The smallest subnormal direction names the plane its unit direction does.
+  const std::vector<Vec3> up = radial_sites({1, 2, 3}, {0, 0, 1}, 2, 4, 1.0, 0, 1);
+  const std::vector<Vec3> tiny = radial_sites({1, 2, 3}, {0, 0, 0x1p-1074}, 2, 4, 1.0, 0, 1);
+  CHECK(std::equal(up.begin(), up.end(), tiny.begin(), tiny.end(),
+                   [](const Vec3& x, const Vec3& y) { return x.x == y.x && x.y == y.y && x.z == y.z; }));
   CHECK_THROWS_AS(grid_sites(sphere, {0, 1, 1}, false, 0, 0, 1), std::invalid_argument);
 }
 
