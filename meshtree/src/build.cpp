@@ -28,6 +28,7 @@
 #include "shatter/meshtree/packed_shapes.hpp"
 #include "address_sanitizer.hpp"
 #include "populate.hpp"
+#include "node_mass.hpp"
 #include "tree_hulls.hpp"
 #include "shatter/cut/hull.hpp"
 #include "shatter/cut/plane_cut.hpp"
@@ -284,6 +285,7 @@ class Builder {
     node->solid = plane_input_->solid;
     node->mesh = mesh;  // the root is the input as given (validated on the way in)
     node->mass = mass_properties(node->mesh);
+    detail::require_representable_mass(node->mass, "the solid");
     node->seed = root_node_seed(recipe_.seed);
     return node;
   }
@@ -349,6 +351,7 @@ class Builder {
         auto child = std::make_unique<BuildNode>();
         child->mesh = std::move(piece.mesh);
         child->mass = mass_properties(child->mesh);
+        detail::require_representable_mass(child->mass, "a fragment");
         child->solid = std::move(piece.solid);
         // A lean build packs the child (its arrays go) as soon as it is cut or
         // found a leaf, except the balanced strategy's leaves, which wait for
@@ -729,6 +732,7 @@ MeshTree build_mesh_tree(const Mesh& mesh, const TreeRecipe& recipe, const Build
       throw std::invalid_argument("build_mesh_tree needs every input triangle on surface 0 (caps are numbered by cut)");
     }
   }
+  detail::require_fracturable_extent(mesh);
   const unsigned threads = run.threads == 0 ? static_cast<unsigned>(tbb::info::default_concurrency()) : run.threads;
   tbb::task_arena arena(static_cast<int>(threads));
   auto phase_start = std::chrono::steady_clock::now();

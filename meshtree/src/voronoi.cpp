@@ -80,6 +80,7 @@
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "shatter/version.hpp"
 #include "validate_tree_certificate.hpp"
+#include "node_mass.hpp"
 #include "tree_hulls.hpp"
 #include "voronoi_hierarchy.hpp"
 
@@ -1070,6 +1071,7 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
       throw std::invalid_argument("build_voronoi_tree needs every input triangle on surface 0 (caps are numbered by plane)");
     }
   }
+  detail::require_fracturable_extent(mesh);
   if (!run.input_validated) require_valid_solid(mesh, "input", recipe.allow_self_intersections);
   const auto start = std::chrono::steady_clock::now();
   VoronoiReport report;

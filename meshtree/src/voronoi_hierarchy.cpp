@@ -15,6 +15,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/meshtree/voronoi.hpp"
 #include "shatter/version.hpp"
+#include "node_mass.hpp"
 
 namespace shatter::detail {
 
@@ -372,6 +373,7 @@ MeshTree voronoi_tree_of_parts(const Mesh& mesh, const PlaneInput& input, const 
   MeshTreeNode root;
   root.mesh = mesh;
   root.mass = mass_properties(root.mesh);
+  require_representable_mass(root.mass, "the solid");
   root.solid = input.solid;
   root.convex = root.solid->convex;
   root.seed = root_node_seed(recipe.seed);
@@ -438,6 +440,7 @@ MeshTree voronoi_tree_of_parts(const Mesh& mesh, const PlaneInput& input, const 
       node.mesh = std::move(part.mesh);
       for (SurfaceId& surface : node.mesh->surfaces) remap_surface(surface);
       node.mass = mass_properties(node.mesh);
+      require_representable_mass(node.mass, "a fragment");
       node.convex = node.solid->convex;
       node.parent = parent;
       node.depth = tree.nodes[parent].depth + 1;

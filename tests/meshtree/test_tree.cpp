@@ -899,6 +899,29 @@ void run(const Case& c) {
 
 // --- the matrix --------------------------------------------------------------------
 
+// Found by a sweep of `fracture` over scaled cubes (2026-12-07): a valid cube
+// 1e-120 across was fractured and written with every node's volume 0 in doubles,
+// a file `info --check` refused; one 1e150 across was refused as if no plane
+// could cut it. Every node's mass must be a positive double with finite moments:
+// a solid outside that range is refused, saying why, and one inside it builds.
+TEST_CASE("solids too small or too large for their masses are refused, saying why", "[tree][build]") {
+  const auto cube_of = [](double size) { return test::box({size, -size, 2 * size}, {2 * size, 0, 3 * size}); };
+  for (const double size : {1e-120, 0x1p-400, 1e-300, 0x1p201, 1e100, 1e300}) {
+    INFO("a cube " << size << " across");
+    for (const std::uint32_t fragments : {1u, 8u}) {
+      CHECK_THROWS_AS(build_mesh_tree(cube_of(size), recipe_for(fragments, Strategy::thesis, 1)), UnsupportedGeometryError);
+    }
+  }
+  // (Up to 2^200 builds too; the kernel's filters overflow by design long
+  // before, which this test's trapped overflow would stop, so 1e20 here.)
+  for (const double size : {1e-100, 0x1p-330, 1e20}) {
+    INFO("a cube " << size << " across");
+    const MeshTree tree = build_mesh_tree(cube_of(size), recipe_for(8, Strategy::thesis, 1));
+    CHECK(tree.leaf_count() >= 8);
+    CHECK(test::tree_problem(tree, true) == "");
+  }
+}
+
 TEST_CASE("one fragment: the root alone, a leaf holding the input", "[tree][build]") {
   for (const TestMesh& m : test_meshes()) {
     for (const Strategy strategy : all_strategies) {
