@@ -59,6 +59,7 @@
 #include <chrono>
 #include <functional>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <unordered_map>
 #include <memory>
@@ -824,37 +825,97 @@ Box solid_box_of(const Mesh& mesh) {
   return box;
 }
 
+// A quarter of the Euclidean length of (x, y, z): scaled by its largest
+// component, so that no square overflows or underflows, and quartered, so
+// that the length of any finite vector is finite.
+double quarter_length(double x, double y, double z) {
+  const double largest = std::max({std::fabs(x), std::fabs(y), std::fabs(z)});
+  if (!(largest > 0)) return 0;
+  x /= largest, y /= largest, z /= largest;
+  return largest / 4 * std::sqrt(x * x + y * y + z * z);
+}
+
+// Per site, whether its cell provably misses the box [lo, hi]: its distance to
+// the box is more than twice the smallest, over all sites, distance from a site
+// to the box's farthest point. Every point of the box is then strictly nearer
+// that site than this one, by a margin no rounding of these distances (a few
+// ulps) or of the sites onto their grid (2^-24 of the largest coordinate)
+// closes. Leaving such a site out changes no cell's part of the box, and keeps
+// it from coarsening the grid: a site at 1e150 beside a unit cube made the
+// spacing 2^-24 of 1e150, and every site near the cube merged into one.
+// Differences are taken of halves, so that none overflows whatever the
+// coordinates.
+std::vector<std::uint8_t> far_sites(std::span<const Vec3> sites, const Vec3& lo, const Vec3& hi) {
+  const auto gap = [](double x, double low, double high) {
+    return x < low ? low / 2 - x / 2 : x > high ? x / 2 - high / 2 : 0.0;
+  };
+  const auto reach = [](double x, double low, double high) {
+    return std::max(std::fabs(x / 2 - low / 2), std::fabs(x / 2 - high / 2));
+  };
+  double nearest_reach = INFINITY;  // an eighth of it, as every length below
+  for (const Vec3& s : sites) {
+    nearest_reach =
+        std::min(nearest_reach, quarter_length(reach(s.x, lo.x, hi.x), reach(s.y, lo.y, hi.y), reach(s.z, lo.z, hi.z)));
+  }
+  std::vector<std::uint8_t> far(sites.size(), 0);
+  for (std::size_t i = 0; i < sites.size(); ++i) {
+    const Vec3& s = sites[i];
+    const double distance = quarter_length(gap(s.x, lo.x, hi.x), gap(s.y, lo.y, hi.y), gap(s.z, lo.z, hi.z));
+    far[i] = distance / 2 > nearest_reach ? 1 : 0;
+  }
+  return far;
+}
+
 }  // namespace
 
 QuantizedSites quantize_sites(std::span<const Vec3> sites, const Vec3& lo, const Vec3& hi) {
   if (sites.empty()) throw std::invalid_argument("quantize_sites: no sites");
-  Box box;
-  box.add(lo);
-  box.add(hi);
   for (const Vec3& s : sites) {
     if (!std::isfinite(s.x) || !std::isfinite(s.y) || !std::isfinite(s.z)) {
       throw std::invalid_argument("quantize_sites: a site has a NaN or infinite coordinate");
     }
-    box.add(s);
   }
+  const std::vector<std::uint8_t> far = far_sites(sites, lo, hi);
+  Box box;
+  box.add(lo);
+  box.add(hi);
+  for (std::size_t i = 0; i < sites.size(); ++i) {
+    if (!far[i]) box.add(sites[i]);
+  }
+  const auto out_of_range = [](double largest) {
+    char magnitude[32];
+    std::snprintf(magnitude, sizeof magnitude, "%.3g", largest);
+    return UnsupportedGeometryError(std::string("Voronoi cells need coordinates of magnitude 2^-476 to 2^500 (about "
+                                                "1e-143 to 3e150), where every bisector is exact in doubles; the solid's "
+                                                "box and the sites reach ") + magnitude);
+  };
+  // The sentinels lie within 8 times the box's largest coordinate of the
+  // origin: a box beyond 2^496 is refused before they are made (their
+  // distances' squares would overflow), as it would be after.
+  const double box_largest = std::max({std::fabs(box.lo.x), std::fabs(box.lo.y), std::fabs(box.lo.z),
+                                       std::fabs(box.hi.x), std::fabs(box.hi.y), std::fabs(box.hi.z)});
+  if (!(box_largest < 0x1p496)) throw out_of_range(box_largest);
   // The sentinels lie around this box; the grid must hold them too.
   double largest = 0;
   for (const Vec3& p : sentinel_sites(box)) largest = std::max({largest, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
-  if (!(largest > 0) || !std::isfinite(largest)) largest = 1;
+  if (!(largest > 0)) largest = 1;
   int exponent = 0;
   std::frexp(largest, &exponent);  // largest < 2^exponent
   // Spacing 2^(exponent - 24): largest / h < 2^24, so |k| <= 2^24 after rounding
   // (grid_limit), with room for the sentinels' own rounding.
   const int step_exponent = exponent - 24;
-  if (2 * step_exponent < -1000 || exponent > 500) {
-    throw std::invalid_argument("quantize_sites: coordinates of magnitude " + std::to_string(largest) +
-                                " are outside the range where the bisectors are exact doubles (2^-476 to 2^500)");
-  }
+  if (2 * step_exponent < -1000 || exponent > 500) throw out_of_range(largest);
   QuantizedSites out;
   out.step = std::ldexp(1.0, step_exponent);
   std::map<std::array<std::int64_t, 3>, std::uint32_t> seen;
   out.site_of_input.reserve(sites.size());
-  for (const Vec3& s : sites) {
+  for (std::size_t i = 0; i < sites.size(); ++i) {
+    if (far[i]) {
+      out.site_of_input.push_back(no_index);
+      ++out.far;
+      continue;
+    }
+    const Vec3& s = sites[i];
     const std::array<std::int64_t, 3> k{grid_index(s.x, out.step), grid_index(s.y, out.step), grid_index(s.z, out.step)};
     const auto [it, inserted] = seen.emplace(k, static_cast<std::uint32_t>(out.sites.size()));
     if (inserted) {
@@ -925,7 +986,9 @@ CellPlanes cell_planes(const Mesh& mesh, std::span<const Vec3> given_sites) {
   // The solid's box grown by a margin: it holds the solid strictly inside.
   // The box the sentinels surround: as quantize_sites takes it, so they fit its grid.
   Box around = mesh_box;
-  for (const Vec3& s : given_sites) around.add(s);
+  for (std::size_t i = 0; i < given_sites.size(); ++i) {
+    if (quantized.site_of_input[i] != no_index) around.add(given_sites[i]);
+  }
   const double extent = std::max({mesh_box.hi.x - mesh_box.lo.x, mesh_box.hi.y - mesh_box.lo.y, mesh_box.hi.z - mesh_box.lo.z});
   const double margin = std::ldexp(extent, -20);
   const Box solid_box = grown(mesh_box, margin);
@@ -1079,6 +1142,7 @@ MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> given_sites,
 
   CellPlanes cell = cell_planes(mesh, given_sites);
   report.sites_merged = cell.quantized.merged;
+  report.sites_far = cell.quantized.far;
   report.step = cell.quantized.step;
   report.neighbour_pairs = cell.neighbour_pairs;
   const std::vector<Vec3>& sites = cell.quantized.sites;

@@ -232,6 +232,56 @@ TEST_CASE("quantize_sites merges duplicates deterministically", "[voronoi]") {
   CHECK_THROWS_AS(quantize_sites(std::vector<Vec3>{{NAN, 0, 0}}, {-1, -1, -1}, {1, 1, 1}), std::invalid_argument);
 }
 
+// Found by a sweep of `fracture --pattern sites` (2026-12-07): one site at 1e150
+// beside the cube set the grid's spacing to 2^-24 of 1e150, and the cube's two
+// sites merged into one (1 fragment where 2 were due); at 1e200 the build
+// stopped on an internal error. A site whose cell cannot meet the box is left
+// out before the grid is chosen.
+TEST_CASE("far sites are left out and do not coarsen the grid", "[voronoi]") {
+  const Mesh cube = corpus("cube.off");  // [-1, 1]^3
+  const std::vector<Vec3> near{{-0.5, 0.1, 0}, {0.5, 0, 0.2}, {0, 0.7, -0.3}};
+  const QuantizedSites plain = quantize_sites(near, {-1, -1, -1}, {1, 1, 1});
+  CHECK(plain.far == 0);
+  for (const double distance : {40.0, 1e6, 1e150, 1e200, 1e300, 1.7e308}) {
+    INFO("a site at " << distance);
+    std::vector<Vec3> sites = near;
+    sites.insert(sites.begin() + 1, Vec3{distance, -distance, 0});
+    const QuantizedSites q = quantize_sites(sites, {-1, -1, -1}, {1, 1, 1});
+    CHECK(q.far == 1);
+    CHECK(q.step == plain.step);
+    CHECK(q.site_of_input == std::vector<std::uint32_t>{0, no_index, 1, 2});
+    VoronoiReport with_far, without;
+    const MeshTree far_tree = build(cube, sites, with_far), plain_tree = build(cube, near, without);
+    CHECK(with_far.sites_far == 1);
+    CHECK(encode_shatter(far_tree) == encode_shatter(plain_tree));
+  }
+  // Twice the nearest site's reach is the line: a site just inside it is kept
+  // (its cell misses the cube, so it has no fragment, but nothing says so
+  // before the cells are made).
+  const double reach = std::sqrt(1.5 * 1.5 + 1.1 * 1.1 + 1.0);  // from (-0.5, 0.1, 0) to (1, -1, -1)
+  std::vector<Vec3> sites = near;
+  sites.push_back({1 + 1.9 * reach, 0, 0});
+  CHECK(quantize_sites(sites, {-1, -1, -1}, {1, 1, 1}).far == 0);
+  // A solid whose coordinates are outside the grid's range is refused as such.
+  const Mesh tiny = test::box({0, 0, 0}, {0x1p-500, 0x1p-500, 0x1p-500});
+  VoronoiReport report;
+  CHECK_THROWS_AS(build(tiny, {{0x1p-502, 0x1p-502, 0x1p-502}, {0x1p-501, 0x1p-502, 0x1p-502}}, report),
+                  UnsupportedGeometryError);
+  // Inside the grid's range but too small for its volume to be a positive
+  // double (1e-120 across: volume 1e-360), refused too (it was written, a file
+  // `info --check` refused).
+  const Mesh small = test::box({0, 0, 0}, {1e-120, 1e-120, 1e-120});
+  CHECK_THROWS_AS(build(small, {{2e-121, 5e-121, 5e-121}, {7e-121, 5e-121, 5e-121}}, report), UnsupportedGeometryError);
+  // So is one beyond it, before anything overflows (at 1e200 the sentinels'
+  // distances did, and the build stopped on an internal error).
+  for (const double scale : {0x1p500, 1e200, 1e300}) {
+    INFO("a cube at " << scale);
+    const Mesh huge = test::box({scale, scale, scale}, {2 * scale, 2 * scale, 2 * scale});
+    CHECK_THROWS_AS(build(huge, {{1.2 * scale, 1.5 * scale, 1.5 * scale}, {1.7 * scale, 1.5 * scale, 1.5 * scale}}, report),
+                    UnsupportedGeometryError);
+  }
+}
+
 TEST_CASE("uniform Voronoi fragments partition corpus meshes exactly, with exact bonds", "[voronoi][corpus]") {
   const char* names[] = {"cube.off", "sphere.off", "torus_quad.off", "helmet.off", "spool.off", "double-torus-example.off"};
   for (const char* name : names) {

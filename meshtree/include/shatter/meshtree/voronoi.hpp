@@ -50,12 +50,17 @@ namespace shatter {
 struct QuantizedSites {
   /// The distinct quantized sites, in the order of their first occurrence.
   std::vector<Vec3> sites;
-  /// For each given site, the index of its quantized site in `sites`.
+  /// For each given site, the index of its quantized site in `sites`, or
+  /// no_index for a far one.
   std::vector<std::uint32_t> site_of_input;
   /// The grid spacing h, a power of two: every coordinate is k h, |k| <= 2^24.
   double step = 0;
   /// Given sites that quantized onto an earlier one (merged into it).
   std::size_t merged = 0;
+  /// Given sites left out because their cells provably miss the box: each
+  /// farther from it than twice the smallest distance, over the sites, from a
+  /// site to the box's farthest point.
+  std::size_t far = 0;
 };
 
 /// Quantizes `sites` to the grid of the smallest power-of-two spacing h for
@@ -63,9 +68,12 @@ struct QuantizedSites {
 /// sites around them (see the file comment) is k h with |k| <= 2^24: each
 /// coordinate goes to the nearest grid value (ties to even). Sites that land on
 /// one grid point are merged, deterministically: the first given one keeps its
-/// place, the later ones map to it. Throws std::invalid_argument on a
-/// non-finite coordinate, an empty site list, or a box too large or too small
-/// for h^2 to be a normal double.
+/// place, the later ones map to it. Far sites (QuantizedSites::far), whose
+/// cells miss the box, are left out before the grid is chosen: they would only
+/// coarsen it. Throws std::invalid_argument on a non-finite coordinate or an
+/// empty site list, and UnsupportedGeometryError (kernel/error.hpp) when the
+/// box and the sites left are too large or too small for h^2 to be a normal
+/// double (magnitudes outside 2^-476 to 2^500).
 QuantizedSites quantize_sites(std::span<const Vec3> sites, const Vec3& lo, const Vec3& hi);
 
 /// The bisector of two grid sites (quantize_sites), exactly: 2 (q - p) . x +
@@ -88,13 +96,14 @@ struct VoronoiCellPlanes {
 /// sites quantized to the bisector-exact grid of the mesh's box, neighbours
 /// from the Delaunay triangulation with the eight sentinels, every bisector an
 /// exact Plane. Nothing is cut. Preconditions: `mesh` non-empty, sites finite
-/// and non-empty. Throws std::invalid_argument as quantize_sites does.
+/// and non-empty. Throws as quantize_sites does.
 VoronoiCellPlanes voronoi_cell_planes(const Mesh& mesh, std::span<const Vec3> sites);
 
 /// What build_voronoi_tree did besides the tree.
 struct VoronoiReport {
   std::size_t sites_given = 0;
   std::size_t sites_merged = 0;      ///< QuantizedSites::merged
+  std::size_t sites_far = 0;         ///< QuantizedSites::far: their cells miss the solid's box
   std::size_t cells_empty = 0;       ///< sites whose cell misses the solid
   std::size_t cells_split = 0;       ///< cells that meet the solid in several pieces
   std::size_t neighbour_pairs = 0;   ///< Delaunay edges between sites
@@ -154,7 +163,8 @@ struct VoronoiReport {
 /// of its children's, so its exact volume is theirs summed, exactly; every
 /// stored mesh valid as written;
 /// deterministic at any run.threads. Throws UnsupportedGeometryError when a
-/// fragment cannot be written validly (round_solid), std::invalid_argument on
+/// fragment cannot be written validly (round_solid) or the solid and its sites
+/// lie outside the grid's range (quantize_sites), std::invalid_argument on
 /// bad arguments, InvalidMeshError on an invalid input.
 MeshTree build_voronoi_tree(const Mesh& mesh, std::span<const Vec3> sites, const TreeRecipe& recipe,
                             const BuildRunOptions& run = {}, VoronoiReport* report = nullptr);
