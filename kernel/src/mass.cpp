@@ -49,14 +49,41 @@ CornerSums corner_sums(double w0, double w1, double w2) {
   return s;
 }
 
-VolumeIntegrals integrate(std::span<const Vec3> positions, std::span<const Triangle> triangles, Vec3 origin) {
+// The power of two the coordinates (relative to `origin`) are divided by before
+// they are integrated: 0 while the largest lies within [2^-60, 2^60], where the
+// integrals' degree-5 terms stay far from underflow and overflow (so the
+// results are the unscaled ones bit for bit), else its exponent. Scaling by a
+// power of two is exact, so a mass is lost only where the result itself leaves
+// the range of doubles: before, a cube 1e-105 across had its centroid NaN (its
+// first moments underflowed to 0, then times 1 / volume, infinite) and
+// fragments of one 1e-100 across a volume of 0.
+int scale_exponent(std::span<const Vec3> positions, Vec3 origin) {
+  double largest = 0;
+  for (const Vec3& p : positions) {
+    const Vec3 d = p - origin;
+    largest = std::fmax(largest, std::fmax(std::fabs(d.x), std::fmax(std::fabs(d.y), std::fabs(d.z))));
+  }
+  if (!(largest > 0) || !std::isfinite(largest)) return 0;
+  int exponent = 0;
+  std::frexp(largest, &exponent);
+  return exponent >= -60 && exponent <= 60 ? 0 : exponent;
+}
+
+// The integrals over the mesh's coordinates relative to `origin`, divided by
+// 2^shift (the results in those units: the volume is 2^-3shift times the true one).
+VolumeIntegrals integrate(std::span<const Vec3> positions, std::span<const Triangle> triangles, Vec3 origin,
+                          int shift) {
   VolumeIntegrals sums;
   const std::size_t vertex_count = positions.size();
+  const auto local = [&](VertexIndex v) {
+    const Vec3 d = positions[v] - origin;
+    return shift == 0 ? d : Vec3{std::ldexp(d.x, -shift), std::ldexp(d.y, -shift), std::ldexp(d.z, -shift)};
+  };
   for (const Triangle& t : triangles) {
     if (!indices_in_range(t, vertex_count)) continue;  // precondition broken: stay finite, never read out of range
-    const Vec3 p0 = positions[t[0]] - origin;
-    const Vec3 p1 = positions[t[1]] - origin;
-    const Vec3 p2 = positions[t[2]] - origin;
+    const Vec3 p0 = local(t[0]);
+    const Vec3 p1 = local(t[1]);
+    const Vec3 p2 = local(t[2]);
     // Twice the area vector; its components weight the divergence-theorem terms.
     const Vec3 d = cross(p1 - p0, p2 - p0);
     const CornerSums x = corner_sums(p0.x, p1.x, p2.x);
@@ -122,12 +149,15 @@ MassProperties mass_properties(std::span<const Vec3> positions, std::span<const 
   // the object's size, so a mesh far from the world origin loses no precision to
   // cancellation between huge first and second moments.
   const Vec3 origin = positions.front();
-  const VolumeIntegrals sums = integrate(positions, triangles, origin);
+  // In units of 2^shift (scale_exponent), scaled back last.
+  const int shift = scale_exponent(positions, origin);
+  const VolumeIntegrals sums = integrate(positions, triangles, origin, shift);
   const double volume = sums.one;
-  result.volume = volume;
+  result.volume = std::ldexp(volume, 3 * shift);
   // A flat (zero-volume) mesh has no centre of mass: report the origin, finite.
   const Vec3 local_centroid = volume != 0 ? sums.first * (1.0 / volume) : Vec3{};
-  result.centroid = origin + local_centroid;
+  result.centroid = origin + Vec3{std::ldexp(local_centroid.x, shift), std::ldexp(local_centroid.y, shift),
+                                  std::ldexp(local_centroid.z, shift)};
 
   // Parallel-axis shift of the second moments to the centroid, then the inertia
   // tensor I = integral of (|r|^2 Id - r r^T): diagonal terms are sums of two
@@ -142,6 +172,9 @@ MassProperties mass_properties(std::span<const Vec3> positions, std::span<const 
   result.inertia = {yy + zz, -xy, -zx,  //
                     -xy, xx + zz, -yz,  //
                     -zx, -yz, xx + yy};
+  if (shift != 0) {
+    for (double& entry : result.inertia) entry = std::ldexp(entry, 5 * shift);
+  }
   return result;
 }
 

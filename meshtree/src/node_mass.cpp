@@ -36,12 +36,14 @@ void require_fracturable_extent(const Mesh& mesh) {
   }
 }
 
-void require_representable_mass(const MassProperties& mass, std::string_view what) {
+bool storable_mass(const MassProperties& mass) {
   const auto finite = [](const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
-  if (mass.volume > 0 && std::isfinite(mass.volume) && finite(mass.centroid) &&
-      std::all_of(mass.inertia.begin(), mass.inertia.end(), [](double entry) { return std::isfinite(entry); })) {
-    return;
-  }
+  return mass.volume > 0 && std::isfinite(mass.volume) && finite(mass.centroid) &&
+         std::all_of(mass.inertia.begin(), mass.inertia.end(), [](double entry) { return std::isfinite(entry); });
+}
+
+void require_representable_mass(const MassProperties& mass, std::string_view what) {
+  if (storable_mass(mass)) return;
   throw UnsupportedGeometryError(std::string(what) + "'s volume is " + short_number(mass.volume) +
                                  " in doubles, not a positive double with finite moments: too small for its mass "
                                  "properties to be stored (about 1e-108 across or less)");

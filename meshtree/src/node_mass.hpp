@@ -17,6 +17,10 @@ namespace shatter::detail {
 /// input check names them).
 void require_fracturable_extent(const Mesh& mesh);
 
+/// Whether mass properties are what the tree checker accepts of a node: a
+/// positive, finite volume, a finite centroid and finite moments.
+bool storable_mass(const MassProperties& mass);
+
 /// Throws UnsupportedGeometryError, naming `what` ("the solid", "a fragment"),
 /// when mass properties are not what the tree checker accepts of a node (a
 /// positive, finite volume, a finite centroid and inertia): a solid or a

@@ -28,6 +28,7 @@
 #include "shatter/kernel/implicit.hpp"
 #include "shatter/kernel/solid.hpp"
 #include "shatter/kernel/validate.hpp"
+#include "node_mass.hpp"
 #include "validate_tree_certificate.hpp"
 
 namespace shatter {
@@ -761,9 +762,7 @@ std::optional<TreeDefect> node_geometry_defect(const MeshTree& tree, NodeIndex k
     }
   }
   const MassProperties& mass = node.mass;
-  const bool mass_finite = finite(mass.centroid) && std::all_of(mass.inertia.begin(), mass.inertia.end(),
-                                                                [](double entry) { return std::isfinite(entry); });
-  if (!(mass.volume > 0 && std::isfinite(mass.volume) && mass_finite)) {
+  if (!storable_mass(mass)) {
     return TreeDefect{TreePart::node, k,
                       name + " has mass properties that are not finite or a volume that is not positive (volume " +
                           full_digits(mass.volume) + ")"};

@@ -219,6 +219,35 @@ TEST_CASE("far from the origin the properties keep their precision", "[mass]") {
   CHECK(signed_volume_sign(moved) == Sign::positive);
 }
 
+// Found by a sweep of `fracture` over scaled cubes (2026-12-07): a cube 1e-105
+// across had a NaN centroid (its first moments underflowed, then times
+// 1 / volume, infinite), and fragments of one 1e-100 across a volume of 0,
+// though every true value was a normal double. Scaled by a power of two, a
+// mesh's properties scale exactly, as long as the results are in range.
+TEST_CASE("far from unit size the properties scale exactly with the mesh", "[mass]") {
+  const Mesh sphere = translated(icosphere(2), {0.3, -0.2, 0.1});
+  const MassProperties unit = mass_properties(sphere);
+  for (const int exponent : {-340, -200, -61, -20, 20, 61, 150, 200}) {
+    INFO("scaled by 2^" << exponent);
+    Mesh scaled = sphere;
+    for (Vec3& p : scaled.positions) p = {std::ldexp(p.x, exponent), std::ldexp(p.y, exponent), std::ldexp(p.z, exponent)};
+    const MassProperties props = mass_properties(scaled);
+    CHECK(props.volume == std::ldexp(unit.volume, 3 * exponent));
+    CHECK(props.centroid.x == std::ldexp(unit.centroid.x, exponent));
+    CHECK(props.centroid.y == std::ldexp(unit.centroid.y, exponent));
+    CHECK(props.centroid.z == std::ldexp(unit.centroid.z, exponent));
+    for (std::size_t k = 0; k < 9; ++k) {
+      // A moment below the doubles' range (2^-340: 2^-1700 times the unit's) is 0, never NaN.
+      const double expected = std::ldexp(unit.inertia[k], 5 * exponent);
+      if (std::fabs(expected) >= 0x1p-1000) {
+        CHECK(props.inertia[k] == expected);
+      } else {
+        CHECK(std::fabs(props.inertia[k]) <= 0x1p-1000);
+      }
+    }
+  }
+}
+
 TEST_CASE("reversing every triangle negates the volume", "[mass]") {
   for (const Mesh& mesh : {test::unit_cube(), icosphere(2), translated(icosphere(2), {1e6, 2e6, -3e6})}) {
     const Mesh inward = reversed(mesh);

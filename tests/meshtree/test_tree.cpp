@@ -914,10 +914,13 @@ TEST_CASE("solids too small or too large for their masses are refused, saying wh
   }
   // (Up to 2^200 builds too; the kernel's filters overflow by design long
   // before, which this test's trapped overflow would stop, so 1e20 here.)
-  for (const double size : {1e-100, 0x1p-330, 1e20}) {
+  // 1e-105 across: a volume of 1e-315, a positive subnormal double (its centroid
+  // was NaN, and fragments of the 1e-100 cube had volume 0, before mass_properties
+  // scaled what it integrates).
+  for (const double size : {1e-100, 1e-105, 0x1p-330, 1e20}) {
     INFO("a cube " << size << " across");
-    const MeshTree tree = build_mesh_tree(cube_of(size), recipe_for(8, Strategy::thesis, 1));
-    CHECK(tree.leaf_count() >= 8);
+    const MeshTree tree = build_mesh_tree(cube_of(size), recipe_for(64, Strategy::thesis, 2));
+    CHECK(tree.leaf_count() >= 64);
     CHECK(test::tree_problem(tree, true) == "");
   }
 }

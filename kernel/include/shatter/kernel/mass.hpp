@@ -22,7 +22,12 @@ struct MassProperties {
 /// Volume, centroid and inertia tensor of the solid the mesh bounds.
 /// Preconditions: closed and consistently oriented (validate_mesh); otherwise the
 /// numbers are meaningless but finite for finite input. Evaluated relative to the
-/// first vertex, so far-from-origin meshes keep their precision.
+/// first vertex, so far-from-origin meshes keep their precision, and, for a mesh
+/// far from unit size (beyond 2^60 or below 2^-60 across), in coordinates scaled
+/// by a power of two, so that a value is lost (0, or infinite) only where it is
+/// itself beyond the range of doubles (the volume grows as the size cubed, the
+/// inertia as its fifth power); within that size the results are the unscaled
+/// computation's, bit for bit.
 MassProperties mass_properties(const Mesh& mesh);
 
 /// The same for a closed oriented surface given as positions and triangles over
