@@ -271,6 +271,14 @@ H4<Exact> exact_normalised(const PlaneSet& set, const PointDef& point) {
   return s < 0 ? negated(h) : h;
 }
 
+// An exact value as an estimate: the nearest double to it, with a bound that
+// holds (the distance to the far end of CGAL's enclosing interval).
+Estimate estimate_of(const Exact& value) {
+  const std::pair<double, double> interval = CGAL::to_interval(value);
+  const double nearest = CGAL::to_double(value);
+  return {nearest, std::max(nearest - interval.first, interval.second - nearest)};
+}
+
 H4<Estimate> cached(const ApproxPoint& p) { return {p.x, p.y, p.z, p.w}; }
 
 template <class NT, class H>
@@ -360,11 +368,16 @@ ApproxPoint approximate(const PlaneSet& set, const PointDef& point) {
     return {{p.x, 0}, {p.y, 0}, {p.z, 0}, {1, 0}};
   }
   H4<Estimate> h = homogeneous_estimate(set, point);
-  int s = certified_sign(h.w);
+  const int s = certified_sign(h.w);
   if (s == 0) {
+    // The filter cannot tell w from zero, so its estimate may be noise: a short
+    // segment near a plane far from the origin (a unit cube at 1e15) had both
+    // ends' values round to zero, and x, y, z and w with them, so x / w was NaN
+    // wherever a box or a projection was taken. The exact coordinates, rounded,
+    // are the estimate then.
     ++implicit_counters().approximate_exact;
-    s = homogeneous<Exact>(set, point).w.sign();
-    if (s == 0) throw std::domain_error("degenerate point definition: its planes do not meet in one point");
+    const H4<Exact> exact = exact_normalised(set, point);  // throws on w = 0
+    return {estimate_of(exact.x), estimate_of(exact.y), estimate_of(exact.z), estimate_of(exact.w)};
   }
   if (s < 0) h = negated(h);
   return {h.x, h.y, h.z, h.w};

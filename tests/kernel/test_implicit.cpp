@@ -240,6 +240,55 @@ TEST_CASE("approximate's error bounds hold the exact homogeneous coordinates", "
   CHECK(mixed > 200);
 }
 
+// Found by a sweep of `fracture` over a unit cube at 1e15 (2026-12-07): a short
+// segment cut near its middle by a plane far from the origin has both ends'
+// values n.p + d round to about zero, and the filter's x, y, z, w with them
+// (all exactly 0 there), so x / w was NaN in the builder's bounding box. When
+// the filter cannot tell w from zero, approximate rounds the exact coordinates.
+TEST_CASE("approximate is a usable estimate where the filter cannot tell w from zero", "[plane][predicates]") {
+  Random random(17);
+  const std::uint64_t exact_before = implicit_counters().approximate_exact;
+  std::size_t tested = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const double far = std::ldexp(1.0, 48 + static_cast<int>(random.index(8)));  // 2^48 .. 2^55
+    const Vec3 p{far, -far, far * 0.5};
+    const double spacing = far * 0x1p-52;  // of doubles at p
+    const Vec3 q = p + Vec3{spacing * static_cast<double>(2 + random.index(15)), 0, 0};  // 2 to 16 spacings along x
+    // Nearly parallel to the segment, as an edge a random plane just grazes.
+    const Vec3 normal = normalized({std::ldexp(random.uniform(-1, 1), -static_cast<int>(random.index(20))), 1,
+                                    random.uniform(-1, 1)});
+    const std::vector<Vec3> points{p, q};
+    const std::vector<Plane> cuts{{normal, -dot(normal, (p + q) * 0.5)}};
+    const PlaneSet set{points, {}, {}, cuts};
+    const auto exact_side = [&](const Vec3& x) {
+      const Plane& c = cuts[0];
+      return sgn(mpq_class(c.normal.x) * x.x + mpq_class(c.normal.y) * x.y + mpq_class(c.normal.z) * x.z +
+                 mpq_class(c.offset));
+    };
+    if (exact_side(p) * exact_side(q) >= 0) continue;  // the rounded plane missed the segment: no such point
+    ++tested;
+    INFO("trial " << trial);
+    const PointDef def = PointDef::segment_plane(0, 1, PlaneRef::cut(0));
+    const ApproxPoint a = approximate(set, def);
+    std::array<mpq_class, 4> exact = exact_homogeneous(set, def);
+    if (sgn(exact[3]) < 0) {
+      for (mpq_class& c : exact) c = -c;
+    }
+    const Estimate estimates[4] = {a.x, a.y, a.z, a.w};
+    for (int k = 0; k < 4; ++k) CHECK(abs(mpq_class(estimates[k].value) - exact[k]) <= mpq_class(estimates[k].error));
+    REQUIRE(a.w.value > 0);
+    // The point as doubles lies on the segment, within its rounding.
+    const double x = a.x.value / a.w.value;
+    CHECK(std::isfinite(x));
+    CHECK(x >= p.x - spacing);
+    CHECK(x <= q.x + spacing);
+  }
+  CHECK(tested > 20);  // 34 segments the plane crosses, of 200 drawn (2026-12-07)
+  // Enough of them took the exact path, the filter unable to tell w from zero
+  // (32 of the trials on 2026-12-07).
+  CHECK(implicit_counters().approximate_exact - exact_before > 20);
+}
+
 TEST_CASE("compare_coordinate: points on one cut plane normal to an axis tie along it, without the exact path",
           "[plane][predicates]") {
   // A Voronoi build's group boxes are cut planes x = c (and y, z): the points

@@ -148,7 +148,9 @@ ApproxPlane approximate_input_plane(const Vec3& p0, const Vec3& p1, const Vec3& 
 /// The cached approximation of a defined point.
 /// Preconditions: the definition is sound: a segment_plane's endpoints lie strictly
 /// on opposite sides of its plane, a three_planes' normals are linearly
-/// independent. Guarantees: w > 0 exactly (the sign is normalised, exactly).
+/// independent. Guarantees: w > 0 exactly (the sign is normalised, exactly),
+/// and w's estimate is positive: where the filter cannot tell w from zero, the
+/// estimate is the exact coordinates rounded (nearest doubles, with bounds).
 /// Throws std::domain_error when the definition is degenerate (w = 0 exactly).
 ApproxPoint approximate(const PlaneSet& set, const PointDef& point);
 
