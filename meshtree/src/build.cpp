@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -376,7 +377,25 @@ class Builder {
         std::to_string(recipe_.max_plane_tries) + " planes, " + std::to_string(missed) + " left it whole, " +
         std::to_string(missed_as_written) + " left only pieces thinner than the rounding of their coordinates "
         "besides one, and " + std::to_string(unroundable) + " gave a piece that cannot be written as a valid mesh" +
-        (last_defect.empty() ? std::string() : " (" + last_defect + ")"));
+        (last_defect.empty() ? std::string() : " (" + last_defect + ")") + near_resolution(box));
+  }
+
+  // Why planes miss a fragment whose size nears the spacing of doubles at its
+  // coordinates (a unit cube at 1e15, where doubles are 0.125 apart: a plane's
+  // offset, about 1e15, is itself rounded by that much), said when it is so:
+  // within 1024 spacings. Empty otherwise.
+  static std::string near_resolution(const BoundingBox& box) {
+    const double largest = std::max({std::fabs(box.lo.x), std::fabs(box.lo.y), std::fabs(box.lo.z), std::fabs(box.hi.x),
+                                     std::fabs(box.hi.y), std::fabs(box.hi.z)});
+    const double spacing = std::nextafter(largest, INFINITY) - largest;
+    const double across = std::max({box.hi.x - box.lo.x, box.hi.y - box.lo.y, box.hi.z - box.lo.z});
+    if (!(across < 1024 * spacing)) return {};
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "; the fragment is %.3g across where its coordinates reach %.3g and doubles are %.3g apart: "
+                  "finer fragments cannot be written",
+                  across, largest, spacing);
+    return text;
   }
 
   /// A lean build's `node`, whose cut is kept (its children are final, unless
