@@ -732,10 +732,16 @@ std::optional<TreeDefect> caches_defect(const MeshTree& tree, MeshTree* fill) {
 // --- the geometry (TreeValidationOptions::geometry) -------------------------------
 
 // Defects a tree built with allow_self_intersections may have: its pieces are
-// promised closed, oriented and manifold only (TreeRecipe).
+// promised closed and oriented, manifold along every edge (TreeRecipe). A vertex
+// where separate fans meet is let through with the flag, as the input check lets
+// it through (require_valid_solid: a surface touching itself at a point is the
+// point case of a self-intersection): the root is that input, and a cut carries
+// the vertex into its pieces. (Until 2026-12-07 the checker refused it, so
+// `fracture --allow-self-intersections` of CGAL's cow wrote a file `info --check`
+// refused.)
 bool embedding_defect(DefectKind kind) {
   return kind == DefectKind::zero_area_triangle || kind == DefectKind::inward_orientation ||
-         kind == DefectKind::self_intersection;
+         kind == DefectKind::self_intersection || kind == DefectKind::non_manifold_vertex;
 }
 
 /// The first geometric defect of node `k`: its plane and children's sides, its

@@ -76,7 +76,8 @@ struct TreeRecipe {
   /// what it makes, but the file has always stored it, so it stays with what the
   /// tree keeps.
   std::uint32_t max_plane_tries = 64;
-  /// Accept a self-intersecting input (only topology is promised then).
+  /// Accept a self-intersecting input, and one touching itself at vertices
+  /// (only topology is promised then: closed, oriented, manifold along edges).
   bool allow_self_intersections = false;
   /// How a Voronoi tree's sites were made, as `fracture` spells its pattern
   /// options (e.g. "voronoi --sites 1000 --seed 1"), so that `info` can say; empty
