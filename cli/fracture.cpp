@@ -37,6 +37,7 @@
 #include "input.hpp"
 #include "output_transaction.hpp"
 #include "tree_stats_json.hpp"
+#include "json_text.hpp"
 
 namespace shatter::cli {
 
@@ -566,7 +567,7 @@ int run_fracture_here(const FractureArgs& args) {
 
   const TreeStats stats = tree_stats(tree);
   if (args.json) {
-    std::cout << fracture_json(args, recipe, stats, outcome).dump(2) << '\n';
+    std::cout << json_text(fracture_json(args, recipe, stats, outcome), 2) << '\n';
   } else {
     print_fracture_text(args, recipe, stats, outcome);
   }

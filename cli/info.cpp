@@ -20,6 +20,7 @@
 #include "input.hpp"
 #include "node_json.hpp"
 #include "tree_stats_json.hpp"
+#include "json_text.hpp"
 
 namespace shatter::cli {
 
@@ -161,7 +162,7 @@ int run_info(const InfoArgs& args) {
       out["node_selection"] = node_selection_name(*selection);
       out["node_details"] = std::move(nodes);
     }
-    std::cout << out.dump(2) << '\n';
+    std::cout << json_text(out, 2) << '\n';
   } else {
     print_info_text(args, tree, stats);
     if (rules) print_bond_rules_text(*rules);

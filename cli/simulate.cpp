@@ -20,6 +20,7 @@
 #include "errors.hpp"
 #include "huge_page_objects.hpp"
 #include "output_transaction.hpp"
+#include "json_text.hpp"
 
 namespace shatter::cli {
 
@@ -441,7 +442,7 @@ int run_simulate(const SimulateArgs& args) {
                {"farthest_piece_object_sizes", farthest / scene.sizes.object_size},
                {"kinetic_energy_J", world.kinetic_energy()}}},
              {"record", args.record.empty() ? json(nullptr) : json(args.record)}};
-    std::cout << out.dump(2) << '\n';
+    std::cout << json_text(out, 2) << '\n';
     return 0;
   }
   std::cout << "after " << number(world.time()) << " s: " << clusters << " clusters of " << scene.objects.size()

@@ -19,6 +19,7 @@
 #include "errors.hpp"
 #include "input.hpp"
 #include "output_transaction.hpp"
+#include "json_text.hpp"
 
 namespace shatter::cli {
 
@@ -202,7 +203,7 @@ int run_slice(const SliceArgs& args) {
              {"pieces", pieces_json},
              {"vanished", vanished_json}};
     if (input.repair) add_repair_json(out, *input.repair);
-    std::cout << out.dump(2) << '\n';
+    std::cout << json_text(out, 2) << '\n';
   } else {
     if (result.plane_missed) std::cout << "the plane misses or only touches the mesh: it is returned whole\n";
     std::cout << pieces.size() << " piece(s) written to " << args.out << '\n';

@@ -13,6 +13,7 @@
 #include "errors.hpp"
 #include "input.hpp"
 #include "output_transaction.hpp"
+#include "json_text.hpp"
 
 namespace shatter::cli {
 
@@ -62,7 +63,7 @@ void print_json(const ValidateArgs& args, const ValidatedMesh& checked) {
     out["volume"] = mass.volume;
     out["centroid"] = {mass.centroid.x, mass.centroid.y, mass.centroid.z};
   }
-  std::cout << out.dump(2) << '\n';
+  std::cout << json_text(out, 2) << '\n';
 }
 
 void print_text(const ValidateArgs& args, const ValidatedMesh& checked) {

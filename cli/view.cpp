@@ -37,6 +37,7 @@
 #include "tree_stats_json.hpp"
 #include "view_original.hpp"
 #include "viewer_page.hpp"
+#include "json_text.hpp"
 
 namespace shatter::cli {
 
@@ -232,7 +233,7 @@ TreeRecipe requested_recipe(const std::string& body) {
 void send_json(httplib::Response& response, int status, const json& body) {
   response.status = status;
   response.set_header("Cache-Control", "no-store");
-  response.set_content(body.dump(), json_type);
+  response.set_content(json_text(body), json_type);
 }
 
 // `original`: the body of GET /api/original, or empty without --original (the route is then not served).
@@ -341,7 +342,7 @@ int run_view(const ViewArgs& args) {
     std::string original_name;
     if (!args.original.empty()) {
       const OriginalInput input = read_original_input(args.original, tree.nodes[0].mesh, tree.input_repair);
-      original = original_json(input, tree.input_repair).dump();
+      original = json_text(original_json(input, tree.input_repair));
       original_name = input.name;
     }
     std::string glb = encode_glb(tree, select_nodes(tree, NodeSelection{NodeSelectionKind::all}));

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "errors.hpp"
+#include "json_text.hpp"
 
 namespace shatter::cli {
 
@@ -15,7 +16,7 @@ constexpr std::string_view data_marker = "<!--shatter:data-->";
 // JSON inside an inline <script> must not contain "</script>": every '<' (only
 // ever inside a JSON string) is written as the escape \u003c instead.
 std::string script_safe_json(const nlohmann::ordered_json& value) {
-  const std::string text = value.dump();
+  const std::string text = json_text(value);
   std::string safe;
   safe.reserve(text.size());
   for (char c : text) {

@@ -351,6 +351,31 @@ TEST_CASE("slice says a volume is beyond the double range, not JSON null") {
   CHECK(run.out.find("(beyond the double range)") != std::string::npos);
 }
 
+TEST_CASE("json output names a path that is not UTF-8 with its bad bytes as U+FFFD and the command succeeds") {
+  // Found by a sweep (2026-12-07): a Linux file name may hold any byte but '/'
+  // and NUL; the JSON writer threw on a byte that is not UTF-8, so each command
+  // exited 1 after writing its files (fracture left its tree, slice its pieces).
+  const fs::path dir = scratch("non-utf8");
+  fs::create_directories(dir);
+  const fs::path mesh = dir / "cube\xff.off", tree = dir / "tree\xfe.shatter";
+  fs::copy_file(mesh_dir() / "cube.off", mesh);
+  const std::vector<std::string> commands = {
+      "validate " + quoted(mesh) + " --json",
+      "slice " + quoted(mesh) + " --plane 1,0,0,0 --json --out " + quoted(dir / "pieces"),
+      "fracture " + quoted(mesh) + " --fragments 4 --json --out " + quoted(tree),
+      "info " + quoted(tree) + " --json --check",
+      "simulate " + quoted(tree) + " --steps 3 --json",
+  };
+  for (const std::string& command : commands) {
+    INFO(command);
+    const Run run = run_shatter(command);
+    INFO(run.err);
+    REQUIRE(run.exit_code == 0);
+    const nlohmann::json out = nlohmann::json::parse(run.out);  // throws on invalid JSON
+    CHECK(run.out.find("\xef\xbf\xbd") != std::string::npos);  // U+FFFD, in UTF-8
+  }
+}
+
 TEST_CASE("usage and I/O errors have their own exit codes and one error line") {
   const std::string cube = quoted(mesh_dir() / "cube.off");
   const fs::path out = scratch("usage");
