@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <cmath>
 #include <stdexcept>
 #include <vector>
 
@@ -389,6 +390,11 @@ int run_simulate(const SimulateArgs& args) {
     const rt::StepReport report = world.step();
     if (recording) recording->capture(world);
     const StepSummary summary = summarise(world, report);
+    // scene_sizes keeps the scene's magnitudes where Bullet's products stay
+    // finite; were a state to leave them anyway, that is a defect, not a number.
+    if (!std::isfinite(summary.kinetic_energy)) {
+      throw std::runtime_error("the simulation's state stopped being finite at step " + std::to_string(report.step));
+    }
     bonds_broken += summary.bonds_broken;
     if (args.json) {
       steps_json.push_back(summary_json(summary));

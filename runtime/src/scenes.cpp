@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
@@ -128,6 +129,31 @@ SceneSizes scene_sizes(const MeshTree& tree, const SceneOptions& options) {
   if (!(sizes.frailty > 0 && std::isfinite(sizes.frailty))) {
     throw std::invalid_argument("the object has no volume or no extent, so the frailty must be given (m^3/(N s))");
   }
+  // Bullet's solver multiplies masses, lengths and speeds together (inertia
+  // m L^2, energies m v^2, and their products with inverses), so a scene whose
+  // magnitudes are finite can still overflow there: `simulate --density 1e300`
+  // printed a kinetic energy of NaN at every step (found by a sweep, 2026-12-07;
+  // 1e150 ran clean). Masses, lengths and speeds are held to 1e60 and energies
+  // to 1e120, where such products stay far inside the doubles' range.
+  const auto within = [](double value, double limit, const char* what, const char* unit) {
+    if (std::isfinite(value) && std::fabs(value) <= limit) return;
+    char text[200];
+    std::snprintf(text, sizeof text, "the scene's %s would be %.3g %s, beyond the %.0e %s a simulation keeps to", what,
+                  value, unit, limit, unit);
+    throw std::invalid_argument(text);
+  };
+  using scene_limits::largest_energy;
+  using scene_limits::largest_magnitude;
+  within(sizes.object_mass, largest_magnitude, "object mass", "kg");
+  within(sizes.object_size, largest_magnitude, "object size", "m");
+  within(sizes.height, largest_magnitude, "drop height", "m");
+  within(sizes.projectile_mass, largest_magnitude, "projectile mass", "kg");
+  within(sizes.projectile_radius, largest_magnitude, "projectile radius", "m");
+  within(sizes.projectile_speed, largest_magnitude, "projectile speed", "m/s");
+  within(0.5 * sizes.projectile_mass * sizes.projectile_speed * sizes.projectile_speed, largest_energy,
+         "projectile's kinetic energy", "J");
+  within(sizes.object_mass * scene_defaults::gravity * (sizes.height + sizes.object_size), largest_energy,
+         "object's potential energy", "J");
   return sizes;
 }
 

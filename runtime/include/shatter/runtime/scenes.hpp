@@ -57,6 +57,14 @@ inline constexpr double speed_in_sqrt_g_size = 2;
 inline constexpr double break_radius_in_sizes = 0.45;
 }  // namespace scene_defaults
 
+namespace scene_limits {
+/// The largest magnitude scene_sizes lets a scene's mass, length or speed (SI
+/// units) reach, and its energies: Bullet's solver multiplies them together,
+/// which must stay far inside the doubles' range.
+inline constexpr double largest_magnitude = 1e60;
+inline constexpr double largest_energy = 1e120;
+}  // namespace scene_limits
+
 /// A scene's geometry; the material and damage model are `parameters`.
 /// Lengths in m, masses in kg, speeds in m/s. An option left unset takes its
 /// relative default (scene_defaults, resolved by scene_sizes); a value that is
@@ -97,8 +105,9 @@ struct SceneSizes {
 
 /// The values `options` comes to for an object cut as `tree`: each set option as
 /// it is, each unset one its relative default. Throws std::invalid_argument for
-/// an option out of range (naming it) or parameters check_parameters refuses, as
-/// set_up_scene does.
+/// an option out of range (naming it), parameters check_parameters refuses, or
+/// a mass, length, speed or energy of the scene beyond scene_limits (naming
+/// it), as set_up_scene does.
 SceneSizes scene_sizes(const MeshTree& tree, const SceneOptions& options);
 
 /// What set_up_scene placed.
