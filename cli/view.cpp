@@ -218,16 +218,29 @@ std::optional<std::uint64_t> whole_number(const json& value) {
   return parse_whole_number(text);
 }
 
+// The most fragments the editor builds: a page shows no more usefully, and a
+// request for 1e9 (accepted up to 2^32 - 1 until 2026-12-07, found by a sweep)
+// grew the server by 450 MB/s until the kernel killed it, with no way to cancel.
+// `shatter fracture` takes more.
+constexpr std::uint64_t editor_fragment_limit = 65536;
+
 // The recipe a POST /api/fracture asks for, checked as the fracture command
 // checks its flags. Throws UsageError with the message for the page.
 TreeRecipe requested_recipe(const std::string& body) {
   const json request = json::parse(body, nullptr, false);
   if (request.is_discarded() || !request.is_object()) throw UsageError("the request is not a JSON object");
   const std::optional<std::uint64_t> fragments = whole_number(request.value("fragments", json()));
-  if (!fragments) throw UsageError("fragments must be a whole number from 1 to 4294967295");
+  if (!fragments || *fragments < 1 || *fragments > editor_fragment_limit) {
+    throw UsageError("fragments must be a whole number from 1 to " + std::to_string(editor_fragment_limit) +
+                     " in the editor (shatter fracture takes more)");
+  }
   const std::optional<std::uint64_t> seed = whole_number(request.value("seed", json("1")));
   if (!seed) throw UsageError("seed must be a whole number from 0 to 18446744073709551615");
-  return tree_recipe_from(*fragments, *seed, request.value("strategy", std::string("thesis")), "");
+  // A strategy that is not a string is the page's mistake, not the server's: a
+  // 400 like the others (it was a 500 from json's type error, found by a sweep).
+  const json strategy = request.value("strategy", json("thesis"));
+  if (!strategy.is_string()) throw UsageError("strategy must be thesis, balanced or axis, as a string");
+  return tree_recipe_from(*fragments, *seed, strategy.get_ref<const std::string&>(), "");
 }
 
 void send_json(httplib::Response& response, int status, const json& body) {

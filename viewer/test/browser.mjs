@@ -750,6 +750,26 @@ const cases = {
         { timeout: 120000, polling: 200 });
       const bad = await page.evaluate(async () => (await fetch('api/fracture', { method: 'POST', body: '{"fragments": "x"}' })).json());
       assert.match(bad.error, /fragments must be a whole number/);
+      // Found by a sweep (2026-12-07): 1e9 fragments were accepted and grew the
+      // server until the kernel killed it; a strategy that is no string was a 500.
+      const refused = await page.evaluate(async () => {
+        const post = async (body) => {
+          const r = await fetch('api/fracture', { method: 'POST', body });
+          return { status: r.status, error: (await r.json()).error };
+        };
+        return [await post('{"fragments": "1000000000", "seed": "1", "strategy": "thesis"}'),
+          await post('{"fragments": "65537"}'),
+          await post('{"fragments": "4", "seed": "1", "strategy": 3}'),
+          await post('{"fragments": "4", "seed": "1", "strategy": null}')];
+      });
+      for (const r of refused.slice(0, 2)) {
+        assert.equal(r.status, 400);
+        assert.match(r.error, /fragments must be a whole number from 1 to 65536 in the editor/);
+      }
+      for (const r of refused.slice(2)) {
+        assert.equal(r.status, 400);
+        assert.match(r.error, /strategy must be thesis, balanced or axis, as a string/);
+      }
       const missing = await page.evaluate(async () => {
         const r = await fetch('no/such/thing');
         return { status: r.status, body: await r.json() };
