@@ -139,6 +139,9 @@ std::array<std::uint32_t, 3> parse_cells(const std::string& text) {
   return cells;
 }
 
+// The most sites a pattern may make (--sites' range, and every other pattern's).
+constexpr std::uint64_t max_pattern_sites = 10'000'000;
+
 // What each cell pattern needs, checked before the mesh is read.
 void check_pattern_flags(const FractureArgs& args) {
   const std::string& p = args.pattern;
@@ -163,9 +166,20 @@ void check_pattern_flags(const FractureArgs& args) {
     const Vec3 d = parse_triple(args.direction, "--direction");
     if (d.x == 0 && d.y == 0 && d.z == 0) throw UsageError("--direction must not be 0,0,0");
   }
+  std::uint64_t site_count = 0;  // what the pattern would draw
+  if (p == "clustered") site_count = std::uint64_t{args.clusters} * args.sites_per_cluster;
+  if (p == "radial") site_count = std::uint64_t{args.rings} * args.sectors + 1;
   if (p == "grid" || p == "brick") {
     need(!args.cells.empty(), "--cells NX,NY,NZ");
-    parse_cells(args.cells);
+    const std::array<std::uint32_t, 3> cells = parse_cells(args.cells);
+    site_count = std::uint64_t{cells[0]} * cells[1] * cells[2];
+  }
+  // Every pattern within --sites' own limit: 1024^3 grid cells or 10^6 clusters
+  // of 10^6 sites were accepted and ran out of memory (an internal error, or
+  // the kernel's OOM killer; found by a probe, 2026-12-07).
+  if (site_count > max_pattern_sites) {
+    throw UsageError("--pattern " + p + " would make " + std::to_string(site_count) + " sites, more than " +
+                     std::to_string(max_pattern_sites) + " (the limit of --sites)");
   }
   if (p == "sites") need(!args.sites_file.empty(), "--sites-file F");
 }
@@ -176,7 +190,14 @@ std::vector<Vec3> pattern_sites(const FractureArgs& args, const Mesh& mesh) {
   if (p == "voronoi") return uniform_sites(mesh, args.sites, args.seed);
   if (p == "clustered") return clustered_sites(mesh, args.clusters, args.sites_per_cluster, args.cluster_radius, args.seed);
   if (p == "grid" || p == "brick") return grid_sites(mesh, parse_cells(args.cells), p == "brick", args.offset, args.jitter, args.seed);
-  if (p == "sites") return read_sites_file(args.sites_file);
+  if (p == "sites") {
+    std::vector<Vec3> sites = read_sites_file(args.sites_file);
+    if (sites.size() > max_pattern_sites) {
+      throw UsageError("--sites-file " + args.sites_file + " holds " + std::to_string(sites.size()) + " sites, more than " +
+                       std::to_string(max_pattern_sites) + " (the limit of --sites)");
+    }
+    return sites;
+  }
   // radial: about the box's centre and half its diagonal unless given
   Vec3 lo = mesh.positions.front(), hi = lo;
   for (const Vec3& q : mesh.positions) {
@@ -411,7 +432,7 @@ Command add_fracture_command(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--sites", args->sites, "voronoi: N >= 1 sites drawn uniformly in the solid's volume (exact point-in-solid)")
       ->check(whole_number())
-      ->check(CLI::Range(std::uint32_t{1}, std::uint32_t{10'000'000}));
+      ->check(CLI::Range(std::uint32_t{1}, static_cast<std::uint32_t>(max_pattern_sites)));
   command->add_option("--clusters", args->clusters, "clustered: C >= 1 cluster centres drawn uniformly in the solid's volume")
       ->check(whole_number())
       ->check(CLI::Range(std::uint32_t{1}, std::uint32_t{1'000'000}));

@@ -655,6 +655,11 @@ TEST_CASE("fracture usage errors exit 2 with one line, before anything is writte
       cube + " --fragments 4 --seed -1" + out,
       cube + " --fragments 4 --frobnicate" + out,
       "--fragments 4" + out,                                        // no mesh
+      // More sites than --sites allows, by another pattern (each ran out of
+      // memory until 2026-12-07: an internal error, or the kernel's OOM killer).
+      cube + " --pattern grid --cells 1024,1024,1024" + out,
+      cube + " --pattern clustered --clusters 1000000 --sites-per-cluster 1000000 --cluster-radius 0.1" + out,
+      cube + " --pattern radial --rings 10000 --sectors 1001" + out,
   };
   for (const std::string& arguments : mistakes) {
     INFO(arguments);
