@@ -180,6 +180,9 @@ class Session {
       glb_ = std::move(glb);
       recipe_ = tree.recipe;
       leaves_ = tree.leaf_count();
+      // The progress counted the leaves of cuts the build undid at the end (the
+      // count passing N): done, the tree's own count is the count.
+      leaves_done_.store(leaves_, std::memory_order_relaxed);
       seconds_ = std::chrono::duration<double>(Clock::now() - start).count();
       ++generation_;
       state_ = State::done;
