@@ -60,14 +60,15 @@ struct TreeValidationOptions {
   /// What the builder promises of the geometry, too: every internal node's plane
   /// has a finite, non-zero normal and a finite offset, with children on both of
   /// its sides, but a cell node's (a cell tree's: recipe.strategy voronoi or cell
-  /// planes kept), which is all zero; every node's mass has a positive volume and finite moments; every
-  /// node's mesh is a valid solid, not empty (validate_mesh, self-intersections
-  /// included; a tree built with allow_self_intersections is held to the
-  /// topology only: closed, consistently oriented, manifold along every edge
-  /// (separate fans may meet at a vertex, as the input check allows with the
-  /// flag), finite, every vertex used); every node not marked convex stores a hull that is a closed, outward
-  /// solid with positive volume and no zero-area triangle (validate_mesh without
-  /// the self-intersection test). Costs the self-intersection test of every
+  /// planes kept), which is all zero; every node's mass has a positive volume
+  /// and finite moments; every node's mesh is a valid solid, not empty
+  /// (validate_mesh, self-intersections included; a tree built with
+  /// allow_self_intersections is held to the topology only: closed, consistently
+  /// oriented, manifold along every edge (separate fans may meet at a vertex, as
+  /// the input check allows with the flag), finite, every vertex used); every
+  /// node not marked convex stores a hull that is a closed, outward solid with
+  /// positive volume and no zero-area triangle (validate_mesh without the
+  /// self-intersection test). Costs the self-intersection test of every
   /// node's mesh, O(T log T) for T triangles on typical meshes, run on the nodes
   /// in parallel: seconds for thousands of fragments, which is why the reader
   /// never asks for it.
