@@ -557,6 +557,27 @@ Vec3 rounded_position(const PlaneSet& set, const PointDef& point, const ApproxPo
   return {correctly_rounded(exact[0]), correctly_rounded(exact[1]), correctly_rounded(exact[2])};
 }
 
+Vec3 position_relative_to(const PlaneSet& set, const PointDef& point, const Vec3& origin) {
+  if (point.kind == PointKind::input) return set.points[point.a] - origin;
+  // (x - o w) / w with x - o w exact: two conversions to double (each within an
+  // ulp: Mpzf keeps the top 64 bits) and one division.
+  const H4<Exact> h = exact_normalised(set, point);
+  const double w = CGAL::to_double(h.w);
+  const Exact coordinates[3] = {h.x, h.y, h.z};
+  const double from[3] = {origin.x, origin.y, origin.z};
+  double offset[3];
+  for (int k = 0; k < 3; ++k) {
+    offset[k] = CGAL::to_double(Exact(coordinates[k] - Exact(from[k]) * h.w)) / w;
+  }
+  if (std::isfinite(offset[0]) && std::isfinite(offset[1]) && std::isfinite(offset[2])) {
+    return {offset[0], offset[1], offset[2]};
+  }
+  // w or a difference outside the doubles' range: the exact quotients, rounded.
+  const std::array<mpq_class, 3> exact = exact_coordinates(set, point);
+  return {correctly_rounded(exact[0] - mpq_class(origin.x)), correctly_rounded(exact[1] - mpq_class(origin.y)),
+          correctly_rounded(exact[2] - mpq_class(origin.z))};
+}
+
 OutputPoint output_point(const PlaneSet& set, const PointDef& point, const ApproxPoint& approx) {
   const Vec3 rounded = rounded_position(set, point, approx);
   if (point.kind != PointKind::segment_plane) return {rounded, point};

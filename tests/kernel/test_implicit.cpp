@@ -240,6 +240,44 @@ TEST_CASE("approximate's error bounds hold the exact homogeneous coordinates", "
   CHECK(mixed > 200);
 }
 
+// position_relative_to against the exact offset, for origins at the point's
+// rounding (the offset a few ulps of the point, where rounded_position - origin
+// keeps nothing), a little and far away: within 3 ulps of the exact difference
+// each coordinate, by every kind of definition.
+TEST_CASE("position_relative_to is within 3 ulps of the exact offset from any origin", "[plane][predicates]") {
+  std::size_t tiny_offsets = 0, checked = 0;
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    Random random(seed);
+    const RandomGeometry g = random_geometry(random, seed % 2 == 0);
+    const PlaneSet set = g.set();
+    for (int i = 0; i < 30; ++i) {
+      const std::optional<PointDef> def = random_point(g, random);
+      if (!def) continue;
+      const Q3 exact = reference_point(set, *def);
+      const Vec3 rounded = rounded_position(set, *def, approximate(set, *def));
+      const double scale = std::max({std::fabs(rounded.x), std::fabs(rounded.y), std::fabs(rounded.z), 1e-300});
+      for (const double away : {0.0, 0x1p-45, 0x1p-20, 1.0, 0x1p20}) {
+        const Vec3 origin{rounded.x + away * scale * (random.uniform() - 0.5),
+                          rounded.y + away * scale * (random.uniform() - 0.5),
+                          rounded.z + away * scale * (random.uniform() - 0.5)};
+        const Vec3 offset = position_relative_to(set, *def, origin);
+        INFO("seed " << seed << " point " << i << " kind " << int(def->kind) << " away " << away);
+        const double got[3] = {offset.x, offset.y, offset.z};
+        const mpq_class want[3] = {exact.x - origin.x, exact.y - origin.y, exact.z - origin.z};
+        for (int k = 0; k < 3; ++k) {
+          const double magnitude = std::fabs(want[k].get_d());
+          const double ulp = std::nextafter(magnitude, INFINITY) - magnitude;
+          CHECK(abs(mpq_class(got[k]) - want[k]) <= mpq_class(3 * ulp));
+          tiny_offsets += magnitude > 0 && magnitude < 0x1p-40 * scale ? 1 : 0;
+          ++checked;
+        }
+      }
+    }
+  }
+  INFO(tiny_offsets << " of " << checked << " offsets were under 2^-40 of the point");
+  CHECK(tiny_offsets > checked / 10);  // the case the function exists for
+}
+
 // Found by a sweep of `fracture` over a unit cube at 1e15 (2026-12-07): a short
 // segment cut near its middle by a plane far from the origin has both ends'
 // values n.p + d round to about zero, and the filter's x, y, z, w with them

@@ -9,7 +9,9 @@
 // decided with exact orientations. The common case is settled faster: the
 // centroid of the rounded clip of the two (a double point) is tested exactly to
 // lie strictly inside both. The overlap's area and centroid are measured on the
-// rounded clip, a construction that never decides anything.
+// rounded clip, a construction that never decides anything (on the corners'
+// exact offsets from a point of the cut where the rounded corners are coarse
+// next to the part: add_measure_polygon).
 //
 // A lean tree's solids keep no approximations (BuildRunOptions::lean): each cap
 // corner's is computed once per cut it is met on and kept beside its rounded 2D
@@ -523,8 +525,8 @@ class PlaneBonds {
   void add_part(const Solid& solid, std::vector<VertexIndex>& vertices, bool reverse, CapFace& cap,
                 CachedSolid* slot = nullptr) {
     if (reverse) std::reverse(vertices.begin(), vertices.end());
-    Part part{static_cast<std::uint32_t>(corner_defs_.size()), static_cast<std::uint32_t>(vertices.size()),
-              static_cast<std::uint32_t>(measure_points_.size()), 0, INFINITY, -INFINITY, INFINITY, -INFINITY};
+    Part part{static_cast<std::uint32_t>(corner_defs_.size()), static_cast<std::uint32_t>(vertices.size()), 0, 0,
+              INFINITY, -INFINITY, INFINITY, -INFINITY};
     for (VertexIndex v : vertices) {
       const ApproxPoint a = approximation(solid, v, slot);
       const Vec2 p = project(a);
@@ -538,7 +540,6 @@ class PlaneBonds {
       part.min_v = std::min(part.min_v, p.y - e);
       part.max_v = std::max(part.max_v, p.y + e);
     }
-    add_measure_polygon(part);
     cap.min_u = std::min(cap.min_u, part.min_u);
     cap.max_u = std::max(cap.max_u, part.max_u);
     cap.min_v = std::min(cap.min_v, part.min_v);
@@ -546,30 +547,66 @@ class PlaneBonds {
     parts_.push_back(part);
   }
 
-  // The polygon a part's overlaps are measured on (issue 22): its rounded
-  // corners, less each corner within 32 ulps (of the pair's largest
-  // coordinate) of the corner kept before it, in both coordinates. The clipper
-  // cuts along every edge's line, and the rounded direction of an edge a few
-  // ulps long is noise: the line through it, extended across the other
-  // polygon, cut a 0.0388 overlap to 0.0007 (regular Voronoi grid on
-  // torus_quad, where a mesh edge crosses a cell plane a few ulps from a cell
-  // edge). Leaving such a corner out moves the boundary by at most those 32
-  // ulps, so the area by at most that times the perimeter, inside what
-  // rounding the corners already allows (bond_reference.hpp's tolerance);
+  // The polygon a part's overlaps are measured on (issue 22), relative to
+  // reference_: its rounded corners, less each corner within 32 ulps (of the
+  // pair's largest coordinate) of the corner kept before it, in both
+  // coordinates. The clipper cuts along every edge's line, and the rounded
+  // direction of an edge a few ulps long is noise: the line through it,
+  // extended across the other polygon, cut a 0.0388 overlap to 0.0007 (regular
+  // Voronoi grid on torus_quad, where a mesh edge crosses a cell plane a few
+  // ulps from a cell edge). Leaving such a corner out moves the boundary by at
+  // most those 32 ulps, so the area by at most that times the perimeter, inside
+  // what rounding the corners already allows (bond_reference.hpp's tolerance);
   // nothing is decided on this polygon.
+  //
+  // A part spanning fewer than 2^26 of its corners' ulps is measured on its
+  // exact corners' offsets
+  // from reference_ instead (position_relative_to): far from the origin the
+  // rounded corners are coarse next to the part, and the 32 ulps dropped
+  // whole parts (a unit cube at 1e14 cut into 64 measured a total bond area
+  // of 0, where 12.73 is right). Elsewhere the offsets are the rounded
+  // corners' differences, as the clipper took them, so the same bits.
   void add_measure_polygon(Part& part) {
+    part.measure_first = static_cast<std::uint32_t>(measure_points_.size());
     const std::uint32_t end = part.first + part.count;
+    double magnitude = 0, lo_u = INFINITY, hi_u = -INFINITY, lo_v = INFINITY, hi_v = -INFINITY;
+    for (std::uint32_t i = part.first; i < end; ++i) {
+      const Vec2 p = points_[i];
+      magnitude = std::max({magnitude, std::fabs(p.x), std::fabs(p.y)});
+      lo_u = std::min(lo_u, p.x);
+      hi_u = std::max(hi_u, p.x);
+      lo_v = std::min(lo_v, p.y);
+      hi_v = std::max(hi_v, p.y);
+    }
+    const bool far = std::max(hi_u - lo_u, hi_v - lo_v) < 0x1p-26 * magnitude;
+    local_.clear();
+    for (std::uint32_t i = part.first; i < end; ++i) {
+      if (far) {
+        double origin[3] = {0, 0, 0};
+        origin[(axis_ + 1) % 3] = reference_.x;
+        origin[(axis_ + 2) % 3] = reference_.y;
+        const Vec3 offset = position_relative_to(set_, corner_defs_[i], Vec3{origin[0], origin[1], origin[2]});
+        const double c[3] = {offset.x, offset.y, offset.z};
+        local_.push_back({c[(axis_ + 1) % 3], c[(axis_ + 2) % 3]});
+      } else {
+        local_.push_back({points_[i].x - reference_.x, points_[i].y - reference_.y});
+      }
+    }
+    // The drop rule on the coordinates the polygon is measured in: the rounded
+    // corners (absolute), or the exact offsets.
+    const std::span<const Vec2> judged = far ? std::span<const Vec2>(local_)
+                                             : std::span<const Vec2>(points_).subspan(part.first, part.count);
     const auto indistinct = [&](std::uint32_t i, std::uint32_t j) {
-      const Vec2 a = points_[i], b = points_[j];
-      const double magnitude = std::max({std::fabs(a.x), std::fabs(a.y), std::fabs(b.x), std::fabs(b.y)});
-      const double bound = 0x1p-47 * magnitude;
+      const Vec2 a = judged[i], b = judged[j];
+      const double largest = std::max({std::fabs(a.x), std::fabs(a.y), std::fabs(b.x), std::fabs(b.y)});
+      const double bound = 0x1p-47 * largest;
       return std::fabs(a.x - b.x) <= bound && std::fabs(a.y - b.y) <= bound;
     };
-    std::uint32_t kept = part.first;
-    measure_points_.push_back(points_[kept]);
-    for (std::uint32_t i = part.first + 1; i < end; ++i) {
-      if (indistinct(i, kept) || (i + 1 == end && indistinct(i, part.first))) continue;
-      measure_points_.push_back(points_[i]);
+    std::uint32_t kept = 0;
+    measure_points_.push_back(local_[kept]);
+    for (std::uint32_t i = 1; i < part.count; ++i) {
+      if (indistinct(i, kept) || (i + 1 == part.count && indistinct(i, 0))) continue;
+      measure_points_.push_back(local_[i]);
       kept = i;
     }
     part.measure_count = static_cast<std::uint32_t>(measure_points_.size()) - part.measure_first;
@@ -608,6 +645,7 @@ class PlaneBonds {
     plane_ = plane;
     unit_ = normalized(plane.normal);
     reference_ = points_.front();
+    for (Part& part : parts_) add_measure_polygon(part);
 
     // Sweep the faces by min u; each side keeps the faces still reaching the line.
     sweep_.resize(faces_.size());
@@ -692,7 +730,7 @@ class PlaneBonds {
         const Part& b = parts_[j];
         if (a.max_u < b.min_u || b.max_u < a.min_u || a.max_v < b.min_v || b.max_v < a.min_v) continue;
         any_box = true;
-        const Clipper::Measure m = clipper_.overlap(measure_points_of(a), measure_points_of(b), reference_);
+        const Clipper::Measure m = clipper_.overlap(measure_points_of(a), measure_points_of(b), Vec2{0, 0});
         bool overlap = false;
         if (m.area > 0) {
           const Vec2 witness{reference_.x + m.area_times_u / m.area, reference_.y + m.area_times_v / m.area};
@@ -801,6 +839,7 @@ class PlaneBonds {
   std::vector<Vec2> points_;
   std::vector<double> errors_;  ///< per corner: how far the rounded 2D point may be from the exact one
   std::vector<Vec2> measure_points_;  ///< per part: the polygon overlaps are measured on (add_measure_polygon)
+  std::vector<Vec2> local_;           ///< add_measure_polygon's corners relative to reference_
   std::vector<VertexIndex> part_vertices_;
   std::vector<Triangle> triangles_;
   std::vector<Vec3> points3_;

@@ -223,6 +223,17 @@ Sign compare_normals(const PlaneSet& set, PlaneRef a, PlaneRef b);
 /// position bit for bit. An input point comes back as it is.
 Vec3 rounded_position(const PlaneSet& set, const PointDef& point, const ApproxPoint& approx);
 
+/// The point's offset from `origin`, point - origin, with each coordinate within
+/// 3 ulps of the exact difference: computed from the exact homogeneous
+/// coordinates, so a point far from the origin keeps the shape of its
+/// neighbourhood, which rounded_position(point) - origin loses once the ulps of
+/// the point's coordinates are not small next to that neighbourhood (a part 0.25
+/// across at 1e14 spans 16 of them). For measures (bond areas), never for
+/// decisions. Precondition: `origin` finite. Cost: exact arithmetic (about a
+/// microsecond; an input point costs one subtraction). Throws
+/// std::domain_error for a definition whose planes do not meet in one point.
+Vec3 position_relative_to(const PlaneSet& set, const PointDef& point, const Vec3& origin);
+
 /// The position an output mesh gives the point: rounded_position, except that the
 /// meet of an input segment with a plane that rounds to within 64 ulps (of the
 /// segment end's largest coordinate, so 2^-46 of it) of an end of its segment
