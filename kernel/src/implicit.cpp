@@ -434,6 +434,51 @@ Projection projection_of(const PlaneSet& set, PlaneRef plane) {
   return {axis, s < 0};
 }
 
+namespace {
+
+// An approximation's cartesian coordinate x / w as an Estimate whose bound holds
+// the exact quotient: |x/w - x^/w^| <= (e_x + |x^/w^| e_w) / (w^ - e_w) for
+// w > 0, inflated for the bound's own rounding, plus the division's rounding.
+// False when the bound does not keep w from zero (or is not finite).
+bool cartesian_of(const Estimate& x, const Estimate& w, Estimate& out) {
+  if (!(w.value - w.error > 0)) return false;
+  const double q = x.value / w.value;
+  out = {q, (x.error + std::fabs(q) * w.error) / (w.value - w.error) * bound_inflation +
+                2 * unit_roundoff * std::fabs(q) + underflow_error};
+  return std::isfinite(out.error);
+}
+
+// The projected point (coordinates i, j) of an approximation, as two Estimates.
+bool projected_cartesian(int i, int j, const ApproxPoint& point, Estimate (&out)[2]) {
+  const Estimate coordinates[3] = {point.x, point.y, point.z};
+  return cartesian_of(coordinates[i], point.w, out[0]) && cartesian_of(coordinates[j], point.w, out[1]);
+}
+
+// The sign of (q - p) x (r - p) in the projection's coordinates i, j, from the
+// points' cartesian approximations, when their bounds certify it; zero
+// otherwise. The same sign as projected_orientation's determinant, which is
+// w_p w_q w_r times it (every w positive). A second filter for small triangles
+// far from the origin: there the determinant's terms are the coordinates'
+// magnitudes squared times the w's, and its filter fails once the triangle's
+// area is below about 2^-50 of them (a face of a unit cube's piece at 1e6 took
+// the exact path at half of `fracture`'s time), while the differences of
+// coordinates keep the triangle's shape to within the approximations' errors.
+int translated_orientation_sign(const Estimate (&p)[2], const Estimate (&q)[2], const Estimate (&r)[2]) {
+  const Estimate qi = q[0] - p[0], qj = q[1] - p[1];
+  const Estimate ri = r[0] - p[0], rj = r[1] - p[1];
+  return certified_sign(qi * rj - qj * ri);
+}
+
+int translated_orientation_sign(int i, int j, const ApproxPoint& p, const ApproxPoint& q, const ApproxPoint& r) {
+  Estimate cp[2], cq[2], cr[2];
+  if (!projected_cartesian(i, j, p, cp) || !projected_cartesian(i, j, q, cq) || !projected_cartesian(i, j, r, cr)) {
+    return 0;
+  }
+  return translated_orientation_sign(cp, cq, cr);
+}
+
+}  // namespace
+
 Sign orient_in_plane(const PlaneSet& set, Projection projection, const PointDef& p, const ApproxPoint& pa,
                      const PointDef& q, const ApproxPoint& qa, const PointDef& r, const ApproxPoint& ra) {
   ImplicitCounters& counters = implicit_counters();
@@ -441,6 +486,7 @@ Sign orient_in_plane(const PlaneSet& set, Projection projection, const PointDef&
   if (p == q || q == r || r == p) return Sign::zero;
   const int i = (projection.axis + 1) % 3, j = (projection.axis + 2) % 3;
   int s = certified_sign(projected_orientation(i, j, cached(pa), cached(qa), cached(ra)));
+  if (s == 0) s = translated_orientation_sign(i, j, pa, qa, ra);
   if (s == 0) {
     ++counters.orient_exact;
     s = projected_orientation(i, j, exact_normalised(set, p), exact_normalised(set, q), exact_normalised(set, r))
@@ -463,6 +509,11 @@ Sign orient_in_plane(const PlaneSet& set, Projection projection, const PointDef&
   };
   int s = certified_sign(projected_orientation(
       i, j, cached(pa), cached(qa), lifted(Estimate{0, 0}, Estimate{m.x, 0}, Estimate{m.y, 0}, Estimate{1, 0})));
+  if (s == 0) {
+    Estimate cp[2], cq[2];
+    const Estimate cm[2] = {{m.x, 0}, {m.y, 0}};
+    if (projected_cartesian(i, j, pa, cp) && projected_cartesian(i, j, qa, cq)) s = translated_orientation_sign(cp, cq, cm);
+  }
   if (s == 0) {
     ++counters.orient_exact;
     s = projected_orientation(i, j, exact_normalised(set, p), exact_normalised(set, q),
