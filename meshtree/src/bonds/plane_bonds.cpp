@@ -559,13 +559,15 @@ class PlaneBonds {
   // what rounding the corners already allows (bond_reference.hpp's tolerance);
   // nothing is decided on this polygon.
   //
-  // A part spanning fewer than 2^26 of its corners' ulps is measured on its
-  // exact corners' offsets
-  // from reference_ instead (position_relative_to): far from the origin the
-  // rounded corners are coarse next to the part, and the 32 ulps dropped
-  // whole parts (a unit cube at 1e14 cut into 64 measured a total bond area
-  // of 0, where 12.73 is right). Elsewhere the offsets are the rounded
-  // corners' differences, as the clipper took them, so the same bits.
+  // A part spanning fewer than 2^23 of its corners' ulps is measured on its
+  // exact corners' offsets from reference_ instead (position_relative_to): far
+  // from the origin the rounded corners are coarse next to the part, and the
+  // 32 ulps dropped whole parts (a unit cube at 1e14 cut into 64 measured a
+  // total bond area of 0, where 12.73 is right). Elsewhere the offsets are the
+  // rounded corners' differences, as the clipper took them, so the same bits;
+  // a corner's ulp or two there is at most 2^-22 of the part, and the dropped
+  // corners' 32 ulps 2^-18 (the exact offsets cost a microsecond a corner: at
+  // 2^26 they were a third of `fracture` for a unit cube at 1e7).
   void add_measure_polygon(Part& part) {
     part.measure_first = static_cast<std::uint32_t>(measure_points_.size());
     const std::uint32_t end = part.first + part.count;
@@ -578,7 +580,7 @@ class PlaneBonds {
       lo_v = std::min(lo_v, p.y);
       hi_v = std::max(hi_v, p.y);
     }
-    const bool far = std::max(hi_u - lo_u, hi_v - lo_v) < 0x1p-26 * magnitude;
+    const bool far = std::max(hi_u - lo_u, hi_v - lo_v) < 0x1p-29 * magnitude;
     local_.clear();
     for (std::uint32_t i = part.first; i < end; ++i) {
       if (far) {
