@@ -734,7 +734,12 @@ TEST_CASE("regression: a wedge split widened to every face by the cap, folds mer
   const RoundingTally tip =
       round_reproducer_pieces("unroundable-wedge-tip-under-the-cap-widened-split-near-parallel-chain-corpus-364.repro");
   CHECK(tip.pieces == 5);
-  CHECK(tip.wedges == 1);
+  // Since 2026-12-07 a cut point whose homogeneous approximation is coarse next
+  // to it (a torus at 1e6) is approximated in cartesian form and rounds to its
+  // floating-point coordinates where they are within 2^-40: the tip's piece then
+  // certifies without the wedge split, which the fan below and the wedge
+  // property still take.
+  CHECK(tip.wedges <= 1);
   CHECK(tip.collapsed == 1);  // a sliver above the cap, thinner than its rounding
   CHECK(tip.refused == 0);
   const RoundingTally fan =
