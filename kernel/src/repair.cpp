@@ -1369,6 +1369,49 @@ void resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const Rep
   report.triangles_after = mesh.triangle_count();
 }
 
+// Closed shells that touch or overlap one another (boxes sharing a face
+// triangulated along other diagonals, an L of boxes, a copy of a solid moved by
+// an ulp): welded by position their triangles still form a closed surface in
+// the sense winding numbers need, every edge crossed as often one way as the
+// other (u -> v as often as v -> u), though not a manifold. The region they
+// wind around at least once is their union, which step 11's arrangement
+// computes from the triangles as they are; the other steps would first take the
+// surface apart at its shared edges (orient_polygon_soup splits them, leaving
+// borders that hole filling then closes with lids that are no part of any
+// shell: an L of three unit boxes came out of volume 2.5). Returns the mesh
+// welded by exact position when it is such a closed surface, else nothing (an
+// edge used more one way than the other: a hole, or a triangle turned against
+// its neighbours, which the other steps repair).
+std::optional<Mesh> balanced_welded_surface(const Mesh& mesh) {
+  const std::size_t vertices = mesh.positions.size();
+  Mesh welded;
+  std::unordered_map<PositionKey, VertexIndex, PositionKeyHash> index_of;
+  std::vector<VertexIndex> welded_of(vertices);
+  for (std::size_t v = 0; v < vertices; ++v) {
+    const auto [it, inserted] =
+        index_of.try_emplace(key_of(mesh.positions[v]), static_cast<VertexIndex>(welded.positions.size()));
+    if (inserted) welded.positions.push_back(mesh.positions[v]);
+    welded_of[v] = it->second;
+  }
+  std::unordered_map<std::uint64_t, std::int64_t> balance;  // per undirected edge: uses low -> high minus high -> low
+  for (const Triangle& t : mesh.triangles) {
+    if (t[0] >= vertices || t[1] >= vertices || t[2] >= vertices) return std::nullopt;
+    const Triangle w{welded_of[t[0]], welded_of[t[1]], welded_of[t[2]]};
+    if (w[0] == w[1] || w[1] == w[2] || w[2] == w[0]) return std::nullopt;
+    for (int c = 0; c < 3; ++c) {
+      const VertexIndex u = w[c], v = w[(c + 1) % 3];
+      balance[(std::uint64_t{std::min(u, v)} << 32) | std::max(u, v)] += u < v ? 1 : -1;
+    }
+    welded.triangles.push_back(w);
+  }
+  for (const auto& [edge, count] : balance) {
+    if (count != 0) return std::nullopt;
+  }
+  welded.surfaces = mesh.surfaces;  // per triangle, in the same order
+  welded.corners = mesh.corners;
+  return welded;
+}
+
 }  // namespace
 
 RepairReport repair_mesh(Mesh& mesh, const RepairOptions& options) {
@@ -1384,6 +1427,22 @@ RepairReport repair_mesh(Mesh& mesh, const RepairOptions& options) {
   if (validation.find(DefectKind::nonfinite_coordinate) || validation.find(DefectKind::index_out_of_range)) {
     report.notes.push_back({"not repaired: " + validation.summary()});
     return report;
+  }
+  if (std::optional<Mesh> shells = balanced_welded_surface(mesh); shells && options.round_solid) {
+    RepairReport attempt = report;
+    if (const std::size_t merged = mesh.positions.size() - shells->positions.size(); merged > 0) {
+      attempt.changes.push_back({RepairKind::merged_duplicate_vertices, merged,
+                                 "merged " + plural(merged, "duplicate vertex", "duplicate vertices") +
+                                     " (exactly equal positions)"});
+    }
+    resolve_self_intersections_exactly(*shells, mesh, options, attempt);
+    const bool resolved = std::any_of(attempt.changes.begin(), attempt.changes.end(), [](const RepairChange& change) {
+      return change.kind == RepairKind::resolved_self_intersections_exactly;
+    });
+    if (resolved && validate_mesh(*shells).valid()) {
+      mesh = std::move(*shells);
+      return attempt;
+    }
   }
   Mesh repaired = Repairer(mesh, options, report).run();
   resolve_self_intersections_exactly(repaired, mesh, options, report);

@@ -148,17 +148,14 @@ TEST_CASE("unions of lattice boxes: a sound Solid of the voxels' volume, repaire
     const Repaired result = repair(merged);
     if (!validate_mesh(merged).find(DefectKind::self_intersection)) continue;
     INFO(report_text(result.report));
-    if (resolved.made.vertex_copies > 0) {
-      // Boxes touching along an edge: the Solid pairs its faces into wedges,
-      // but the steps before the exact one (CGAL's orientation and hole
-      // filling on a soup with crowded edges) may leave the mesh open. Counted.
-      ++touching;
-      if (!result.valid) continue;
-    } else {
-      ++self_intersecting;
-      CHECK(result.valid);
-      if (!result.valid) continue;
-    }
+    // Boxes touching along an edge: the Solid pairs its faces into wedges.
+    // Until 2026-12-07 the steps before the exact one (CGAL's orientation and
+    // hole filling on a soup with crowded edges) could leave such a mesh open;
+    // a surface whose every edge is crossed as often each way now goes to the
+    // exact step as it is (repair_mesh), and every one is repaired.
+    ++(resolved.made.vertex_copies > 0 ? touching : self_intersecting);
+    CHECK(result.valid);
+    if (!result.valid) continue;
     ++repaired;
     // Boxes that only touch at a corner are separated by step 9 instead.
     if (const RepairChange* change = result.report.find(RepairKind::resolved_self_intersections_exactly)) {
@@ -172,8 +169,76 @@ TEST_CASE("unions of lattice boxes: a sound Solid of the voxels' volume, repaire
   }
   INFO("repaired " << repaired << ", of them " << self_intersecting << " without solids touching along an edge; "
                     << touching << " touching along an edge");
-  CHECK(repaired >= self_intersecting);
+  CHECK(repaired == self_intersecting + touching);
   CHECK(self_intersecting > seeds / 4);
+  CHECK(touching > 0);
+}
+
+namespace {
+
+// A unit box at `corner` with its six faces split along the diagonal
+// `diagonal` picks (0 or 1 per face), outward.
+Mesh unit_box_at(Vec3 corner, unsigned diagonal) {
+  Mesh box;
+  for (int i = 0; i < 8; ++i) {
+    box.positions.push_back(corner + Vec3{static_cast<double>(i & 1), static_cast<double>((i >> 1) & 1),
+                                          static_cast<double>((i >> 2) & 1)});
+  }
+  // Each face's corners counter-clockwise seen from outside.
+  const std::array<std::array<VertexIndex, 4>, 6> faces{{{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                                          {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}}};
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    const auto& q = faces[f];
+    if ((diagonal >> f) & 1) {
+      box.triangles.push_back({q[0], q[1], q[2]});
+      box.triangles.push_back({q[0], q[2], q[3]});
+    } else {
+      box.triangles.push_back({q[1], q[2], q[3]});
+      box.triangles.push_back({q[1], q[3], q[0]});
+    }
+  }
+  box.surfaces.assign(box.triangles.size(), 0);
+  return box;
+}
+
+}  // namespace
+
+// Found by a sweep of `validate --repair` over generated dirty meshes
+// (2026-12-07): unit boxes sharing whole faces whose triangles run along other
+// diagonals (an L of three came out of volume 2.5, two side by side or four
+// around an edge were refused as non-manifold). Every placement of 2 to 4
+// boxes on a 2 x 2 x 2 lattice that shares a face, every choice of diagonals
+// drawn at random: the union, of the boxes' total volume (up to the hair by
+// which copies of a vertex where boxes touch only along an edge move apart),
+// as a valid solid.
+TEST_CASE("unit boxes sharing faces along other diagonals: their union, of their volume", "[arrangement][repair]") {
+  test::Random random(20261207);
+  std::size_t unions = 0;
+  const std::size_t trials = test::sized(60, 12);
+  for (std::size_t trial = 0; trial < trials; ++trial) {
+    const int count = 2 + static_cast<int>(random.index(3));
+    std::set<std::array<int, 3>> cells;
+    std::vector<Mesh> boxes;
+    while (static_cast<int>(boxes.size()) < count) {
+      const std::array<int, 3> cell{static_cast<int>(random.index(2)), static_cast<int>(random.index(2)),
+                                    static_cast<int>(random.index(2))};
+      if (!cells.insert(cell).second) continue;
+      boxes.push_back(unit_box_at({static_cast<double>(cell[0]), static_cast<double>(cell[1]),
+                                   static_cast<double>(cell[2])},
+                                  static_cast<unsigned>(random.index(64))));
+    }
+    const Mesh merged = test::merge(boxes);
+    if (validate_mesh(merged).valid()) continue;  // no two share a face with other diagonals
+    INFO("trial " << trial << ": " << count << " boxes");
+    const Repaired result = repair(merged);
+    INFO(report_text(result.report));
+    REQUIRE(result.valid);
+    // Where boxes touch only along an edge or at a corner, the copies of its
+    // vertices move apart by a hair (the bound the report states).
+    CHECK(std::abs(mpq_class(six_volume(result.mesh) / 6).get_d() - count) <= 1e-4 * count);
+    ++unions;
+  }
+  CHECK(unions > trials / 2);
 }
 
 TEST_CASE("unions of solids at random angles: CGAL's exact union volume, repaired within one rounding",

@@ -147,7 +147,13 @@ struct RepairReport {
 };
 
 /// Repairs `mesh` in place, step by step, each step doing something only when its
-/// defect is present:
+/// defect is present. First, a surface that welded by position crosses every
+/// edge as often one way as the other (closed as winding numbers need it, as
+/// overlapping or face-sharing closed shells are) but is not valid goes to step
+/// 11 as it is (after merging equal positions, reported as step 1), and when
+/// that certifies a valid mesh, that is the repair: the steps below would take
+/// such a surface apart at its crowded edges and close the borders so made with
+/// lids of no shell. Otherwise:
 ///  1. merge vertices at exactly equal positions (a caller may pass an unwelded mesh);
 ///  2. remove triangles that use one vertex twice, extra copies of a triangle, and
 ///     pairs of a triangle with its reverse; then every piece (triangles connected
