@@ -446,15 +446,12 @@ bool segment_plane_cartesian(const PlaneSet& set, const PointDef& point, ApproxP
   for (const double c : {pp.x, pp.y, pp.z, qq.x, qq.y, qq.z}) {
     if (!(std::fabs(c) < 0x1p250)) return false;
   }
-  if (point.planes[0].is_cut()) {
-    const Plane& cut = set.cuts[point.planes[0].index()];
-    for (const double c : {cut.normal.x, cut.normal.y, cut.normal.z, cut.offset}) {
-      if (!(std::fabs(c) < 0x1p250)) return false;
-    }
-  }
   const V3<ErrorFree> p{{pp.x}, {pp.y}, {pp.z}}, q{{qq.x}, {qq.y}, {qq.z}};
   if (point.planes[0].is_cut()) {
     const P4<ErrorFree> plane = cut_coefficients(set, point.planes[0]);
+    for (const ErrorFree c : {plane.n.x, plane.n.y, plane.n.z, plane.d}) {
+      if (!(std::fabs(c.value) < 0x1p250)) return false;
+    }
     return segment_plane_cartesian(p, q, compensated_value(plane, p), compensated_value(plane, q), out);
   }
   const P4<Estimate> plane = plane_coefficients<Estimate>(set, point.planes[0]);

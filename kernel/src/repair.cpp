@@ -60,6 +60,11 @@ std::string plural(std::size_t count, const char* singular, const char* plural_f
 using kernel_detail::PositionKey;
 using kernel_detail::PositionKeyHash;
 using kernel_detail::key_of;
+// Step 1's line in the report.
+std::string merged_vertices_text(std::size_t merged) {
+  return "merged " + plural(merged, "duplicate vertex", "duplicate vertices") + " (exactly equal positions)";
+}
+
 PositionKey key_of(const CgalPoint& p) { return key_of(Vec3{p.x(), p.y(), p.z()}); }
 
 CgalPoint to_cgal(Vec3 p) { return CgalPoint(p.x, p.y, p.z); }
@@ -266,10 +271,7 @@ class Repairer {
       representative_[v] = it->second;
       merged += inserted ? 0 : 1;
     }
-    if (merged > 0) {
-      change(RepairKind::merged_duplicate_vertices, merged,
-             "merged " + plural(merged, "duplicate vertex", "duplicate vertices") + " (exactly equal positions)");
-    }
+    if (merged > 0) change(RepairKind::merged_duplicate_vertices, merged, merged_vertices_text(merged));
   }
 
   Triangle mapped(std::size_t t) const {
@@ -1266,11 +1268,11 @@ std::size_t orient_crossing_shells(Mesh& mesh, std::span<const TrianglePair> pai
 // Step 11 (RepairOptions::round_solid): a mesh the other steps left closed but
 // self-intersecting, resolved exactly: its arrangement, the boundary of what it
 // winds around at least once, that boundary as a plane-based solid, rounded and
-// certified by the hook. Taken only when the rounded mesh is valid; otherwise
-// the mesh stays as it was and a note says why.
-void resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const RepairOptions& options,
+// certified by the hook. Taken only when the rounded mesh is valid (then
+// true); otherwise the mesh stays as it was and a note says why (false).
+bool resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const RepairOptions& options,
                                         RepairReport& report) {
-  if (!options.round_solid || mesh.triangles.empty()) return;
+  if (!options.round_solid || mesh.triangles.empty()) return false;
   // Validation names self-intersections only on a surface whose topology passes,
   // so the pairs are found here; their finder needs finite, in-range, non-flat
   // triangles.
@@ -1284,11 +1286,11 @@ void resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const Rep
        {DefectKind::nonfinite_coordinate, DefectKind::index_out_of_range, DefectKind::zero_area_triangle}) {
     if (const Defect* defect = check.find(blocking)) {
       not_done("the surface still has " + std::string(defect_name(blocking)) + " (" + std::to_string(defect->count) + ")");
-      return;
+      return false;
     }
   }
   const std::vector<TrianglePair> pairs = self_intersecting_pairs(mesh.positions, mesh.triangles);
-  if (pairs.empty()) return;
+  if (pairs.empty()) return false;
   // The input's orientation where it is one, else each shell's own volume; when
   // that leaves nothing wound around (an input turned inside out as a whole),
   // every crossing shell by its own volume.
@@ -1304,28 +1306,28 @@ void resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const Rep
   }
   if (boundary.status == WindingBoundary::Status::open) {
     not_done("the surface is open (its pieces do not close up), so it winds around no solid");
-    return;
+    return false;
   }
   if (boundary.status != WindingBoundary::Status::ok) {
     not_done("the winding numbers of its cells could not be decided");
-    return;
+    return false;
   }
   if (boundary.triangles.empty()) {
     report.no_volume_reason = "every cell of its exact arrangement has winding number <= 0";
     not_done("the surface winds around no volume (every cell has winding number <= 0)");
-    return;
+    return false;
   }
   const ArrangementSolid made = solid_from_winding_boundary(arrangement, boundary, oriented.surfaces);
   switch (made.status) {
     case ArrangementSolid::Status::ok: break;
-    case ArrangementSolid::Status::not_selected: not_done("nothing selected"); return;
+    case ArrangementSolid::Status::not_selected: not_done("nothing selected"); return false;
     case ArrangementSolid::Status::crowded_edge:
       not_done("the solid it winds around touches itself along an edge whose faces cannot be paired into wedges");
-      return;
+      return false;
     case ArrangementSolid::Status::pinched_face:
       not_done("a face of the solid it winds around does not close into simple loops");
-      return;
-    case ArrangementSolid::Status::no_edge_line: not_done("an edge of the result lies on no known line"); return;
+      return false;
+    case ArrangementSolid::Status::no_edge_line: not_done("an edge of the result lies on no known line"); return false;
   }
   RepairRounding rounded;
   try {
@@ -1340,7 +1342,7 @@ void resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const Rep
   }
   if (!rounded.valid) {
     not_done("the solid it winds around did not round to a valid mesh (" + rounded.defect + ")");
-    return;
+    return false;
   }
   const double before = signed_volume(mesh), after = signed_volume(rounded.mesh);
   char volume[160];
@@ -1367,6 +1369,7 @@ void resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const Rep
   mesh = std::move(rounded.mesh);
   report.vertices_after = mesh.vertex_count();
   report.triangles_after = mesh.triangle_count();
+  return true;
 }
 
 // Closed shells that touch or overlap one another (boxes sharing a face
@@ -1431,15 +1434,10 @@ RepairReport repair_mesh(Mesh& mesh, const RepairOptions& options) {
   if (std::optional<Mesh> shells = balanced_welded_surface(mesh); shells && options.round_solid) {
     RepairReport attempt = report;
     if (const std::size_t merged = mesh.positions.size() - shells->positions.size(); merged > 0) {
-      attempt.changes.push_back({RepairKind::merged_duplicate_vertices, merged,
-                                 "merged " + plural(merged, "duplicate vertex", "duplicate vertices") +
-                                     " (exactly equal positions)"});
+      attempt.changes.push_back({RepairKind::merged_duplicate_vertices, merged, merged_vertices_text(merged)});
     }
-    resolve_self_intersections_exactly(*shells, mesh, options, attempt);
-    const bool resolved = std::any_of(attempt.changes.begin(), attempt.changes.end(), [](const RepairChange& change) {
-      return change.kind == RepairKind::resolved_self_intersections_exactly;
-    });
-    if (resolved && validate_mesh(*shells).valid()) {
+    // Taken only as a whole: the hook's mesh is valid (RepairRounding::valid).
+    if (resolve_self_intersections_exactly(*shells, mesh, options, attempt)) {
       mesh = std::move(*shells);
       return attempt;
     }

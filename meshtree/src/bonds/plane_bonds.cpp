@@ -581,12 +581,12 @@ class PlaneBonds {
       hi_v = std::max(hi_v, p.y);
     }
     const bool far = std::max(hi_u - lo_u, hi_v - lo_v) < 0x1p-29 * magnitude;
+    double origin[3] = {0, 0, 0};  // reference_ in 3D (the dropped axis's coordinate is not read)
+    origin[(axis_ + 1) % 3] = reference_.x;
+    origin[(axis_ + 2) % 3] = reference_.y;
     local_.clear();
     for (std::uint32_t i = part.first; i < end; ++i) {
       if (far) {
-        double origin[3] = {0, 0, 0};
-        origin[(axis_ + 1) % 3] = reference_.x;
-        origin[(axis_ + 2) % 3] = reference_.y;
         const Vec3 offset = position_relative_to(set_, corner_defs_[i], Vec3{origin[0], origin[1], origin[2]});
         const double c[3] = {offset.x, offset.y, offset.z};
         local_.push_back({c[(axis_ + 1) % 3], c[(axis_ + 2) % 3]});
