@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -25,6 +26,7 @@
 #include "shatter/generators/solids.hpp"
 #include "shatter/kernel/arrangement.hpp"
 #include "shatter/kernel/exact.hpp"
+#include "shatter/kernel/inside.hpp"
 #include "shatter/kernel/io.hpp"
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/rationals.hpp"
@@ -467,6 +469,76 @@ TEST_CASE("a union's tetrahedron touching the rest at a vertex is kept, not canc
   CHECK(std::abs(volume - (16 + 4.0 / 6)) <= 1e-9 * 17);
   const Mesh read = read_mesh_from_bytes(write_mesh_to_bytes(rounded.mesh, MeshFormat::off), MeshFormat::off);
   CHECK(validate_mesh(read).valid());
+}
+
+TEST_CASE("tetrahedra around one edge (overlapping or apart): their union point by point", "[arrangement][repair]") {
+  // Two to five tetrahedra on one edge, each over its own angle around it: the
+  // union's wedges meet along the edge, which the rounds that untangle edges
+  // separate. Those rounds also cancel two-sided sheets over four corners, and
+  // a whole tetrahedron meeting the rest only along the edge looks like one:
+  // removing it moved more volume than rounding can, and every round failed
+  // (the sweep's three_tets_on_one_edge_overlapping.off was refused).
+  test::Random random(20261208);
+  const std::size_t trials = test::sized(40, 10);
+  std::size_t overlapping = 0;
+  for (std::size_t trial = 0; trial < trials; ++trial) {
+    const int count = 2 + static_cast<int>(random.index(4));
+    const bool overlap = trial % 2 == 0;
+    const auto angle = [&] { return random.uniform(0, 6.283185307179586); };
+    const double a = angle(), b = angle(), c = angle();
+    const Vec3 shift{random.uniform(-1, 1), random.uniform(-1, 1), random.uniform(-1, 1)};
+    std::vector<Mesh> tetrahedra;
+    double largest = 0, sum = 0;
+    for (int i = 0; i < count; ++i) {
+      const double width = 6.283185307179586 / count;
+      const double from = overlap ? angle() : (i + random.uniform(0.05, 0.3)) * width;
+      const double to = overlap ? from + random.uniform(0.3, 1.5) : (i + 1 - random.uniform(0.05, 0.3)) * width;
+      const double r0 = random.uniform(0.5, 1.5), r1 = random.uniform(0.5, 1.5);
+      Mesh tetrahedron = test::mesh_from(
+          {{0, 0, 0}, {0, 0, 1}, {r0 * std::cos(from), r0 * std::sin(from), random.uniform(0.2, 0.8)},
+           {r1 * std::cos(to), r1 * std::sin(to), random.uniform(0.2, 0.8)}},
+          {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+      if (six_volume(tetrahedron) < 0) {
+        for (Triangle& t : tetrahedron.triangles) std::swap(t[1], t[2]);
+      }
+      // Turned as a whole: the edge's ends are the same doubles in each.
+      tetrahedron = test::turned(tetrahedron, a, b, c, shift);
+      REQUIRE(validate_mesh(tetrahedron).valid());
+      const double volume = signed_volume(tetrahedron);
+      largest = std::max(largest, volume);
+      sum += volume;
+      tetrahedra.push_back(std::move(tetrahedron));
+    }
+    const Mesh merged = test::merge(tetrahedra);
+    INFO("trial " << trial << ": " << count << (overlap ? " overlapping" : " apart") << " tetrahedra");
+    const Repaired result = repair(merged);
+    INFO(report_text(result.report));
+    REQUIRE(result.valid);
+    const double volume = signed_volume(result.mesh);
+    CHECK(volume >= largest * (1 - 1e-9));
+    CHECK(volume <= sum * (1 + 1e-9));
+    // Inside the result exactly where inside one of the tetrahedra (points a
+    // hair from the edge, where its copies moved apart, are not drawn).
+    std::vector<std::unique_ptr<PointInSolid>> parts;
+    for (const Mesh& tetrahedron : tetrahedra) parts.push_back(std::make_unique<PointInSolid>(tetrahedron));
+    const PointInSolid solid(result.mesh);
+    Vec3 lo = merged.positions.front(), hi = lo;
+    for (const Vec3& p : merged.positions) {
+      lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+      hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    }
+    std::size_t disagree = 0, inside = 0;
+    for (int i = 0; i < 300; ++i) {
+      const Vec3 p{random.uniform(lo.x, hi.x), random.uniform(lo.y, hi.y), random.uniform(lo.z, hi.z)};
+      const bool in_part = std::any_of(parts.begin(), parts.end(), [&](const auto& part) { return part->strictly_inside(p); });
+      disagree += in_part != solid.strictly_inside(p);
+      inside += in_part;
+    }
+    CHECK(disagree == 0);
+    CHECK(inside > 0);
+    overlapping += overlap;
+  }
+  CHECK(overlapping == (trials + 1) / 2);
 }
 
 TEST_CASE("the exact step changes nothing where nothing self-intersects", "[arrangement][repair]") {

@@ -226,7 +226,18 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
     if (!thin_whole) thin_whole = piece.six() <= 6 * piece.sweep(false);
     return *thin_whole;
   };
-  for (std::size_t step = 0; step < all_steps; ++step) {
+  // The second round's steps (untangle_edges, not folding) that removed
+  // four-corner sheets and were not taken, run again without them once every
+  // round above has failed (so that no piece written before it existed is
+  // written differently): four triangles over four corners bound a tetrahedron,
+  // thin when rounding made it, but it may be a part of the solid of its own
+  // that touches the rest along an edge (a union of tetrahedra sharing an edge,
+  // repaired by the mesh arrangement: removing it moved more volume than
+  // rounding can, and the edge, untangled, certifies).
+  std::vector<std::size_t> without_quads_steps;
+  for (std::size_t pass = 0; pass < all_steps + without_quads_steps.size(); ++pass) {
+    const bool without_quads = pass >= all_steps;
+    const std::size_t step = without_quads ? without_quads_steps[pass - all_steps] : pass;
     const bool apart = step >= snap_end;
     const bool snapping = step >= steps && !apart;
     const bool folding = (step >= plain_steps && !snapping) || apart;
@@ -322,9 +333,12 @@ RoundedSolid round_solid_rounds(const PlaneSet& set, const Solid& solid, const S
       Mesh sheetless = mesh;
       std::vector<VertexIndex> renumbered;
       std::vector<std::uint32_t> kept;
-      if (const std::size_t gone = cancel_two_sided_sheets(sheetless, renumbered, untangle_edges,
-                                                           untangle_edges ? &kept : nullptr);
+      std::size_t quad_triangles = 0;
+      if (const std::size_t gone = cancel_two_sided_sheets(sheetless, renumbered, untangle_edges && !without_quads,
+                                                           untangle_edges ? &kept : nullptr, &quad_triangles);
           gone > 0) {
+        // Once per step: taken, it returns and the list is never read.
+        if (quad_triangles > 0 && untangle_edges && !folding && !snapping) without_quads_steps.push_back(step);
         if (sheetless.triangles.empty()) {
           // A repair that merged folds or snapped vertices can flatten a piece
           // that is not thin (it merged across a thick part): when the piece

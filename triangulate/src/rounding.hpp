@@ -239,8 +239,11 @@ void triangulate(const PlaneSet& set, const Solid& solid, const SolidMeshOptions
 // meets along an edge, its corners off one plane (exact), is a part of its own
 // (a union's tiny part touching the rest at a vertex), not a sheet, and stays.
 // `kept`: when given, the old index of each triangle left, in order.
+// `quad_triangles`: when given, how many of those removed were such quads' (a
+// multiple of four).
 std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumbered, bool quads = false,
-                                    std::vector<std::uint32_t>* kept_triangles = nullptr);
+                                    std::vector<std::uint32_t>* kept_triangles = nullptr,
+                                    std::size_t* quad_triangles = nullptr);
 
 // The triangles of `mesh` with a shape (self_intersecting_pairs' precondition):
 // three distinct corners not on one line (collinear, exact on the doubles).

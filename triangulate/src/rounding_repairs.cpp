@@ -29,7 +29,8 @@ namespace shatter {
 namespace rounding {
 
 std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumbered, bool quads,
-                                    std::vector<std::uint32_t>* kept_triangles) {
+                                    std::vector<std::uint32_t>* kept_triangles, std::size_t* quad_triangles) {
+  if (quad_triangles != nullptr) *quad_triangles = 0;
   const std::size_t count = mesh.triangles.size();
   // Key: the triangle rotated to start at its smallest index; its reverse is then
   // (a, c, b) for (a, b, c).
@@ -107,6 +108,7 @@ std::size_t cancel_two_sided_sheets(Mesh& mesh, std::vector<VertexIndex>& renumb
           }
           removed[t] = removed[u] = removed[q1] = removed[q2] = 1;
           gone += 4;
+          if (quad_triangles != nullptr) *quad_triangles += 4;
           break;
         }
       }
