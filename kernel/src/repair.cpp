@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "shatter/kernel/position_key.hpp"
+#include "shatter/kernel/predicates.hpp"
 #include "repair_touching.hpp"
 #include "shatter/kernel/arrangement.hpp"
 #include "shatter/kernel/union_find.hpp"
@@ -60,6 +61,36 @@ std::string plural(std::size_t count, const char* singular, const char* plural_f
 using kernel_detail::PositionKey;
 using kernel_detail::PositionKeyHash;
 using kernel_detail::key_of;
+
+// A number in a report line: six significant digits.
+std::string number_text(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
+}
+
+// A share as 2^k when it is a power of two (the default 2^-20), else as %g.
+std::string share_text(double share) {
+  int exponent = 0;
+  if (share > 0 && std::frexp(share, &exponent) == 0.5) return "2^" + std::to_string(exponent - 1);
+  return number_text(share);
+}
+
+// Step 9's line in the report (separate_touching_parts, at `share` of the
+// nearest neighbour's distance).
+RepairChange touching_change(const kernel_detail::TouchingSeparation& separation, double share) {
+  std::string text = "separated parts touching at " + plural(separation.vertices, "vertex", "vertices");
+  if (separation.edges > 0) {
+    text += " (on " + plural(separation.edges, "edge", "edges") +
+            " with more than two triangles, paired into wedges in exact angular order)";
+  }
+  text += ": " + plural(separation.copies, "vertex copy", "vertex copies") + " moved into their own parts by at most " +
+          number_text(separation.largest_move) + " (" + share_text(share) +
+          " of the nearest neighbour's distance), volume change " + number_text(separation.volume_change) +
+          " (bound " + number_text(separation.volume_bound) + ")";
+  return {RepairKind::separated_touching_parts, separation.vertices, std::move(text)};
+}
+
 // Step 1's line in the report.
 std::string merged_vertices_text(std::size_t merged) {
   return "merged " + plural(merged, "duplicate vertex", "duplicate vertices") + " (exactly equal positions)";
@@ -700,19 +731,6 @@ class Repairer {
   }
 
   // Step 8.
-  static std::string number_text(double value) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.6g", value);
-    return text;
-  }
-
-  // A share as 2^k when it is a power of two (the default 2^-20), else as %g.
-  static std::string share_text(double share) {
-    int exponent = 0;
-    if (share > 0 && std::frexp(share, &exponent) == 0.5) return "2^" + std::to_string(exponent - 1);
-    return number_text(share);
-  }
-
   Mesh output_from_working_only() {
     // Only reached when every triangle was removed: nothing is left to output.
     Mesh out;
@@ -1082,18 +1100,9 @@ class Repairer {
       if (!separation.failure.empty()) report_.notes.push_back({separation.failure});
       return false;
     }
-    std::string text = "separated parts touching at " + plural(separation.vertices, "vertex", "vertices");
-    if (separation.edges > 0) {
-      text += " (on " + plural(separation.edges, "edge", "edges") +
-              " with more than two triangles, paired into wedges in exact angular order)";
-    }
-    text += ": " + plural(separation.copies, "vertex copy", "vertex copies") +
-            " moved into their own parts by at most " + number_text(separation.largest_move) + " (" +
-            share_text(options_.touching_separation) + " of the nearest neighbour's distance), volume change " +
-            number_text(separation.volume_change) + " (bound " + number_text(separation.volume_bound) + ")";
     // Named after the reversal and self-intersection steps, which are counted later.
     separation_copies_ = separation.copies;
-    separation_change_ = RepairChange{RepairKind::separated_touching_parts, separation.vertices, std::move(text)};
+    separation_change_ = touching_change(separation, options_.touching_separation);
     return true;
   }
 
@@ -1270,8 +1279,10 @@ std::size_t orient_crossing_shells(Mesh& mesh, std::span<const TrianglePair> pai
 // winds around at least once, that boundary as a plane-based solid, rounded and
 // certified by the hook. Taken only when the rounded mesh is valid (then
 // true); otherwise the mesh stays as it was and a note says why (false).
+// `touching_too`: also when no two triangles cross (a closed chain whose
+// shells only touch, along edges or at vertices: the rounding takes them apart).
 bool resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const RepairOptions& options,
-                                        RepairReport& report) {
+                                        RepairReport& report, bool touching_too = false) {
   if (!options.round_solid || mesh.triangles.empty()) return false;
   // Validation names self-intersections only on a surface whose topology passes,
   // so the pairs are found here; their finder needs finite, in-range, non-flat
@@ -1290,7 +1301,7 @@ bool resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const Rep
     }
   }
   const std::vector<TrianglePair> pairs = self_intersecting_pairs(mesh.positions, mesh.triangles);
-  if (pairs.empty()) return false;
+  if (pairs.empty() && !touching_too) return false;
   // The input's orientation where it is one, else each shell's own volume; when
   // that leaves nothing wound around (an input turned inside out as a whole),
   // every crossing shell by its own volume.
@@ -1348,9 +1359,14 @@ bool resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const Rep
   char volume[160];
   std::snprintf(volume, sizeof volume, "volume %.9g -> %.9g (change %.3g, overlaps counted once; rounding moved %.3g, bound %.3g)",
                 before, after, after - before, rounded.moved_volume, rounded.moved_volume_bound);
-  std::string text = "resolved " + plural(arrangement.pairs.size(), "self-intersecting triangle pair",
-                                          "self-intersecting triangle pairs") +
-                     " exactly (" +
+  // With no crossing (`touching_too`), what the step did is take apart where
+  // the solid touches itself.
+  const bool crossed = !arrangement.pairs.empty();
+  std::string text = (crossed ? "resolved " + plural(arrangement.pairs.size(), "self-intersecting triangle pair",
+                                                     "self-intersecting triangle pairs") +
+                                    " exactly ("
+                              : std::string("made the solid the surface winds around, exactly, where its shells touch "
+                                            "along edges or at vertices (")) +
                      (turned > 0 ? plural(turned, "triangle", "triangles") +
                                        " of crossing shells turned to face as in the input or out of their own volume; "
                                  : std::string()) +
@@ -1365,54 +1381,485 @@ bool resolve_self_intersections_exactly(Mesh& mesh, const Mesh& input, const Rep
                                 " moved apart where the solid touches itself"
                           : std::string()) +
                      "); " + volume;
-  report.changes.push_back({RepairKind::resolved_self_intersections_exactly, arrangement.pairs.size(), std::move(text)});
+  if (crossed || rounded.separated_vertices == 0) {
+    report.changes.push_back({RepairKind::resolved_self_intersections_exactly, arrangement.pairs.size(), std::move(text)});
+  } else {
+    report.changes.push_back({RepairKind::separated_touching_parts, rounded.separated_vertices, std::move(text)});
+  }
   mesh = std::move(rounded.mesh);
   report.vertices_after = mesh.vertex_count();
   report.triangles_after = mesh.triangle_count();
   return true;
 }
 
-// Closed shells that touch or overlap one another (boxes sharing a face
-// triangulated along other diagonals, an L of boxes, a copy of a solid moved by
-// an ulp): welded by position their triangles still form a closed surface in
-// the sense winding numbers need, every edge crossed as often one way as the
-// other (u -> v as often as v -> u), though not a manifold. The region they
-// wind around at least once is their union, which step 11's arrangement
-// computes from the triangles as they are; the other steps would first take the
-// surface apart at its shared edges (orient_polygon_soup splits them, leaving
-// borders that hole filling then closes with lids that are no part of any
-// shell: an L of three unit boxes came out of volume 2.5). Returns the mesh
-// welded by exact position when it is such a closed surface, else nothing (an
-// edge used more one way than the other: a hole, or a triangle turned against
-// its neighbours, which the other steps repair).
-std::optional<Mesh> balanced_welded_surface(const Mesh& mesh) {
-  const std::size_t vertices = mesh.positions.size();
-  Mesh welded;
-  std::unordered_map<PositionKey, VertexIndex, PositionKeyHash> index_of;
-  std::vector<VertexIndex> welded_of(vertices);
-  for (std::size_t v = 0; v < vertices; ++v) {
-    const auto [it, inserted] =
-        index_of.try_emplace(key_of(mesh.positions[v]), static_cast<VertexIndex>(welded.positions.size()));
-    if (inserted) welded.positions.push_back(mesh.positions[v]);
-    welded_of[v] = it->second;
-  }
-  std::unordered_map<std::uint64_t, std::int64_t> balance;  // per undirected edge: uses low -> high minus high -> low
-  for (const Triangle& t : mesh.triangles) {
-    if (t[0] >= vertices || t[1] >= vertices || t[2] >= vertices) return std::nullopt;
-    const Triangle w{welded_of[t[0]], welded_of[t[1]], welded_of[t[2]]};
-    if (w[0] == w[1] || w[1] == w[2] || w[2] == w[0]) return std::nullopt;
+// A surface that, welded by exact position, is closed as a chain: every
+// segment is crossed as often one way as the other, once the triangles that
+// enclose nothing are gone (one over a repeated or collinear corner; one and its
+// reverse), copies of a triangle are what its neighbours need (when the chain is
+// not closed with them) and edges are counted through the vertices that lie
+// inside them.
+// Its winding numbers are then defined everywhere off it, and the solid it
+// encloses is the region they count at least once (step 11). Closed shells that
+// touch or overlap (boxes sharing a face triangulated along other diagonals, an
+// L of boxes, a copy of a solid moved by an ulp, tetrahedra around one edge)
+// and closed surfaces with stray zero-area triangles, fins or T-junctions are
+// such chains. The other steps would take them apart at their shared or crowded
+// edges (orient_polygon_soup splits them, leaving borders that hole filling
+// then closes with lids that are no part of any shell: an L of three unit boxes
+// came out of volume 2.5, a box with stray zero-area triangles along its edges
+// lost a sixth of its volume).
+struct ClosedChain {
+  Mesh mesh;  ///< welded, those triangles removed, every edge split at the vertices inside it, unused vertices dropped
+  std::size_t merged = 0;       ///< vertices welded into an earlier one at the same position
+  std::size_t repeated = 0;     ///< triangles over a repeated vertex (after welding)
+  std::size_t collinear = 0;    ///< triangles over three distinct, exactly collinear corners
+  std::size_t opposite = 0;     ///< triangles removed from groups over the same corners both ways round
+  std::size_t duplicates = 0;   ///< extra copies of a triangle the same way round (no reverse among them)
+  std::size_t fins = 0;         ///< triangles hanging from an edge of the surface, their other edges free
+  std::size_t split_edges = 0;  ///< edges split at vertices inside them (T-junctions)
+  std::size_t split_at = 0;     ///< the vertices they were split at, counted once per edge
+  std::size_t unused = 0;       ///< vertices no triangle left uses
+};
+
+// A piece of an input triangle: its corners, and each corner as barycentric
+// weights of the input triangle's corners (for its attributes).
+struct TrianglePiece {
+  Triangle corners;
+  std::uint32_t source;
+  std::array<std::array<double, 3>, 3> weights;
+};
+
+// Splits every piece at each vertex of `inside` (undirected edge, low << 32 |
+// high -> the vertices strictly inside it) that lies inside one of its edges:
+// the piece (a, b, c) with p inside a -> b becomes (a, p, c) and (p, b, c),
+// both non-degenerate (c is off the line of a and b, and p is strictly between
+// them). Returns how many splits were made.
+std::size_t split_at_inside_vertices(const std::vector<Vec3>& positions,
+                                     const std::unordered_map<std::uint64_t, std::vector<VertexIndex>>& inside,
+                                     std::vector<TrianglePiece>& pieces) {
+  std::size_t splits = 0;
+  const std::size_t original = pieces.size();
+  std::vector<std::size_t> of_triangle;
+  for (std::size_t t = 0; t < original; ++t) {
+    const Triangle corners = pieces[t].corners;
+    of_triangle.assign(1, t);
     for (int c = 0; c < 3; ++c) {
-      const VertexIndex u = w[c], v = w[(c + 1) % 3];
+      const VertexIndex u = corners[c], v = corners[(c + 1) % 3];
+      const auto found = inside.find((std::uint64_t{std::min(u, v)} << 32) | std::max(u, v));
+      if (found == inside.end()) continue;
+      for (const VertexIndex p : found->second) {
+        for (const std::size_t at : of_triangle) {
+          TrianglePiece& piece = pieces[at];
+          int e = 0;
+          while (e < 3 && !strictly_inside_segment(positions[piece.corners[e]], positions[piece.corners[(e + 1) % 3]],
+                                                   positions[p])) {
+            ++e;
+          }
+          if (e == 3) continue;
+          const int f = (e + 1) % 3, g = (e + 2) % 3;
+          const Vec3 &a = positions[piece.corners[e]], &b = positions[piece.corners[f]], &q = positions[p];
+          int axis = 0;  // where a and b differ most (they differ there: p is strictly between them)
+          for (int d = 1; d < 3; ++d) {
+            if (std::fabs(b[d] - a[d]) > std::fabs(b[axis] - a[axis])) axis = d;
+          }
+          const double along = (q[axis] - a[axis]) / (b[axis] - a[axis]);
+          std::array<double, 3> at_p;
+          for (int w = 0; w < 3; ++w) at_p[w] = (1 - along) * piece.weights[e][w] + along * piece.weights[f][w];
+          TrianglePiece second{{p, piece.corners[f], piece.corners[g]}, piece.source,
+                               {at_p, piece.weights[f], piece.weights[g]}};
+          piece.corners = {piece.corners[e], p, piece.corners[g]};
+          piece.weights = {piece.weights[e], at_p, piece.weights[g]};
+          pieces.push_back(second);
+          of_triangle.push_back(pieces.size() - 1);
+          ++splits;
+          break;
+        }
+      }
+    }
+  }
+  return splits;
+}
+
+// Per undirected edge (low << 32 | high): its uses low -> high minus high -> low.
+std::unordered_map<std::uint64_t, std::int64_t> edge_balance(const std::vector<TrianglePiece>& pieces) {
+  std::unordered_map<std::uint64_t, std::int64_t> balance;
+  balance.reserve(3 * pieces.size() / 2 + 3);
+  for (const TrianglePiece& piece : pieces) {
+    for (int c = 0; c < 3; ++c) {
+      const VertexIndex u = piece.corners[c], v = piece.corners[(c + 1) % 3];
       balance[(std::uint64_t{std::min(u, v)} << 32) | std::max(u, v)] += u < v ? 1 : -1;
     }
-    welded.triangles.push_back(w);
   }
+  return balance;
+}
+
+// The corner attributes of a piece's corner: its weights over its source
+// triangle's corners (normals and tangents normalised again; a tangent's
+// handedness from the heaviest corner).
+void add_corner_attributes(const Mesh& from, const TrianglePiece& piece, int corner, CornerAttributes& to) {
+  const std::array<double, 3>& w = piece.weights[corner];
+  const std::size_t first = 3 * std::size_t{piece.source};
+  const int heaviest = w[0] >= w[1] ? (w[0] >= w[2] ? 0 : 2) : (w[1] >= w[2] ? 1 : 2);
+  if (from.corners.has_normals()) {
+    Vec3 n;
+    for (int k = 0; k < 3; ++k) n = n + from.corners.normals[first + k] * w[k];
+    const double length = norm(n);
+    to.normals.push_back(length > 0 ? n * (1 / length) : from.corners.normals[first + heaviest]);
+  }
+  if (from.corners.has_uvs()) {
+    Vec2 uv{0, 0};
+    for (int k = 0; k < 3; ++k) {
+      uv.x += from.corners.uvs[first + k].x * w[k];
+      uv.y += from.corners.uvs[first + k].y * w[k];
+    }
+    to.uvs.push_back(uv);
+  }
+  if (from.corners.has_tangents()) {
+    Vec3 t;
+    for (int k = 0; k < 3; ++k) {
+      const Vec4& tk = from.corners.tangents[first + k];
+      t = t + Vec3{tk.x, tk.y, tk.z} * w[k];
+    }
+    const double length = norm(t);
+    const Vec4& kept = from.corners.tangents[first + heaviest];
+    to.tangents.push_back(length > 0 ? Vec4{t.x / length, t.y / length, t.z / length, kept.w} : kept);
+  }
+}
+
+// `mesh` as a closed chain (above), or nothing when some segment is crossed
+// more often one way than the other (a hole, duplicated triangles, a triangle
+// turned against its neighbours, cracks: the other steps' work) or an index is
+// out of range.
+std::optional<ClosedChain> closed_welded_chain(const Mesh& mesh) {
+  const std::size_t vertices = mesh.positions.size();
+  ClosedChain chain;
+  std::vector<Vec3> positions;
+  std::unordered_map<PositionKey, VertexIndex, PositionKeyHash> index_of;
+  index_of.reserve(vertices);
+  std::vector<VertexIndex> welded_of(vertices);
+  for (std::size_t v = 0; v < vertices; ++v) {
+    const auto [it, inserted] = index_of.try_emplace(key_of(mesh.positions[v]), static_cast<VertexIndex>(positions.size()));
+    if (inserted) positions.push_back(mesh.positions[v]);
+    welded_of[v] = it->second;
+  }
+  chain.merged = vertices - positions.size();
+  std::vector<TrianglePiece> pieces;
+  pieces.reserve(mesh.triangles.size());
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    if (tri[0] >= vertices || tri[1] >= vertices || tri[2] >= vertices) return std::nullopt;
+    const Triangle w{welded_of[tri[0]], welded_of[tri[1]], welded_of[tri[2]]};
+    if (w[0] == w[1] || w[1] == w[2] || w[2] == w[0]) {
+      ++chain.repeated;
+    } else if (collinear(positions[w[0]], positions[w[1]], positions[w[2]])) {
+      ++chain.collinear;
+    } else {
+      pieces.push_back({w, t, {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}});
+    }
+  }
+  // Triangles over the same three vertices: a triangle and its reverse enclose
+  // nothing, so each group first keeps only what its copies add up to (its
+  // uses one way minus the other, as copies of the first of that way round),
+  // which crosses every edge as before. When the chain is still not closed
+  // there, a group's copies are a copying error rather than shells (a reversed
+  // or repeated copy of a triangle of a closed surface): the group becomes what
+  // its edges need, one copy either way round or none, as the rest of the chain
+  // crosses those edges (ignoring edges it shares with another such group,
+  // whose need depends on that group; groups are settled until none changes).
+  std::unordered_map<std::uint64_t, std::int64_t> balance;
+  balance.reserve(3 * pieces.size() / 2 + 3);
+  {
+    // (sorted corners, piece) in order: a group's pieces together, in input order.
+    std::vector<std::pair<Triangle, std::uint32_t>> by_corners(pieces.size());
+    for (std::uint32_t i = 0; i < pieces.size(); ++i) {
+      Triangle sorted = pieces[i].corners;
+      std::sort(sorted.begin(), sorted.end());
+      by_corners[i] = {sorted, i};
+    }
+    std::sort(by_corners.begin(), by_corners.end());
+    struct Group {
+      Triangle sorted;              // runs each edge as `sign` of the copies kept
+      std::vector<std::uint32_t> pieces;
+      std::int64_t net;             // copies kept, signed: + as `sorted` runs, - reversed
+      bool mixed;                   // copies both ways round
+    };
+    std::vector<Group> multiple;
+    std::vector<std::uint8_t> kept(pieces.size(), 1);
+    const auto way = [&](std::uint32_t piece, const Triangle& sorted) {
+      return canonical_rotation(pieces[piece].corners) == sorted ? 1 : -1;  // sorted is its own canonical rotation
+    };
+    for (std::size_t first = 0, end = 0; first < by_corners.size(); first = end) {
+      end = first + 1;
+      while (end < by_corners.size() && by_corners[end].first == by_corners[first].first) ++end;
+      if (end - first < 2) continue;
+      const Triangle& sorted = by_corners[first].first;
+      Group group{sorted, {}, 0, false};
+      for (std::size_t k = first; k < end; ++k) group.pieces.push_back(by_corners[k].second);
+      for (const std::uint32_t piece : group.pieces) {
+        group.net += way(piece, sorted);
+        group.mixed = group.mixed || way(piece, sorted) != way(group.pieces.front(), sorted);
+      }
+      multiple.push_back(std::move(group));
+    }
+    // Keeps `net` copies of a group (those first in input order of that way round).
+    const auto keep = [&](Group& group, std::int64_t net) {
+      std::int64_t left = net < 0 ? -net : net;
+      for (const std::uint32_t piece : group.pieces) {
+        const bool take = left > 0 && way(piece, group.sorted) == (net < 0 ? -1 : 1);
+        kept[piece] = take ? 1 : 0;
+        if (take) --left;
+      }
+      group.net = net;
+    };
+    for (Group& group : multiple) keep(group, group.net);
+    const auto key = [](VertexIndex u, VertexIndex v) { return (std::uint64_t{std::min(u, v)} << 32) | std::max(u, v); };
+    for (std::uint32_t i = 0; i < pieces.size(); ++i) {
+      if (!kept[i]) continue;
+      for (int c = 0; c < 3; ++c) {
+        const VertexIndex u = pieces[i].corners[c], v = pieces[i].corners[(c + 1) % 3];
+        balance[key(u, v)] += u < v ? 1 : -1;
+      }
+    }
+    const auto closed = [&] {
+      return std::all_of(balance.begin(), balance.end(), [](const auto& entry) { return entry.second == 0; });
+    };
+    if (!closed()) {
+      std::unordered_map<std::uint64_t, std::uint32_t> groups_at_edge;
+      for (const Group& group : multiple) {
+        for (int c = 0; c < 3; ++c) ++groups_at_edge[key(group.sorted[c], group.sorted[(c + 1) % 3])];
+      }
+      std::vector<std::uint8_t> settled(multiple.size(), 0);
+      for (bool changed = true; changed;) {
+        changed = false;
+        for (std::size_t g = 0; g < multiple.size(); ++g) {
+          if (settled[g]) continue;
+          Group& group = multiple[g];
+          std::optional<std::int64_t> need;
+          bool agree = true;
+          for (int c = 0; c < 3 && agree; ++c) {
+            const VertexIndex u = group.sorted[c], v = group.sorted[(c + 1) % 3];
+            const std::uint64_t edge = key(u, v);
+            if (groups_at_edge[edge] > 1) continue;
+            const std::int64_t runs = u < v ? 1 : -1;  // how `sorted` crosses the edge
+            const std::int64_t rest = balance[edge] - group.net * runs;
+            const std::int64_t here = -rest * runs;
+            agree = !need || *need == here;
+            need = here;
+          }
+          if (!agree || !need) continue;  // waits for its neighbours, or stays as it is
+          // Settled now, also when its need cannot be met (it then stays).
+          settled[g] = 1;
+          changed = true;
+          for (int c = 0; c < 3; ++c) --groups_at_edge[key(group.sorted[c], group.sorted[(c + 1) % 3])];
+          const bool available = *need == 0 || std::any_of(group.pieces.begin(), group.pieces.end(), [&](std::uint32_t piece) {
+            return way(piece, group.sorted) == *need;
+          });
+          if (*need == group.net || *need < -1 || *need > 1 || !available) continue;
+          for (int c = 0; c < 3; ++c) {
+            const VertexIndex u = group.sorted[c], v = group.sorted[(c + 1) % 3];
+            balance[key(u, v)] += (*need - group.net) * (u < v ? 1 : -1);
+          }
+          keep(group, *need);
+        }
+      }
+    }
+    for (const Group& group : multiple) {
+      const std::size_t removed = group.pieces.size() - static_cast<std::size_t>(group.net < 0 ? -group.net : group.net);
+      (group.mixed ? chain.opposite : chain.duplicates) += removed;
+    }
+    std::size_t at = 0;
+    for (std::uint32_t i = 0; i < pieces.size(); ++i) {
+      if (kept[i]) pieces[at++] = pieces[i];
+    }
+    pieces.resize(at);
+  }
+  // Fins: a triangle on an edge of the surface (one that three or more
+  // triangles use), its other edges its own or also such (a sliver stuck on an
+  // edge: a zero-area triangle whose third corner rounded off the edge's line).
+  // Its free edges are a border, so it bounds nothing; removed, the surface may
+  // close. Peeled until none is left.
+  if (std::any_of(balance.begin(), balance.end(), [](const auto& entry) { return entry.second != 0; })) {
+    const auto edge_of = [&](const TrianglePiece& piece, int c) {
+      const VertexIndex u = piece.corners[c], v = piece.corners[(c + 1) % 3];
+      return (std::uint64_t{std::min(u, v)} << 32) | std::max(u, v);
+    };
+    // A fin's free edges are crossed one way only: the candidates are the
+    // triangles on such edges, and only their edges' uses are counted (peeling
+    // never frees an edge of another triangle: it takes one use from an edge
+    // with three or more, or the last from a free one).
+    std::vector<std::uint32_t> candidates;
+    std::unordered_map<std::uint64_t, std::uint32_t> uses;
+    for (std::uint32_t i = 0; i < pieces.size(); ++i) {
+      bool on_unbalanced = false;
+      for (int c = 0; c < 3 && !on_unbalanced; ++c) on_unbalanced = balance.find(edge_of(pieces[i], c))->second != 0;
+      if (!on_unbalanced) continue;
+      candidates.push_back(i);
+      for (int c = 0; c < 3; ++c) uses.emplace(edge_of(pieces[i], c), 0);
+    }
+    for (const TrianglePiece& piece : pieces) {
+      for (int c = 0; c < 3; ++c) {
+        if (const auto it = uses.find(edge_of(piece, c)); it != uses.end()) ++it->second;
+      }
+    }
+    std::vector<std::uint8_t> peeled(pieces.size(), 0);
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (const std::uint32_t i : candidates) {
+        if (peeled[i]) continue;
+        int free = 0, crowded = 0;
+        for (int c = 0; c < 3; ++c) {
+          const std::uint32_t count = uses[edge_of(pieces[i], c)];
+          free += count == 1;
+          crowded += count >= 3;
+        }
+        if (free == 0 || crowded == 0 || free + crowded != 3) continue;
+        peeled[i] = 1;
+        ++chain.fins;
+        changed = true;
+        for (int c = 0; c < 3; ++c) {
+          const std::uint64_t edge = edge_of(pieces[i], c);
+          --uses[edge];
+          balance[edge] -= pieces[i].corners[c] < pieces[i].corners[(c + 1) % 3] ? 1 : -1;
+        }
+      }
+    }
+    if (chain.fins > 0) {
+      std::size_t at = 0;
+      for (std::size_t i = 0; i < pieces.size(); ++i) {
+        if (!peeled[i]) pieces[at++] = pieces[i];
+      }
+      pieces.resize(at);
+    }
+  }
+  std::vector<std::uint64_t> unbalanced;
   for (const auto& [edge, count] : balance) {
-    if (count != 0) return std::nullopt;
+    if (count != 0) unbalanced.push_back(edge);
   }
-  welded.surfaces = mesh.surfaces;  // per triangle, in the same order
-  welded.corners = mesh.corners;
-  return welded;
+  // Edges crossed more often one way: closed all the same when vertices inside
+  // them split them into segments that are not (T-junctions, a zero-area
+  // triangle's long edge). The vertices to look for are those of such edges.
+  if (!unbalanced.empty()) {
+    std::sort(unbalanced.begin(), unbalanced.end());
+    std::vector<VertexIndex> candidates;
+    for (const std::uint64_t edge : unbalanced) {
+      candidates.push_back(static_cast<VertexIndex>(edge >> 32));
+      candidates.push_back(static_cast<VertexIndex>(edge));
+    }
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    // The candidates sorted along each axis; an edge scans those within its
+    // extent along the axis where that range holds the fewest.
+    std::array<std::vector<VertexIndex>, 3> along;
+    for (int axis = 0; axis < 3; ++axis) {
+      along[axis] = candidates;
+      std::sort(along[axis].begin(), along[axis].end(), [&](VertexIndex a, VertexIndex b) {
+        return positions[a][axis] != positions[b][axis] ? positions[a][axis] < positions[b][axis] : a < b;
+      });
+    }
+    std::unordered_map<std::uint64_t, std::vector<VertexIndex>> inside;
+    for (const std::uint64_t edge : unbalanced) {
+      const auto u = static_cast<VertexIndex>(edge >> 32), v = static_cast<VertexIndex>(edge);
+      using Range = std::pair<std::vector<VertexIndex>::const_iterator, std::vector<VertexIndex>::const_iterator>;
+      std::optional<Range> fewest;
+      for (int axis = 0; axis < 3; ++axis) {
+        const double low = std::min(positions[u][axis], positions[v][axis]);
+        const double high = std::max(positions[u][axis], positions[v][axis]);
+        const auto first = std::partition_point(along[axis].cbegin(), along[axis].cend(),
+                                                [&](VertexIndex w) { return positions[w][axis] < low; });
+        const auto last = std::partition_point(first, along[axis].cend(),
+                                               [&](VertexIndex w) { return positions[w][axis] <= high; });
+        if (!fewest || last - first < fewest->second - fewest->first) fewest = Range{first, last};
+      }
+      std::vector<VertexIndex> on;
+      for (auto it = fewest->first; it != fewest->second; ++it) {
+        if (strictly_inside_segment(positions[u], positions[v], positions[*it])) on.push_back(*it);
+      }
+      if (on.empty()) continue;
+      // From u to v: along the first coordinate where they differ (exact).
+      int axis = 0;
+      while (positions[u][axis] == positions[v][axis]) ++axis;
+      const bool rising = positions[u][axis] < positions[v][axis];
+      std::sort(on.begin(), on.end(), [&](VertexIndex a, VertexIndex b) {
+        return rising ? positions[a][axis] < positions[b][axis] : positions[a][axis] > positions[b][axis];
+      });
+      chain.split_at += on.size();
+      inside.emplace(edge, std::move(on));
+    }
+    if (inside.empty()) return std::nullopt;
+    chain.split_edges = inside.size();
+    split_at_inside_vertices(positions, inside, pieces);
+    balance = edge_balance(pieces);
+    for (const auto& [edge, count] : balance) {
+      if (count != 0) return std::nullopt;
+    }
+  }
+  // The chain's mesh over the vertices it uses, in their first order.
+  std::vector<VertexIndex> renumbered(positions.size(), no_index);
+  for (const TrianglePiece& piece : pieces) {
+    for (const VertexIndex v : piece.corners) renumbered[v] = 0;
+  }
+  for (VertexIndex v = 0; v < positions.size(); ++v) {
+    if (renumbered[v] == no_index) {
+      ++chain.unused;
+      continue;
+    }
+    renumbered[v] = static_cast<VertexIndex>(chain.mesh.positions.size());
+    chain.mesh.positions.push_back(positions[v]);
+  }
+  for (const TrianglePiece& piece : pieces) {
+    chain.mesh.triangles.push_back(
+        {renumbered[piece.corners[0]], renumbered[piece.corners[1]], renumbered[piece.corners[2]]});
+    chain.mesh.surfaces.push_back(mesh.surfaces[piece.source]);
+    for (int c = 0; c < 3; ++c) add_corner_attributes(mesh, piece, c, chain.mesh.corners);
+  }
+  return chain;
+}
+
+// The chain's steps as report lines (in step order, the kinds the other steps
+// report the same changes with).
+void report_chain(const ClosedChain& chain, RepairReport& report) {
+  if (chain.merged > 0) {
+    report.changes.push_back({RepairKind::merged_duplicate_vertices, chain.merged, merged_vertices_text(chain.merged)});
+  }
+  if (chain.repeated > 0) {
+    report.changes.push_back({RepairKind::removed_repeated_index_triangles, chain.repeated,
+                              "removed " + plural(chain.repeated, "zero-area triangle", "zero-area triangles") +
+                                  " that use one vertex twice"});
+  }
+  if (chain.duplicates > 0) {
+    report.changes.push_back({RepairKind::removed_duplicate_triangles, chain.duplicates,
+                              "removed " + plural(chain.duplicates, "duplicate triangle", "duplicate triangles")});
+  }
+  if (chain.opposite > 0) {
+    report.changes.push_back({RepairKind::removed_opposite_triangle_pairs, chain.opposite,
+                              "removed " +
+                                  plural(chain.opposite, "triangle lying back to back with a copy of itself",
+                                         "triangles lying back to back with copies of themselves") +
+                                  " (the copies over three vertices kept as their neighbours need them)"});
+  }
+  if (chain.collinear > 0) {
+    report.changes.push_back({RepairKind::fixed_zero_area_triangles, chain.collinear,
+                              "removed " + plural(chain.collinear, "zero-area triangle", "zero-area triangles") +
+                                  " (corners exactly collinear: they enclose nothing)"});
+  }
+  if (chain.fins > 0) {
+    report.changes.push_back({RepairKind::removed_hanging_triangles, chain.fins,
+                              "removed " + plural(chain.fins, "triangle", "triangles") +
+                                  " hanging from an edge of the surface (fins: their other edges free, they bound "
+                                  "nothing)"});
+  }
+  if (chain.split_edges > 0) {
+    report.changes.push_back({RepairKind::split_edges_at_vertices, chain.split_edges,
+                              "split " + plural(chain.split_edges, "edge", "edges") + " at the " +
+                                  plural(chain.split_at, "vertex", "vertices") +
+                                  " lying inside them (T-junctions), closing the surface"});
+  }
+  if (chain.unused > 0) {
+    report.changes.push_back({RepairKind::removed_unused_vertices, chain.unused,
+                              "removed " + plural(chain.unused, "vertex", "vertices") + " no triangle uses"});
+  }
+  report.vertices_after = chain.mesh.vertex_count();
+  report.triangles_after = chain.mesh.triangle_count();
 }
 
 }  // namespace
@@ -1431,14 +1878,31 @@ RepairReport repair_mesh(Mesh& mesh, const RepairOptions& options) {
     report.notes.push_back({"not repaired: " + validation.summary()});
     return report;
   }
-  if (std::optional<Mesh> shells = balanced_welded_surface(mesh); shells && options.round_solid) {
+  if (std::optional<ClosedChain> chain = closed_welded_chain(mesh)) {
     RepairReport attempt = report;
-    if (const std::size_t merged = mesh.positions.size() - shells->positions.size(); merged > 0) {
-      attempt.changes.push_back({RepairKind::merged_duplicate_vertices, merged, merged_vertices_text(merged)});
+    report_chain(*chain, attempt);
+    if (getenv("DBG_CHAIN")) fprintf(stderr, "chain: %s\n", attempt.summary().c_str());
+    // Taken only as a whole: valid as it is, or the hook's mesh is valid
+    // (RepairRounding::valid). Shells that only touch go to the arrangement
+    // too; shells nested the wrong way round (no crossing, no touching) stay
+    // for step 7, which orients them by their nesting (an inner shell a cavity).
+    // Shells that touch are taken apart as step 9 does, keeping their
+    // triangles, when that leaves a valid mesh.
+    const ValidationReport check = validate_mesh(chain->mesh);
+    const bool touching = check.find(DefectKind::non_manifold_edge) || check.find(DefectKind::non_manifold_vertex);
+    if (touching && !check.find(DefectKind::inconsistent_orientation)) {
+      Mesh separated = chain->mesh;
+      const kernel_detail::TouchingSeparation separation =
+          kernel_detail::separate_touching_parts(separated, options.touching_separation);
+      if (separation.separated && validate_mesh(separated).valid()) {
+        attempt.changes.push_back(touching_change(separation, options.touching_separation));
+        mesh = std::move(separated);
+        attempt.vertices_after = mesh.vertex_count();
+        return attempt;
+      }
     }
-    // Taken only as a whole: the hook's mesh is valid (RepairRounding::valid).
-    if (resolve_self_intersections_exactly(*shells, mesh, options, attempt)) {
-      mesh = std::move(*shells);
+    if (check.valid() || resolve_self_intersections_exactly(chain->mesh, mesh, options, attempt, touching)) {
+      mesh = std::move(chain->mesh);
       return attempt;
     }
   }

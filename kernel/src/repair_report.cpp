@@ -37,6 +37,8 @@ std::string_view repair_kind_name(RepairKind kind) {
     case RepairKind::separated_touching_parts: return "separated_touching_parts";
     case RepairKind::resolved_self_intersections_exactly: return "resolved_self_intersections_exactly";
     case RepairKind::removed_flat_pieces: return "removed_flat_pieces";
+    case RepairKind::split_edges_at_vertices: return "split_edges_at_vertices";
+    case RepairKind::removed_hanging_triangles: return "removed_hanging_triangles";
   }
   return "unknown";
 }

@@ -33,7 +33,8 @@ enum class RepairKind {
                                  ///< shell bounding its volume, the outer ones outward (orient_to_bound_a_volume);
                                  ///< counted once, against the input's orientation
   stitched_border_edges,         ///< pairs of boundary edges with exactly equal endpoints joined (stitch_borders)
-  fixed_zero_area_triangles,     ///< exactly collinear triangles removed by edge flips/collapses (remove_degenerate_faces)
+  fixed_zero_area_triangles,     ///< exactly collinear triangles removed by edge flips/collapses (remove_degenerate_faces),
+                                 ///< or outright where the welded surface closes without them (their edges split)
   filled_holes,                  ///< boundary cycles closed by new triangles over their own vertices (triangulate_hole)
   resolved_self_intersections,   ///< retired, made by no repair now: CGAL 5.5's experimental autorefinement
                                  ///< (an opt-in step 8 until 2026-12-05, replaced by the exact step 11); kept so
@@ -47,19 +48,24 @@ enum class RepairKind {
                                         ///< certified once (RepairOptions::round_solid); runs last
   removed_flat_pieces,  ///< connected pieces (through shared vertices) whose corners all lie in one plane, exactly: however
                         ///< they are closed they enclose no volume; runs after step 2 (appended: see above)
+  split_edges_at_vertices,  ///< edges split at the vertices lying exactly inside them (T-junctions), closing a
+                            ///< surface whose welded triangles cross every segment as often each way (appended)
+  removed_hanging_triangles,  ///< fins: triangles on an edge three or more triangles use, their other edges used by
+                              ///< no other triangle, removed where the surface closes without them (appended)
 };
 
 /// Every RepairKind (in step order, but for the last two); a kind's position is the number the
 /// .shatter file stores for it (formats/file.hpp, section `rpar`), so new kinds
 /// are appended, never inserted.
-inline constexpr std::array<RepairKind, 13> all_repair_kinds = {
+inline constexpr std::array<RepairKind, 15> all_repair_kinds = {
     RepairKind::merged_duplicate_vertices,       RepairKind::removed_repeated_index_triangles,
     RepairKind::removed_duplicate_triangles,     RepairKind::removed_opposite_triangle_pairs,
     RepairKind::reversed_triangles,              RepairKind::stitched_border_edges,
     RepairKind::fixed_zero_area_triangles,       RepairKind::filled_holes,
     RepairKind::resolved_self_intersections,     RepairKind::removed_unused_vertices,
     RepairKind::separated_touching_parts,        RepairKind::resolved_self_intersections_exactly,
-    RepairKind::removed_flat_pieces};
+    RepairKind::removed_flat_pieces,             RepairKind::split_edges_at_vertices,
+    RepairKind::removed_hanging_triangles};
 
 /// The kind's name as the CLI's JSON prints it, e.g. "filled_holes".
 std::string_view repair_kind_name(RepairKind kind);
