@@ -1818,46 +1818,30 @@ std::optional<ClosedChain> closed_welded_chain(const Mesh& mesh) {
 // The chain's steps as report lines (in step order, the kinds the other steps
 // report the same changes with).
 void report_chain(const ClosedChain& chain, RepairReport& report) {
-  if (chain.merged > 0) {
-    report.changes.push_back({RepairKind::merged_duplicate_vertices, chain.merged, merged_vertices_text(chain.merged)});
-  }
-  if (chain.repeated > 0) {
-    report.changes.push_back({RepairKind::removed_repeated_index_triangles, chain.repeated,
-                              "removed " + plural(chain.repeated, "zero-area triangle", "zero-area triangles") +
-                                  " that use one vertex twice"});
-  }
-  if (chain.duplicates > 0) {
-    report.changes.push_back({RepairKind::removed_duplicate_triangles, chain.duplicates,
-                              "removed " + plural(chain.duplicates, "duplicate triangle", "duplicate triangles")});
-  }
-  if (chain.opposite > 0) {
-    report.changes.push_back({RepairKind::removed_opposite_triangle_pairs, chain.opposite,
-                              "removed " +
-                                  plural(chain.opposite, "triangle lying back to back with a copy of itself",
-                                         "triangles lying back to back with copies of themselves") +
-                                  " (the copies over three vertices kept as their neighbours need them)"});
-  }
-  if (chain.collinear > 0) {
-    report.changes.push_back({RepairKind::fixed_zero_area_triangles, chain.collinear,
-                              "removed " + plural(chain.collinear, "zero-area triangle", "zero-area triangles") +
-                                  " (corners exactly collinear: they enclose nothing)"});
-  }
-  if (chain.fins > 0) {
-    report.changes.push_back({RepairKind::removed_hanging_triangles, chain.fins,
-                              "removed " + plural(chain.fins, "triangle", "triangles") +
-                                  " hanging from an edge of the surface (fins: their other edges free, they bound "
-                                  "nothing)"});
-  }
-  if (chain.split_edges > 0) {
-    report.changes.push_back({RepairKind::split_edges_at_vertices, chain.split_edges,
-                              "split " + plural(chain.split_edges, "edge", "edges") + " at the " +
-                                  plural(chain.split_at, "vertex", "vertices") +
-                                  " lying inside them (T-junctions), closing the surface"});
-  }
-  if (chain.unused > 0) {
-    report.changes.push_back({RepairKind::removed_unused_vertices, chain.unused,
-                              "removed " + plural(chain.unused, "vertex", "vertices") + " no triangle uses"});
-  }
+  const auto add = [&](std::size_t count, RepairKind kind, std::string text) {
+    if (count > 0) report.changes.push_back({kind, count, std::move(text)});
+  };
+  add(chain.merged, RepairKind::merged_duplicate_vertices, merged_vertices_text(chain.merged));
+  add(chain.repeated, RepairKind::removed_repeated_index_triangles,
+      "removed " + plural(chain.repeated, "zero-area triangle", "zero-area triangles") + " that use one vertex twice");
+  add(chain.duplicates, RepairKind::removed_duplicate_triangles,
+      "removed " + plural(chain.duplicates, "duplicate triangle", "duplicate triangles"));
+  add(chain.opposite, RepairKind::removed_opposite_triangle_pairs,
+      "removed " +
+          plural(chain.opposite, "triangle lying back to back with a copy of itself",
+                 "triangles lying back to back with copies of themselves") +
+          " (the copies over three vertices kept as their neighbours need them)");
+  add(chain.collinear, RepairKind::fixed_zero_area_triangles,
+      "removed " + plural(chain.collinear, "zero-area triangle", "zero-area triangles") +
+          " (corners exactly collinear: they enclose nothing)");
+  add(chain.fins, RepairKind::removed_hanging_triangles,
+      "removed " + plural(chain.fins, "triangle", "triangles") +
+          " hanging from an edge of the surface (fins: their other edges free, they bound nothing)");
+  add(chain.split_edges, RepairKind::split_edges_at_vertices,
+      "split " + plural(chain.split_edges, "edge", "edges") + " at the " + plural(chain.split_at, "vertex", "vertices") +
+          " lying inside them (T-junctions), closing the surface");
+  add(chain.unused, RepairKind::removed_unused_vertices,
+      "removed " + plural(chain.unused, "vertex", "vertices") + " no triangle uses");
   report.vertices_after = chain.mesh.vertex_count();
   report.triangles_after = chain.mesh.triangle_count();
 }

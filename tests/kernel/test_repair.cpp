@@ -233,90 +233,70 @@ std::optional<Vec3> midpoint_inside(const Mesh& mesh, std::size_t t, int c) {
   return m;
 }
 
-TEST_CASE("stray zero-area triangles along a closed surface's edges are removed: the surface comes back as it was",
-          "[repair][chain]") {
-  // Each stray triangle is an edge and a point exactly inside it, either way
-  // round: a degenerate triangle of the welded chain that encloses nothing. The
-  // other steps took its edges for holes and closed them with lids (a box
-  // scaled by 1e8 with 9 such triangles came out of volume 6.67e24, not 8e24).
-  std::size_t cases = 0;
-  for (const NamedMesh& named : test_meshes()) {
-    Random random(named.mesh.triangle_count() + 17);
-    for (int attempt = 0; attempt < 3; ++attempt) {
-      Mesh mesh = named.mesh;
-      const std::size_t strays = 1 + random.index(9);
-      std::size_t added = 0;
-      for (std::size_t i = 0; i < 4 * strays && added < strays; ++i) {
-        const std::size_t t = random.index(named.mesh.triangle_count());
-        const int c = static_cast<int>(random.index(3));
-        const std::optional<Vec3> m = midpoint_inside(named.mesh, t, c);
-        if (!m) continue;
-        const VertexIndex a = mesh.triangles[t][c], b = mesh.triangles[t][(c + 1) % 3];
-        mesh.positions.push_back(*m);
-        const auto mi = static_cast<VertexIndex>(mesh.positions.size() - 1);
-        mesh.triangles.push_back(random.index(2) == 0 ? Triangle{a, b, mi} : Triangle{b, a, mi});
-        mesh.surfaces.push_back(original_surface);
-        ++added;
-      }
-      if (added == 0) continue;
-      INFO(named.name << " attempt " << attempt << ": " << added << " stray triangles");
-      const RepairReport report = repair_mesh(mesh);
-      INFO(report.summary());
-      CHECK(count_of(report, RepairKind::fixed_zero_area_triangles) == added);
-      // The same midpoint twice is welded first.
-      CHECK(count_of(report, RepairKind::removed_unused_vertices) +
-                count_of(report, RepairKind::merged_duplicate_vertices) ==
-            added);
-      CHECK_FALSE(names(report, RepairKind::filled_holes));
-      CHECK(problem_after_repair(mesh).empty());
-      CHECK(canonical_bytes(mesh) == canonical_bytes(named.mesh));
-      ++cases;
-    }
+// Adds up to `wanted` triangles (a, b, p), either way round, each on another
+// edge (a, b) of `mesh`'s first `triangles` triangles, p = point(t, c) for the
+// edge c of triangle t (none where it gives nothing). Returns how many it added.
+template <class Point>
+std::size_t add_triangles_on_edges(Mesh& mesh, std::size_t triangles, Random& random, std::size_t wanted,
+                                   Point point) {
+  std::set<std::pair<VertexIndex, VertexIndex>> used;
+  std::size_t added = 0;
+  for (std::size_t i = 0; i < 4 * wanted && added < wanted; ++i) {
+    const std::size_t t = random.index(triangles);
+    const int c = static_cast<int>(random.index(3));
+    const VertexIndex a = mesh.triangles[t][c], b = mesh.triangles[t][(c + 1) % 3];
+    const std::optional<Vec3> p = point(t, c);
+    if (!p || !used.insert({std::min(a, b), std::max(a, b)}).second) continue;
+    mesh.positions.push_back(*p);
+    const auto pi = static_cast<VertexIndex>(mesh.positions.size() - 1);
+    mesh.triangles.push_back(random.index(2) == 0 ? Triangle{a, b, pi} : Triangle{b, a, pi});
+    mesh.surfaces.push_back(original_surface);
+    ++added;
   }
-  CHECK(cases > 30);
+  return added;
 }
 
-TEST_CASE("slivers stuck on a closed surface's edges (fins) are removed: the surface comes back as it was",
+TEST_CASE("triangles stuck on a closed surface's edges (zero-area or fins) are removed: the surface comes back as it was",
           "[repair][chain]") {
-  // An edge and a point near its middle but off its line (a rounded midpoint,
-  // or one moved a little): a real triangle whose two other edges are free. It
-  // bounds nothing; lids over its free edges would repeat it the other way,
-  // and the other steps refused such meshes as open (the sweep's stray_zero
-  // class where the midpoint rounded off the edge).
-  std::size_t cases = 0;
-  for (const NamedMesh& named : test_meshes()) {
-    Random random(named.mesh.triangle_count() + 41);
-    for (int attempt = 0; attempt < 3; ++attempt) {
-      Mesh mesh = named.mesh;
-      const std::size_t fins = 1 + random.index(6);
-      std::set<std::pair<VertexIndex, VertexIndex>> used;
-      for (std::size_t i = 0; i < fins; ++i) {
-        const std::size_t t = random.index(named.mesh.triangle_count());
-        const int c = static_cast<int>(random.index(3));
-        const VertexIndex a = mesh.triangles[t][c], b = mesh.triangles[t][(c + 1) % 3];
-        if (!used.insert({std::min(a, b), std::max(a, b)}).second) continue;  // one fin per edge
-        const Vec3 pa = mesh.positions[a], pb = mesh.positions[b];
-        const Vec3 across = mesh.positions[mesh.triangles[t][(c + 2) % 3]] - pa;
-        const Vec3 m = (pa + pb) * 0.5 + across * std::ldexp(1.0, -static_cast<int>(10 + random.index(30)));
-        REQUIRE_FALSE(collinear(pa, pb, m));
-        mesh.positions.push_back(m);
-        const auto mi = static_cast<VertexIndex>(mesh.positions.size() - 1);
-        mesh.triangles.push_back(random.index(2) == 0 ? Triangle{a, b, mi} : Triangle{b, a, mi});
-        mesh.surfaces.push_back(original_surface);
+  // Each is an edge and a point near its middle: exactly inside it (a zero-area
+  // triangle of the welded chain, enclosing nothing) or off its line (a rounded
+  // midpoint, or one moved a little: a fin, whose two other edges are free and
+  // bound nothing). The other steps took their edges for holes: they closed
+  // them with lids (a box scaled by 1e8 with 9 zero-area ones came out of
+  // volume 6.67e24, not 8e24) or refused the mesh as open (a fin's only lid
+  // repeats it the other way round).
+  for (const bool fins : {false, true}) {
+    std::size_t cases = 0;
+    for (const NamedMesh& named : test_meshes()) {
+      Random random(named.mesh.triangle_count() + (fins ? 41 : 17));
+      for (int attempt = 0; attempt < 3; ++attempt) {
+        Mesh mesh = named.mesh;
+        const std::size_t added = add_triangles_on_edges(
+            mesh, named.mesh.triangle_count(), random, 1 + random.index(9),
+            [&](std::size_t t, int c) -> std::optional<Vec3> {
+              if (!fins) return midpoint_inside(named.mesh, t, c);
+              const Vec3 a = named.mesh.positions[named.mesh.triangles[t][c]];
+              const Vec3 b = named.mesh.positions[named.mesh.triangles[t][(c + 1) % 3]];
+              const Vec3 across = named.mesh.positions[named.mesh.triangles[t][(c + 2) % 3]] - a;
+              const Vec3 m = (a + b) * 0.5 + across * std::ldexp(1.0, -static_cast<int>(10 + random.index(30)));
+              if (collinear(a, b, m)) return std::nullopt;  // the move rounded away: no fin
+              return m;
+            });
+        if (added == 0) continue;
+        INFO(named.name << " attempt " << attempt << ": " << added << (fins ? " fins" : " zero-area triangles"));
+        const RepairReport report = repair_mesh(mesh);
+        INFO(report.summary());
+        CHECK(count_of(report, fins ? RepairKind::removed_hanging_triangles : RepairKind::fixed_zero_area_triangles) ==
+              added);
+        CHECK(count_of(report, RepairKind::removed_unused_vertices) == added);
+        CHECK_FALSE(names(report, RepairKind::filled_holes));
+        CHECK(problem_after_repair(mesh).empty());
+        CHECK(canonical_bytes(mesh) == canonical_bytes(named.mesh));
+        ++cases;
       }
-      const std::size_t added = mesh.triangle_count() - named.mesh.triangle_count();
-      INFO(named.name << " attempt " << attempt << ": " << added << " fins");
-      const RepairReport report = repair_mesh(mesh);
-      INFO(report.summary());
-      CHECK(count_of(report, RepairKind::removed_hanging_triangles) == added);
-      CHECK(count_of(report, RepairKind::removed_unused_vertices) == added);
-      CHECK_FALSE(names(report, RepairKind::filled_holes));
-      CHECK(problem_after_repair(mesh).empty());
-      CHECK(canonical_bytes(mesh) == canonical_bytes(named.mesh));
-      ++cases;
     }
+    CHECK(cases > 30);
   }
-  CHECK(cases > 30);
 }
 
 TEST_CASE("a triangle split at a point inside an edge its neighbour does not split (a T-junction): the neighbour is "
