@@ -2,7 +2,10 @@
 
 #include <gmpxx.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <span>
 
 #include "shatter/kernel/error.hpp"
 
@@ -20,26 +23,30 @@ bool indices_in_range(const Triangle& t, std::size_t vertex_count) {
 // accumulated face by face with the divergence theorem. Each triangle contributes
 // the exact integrals over the tetrahedron it spans with the (local) origin; the
 // polynomial subexpressions are those of D. Eberly, "Polyhedral Mass Properties
-// (Revisited)", 2002 (itself a simplification of Mirtich 1996).
+// (Revisited)", 2002 (itself a simplification of Mirtich 1996). In doubles, or
+// exactly in rationals (N = mpq_class) where the doubles cancel to nothing.
+template <class N>
 struct VolumeIntegrals {
-  double one = 0;
-  Vec3 first;                      // integrals of x, y, z
-  Vec3 square;                     // integrals of x^2, y^2, z^2
-  double xy = 0, yz = 0, zx = 0;   // mixed integrals
+  N one = 0;
+  std::array<N, 3> first{};   // integrals of x, y, z
+  std::array<N, 3> square{};  // integrals of x^2, y^2, z^2
+  N xy = 0, yz = 0, zx = 0;   // mixed integrals
 };
 
 // For one coordinate with values w0, w1, w2 at the corners: the sums Eberly calls
 // f1 = w0 + w1 + w2, f2 = sum of degree-2 monomials, f3 = sum of degree-3
 // monomials, and g_i = f2 + w_i (f1 + w_i), used for the mixed integrals.
+template <class N>
 struct CornerSums {
-  double f1, f2, f3, g0, g1, g2;
+  N f1, f2, f3, g0, g1, g2;
 };
 
-CornerSums corner_sums(double w0, double w1, double w2) {
-  const double sum01 = w0 + w1;
-  const double w0_squared = w0 * w0;
-  const double partial = w0_squared + w1 * sum01;
-  CornerSums s{};
+template <class N>
+CornerSums<N> corner_sums(const N& w0, const N& w1, const N& w2) {
+  const N sum01 = w0 + w1;
+  const N w0_squared = w0 * w0;
+  const N partial = w0_squared + w1 * sum01;
+  CornerSums<N> s{};
   s.f1 = sum01 + w2;
   s.f2 = partial + w2 * s.f1;
   s.f3 = w0 * w0_squared + w1 * partial + w2 * s.f2;
@@ -47,6 +54,49 @@ CornerSums corner_sums(double w0, double w1, double w2) {
   s.g1 = s.f2 + w1 * (s.f1 + w1);
   s.g2 = s.f2 + w2 * (s.f1 + w2);
   return s;
+}
+
+double divided(double x, int by) { return x * (1.0 / by); }
+mpq_class divided(const mpq_class& x, int by) { return x / by; }
+
+// The integrals over the triangles whose corners `corner(v)` gives (as three
+// coordinates of type N), summed in triangle order.
+template <class N, class Corner>
+VolumeIntegrals<N> integrate_corners(std::span<const Triangle> triangles, std::size_t vertex_count, Corner corner) {
+  VolumeIntegrals<N> sums;
+  for (const Triangle& t : triangles) {
+    if (!indices_in_range(t, vertex_count)) continue;  // precondition broken: stay finite, never read out of range
+    const std::array<N, 3> p0 = corner(t[0]), p1 = corner(t[1]), p2 = corner(t[2]);
+    // Twice the area vector (p1 - p0) x (p2 - p0); its components weight the
+    // divergence-theorem terms.
+    const std::array<N, 3> e1{p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+    const std::array<N, 3> e2{p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+    const std::array<N, 3> d{e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                             e1[0] * e2[1] - e1[1] * e2[0]};
+    const CornerSums<N> x = corner_sums(p0[0], p1[0], p2[0]);
+    const CornerSums<N> y = corner_sums(p0[1], p1[1], p2[1]);
+    const CornerSums<N> z = corner_sums(p0[2], p1[2], p2[2]);
+    sums.one += d[0] * x.f1;
+    sums.first[0] += d[0] * x.f2;
+    sums.first[1] += d[1] * y.f2;
+    sums.first[2] += d[2] * z.f2;
+    sums.square[0] += d[0] * x.f3;
+    sums.square[1] += d[1] * y.f3;
+    sums.square[2] += d[2] * z.f3;
+    sums.xy += d[0] * (p0[1] * x.g0 + p1[1] * x.g1 + p2[1] * x.g2);
+    sums.yz += d[1] * (p0[2] * y.g0 + p1[2] * y.g1 + p2[2] * y.g2);
+    sums.zx += d[2] * (p0[0] * z.g0 + p1[0] * z.g1 + p2[0] * z.g2);
+  }
+  // The constant factors of the exact integrals over a tetrahedron (in doubles
+  // the first and second moments times the rounded reciprocals, as they always
+  // were: the same bits).
+  sums.one /= 6;
+  for (N& moment : sums.first) moment = divided(moment, 24);
+  for (N& moment : sums.square) moment = divided(moment, 60);
+  sums.xy /= 120;
+  sums.yz /= 120;
+  sums.zx /= 120;
+  return sums;
 }
 
 // The power of two the coordinates (relative to `origin`) are divided by before
@@ -71,43 +121,13 @@ int scale_exponent(std::span<const Vec3> positions, Vec3 origin) {
 
 // The integrals over the mesh's coordinates relative to `origin`, divided by
 // 2^shift (the results in those units: the volume is 2^-3shift times the true one).
-VolumeIntegrals integrate(std::span<const Vec3> positions, std::span<const Triangle> triangles, Vec3 origin,
-                          int shift) {
-  VolumeIntegrals sums;
-  const std::size_t vertex_count = positions.size();
-  const auto local = [&](VertexIndex v) {
+VolumeIntegrals<double> integrate(std::span<const Vec3> positions, std::span<const Triangle> triangles, Vec3 origin,
+                                  int shift) {
+  return integrate_corners<double>(triangles, positions.size(), [&](VertexIndex v) {
     const Vec3 d = positions[v] - origin;
-    return shift == 0 ? d : Vec3{std::ldexp(d.x, -shift), std::ldexp(d.y, -shift), std::ldexp(d.z, -shift)};
-  };
-  for (const Triangle& t : triangles) {
-    if (!indices_in_range(t, vertex_count)) continue;  // precondition broken: stay finite, never read out of range
-    const Vec3 p0 = local(t[0]);
-    const Vec3 p1 = local(t[1]);
-    const Vec3 p2 = local(t[2]);
-    // Twice the area vector; its components weight the divergence-theorem terms.
-    const Vec3 d = cross(p1 - p0, p2 - p0);
-    const CornerSums x = corner_sums(p0.x, p1.x, p2.x);
-    const CornerSums y = corner_sums(p0.y, p1.y, p2.y);
-    const CornerSums z = corner_sums(p0.z, p1.z, p2.z);
-    sums.one += d.x * x.f1;
-    sums.first.x += d.x * x.f2;
-    sums.first.y += d.y * y.f2;
-    sums.first.z += d.z * z.f2;
-    sums.square.x += d.x * x.f3;
-    sums.square.y += d.y * y.f3;
-    sums.square.z += d.z * z.f3;
-    sums.xy += d.x * (p0.y * x.g0 + p1.y * x.g1 + p2.y * x.g2);
-    sums.yz += d.y * (p0.z * y.g0 + p1.z * y.g1 + p2.z * y.g2);
-    sums.zx += d.z * (p0.x * z.g0 + p1.x * z.g1 + p2.x * z.g2);
-  }
-  // The constant factors of the exact integrals over a tetrahedron.
-  sums.one /= 6;
-  sums.first = sums.first * (1.0 / 24);
-  sums.square = sums.square * (1.0 / 60);
-  sums.xy /= 120;
-  sums.yz /= 120;
-  sums.zx /= 120;
-  return sums;
+    return shift == 0 ? std::array<double, 3>{d.x, d.y, d.z}
+                      : std::array<double, 3>{std::ldexp(d.x, -shift), std::ldexp(d.y, -shift), std::ldexp(d.z, -shift)};
+  });
 }
 
 Sign sign_of(const mpq_class& value) {
@@ -140,42 +160,75 @@ bool in_filter_range(double x) {
 
 }  // namespace
 
+namespace {
+
+double to_double(double x) { return x; }
+double to_double(const mpq_class& x) { return x.get_d(); }
+
+// The volume, centroid and inertia about the centroid from the integrals over
+// coordinates relative to `origin` in units of 2^shift, in N, rounded to doubles
+// last.
+template <class N>
+MassProperties mass_from_integrals(const VolumeIntegrals<N>& sums, Vec3 origin, int shift) {
+  MassProperties result;
+  const N& volume = sums.one;
+  result.volume = std::ldexp(to_double(volume), 3 * shift);
+  // A flat (zero-volume) mesh has no centre of mass: report the origin, finite.
+  std::array<N, 3> c{};
+  if (volume != 0) {
+    const N inverse = 1 / volume;
+    for (int k = 0; k < 3; ++k) c[k] = sums.first[k] * inverse;
+  }
+  result.centroid = origin + Vec3{std::ldexp(to_double(c[0]), shift), std::ldexp(to_double(c[1]), shift),
+                                  std::ldexp(to_double(c[2]), shift)};
+
+  // Parallel-axis shift of the second moments to the centroid, then the inertia
+  // tensor I = integral of (|r|^2 Id - r r^T): diagonal terms are sums of two
+  // squared moments, off-diagonal terms the negated products of inertia.
+  const N xx = sums.square[0] - volume * c[0] * c[0];
+  const N yy = sums.square[1] - volume * c[1] * c[1];
+  const N zz = sums.square[2] - volume * c[2] * c[2];
+  const N xy = sums.xy - volume * c[0] * c[1];
+  const N yz = sums.yz - volume * c[1] * c[2];
+  const N zx = sums.zx - volume * c[2] * c[0];
+  result.inertia = {to_double(yy + zz), to_double(-xy),      to_double(-zx),  //
+                    to_double(-xy),      to_double(xx + zz), to_double(-yz),  //
+                    to_double(-zx),      to_double(-yz),     to_double(xx + yy)};
+  if (shift != 0) {
+    for (double& entry : result.inertia) entry = std::ldexp(entry, 5 * shift);
+  }
+  return result;
+}
+
+}  // namespace
+
 MassProperties mass_properties(const Mesh& mesh) { return mass_properties(mesh.positions, mesh.triangles); }
 
 MassProperties mass_properties(std::span<const Vec3> positions, std::span<const Triangle> triangles) {
-  MassProperties result;
-  if (positions.empty()) return result;
+  if (positions.empty()) return {};
   // Integrating about a vertex of the mesh keeps the coordinates small relative to
   // the object's size, so a mesh far from the world origin loses no precision to
   // cancellation between huge first and second moments.
   const Vec3 origin = positions.front();
   // In units of 2^shift (scale_exponent), scaled back last.
   const int shift = scale_exponent(positions, origin);
-  const VolumeIntegrals sums = integrate(positions, triangles, origin, shift);
-  const double volume = sums.one;
-  result.volume = std::ldexp(volume, 3 * shift);
-  // A flat (zero-volume) mesh has no centre of mass: report the origin, finite.
-  const Vec3 local_centroid = volume != 0 ? sums.first * (1.0 / volume) : Vec3{};
-  result.centroid = origin + Vec3{std::ldexp(local_centroid.x, shift), std::ldexp(local_centroid.y, shift),
-                                  std::ldexp(local_centroid.z, shift)};
-
-  // Parallel-axis shift of the second moments to the centroid, then the inertia
-  // tensor I = integral of (|r|^2 Id - r r^T): diagonal terms are sums of two
-  // squared moments, off-diagonal terms the negated products of inertia.
-  const Vec3 c = local_centroid;
-  const double xx = sums.square.x - volume * c.x * c.x;
-  const double yy = sums.square.y - volume * c.y * c.y;
-  const double zz = sums.square.z - volume * c.z * c.z;
-  const double xy = sums.xy - volume * c.x * c.y;
-  const double yz = sums.yz - volume * c.y * c.z;
-  const double zx = sums.zx - volume * c.z * c.x;
-  result.inertia = {yy + zz, -xy, -zx,  //
-                    -xy, xx + zz, -yz,  //
-                    -zx, -yz, xx + yy};
-  if (shift != 0) {
-    for (double& entry : result.inertia) entry = std::ldexp(entry, 5 * shift);
+  const VolumeIntegrals<double> sums = integrate(positions, triangles, origin, shift);
+  const auto finite = [](const Vec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); };
+  if (!(sums.one > 0) && std::all_of(positions.begin(), positions.end(), finite)) {
+    // The doubles cancelled to nothing or below (a solid nearly flat: an open
+    // disk closed by a lid ulps from its plane, of volume 1e-17, came out
+    // negative, and fracture refused what validate, deciding the sign exactly,
+    // accepted): the integrals again, exactly, on the input doubles about the
+    // world origin, rounded once at the end (only on finite coordinates, which
+    // rationals need; the doubles' NaN stays NaN).
+    const VolumeIntegrals<mpq_class> exact =
+        integrate_corners<mpq_class>(triangles, positions.size(), [&](VertexIndex v) {
+          const Vec3& p = positions[v];
+          return std::array<mpq_class, 3>{mpq_class(p.x), mpq_class(p.y), mpq_class(p.z)};
+        });
+    if (sgn(exact.one) > 0) return mass_from_integrals(exact, Vec3{}, 0);
   }
-  return result;
+  return mass_from_integrals(sums, origin, shift);
 }
 
 double signed_volume(const Mesh& mesh) {
