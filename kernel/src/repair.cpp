@@ -1557,6 +1557,66 @@ std::optional<ClosedChain> closed_welded_chain(const Mesh& mesh) {
       pieces.push_back({w, t, {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}});
     }
   }
+  std::unordered_map<std::uint64_t, std::int64_t> balance = edge_balance(pieces);
+  // Fins: a triangle on an edge of the surface (one that three or more
+  // triangles use), its other edges its own or also such (a sliver stuck on an
+  // edge: a zero-area triangle whose third corner rounded off the edge's line).
+  // Its free edges are a border, so it bounds nothing; removed, the surface may
+  // close. Peeled until none is left, before the copies below are settled: a
+  // fin on an edge of copied triangles would count against what the edge needs.
+  if (std::any_of(balance.begin(), balance.end(), [](const auto& entry) { return entry.second != 0; })) {
+    const auto edge_of = [&](const TrianglePiece& piece, int c) {
+      const VertexIndex u = piece.corners[c], v = piece.corners[(c + 1) % 3];
+      return (std::uint64_t{std::min(u, v)} << 32) | std::max(u, v);
+    };
+    // A fin's free edges are crossed one way only: the candidates are the
+    // triangles on such edges, and only their edges' uses are counted (peeling
+    // never frees an edge of another triangle: it takes one use from an edge
+    // with three or more, or the last from a free one).
+    std::vector<std::uint32_t> candidates;
+    std::unordered_map<std::uint64_t, std::uint32_t> uses;
+    for (std::uint32_t i = 0; i < pieces.size(); ++i) {
+      bool on_unbalanced = false;
+      for (int c = 0; c < 3 && !on_unbalanced; ++c) on_unbalanced = balance.find(edge_of(pieces[i], c))->second != 0;
+      if (!on_unbalanced) continue;
+      candidates.push_back(i);
+      for (int c = 0; c < 3; ++c) uses.emplace(edge_of(pieces[i], c), 0);
+    }
+    for (const TrianglePiece& piece : pieces) {
+      for (int c = 0; c < 3; ++c) {
+        if (const auto it = uses.find(edge_of(piece, c)); it != uses.end()) ++it->second;
+      }
+    }
+    std::vector<std::uint8_t> peeled(pieces.size(), 0);
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (const std::uint32_t i : candidates) {
+        if (peeled[i]) continue;
+        int free = 0, crowded = 0;
+        for (int c = 0; c < 3; ++c) {
+          const std::uint32_t count = uses[edge_of(pieces[i], c)];
+          free += count == 1;
+          crowded += count >= 3;
+        }
+        if (free == 0 || crowded == 0 || free + crowded != 3) continue;
+        peeled[i] = 1;
+        ++chain.fins;
+        changed = true;
+        for (int c = 0; c < 3; ++c) {
+          const std::uint64_t edge = edge_of(pieces[i], c);
+          --uses[edge];
+          balance[edge] -= pieces[i].corners[c] < pieces[i].corners[(c + 1) % 3] ? 1 : -1;
+        }
+      }
+    }
+    if (chain.fins > 0) {
+      std::size_t at = 0;
+      for (std::size_t i = 0; i < pieces.size(); ++i) {
+        if (!peeled[i]) pieces[at++] = pieces[i];
+      }
+      pieces.resize(at);
+    }
+  }
   // Triangles over the same three vertices: a triangle and its reverse enclose
   // nothing, so each group first keeps only what its copies add up to (its
   // uses one way minus the other, as copies of the first of that way round),
@@ -1566,8 +1626,7 @@ std::optional<ClosedChain> closed_welded_chain(const Mesh& mesh) {
   // its edges need, one copy either way round or none, as the rest of the chain
   // crosses those edges (ignoring edges it shares with another such group,
   // whose need depends on that group; groups are settled until none changes).
-  std::unordered_map<std::uint64_t, std::int64_t> balance;
-  balance.reserve(3 * pieces.size() / 2 + 3);
+  balance.clear();
   {
     // (sorted corners, piece) in order: a group's pieces together, in input order.
     std::vector<std::pair<Triangle, std::uint32_t>> by_corners(pieces.size());
@@ -1672,64 +1731,6 @@ std::optional<ClosedChain> closed_welded_chain(const Mesh& mesh) {
       if (kept[i]) pieces[at++] = pieces[i];
     }
     pieces.resize(at);
-  }
-  // Fins: a triangle on an edge of the surface (one that three or more
-  // triangles use), its other edges its own or also such (a sliver stuck on an
-  // edge: a zero-area triangle whose third corner rounded off the edge's line).
-  // Its free edges are a border, so it bounds nothing; removed, the surface may
-  // close. Peeled until none is left.
-  if (std::any_of(balance.begin(), balance.end(), [](const auto& entry) { return entry.second != 0; })) {
-    const auto edge_of = [&](const TrianglePiece& piece, int c) {
-      const VertexIndex u = piece.corners[c], v = piece.corners[(c + 1) % 3];
-      return (std::uint64_t{std::min(u, v)} << 32) | std::max(u, v);
-    };
-    // A fin's free edges are crossed one way only: the candidates are the
-    // triangles on such edges, and only their edges' uses are counted (peeling
-    // never frees an edge of another triangle: it takes one use from an edge
-    // with three or more, or the last from a free one).
-    std::vector<std::uint32_t> candidates;
-    std::unordered_map<std::uint64_t, std::uint32_t> uses;
-    for (std::uint32_t i = 0; i < pieces.size(); ++i) {
-      bool on_unbalanced = false;
-      for (int c = 0; c < 3 && !on_unbalanced; ++c) on_unbalanced = balance.find(edge_of(pieces[i], c))->second != 0;
-      if (!on_unbalanced) continue;
-      candidates.push_back(i);
-      for (int c = 0; c < 3; ++c) uses.emplace(edge_of(pieces[i], c), 0);
-    }
-    for (const TrianglePiece& piece : pieces) {
-      for (int c = 0; c < 3; ++c) {
-        if (const auto it = uses.find(edge_of(piece, c)); it != uses.end()) ++it->second;
-      }
-    }
-    std::vector<std::uint8_t> peeled(pieces.size(), 0);
-    for (bool changed = true; changed;) {
-      changed = false;
-      for (const std::uint32_t i : candidates) {
-        if (peeled[i]) continue;
-        int free = 0, crowded = 0;
-        for (int c = 0; c < 3; ++c) {
-          const std::uint32_t count = uses[edge_of(pieces[i], c)];
-          free += count == 1;
-          crowded += count >= 3;
-        }
-        if (free == 0 || crowded == 0 || free + crowded != 3) continue;
-        peeled[i] = 1;
-        ++chain.fins;
-        changed = true;
-        for (int c = 0; c < 3; ++c) {
-          const std::uint64_t edge = edge_of(pieces[i], c);
-          --uses[edge];
-          balance[edge] -= pieces[i].corners[c] < pieces[i].corners[(c + 1) % 3] ? 1 : -1;
-        }
-      }
-    }
-    if (chain.fins > 0) {
-      std::size_t at = 0;
-      for (std::size_t i = 0; i < pieces.size(); ++i) {
-        if (!peeled[i]) pieces[at++] = pieces[i];
-      }
-      pieces.resize(at);
-    }
   }
   std::vector<std::uint64_t> unbalanced;
   for (const auto& [edge, count] : balance) {

@@ -451,7 +451,7 @@ int main(int argc, char** argv) {
   std::optional<std::size_t> max_repair_refused;
   app.add_option("--repair-cases", repair_cases,
                  "Run this many repair cases instead of cut cases: meshes of the pool damaged (unwelded, duplicated, "
-                 "flipped, holed, nested the wrong way out, touching, overlapping, mixed), repaired by repair_mesh, "
+                 "flipped, holed, nested the wrong way out, touching, overlapping, mixed, stray), repaired by repair_mesh, "
                  "every promise checked and each repaired solid cut once (--seed, --first and --threads apply)");
   bool list_repair_refusals = false;
   app.add_flag("--list-repair-refusals", list_repair_refusals,

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <exception>
 #include <numeric>
+#include <set>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -17,6 +18,7 @@
 #include "shatter/kernel/mass.hpp"
 #include "shatter/kernel/repair.hpp"
 #include "shatter/kernel/validate.hpp"
+#include "shatter/kernel/predicates.hpp"
 #include "shatter/triangulate/solid_mesh.hpp"
 #include "support/checks.hpp"
 
@@ -26,7 +28,7 @@ namespace {
 using test::Random;
 
 constexpr std::array<std::string_view, damage_class_count> damage_names{
-    "unwelded", "duplicated", "flipped", "holes", "nested", "touching", "overlapping", "mixed"};
+    "unwelded", "duplicated", "flipped", "holes", "nested", "touching", "overlapping", "mixed", "stray"};
 
 // Meshes above this size are left out: repair runs CGAL's hole filling and
 // orientation, whose cost would dominate a run without adding kinds of damage.
@@ -171,6 +173,42 @@ Mesh punch_holes(const Mesh& mesh, Random& random) {
   return out;
 }
 
+// Triangles a closed surface does not need, which enclose nothing with it:
+// on up to 8 of its edges an edge and a point near its middle (its exact
+// midpoint when that lies inside the edge, a zero-area triangle; else, or by
+// choice, one moved off the edge's line by 2^-10 to 2^-40 of the triangle,
+// a fin), either way round; and reversed or repeated copies of up to 8 of its
+// triangles.
+Mesh add_stray_triangles(Mesh mesh, Random& random) {
+  const std::size_t n = mesh.triangles.size();
+  std::set<std::pair<VertexIndex, VertexIndex>> used;
+  const std::size_t on_edges = random.index(9);
+  for (std::size_t k = 0; k < on_edges; ++k) {
+    const Triangle t = mesh.triangles[random.index(n)];
+    const int c = static_cast<int>(random.index(3));
+    const VertexIndex a = t[c], b = t[(c + 1) % 3];
+    if (!used.insert({std::min(a, b), std::max(a, b)}).second) continue;
+    const Vec3 pa = mesh.positions[a], pb = mesh.positions[b], across = mesh.positions[t[(c + 2) % 3]] - pa;
+    Vec3 m = (pa + pb) * 0.5;
+    if (!strictly_inside_segment(pa, pb, m) || random.index(2) == 0) {
+      m = m + across * std::ldexp(1.0, -static_cast<int>(10 + random.index(31)));
+      if (collinear(pa, pb, m)) continue;
+    }
+    mesh.positions.push_back(m);
+    const auto mi = static_cast<VertexIndex>(mesh.positions.size() - 1);
+    append_triangle(mesh, random.index(2) == 0 ? Triangle{a, b, mi} : Triangle{b, a, mi});
+  }
+  const std::size_t copies = random.index(9);
+  for (std::size_t k = 0; k < copies; ++k) {
+    Triangle copy = rotated(mesh.triangles[random.index(n)], random.index(3));
+    if (random.index(2) == 0) std::swap(copy[1], copy[2]);
+    append_triangle(mesh, copy);
+  }
+  // At least one: a case with no damage would test nothing.
+  if (mesh.triangles.size() == n) append_triangle(mesh, {mesh.triangles[0][0], mesh.triangles[0][2], mesh.triangles[0][1]});
+  return mesh;
+}
+
 double random_integer(Random& random, int lo, int hi) { return double(lo + int(random.index(std::size_t(hi - lo + 1)))); }
 
 // A lattice box with integer corners and sides of 1 to 4.
@@ -222,6 +260,12 @@ DamageCase make_damage_case(const MeshPool& pool, std::uint64_t seed, std::uint6
     case DamageClass::flipped:
       pick_pool();
       c.damaged = flip_some(c.original, random);
+      c.exact = true;
+      keep_all();
+      break;
+    case DamageClass::stray:
+      pick_pool();
+      c.damaged = add_stray_triangles(c.original, random);
       c.exact = true;
       keep_all();
       break;

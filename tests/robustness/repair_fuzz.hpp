@@ -29,8 +29,10 @@ enum class DamageClass : std::uint8_t {
                 ///< triangle away from the shared positions kept, the volume lost within the moves' bound
   overlapping,  ///< the mesh and a shifted copy of it: the surfaces cross (self-intersecting)
   mixed,        ///< unwelded, duplicated, flipped and holed at once: closed again, every kept triangle kept
+  stray,        ///< triangles stuck on edges (zero-area: an edge and its exact midpoint; fins: a point off the
+                ///< edge's line), reversed and repeated copies of triangles: back exactly
 };
-inline constexpr int damage_class_count = 8;
+inline constexpr int damage_class_count = 9;
 std::string_view damage_name(DamageClass kind);
 
 struct DamageCase {
