@@ -1201,7 +1201,8 @@ class Repairer {
 // faces the way the input had it: a cavity of a solid that crosses a copy of it
 // stays a cavity. Any other crossing shell, or every one when
 // `own_volume_only`, is taken as a solid of its own and turned to bound a
-// positive volume (exact sign). A shell that crosses nothing keeps the
+// positive volume (exact sign), and so is every one of a mesh of one shell
+// (no shell for it to be a cavity of). A shell that crosses nothing keeps the
 // orientation its nesting gave it. Returns the triangles reversed.
 std::size_t orient_crossing_shells(Mesh& mesh, std::span<const TrianglePair> pairs, const Mesh& input,
                                    bool own_volume_only) {
@@ -1215,6 +1216,13 @@ std::size_t orient_crossing_shells(Mesh& mesh, std::span<const TrianglePair> pai
       if (!inserted) shells.unite(it->second, t);
     }
   }
+  // A shell can be a cavity only inside another: a mesh of one shell faces out
+  // of its own volume whatever the input's turn (one turned inside out as a
+  // whole, whose lid over a hole crosses it, wound around only the lid's
+  // sliver: a spool came out of volume 2e-5).
+  std::size_t shell_count = 0;
+  for (std::uint32_t t = 0; t < n; ++t) shell_count += shells.find(t) == t;
+  own_volume_only = own_volume_only || shell_count == 1;
   std::vector<std::uint8_t> crossing(n, 0);
   for (const TrianglePair& pair : pairs) {
     crossing[shells.find(static_cast<std::uint32_t>(pair.first))] = 1;

@@ -541,6 +541,40 @@ TEST_CASE("tetrahedra around one edge (overlapping or apart): their union point 
   CHECK(overlapping == (trials + 1) / 2);
 }
 
+TEST_CASE("one shell turned inside out as a whole and crossing itself is repaired as when read the right way round",
+          "[arrangement][repair]") {
+  // A unit box whose top is a fan around its centre, the centre pulled down
+  // through the bottom: one shell crossing itself. Turned inside out, its
+  // triangles all face against the input's, which the exact step follows for a
+  // shell that may be a cavity; it then wound around only the spike below the
+  // bottom (a spool so damaged by shatter-fuzz came out of volume 2e-5 instead
+  // of 0.16). A mesh of one shell has no shell to be a cavity of.
+  for (const double depth : {-0.5, -0.25, -1.5}) {
+    const Mesh dented = test::mesh_from(
+        {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0.5, 0.5, depth}},
+        {{0, 2, 1}, {0, 3, 2},                          // bottom
+         {0, 1, 5}, {0, 5, 4}, {1, 2, 6}, {1, 6, 5},  // sides
+         {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7},
+         {4, 5, 8}, {5, 6, 8}, {6, 7, 8}, {7, 4, 8}});  // the top, fanned around its pulled centre
+    Mesh inverted = dented;
+    for (Triangle& t : inverted.triangles) std::swap(t[1], t[2]);
+    INFO("centre pulled to z = " << depth);
+    const Repaired as_read = repair(dented);
+    INFO(report_text(as_read.report));
+    REQUIRE(as_read.valid);
+    const Repaired turned = repair(inverted);
+    INFO(report_text(turned.report));
+    REQUIRE(turned.valid);
+    // The region wound around once: the box less the part of the cone from
+    // its top to the pulled centre that lies in it (the spike below the bottom
+    // is wound around -1 times). The cone's section at height z is a square of
+    // side (z - depth) / (1 - depth).
+    const double in_box = (std::pow(1 - depth, 3) - std::pow(-depth, 3)) / (3 * (1 - depth) * (1 - depth));
+    CHECK(std::abs(signed_volume(as_read.mesh) - (1 - in_box)) <= 1e-12);
+    CHECK(std::abs(signed_volume(turned.mesh) - (1 - in_box)) <= 1e-12);
+  }
+}
+
 TEST_CASE("the exact step changes nothing where nothing self-intersects", "[arrangement][repair]") {
   // A valid mesh, and one the earlier steps repair (unwelded, a triangle
   // reversed): the same bytes with the hook as without.
