@@ -30,6 +30,7 @@
 #include <utility>
 #include <vector>
 
+#include "shatter/kernel/index_map.hpp"
 #include "shatter/kernel/position_key.hpp"
 #include "shatter/kernel/predicates.hpp"
 #include "repair_touching.hpp"
@@ -89,6 +90,40 @@ RepairChange touching_change(const kernel_detail::TouchingSeparation& separation
           " of the nearest neighbour's distance), volume change " + number_text(separation.volume_change) +
           " (bound " + number_text(separation.volume_bound) + ")";
   return {RepairKind::separated_touching_parts, separation.vertices, std::move(text)};
+}
+
+// Attributes of a point inside input triangle t, barycentric in t's corners
+// (computed in doubles: attributes are data, no decision depends on them).
+void interpolate_corner_attributes(const Mesh& input, std::size_t t, Vec3 p, CornerAttributes& out) {
+  const Triangle& tri = input.triangles[t];
+  const Vec3 a = input.positions[tri[0]], b = input.positions[tri[1]], c = input.positions[tri[2]];
+  const Vec3 n = cross(b - a, c - a);
+  const double area2 = dot(n, n);
+  double wa = 1.0 / 3, wb = 1.0 / 3, wc = 1.0 / 3;
+  if (area2 > 0) {
+    wa = dot(cross(b - p, c - p), n) / area2;
+    wb = dot(cross(c - p, a - p), n) / area2;
+    wc = 1.0 - wa - wb;
+  }
+  const CornerAttributes& in = input.corners;
+  const std::size_t k = 3 * t;
+  if (in.has_normals()) {
+    Vec3 v = in.normals[k] * wa + in.normals[k + 1] * wb + in.normals[k + 2] * wc;
+    const double length = std::sqrt(dot(v, v));
+    if (length > 0) v = v * (1.0 / length);
+    out.normals.push_back(v);
+  }
+  if (in.has_uvs()) {
+    const Vec2 &ua = in.uvs[k], &ub = in.uvs[k + 1], &uc = in.uvs[k + 2];
+    out.uvs.push_back(Vec2{ua.x * wa + ub.x * wb + uc.x * wc, ua.y * wa + ub.y * wb + uc.y * wc});
+  }
+  if (in.has_tangents()) {
+    const Vec4 &ta = in.tangents[k], &tb = in.tangents[k + 1], &tc = in.tangents[k + 2];
+    Vec3 v{ta.x * wa + tb.x * wb + tc.x * wc, ta.y * wa + tb.y * wb + tc.y * wc, ta.z * wa + tb.z * wb + tc.z * wc};
+    const double length = std::sqrt(dot(v, v));
+    if (length > 0) v = v * (1.0 / length);
+    out.tangents.push_back(Vec4{v.x, v.y, v.z, ta.w});
+  }
 }
 
 // Step 1's line in the report.
@@ -1106,40 +1141,8 @@ class Repairer {
     return true;
   }
 
-  // Attributes of a point inside input triangle t, barycentric in t's corners
-  // (computed in doubles: attributes are data, no decision depends on them).
   void interpolate_corner(Mesh& out, std::size_t t, Vec3 p) const {
-    const Triangle& tri = input_.triangles[t];
-    const Vec3 a = input_.positions[tri[0]], b = input_.positions[tri[1]], c = input_.positions[tri[2]];
-    auto cross = [](Vec3 u, Vec3 v) { return Vec3{u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x}; };
-    auto dot = [](Vec3 u, Vec3 v) { return u.x * v.x + u.y * v.y + u.z * v.z; };
-    const Vec3 n = cross(b - a, c - a);
-    const double area2 = dot(n, n);
-    double wa = 1.0 / 3, wb = 1.0 / 3, wc = 1.0 / 3;
-    if (area2 > 0) {
-      wa = dot(cross(b - p, c - p), n) / area2;
-      wb = dot(cross(c - p, a - p), n) / area2;
-      wc = 1.0 - wa - wb;
-    }
-    const CornerAttributes& in = input_.corners;
-    const std::size_t k = 3 * t;
-    if (in.has_normals()) {
-      Vec3 v = in.normals[k] * wa + in.normals[k + 1] * wb + in.normals[k + 2] * wc;
-      const double length = std::sqrt(dot(v, v));
-      if (length > 0) v = v * (1.0 / length);
-      out.corners.normals.push_back(v);
-    }
-    if (in.has_uvs()) {
-      const Vec2 &ua = in.uvs[k], &ub = in.uvs[k + 1], &uc = in.uvs[k + 2];
-      out.corners.uvs.push_back(Vec2{ua.x * wa + ub.x * wb + uc.x * wc, ua.y * wa + ub.y * wb + uc.y * wc});
-    }
-    if (in.has_tangents()) {
-      const Vec4 &ta = in.tangents[k], &tb = in.tangents[k + 1], &tc = in.tangents[k + 2];
-      Vec3 v{ta.x * wa + tb.x * wb + tc.x * wc, ta.y * wa + tb.y * wb + tc.y * wc, ta.z * wa + tb.z * wb + tc.z * wc};
-      const double length = std::sqrt(dot(v, v));
-      if (length > 0) v = v * (1.0 / length);
-      out.corners.tangents.push_back(Vec4{v.x, v.y, v.z, ta.w});
-    }
+    interpolate_corner_attributes(input_, t, p, out.corners);
   }
 
   void finish_report(const Mesh& out, std::size_t kept_input_vertices, std::size_t /*created_vertices*/) {
@@ -1429,23 +1432,21 @@ struct ClosedChain {
   std::size_t unused = 0;       ///< vertices no triangle left uses
 };
 
-// A piece of an input triangle: its corners, and each corner as barycentric
-// weights of the input triangle's corners (for its attributes).
+// A piece of an input triangle: its corners, and the input triangle's index
+// (its surface, and its corners' attributes interpolated at the piece's).
 struct TrianglePiece {
   Triangle corners;
   std::uint32_t source;
-  std::array<std::array<double, 3>, 3> weights;
 };
 
 // Splits every piece at each vertex of `inside` (undirected edge, low << 32 |
 // high -> the vertices strictly inside it) that lies inside one of its edges:
 // the piece (a, b, c) with p inside a -> b becomes (a, p, c) and (p, b, c),
 // both non-degenerate (c is off the line of a and b, and p is strictly between
-// them). Returns how many splits were made.
-std::size_t split_at_inside_vertices(const std::vector<Vec3>& positions,
+// them).
+void split_at_inside_vertices(const std::vector<Vec3>& positions,
                                      const std::unordered_map<std::uint64_t, std::vector<VertexIndex>>& inside,
                                      std::vector<TrianglePiece>& pieces) {
-  std::size_t splits = 0;
   const std::size_t original = pieces.size();
   std::vector<std::size_t> of_triangle;
   for (std::size_t t = 0; t < original; ++t) {
@@ -1453,7 +1454,7 @@ std::size_t split_at_inside_vertices(const std::vector<Vec3>& positions,
     of_triangle.assign(1, t);
     for (int c = 0; c < 3; ++c) {
       const VertexIndex u = corners[c], v = corners[(c + 1) % 3];
-      const auto found = inside.find((std::uint64_t{std::min(u, v)} << 32) | std::max(u, v));
+      const auto found = inside.find(undirected_edge_key(u, v));
       if (found == inside.end()) continue;
       for (const VertexIndex p : found->second) {
         for (const std::size_t at : of_triangle) {
@@ -1464,28 +1465,15 @@ std::size_t split_at_inside_vertices(const std::vector<Vec3>& positions,
             ++e;
           }
           if (e == 3) continue;
-          const int f = (e + 1) % 3, g = (e + 2) % 3;
-          const Vec3 &a = positions[piece.corners[e]], &b = positions[piece.corners[f]], &q = positions[p];
-          int axis = 0;  // where a and b differ most (they differ there: p is strictly between them)
-          for (int d = 1; d < 3; ++d) {
-            if (std::fabs(b[d] - a[d]) > std::fabs(b[axis] - a[axis])) axis = d;
-          }
-          const double along = (q[axis] - a[axis]) / (b[axis] - a[axis]);
-          std::array<double, 3> at_p;
-          for (int w = 0; w < 3; ++w) at_p[w] = (1 - along) * piece.weights[e][w] + along * piece.weights[f][w];
-          TrianglePiece second{{p, piece.corners[f], piece.corners[g]}, piece.source,
-                               {at_p, piece.weights[f], piece.weights[g]}};
-          piece.corners = {piece.corners[e], p, piece.corners[g]};
-          piece.weights = {piece.weights[e], at_p, piece.weights[g]};
-          pieces.push_back(second);
+          const VertexIndex a = piece.corners[e], b = piece.corners[(e + 1) % 3], c = piece.corners[(e + 2) % 3];
+          piece.corners = {a, p, c};
+          pieces.push_back({{p, b, c}, piece.source});
           of_triangle.push_back(pieces.size() - 1);
-          ++splits;
           break;
         }
       }
     }
   }
-  return splits;
 }
 
 // Per undirected edge (low << 32 | high): its uses low -> high minus high -> low.
@@ -1495,43 +1483,10 @@ std::unordered_map<std::uint64_t, std::int64_t> edge_balance(const std::vector<T
   for (const TrianglePiece& piece : pieces) {
     for (int c = 0; c < 3; ++c) {
       const VertexIndex u = piece.corners[c], v = piece.corners[(c + 1) % 3];
-      balance[(std::uint64_t{std::min(u, v)} << 32) | std::max(u, v)] += u < v ? 1 : -1;
+      balance[undirected_edge_key(u, v)] += u < v ? 1 : -1;
     }
   }
   return balance;
-}
-
-// The corner attributes of a piece's corner: its weights over its source
-// triangle's corners (normals and tangents normalised again; a tangent's
-// handedness from the heaviest corner).
-void add_corner_attributes(const Mesh& from, const TrianglePiece& piece, int corner, CornerAttributes& to) {
-  const std::array<double, 3>& w = piece.weights[corner];
-  const std::size_t first = 3 * std::size_t{piece.source};
-  const int heaviest = w[0] >= w[1] ? (w[0] >= w[2] ? 0 : 2) : (w[1] >= w[2] ? 1 : 2);
-  if (from.corners.has_normals()) {
-    Vec3 n;
-    for (int k = 0; k < 3; ++k) n = n + from.corners.normals[first + k] * w[k];
-    const double length = norm(n);
-    to.normals.push_back(length > 0 ? n * (1 / length) : from.corners.normals[first + heaviest]);
-  }
-  if (from.corners.has_uvs()) {
-    Vec2 uv{0, 0};
-    for (int k = 0; k < 3; ++k) {
-      uv.x += from.corners.uvs[first + k].x * w[k];
-      uv.y += from.corners.uvs[first + k].y * w[k];
-    }
-    to.uvs.push_back(uv);
-  }
-  if (from.corners.has_tangents()) {
-    Vec3 t;
-    for (int k = 0; k < 3; ++k) {
-      const Vec4& tk = from.corners.tangents[first + k];
-      t = t + Vec3{tk.x, tk.y, tk.z} * w[k];
-    }
-    const double length = norm(t);
-    const Vec4& kept = from.corners.tangents[first + heaviest];
-    to.tangents.push_back(length > 0 ? Vec4{t.x / length, t.y / length, t.z / length, kept.w} : kept);
-  }
 }
 
 // `mesh` as a closed chain (above), or nothing when some segment is crossed
@@ -1562,7 +1517,7 @@ std::optional<ClosedChain> closed_welded_chain(const Mesh& mesh) {
     } else if (collinear(positions[w[0]], positions[w[1]], positions[w[2]])) {
       ++chain.collinear;
     } else {
-      pieces.push_back({w, t, {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}});
+      pieces.push_back({w, t});
     }
   }
   std::unordered_map<std::uint64_t, std::int64_t> balance = edge_balance(pieces);
@@ -1574,8 +1529,7 @@ std::optional<ClosedChain> closed_welded_chain(const Mesh& mesh) {
   // fin on an edge of copied triangles would count against what the edge needs.
   if (std::any_of(balance.begin(), balance.end(), [](const auto& entry) { return entry.second != 0; })) {
     const auto edge_of = [&](const TrianglePiece& piece, int c) {
-      const VertexIndex u = piece.corners[c], v = piece.corners[(c + 1) % 3];
-      return (std::uint64_t{std::min(u, v)} << 32) | std::max(u, v);
+      return undirected_edge_key(piece.corners[c], piece.corners[(c + 1) % 3]);
     };
     // A fin's free edges are crossed one way only: the candidates are the
     // triangles on such edges, and only their edges' uses are counted (peeling
@@ -1679,12 +1633,11 @@ std::optional<ClosedChain> closed_welded_chain(const Mesh& mesh) {
       group.net = net;
     };
     for (Group& group : multiple) keep(group, group.net);
-    const auto key = [](VertexIndex u, VertexIndex v) { return (std::uint64_t{std::min(u, v)} << 32) | std::max(u, v); };
     for (std::uint32_t i = 0; i < pieces.size(); ++i) {
       if (!kept[i]) continue;
       for (int c = 0; c < 3; ++c) {
         const VertexIndex u = pieces[i].corners[c], v = pieces[i].corners[(c + 1) % 3];
-        balance[key(u, v)] += u < v ? 1 : -1;
+        balance[undirected_edge_key(u, v)] += u < v ? 1 : -1;
       }
     }
     const auto closed = [&] {
@@ -1693,7 +1646,7 @@ std::optional<ClosedChain> closed_welded_chain(const Mesh& mesh) {
     if (!closed()) {
       std::unordered_map<std::uint64_t, std::uint32_t> groups_at_edge;
       for (const Group& group : multiple) {
-        for (int c = 0; c < 3; ++c) ++groups_at_edge[key(group.sorted[c], group.sorted[(c + 1) % 3])];
+        for (int c = 0; c < 3; ++c) ++groups_at_edge[undirected_edge_key(group.sorted[c], group.sorted[(c + 1) % 3])];
       }
       std::vector<std::uint8_t> settled(multiple.size(), 0);
       for (bool changed = true; changed;) {
@@ -1705,7 +1658,7 @@ std::optional<ClosedChain> closed_welded_chain(const Mesh& mesh) {
           bool agree = true;
           for (int c = 0; c < 3 && agree; ++c) {
             const VertexIndex u = group.sorted[c], v = group.sorted[(c + 1) % 3];
-            const std::uint64_t edge = key(u, v);
+            const std::uint64_t edge = undirected_edge_key(u, v);
             if (groups_at_edge[edge] > 1) continue;
             const std::int64_t runs = u < v ? 1 : -1;  // how `sorted` crosses the edge
             const std::int64_t rest = balance[edge] - group.net * runs;
@@ -1717,14 +1670,14 @@ std::optional<ClosedChain> closed_welded_chain(const Mesh& mesh) {
           // Settled now, also when its need cannot be met (it then stays).
           settled[g] = 1;
           changed = true;
-          for (int c = 0; c < 3; ++c) --groups_at_edge[key(group.sorted[c], group.sorted[(c + 1) % 3])];
+          for (int c = 0; c < 3; ++c) --groups_at_edge[undirected_edge_key(group.sorted[c], group.sorted[(c + 1) % 3])];
           const bool available = *need == 0 || std::any_of(group.pieces.begin(), group.pieces.end(), [&](std::uint32_t piece) {
             return way(piece, group.sorted) == *need;
           });
           if (*need == group.net || *need < -1 || *need > 1 || !available) continue;
           for (int c = 0; c < 3; ++c) {
             const VertexIndex u = group.sorted[c], v = group.sorted[(c + 1) % 3];
-            balance[key(u, v)] += (*need - group.net) * (u < v ? 1 : -1);
+            balance[undirected_edge_key(u, v)] += (*need - group.net) * (u < v ? 1 : -1);
           }
           keep(group, *need);
         }
@@ -1819,7 +1772,7 @@ std::optional<ClosedChain> closed_welded_chain(const Mesh& mesh) {
     chain.mesh.triangles.push_back(
         {renumbered[piece.corners[0]], renumbered[piece.corners[1]], renumbered[piece.corners[2]]});
     chain.mesh.surfaces.push_back(mesh.surfaces[piece.source]);
-    for (int c = 0; c < 3; ++c) add_corner_attributes(mesh, piece, c, chain.mesh.corners);
+    for (const VertexIndex v : piece.corners) interpolate_corner_attributes(mesh, piece.source, positions[v], chain.mesh.corners);
   }
   return chain;
 }
